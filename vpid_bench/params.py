@@ -1,0 +1,171 @@
+"""Typed hyper-parameters: build a frozen dataclass from a config mapping, and back.
+
+``build_dataclass(Params, mapping, prefix="optimizer")`` checks every key against the
+dataclass fields (nested dataclasses included) and every value against the field's type, so
+that ``optimizer.FF=0.8`` or ``problem.noise.level=abc`` fails with one line naming the key,
+the bad value and what is allowed, before any work is done.
+
+``hydra_node(cls, name, interpolations)`` builds the Hydra config node of a plugin from its
+dataclass, so a third-party optimizer needs no YAML to be usable as ``optimizer=<name>``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import types
+import typing
+from collections.abc import Mapping
+from typing import Any, Literal, TypeVar, Union, get_args, get_origin
+
+from .api import ConfigError
+
+T = TypeVar("T")
+
+
+def _is_dataclass_type(tp: Any) -> bool:
+    return isinstance(tp, type) and dataclasses.is_dataclass(tp)
+
+
+def _type_name(tp: Any) -> str:
+    origin = get_origin(tp)
+    if origin is Literal:
+        return "one of " + ", ".join(repr(a) for a in get_args(tp))
+    if origin in (Union, types.UnionType):
+        return " or ".join(_type_name(a) for a in get_args(tp))
+    if tp is type(None):
+        return "null"
+    return getattr(tp, "__name__", str(tp))
+
+
+def _coerce(value: Any, tp: Any, key: str) -> Any:
+    """Return ``value`` converted to the annotated type ``tp``, or raise ConfigError."""
+    origin = get_origin(tp)
+    if tp is Any:
+        return value
+    if origin is Literal:
+        choices = get_args(tp)
+        if value in choices:
+            return value
+        raise ConfigError(key, value, _type_name(tp))
+    if origin in (Union, types.UnionType):
+        args = get_args(tp)
+        if value is None and type(None) in args:
+            return None
+        errors = []
+        for arg in args:
+            if arg is type(None):
+                continue
+            try:
+                return _coerce(value, arg, key)
+            except ConfigError as exc:
+                errors.append(exc)
+        raise ConfigError(key, value, _type_name(tp))
+    if origin in (list, tuple) or tp in (list, tuple):
+        if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
+            raise ConfigError(key, value, f"a list ({_type_name(tp)})")
+        inner = get_args(tp)
+        item_tp = inner[0] if inner else Any
+        items = [_coerce(v, item_tp, f"{key}[{i}]") for i, v in enumerate(value)]
+        return tuple(items) if (origin is tuple or tp is tuple) else items
+    if _is_dataclass_type(tp):
+        if isinstance(value, tp):
+            return value
+        if not isinstance(value, Mapping):
+            raise ConfigError(key, value, f"a mapping of {tp.__name__} fields")
+        return build_dataclass(tp, value, prefix=key)
+    if tp is bool:
+        if isinstance(value, bool):
+            return value
+        raise ConfigError(key, value, "true or false")
+    if tp is int:
+        if isinstance(value, bool):
+            raise ConfigError(key, value, "an integer")
+        if isinstance(value, int):
+            return value
+        if isinstance(value, float) and value.is_integer():
+            return int(value)
+        raise ConfigError(key, value, "an integer")
+    if tp is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(key, value, "a real number")
+        value = float(value)
+        if math.isnan(value):
+            raise ConfigError(key, value, "a real number (not NaN)")
+        return value
+    if tp is str:
+        if isinstance(value, str):
+            return value
+        raise ConfigError(key, value, "a string")
+    return value
+
+
+def build_dataclass(cls: type[T], mapping: Mapping[str, Any] | None, prefix: str = "") -> T:
+    """Instantiate the dataclass ``cls`` from ``mapping``, validating keys and value types.
+
+    Keys missing from ``mapping`` take the field default. ``prefix`` is the dotted config path
+    used in error messages (``optimizer``, ``problem.noise``). Keys starting with ``_`` and
+    the key ``name`` are metadata of the config node and are ignored.
+    """
+    mapping = dict(mapping or {})
+    hints = typing.get_type_hints(cls)
+    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
+    dot = f"{prefix}." if prefix else ""
+    unknown = [k for k in mapping if k not in fields and k != "name" and not str(k).startswith("_")]
+    if unknown:
+        allowed = ", ".join(sorted(fields)) or "(none)"
+        raise ConfigError(f"{dot}{unknown[0]}", mapping[unknown[0]], f"known keys are {allowed}")
+    kwargs = {}
+    for field_name in fields:
+        if field_name in mapping:
+            kwargs[field_name] = _coerce(mapping[field_name], hints[field_name], dot + field_name)
+    try:
+        return cls(**kwargs)
+    except ConfigError:
+        raise
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(prefix or cls.__name__, kwargs, str(exc)) from exc
+
+
+def to_plain(obj: Any) -> Any:
+    """A dataclass (possibly nested) as plain JSON-able dicts, lists and scalars."""
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return {f.name: to_plain(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+    if isinstance(obj, Mapping):
+        return {str(k): to_plain(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_plain(v) for v in obj]
+    return obj
+
+
+def dataclass_defaults(cls: type) -> dict[str, Any]:
+    """The defaults of a dataclass type as a plain nested dict (fields without default: None)."""
+    out: dict[str, Any] = {}
+    hints = typing.get_type_hints(cls)
+    for f in dataclasses.fields(cls):
+        if f.default is not dataclasses.MISSING:
+            out[f.name] = to_plain(f.default)
+        elif f.default_factory is not dataclasses.MISSING:
+            out[f.name] = to_plain(f.default_factory())
+        elif _is_dataclass_type(hints[f.name]):
+            out[f.name] = dataclass_defaults(hints[f.name])
+        else:
+            out[f.name] = None
+    return out
+
+
+def hydra_node(
+    cls: type, name: str, interpolations: Mapping[str, str] | None = None
+) -> dict[str, Any]:
+    """The Hydra config node of a plugin: ``{"name": name, **defaults}``.
+
+    ``interpolations`` replaces some defaults by interpolation strings, e.g.
+    ``{"ps": "${problem.ps}"}``, so an optimizer reads its population size from the problem's
+    protocol unless the user overrides it.
+    """
+    node: dict[str, Any] = {"name": name}
+    node.update(dataclass_defaults(cls))
+    for key, expr in (interpolations or {}).items():
+        if key in node:
+            node[key] = expr
+    return node

@@ -1,0 +1,167 @@
+"""Plugin discovery: entry points of group ``vpid_bench``, loaded into a pluggy manager.
+
+``get_plugin_manager()`` is a factory: nothing is imported or registered at import time of
+this module. Entry points are iterated one by one, so a plugin that fails to import is
+reported by name and skipped rather than aborting everything. Set ``VPID_BENCH_BLOCK_PLUGINS``
+to a comma-separated list of entry-point names to keep those plugins out.
+
+``Registry`` collects what the plugins register and refuses a name registered twice, naming
+both plugins.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.metadata
+import os
+import warnings
+from collections.abc import Iterable
+from typing import Any
+
+import pluggy
+
+from . import hookspecs
+from .api import ConfigError, Optimizer, OptimizerParams, PluginError, Problem, ProblemConfig
+
+ENTRY_POINT_GROUP = "vpid_bench"
+BLOCK_ENV = "VPID_BENCH_BLOCK_PLUGINS"
+
+
+class PluginLoadWarning(UserWarning):
+    """A plugin was skipped because it failed to import."""
+
+
+@dataclasses.dataclass
+class PluginManagerInfo:
+    """What happened while loading plugins: skipped (blocked) and failed entry points."""
+
+    blocked: list[str] = dataclasses.field(default_factory=list)
+    failed: dict[str, str] = dataclasses.field(default_factory=dict)
+
+
+def _blocked_names() -> set[str]:
+    raw = os.environ.get(BLOCK_ENV, "")
+    return {name.strip() for name in raw.split(",") if name.strip()}
+
+
+def _entry_point_owner(ep: importlib.metadata.EntryPoint) -> str:
+    dist = getattr(ep, "dist", None)
+    if dist is None:
+        return ep.value
+    return f"{dist.metadata['Name']} {dist.version}"
+
+
+def get_plugin_manager(
+    entry_points: Iterable[importlib.metadata.EntryPoint] | None = None,
+    extra_plugins: Iterable[tuple[str, Any]] = (),
+) -> pluggy.PluginManager:
+    """A fresh plugin manager with every ``vpid_bench`` entry point loaded.
+
+    ``entry_points`` replaces the installed entry points (tests use it); ``extra_plugins``
+    registers ``(name, module_or_object)`` pairs on top. The manager's ``vpid_bench_info``
+    attribute is a :class:`PluginManagerInfo` listing blocked and failed plugins.
+    """
+    pm = pluggy.PluginManager(hookspecs.PROJECT_NAME)
+    pm.add_hookspecs(hookspecs)
+    info = PluginManagerInfo()
+    blocked = _blocked_names()
+    if entry_points is None:
+        entry_points = importlib.metadata.entry_points(group=ENTRY_POINT_GROUP)
+    owners: dict[str, str] = {}
+    for ep in entry_points:
+        if ep.name in blocked:
+            info.blocked.append(ep.name)
+            continue
+        owner = _entry_point_owner(ep)
+        if ep.name in owners:
+            raise PluginError(
+                f"two plugins use the entry-point name {ep.name!r}: {owners[ep.name]} and "
+                f"{owner}; uninstall one or block it with {BLOCK_ENV}={ep.name}"
+            )
+        owners[ep.name] = owner
+        try:
+            plugin = ep.load()
+        except Exception as exc:  # a broken third-party plugin must not stop the others
+            info.failed[ep.name] = f"{type(exc).__name__}: {exc}"
+            warnings.warn(
+                f"vpid-bench plugin {ep.name!r} ({owner}) failed to import and was skipped: "
+                f"{type(exc).__name__}: {exc}",
+                PluginLoadWarning,
+                stacklevel=2,
+            )
+            continue
+        pm.register(plugin, name=ep.name)
+    for name, plugin in extra_plugins:
+        pm.register(plugin, name=name)
+    pm.check_pending()
+    pm.vpid_bench_info = info  # type: ignore[attr-defined]
+    return pm
+
+
+class Registry:
+    """The problems and optimizers the plugins registered, by name."""
+
+    def __init__(self, pm: pluggy.PluginManager | None = None) -> None:
+        self.pm = pm if pm is not None else get_plugin_manager()
+        self.optimizers: dict[str, type[Optimizer]] = {}
+        self.problems: dict[str, type[Problem]] = {}
+        self._owner: dict[tuple[str, str], str] = {}
+        self._collect("optimizer", self.pm.hook.vpid_bench_register_optimizers, self.optimizers)
+        self._collect("problem", self.pm.hook.vpid_bench_register_problems, self.problems)
+
+    def _collect(self, kind: str, hook: Any, table: dict[str, Any]) -> None:
+        base, params_attr, params_base = {
+            "optimizer": (Optimizer, "Params", OptimizerParams),
+            "problem": (Problem, "Config", ProblemConfig),
+        }[kind]
+        # Oldest registration first, so error messages name plugins in load order.
+        for impl in reversed(hook.get_hookimpls()):
+            plugin_name = impl.plugin_name
+
+            def register(name: str, cls: type, _plugin: str = plugin_name) -> None:
+                if not isinstance(name, str) or not name.isidentifier():
+                    raise PluginError(
+                        f"plugin {_plugin!r} registered the {kind} name {name!r}: a name must "
+                        "be a Python identifier (letters, digits, underscores)"
+                    )
+                if not (isinstance(cls, type) and issubclass(cls, base)):
+                    raise PluginError(
+                        f"plugin {_plugin!r} registered {kind} {name!r} as {cls!r}, which is "
+                        f"not a subclass of {base.__module__}.{base.__name__}"
+                    )
+                params = getattr(cls, params_attr, None)
+                if not (dataclasses.is_dataclass(params) and issubclass(params, params_base)):
+                    raise PluginError(
+                        f"plugin {_plugin!r}: {kind} {name!r} needs a {params_attr} dataclass "
+                        f"deriving from {params_base.__name__}"
+                    )
+                if name in table:
+                    raise PluginError(
+                        f"{kind} name {name!r} is registered twice: by plugin "
+                        f"{self._owner[(kind, name)]!r} and by plugin {_plugin!r}; block one "
+                        f"with {BLOCK_ENV}=<plugin name>"
+                    )
+                table[name] = cls
+                self._owner[(kind, name)] = _plugin
+
+            impl.function(register=register)
+
+    def owner(self, kind: str, name: str) -> str:
+        """The name of the plugin that registered ``kind`` ``name``."""
+        return self._owner[(kind, name)]
+
+    def optimizer(self, name: str) -> type[Optimizer]:
+        """The optimizer class registered as ``name``; a clear error lists the known names."""
+        try:
+            return self.optimizers[name]
+        except KeyError:
+            raise ConfigError(
+                "optimizer", name, "one of " + ", ".join(sorted(self.optimizers))
+            ) from None
+
+    def problem(self, name: str) -> type[Problem]:
+        """The problem class registered as ``name``; a clear error lists the known names."""
+        try:
+            return self.problems[name]
+        except KeyError:
+            raise ConfigError("problem", name, "one of " + ", ".join(sorted(self.problems))) from None

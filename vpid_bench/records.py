@@ -1,0 +1,145 @@
+"""Run records: one JSON file per run, written atomically, named deterministically.
+
+A record says everything needed to repeat a run (config, seeds, versions) and to judge it
+(best vector in physical units, objective, NoRE and relative errors where true values are
+known, evaluations, trace, time). It is plain JSON (no pickle); non-finite floats are
+written as ``null``.
+
+Determinism: two runs of the same config and seed produce records that are identical except
+for the ``timing`` section (wall time, start time, host). :func:`fingerprint` drops that
+section, and tests compare fingerprints.
+
+File name: ``records/run-<index>-<run_id>.json`` inside the job's output directory. The
+``run_id`` is a hash of what determines the result (problem config, optimizer name and
+parameters, seed, budget, run index), so a re-run of the same job recognises its records.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import tempfile
+from collections.abc import Iterable, Iterator, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+SCHEMA = "vpid-bench/run-record/1"
+RECORDS_DIR = "records"
+
+
+class CorruptRecordError(ValueError):
+    """A record file exists but is not a complete, valid run record."""
+
+
+def _jsonable(obj: Any) -> Any:
+    """Convert numpy scalars/arrays and non-finite floats into strict-JSON values."""
+    if isinstance(obj, Mapping):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return [_jsonable(v) for v in obj.tolist()]
+    if isinstance(obj, (np.floating, float)):
+        value = float(obj)
+        return value if math.isfinite(value) else None
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
+
+
+def canonical_json(obj: Any) -> str:
+    """Compact JSON with sorted keys: the form hashed into ids."""
+    return json.dumps(_jsonable(obj), sort_keys=True, separators=(",", ":"), allow_nan=False)
+
+
+def stable_hash(obj: Any, length: int = 16) -> str:
+    """First ``length`` hex digits of the SHA-256 of ``canonical_json(obj)``."""
+    return hashlib.sha256(canonical_json(obj).encode()).hexdigest()[:length]
+
+
+def job_key(problem: Mapping, optimizer: Mapping, seed: int, budget: int) -> dict[str, Any]:
+    """What determines every run of a job, apart from the run index."""
+    return {"problem": problem, "optimizer": optimizer, "seed": seed, "budget": budget}
+
+
+def run_id(key: Mapping[str, Any], run_index: int) -> str:
+    """Deterministic id of run ``run_index`` of the job described by ``key``."""
+    return stable_hash({**key, "run_index": run_index})
+
+
+def record_path(job_dir: Path, run_index: int, rid: str) -> Path:
+    """Where the record of run ``run_index`` with id ``rid`` lives in ``job_dir``."""
+    return Path(job_dir) / RECORDS_DIR / f"run-{run_index:03d}-{rid}.json"
+
+
+def write_record(path: Path, record: Mapping[str, Any]) -> Path:
+    """Write ``record`` to ``path`` atomically: a temporary file in the same folder, fsync,
+    then ``os.replace``. A crash at any moment leaves either no file or a complete one."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    text = json.dumps(_jsonable(record), indent=1, sort_keys=True, allow_nan=False) + "\n"
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+REQUIRED_KEYS = (
+    "schema",
+    "run_id",
+    "run_index",
+    "status",
+    "problem",
+    "optimizer",
+    "seeds",
+    "budget",
+    "parameters",
+    "result",
+    "trace",
+    "config",
+    "versions",
+    "timing",
+)
+
+
+def read_record(path: Path) -> dict[str, Any]:
+    """Load and check one record; :class:`CorruptRecordError` names the file and the fault."""
+    path = Path(path)
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise CorruptRecordError(f"{path}: not a readable JSON run record ({exc})") from exc
+    if not isinstance(record, dict) or record.get("schema") != SCHEMA:
+        raise CorruptRecordError(f"{path}: not a vpid-bench run record (schema != {SCHEMA!r})")
+    missing = [k for k in REQUIRED_KEYS if k not in record]
+    if missing:
+        raise CorruptRecordError(f"{path}: incomplete run record, missing {', '.join(missing)}")
+    return record
+
+
+def fingerprint(record: Mapping[str, Any]) -> str:
+    """Canonical JSON of a record without its ``timing`` section (for determinism checks)."""
+    return canonical_json({k: v for k, v in record.items() if k != "timing"})
+
+
+def iter_record_files(paths: Iterable[Path]) -> Iterator[Path]:
+    """Every ``run-*.json`` record file below the given files or folders, sorted."""
+    for p in paths:
+        p = Path(p)
+        if p.is_file():
+            yield p
+        elif p.is_dir():
+            yield from sorted(p.rglob(f"{RECORDS_DIR}/run-*.json"))
