@@ -90,12 +90,26 @@ def get_plugin_manager(
                 stacklevel=2,
             )
             continue
-        pm.register(plugin, name=ep.name)
+        _register(pm, plugin, ep.name, owner)
     for name, plugin in extra_plugins:
-        pm.register(plugin, name=name)
-    pm.check_pending()
+        _register(pm, plugin, name, name)
+    try:
+        pm.check_pending()
+    except pluggy.PluginValidationError as exc:
+        raise PluginError(
+            f"plugin {pm.get_name(exc.plugin)!r} implements a hook vpid-bench does not know: "
+            f"{exc}; the hooks are vpid_bench_register_optimizers and "
+            "vpid_bench_register_problems"
+        ) from exc
     pm.vpid_bench_info = info  # type: ignore[attr-defined]
     return pm
+
+
+def _register(pm: pluggy.PluginManager, plugin: Any, name: str, owner: str) -> None:
+    try:
+        pm.register(plugin, name=name)
+    except pluggy.PluginValidationError as exc:
+        raise PluginError(f"plugin {name!r} ({owner}) has an invalid hook: {exc}") from exc
 
 
 class Registry:
@@ -164,4 +178,5 @@ class Registry:
         try:
             return self.problems[name]
         except KeyError:
-            raise ConfigError("problem", name, "one of " + ", ".join(sorted(self.problems))) from None
+            known = ", ".join(sorted(self.problems))
+            raise ConfigError("problem", name, "one of " + known) from None

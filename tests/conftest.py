@@ -1,0 +1,39 @@
+"""Shared test set-up: a headless matplotlib, and helpers to compose Hydra configs."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Iterator, Sequence
+
+import pytest
+
+os.environ.setdefault("MPLBACKEND", "Agg")
+os.environ.setdefault("MPLCONFIGDIR", tempfile.mkdtemp(prefix="vpid-mpl-"))
+
+
+@pytest.fixture(scope="session")
+def registry():
+    """The plugin registry of the installed environment (built-ins and third parties)."""
+    from vpid_bench.plugins import Registry
+
+    return Registry()
+
+
+@pytest.fixture(scope="session")
+def compose_config(registry) -> Iterator:
+    """``compose_config(overrides)`` -> the composed config, as the CLI would build it."""
+    from hydra import compose, initialize_config_module
+    from hydra.core.global_hydra import GlobalHydra
+
+    from vpid_bench.config_store import register_configs
+
+    register_configs(registry)
+
+    def _compose(overrides: Sequence[str] = ()):
+        GlobalHydra.instance().clear()
+        with initialize_config_module(version_base="1.3", config_module="vpid_bench.conf"):
+            return compose(config_name="config", overrides=list(overrides))
+
+    yield _compose
+    GlobalHydra.instance().clear()
