@@ -1,0 +1,111 @@
+"""Run records: every field, determinism, atomic writes, corrupt files."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vpid_bench import records as rec
+from vpid_bench.experiment import run_from_config, run_rng
+
+FAST = ["problem=functions", "optimizer=random", "runs=3", "problem.iterations=4",
+        "progress=false"]
+
+
+@pytest.fixture(scope="module")
+def job(tmp_path_factory, compose_config):
+    """One small job: 3 runs of random search on the 10-D sphere."""
+    out = tmp_path_factory.mktemp("job")
+    summary = run_from_config(compose_config(FAST), out)
+    return out, summary
+
+
+def _records(job_dir: Path) -> list[dict]:
+    return [rec.read_record(p) for p in rec.iter_record_files([job_dir])]
+
+
+def test_one_record_per_run_with_every_field(job):
+    job_dir, summary = job
+    records = _records(job_dir)
+    assert len(records) == 3 == summary.ran
+    r = records[0]
+    for key in rec.REQUIRED_KEYS:
+        assert key in r
+    assert r["schema"] == rec.SCHEMA and r["status"] == "ok" and r["error"] is None
+    assert r["problem"]["name"] == "functions" and r["optimizer"]["name"] == "random"
+    assert r["optimizer"]["params"] == {"ps": 20, "iterations": 4}
+    assert r["seeds"] == {"seed": 0, "run_index": 0, "spawn_key": [0]}
+    assert r["budget"] == 20 * 5
+    assert r["parameters"]["names"][:2] == ["x1", "x2"] and len(r["parameters"]["units"]) == 10
+    res = r["result"]
+    assert res["evaluations"] == 100 and len(res["x_best"]) == 10
+    assert res["f_best"] == pytest.approx(float(np.sum(np.square(res["x_best"]))))
+    assert r["trace"]["evaluations"] == [20, 40, 60, 80, 100]
+    assert r["trace"]["best"][-1] == res["f_best"]
+    assert all(a >= b for a, b in zip(r["trace"]["best"], r["trace"]["best"][1:]))
+    assert r["config"]["runs"] == 3 and "hydra" not in r["config"]
+    assert {"python", "numpy", "vpid-bench"} <= set(r["versions"])
+    assert r["timing"]["wall_time_s"] > 0
+
+
+def test_nore_and_relative_errors_where_true_values_exist(tmp_path, compose_config):
+    cfg = compose_config(FAST[:-1] + ["problem.function=rosenbrock", "runs=1"])
+    run_from_config(cfg, tmp_path)
+    (r,) = _records(tmp_path)
+    x = np.asarray(r["result"]["x_best"])
+    eps = 100 * (x - 1.0) / 1.0
+    np.testing.assert_allclose(r["result"]["rel_error_percent"], eps, rtol=1e-12)
+    assert r["result"]["nore"] == pytest.approx(np.linalg.norm(eps), rel=1e-12)
+
+
+def test_same_config_and_seed_give_identical_records(job, tmp_path, compose_config):
+    job_dir, _ = job
+    run_from_config(compose_config(FAST), tmp_path)
+    a = [rec.fingerprint(r) for r in _records(job_dir)]
+    b = [rec.fingerprint(r) for r in _records(tmp_path)]
+    assert a == b
+    names_a = sorted(p.name for p in rec.iter_record_files([job_dir]))
+    names_b = sorted(p.name for p in rec.iter_record_files([tmp_path]))
+    assert names_a == names_b  # deterministic run ids
+
+
+def test_different_seeds_and_runs_differ(job, tmp_path, compose_config):
+    job_dir, _ = job
+    run_from_config(compose_config(FAST + ["seed=1"]), tmp_path)
+    x0 = [r["result"]["x_best"] for r in _records(job_dir)]
+    x1 = [r["result"]["x_best"] for r in _records(tmp_path)]
+    assert x0[0] != x0[1] != x0[2]
+    assert all(a != b for a, b in zip(x0, x1))
+    ids0 = {r["run_id"] for r in _records(job_dir)}
+    assert ids0.isdisjoint(r["run_id"] for r in _records(tmp_path))
+
+
+def test_run_streams_are_seedsequence_children():
+    child = np.random.SeedSequence(7).spawn(3)[2]
+    expected = np.random.default_rng(child).random(4)
+    np.testing.assert_array_equal(run_rng(7, 2).random(4), expected)
+
+
+def test_atomic_write_leaves_no_temporary_file(tmp_path):
+    path = rec.write_record(tmp_path / "records" / "run-000-x.json", {"a": np.float64(np.inf)})
+    assert json.loads(path.read_text()) == {"a": None}  # strict JSON: non-finite -> null
+    assert [p.name for p in path.parent.iterdir()] == [path.name]
+
+
+@pytest.mark.parametrize(
+    "text, fragment",
+    [
+        ("{not json", "not a readable JSON"),
+        ('{"schema": "other"}', "not a vpid-bench run record"),
+        (json.dumps({"schema": rec.SCHEMA, "run_id": "x"}), "missing"),
+    ],
+)
+def test_corrupt_records_are_named(tmp_path, text, fragment):
+    path = tmp_path / "run-000-x.json"
+    path.write_text(text)
+    with pytest.raises(rec.CorruptRecordError, match=fragment) as info:
+        rec.read_record(path)
+    assert str(path) in str(info.value)
