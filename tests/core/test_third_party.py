@@ -72,3 +72,10 @@ def test_installed_plugin_rejects_an_unknown_parameter(installed_plugin, tmp_pat
     assert proc.returncode != 0
     assert "optimizer.sigmaa" in proc.stderr and "sigma" in proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+def test_help_lists_the_third_party_optimizer(installed_plugin, tmp_path):
+    proc = _run(installed_plugin, ["--help", "problem=functions", "optimizer=random"], tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    choices = proc.stdout.split("== Choices")[1].split("==")[0]
+    assert "local_search" in choices and "random" in choices
