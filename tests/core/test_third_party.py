@@ -77,5 +77,5 @@ def test_installed_plugin_rejects_an_unknown_parameter(installed_plugin, tmp_pat
 def test_help_lists_the_third_party_optimizer(installed_plugin, tmp_path):
     proc = _run(installed_plugin, ["--help", "problem=functions", "optimizer=random"], tmp_path)
     assert proc.returncode == 0, proc.stderr
-    choices = proc.stdout.split("== Choices")[1].split("==")[0]
+    choices = proc.stdout.split("== Choices (group=option) ==")[1].split("== Config")[0]
     assert "local_search" in choices and "random" in choices
