@@ -1,0 +1,136 @@
+"""The generational DE loop shared by DE1-DE8, as an ask/tell optimizer.
+
+``DifferentialEvolution.tell`` does the generic work (greedy selection, bookkeeping of the
+generation counter and of the best member); a variant only names its mutation kernel and says
+which factors (``F``, ``K``) a generation uses, in a few lines (see :mod:`vpid_de.variants`).
+
+Schedule: the first ``ask`` returns the initial population, ``ps`` uniform vectors in the box;
+every later ``ask`` returns one generation of ``ps`` trial vectors built from the *current*
+population only (generational updating: no trial sees a member replaced in the same
+generation; ``x_best`` is the best member of the current population). After ``iterations``
+generations ``done`` is true, so a run uses exactly ``ps * (iterations + 1)`` evaluations.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, ClassVar
+
+import numpy as np
+
+from vpid_bench.api import Bounds, ConfigError, Optimizer, OptimizerParams
+
+from .kernels import BOUNDS_RULES, MUTATIONS, binomial_crossover, draw_indices, greedy_selection
+
+DRAW_CHOICES = ("generation", "vector")
+
+
+@dataclasses.dataclass(frozen=True)
+class DEParams(OptimizerParams):
+    """Parameters every DE variant has.
+
+    ``CR``: crossover constant of Eq. 8, in [0, 1].
+    ``bounds``: what happens to a trial coordinate outside the box (the paper is silent):
+    ``reinit`` (default: a fresh uniform value in the box, what scipy's
+    ``differential_evolution`` does, so results compare with the most used implementation),
+    ``clip``, ``reflect`` or ``midpoint`` (half way between the parent and the face).
+    """
+
+    CR: float = 0.9
+    bounds: str = "reinit"
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.CR <= 1.0:
+            raise ConfigError("optimizer.CR", self.CR, "a number in [0, 1]")
+        if self.bounds not in BOUNDS_RULES:
+            raise ConfigError("optimizer.bounds", self.bounds, "one of " + ", ".join(BOUNDS_RULES))
+        if self.iterations < 0:
+            raise ConfigError("problem.iterations", self.iterations, "an integer >= 0")
+
+
+def check_draw(value: str) -> None:
+    """Validate a ``draw`` option (DE6, DE7): ``generation`` or ``vector``."""
+    if value not in DRAW_CHOICES:
+        raise ConfigError("optimizer.draw", value, "one of " + ", ".join(DRAW_CHOICES))
+
+
+class DifferentialEvolution(Optimizer):
+    """Generational DE with binomial crossover and greedy one-to-one selection.
+
+    Subclasses set ``Params``, ``mutation`` (a key of :data:`vpid_de.kernels.MUTATIONS`) and
+    override :meth:`factors`.
+    """
+
+    Params: ClassVar[type[OptimizerParams]] = DEParams
+    mutation: ClassVar[str] = "rand1"
+    label: ClassVar[str] = "de"
+
+    def __init__(self, params: DEParams, bounds: Bounds, rng: np.random.Generator) -> None:
+        super().__init__(params, bounds, rng)
+        self._kernel, self._n_random = MUTATIONS[self.mutation]
+        if params.ps < self._n_random + 1:
+            raise ConfigError(
+                "problem.ps",
+                params.ps,
+                f"at least {self._n_random + 1} for {self.label} ({self.mutation} draws "
+                f"{self._n_random} distinct vectors besides the target)",
+            )
+        self._repair = BOUNDS_RULES[params.bounds]
+        self._lower = bounds.lower
+        self._upper = bounds.upper
+        self.generation = 0  # generations completed after the initial population
+        self.population: np.ndarray | None = None
+        self.fitness: np.ndarray | None = None
+        self._pending: np.ndarray | None = None
+
+    # -- what a variant customises ------------------------------------------------------------
+    def factors(self) -> dict[str, Any]:
+        """Keyword arguments ``F`` (and ``K``) of the kernel for the generation being built.
+
+        ``self.generation`` is the number of generations completed (0 for the first)."""
+        return {"F": self.params.F}
+
+    def draw_factor(self, low: float, high: float, draw: str) -> float | np.ndarray:
+        """A factor ~ U(low, high): one scalar per generation, or a ``(ps, 1)`` column with
+        one value per target vector (``draw='vector'``)."""
+        if draw == "vector":
+            return self.rng.uniform(low, high, size=(self.params.ps, 1))
+        return float(self.rng.uniform(low, high))
+
+    # -- ask/tell -----------------------------------------------------------------------------
+    def trials(self) -> np.ndarray:
+        """One generation of trial vectors from the current population (mutation, Eq. 8
+        crossover, bounds rule). Random draws, in order: factors, indices, crossover,
+        bounds."""
+        X, f = self.population, self.fitness
+        factors = self.factors()
+        r = draw_indices(self.rng, self.params.ps, self._n_random)
+        best = int(np.argmin(f))
+        V = self._kernel(X, best, r, **factors)
+        U = binomial_crossover(X, V, self.params.CR, self.rng)
+        return self._repair(U, X, self._lower, self._upper, self.rng)
+
+    def ask(self) -> np.ndarray:
+        if self._pending is None:
+            if self.population is None:
+                U = self.bounds.sample(self.rng, self.params.ps)
+                self._pending = np.minimum(np.maximum(U, self._lower), self._upper)
+            else:
+                self._pending = self.trials()
+        return self._pending.copy()
+
+    def tell(self, X: np.ndarray, f: np.ndarray) -> None:
+        if self._pending is None or X.shape != self._pending.shape:
+            raise ValueError("tell() must follow ask() with the whole population it returned")
+        f = np.asarray(f, dtype=float).reshape(-1)
+        X = np.array(X, dtype=float)
+        if self.population is None:
+            self.population, self.fitness = X, f
+        else:
+            self.population, self.fitness = greedy_selection(self.population, self.fitness, X, f)
+            self.generation += 1
+        self._pending = None
+
+    @property
+    def done(self) -> bool:
+        return self.population is not None and self.generation >= self.params.iterations

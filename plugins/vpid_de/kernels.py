@@ -1,0 +1,173 @@
+"""The numerical pieces of differential evolution, vectorised over the population.
+
+Everything here is a pure function of arrays (and of a ``numpy.random.Generator`` where
+randomness is needed), so each piece is tested alone on a hand-built population:
+
+* :func:`draw_indices`: for every target ``i``, ``n`` mutually distinct random indices, all
+  different from ``i`` (the paper's ``r1 != r2 != ... != i``);
+* :data:`MUTATIONS`: one mutation kernel per equation of Gökdağ (2014), Eqs. 7, 9-14;
+* :func:`binomial_crossover`: Eq. 8 (``rand_j <= CR`` or ``j == rnbr(i)``);
+* :data:`BOUNDS_RULES`: how a trial coordinate outside the box is brought back;
+* :func:`greedy_selection`: one-to-one replacement when the trial is strictly better.
+
+Vectors are in physical units; the population ``X`` has shape ``(ps, dim)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+# ----------------------------------------------------------------------------------------------
+# Index drawing
+
+
+def draw_indices(rng: np.random.Generator, ps: int, n: int) -> np.ndarray:
+    """``(ps, n)`` integer array: row ``i`` holds ``n`` distinct indices in ``0..ps-1``, none
+    equal to ``i``, drawn uniformly without replacement.
+
+    Each row is the first ``n`` entries of a random permutation of the ``ps - 1`` other
+    members: argsort of uniform keys gives a uniform permutation, and indices ``>= i`` are
+    shifted by one to skip ``i``. One ``rng.random((ps, ps - 1))`` call per generation, so the
+    stream is reproducible and the cost is O(ps^2 log ps), negligible at ps = 20-30.
+    """
+    if n > ps - 1:
+        raise ValueError(f"cannot draw {n} distinct indices besides i from a population of {ps}")
+    keys = rng.random((ps, ps - 1))
+    r = np.argsort(keys, axis=1)[:, :n]
+    return r + (r >= np.arange(ps)[:, None])
+
+
+# ----------------------------------------------------------------------------------------------
+# Mutation kernels. Signature: kernel(X, best, r, F, K) -> V, shape (ps, dim).
+#   X: population (ps, dim); best: index of the best member of X; r: (ps, n) from draw_indices;
+#   F: scale factor, a scalar or a (ps, 1) column (one factor per target vector);
+#   K: combination factor (only Eq. 13 uses it).
+
+
+def rand1(X: np.ndarray, best: int, r: np.ndarray, F, K=None) -> np.ndarray:
+    """Eq. 7 (also Eq. 14 with F = R): ``v_i = x_r1 + F (x_r2 - x_r3)``."""
+    return X[r[:, 0]] + F * (X[r[:, 1]] - X[r[:, 2]])
+
+
+def best2(X: np.ndarray, best: int, r: np.ndarray, F, K=None) -> np.ndarray:
+    """Eq. 9: ``v_i = x_best + F (x_r1 + x_r2 - x_r3 - x_r4)``."""
+    return X[best] + F * (X[r[:, 0]] + X[r[:, 1]] - X[r[:, 2]] - X[r[:, 3]])
+
+
+def best1(X: np.ndarray, best: int, r: np.ndarray, F, K=None) -> np.ndarray:
+    """Eq. 10: ``v_i = x_best + F (x_r1 - x_r2)``."""
+    return X[best] + F * (X[r[:, 0]] - X[r[:, 1]])
+
+
+def current_to_best1(X: np.ndarray, best: int, r: np.ndarray, F, K=None) -> np.ndarray:
+    """Eq. 11: ``v_i = x_i + F (x_best - x_i) + F (x_r1 - x_r2)``."""
+    return X + F * (X[best] - X) + F * (X[r[:, 0]] - X[r[:, 1]])
+
+
+def rand2(X: np.ndarray, best: int, r: np.ndarray, F, K=None) -> np.ndarray:
+    """Eq. 12: ``v_i = x_r1 + F (x_r2 - x_r3) + F (x_r4 - x_r5)``."""
+    return X[r[:, 0]] + F * (X[r[:, 1]] - X[r[:, 2]]) + F * (X[r[:, 3]] - X[r[:, 4]])
+
+
+def current_to_rand1(X: np.ndarray, best: int, r: np.ndarray, F, K) -> np.ndarray:
+    """Eq. 13 (Karaboğa and Ökdem): ``v_i = x_i + K (x_r1 - x_i) + F (x_r2 - x_r3)``."""
+    return X + K * (X[r[:, 0]] - X) + F * (X[r[:, 1]] - X[r[:, 2]])
+
+
+#: name -> (kernel, number of random indices besides i it needs)
+MUTATIONS: dict[str, tuple[Callable[..., np.ndarray], int]] = {
+    "rand1": (rand1, 3),
+    "best2": (best2, 4),
+    "best1": (best1, 2),
+    "current_to_best1": (current_to_best1, 2),
+    "rand2": (rand2, 5),
+    "current_to_rand1": (current_to_rand1, 3),
+}
+
+
+# ----------------------------------------------------------------------------------------------
+# Crossover and selection
+
+
+def binomial_crossover(
+    X: np.ndarray, V: np.ndarray, CR: float, rng: np.random.Generator
+) -> np.ndarray:
+    """Eq. 8: ``u_ij = v_ij`` if ``rand_j <= CR`` or ``j == rnbr(i)``, else ``x_ij``.
+
+    ``rand_j ~ U[0, 1)`` is drawn per gene and ``rnbr(i)`` per vector, both fresh every
+    generation, so every trial keeps at least one mutant gene (even with ``CR = 0``).
+    """
+    ps, dim = X.shape
+    take = rng.random((ps, dim)) <= CR
+    take[np.arange(ps), rng.integers(dim, size=ps)] = True
+    return np.where(take, V, X)
+
+
+def greedy_selection(
+    X: np.ndarray, fX: np.ndarray, U: np.ndarray, fU: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """One-to-one selection: trial ``u_i`` replaces ``x_i`` when ``f(u_i) < f(x_i)``.
+
+    Strictly smaller, as the paper words it ("if u yields a smaller OF value"); a failed
+    trial (``inf``) never replaces anything. Returns new arrays; the inputs are not modified.
+    """
+    better = fU < fX
+    return np.where(better[:, None], U, X), np.where(better, fU, fX)
+
+
+# ----------------------------------------------------------------------------------------------
+# Bounds handling. Signature: rule(U, parent, lower, upper, rng) -> U inside [lower, upper].
+# Only coordinates outside the box change. Every rule ends with an exact clip, so rounding in
+# ``lower + something`` can never leave a candidate one ulp outside the box.
+
+
+def _exact(U: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    return np.minimum(np.maximum(U, lower), upper)
+
+
+def bounds_reinit(U, parent, lower, upper, rng: np.random.Generator) -> np.ndarray:
+    """A coordinate outside the box gets a fresh uniform value in ``[lower, upper)``, as
+    scipy's ``differential_evolution`` does. Keeps diversity; forgets the mutant's direction."""
+    out = (U < lower) | (U > upper)
+    if not out.any():
+        return U
+    fresh = lower + rng.random(U.shape) * (upper - lower)
+    return _exact(np.where(out, fresh, U), lower, upper)
+
+
+def bounds_clip(U, parent, lower, upper, rng=None) -> np.ndarray:
+    """Project onto the box. Piles candidates up on the faces of the box."""
+    return _exact(U, lower, upper)
+
+
+def bounds_reflect(U, parent, lower, upper, rng=None) -> np.ndarray:
+    """Mirror at the violated face (``2 lower - u``), folded repeatedly if a large step
+    crosses the whole box (a triangle wave of period ``2 (upper - lower)``)."""
+    out = (U < lower) | (U > upper)
+    if not out.any():
+        return U
+    width = upper - lower
+    y = np.mod(U - lower, 2.0 * width)
+    y = np.where(y > width, 2.0 * width - y, y)
+    return _exact(np.where(out, lower + y, U), lower, upper)
+
+
+def bounds_midpoint(U, parent, lower, upper, rng=None) -> np.ndarray:
+    """Half way between the parent ``x_i`` (inside the box) and the violated face:
+    ``(x_ij + lower_j) / 2`` below, ``(x_ij + upper_j) / 2`` above."""
+    below, above = U < lower, U > upper
+    if not (below.any() or above.any()):
+        return U
+    U = np.where(below, 0.5 * (parent + lower), U)
+    U = np.where(above, 0.5 * (parent + upper), U)
+    return _exact(U, lower, upper)
+
+
+BOUNDS_RULES: dict[str, Callable[..., np.ndarray]] = {
+    "reinit": bounds_reinit,
+    "clip": bounds_clip,
+    "reflect": bounds_reflect,
+    "midpoint": bounds_midpoint,
+}

@@ -1,0 +1,188 @@
+"""DE1-DE8 of Gökdağ (2014), Table I: one table, a few lines per variant.
+
+Each variant is a :class:`~vpid_de.base.DifferentialEvolution` with its own ``Params`` (whose
+defaults are Table I's values, so ``optimizer=de6 optimizer.K=0.4`` works and
+``optimizer=de1 optimizer.K=0.4`` is an unknown key), a mutation kernel and, where the scale
+factor is not a constant, a :meth:`factors` method. :data:`STRATEGIES` maps the command-line
+name to the class.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+from vpid_bench.api import ConfigError
+
+from .base import DEParams, DifferentialEvolution, check_draw
+
+EQ15_FORMS = ("das", "printed")
+
+
+@dataclasses.dataclass(frozen=True)
+class FixedFParams(DEParams):
+    """A constant scale factor ``F`` (Table I: F = 0.6, CR = 0.9 for DE1-DE5). The paper
+    gives F's range as 0:2."""
+
+    F: float = 0.6
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not 0.0 < self.F <= 2.0:
+            raise ConfigError("optimizer.F", self.F, "a number in (0, 2]")
+
+
+@dataclasses.dataclass(frozen=True)
+class DE1Params(FixedFParams):
+    """DE1, Eq. 7 (rand/1): F = 0.6, CR = 0.9."""
+
+
+@dataclasses.dataclass(frozen=True)
+class DE2Params(FixedFParams):
+    """DE2, Eq. 9 (best/2): F = 0.6, CR = 0.9."""
+
+
+@dataclasses.dataclass(frozen=True)
+class DE3Params(FixedFParams):
+    """DE3, Eq. 10 (best/1): F = 0.6, CR = 0.9."""
+
+
+@dataclasses.dataclass(frozen=True)
+class DE4Params(FixedFParams):
+    """DE4, Eq. 11 (current-to-best/1): F = 0.6, CR = 0.9."""
+
+
+@dataclasses.dataclass(frozen=True)
+class DE5Params(FixedFParams):
+    """DE5, Eq. 12 (rand/2): F = 0.6, CR = 0.9."""
+
+
+@dataclasses.dataclass(frozen=True)
+class DE6Params(DEParams):
+    """DE6, Eq. 13 (Karaboğa and Ökdem): K = 0.5, CR = 0.8, F ~ U(F_min, F_max) = U(-2, 2).
+
+    ``draw``: ``generation`` (default, the paper: "a random value between -2 and 2 at each
+    iteration") or ``vector`` (a fresh F for every target vector)."""
+
+    CR: float = 0.8
+    K: float = 0.5
+    F_min: float = -2.0
+    F_max: float = 2.0
+    draw: str = "generation"
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_draw(self.draw)
+        if not self.F_min <= self.F_max:
+            raise ConfigError("optimizer.F_max", self.F_max, f"a number >= F_min={self.F_min}")
+
+
+@dataclasses.dataclass(frozen=True)
+class DE7Params(DEParams):
+    """DE7, Eq. 14 (Das et al., random scale factor): CR = 0.9, R ~ U(R_min, R_max) =
+    U(0.5, 1).
+
+    ``draw``: ``generation`` (default, the paper's "at each iteration") or ``vector`` (Das et
+    al.'s original: a fresh R for every target vector)."""
+
+    R_min: float = 0.5
+    R_max: float = 1.0
+    draw: str = "generation"
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_draw(self.draw)
+        if not self.R_min <= self.R_max:
+            raise ConfigError("optimizer.R_max", self.R_max, f"a number >= R_min={self.R_min}")
+
+
+@dataclasses.dataclass(frozen=True)
+class DE8Params(DEParams):
+    """DE8, Eq. 14 with Eq. 15 (Das et al., time-varying scale factor): CR = 0.9,
+    R_max = 1.2, R_min = 0.4.
+
+    ``eq15``: ``das`` (default) ``R_k = (R_max - R_min)(K_max - k)/K_max + R_min``, linear from
+    R_max down towards R_min as Das et al. (2005) intend; ``printed`` drops the ``+ R_min``
+    as the paper prints Eq. 15 (R then runs from 0.8 towards 0). ``k`` = generations
+    completed (0 for the first generation), ``K_max`` = ``iterations``."""
+
+    R_max: float = 1.2
+    R_min: float = 0.4
+    eq15: str = "das"
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.eq15 not in EQ15_FORMS:
+            raise ConfigError("optimizer.eq15", self.eq15, "one of " + ", ".join(EQ15_FORMS))
+
+
+def eq15(k: int, k_max: int, r_max: float, r_min: float, form: str = "das") -> float:
+    """Eq. 15's scale factor at generation ``k`` (0-based) of ``k_max``."""
+    r = (r_max - r_min) * (k_max - k) / k_max
+    return r + r_min if form == "das" else r
+
+
+class DE1(DifferentialEvolution):
+    """Eq. 7, rand/1: ``v_i = x_r1 + F (x_r2 - x_r3)``."""
+
+    Params, mutation, label = DE1Params, "rand1", "de1"
+
+
+class DE2(DifferentialEvolution):
+    """Eq. 9, best/2: ``v_i = x_best + F (x_r1 + x_r2 - x_r3 - x_r4)``."""
+
+    Params, mutation, label = DE2Params, "best2", "de2"
+
+
+class DE3(DifferentialEvolution):
+    """Eq. 10, best/1: ``v_i = x_best + F (x_r1 - x_r2)``."""
+
+    Params, mutation, label = DE3Params, "best1", "de3"
+
+
+class DE4(DifferentialEvolution):
+    """Eq. 11, current-to-best/1: ``v_i = x_i + F (x_best - x_i) + F (x_r1 - x_r2)``."""
+
+    Params, mutation, label = DE4Params, "current_to_best1", "de4"
+
+
+class DE5(DifferentialEvolution):
+    """Eq. 12, rand/2: ``v_i = x_r1 + F (x_r2 - x_r3) + F (x_r4 - x_r5)``."""
+
+    Params, mutation, label = DE5Params, "rand2", "de5"
+
+
+class DE6(DifferentialEvolution):
+    """Eq. 13: ``v_i = x_i + K (x_r1 - x_i) + F (x_r2 - x_r3)``, F ~ U(-2, 2)."""
+
+    Params, mutation, label = DE6Params, "current_to_rand1", "de6"
+
+    def factors(self) -> dict[str, Any]:
+        p = self.params
+        return {"F": self.draw_factor(p.F_min, p.F_max, p.draw), "K": p.K}
+
+
+class DE7(DifferentialEvolution):
+    """Eq. 14: ``v_i = x_r1 + R (x_r2 - x_r3)``, R ~ U(0.5, 1)."""
+
+    Params, mutation, label = DE7Params, "rand1", "de7"
+
+    def factors(self) -> dict[str, Any]:
+        p = self.params
+        return {"F": self.draw_factor(p.R_min, p.R_max, p.draw)}
+
+
+class DE8(DifferentialEvolution):
+    """Eq. 14 with Eq. 15: ``v_i = x_r1 + R_k (x_r2 - x_r3)``, R_k decreasing linearly."""
+
+    Params, mutation, label = DE8Params, "rand1", "de8"
+
+    def factors(self) -> dict[str, Any]:
+        p = self.params
+        return {"F": eq15(self.generation, p.iterations, p.R_max, p.R_min, p.eq15)}
+
+
+#: command-line name -> optimizer class
+STRATEGIES: dict[str, type[DifferentialEvolution]] = {
+    cls.label: cls for cls in (DE1, DE2, DE3, DE4, DE5, DE6, DE7, DE8)
+}

@@ -1,0 +1,129 @@
+"""``optimizer=ga``: MATLAB R2014b's ``ga`` with default options on a bounded problem.
+
+One generation (``stepGA``): from the current population and scores,
+
+1. ``n_elite`` = EliteCount, ``n_xover = round(CrossoverFraction * (ps - n_elite))``,
+   ``n_mutate = ps - n_elite - n_xover``, ``n_parents = 2 n_xover + n_mutate``;
+2. expectations by rank scaling, ``n_parents`` parents by stochastic uniform selection, then
+   shuffled (a random permutation, as ``stepGA`` does against locality effects);
+3. the ``n_elite`` best members pass unchanged and are NOT evaluated again (their scores are
+   kept); ``n_xover`` scattered-crossover children come from the first ``2 n_xover``
+   parents, ``n_mutate`` adaptive-feasible mutation children from the rest.
+
+So the initial population costs ``ps`` evaluations and every generation ``ps - n_elite``:
+``ask`` returns only the children, and the run records' trace shows steps of
+``ps - n_elite``. The initial population is uniform in the bounds (``gacreationuniform``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import ClassVar
+
+import numpy as np
+
+from vpid_bench.api import Bounds, ConfigError, Optimizer, OptimizerParams
+
+from .operators import (
+    AdaptiveStep,
+    crossoverscattered,
+    fitscalingrank,
+    matlab_round,
+    mutationadaptfeasible,
+    selectionstochunif,
+)
+
+
+@dataclasses.dataclass(frozen=True)
+class GAParams(OptimizerParams):
+    """``elite_count``: members copied unchanged into the next generation; ``-1`` (default)
+    means R2014b's default ``floor(0.05 * ps)`` (1 at ps = 20 and at ps = 30).
+    ``crossover_fraction``: MATLAB's CrossoverFraction, default 0.8."""
+
+    elite_count: int = -1
+    crossover_fraction: float = 0.8
+
+    def __post_init__(self) -> None:
+        if self.ps < 2:
+            raise ConfigError("problem.ps", self.ps, "at least 2 for ga")
+        if self.iterations < 0:
+            raise ConfigError("problem.iterations", self.iterations, "an integer >= 0")
+        if not (self.elite_count == -1 or 0 <= self.elite_count < self.ps):
+            raise ConfigError(
+                "optimizer.elite_count", self.elite_count, f"-1 (default) or 0 ... {self.ps - 1}"
+            )
+        if not 0.0 <= self.crossover_fraction <= 1.0:
+            raise ConfigError("optimizer.crossover_fraction", self.crossover_fraction,
+                              "a number in [0, 1]")
+
+
+def default_elite_count(ps: int) -> int:
+    """R2014b's default EliteCount, ``floor(0.05 * PopulationSize)``."""
+    return math.floor(0.05 * ps)
+
+
+class GeneticAlgorithm(Optimizer):
+    """MATLAB-R2014b-like GA: rank scaling, stochastic uniform selection, elitism, scattered
+    crossover, adaptive-feasible mutation; ``iterations`` generations after the initial
+    population."""
+
+    Params: ClassVar[type[OptimizerParams]] = GAParams
+
+    def __init__(self, params: GAParams, bounds: Bounds, rng: np.random.Generator) -> None:
+        super().__init__(params, bounds, rng)
+        ps = params.ps
+        self.n_elite = default_elite_count(ps) if params.elite_count == -1 else params.elite_count
+        self.n_xover = matlab_round(params.crossover_fraction * (ps - self.n_elite))
+        self.n_mutate = ps - self.n_elite - self.n_xover
+        self.n_parents = 2 * self.n_xover + self.n_mutate
+        self.generation = 0  # generations completed after the initial population
+        self.population: np.ndarray | None = None
+        self.scores: np.ndarray | None = None
+        self.best_history: list[float] = []  # best score after each completed generation
+        self._step = AdaptiveStep()
+        self._elites: np.ndarray | None = None
+        self._elite_scores: np.ndarray | None = None
+        self._pending: np.ndarray | None = None
+
+    def _children(self) -> np.ndarray:
+        """Elites are set aside; returns the ``ps - n_elite`` children to evaluate."""
+        X, s = self.population, self.scores
+        expectation = fitscalingrank(s, self.n_parents)
+        parents = selectionstochunif(expectation, self.n_parents, self.rng)
+        parents = parents[self.rng.permutation(self.n_parents)]
+        elite = np.argsort(s, kind="stable")[: self.n_elite]
+        self._elites, self._elite_scores = X[elite].copy(), s[elite].copy()
+        xover = crossoverscattered(X, parents[: 2 * self.n_xover], self.rng)
+        step = self._step.update(self.generation + 1, self.best_history)
+        mutants = mutationadaptfeasible(
+            X, parents[2 * self.n_xover :], step, self.bounds.lower, self.bounds.upper, self.rng
+        )
+        return np.vstack([xover, mutants])
+
+    def ask(self) -> np.ndarray:
+        if self._pending is None:
+            if self.population is None:
+                U = self.bounds.sample(self.rng, self.params.ps)
+                self._pending = np.minimum(np.maximum(U, self.bounds.lower), self.bounds.upper)
+            else:
+                self._pending = self._children()
+        return self._pending.copy()
+
+    def tell(self, X: np.ndarray, f: np.ndarray) -> None:
+        if self._pending is None or X.shape != self._pending.shape:
+            raise ValueError("tell() must follow ask() with the whole population it returned")
+        f = np.asarray(f, dtype=float).reshape(-1)
+        X = np.array(X, dtype=float)
+        if self.population is None:
+            self.population, self.scores = X, f
+        else:
+            self.population = np.vstack([self._elites, X])
+            self.scores = np.concatenate([self._elite_scores, f])
+            self.generation += 1
+            self.best_history.append(float(np.min(self.scores)))
+        self._pending = None
+
+    @property
+    def done(self) -> bool:
+        return self.population is not None and self.generation >= self.params.iterations
