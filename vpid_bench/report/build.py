@@ -76,6 +76,7 @@ def _headline(stats_table: Any, verdicts: list[str]) -> Any:
                 zip(t.get("q1", np.nan * t["n_runs"]), t.get("q3", np.nan * t["n_runs"]),
                     strict=True)],
         "mean-vector NoRE": t["meanvec_nore"],
+        "rank by mean-vector NoRE": t["rank_meanvec_nore"],
         "paper NoRE": t["paper_nore"],
         "median f": t.get("f_median"),
     })
@@ -137,9 +138,12 @@ def _mean_vector_md(meanvec: Any) -> list[str]:
     if meanvec is None or meanvec.empty:
         return lines + ["No context has true parameter values: the mean-vector table needs "
                         "them (the per-run statistics below use the objective).", ""]
-    lines += [f"Mean over the successful runs of the identified vectors, its relative errors "
-              f"ε (%) and their norm NoRE (%). `paper`: {paper.CITATION} (Table III's DE2 row "
-              "repaired, see the note). `difference` = ours − paper.", ""]
+    text = ("Mean over the successful runs of the identified vectors, its relative errors "
+            "ε (%) and their norm NoRE (%).")
+    if (meanvec["source"] == "paper").any():
+        text += (f" `paper`: the published values, {paper.CITATION} (Table III's DE2 row "
+                 "repaired, see the note). `difference` = ours − paper.")
+    lines += [text, ""]
     for context, g in meanvec.groupby("context", sort=True):
         params = [c for c in g.columns if c not in {"context", "problem", "ps", "algorithm",
                                                      "n_runs", "source", "quantity", "nore",
@@ -177,7 +181,8 @@ def _tests_md(kw: Any, pairs: Any, fr: stats.FriedmanResult, alpha: float) -> li
     return lines
 
 
-def _signals_figure(df: Any, records: list[dict], problem: str, path: Path) -> Path | str:
+def _signals_figure(df: Any, records: list[dict], problem: str, path: Path,
+                    registry: Any = None) -> Path | str:
     ok = df[(df["problem"] == problem) & (df["status"] == "ok") & np.isfinite(df["metric"])]
     if ok.empty:
         return "no successful run"
@@ -190,7 +195,8 @@ def _signals_figure(df: Any, records: list[dict], problem: str, path: Path) -> P
         from ..experiment import build_problem
         from ..plugins import Registry
 
-        prob = build_problem(Registry(), {**rec["problem"]["config"], "name": problem})
+        registry = registry if registry is not None else Registry()
+        prob = build_problem(registry, {**rec["problem"]["config"], "name": problem})
         sig = prob.signals(np.asarray(x, dtype=float))
     except Exception as exc:  # a report must not die on a plugin's fault
         return f"could not rebuild the problem ({type(exc).__name__}: {exc})"
@@ -206,11 +212,14 @@ def build_report(
     short: bool = False,
     alpha: float = stats.ALPHA,
     baseline: str = tables.BASELINE,
+    registry: Any = None,
 ) -> Report:
     """Read the records below ``paths`` and write the report into ``out_dir``.
 
     ``short`` (a single job's report) skips the significance tests and the comparison
-    figures. Raises :class:`NoRecordsError` when no readable record exists.
+    figures. ``registry`` (default: the installed plugins) rebuilds the best run's problem
+    for the measured-vs-fitted figure. Raises :class:`NoRecordsError` when no readable
+    record exists.
     """
     paths = [Path(p) for p in paths]
     out_dir = Path(out_dir)
@@ -252,7 +261,7 @@ def build_report(
         figs[f"Relative errors of the mean vector, {p}"] = figures.rel_error_heatmap(
             meanvec, p, fdir / f"rel_error_{p}.png")
         figs[f"Measured vs fitted signals, best run, {p}"] = _signals_figure(
-            df, loaded.records, p, fdir / f"signals_{p}.png")
+            df, loaded.records, p, fdir / f"signals_{p}.png", registry)
     if not short:
         for context in sorted(df["context"].unique()):
             ranks = stats.mean_ranks_in_context(df, context)

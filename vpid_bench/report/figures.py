@@ -190,6 +190,5 @@ def cd_diagram(ranks: Any, pvalues: Any, title: str, path: Path, alpha: float) -
     plt = _plt()
     fig, ax = plt.subplots(figsize=(8, 1.2 + 0.35 * len(ranks)))
     sp.critical_difference_diagram(ranks, pvalues, ax=ax, alpha=alpha)
-    ax.set_title(title, fontsize=9)
-    ax.set_xlabel("mean rank (1 = best)")
+    ax.set_title(title + "\naxis: mean rank (1 = best)", fontsize=9)
     return _save(fig, path)

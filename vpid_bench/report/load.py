@@ -154,6 +154,37 @@ def grouping(records: list[dict[str, Any]]) -> tuple[dict[str, list[str]], dict[
             {o: _varying(rows) for o, rows in by_opt.items()})
 
 
+#: Context keys left out of the label when the population size and the other varying keys
+#: already determine them (e.g. the budget of ``ps * (iterations + 1)`` when ps varies).
+IMPLIED_KEYS = ("budget", "iterations")
+
+
+def _drop_implied(
+    records: list[dict[str, Any]], keys: dict[str, list[str]]
+) -> dict[str, list[str]]:
+    """``keys`` without the implied keys that ps and the other varying keys determine."""
+    out = {}
+    for pname, varying in keys.items():
+        kept = list(varying)
+        for key in IMPLIED_KEYS:
+            if key not in kept:
+                continue
+            others = [k for k in kept if k not in IMPLIED_KEYS]
+            seen: dict[str, set[str]] = {}
+            for r in records:
+                if r["problem"]["name"] != pname:
+                    continue
+                pflat = flatten(r["problem"].get("config") or {})
+                pflat["budget"] = r.get("budget")
+                ps = (r["optimizer"].get("params") or {}).get("ps", pflat.get("ps"))
+                ident = repr((ps, [pflat.get(k) for k in others]))
+                seen.setdefault(ident, set()).add(repr(pflat.get(key)))
+            if all(len(v) == 1 for v in seen.values()):
+                kept.remove(key)
+        out[pname] = kept
+    return out
+
+
 def runs_frame(records: list[dict[str, Any]]) -> Any:
     """The tidy table of all runs (a pandas DataFrame, one row per record).
 
@@ -169,6 +200,7 @@ def runs_frame(records: list[dict[str, Any]]) -> Any:
     import pandas as pd
 
     problem_keys, optimizer_keys = grouping(records)
+    problem_keys = _drop_implied(records, problem_keys)
     rows = []
     for r in records:
         pname = r["problem"]["name"]

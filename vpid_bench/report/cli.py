@@ -1,0 +1,69 @@
+"""``vpid-bench-report DIR... [-o OUT]``: one report from any set of run records.
+
+Merges the records below every given folder (sweeps, single jobs, record files) and writes
+the report into ``OUT`` (default ``report`` in the current folder). Exit status: 0 when the
+report was written and every record and job was fine, 1 when it was written but some job or
+run failed or some record was unreadable, 2 for a usage error or when no record was found.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="vpid-bench-report",
+        description="Build a vpid-bench report (Markdown, CSV, LaTeX, PNG figures) from the "
+        "run records below one or more sweep or job folders, merged.",
+    )
+    p.add_argument("paths", nargs="+", type=Path, metavar="DIR",
+                   help="sweep folders, job folders or record files (any number)")
+    p.add_argument("-o", "--out", type=Path, default=Path("report"),
+                   help="output folder (default: ./report)")
+    p.add_argument("--short", action="store_true",
+                   help="skip the significance tests and critical-difference diagrams")
+    p.add_argument("--alpha", type=float, default=0.05,
+                   help="significance level after Holm correction (default 0.05)")
+    p.add_argument("--baseline", default="random",
+                   help="optimizer name of the baseline to clear (default: random)")
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Console entry point ``vpid-bench-report``; returns (and exits with) the status."""
+    args = _parser().parse_args(argv)
+    missing = [str(p) for p in args.paths if not p.exists()]
+    if missing:
+        print(f"error: no such file or folder: {', '.join(missing)}", file=sys.stderr)
+        return _exit(2, argv)
+    if not 0.0 < args.alpha < 1.0:
+        print(f"error: --alpha={args.alpha} is not allowed: a number between 0 and 1",
+              file=sys.stderr)
+        return _exit(2, argv)
+    from .build import NoRecordsError, build_report
+
+    try:
+        report = build_report(args.paths, args.out, short=args.short, alpha=args.alpha,
+                              baseline=args.baseline)
+    except NoRecordsError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return _exit(2, argv)
+    print(report.headline)
+    print(f"\nreport: {report.report_md} ({report.n_records} run records)")
+    for line in report.failures:
+        print(f"warning: {line}", file=sys.stderr)
+    return _exit(1 if report.failures else 0, argv)
+
+
+def _exit(code: int, argv: Sequence[str] | None) -> int:
+    if argv is None:  # called as the console script
+        sys.exit(code)
+    return code
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()
