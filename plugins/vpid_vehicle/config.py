@@ -1,0 +1,219 @@
+"""Settings of ``problem=vehicle`` (frozen dataclasses) and their validation.
+
+Every field is a Hydra key under ``problem.``: ``problem.vehicle.m``, ``problem.bump.V``,
+``problem.noise.level`` ... Units are SI except the bump speed ``V``, which is in km/h as in
+the paper. Defaults are the paper's vehicle and test (Gökdağ 2014, see ../shared/paper/NOTES.md).
+
+:func:`validate` raises :class:`vpid_bench.api.ConfigError` naming the key as the user types
+it, so a bad override fails in one line before any simulation starts.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from vpid_bench.api import ConfigError, ProblemConfig
+
+#: The unknowns of Eq. (4), in order, with their units.
+PARAM_NAMES: tuple[str, ...] = ("m", "I", "m1", "m2", "k1", "k2", "c1", "c2", "a1")
+PARAM_UNITS: tuple[str, ...] = ("kg", "kg m^2", "kg", "kg", "N/m", "N/m", "N s/m", "N s/m", "m")
+
+INTEGRATORS = ("newmark", "exact")
+SAMPLINGS = ("point", "average")
+NOISE_MODELS = ("multiplicative", "additive", "uniform")
+
+
+@dataclass(frozen=True)
+class VehicleParams:
+    """The half-car (bicycle) model. Masses in kg, ``I`` in kg m^2, stiffnesses in N/m,
+    damping in N s/m, lengths in m. ``a1`` is the distance from the centre of gravity to the
+    front axle, ``L`` the wheelbase (known), so ``a2 = L - a1``. ``kt1``, ``kt2`` (tyre
+    stiffnesses) are known and not identified."""
+
+    m: float = 505.1
+    I: float = 651.0
+    m1: float = 28.58
+    m2: float = 54.3
+    k1: float = 15000.0
+    k2: float = 15000.0
+    c1: float = 1828.0
+    c2: float = 1828.0
+    a1: float = 1.468
+    L: float = 2.566
+    kt1: float = 155900.0
+    kt2: float = 155900.0
+
+
+@dataclass(frozen=True)
+class BumpConfig:
+    """Rectangular bump: speed ``V`` in km/h (the paper's unit), height ``h`` and width
+    ``w`` in m. The rear tyre meets it ``L / V`` after the front one."""
+
+    V: float = 20.0
+    h: float = 0.04
+    w: float = 0.10
+
+
+@dataclass(frozen=True)
+class NewmarkConfig:
+    """Newmark-beta constants; the default is the average-acceleration (trapezoidal) rule.
+    ``gamma`` in [0.5, 1] (below 1/2 the scheme adds energy), ``beta`` in [0, 0.5]."""
+
+    gamma: float = 0.5
+    beta: float = 0.25
+
+
+@dataclass(frozen=True)
+class RecordConfig:
+    """``extra``: seconds recorded after the paper's window ``(L + w) / V`` ends (>= 0)."""
+
+    extra: float = 0.0
+
+
+@dataclass(frozen=True)
+class NoiseConfig:
+    """Measurement noise added once to the synthetic reference.
+
+    ``model``: ``multiplicative`` (z (1 + level n), n ~ N(0, 1) per sample, the default
+    reading of the paper's "5 %"), ``additive`` (z + level rms(z) n, rms per channel) or
+    ``uniform`` (z (1 + level u), u ~ U(-1, 1)). ``seed`` seeds the noise generator only.
+    """
+
+    level: float = 0.05
+    model: str = "multiplicative"
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class ReferenceConfig:
+    """How the reference record is made. ``null`` means "the same as the model".
+
+    ``integrator``, ``dt`` (s, must divide ``problem.dt``) and ``sampling`` let the synthetic
+    reference differ from the model that fits it (no "inverse crime"). ``file``: a CSV with
+    a measured record (columns ``t, z1dd, z2dd`` in s and m/s^2) fitted instead; no noise is
+    added to it.
+    """
+
+    integrator: str | None = None
+    dt: float | None = None
+    sampling: str | None = None
+    file: str | None = None
+
+
+@dataclass(frozen=True)
+class BoundsConfig:
+    """The search box is ``[lower_factor, upper_factor] x`` the true values."""
+
+    lower_factor: float = 0.5
+    upper_factor: float = 1.5
+
+
+@dataclass(frozen=True)
+class VehicleConfig(ProblemConfig):
+    """``problem=vehicle``: identify 9 parameters of a half-car from two body accelerations.
+
+    ``dt`` is the integration step and sample interval in s; ``integrator`` is ``newmark``
+    (fast compiled kernel) or ``exact`` (matrix exponential, for validation); ``sampling`` is
+    how the step input enters Newmark: ``point`` (y at t_k) or ``average`` (each step gets
+    the exact mean of y over the step; see :mod:`vpid_vehicle.road`).
+    """
+
+    vehicle: VehicleParams = field(default_factory=VehicleParams)
+    bump: BumpConfig = field(default_factory=BumpConfig)
+    dt: float = 0.001
+    integrator: str = "newmark"
+    sampling: str = "point"
+    newmark: NewmarkConfig = field(default_factory=NewmarkConfig)
+    record: RecordConfig = field(default_factory=RecordConfig)
+    noise: NoiseConfig = field(default_factory=NoiseConfig)
+    reference: ReferenceConfig = field(default_factory=ReferenceConfig)
+    bounds: BoundsConfig = field(default_factory=BoundsConfig)
+
+
+def _finite(key: str, value: float, allowed: str) -> None:
+    if not math.isfinite(value):
+        raise ConfigError(key, value, allowed)
+
+
+def _positive(key: str, value: float, allowed: str) -> None:
+    if not (math.isfinite(value) and value > 0):
+        raise ConfigError(key, value, allowed)
+
+
+def _choice(key: str, value: str | None, choices: tuple[str, ...], nullable: bool = False) -> None:
+    if value is None and nullable:
+        return
+    if value not in choices:
+        allowed = "one of " + ", ".join(choices) + (" or null" if nullable else "")
+        raise ConfigError(key, value, allowed)
+
+
+def window(config: VehicleConfig) -> float:
+    """The record length T in s: front tyre meets the bump until the rear one leaves it,
+    ``(L + w) / V``, plus ``record.extra``."""
+    v = config.bump.V / 3.6
+    return (config.vehicle.L + config.bump.w) / v + config.record.extra
+
+
+def validate(config: VehicleConfig) -> None:
+    """Raise ConfigError for the first value that makes no physical or numerical sense."""
+    p = config.vehicle
+    for name in ("m", "m1", "m2"):
+        _positive(f"problem.vehicle.{name}", getattr(p, name), "a mass > 0 (kg)")
+    _positive("problem.vehicle.I", p.I, "an inertia > 0 (kg m^2)")
+    for name in ("k1", "k2", "kt1", "kt2"):
+        _positive(f"problem.vehicle.{name}", getattr(p, name), "a stiffness > 0 (N/m)")
+    for name in ("c1", "c2"):
+        value = getattr(p, name)
+        if not (math.isfinite(value) and value >= 0):
+            raise ConfigError(f"problem.vehicle.{name}", value, "a damping >= 0 (N s/m)")
+    _positive("problem.vehicle.L", p.L, "a wheelbase > 0 (m)")
+    if not (math.isfinite(p.a1) and 0.0 < p.a1 < p.L):
+        raise ConfigError("problem.vehicle.a1", p.a1, f"a value in (0, L) = (0, {p.L:g}) m")
+    _positive("problem.bump.V", config.bump.V, "a speed > 0 (km/h)")
+    _finite("problem.bump.h", config.bump.h, "a finite bump height (m)")
+    _positive("problem.bump.w", config.bump.w, "a bump width > 0 (m)")
+    _positive("problem.dt", config.dt, "a time step > 0 (s)")
+    _choice("problem.integrator", config.integrator, INTEGRATORS)
+    _choice("problem.sampling", config.sampling, SAMPLINGS)
+    nm = config.newmark
+    if not (math.isfinite(nm.gamma) and 0.5 <= nm.gamma <= 1.0):
+        raise ConfigError("problem.newmark.gamma", nm.gamma, "a value in [0.5, 1] (default 0.5)")
+    if not (math.isfinite(nm.beta) and 0.0 <= nm.beta <= 0.5):
+        raise ConfigError("problem.newmark.beta", nm.beta, "a value in [0, 0.5] (default 0.25)")
+    extra = config.record.extra
+    if not (math.isfinite(extra) and extra >= 0):
+        raise ConfigError("problem.record.extra", extra, "seconds >= 0 recorded after the window")
+    T = window(config)
+    if T < config.dt:
+        raise ConfigError("problem.dt", config.dt, f"a step no longer than the window T = {T:g} s")
+    nz = config.noise
+    if not (math.isfinite(nz.level) and nz.level >= 0):
+        raise ConfigError("problem.noise.level", nz.level, "a noise level >= 0 (0.05 = 5 %)")
+    _choice("problem.noise.model", nz.model, NOISE_MODELS)
+    if nz.seed < 0:
+        raise ConfigError("problem.noise.seed", nz.seed, "an integer >= 0")
+    ref = config.reference
+    _choice("problem.reference.integrator", ref.integrator, INTEGRATORS, nullable=True)
+    _choice("problem.reference.sampling", ref.sampling, SAMPLINGS, nullable=True)
+    if ref.dt is not None:
+        _positive("problem.reference.dt", ref.dt, "a time step > 0 (s) or null")
+        ratio = config.dt / ref.dt
+        if abs(ratio - round(ratio)) > 1e-6 * ratio or round(ratio) < 1:
+            raise ConfigError(
+                "problem.reference.dt", ref.dt,
+                f"null or a step dividing problem.dt = {config.dt:g} s (e.g. {config.dt / 10:g})",
+            )
+    b = config.bounds
+    _positive("problem.bounds.lower_factor", b.lower_factor, "a factor > 0")
+    if not (math.isfinite(b.upper_factor) and b.upper_factor > b.lower_factor):
+        raise ConfigError(
+            "problem.bounds.upper_factor", b.upper_factor,
+            f"a factor > problem.bounds.lower_factor = {b.lower_factor:g}",
+        )
+    if b.upper_factor * p.a1 >= p.L:
+        raise ConfigError(
+            "problem.bounds.upper_factor", b.upper_factor,
+            f"a factor with upper_factor * a1 < L, i.e. < {p.L / p.a1:.4g} (a2 = L - a1 > 0)",
+        )

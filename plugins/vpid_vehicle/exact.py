@@ -1,0 +1,65 @@
+"""Exact response of the linear model to the rectangular bump (validation solver).
+
+State ``s = [q, q']`` (8 values), ``s' = A s + B y`` with ``A = [[0, I], [-M^-1 K, -M^-1 C]]``
+and ``B = [[0], [M^-1 B_y]]``. The input ``y`` is piecewise constant, so each grid step is
+split at the bump edges that fall inside it and every piece is propagated exactly (zero-order
+hold is exact here) with one matrix exponential of the augmented matrix
+``[[A, B], [0, 0]] tau``, whose top blocks are ``exp(A tau)`` and ``int_0^tau exp(A s) ds B``.
+Only a handful of distinct piece lengths occur, so the exponentials are computed once per
+length for the whole population (``scipy.linalg.expm`` is batched).
+
+The outputs are exact up to round-off at the sample times: the body accelerations do not
+depend on the input directly (the road acts on the wheels only).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .model import KnownConstants, matrices, response_rows, tyre_input
+from .road import TIME_TOL, Bump
+
+
+def _pieces(t0: float, t1: float, bump: Bump) -> list[tuple[float, float]]:
+    """``(duration, midpoint)`` of the pieces of ``[t0, t1]`` between bump edges."""
+    cuts = [t0] + [e for e in sorted(bump.edges) if t0 + TIME_TOL < e < t1 - TIME_TOL] + [t1]
+    return [(b - a, 0.5 * (a + b)) for a, b in zip(cuts[:-1], cuts[1:], strict=True)]
+
+
+def body_accelerations(
+    X: np.ndarray, known: KnownConstants, bump: Bump, t: np.ndarray
+) -> np.ndarray:
+    """Exact z1'' and z2'' (m/s^2) at the times ``t`` (s, increasing from 0, the system at
+    rest at t = 0), shape ``(n, 2, len(t))``."""
+    from scipy.linalg import expm  # lazy: keeps the plugin's import chain light
+
+    M, C, K = matrices(X, known)
+    n = M.shape[0]
+    Minv = np.linalg.inv(M)
+    aug = np.zeros((n, 10, 10))
+    aug[:, :4, 4:8] = np.eye(4)
+    aug[:, 4:8, :4] = -Minv @ K
+    aug[:, 4:8, 4:8] = -Minv @ C
+    aug[:, 4:8, 8:] = Minv @ tyre_input(known)
+    cache: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+
+    def propagator(tau: float) -> tuple[np.ndarray, np.ndarray]:
+        key = round(tau, 12)
+        if key not in cache:
+            E = expm(aug * tau)
+            cache[key] = (E[:, :8, :8], E[:, :8, 8:])
+        return cache[key]
+
+    s = np.zeros((n, 8))
+    states = np.empty((len(t), n, 8))
+    states[0] = s
+    for k in range(1, len(t)):
+        for tau, mid in _pieces(float(t[k - 1]), float(t[k]), bump):
+            Phi, Gamma = propagator(tau)
+            y = bump.value(np.array([mid]))[0]
+            s = np.einsum("nij,nj->ni", Phi, s) + Gamma @ y
+        states[k] = s
+    # acceleration = -M^-1 (K q + C q') (+ M^-1 B_y y, zero in the body rows)
+    acc = -(np.einsum("nij,knj->kni", Minv @ K, states[..., :4])
+            + np.einsum("nij,knj->kni", Minv @ C, states[..., 4:]))
+    return np.einsum("nij,knj->nik", response_rows(X, known), acc)

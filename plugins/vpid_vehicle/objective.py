@@ -1,0 +1,49 @@
+"""The objective of Eq. (3) and the measurement noise added to a synthetic reference.
+
+Signals are arrays ``(2, N)`` (channels z1'', z2'' in m/s^2, N samples); a population's
+responses are ``(n, 2, N)``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def objective(responses: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Eq. (3): ``sum_i ||zr_i - zc_i|| / sum_i ||zr_i||`` with Euclidean norms over the
+    samples; shape ``(n,)``, dimensionless. A candidate with a non-finite response gets inf."""
+    responses = np.asarray(responses, dtype=float)
+    num = np.sqrt(np.sum((responses - reference[None]) ** 2, axis=2)).sum(axis=1)
+    den = float(np.sqrt(np.sum(reference**2, axis=1)).sum())
+    with np.errstate(invalid="ignore"):
+        f = num / den
+    f[~np.isfinite(f)] = np.inf
+    return f
+
+
+def add_noise(clean: np.ndarray, level: float, model: str, rng: np.random.Generator) -> np.ndarray:
+    """The clean signals ``(2, N)`` with noise, drawn from ``rng`` (channel z1'' first).
+
+    ``multiplicative``: ``z (1 + level n)``, n ~ N(0, 1) per sample; ``additive``:
+    ``z + level rms(z) n`` with the rms of each channel; ``uniform``: ``z (1 + level u)``,
+    u ~ U(-1, 1).
+    """
+    clean = np.asarray(clean, dtype=float)
+    if model == "multiplicative":
+        return clean * (1.0 + level * rng.standard_normal(clean.shape))
+    if model == "additive":
+        rms = np.sqrt(np.mean(clean**2, axis=1, keepdims=True))
+        return clean + level * rms * rng.standard_normal(clean.shape)
+    if model == "uniform":
+        return clean * (1.0 + level * rng.uniform(-1.0, 1.0, clean.shape))
+    raise ValueError(f"unknown noise model {model!r}")
+
+
+def noise_summary(clean: np.ndarray, noisy: np.ndarray) -> dict[str, float]:
+    """Realised noise per channel: ``rms(noisy - clean) / rms(clean)`` (dimensionless)."""
+    out = {}
+    for i, name in enumerate(("z1dd", "z2dd")):
+        rms_clean = float(np.sqrt(np.mean(clean[i] ** 2)))
+        rms_noise = float(np.sqrt(np.mean((noisy[i] - clean[i]) ** 2)))
+        out[f"{name}_relative_rms"] = rms_noise / rms_clean if rms_clean > 0 else float("nan")
+    return out

@@ -1,0 +1,154 @@
+"""``problem=vehicle``: identify the 9 unknowns of Eq. (4) from two body accelerations.
+
+The reference record is made once per problem instance (synthetic: the true vehicle, an
+integrator, then noise drawn from ``problem.noise.seed``; or read from
+``problem.reference.file``) and shared by every run of the job. ``evaluate`` simulates a
+whole population per call with the compiled Newmark kernel (or the exact solver).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from vpid_bench.api import Bounds, Problem
+
+from .config import PARAM_NAMES, PARAM_UNITS, VehicleConfig, validate, window
+from .model import KnownConstants, physical
+from .objective import add_noise, noise_summary, objective
+from .reference_io import read_measured, write_reference
+from .road import Bump
+from .simulator import Simulator
+
+
+class VehicleProblem(Problem):
+    """Half-car parameter identification (Gökdağ 2014); see docs/vehicle.md."""
+
+    Config = VehicleConfig
+    name = "vehicle"
+
+    def __init__(self, config: VehicleConfig) -> None:
+        super().__init__(config)
+        validate(config)
+        p = config.vehicle
+        self.known = KnownConstants(L=p.L, kt1=p.kt1, kt2=p.kt2)
+        self.bump = Bump.from_geometry(config.bump.V, config.bump.h, config.bump.w, p.L)
+        self.T = window(config)
+        self._x_true = np.array([getattr(p, n) for n in PARAM_NAMES], dtype=float)
+        self._x_true.setflags(write=False)
+        self._bounds = Bounds(
+            config.bounds.lower_factor * self._x_true,
+            config.bounds.upper_factor * self._x_true,
+            PARAM_NAMES,
+            PARAM_UNITS,
+        )
+        nm = config.newmark
+        self.model = Simulator(self.known, self.bump, self.T, config.dt, config.integrator,
+                               config.sampling, nm.gamma, nm.beta)
+        self.t = self.model.t_out
+        ref = config.reference
+        if ref.file is not None:
+            self.reference_source = "file"
+            self.reference_clean: np.ndarray | None = None
+            self.reference = read_measured(ref.file, self.t, config.dt)
+        else:
+            self.reference_source = "synthetic"
+            dt_ref = config.dt if ref.dt is None else ref.dt
+            ref_sim = Simulator(
+                self.known, self.bump, self.T, dt_ref,
+                ref.integrator or config.integrator, ref.sampling or config.sampling,
+                nm.gamma, nm.beta, stride=int(round(config.dt / dt_ref)),
+            )
+            clean = ref_sim(self._x_true[None])[0]
+            if clean.shape[1] != self.t.size:  # pragma: no cover - guarded by validate()
+                raise RuntimeError("reference and model grids differ")
+            rng = np.random.default_rng(config.noise.seed)
+            self.reference_clean = clean
+            self.reference = add_noise(clean, config.noise.level, config.noise.model, rng)
+        self.reference.setflags(write=False)
+
+    @property
+    def bounds(self) -> Bounds:
+        return self._bounds
+
+    @property
+    def x_true(self) -> np.ndarray | None:
+        return self._x_true.copy()
+
+    def responses(self, X: np.ndarray) -> np.ndarray:
+        """z1'' and z2'' (m/s^2) computed for the rows of ``X``, ``(n, 2, N)``; NaN rows for
+        non-physical candidates (a mass <= 0, a1 outside (0, L), ...)."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        out = np.full((X.shape[0], 2, self.t.size), np.nan)
+        ok = physical(X, self.known)
+        if np.any(ok):
+            with np.errstate(all="ignore"):
+                out[ok] = self.model(X[ok])
+        return out
+
+    def evaluate(self, X: np.ndarray) -> np.ndarray:
+        """Eq. (3) for every row of ``X`` (shape ``(n, 9)``), ``inf`` where a simulation fails."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        try:
+            return objective(self.responses(X), self.reference)
+        except (ValueError, FloatingPointError, ZeroDivisionError, np.linalg.LinAlgError):
+            return np.full(X.shape[0], np.inf)
+
+    def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        fitted = self.responses(np.asarray(x, dtype=float).reshape(1, -1))[0]
+        return {
+            "t": self.t.copy(),
+            "z1'':measured": self.reference[0].copy(),
+            "z1'':fitted": fitted[0],
+            "z2'':measured": self.reference[1].copy(),
+            "z2'':fitted": fitted[1],
+        }
+
+    def _f_at_true(self) -> float:
+        """The objective at the true vector: the floor that noise (or a model mismatch) sets."""
+        if not hasattr(self, "_f_true"):
+            self._f_true = float(self.evaluate(self._x_true[None])[0])
+        return self._f_true
+
+    def describe(self) -> dict[str, Any]:
+        cfg = self.config
+        rear_in = max(0.0, min(self.bump.rear_off, self.T) - self.bump.rear_on)
+        info: dict[str, Any] = {
+            "samples": int(self.t.size),
+            "window_s": float(self.T),
+            "t_last_s": float(self.t[-1]),
+            "dt_s": float(cfg.dt),
+            "integrator": cfg.integrator,
+            "sampling": cfg.sampling,
+            "bump_edges_s": [float(e) for e in self.bump.edges],
+            "rear_excited_s": float(rear_in),
+            "reference": {"source": self.reference_source},
+            "f_at_true": self._f_at_true(),
+        }
+        ref = cfg.reference
+        if self.reference_source == "file":
+            info["reference"]["file"] = str(ref.file)
+            info["noise"] = {"applied": False}
+        else:
+            info["reference"].update(
+                integrator=ref.integrator or cfg.integrator,
+                dt_s=float(ref.dt or cfg.dt),
+                sampling=ref.sampling or cfg.sampling,
+            )
+            info["noise"] = {
+                "applied": cfg.noise.level > 0,
+                "model": cfg.noise.model,
+                "level": cfg.noise.level,
+                "seed": cfg.noise.seed,
+                **noise_summary(self.reference_clean, self.reference),
+            }
+        return info
+
+    def write_artifacts(self, directory: Path) -> list[Path]:
+        directory = Path(directory)
+        directory.mkdir(parents=True, exist_ok=True)
+        path = write_reference(directory / "reference.csv", self.t, self.reference,
+                               self.reference_clean)
+        return [path]

@@ -1,0 +1,109 @@
+"""The road input: a rectangular bump met by the front tyre at t = 0 and by the rear tyre
+``L / V`` later, sampled on the record's time grid.
+
+Times in s, heights in m. The record window is ``T = (L + w) / V + extra`` and the grid is
+``t_k = k dt`` for ``k = 0 ... floor(T / dt)``. Two ways to feed a step input to a
+time-stepping integrator (NOTES.md):
+
+* ``point``: ``y_k = y(t_k)``, with ``start <= t_k < end`` judged with a 1e-9 s tolerance so
+  an edge that falls on a grid point up to rounding counts as on the grid. Newmark then
+  converges at first order only (the edge is smeared over a step).
+* ``average``: the load over each step ``[t_k, t_{k+1}]`` is the exact mean of ``y`` over
+  that step. Newmark's velocity update integrates the load as ``dt ((1 - gamma) y_k +
+  gamma y_{k+1})``, so the sequence fed to it is ``y_0 = y(0)`` and ``y_{k+1} = (mean_k -
+  (1 - gamma) y_k) / gamma``: each step then receives the exact impulse. For the average
+  acceleration rule this is the trapezoidal rule with exact step means, and the error
+  becomes second order (0.09 % at 1 ms against the exact solution, 3.4 % with ``point``).
+  The effective samples alternate in sign after an edge (they are loads, not road heights);
+  the body accelerations, which do not depend on the load directly, are smooth. This needs
+  ``gamma >= 1/2`` (the recursion is unstable otherwise).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Tolerance (s) for comparing grid times with bump edges.
+TIME_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Bump:
+    """Where the bump is under each tyre: ``y_i(t) = h`` for ``on_i <= t < off_i`` (s, m)."""
+
+    h: float
+    front_on: float
+    front_off: float
+    rear_on: float
+    rear_off: float
+
+    @classmethod
+    def from_geometry(cls, V_kmh: float, h: float, w: float, L: float) -> Bump:
+        """Bump of height ``h`` and width ``w`` (m) crossed at ``V_kmh`` (km/h) by a vehicle
+        of wheelbase ``L`` (m)."""
+        v = V_kmh / 3.6
+        return cls(h=h, front_on=0.0, front_off=w / v, rear_on=L / v, rear_off=(L + w) / v)
+
+    @property
+    def windows(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """``((front_on, front_off), (rear_on, rear_off))`` in s."""
+        return (self.front_on, self.front_off), (self.rear_on, self.rear_off)
+
+    @property
+    def edges(self) -> tuple[float, ...]:
+        """Times (s) where the input jumps."""
+        return (self.front_on, self.front_off, self.rear_on, self.rear_off)
+
+    def value(self, t: np.ndarray) -> np.ndarray:
+        """``[y1(t), y2(t)]`` with the exact edges (no tolerance), shape ``(len(t), 2)``."""
+        t = np.asarray(t, dtype=float)
+        return np.stack([self.h * ((t >= a) & (t < b)) for a, b in self.windows], axis=-1)
+
+
+def time_grid(T: float, dt: float) -> np.ndarray:
+    """``t_k = k dt`` for ``k = 0 ... floor(T / dt)`` (s); T is the window length in s."""
+    n = int(np.floor((T + TIME_TOL) / dt)) + 1
+    return np.arange(n) * dt
+
+
+def sample_point(bump: Bump, t: np.ndarray) -> np.ndarray:
+    """``y(t_k)`` with tolerant edges; shape ``(len(t), 2)`` (m)."""
+    t = np.asarray(t, dtype=float)
+    cols = [bump.h * ((t >= a - TIME_TOL) & (t < b - TIME_TOL)) for a, b in bump.windows]
+    return np.stack(cols, axis=-1)
+
+
+def step_means(bump: Bump, t: np.ndarray) -> np.ndarray:
+    """Exact mean of ``y`` over each step ``[t_k, t_{k+1}]``; shape ``(len(t) - 1, 2)`` (m)."""
+    t = np.asarray(t, dtype=float)
+    lo, hi = t[:-1], t[1:]
+    cols = []
+    for a, b in bump.windows:
+        overlap = np.clip(np.minimum(hi, b) - np.maximum(lo, a), 0.0, None)
+        cols.append(bump.h * overlap / (hi - lo))
+    return np.stack(cols, axis=-1).reshape(len(lo), 2)
+
+
+def sample_average(bump: Bump, t: np.ndarray, gamma: float = 0.5) -> np.ndarray:
+    """The load sequence that gives every Newmark step (parameter ``gamma`` >= 1/2) the exact
+    impulse of the step's mean: ``y_0 = y(0)``, ``y_{k+1} = (mean_k - (1 - gamma) y_k) /
+    gamma``. Shape ``(len(t), 2)`` (m)."""
+    if not gamma >= 0.5:
+        raise ValueError(f"average sampling needs gamma >= 1/2, got {gamma}")
+    means = step_means(bump, t)
+    y = np.empty((len(t), 2))
+    y[0] = sample_point(bump, np.asarray(t[:1], dtype=float))[0]
+    for k in range(len(t) - 1):
+        y[k + 1] = (means[k] - (1.0 - gamma) * y[k]) / gamma
+    return y
+
+
+def sample(bump: Bump, t: np.ndarray, mode: str, gamma: float = 0.5) -> np.ndarray:
+    """The input as Newmark sees it: ``point`` or ``average`` sampling, ``(len(t), 2)``."""
+    if mode == "point":
+        return sample_point(bump, t)
+    if mode == "average":
+        return sample_average(bump, t, gamma)
+    raise ValueError(f"unknown sampling {mode!r}: expected 'point' or 'average'")
