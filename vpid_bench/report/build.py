@@ -18,6 +18,7 @@ from __future__ import annotations
 import dataclasses
 import datetime as _dt
 import logging
+import warnings
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -201,8 +202,40 @@ def _signals_figure(df: Any, records: list[dict], problem: str, path: Path,
     except Exception as exc:  # a report must not die on a plugin's fault
         return f"could not rebuild the problem ({type(exc).__name__}: {exc})"
     title = (f"Measured vs fitted signals of the best run: {best['algorithm']}, "
-             f"{best['context']}, {best['metric_name']} = {render.fmt(best['metric'])}")
+             f"{best['context']}, {best['metric_name']} = {render.fmt(best['metric'])}"
+             + (" %" if best["metric_name"] == "NoRE" else ""))
     return figures.signals(sig, title, path, getattr(prob, "signal_units", None))
+
+
+def _figures(df: Any, loaded: LoadedRecords, meanvec: Any, pairs: Any,
+             fr: stats.FriedmanResult | None, fdir: Path, short: bool, alpha: float,
+             registry: Any) -> dict[str, Path | str]:
+    """Draw every figure; a value is the PNG path or why the figure was not drawn."""
+    figs: dict[str, Path | str] = {}
+    problems = sorted(df["problem"].unique())
+    traces = traces_frame(loaded.records, df)
+    figs["Convergence"] = figures.convergence(traces, fdir / "convergence.png")
+    for p in problems:
+        figs[f"Per-run metric, {p}"] = figures.runs_metric(df, p, fdir / f"runs_{p}.png")
+        figs[f"Relative errors of the mean vector, {p}"] = figures.rel_error_heatmap(
+            meanvec, p, fdir / f"rel_error_{p}.png")
+        figs[f"Measured vs fitted signals, best run, {p}"] = _signals_figure(
+            df, loaded.records, p, fdir / f"signals_{p}.png", registry)
+    if not short:
+        for context in sorted(df["context"].unique()):
+            ranks = stats.mean_ranks_in_context(df, context)
+            title = (f"{context}: mean rank of the per-run metric among all runs; bars join "
+                     f"optimizers not significantly different (Mann–Whitney, Holm, α={alpha})")
+            figs[f"Critical-difference diagram, {context}"] = figures.cd_diagram(
+                ranks, stats.pvalue_matrix(pairs, context), title,
+                fdir / f"cd_{figures.slug(context)}.png", alpha)
+        if fr is not None and fr.mean_ranks is not None:
+            figs["Critical-difference diagram across blocks"] = figures.cd_diagram(
+                fr.mean_ranks, fr.nemenyi,
+                f"Across {len(fr.blocks)} blocks: mean rank of the median metric; bars join "
+                f"optimizers not significantly different (Nemenyi, α={alpha})",
+                fdir / "cd_blocks.png", alpha)
+    return figs
 
 
 def build_report(
@@ -252,30 +285,11 @@ def build_report(
     if fr is not None and fr.mean_ranks is not None:
         written += render.write_table(fr.wilcoxon, tdir, "friedman_wilcoxon")
 
-    figs: dict[str, Path | str] = {}
-    problems = sorted(df["problem"].unique())
-    traces = traces_frame(loaded.records, df)
-    figs["Convergence"] = figures.convergence(traces, fdir / "convergence.png")
-    for p in problems:
-        figs[f"Per-run metric, {p}"] = figures.runs_metric(df, p, fdir / f"runs_{p}.png")
-        figs[f"Relative errors of the mean vector, {p}"] = figures.rel_error_heatmap(
-            meanvec, p, fdir / f"rel_error_{p}.png")
-        figs[f"Measured vs fitted signals, best run, {p}"] = _signals_figure(
-            df, loaded.records, p, fdir / f"signals_{p}.png", registry)
-    if not short:
-        for context in sorted(df["context"].unique()):
-            ranks = stats.mean_ranks_in_context(df, context)
-            title = (f"{context}: mean rank of the per-run metric among all runs; bars join "
-                     f"optimizers not significantly different (Mann–Whitney, Holm, α={alpha})")
-            figs[f"Critical-difference diagram, {context}"] = figures.cd_diagram(
-                ranks, stats.pvalue_matrix(pairs, context), title,
-                fdir / f"cd_{figures.slug(context)}.png", alpha)
-        if fr is not None and fr.mean_ranks is not None:
-            figs["Critical-difference diagram across blocks"] = figures.cd_diagram(
-                fr.mean_ranks, fr.nemenyi,
-                f"Across {len(fr.blocks)} blocks: mean rank of the median metric; bars join "
-                f"optimizers not significantly different (Nemenyi, α={alpha})",
-                fdir / "cd_blocks.png", alpha)
+    with warnings.catch_warnings():
+        # seaborn 0.13 calls matplotlib APIs that newer matplotlib deprecates: not our news.
+        warnings.simplefilter("ignore", DeprecationWarning)
+        warnings.simplefilter("ignore", PendingDeprecationWarning)
+        figs = _figures(df, loaded, meanvec, pairs, fr, fdir, short, alpha, registry)
     skipped = {k: v for k, v in figs.items() if isinstance(v, str)}
     written += [v for v in figs.values() if isinstance(v, Path)]
 
@@ -309,4 +323,5 @@ def build_report(
     md.write_text("\n".join(lines), encoding="utf-8")
     written.append(md)
     headline = render.terminal(head)
+    problems = sorted(df["problem"].unique())
     return Report(out_dir, md, headline, len(loaded.records), problems, written, skipped, loaded)

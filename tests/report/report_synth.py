@@ -1,0 +1,71 @@
+"""Synthetic run records with known answers, written as a sweep would write them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from vpid_bench.api import nore, relative_errors_percent
+from vpid_bench.jobstatus import write_job_status
+from vpid_bench.records import SCHEMA, record_path, stable_hash, write_record
+
+PAPER_NAMES = ["m", "I", "m1", "m2", "k1", "k2", "c1", "c2", "a1"]
+OV = np.array([505.10, 651.00, 28.58, 54.30, 15000, 15000, 1828.00, 1828.00, 1.468])
+# The paper's DE4 mean vector at PS = 20 (Table II): its NoRE is 1.51 %.
+DE4_PS20_MEAN = np.array([506.68, 653.84, 28.64, 54.46, 15016.74, 14894.38, 1834.80,
+                          1847.71, 1.471])
+
+
+def record(*, problem: str, optimizer: str, ps: int, run_index: int, x: np.ndarray | None,
+           f: float | None, names: list[str], true: np.ndarray | None, seed: int = 0,
+           problem_extra: dict[str, Any] | None = None, status: str = "ok",
+           trace_best: list[float] | None = None) -> dict[str, Any]:
+    """One run record in the schema of vpid_bench.experiment.make_record."""
+    pcfg = {"ps": ps, "iterations": 4, **(problem_extra or {})}
+    params = {"ps": ps, "iterations": 4}
+    budget = ps * 5
+    rid = stable_hash([problem, pcfg, optimizer, params, seed, run_index])
+    result = None
+    trace = None
+    if status == "ok":
+        x = np.asarray(x, dtype=float)
+        result = {"x_best": x.tolist(), "f_best": f, "evaluations": budget, "batches": 5,
+                  "stopped_by": "budget", "nore": None, "rel_error_percent": None}
+        if true is not None:
+            result["nore"] = nore(x, true)
+            result["rel_error_percent"] = relative_errors_percent(x, true).tolist()
+        best = trace_best or [f * (5 - i) for i in range(5)]
+        trace = {"evaluations": [ps * (i + 1) for i in range(5)], "best": best}
+    return {
+        "schema": SCHEMA, "run_id": rid, "run_index": run_index, "status": status,
+        "error": None if status == "ok" else {"type": "RuntimeError", "message": "boom",
+                                              "traceback": ""},
+        "problem": {"name": problem, "config": pcfg, "info": {}},
+        "optimizer": {"name": optimizer, "plugin": None, "params": params},
+        "seeds": {"seed": seed, "run_index": run_index, "spawn_key": [run_index]},
+        "budget": budget,
+        "parameters": {"names": names, "units": [""] * len(names),
+                       "lower": [0.0] * len(names), "upper": [1.0] * len(names),
+                       "true": None if true is None else list(map(float, true))},
+        "result": result, "trace": trace, "config": {}, "versions": {},
+        "timing": {"wall_time_s": 0.01, "run_time_s": 0.01, "started_at": "x"},
+    }
+
+
+def write_job(job_dir: Path, records: list[dict[str, Any]], status: str = "ok") -> Path:
+    """Write the records and a job.json into ``job_dir``."""
+    for r in records:
+        write_record(record_path(job_dir, r["run_index"], r["run_id"]), r)
+    write_job_status(job_dir, status, "synthetic")
+    return job_dir
+
+
+def objective_job(root: Path, optimizer: str, ps: int, values: list[float],
+                  problem: str = "toy", seed: int = 0) -> Path:
+    """A job whose runs have the given objective values and no true parameters."""
+    recs = [record(problem=problem, optimizer=optimizer, ps=ps, run_index=i,
+                   x=np.array([v, -v]), f=v, names=["x1", "x2"], true=None, seed=seed)
+            for i, v in enumerate(values)]
+    return write_job(root / f"optimizer={optimizer},ps={ps},seed={seed}", recs)

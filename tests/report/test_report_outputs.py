@@ -1,0 +1,194 @@
+"""The report's files: every figure drawn and not empty, tables, merging sweeps, bad
+records, the CLI's exit codes and the Hydra callback."""
+
+from __future__ import annotations
+
+import dataclasses
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from report_synth import OV, PAPER_NAMES, objective_job, record, write_job
+
+from vpid_bench.api import Bounds, Problem, ProblemConfig
+from vpid_bench.report.build import NoRecordsError, build_report
+from vpid_bench.report.cli import main as report_main
+
+
+@dataclasses.dataclass(frozen=True)
+class FakeConfig(ProblemConfig):
+    """The config keys the synthetic records carry."""
+
+
+class FakeVehicle(Problem):
+    """Nine parameters and two signal channels; the fitted signal is scaled by x[0]/OV[0]."""
+
+    Config = FakeConfig
+
+    @property
+    def bounds(self) -> Bounds:
+        return Bounds(0.5 * OV, 1.5 * OV, tuple(PAPER_NAMES))
+
+    def evaluate(self, X):
+        return np.zeros(len(X))
+
+    def signals(self, x):
+        t = np.linspace(0.0, 0.48, 100)
+        ref = np.sin(20 * t)
+        out = {"t": t}
+        for ch in ("z1''", "z2''"):
+            out[f"{ch}:measured"] = ref
+            out[f"{ch}:fitted"] = ref * x[0] / OV[0]
+        return out
+
+
+class FakeRegistry:
+    def problem(self, name):
+        assert name == "vehicle"
+        return FakeVehicle
+
+
+def _vehicle_sweep(root: Path) -> Path:
+    rng = np.random.default_rng(0)
+    for ps in (20, 30):
+        for algo, spread in (("de4", 0.01), ("de1", 0.05), ("random", 0.3)):
+            recs = [record(problem="vehicle", optimizer=algo, ps=ps, run_index=i,
+                           x=OV * (1 + spread * rng.standard_normal(9)), f=spread * (1 + i),
+                           names=PAPER_NAMES, true=OV) for i in range(6)]
+            write_job(root / f"optimizer={algo},problem.ps={ps}", recs)
+    return root
+
+
+@pytest.fixture(scope="module")
+def vehicle_report(tmp_path_factory):
+    root = _vehicle_sweep(tmp_path_factory.mktemp("sweep"))
+    return build_report([root], root / "report", registry=FakeRegistry())
+
+
+def _png_ok(path: Path) -> bool:
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(path)
+    return img.ndim == 3 and min(img.shape[:2]) > 100 and float(img[..., :3].std()) > 0.01
+
+
+def test_every_figure_is_drawn_and_not_empty(vehicle_report):
+    figs = vehicle_report.out_dir / "figures"
+    expected = ["convergence.png", "runs_vehicle.png", "rel_error_vehicle.png",
+                "signals_vehicle.png", "cd_blocks.png", "cd_vehicle_ps=20.png",
+                "cd_vehicle_ps=30.png"]
+    for name in expected:
+        assert (figs / name).is_file(), name
+        assert _png_ok(figs / name), name
+    assert vehicle_report.skipped_figures == {}
+    md = vehicle_report.report_md.read_text()
+    for name in expected:
+        assert f"(figures/{name})" in md
+
+
+def test_tables_and_tidy_runs(vehicle_report):
+    import pandas as pd
+
+    runs = pd.read_csv(vehicle_report.out_dir / "runs.csv")
+    assert len(runs) == 36 and set(runs.metric_name) == {"NoRE"}
+    t = vehicle_report.out_dir / "tables"
+    for stem in ("headline", "run_stats", "mean_vector", "kruskal", "pairwise"):
+        assert (t / f"{stem}.csv").is_file()
+        tex = (t / f"{stem}.tex").read_text()
+        assert "\\toprule" in tex and "\\bottomrule" in tex
+    mv = pd.read_csv(t / "mean_vector.csv")
+    assert {"ours", "paper", "difference"} <= set(mv.source)  # de1, de4 are in the paper
+    head = vehicle_report.headline
+    assert "de4" in head and "baseline" in head
+    # de4 (1 % scatter) ranks first in both contexts, random (30 %) last.
+    st = pd.read_csv(t / "run_stats.csv")
+    for _, g in st.groupby("context"):
+        assert list(g.sort_values("rank_median").algorithm) == ["de4", "de1", "random"]
+    assert vehicle_report.failures == []
+
+
+def test_merge_two_sweeps_and_duplicates(tmp_path):
+    a = objective_job(tmp_path / "sweep_a", "good", 20, [1.0, 1.1, 1.2]).parent
+    b = objective_job(tmp_path / "sweep_b", "bad", 20, [3.0, 3.1, 3.2]).parent
+    rep = build_report([a, b, a], tmp_path / "out", short=True)
+    assert rep.n_records == 6
+    assert "good" in rep.headline and "bad" in rep.headline
+    assert rep.loaded.duplicates == 0  # the same folder twice is read once
+
+
+def test_bad_record_is_listed_not_fatal(tmp_path):
+    job = objective_job(tmp_path, "a", 20, [1.0, 2.0])
+    (job / "records" / "run-009-deadbeef.json").write_text("{ not json")
+    failed = record(problem="toy", optimizer="a", ps=20, run_index=5, x=None, f=None,
+                    names=["x1", "x2"], true=None, status="failed")
+    write_job(tmp_path / "failed-job", [failed], status="failed_runs")
+    rep = build_report([tmp_path], tmp_path / "out", short=True)
+    assert rep.n_records == 3
+    text = " ".join(rep.failures)
+    assert "run-009-deadbeef.json" in text and "failed_runs" in text
+    md = rep.report_md.read_text()
+    assert "Skipped unreadable record" in md and "Failed run" in md
+
+
+def test_no_records(tmp_path):
+    with pytest.raises(NoRecordsError):
+        build_report([tmp_path], tmp_path / "out")
+
+
+def test_cli_exit_codes(tmp_path, capsys):
+    assert report_main([str(tmp_path)]) == 2
+    assert "no run records" in capsys.readouterr().err
+    assert report_main([str(tmp_path / "missing")]) == 2
+    objective_job(tmp_path / "s", "a", 20, [1.0, 2.0])
+    out = tmp_path / "rep"
+    assert report_main([str(tmp_path / "s"), "-o", str(out), "--short"]) == 0
+    assert (out / "report.md").is_file()
+    assert report_main([str(tmp_path / "s"), "--alpha", "2"]) == 2
+
+
+def test_callback_writes_report_and_honours_report_false(tmp_path):
+    from omegaconf import OmegaConf
+
+    from vpid_bench import cli
+    from vpid_bench.report.callback import ReportCallback
+
+    sweep = tmp_path / "sweep"
+    objective_job(sweep, "a", 20, [1.0, 2.0])
+    objective_job(sweep, "b", 20, [3.0, 4.0])
+    cb = ReportCallback()
+    cb.on_multirun_end(OmegaConf.create({"report": False, "hydra": {"sweep": {"dir": str(sweep)}}}))
+    assert not (sweep / "report").exists()
+    cli._FAILURES.clear()
+    cb.on_multirun_end(OmegaConf.create({"report": True, "hydra": {"sweep": {"dir": str(sweep)}}}))
+    assert (sweep / "report" / "report.md").is_file() and cli._FAILURES == []
+    job = sweep / "optimizer=a,ps=20,seed=0"
+    cb.on_run_end(OmegaConf.create({"hydra": {"runtime": {"output_dir": str(job)}}}))
+    assert (job / "report" / "report.md").is_file()
+    # A report that cannot be built prints one line and notes a failure; it never raises.
+    cb.on_multirun_end(OmegaConf.create({"hydra": {"sweep": {"dir": str(tmp_path / "none")}}}))
+    assert len(cli._FAILURES) == 1 and "report" in cli._FAILURES[0]
+    cli._FAILURES.clear()
+
+
+def test_importing_the_callback_is_cheap():
+    code = ("import sys, vpid_bench.report.callback; "
+            "print(sorted(m for m in ('pandas', 'seaborn', 'matplotlib', 'scikit_posthocs') "
+            "if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+def test_real_sweep_ends_with_a_report(tmp_path):
+    """`vpid-bench -m ...` end to end: the callback writes the report into the sweep dir."""
+    exe = Path(sys.executable).with_name("vpid-bench")
+    sweep = tmp_path / "sweep"
+    out = subprocess.run(
+        [str(exe), "-m", "problem=functions", "optimizer=random,de1", "runs=3",
+         "problem.iterations=3", "problem.dim=3", "progress=false", f"hydra.sweep.dir={sweep}"],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert (sweep / "report" / "report.md").is_file()
+    assert "random" in out.stdout and "baseline" in out.stdout
