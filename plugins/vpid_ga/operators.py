@@ -92,14 +92,20 @@ def mutationadaptfeasible(
 ) -> np.ndarray:
     """Adaptive-feasible mutation for a box: child = ``x + s * step * (upper - lower) * d``.
 
-    ``d`` is a random direction (uniform on ``[-1, 1]`` per coordinate), ``s`` starts at 1 and
-    is halved until the child is inside the box (a parent on a face still moves along the
-    feasible half of its directions). After ``max_halvings`` halvings the child is the parent
-    itself, which cannot happen unless ``step`` underflows. The result is clipped exactly so
-    rounding never leaves the box."""
+    ``d`` is a random direction (uniform on ``[-1, 1]`` per coordinate) in the tangent cone of
+    the active bounds (a component that would leave a face the parent sits on is reversed),
+    and ``s`` starts at 1 and is halved until the child is inside the box. After
+    ``max_halvings`` halvings the child is the parent itself (practically never). The result
+    is clipped exactly so rounding never leaves the box."""
     X = population[parents]
     n, dim = X.shape
-    move = step * (upper - lower) * rng.uniform(-1.0, 1.0, size=(n, dim))
+    width = upper - lower
+    d = rng.uniform(-1.0, 1.0, size=(n, dim))
+    # Tangent cone of the active bounds: at (within sqrt(eps) of) a face, a component pointing
+    # out of the box is turned inwards, so shrinking the step always reaches a feasible child.
+    tol = np.sqrt(np.finfo(float).eps) * width
+    d = np.where((X <= lower + tol) & (d < 0) | (X >= upper - tol) & (d > 0), -d, d)
+    move = step * width * d
     scale = np.ones((n, 1))
     for _ in range(max_halvings):
         child = X + scale * move
