@@ -1,0 +1,86 @@
+"""The ask/tell contract, checked for EVERY registered optimizer (third-party ones included):
+inside the box, within the budget, reproducible with a seed, different across seeds."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vpid_bench.experiment import build_problem, optimizer_params
+from vpid_bench.plugins import Registry
+from vpid_bench.runner import run
+
+PS, ITERATIONS, DIM = 20, 5, 4
+BUDGET = PS * (ITERATIONS + 1)
+
+
+def _names() -> list[str]:
+    return sorted(Registry().optimizers)
+
+
+class CountingProblem:
+    """Wraps a problem: counts evaluated rows and checks every row is inside the box."""
+
+    def __init__(self, problem):
+        self.inner, self.name, self.bounds = problem, problem.name, problem.bounds
+        self.evaluated = 0
+        self.outside = 0
+
+    def evaluate(self, X):
+        self.evaluated += len(X)
+        self.outside += int(np.sum(~self.bounds.contains(X)))
+        return self.inner.evaluate(X)
+
+
+def _run(registry, name: str, seed: int, function: str = "rastrigin"):
+    problem = build_problem(registry, {"name": "functions", "function": function, "dim": DIM,
+                                       "ps": PS, "iterations": ITERATIONS})
+    cls, params = optimizer_params(registry, {"name": name, "ps": PS, "iterations": ITERATIONS})
+    counting = CountingProblem(problem)
+    optimizer = cls(params, problem.bounds, np.random.default_rng(seed))
+    optimizer.name = name
+    return run(counting, optimizer, BUDGET), counting
+
+
+def test_the_family_is_registered(registry):
+    assert {f"de{i}" for i in range(1, 9)} | {"ga", "random"} <= set(registry.optimizers)
+
+
+@pytest.mark.parametrize("name", _names())
+def test_contract(registry, name):
+    result, counting = _run(registry, name, seed=1)
+    assert counting.outside == 0
+    assert counting.evaluated == result.evaluations <= BUDGET
+    assert counting.bounds.contains(result.x_best).all()
+    again, _ = _run(registry, name, seed=1)
+    np.testing.assert_array_equal(again.x_best, result.x_best)
+    assert again.trace_best == result.trace_best
+    other, _ = _run(registry, name, seed=2)
+    assert not np.array_equal(other.x_best, result.x_best)
+
+
+def test_compose_variant_parameters(compose_config):
+    from hydra.errors import ConfigCompositionException
+
+    cfg = compose_config(["problem=functions", "optimizer=de6", "optimizer.K=0.4"])
+    assert cfg.optimizer.K == 0.4 and cfg.optimizer.ps == cfg.problem.ps
+    with pytest.raises(ConfigCompositionException, match="optimizer.K"):
+        compose_config(["problem=functions", "optimizer=de1", "optimizer.K=0.4"])
+
+
+def test_run_from_config_ga_and_de(compose_config, tmp_path):
+    from vpid_bench.experiment import run_from_config
+    from vpid_bench.records import read_record
+
+    for name, expected in (("de8", [10, 10, 10, 10]), ("ga", [10, 10, 10, 10]),
+                           ("ga", [20, 19, 19, 19])):
+        ps = expected[0]
+        cfg = compose_config(["problem=functions", f"optimizer={name}", f"problem.ps={ps}",
+                              "problem.iterations=3", "runs=2", "progress=false",
+                              "report=false"])
+        summary = run_from_config(cfg, tmp_path / f"{name}-{ps}")
+        assert summary.ran == 2 and not summary.failed
+        record = read_record(summary.record_paths[0])
+        steps = np.diff([0, *record["trace"]["evaluations"]]).tolist()
+        # GA: floor(0.05 * 10) = 0 elites, floor(0.05 * 20) = 1 elite not evaluated again
+        assert steps == expected
