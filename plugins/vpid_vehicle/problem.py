@@ -17,7 +17,7 @@ from vpid_bench.api import Bounds, Problem
 
 from .config import PARAM_NAMES, PARAM_UNITS, VehicleConfig, validate, window
 from .model import KnownConstants, physical
-from .objective import add_noise, noise_summary, objective
+from .objective import add_noise, noise_summary
 from .reference_io import read_measured, write_reference
 from .road import Bump
 from .simulator import Simulator
@@ -92,7 +92,7 @@ class VehicleProblem(Problem):
         """Eq. (3) for every row of ``X`` (shape ``(n, 9)``), ``inf`` where a simulation fails."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         try:
-            return objective(self.responses(X), self.reference)
+            return self.model.objective(X, self.reference)
         except (ValueError, FloatingPointError, ZeroDivisionError, np.linalg.LinAlgError):
             return np.full(X.shape[0], np.inf)
 

@@ -11,7 +11,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .model import KnownConstants
+from .model import KnownConstants, physical
+from .objective import objective
 from .road import Bump, sample, time_grid
 
 
@@ -58,14 +59,40 @@ class Simulator:
         return out[:, :, :: self.stride]
 
 
+    def objective(self, X: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        """Eq. (3) of the rows of ``X`` against ``reference`` (2, N), inf where a candidate is
+        non-physical or its simulation fails. Newmark with stride 1 runs fully compiled."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        if self.integrator == "newmark" and self.stride == 1:
+            kernel = _kernel()
+            if kernel is not None:
+                k = self.known
+                return kernel.evaluate(X, k.L, k.kt1, k.kt2, self.y, self.dt, self.gamma,
+                                       self.beta, reference)
+        f = np.full(X.shape[0], np.inf)
+        ok = physical(X, self.known)
+        if np.any(ok):
+            with np.errstate(all="ignore"):
+                f[ok] = objective(self(X[ok]), reference)
+        return f
+
+
+def _kernel():
+    """The compiled kernel module, or None when numba cannot be imported."""
+    try:
+        from . import kernel
+    except ImportError:  # pragma: no cover - numba is a dependency
+        return None
+    return kernel
+
+
 def newmark_fast(
     X: np.ndarray, known: KnownConstants, y: np.ndarray, dt: float, gamma: float, beta: float
 ) -> np.ndarray:
     """The compiled kernel (plain numpy Newmark if numba cannot be imported)."""
-    try:
-        from .kernel import body_accelerations
-    except ImportError:  # pragma: no cover - numba is a dependency
+    kernel = _kernel()
+    if kernel is None:  # pragma: no cover - numba is a dependency
         from .newmark import body_accelerations as plain
 
         return plain(X, known, y, dt, gamma, beta)
-    return body_accelerations(X, known.L, known.kt1, known.kt2, y, dt, gamma, beta)
+    return kernel.body_accelerations(X, known.L, known.kt1, known.kt2, y, dt, gamma, beta)

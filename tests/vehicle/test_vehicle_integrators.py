@@ -66,3 +66,20 @@ def test_kernel_equals_plain_newmark(mode, gamma, beta):
     fast = kernel.body_accelerations(X, P.L, P.kt1, P.kt2, y, 1e-3, gamma, beta)
     plain = newmark.body_accelerations(X, KNOWN, y, 1e-3, gamma, beta)
     assert np.abs(fast - plain).max() <= 1e-10 * np.abs(plain).max()
+
+
+def test_fused_kernel_objective_equals_numpy_objective():
+    """The compiled Eq. (3) (simulation and norms fused) equals Eq. (3) computed in numpy on
+    the plain Newmark's responses, to 1e-10 relative; non-physical rows give inf."""
+    from vpid_vehicle.objective import objective
+
+    X = X_TRUE * np.random.default_rng(4).uniform(0.5, 1.5, (6, 9))
+    X[4, 0] = -1.0
+    X[5, 8] = P.L + 0.1
+    t = time_grid(T, 1e-3)
+    y = sample(BUMP, t, "point")
+    ref = newmark.body_accelerations(X_TRUE, KNOWN, y, 1e-3, 0.5, 0.25)[0] * 1.01
+    fused = kernel.evaluate(X, P.L, P.kt1, P.kt2, y, 1e-3, 0.5, 0.25, ref)
+    plain = objective(newmark.body_accelerations(X[:4], KNOWN, y, 1e-3, 0.5, 0.25), ref)
+    np.testing.assert_allclose(fused[:4], plain, rtol=1e-10, atol=0)
+    assert np.all(np.isinf(fused[4:]))
