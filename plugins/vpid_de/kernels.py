@@ -1,7 +1,9 @@
 """The numerical pieces of differential evolution, vectorised over the population.
 
 Everything here is a pure function of arrays (and of a ``numpy.random.Generator`` where
-randomness is needed), so each piece is tested alone on a hand-built population:
+randomness is needed, or of uniforms drawn beforehand: the optimizer draws one block of
+uniforms per generation, see :meth:`vpid_de.base.DifferentialEvolution.trials`), so each
+piece is tested alone on a hand-built population:
 
 * :func:`draw_indices`: for every target ``i``, ``n`` mutually distinct random indices, all
   different from ``i`` (the paper's ``r1 != r2 != ... != i``);
@@ -23,20 +25,28 @@ import numpy as np
 # Index drawing
 
 
-def draw_indices(rng: np.random.Generator, ps: int, n: int) -> np.ndarray:
-    """``(ps, n)`` integer array: row ``i`` holds ``n`` distinct indices in ``0..ps-1``, none
-    equal to ``i``, drawn uniformly without replacement.
+def indices_from_keys(keys: np.ndarray, n: int) -> np.ndarray:
+    """``(ps, n)`` integer array from uniform ``keys`` of shape ``(ps, ps - 1)``: row ``i``
+    holds ``n`` distinct indices in ``0..ps-1``, none equal to ``i``.
 
-    Each row is the first ``n`` entries of a random permutation of the ``ps - 1`` other
-    members: argsort of uniform keys gives a uniform permutation, and indices ``>= i`` are
-    shifted by one to skip ``i``. One ``rng.random((ps, ps - 1))`` call per generation, so the
-    stream is reproducible and the cost is O(ps^2 log ps), negligible at ps = 20-30.
+    Each row is the first ``n`` entries of the permutation that sorts the row's keys (a
+    uniform random permutation of the ``ps - 1`` others); indices ``>= i`` are shifted by one
+    to skip ``i``. Cost O(ps^2 log ps), negligible at ps = 20-30.
     """
+    ps = keys.shape[0]
     if n > ps - 1:
         raise ValueError(f"cannot draw {n} distinct indices besides i from a population of {ps}")
-    keys = rng.random((ps, ps - 1))
-    r = np.argsort(keys, axis=1)[:, :n]
-    return r + (r >= np.arange(ps)[:, None])
+    r = np.argsort(keys, axis=1, kind="stable")[:, :n]
+    r += r >= np.arange(ps)[:, None]
+    return r
+
+
+def draw_indices(rng: np.random.Generator, ps: int, n: int) -> np.ndarray:
+    """:func:`indices_from_keys` with keys drawn from ``rng``: for every target ``i``, ``n``
+    distinct random indices different from ``i``, uniformly without replacement."""
+    if n > ps - 1:
+        raise ValueError(f"cannot draw {n} distinct indices besides i from a population of {ps}")
+    return indices_from_keys(rng.random((ps, ps - 1)), n)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -91,6 +101,18 @@ MUTATIONS: dict[str, tuple[Callable[..., np.ndarray], int]] = {
 # Crossover and selection
 
 
+def crossover_from_uniforms(
+    X: np.ndarray, V: np.ndarray, CR: float, u: np.ndarray, u_j: np.ndarray
+) -> np.ndarray:
+    """Eq. 8 from pre-drawn uniforms: ``u`` (ps, dim) are the ``rand_j``, ``u_j`` (ps,) picks
+    ``rnbr(i) = floor(u_j * dim)``. Gene ``j`` of trial ``i`` is the mutant's when
+    ``rand_j <= CR`` or ``j == rnbr(i)``, else the parent's."""
+    ps, dim = X.shape
+    take = u <= CR
+    take[np.arange(ps), np.minimum((u_j * dim).astype(np.intp), dim - 1)] = True
+    return np.where(take, V, X)
+
+
 def binomial_crossover(
     X: np.ndarray, V: np.ndarray, CR: float, rng: np.random.Generator
 ) -> np.ndarray:
@@ -100,9 +122,8 @@ def binomial_crossover(
     generation, so every trial keeps at least one mutant gene (even with ``CR = 0``).
     """
     ps, dim = X.shape
-    take = rng.random((ps, dim)) <= CR
-    take[np.arange(ps), rng.integers(dim, size=ps)] = True
-    return np.where(take, V, X)
+    u = rng.random((ps, dim + 1))
+    return crossover_from_uniforms(X, V, CR, u[:, :dim], u[:, dim])
 
 
 def greedy_selection(
@@ -118,7 +139,8 @@ def greedy_selection(
 
 
 # ----------------------------------------------------------------------------------------------
-# Bounds handling. Signature: rule(U, parent, lower, upper, rng) -> U inside [lower, upper].
+# Bounds handling. Signature: rule(U, parent, lower, upper, u) -> U inside [lower, upper], where
+# ``u`` is a (ps, dim) block of uniforms drawn with the generation (only ``reinit`` uses it).
 # Only coordinates outside the box change. Every rule ends with an exact clip, so rounding in
 # ``lower + something`` can never leave a candidate one ulp outside the box.
 
@@ -127,22 +149,22 @@ def _exact(U: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
     return np.minimum(np.maximum(U, lower), upper)
 
 
-def bounds_reinit(U, parent, lower, upper, rng: np.random.Generator) -> np.ndarray:
+def bounds_reinit(U, parent, lower, upper, u: np.ndarray) -> np.ndarray:
     """A coordinate outside the box gets a fresh uniform value in ``[lower, upper)``, as
     scipy's ``differential_evolution`` does. Keeps diversity; forgets the mutant's direction."""
     out = (U < lower) | (U > upper)
     if not out.any():
         return U
-    fresh = lower + rng.random(U.shape) * (upper - lower)
-    return _exact(np.where(out, fresh, U), lower, upper)
+    # lower + u * width >= lower exactly (u >= 0), so only the upper face needs a guard
+    return np.minimum(np.where(out, lower + u * (upper - lower), U), upper)
 
 
-def bounds_clip(U, parent, lower, upper, rng=None) -> np.ndarray:
+def bounds_clip(U, parent, lower, upper, u=None) -> np.ndarray:
     """Project onto the box. Piles candidates up on the faces of the box."""
     return _exact(U, lower, upper)
 
 
-def bounds_reflect(U, parent, lower, upper, rng=None) -> np.ndarray:
+def bounds_reflect(U, parent, lower, upper, u=None) -> np.ndarray:
     """Mirror at the violated face (``2 lower - u``), folded repeatedly if a large step
     crosses the whole box (a triangle wave of period ``2 (upper - lower)``)."""
     out = (U < lower) | (U > upper)
@@ -154,7 +176,7 @@ def bounds_reflect(U, parent, lower, upper, rng=None) -> np.ndarray:
     return _exact(np.where(out, lower + y, U), lower, upper)
 
 
-def bounds_midpoint(U, parent, lower, upper, rng=None) -> np.ndarray:
+def bounds_midpoint(U, parent, lower, upper, u=None) -> np.ndarray:
     """Half way between the parent ``x_i`` (inside the box) and the violated face:
     ``(x_ij + lower_j) / 2`` below, ``(x_ij + upper_j) / 2`` above."""
     below, above = U < lower, U > upper

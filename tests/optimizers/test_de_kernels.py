@@ -10,6 +10,7 @@ from vpid_de.kernels import (
     best1,
     best2,
     binomial_crossover,
+    crossover_from_uniforms,
     current_to_best1,
     current_to_rand1,
     draw_indices,
@@ -154,10 +155,24 @@ def test_bounds_rule_keeps_every_candidate_in_the_box(rule):
     U[:10] = np.nextafter(UPPER, np.inf)
     U[10:20] = np.nextafter(LOWER, -np.inf)
     U[20:30] = UPPER
-    out = BOUNDS_RULES[rule](U.copy(), parent, LOWER, UPPER, rng)
+    out = BOUNDS_RULES[rule](U.copy(), parent, LOWER, UPPER, rng.random(U.shape))
     assert np.all((out >= LOWER) & (out <= UPPER))
     inside = (U >= LOWER) & (U <= UPPER)
     np.testing.assert_array_equal(out[inside], U[inside])  # coordinates inside are untouched
+
+
+def test_reinit_uses_the_given_uniforms_by_hand():
+    lo, hi = np.array([0.0, 0.0]), np.array([10.0, 4.0])
+    U = np.array([[-2.0, 1.0], [3.0, 5.0]])
+    u = np.array([[0.25, 0.9], [0.9, 0.5]])
+    np.testing.assert_array_equal(BOUNDS_RULES["reinit"](U, U, lo, hi, u), [[2.5, 1.0], [3.0, 2.0]])
+
+
+def test_crossover_from_uniforms_by_hand():
+    Xp, V = np.zeros((2, 4)), np.ones((2, 4))
+    u = np.array([[0.1, 0.95, 0.9, 0.5], [0.99, 0.99, 0.99, 0.99]])
+    U = crossover_from_uniforms(Xp, V, 0.9, u, np.array([0.6, 0.3]))  # rnbr = 2, 1
+    np.testing.assert_array_equal(U, [[1, 0, 1, 1], [0, 1, 0, 0]])
 
 
 def test_bounds_rules_by_hand():
