@@ -187,16 +187,22 @@ def objective(
         f[j] = fj if np.isfinite(fj) else np.inf
 
 
+def _inputs(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Fresh writable C-contiguous float64 copies, so every call has the same numba
+    signature (a read-only array would be a new type and trigger a second compilation)."""
+    X = np.array(np.atleast_2d(X), dtype=np.float64, order="C")
+    return X, np.array(y[:, 0], dtype=np.float64), np.array(y[:, 1], dtype=np.float64)
+
+
 def evaluate(
     X: np.ndarray, L: float, kt1: float, kt2: float, y: np.ndarray, dt: float, gamma: float,
     beta: float, ref: np.ndarray,
 ) -> np.ndarray:
     """Eq. (3) for every row of ``X`` against the reference ``ref`` (2, N), shape ``(n,)``."""
-    X = np.ascontiguousarray(np.atleast_2d(X), dtype=np.float64)
+    X, y1, y2 = _inputs(X, y)
     f = np.empty(X.shape[0])
-    objective(X, float(L), float(kt1), float(kt2), np.ascontiguousarray(y[:, 0]),
-              np.ascontiguousarray(y[:, 1]), float(dt), float(gamma), float(beta),
-              np.ascontiguousarray(ref, dtype=np.float64), f)
+    objective(X, float(L), float(kt1), float(kt2), y1, y2, float(dt), float(gamma), float(beta),
+              np.array(ref, dtype=np.float64, order="C"), f)
     return f
 
 
@@ -205,9 +211,7 @@ def body_accelerations(
     beta: float,
 ) -> np.ndarray:
     """z1'' and z2'' (m/s^2) of every row of ``X``, shape ``(n, 2, N)``; ``y`` is ``(N, 2)``."""
-    X = np.ascontiguousarray(np.atleast_2d(X), dtype=np.float64)
-    y1 = np.ascontiguousarray(y[:, 0], dtype=np.float64)
-    y2 = np.ascontiguousarray(y[:, 1], dtype=np.float64)
+    X, y1, y2 = _inputs(X, y)
     out = np.empty((X.shape[0], 2, y1.shape[0]))
     simulate(X, float(L), float(kt1), float(kt2), y1, y2, float(dt), float(gamma), float(beta),
              out)

@@ -215,3 +215,16 @@ def test_job_writes_records_and_reference(tmp_path, registry):
     record = json.loads(summary.record_paths[0].read_text())
     assert record["problem"]["info"]["samples"] == 480
     assert record["result"]["evaluations"] == 8
+
+
+def test_kernel_compiles_one_signature_per_function(default_problem):
+    """Read-only inputs (x_true, the reference) and fresh populations all reach the same
+    compiled specialisation, so numba compiles (or loads from cache) once per process."""
+    from vpid_vehicle import kernel
+
+    p = default_problem
+    p.evaluate(p.x_true[None])
+    p.evaluate(p.bounds.sample(np.random.default_rng(0), 3).astype(np.float32))
+    p.signals(p.x_true)
+    assert len(kernel.objective.signatures) == 1
+    assert len(kernel.simulate.signatures) == 1
