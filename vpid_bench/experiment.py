@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import datetime as _dt
+import functools
 import importlib.metadata
 import logging
 import platform
@@ -79,8 +80,10 @@ def _int_key(cfg: Mapping, key: str, minimum: int, allow_none: bool = False) -> 
     return value
 
 
+@functools.lru_cache(maxsize=8)
 def package_versions(extra: tuple[str, ...] = ()) -> dict[str, str]:
-    """Versions of Python and of the packages that can change a result."""
+    """Versions of Python and of the packages that can change a result (looked up once per
+    process: reading package metadata costs milliseconds, a record is written per run)."""
     out = {"python": platform.python_version()}
     for dist in ("vpid-bench", "numpy", "scipy", "numba", "hydra-core", "pluggy", *extra):
         try:
@@ -90,10 +93,19 @@ def package_versions(extra: tuple[str, ...] = ()) -> dict[str, str]:
     return out
 
 
+@functools.lru_cache(maxsize=64)
 def _plugin_distribution(module_name: str) -> str | None:
     top = module_name.split(".")[0]
     dists = importlib.metadata.packages_distributions().get(top, [])
     return dists[0] if dists else None
+
+
+def _check_protocol(prefix: str, obj: Any) -> None:
+    """``ps`` and ``iterations`` of a problem or optimizer must be integers >= 1."""
+    for key in ("ps", "iterations"):
+        value = getattr(obj, key, None)
+        if value is not None and (not isinstance(value, int) or value < 1):
+            raise ConfigError(f"{prefix}.{key}", value, "an integer >= 1")
 
 
 def build_problem(registry: Registry, cfg: Mapping) -> Problem:
@@ -169,7 +181,9 @@ def make_record(
             "config": to_plain(problem.config),
             "info": problem.describe(),
         },
-        "optimizer": {"name": optimizer_name, "plugin": optimizer_plugin, "params": to_plain(params)},
+        "optimizer": {
+            "name": optimizer_name, "plugin": optimizer_plugin, "params": to_plain(params)
+        },
         "seeds": {"seed": seed, "run_index": run_index, "spawn_key": [run_index]},
         "budget": budget,
         "parameters": {
@@ -182,7 +196,7 @@ def make_record(
         "result": None,
         "trace": None,
         "config": config,
-        "versions": package_versions(),
+        "versions": dict(package_versions()),
         "timing": {
             "started_at": started_at,
             "wall_time_s": wall_time_s,
@@ -226,10 +240,13 @@ def run_from_config(
     config = {k: v for k, v in plain.items() if k != "hydra"}
     unknown = sorted(set(config) - set(TOP_LEVEL_KEYS))
     if unknown:
-        raise ConfigError(unknown[0], config[unknown[0]], "known top-level keys are " + ", ".join(TOP_LEVEL_KEYS))
+        raise ConfigError(
+            unknown[0], config[unknown[0]], "known top-level keys are " + ", ".join(TOP_LEVEL_KEYS)
+        )
     seed = _int_key(config, "seed", 0)
     runs = _int_key(config, "runs", 1)
-    if not isinstance(config.get("problem"), Mapping) or not isinstance(config.get("optimizer"), Mapping):
+    if not (isinstance(config.get("problem"), Mapping)
+            and isinstance(config.get("optimizer"), Mapping)):
         raise ConfigError("problem/optimizer", None, "both config groups must be selected")
     problem_cfg = dict(config["problem"])
     optimizer_cfg = dict(config["optimizer"])
@@ -241,6 +258,8 @@ def run_from_config(
     budget = _int_key(config, "budget", 1, allow_none=True) or default_budget(
         to_plain(problem.config)
     )
+    _check_protocol("problem", problem.config)
+    _check_protocol("optimizer", params)
     # Build one optimizer up front so a bad parameter stops the job before any run.
     opt_cls(params, problem.bounds, run_rng(seed, 0))
     plugin = _plugin_distribution(opt_cls.__module__)
@@ -248,7 +267,12 @@ def run_from_config(
     job_dir = Path(job_dir)
     job_dir.mkdir(parents=True, exist_ok=True)
     problem.write_artifacts(job_dir)
-    key = rec.job_key(to_plain(problem.config) | {"name": problem.name}, {"name": opt_name, **to_plain(params)}, seed, budget)
+    key = rec.job_key(
+        to_plain(problem.config) | {"name": problem.name},
+        {"name": opt_name, **to_plain(params)},
+        seed,
+        budget,
+    )
 
     resume = bool(config.get("resume", True))
     progress = bool(config.get("progress", True))

@@ -1,12 +1,16 @@
 """``job.json``: the status of one job, written atomically into its output directory.
 
-The sweep callback reads these to tell which jobs failed, whatever launcher ran them.
+The command reads these after a sweep to tell which jobs failed, whatever launcher (and
+process) ran them. Each status carries the invocation id of the command that wrote it
+(``VPID_BENCH_INVOCATION``), so statuses left by an earlier run of a resumed sweep are not
+mistaken for this one's.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import json
+import os
 from pathlib import Path
 from typing import Any
 
@@ -16,11 +20,20 @@ JOB_STATUS_FILE = "job.json"
 
 
 def write_job_status(job_dir: Path, status: str, detail: Any) -> Path:
-    """Write ``{"status": ..., "detail": ...}``; ``detail`` may be a JobSummary or a message."""
+    """Write ``{"status", "detail", "invocation"}``; ``detail`` is a JobSummary or a message.
+
+    ``status`` is ``ok``, ``failed_runs`` (some runs raised; their records say why),
+    ``error`` (the job stopped before or between runs) or ``interrupted``.
+    """
     if dataclasses.is_dataclass(detail) and not isinstance(detail, type):
         detail = {k: (str(v) if isinstance(v, Path) else v)
                   for k, v in dataclasses.asdict(detail).items() if k != "record_paths"}
-    return write_record(Path(job_dir) / JOB_STATUS_FILE, {"status": status, "detail": _jsonable(detail)})
+    payload = {
+        "status": status,
+        "detail": _jsonable(detail),
+        "invocation": os.environ.get("VPID_BENCH_INVOCATION"),
+    }
+    return write_record(Path(job_dir) / JOB_STATUS_FILE, payload)
 
 
 def read_job_status(job_dir: Path) -> dict[str, Any] | None:
