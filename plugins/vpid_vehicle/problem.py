@@ -28,6 +28,7 @@ class VehicleProblem(Problem):
 
     Config = VehicleConfig
     name = "vehicle"
+    has_residuals = True
 
     def __init__(self, config: VehicleConfig) -> None:
         super().__init__(config)
@@ -95,6 +96,15 @@ class VehicleProblem(Problem):
             return self.model.objective(X, self.reference)
         except (ValueError, FloatingPointError, ZeroDivisionError, np.linalg.LinAlgError):
             return np.full(X.shape[0], np.inf)
+
+    def residuals(self, X: np.ndarray) -> np.ndarray:
+        """Measured minus computed, z1'' samples then z2'' samples (m/s^2), ``(n, 2 N)``;
+        rows of non-physical candidates are inf. Note Eq. (3) is a sum of two norms, not
+        the norm of this vector, so a least-squares fit minimises a slightly different
+        objective."""
+        R = self.reference[None] - self.responses(X)
+        R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
+        return R.reshape(R.shape[0], -1)
 
     def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
         fitted = self.responses(np.asarray(x, dtype=float).reshape(1, -1))[0]

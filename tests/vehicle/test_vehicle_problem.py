@@ -228,3 +228,16 @@ def test_kernel_compiles_one_signature_per_function(default_problem):
     p.signals(p.x_true)
     assert len(kernel.objective.signatures) == 1
     assert len(kernel.simulate.signatures) == 1
+
+
+def test_residuals_match_the_objective(default_problem):
+    """Per-channel norms of the residual vector rebuild Eq. (3) (to 1e-10 relative)."""
+    p = default_problem
+    X = np.vstack([p.bounds.sample(np.random.default_rng(2), 3), p.x_true])
+    X[1, 8] = -1.0  # non-physical row
+    R = p.residuals(X)
+    N = p.t.size
+    assert R.shape == (4, 2 * N) and np.all(np.isinf(R[1]))
+    den = np.linalg.norm(p.reference, axis=1).sum()
+    f = (np.linalg.norm(R[:, :N], axis=1) + np.linalg.norm(R[:, N:], axis=1)) / den
+    np.testing.assert_allclose(f[[0, 2, 3]], p.evaluate(X)[[0, 2, 3]], rtol=1e-10)
