@@ -70,6 +70,8 @@ class DifferentialEvolution(Optimizer):
     Params: ClassVar[type[OptimizerParams]] = DEParams
     mutation: ClassVar[str] = "rand1"
     label: ClassVar[str] = "de"
+    #: "numba" (fused compiled generation) or "numpy" (reference kernels); same results
+    engine: ClassVar[str] = "numba"
 
     def __init__(self, params: DEParams, bounds: Bounds, rng: np.random.Generator) -> None:
         super().__init__(params, bounds, rng)
@@ -85,6 +87,8 @@ class DifferentialEvolution(Optimizer):
         self._lower = bounds.lower
         self._upper = bounds.upper
         self._dim = bounds.dim
+        self._fused = None  # the compiled generation, loaded on first use (engine "numba")
+        self._F = np.empty(params.ps)  # buffer for a scalar F broadcast to every target
         self.generation = 0  # generations completed after the initial population
         self.population: np.ndarray | None = None
         self.fitness: np.ndarray | None = None
@@ -109,13 +113,33 @@ class DifferentialEvolution(Optimizer):
         """One generation of trial vectors from the current population (mutation, Eq. 8
         crossover, bounds rule). Randomness, in order: the factors (DE6, DE7), then ONE block
         of ``ps x (ps + 2 dim)`` uniforms, split per row into the index keys (ps - 1), the
-        ``rand_j`` (dim), ``rnbr`` (1) and the ``reinit`` values (dim). One call instead of
-        four keeps a generation cheap next to a fast objective."""
+        ``rand_j`` (dim), ``rnbr`` (1) and the ``reinit`` values (dim).
+
+        ``engine = "numba"`` (default) computes it in one compiled loop
+        (:mod:`vpid_de.fused`); ``"numpy"`` with the reference kernels of
+        :mod:`vpid_de.kernels`. Both give identical vectors (tested)."""
         X, f, ps, dim = self.population, self.fitness, self.params.ps, self._dim
         factors = self.factors()
         u = self.rng.random((ps, ps + 2 * dim))
+        if self.engine == "numba":
+            if self._fused is None:
+                from .fused import BOUNDS_IDS, MUTATION_IDS, generation
+
+                self._fused = generation
+                self._ids = (MUTATION_IDS[self.mutation], BOUNDS_IDS[self.params.bounds])
+            F = factors["F"]
+            if isinstance(F, np.ndarray):
+                F = np.ascontiguousarray(F.reshape(-1), dtype=float)
+            else:
+                self._F.fill(F)
+                F = self._F
+            return self._fused(
+                X, f, u, self._n_random, self._ids[0], F, float(factors.get("K", 0.0)),
+                float(self.params.CR), self._ids[1], self._lower, self._upper,
+            )
+        best = int(np.argmin(f))
         r = indices_from_keys(u[:, : ps - 1], self._n_random)
-        V = self._kernel(X, int(np.argmin(f)), r, **factors)
+        V = self._kernel(X, best, r, **factors)
         c = ps - 1
         U = crossover_from_uniforms(X, V, self.params.CR, u[:, c : c + dim], u[:, c + dim])
         return self._repair(U, X, self._lower, self._upper, u[:, c + dim + 1 :])
