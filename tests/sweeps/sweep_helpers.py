@@ -1,0 +1,41 @@
+"""Helpers for the sweep tests: run the real ``vpid-bench`` command in a subprocess."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+from vpid_bench import records as rec
+
+CLI = [sys.executable, "-c", "from vpid_bench.cli import main; main()"]
+
+
+def cli_env(extra: Mapping[str, str] | None = None) -> dict[str, str]:
+    """The environment of a CLI subprocess: headless, no debug tracebacks."""
+    env = {k: v for k, v in os.environ.items() if k not in ("VPID_BENCH_DEBUG",)}
+    env["MPLBACKEND"] = "Agg"
+    env.update(extra or {})
+    return env
+
+
+def run_cli(
+    args: Sequence[str], cwd: Path, env: Mapping[str, str] | None = None, timeout: float = 120
+) -> subprocess.CompletedProcess:
+    """``vpid-bench <args>`` in ``cwd``; returns the completed process (text output)."""
+    return subprocess.run(
+        [*CLI, *args], cwd=cwd, env=cli_env(env), capture_output=True, text=True,
+        timeout=timeout, check=False,
+    )
+
+
+def fingerprints(sweep_dir: Path) -> dict[str, str]:
+    """Record path (relative to the sweep) -> fingerprint, for every record below it."""
+    sweep_dir = Path(sweep_dir)
+    return {
+        str(p.relative_to(sweep_dir)): rec.fingerprint(rec.read_record(p))
+        for p in rec.iter_record_files([sweep_dir])
+    }
+

@@ -1,0 +1,99 @@
+"""Resume: a sweep killed with SIGKILL part-way and run again ends with exactly the records
+of an uninterrupted sweep (same files, same contents apart from timing)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+from sweep_helpers import CLI, cli_env, fingerprints, run_cli
+
+from vpid_bench import records as rec
+
+# Two jobs of 8 runs; each run is a few hundred generations, so the sweep takes seconds
+# and a kill lands part-way.
+SWEEP = ["-m", "problem=functions", "optimizer=random,de1", "runs=8", "problem.iterations=1500",
+         "problem.dim=6", "progress=false", "report=false"]
+TOTAL = 16
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory) -> dict[str, str]:
+    """Fingerprints of the uninterrupted sweep."""
+    cwd = tmp_path_factory.mktemp("ref")
+    done = run_cli([*SWEEP, "hydra.sweep.dir=ref"], cwd)
+    assert done.returncode == 0, done.stderr
+    prints = fingerprints(cwd / "ref")
+    assert len(prints) == TOTAL
+    return prints
+
+
+def _count_records(root: Path) -> int:
+    return sum(1 for _ in root.rglob("records/run-*.json"))
+
+
+def test_sigkill_then_resume_gives_the_uninterrupted_records(tmp_path, reference):
+    proc = subprocess.Popen(
+        [*CLI, *SWEEP], cwd=tmp_path, env=cli_env(), stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL, start_new_session=True,
+    )
+    try:
+        deadline = time.monotonic() + 90
+        while _count_records(tmp_path) < 3 and time.monotonic() < deadline:
+            if proc.poll() is not None:
+                break
+            time.sleep(0.005)
+        os.killpg(proc.pid, signal.SIGKILL)
+    finally:
+        proc.wait(timeout=30)
+    killed_with = _count_records(tmp_path)
+    assert 0 < killed_with < TOTAL, "the kill should land part-way through the sweep"
+    sweeps = list((tmp_path / "outputs" / "multirun").iterdir())
+    assert len(sweeps) == 1
+    # Whatever the moment of the kill, every record file present is complete.
+    for path in rec.iter_record_files([sweeps[0]]):
+        rec.read_record(path)
+
+    again = run_cli(["--resume", *SWEEP], tmp_path)
+    assert again.returncode == 0, again.stderr
+    assert f"resume: continuing {Path('outputs/multirun') / sweeps[0].name}" in again.stderr
+    assert "already recorded" in again.stderr
+    assert list((tmp_path / "outputs" / "multirun").iterdir()) == sweeps  # no new sweep
+    assert fingerprints(sweeps[0]) == reference  # same names, none duplicated, same contents
+
+    # A third run does nothing new: every record is skipped, none rewritten.
+    mtimes = {p: p.stat().st_mtime_ns for p in rec.iter_record_files([sweeps[0]])}
+    third = run_cli(["--resume", *SWEEP], tmp_path)
+    assert third.returncode == 0, third.stderr
+    assert third.stderr.count("0 run(s) done, 8 already recorded") == 2
+    assert {p: p.stat().st_mtime_ns for p in rec.iter_record_files([sweeps[0]])} == mtimes
+
+
+def test_corrupt_and_failed_records_are_run_again(tmp_path, compose_config, registry):
+    from vpid_bench.experiment import run_from_config
+
+    cfg = compose_config(["problem=functions", "optimizer=random", "runs=3", "progress=false",
+                          "problem.iterations=5"])
+    first = run_from_config(cfg, tmp_path, registry)
+    assert first.ran == 3
+    paths = first.record_paths
+    good = {p: rec.fingerprint(rec.read_record(p)) for p in paths}
+    paths[0].write_text(paths[0].read_text()[:50])  # a torn file (e.g. copied half-way)
+    failed = rec.read_record(paths[1]) | {"status": "failed"}
+    rec.write_record(paths[1], failed)
+    again = run_from_config(cfg, tmp_path, registry)
+    assert (again.ran, again.skipped) == (2, 1)
+    assert {p: rec.fingerprint(rec.read_record(p)) for p in paths} == good
+
+
+def test_resume_flag_with_a_missing_folder_is_refused(tmp_path):
+    done = run_cli(["--resume=nowhere", "problem=functions", "optimizer=random", "runs=1"],
+                   tmp_path)
+    assert done.returncode == 2
+    assert done.stderr.strip() == (
+        "error: --resume='nowhere' is not allowed: an existing sweep or run folder"
+    )
