@@ -131,6 +131,11 @@ def _values(override: Any, names: Iterable[str] = ()) -> list[Any]:
     return [value]
 
 
+def _raw_value(override: Any) -> str:
+    """The value of an override as typed (``a,b`` for a sweep)."""
+    return str(override.input_line).split("=", 1)[-1]
+
+
 def _is_interpolation(value: Any) -> bool:
     return isinstance(value, str) and "${" in value
 
@@ -225,7 +230,7 @@ def check_overrides(
         if key in GROUPS and not o.is_delete():
             values = _values(o, names[key])
             if not values and o.is_sweep_override():
-                raise ConfigError(key, o.input_line, "a pattern matching one of "
+                raise ConfigError(key, _raw_value(o), "a pattern matching one of "
                                   + ", ".join(sorted(names[key])))
             for v in values:
                 if not isinstance(v, str) or v not in names[key]:
@@ -243,7 +248,7 @@ def check_overrides(
             continue
         head, *path = key.split(".")
         if "/" in key:
-            raise ConfigError(key, o.input_line, "config groups are problem and optimizer")
+            raise ConfigError(key, _raw_value(o), "config groups are problem and optimizer")
         if head in GROUPS and path:
             for v in _values(o):
                 check_group_key(head, path, v, choices[head], registry)
@@ -256,7 +261,7 @@ def check_overrides(
                 [*GROUPS, *TOP_LEVEL]
             ) + "; problem.<key> and optimizer.<key> set a plugin's parameters"
             first = _values(o)
-            raise ConfigError(key, first[0] if len(first) == 1 else o.input_line, allowed)
+            raise ConfigError(key, first[0] if len(first) == 1 else _raw_value(o), allowed)
     return choices
 
 
