@@ -7,6 +7,8 @@
 
 from __future__ import annotations
 
+import inspect
+
 import numpy as np
 import pytest
 from scipy.optimize import differential_evolution, rosen
@@ -57,13 +59,15 @@ def test_de1_agrees_with_scipy_on_rosenbrock(registry):
     problem = build_problem(registry, {"name": "functions", "function": "rosenbrock", "dim": 10,
                                        "ps": PS, "iterations": ITERATIONS})
     box = list(zip(problem.bounds.lower, problem.bounds.upper, strict=True))
+    # scipy >= 1.15 takes rng=, older releases seed= (a Generator works for both)
+    rng_kw = "rng" if "rng" in inspect.signature(differential_evolution).parameters else "seed"
     theirs = []
     for s in seeds:
         init = problem.bounds.sample(np.random.default_rng(1000 + s), PS)  # ps rows exactly
         res = differential_evolution(
             rosen, box, strategy="rand1bin", maxiter=ITERATIONS, init=init, mutation=0.6,
             recombination=0.9, tol=0, atol=0, polish=False, updating="deferred",
-            rng=np.random.default_rng(2000 + s),
+            **{rng_kw: np.random.default_rng(2000 + s)},
         )
         assert res.nfev == BUDGET
         theirs.append(res.fun)
