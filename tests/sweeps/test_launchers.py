@@ -1,0 +1,55 @@
+"""Launchers: the joblib launcher (2 worker processes) writes records bit-identical to the
+basic launcher's (apart from timing), and a job that fails in a worker process still makes
+the command exit non-zero and is named in the sweep summary."""
+
+from __future__ import annotations
+
+import importlib.util
+
+import pytest
+from sweep_helpers import fingerprints, run_cli
+
+# One job fails in every launcher (problem.dim=1 is refused by the functions problem).
+SWEEP = ["-m", "problem=functions", "optimizer=random,de1,ga", "problem.dim=1,4", "runs=3",
+         "problem.iterations=10", "progress=false", "report=false"]
+OK_JOBS = 3
+
+
+@pytest.fixture(scope="module")
+def basic(tmp_path_factory):
+    cwd = tmp_path_factory.mktemp("basic")
+    return cwd, run_cli([*SWEEP, "hydra.sweep.dir=sweep"], cwd)
+
+
+def _check_failed_job_reported(done) -> None:
+    assert done.returncode == 1, done.stderr
+    assert "sweep: 6 job(s), 3 ok, 3 not ok" in done.stderr
+    summary = [line for line in done.stderr.splitlines() if line.startswith("  error: ")]
+    assert len(summary) == 3  # one line per failed job, whichever process ran it
+    assert all(line.endswith("problem.dim=1 is not allowed: an integer >= 2") for line in summary)
+    assert "Traceback" not in done.stderr
+
+
+def test_basic_launcher_reports_the_failed_jobs(basic):
+    cwd, done = basic
+    _check_failed_job_reported(done)
+    assert len(fingerprints(cwd / "sweep")) == OK_JOBS * 3
+
+
+def test_joblib_records_are_bit_identical_to_basic(basic, tmp_path):
+    cwd, _ = basic
+    done = run_cli([*SWEEP, "hydra/launcher=joblib", "hydra.launcher.n_jobs=2",
+                    "hydra.sweep.dir=sweep"], tmp_path)
+    _check_failed_job_reported(done)
+    assert "Joblib.Parallel" in done.stdout + done.stderr  # it ran in the joblib launcher
+    assert fingerprints(tmp_path / "sweep") == fingerprints(cwd / "sweep")
+
+
+@pytest.mark.skipif(importlib.util.find_spec("hydra_plugins.hydra_submitit_launcher") is None,
+                    reason="hydra-submitit-launcher not installed (extra 'submitit')")
+def test_submitit_local_records_match_basic(basic, tmp_path):
+    cwd, _ = basic
+    done = run_cli([*SWEEP, "hydra/launcher=submitit_local", "hydra.sweep.dir=sweep"],
+                   tmp_path, timeout=300)
+    _check_failed_job_reported(done)
+    assert fingerprints(tmp_path / "sweep") == fingerprints(cwd / "sweep")
