@@ -106,6 +106,8 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=30)
     parser.add_argument("--launchers", default="basic,joblib")
     parser.add_argument("--keep", type=Path, default=None, help="keep outputs in this folder")
+    parser.add_argument("--no-report", action="store_true",
+                        help="sweeps without their report (isolates the launchers' share)")
     args = parser.parse_args()
 
     registry = Registry()
@@ -116,7 +118,8 @@ def main() -> None:
         sys.exit(f"none of {wanted} is registered")
     sizes = [int(s) for s in args.ps.split(",")]
     sweep = ["-m", f"problem={args.problem}", "optimizer=" + ",".join(optimizers),
-             "problem.ps=" + args.ps, f"runs={args.runs}", "progress=false"]
+             "problem.ps=" + args.ps, f"runs={args.runs}", "progress=false",
+             *(["report=false"] if args.no_report else [])]
     launcher_args = {"basic": [], "joblib": ["hydra/launcher=joblib", "hydra.launcher.n_jobs=2"]}
     root = args.keep or Path(tempfile.mkdtemp(prefix="vpid-paper-"))
     root.mkdir(parents=True, exist_ok=True)
@@ -128,7 +131,8 @@ def main() -> None:
         walls[name] = run_sweep([*sweep, *launcher_args[name], f"hydra.sweep.dir={sweep_dir}"],
                                 root)
         evaluations = count_evaluations(sweep_dir)
-        print(f"  {name:7s} launcher: {walls[name]:8.2f} s wall (report included)")
+        print(f"  {name:7s} launcher: {walls[name]:8.2f} s wall "
+              f"({'no report' if args.no_report else 'report included'})")
     costs = {ps: objective_cost(args.problem, ps) for ps in sizes}
     total_evals = sum(evaluations.values())
     bare = sum(evaluations[ps] * costs[ps] for ps in evaluations)

@@ -65,7 +65,8 @@ class SweepStatus(Callback):
         hint = _command_text([*args, f"hydra.sweep.dir={sweep_dir}"])
         print(
             f"sweep folder: {sweep_dir}\n"
-            f"  if this sweep stops, resume it (only missing runs are run) with:\n  {hint}",
+            f"  if this sweep stops, resume it (only missing runs are run) with:\n  {hint}\n"
+            "  (or run the same command with --resume: it finds the newest sweep like it)",
             file=sys.stderr,
             flush=True,
         )
