@@ -97,3 +97,20 @@ def test_resume_flag_with_a_missing_folder_is_refused(tmp_path):
     assert done.stderr.strip() == (
         "error: --resume='nowhere' is not allowed: an existing sweep or run folder"
     )
+
+
+def test_resume_finds_the_matching_single_run(tmp_path):
+    """``--resume`` without -m re-uses the newest run folder with the same overrides, and
+    ignores one whose overrides differ."""
+    job = ["problem=functions", "optimizer=random", "runs=2", "problem.iterations=3",
+           "report=false"]
+    first = run_cli([*job, "progress=false"], tmp_path)
+    other = run_cli([*job, "seed=5", "progress=false"], tmp_path)
+    assert first.returncode == other.returncode == 0
+    again = run_cli(["--resume", *job, "progress=true"], tmp_path)  # progress may differ
+    assert again.returncode == 0, again.stderr
+    assert "0 run(s) done, 2 already recorded" in again.stderr
+    runs = sorted((tmp_path / "outputs" / "runs").iterdir())
+    assert len(runs) == 2  # no third folder
+    resumed = [line for line in again.stderr.splitlines() if line.startswith("resume:")]
+    assert resumed == [f"resume: continuing {Path('outputs/runs') / runs[0].name}"]
