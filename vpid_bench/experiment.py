@@ -114,13 +114,34 @@ def _check_protocol(prefix: str, obj: Any) -> None:
             raise ConfigError(f"{prefix}.{key}", value, "an integer >= 1")
 
 
+#: Problems built in this process, by (class, name, config): the jobs of a sweep that share a
+#: problem config (9 optimizers x the same ``ps``) share one instance, so a costly set-up
+#: (the vehicle's reference simulation) is done once per process, not once per job. A
+#: problem's ``evaluate`` is a pure function of its config (see Problem), so this changes no
+#: result; the launcher tests compare records of the basic launcher (shared instances) and
+#: of joblib workers (fresh ones).
+_PROBLEMS: dict[Any, Problem] = {}
+_PROBLEMS_MAX = 8
+
+
 def build_problem(registry: Registry, cfg: Mapping) -> Problem:
-    """The problem named by ``cfg['name']``, built from the rest of ``cfg``."""
+    """The problem named by ``cfg['name']``, built from the rest of ``cfg`` (or re-used)."""
     name = cfg.get("name")
     cls = registry.problem(name)
     config = build_dataclass(cls.Config, cfg, prefix="problem")
+    try:
+        key: Any = (cls, name, config)
+        hash(key)
+    except TypeError:  # a config with unhashable values: build it every time
+        key = None
+    if key is not None and key in _PROBLEMS:
+        return _PROBLEMS[key]
     problem = cls(config)
     problem.name = name
+    if key is not None:
+        if len(_PROBLEMS) >= _PROBLEMS_MAX:
+            _PROBLEMS.pop(next(iter(_PROBLEMS)))
+        _PROBLEMS[key] = problem
     return problem
 
 
