@@ -311,3 +311,25 @@ def test_corrupt_job_status_and_record_are_reported_not_fatal(tmp_path):
     bad.write_text(json.dumps({"schema": rec.SCHEMA, "run_id": "x"}))
     with pytest.raises(rec.CorruptRecordError, match="incomplete run record, missing run_index"):
         rec.read_record(bad)
+
+
+def test_the_report_names_a_corrupt_record_and_reports_the_rest(compose_config, registry,
+                                                                tmp_path):
+    """A torn record met by the report: one warning naming the file, the other runs reported."""
+    import subprocess
+    import sys
+
+    cfg = compose_config(["problem=functions", "optimizer=random", "runs=3", "progress=false",
+                          "problem.iterations=3"])
+    summary = run_from_config(cfg, tmp_path / "sweep" / "job", registry)
+    torn = summary.record_paths[0]
+    torn.write_text(torn.read_text()[:80])
+    done = subprocess.run(
+        [sys.executable, "-c", "from vpid_bench.report.cli import main; main()",
+         str(tmp_path / "sweep"), "-o", str(tmp_path / "report")],
+        capture_output=True, text=True, check=False, timeout=120,
+    )
+    assert "Traceback" not in done.stderr
+    warnings = [line for line in done.stderr.splitlines() if str(torn.name) in line]
+    assert len(warnings) == 1 and "not a readable JSON run record" in warnings[0]
+    assert "(2 run records)" in done.stdout + done.stderr
