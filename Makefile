@@ -13,7 +13,7 @@ $(BIN)/python:
 	$(BIN)/python -m pip install --upgrade "pip>=23.1"
 
 $(VENV)/.installed: $(BIN)/python pyproject.toml examples/vpid-random-search/pyproject.toml
-	$(BIN)/python -m pip install -e ".[test,joblib]" -e examples/vpid-random-search
+	$(BIN)/python -m pip install -e ".[test,joblib,submitit]" -e examples/vpid-random-search
 	touch $@
 
 install: $(VENV)/.installed
@@ -27,7 +27,9 @@ test: install
 	$(BIN)/python -m pytest
 
 bench: install
-	$(BIN)/python -m pytest benchmarks --benchmark-only -m "slow or not slow"
+	$(BIN)/python benchmarks/bench_vehicle.py
+	$(BIN)/python benchmarks/bench_optimizers.py
+	$(BIN)/python benchmarks/paper_experiment.py
 
 clean:
 	rm -rf $(VENV) outputs/*/ .pytest_cache

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from vpid_bench import records as rec
+from vpid_bench.records import _umask
 from vpid_bench.experiment import run_from_config, run_rng
 
 FAST = ["problem=functions", "optimizer=random", "runs=3", "problem.iterations=4",
@@ -93,6 +94,7 @@ def test_atomic_write_leaves_no_temporary_file(tmp_path):
     path = rec.write_record(tmp_path / "records" / "run-000-x.json", {"a": np.float64(np.inf)})
     assert json.loads(path.read_text()) == {"a": None}  # strict JSON: non-finite -> null
     assert [p.name for p in path.parent.iterdir()] == [path.name]
+    assert path.stat().st_mode & 0o044 == 0o044 & ~_umask()  # readable by others, per umask
 
 
 @pytest.mark.parametrize(
