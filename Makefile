@@ -19,8 +19,7 @@ $(VENV)/.installed: $(BIN)/python pyproject.toml examples/vpid-random-search/pyp
 install: $(VENV)/.installed
 
 demo: install
-	$(BIN)/vpid-bench -m optimizer=de1,de4,ga,random problem.ps=20 runs=5 \
-		hydra.sweep.dir=outputs/demo
+	$(BIN)/vpid-bench -m optimizer=de1,de4,ga,random problem.ps=20,30 hydra.sweep.dir=outputs/demo
 
 test: install
 	$(BIN)/ruff check .
