@@ -146,6 +146,16 @@ def test_cli_exit_codes(tmp_path, capsys):
     assert report_main([str(tmp_path / "s"), "-o", str(out), "--short"]) == 0
     assert (out / "report.md").is_file()
     assert report_main([str(tmp_path / "s"), "--alpha", "2"]) == 2
+    capsys.readouterr()
+    # A torn record: the report is written from the others, exit 1, one line names the file.
+    torn = tmp_path / "s" / "optimizer=a,ps=20,seed=0" / "records" / "run-009-torn.json"
+    torn.write_text('{"schema": "vpid')
+    assert report_main([str(tmp_path / "s"), "-o", str(out), "--short"]) == 1
+    captured = capsys.readouterr()
+    (line,) = [ln for ln in captured.err.splitlines() if torn.name in ln]
+    assert line == (f"warning: unreadable record {torn}: not a readable JSON run record "
+                    "(Unterminated string starting at: line 1 column 12 (char 11))")
+    assert "(2 run records)" in captured.out and (out / "report.md").is_file()
 
 
 def test_callback_writes_report_and_honours_report_false(tmp_path):
@@ -165,7 +175,10 @@ def test_callback_writes_report_and_honours_report_false(tmp_path):
     assert (sweep / "report" / "report.md").is_file() and cli._FAILURES == []
     job = sweep / "optimizer=a,ps=20,seed=0"
     cb.on_run_end(OmegaConf.create({"hydra": {"runtime": {"output_dir": str(job)}}}))
-    assert (job / "report" / "report.md").is_file()
+    # A single job gets the light report: no figures, the command for the full one.
+    text = (job / "report" / "report.md").read_text()
+    assert "(single job)" in text and "vpid-bench-report" in text
+    assert not (job / "report" / "figures").exists() and cli._FAILURES == []
     # A report that cannot be built prints one line and notes a failure; it never raises.
     cb.on_multirun_end(OmegaConf.create({"hydra": {"sweep": {"dir": str(tmp_path / "none")}}}))
     assert len(cli._FAILURES) == 1 and "report" in cli._FAILURES[0]

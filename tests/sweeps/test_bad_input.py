@@ -315,7 +315,8 @@ def test_corrupt_job_status_and_record_are_reported_not_fatal(tmp_path):
 
 def test_the_report_names_a_corrupt_record_and_reports_the_rest(compose_config, registry,
                                                                 tmp_path):
-    """A torn record met by the report: one warning naming the file, the other runs reported."""
+    """A torn record met by the report: one warning naming the file, the other runs reported,
+    exit status 1 (report written, problems found)."""
     import subprocess
     import sys
 
@@ -333,3 +334,5 @@ def test_the_report_names_a_corrupt_record_and_reports_the_rest(compose_config, 
     warnings = [line for line in done.stderr.splitlines() if str(torn.name) in line]
     assert len(warnings) == 1 and "not a readable JSON run record" in warnings[0]
     assert "(2 run records)" in done.stdout + done.stderr
+    assert done.returncode == 1
+    assert (tmp_path / "report" / "report.md").is_file()

@@ -16,7 +16,6 @@ p-values do not show.
 from __future__ import annotations
 
 import dataclasses
-import datetime as _dt
 import logging
 import warnings
 from collections.abc import Iterable
@@ -25,15 +24,13 @@ from typing import Any
 
 import numpy as np
 
-from ..api import VpidBenchError
 from . import figures, paper, render, stats, tables
-from .load import LoadedRecords, load_records, runs_frame, traces_frame
+from .light import sources_lines
+from .load import LoadedRecords, NoRecordsError, load_records, runs_frame, traces_frame
+
+__all__ = ["NoRecordsError", "Report", "build_report"]
 
 log = logging.getLogger(__name__)
-
-
-class NoRecordsError(VpidBenchError):
-    """No run record was found below the given paths."""
 
 
 @dataclasses.dataclass
@@ -52,12 +49,7 @@ class Report:
     @property
     def failures(self) -> list[str]:
         """One line per failed job, failed run or unreadable record file."""
-        out = [f"job {d}: {why}" for d, why in self.loaded.failed_jobs]
-        out += [f"unreadable record {p}: {why}" for p, why in self.loaded.skipped]
-        failed_runs = [r for r in self.loaded.records if r["status"] != "ok"]
-        if failed_runs and not self.loaded.failed_jobs:
-            out.append(f"{len(failed_runs)} failed run(s) in the records")
-        return out
+        return self.loaded.failures
 
 
 def _headline(stats_table: Any, verdicts: list[str]) -> Any:
@@ -87,25 +79,10 @@ def _headline(stats_table: Any, verdicts: list[str]) -> Any:
 
 
 def _sources_text(paths: list[Path], loaded: LoadedRecords, df: Any) -> list[str]:
-    n_ok = int((df["status"] == "ok").sum())
-    lines = [
-        f"Built {_dt.datetime.now(_dt.timezone.utc):%Y-%m-%d %H:%M UTC} from "
-        f"{len(loaded.records)} run record(s) ({n_ok} ok, {len(df) - n_ok} failed) found in:",
-        "",
-        *[f"- `{p}`" for p in paths],
-        "",
-    ]
-    if loaded.duplicates:
-        lines.append(f"- {loaded.duplicates} duplicate record(s) (same run id) were counted once.")
-    for p, why in loaded.skipped:
-        lines.append(f"- **Skipped unreadable record** `{p}`: {why}")
-    for d, why in loaded.failed_jobs:
-        lines.append(f"- **Job not ok** `{d}`: {why}")
     failed = df[df["status"] != "ok"]
-    for _, r in failed.iterrows():
-        lines.append(f"- **Failed run** {r['algorithm']} on {r['context']}, run "
-                     f"{r['run_index']} (seed {r['seed']}): {r['error']}")
-    return lines
+    return sources_lines(paths, loaded, list(zip(
+        failed["algorithm"], failed["context"], failed["run_index"], failed["seed"],
+        failed["error"], strict=True)))
 
 
 HOW_TO_READ = """\

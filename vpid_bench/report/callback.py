@@ -2,12 +2,14 @@
 
 Registered in ``conf/config.yaml`` under ``hydra.callbacks.report``. At the end of a
 multirun it writes the report into ``<sweep dir>/report/`` and prints the headline table;
-at the end of a single job it writes a short report into ``<job dir>/report/``. The top-level
-key ``report: false`` turns it off.
+at the end of a single job it writes the light report (:mod:`.light`: numpy and tabulate
+only, no figures) into ``<job dir>/report/report.md``. The top-level key ``report: false``
+turns it off.
 
 A report never crashes the command: any exception becomes one printed line and a noted
-failure (non-zero exit). Importing this module is cheap: the report code (pandas, seaborn,
-matplotlib, scikit-posthocs) is imported only when a report is built.
+failure (non-zero exit). Importing this module is cheap: the full report's code (pandas,
+seaborn, matplotlib, scikit-posthocs) is imported only when a sweep's report is built, never
+for a single job.
 """
 
 from __future__ import annotations
@@ -55,12 +57,19 @@ def _run_dir(config: Any) -> Path:
 def write_and_print(folder: Path, short: bool) -> bool:
     """Build the report of ``folder`` into ``folder/report``, print where and the headline.
 
-    Returns True on success; on any error prints one line, notes a failure, returns False.
+    ``short``: the light single-job report (:func:`.light.light_report`, no pandas, no
+    figures); else the full report. Returns True on success; on any error prints one line,
+    notes a failure, returns False.
     """
     try:
-        from .build import build_report
+        if short:
+            from .light import light_report
 
-        report = build_report([folder], folder / REPORT_SUBDIR, short=short)
+            report: Any = light_report(folder, folder / REPORT_SUBDIR)
+        else:
+            from .build import build_report
+
+            report = build_report([folder], folder / REPORT_SUBDIR)
     except Exception as exc:  # the report must not crash a sweep
         log.debug("report failed", exc_info=True)
         message = f"report: not written for {folder} ({type(exc).__name__}: {exc})"
@@ -68,6 +77,10 @@ def write_and_print(folder: Path, short: bool) -> bool:
         _note_failure(message)
         return False
     print(f"\n{report.headline}\n\nreport: {report.report_md}", flush=True)
+    if short:
+        from .light import full_report_command
+
+        print(f"full report with figures: {full_report_command(folder)}", flush=True)
     bad = report.failures
     if bad:
         print(f"report: {len(bad)} problem(s) found, listed in the report: " + "; ".join(bad[:3])

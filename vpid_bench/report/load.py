@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from ..api import VpidBenchError
 from ..jobstatus import read_job_status
 from ..records import CorruptRecordError, iter_record_files, read_record
 
@@ -33,6 +34,10 @@ from ..records import CorruptRecordError, iter_record_files, read_record
 PROBLEM_KEYS_IGNORED = ("ps",)
 #: Optimizer parameters that never distinguish algorithm variants (they are the protocol).
 OPTIMIZER_KEYS_IGNORED = ("ps", "iterations")
+
+
+class NoRecordsError(VpidBenchError):
+    """No run record was found below the given paths."""
 
 
 @dataclasses.dataclass
@@ -58,6 +63,23 @@ class LoadedRecords:
                     detail = f"failed runs {detail['failed']}"
                 out.append((job_dir, f"{status.get('status')}: {detail}"))
         return out
+
+    @property
+    def failures(self) -> list[str]:
+        """One line per failed job, failed run or unreadable record file (each names it)."""
+        out = [f"job {d}: {why}" for d, why in self.failed_jobs]
+        out += [f"unreadable record {p}: {reason(p, why)}" for p, why in self.skipped]
+        failed_runs = [r for r in self.records if r["status"] != "ok"]
+        if failed_runs and not self.failed_jobs:
+            out.append(f"{len(failed_runs)} failed run(s) in the records")
+        return out
+
+
+def reason(path: Path, why: str) -> str:
+    """``why`` without a leading ``path: `` (a :class:`CorruptRecordError` names its file,
+    and the lines that quote it name the file already)."""
+    prefix = f"{path}: "
+    return why[len(prefix):] if why.startswith(prefix) else why
 
 
 def _job_dirs_below(paths: Iterable[Path]) -> set[Path]:
@@ -185,23 +207,22 @@ def _drop_implied(
     return out
 
 
-def runs_frame(records: list[dict[str, Any]]) -> Any:
-    """The tidy table of all runs (a pandas DataFrame, one row per record).
+@dataclasses.dataclass(frozen=True)
+class RunLabel:
+    """Where a run belongs: its context, algorithm, population size and varying keys."""
 
-    Columns: ``context``, ``problem``, ``ps``, ``algorithm``, ``optimizer``, one column per
-    varying config key (``problem.<key>``, ``optimizer.<key>``), ``seed``, ``run_index``,
-    ``status``, ``f_best``, ``nore`` (percent, NaN when no true values), ``metric`` (NoRE
-    where every run of the context has it, else ``f_best``) and ``metric_name``,
-    ``evaluations``, ``budget``, ``wall_time_s``, ``run_time_s``, ``stopped_by``, ``error``,
-    ``x.<param>``, ``eps.<param>`` (relative error, percent), ``true.<param>``, ``run_id``,
-    ``file``.
-    Failed runs have NaN results. Non-finite objective values are ``inf``.
-    """
-    import pandas as pd
+    context: str
+    algorithm: str
+    ps: Any
+    problem_vary: dict[str, Any]
+    optimizer_vary: dict[str, Any]
 
+
+def run_labels(records: list[dict[str, Any]]) -> list[RunLabel]:
+    """The context and algorithm of every record (see the module docstring), in order."""
     problem_keys, optimizer_keys = grouping(records)
     problem_keys = _drop_implied(records, problem_keys)
-    rows = []
+    out = []
     for r in records:
         pname = r["problem"]["name"]
         oname = r["optimizer"]["name"]
@@ -217,6 +238,47 @@ def runs_frame(records: list[dict[str, Any]]) -> Any:
         algorithm = oname + (
             "[" + ",".join(f"{k}={_fmt(v)}" for k, v in ovary.items()) + "]" if ovary else ""
         )
+        out.append(RunLabel(context, algorithm, ps, pvary, ovary))
+    return out
+
+
+def metric_of(record: dict[str, Any], use_nore: bool) -> float:
+    """A run's metric: its NoRE when ``use_nore`` (``inf`` when an ok run has none: a
+    non-finite vector ranks last), else its best objective (``inf`` when not finite); NaN for
+    a failed run."""
+    res = record.get("result") or {}
+    if record["status"] != "ok":
+        return math.nan
+    if use_nore:
+        return _num(res.get("nore"))
+    return _num(res.get("f_best")) if res else math.nan
+
+
+def has_true(record: dict[str, Any]) -> bool:
+    """Whether the record knows the true parameter values."""
+    return (record.get("parameters") or {}).get("true") is not None
+
+
+def runs_frame(records: list[dict[str, Any]]) -> Any:
+    """The tidy table of all runs (a pandas DataFrame, one row per record).
+
+    Columns: ``context``, ``problem``, ``ps``, ``algorithm``, ``optimizer``, one column per
+    varying config key (``problem.<key>``, ``optimizer.<key>``), ``seed``, ``run_index``,
+    ``status``, ``f_best``, ``nore`` (percent, NaN when no true values), ``metric`` (NoRE
+    where every run of the context has it, else ``f_best``) and ``metric_name``,
+    ``evaluations``, ``budget``, ``wall_time_s``, ``run_time_s``, ``stopped_by``, ``error``,
+    ``x.<param>``, ``eps.<param>`` (relative error, percent), ``true.<param>``, ``run_id``,
+    ``file``.
+    Failed runs have NaN results. Non-finite objective values are ``inf``.
+    """
+    import pandas as pd
+
+    rows = []
+    for r, lab in zip(records, run_labels(records), strict=True):
+        pname = r["problem"]["name"]
+        oname = r["optimizer"]["name"]
+        context, algorithm, ps = lab.context, lab.algorithm, lab.ps
+        pvary, ovary = lab.problem_vary, lab.optimizer_vary
         res = r.get("result") or {}
         ok = r["status"] == "ok" and bool(res)
         timing = r.get("timing") or {}
@@ -240,7 +302,7 @@ def runs_frame(records: list[dict[str, Any]]) -> Any:
             "run_time_s": _num(timing.get("run_time_s"), np.nan),
             "stopped_by": res.get("stopped_by") if ok else None,
             "error": (f"{error.get('type')}: {error.get('message')}" if error else None),
-            "has_true": (r.get("parameters") or {}).get("true") is not None,
+            "has_true": has_true(r),
         }
         names = (r.get("parameters") or {}).get("names") or []
         x = res.get("x_best") or [None] * len(names)

@@ -11,6 +11,8 @@ row is repaired as the project's paper notes say (the extracted text lost three 
 
 from __future__ import annotations
 
+import csv
+import functools
 from importlib import resources
 from typing import Any
 
@@ -24,31 +26,45 @@ PARAMETERS = ("m", "I", "m1", "m2", "k1", "k2", "c1", "c2", "a1")
 PAPER_PROBLEM = "vehicle"
 
 
+def _open_csv() -> Any:
+    return resources.files("vpid_bench.report").joinpath("data/paper_tables.csv").open(
+        encoding="utf-8"
+    )
+
+
 def paper_table() -> Any:
     """The published tables as a DataFrame (columns: table, ps, algorithm, quantity, the nine
     parameters, nore, note)."""
     import pandas as pd
 
-    with resources.files("vpid_bench.report").joinpath("data/paper_tables.csv").open(
-        encoding="utf-8"
-    ) as fh:
+    with _open_csv() as fh:
         df = pd.read_csv(fh)
     df["note"] = df["note"].fillna("")
     return df
 
 
+@functools.cache
+def paper_rows() -> tuple[dict[str, str], ...]:
+    """The published tables as plain rows of text, read with the csv module (no pandas: the
+    single job's report uses this)."""
+    with _open_csv() as fh:
+        return tuple(csv.DictReader(fh))
+
+
 def published(table: Any, algorithm: str, ps: int) -> dict[str, Any] | None:
     """The paper's mean vector, ε (%) and NoRE of ``algorithm`` (e.g. ``de4``) at ``ps``, or
-    ``None`` when the paper has no such row."""
-    rows = table[(table["algorithm"] == algorithm.upper()) & (table["ps"] == ps)]
-    if rows.empty:
+    ``None`` when the paper has no such row. ``table``: :func:`paper_table`, or ``None`` to
+    read the CSV without pandas."""
+    rows = paper_rows() if table is None else table.to_dict("records")
+    rows = [r for r in rows if r["algorithm"] == algorithm.upper() and int(r["ps"]) == ps]
+    mean = next((r for r in rows if r["quantity"] == "mean"), None)
+    eps = next((r for r in rows if r["quantity"] == "eps_percent"), None)
+    if mean is None or eps is None:
         return None
-    mean = rows[rows["quantity"] == "mean"].iloc[0]
-    eps = rows[rows["quantity"] == "eps_percent"].iloc[0]
     return {
         "table": str(mean["table"]),
         "mean": {p: float(mean[p]) for p in PARAMETERS},
         "eps": {p: float(eps[p]) for p in PARAMETERS},
         "nore": float(eps["nore"]),
-        "note": str(mean["note"]),
+        "note": str(mean["note"] or ""),
     }

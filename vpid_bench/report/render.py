@@ -1,4 +1,5 @@
-"""Table rendering: Markdown (pipe tables), LaTeX (booktabs) and CSV, via tabulate/pandas."""
+"""Table rendering: Markdown (pipe tables), LaTeX (booktabs) and CSV, via tabulate/pandas
+(:func:`table` and :func:`fmt` need no pandas)."""
 
 from __future__ import annotations
 
@@ -32,30 +33,34 @@ def _cells(df: Any, digits: int) -> list[list[str]]:
     return [[fmt(v, digits) for v in row] for row in df.itertuples(index=False, name=None)]
 
 
-def markdown(df: Any, digits: int = 4) -> str:
-    """A GitHub pipe table."""
+def table(headers: list[str], rows: list[list[Any]], tablefmt: str = "github",
+          digits: int = 4) -> str:
+    """Rows of cells (formatted with :func:`fmt`) as a tabulate table; no pandas needed.
+    ``tablefmt``: ``github`` (Markdown), ``simple`` (terminal), ``latex_booktabs``."""
+    return _tabulate(headers, [[fmt(v, digits) for v in row] for row in rows], tablefmt)
+
+
+def _tabulate(headers: list[str], cells: list[list[str]], tablefmt: str) -> str:
     from tabulate import tabulate
 
+    return tabulate(cells, headers=list(headers), tablefmt=tablefmt, disable_numparse=True)
+
+
+def markdown(df: Any, digits: int = 4) -> str:
+    """A GitHub pipe table."""
     if df is None or df.empty:
         return "_(empty)_"
-    return tabulate(_cells(df, digits), headers=list(df.columns), tablefmt="github",
-                    disable_numparse=True)
+    return _tabulate(list(df.columns), _cells(df, digits), "github")
 
 
 def terminal(df: Any, digits: int = 4) -> str:
     """A plain-text table for the terminal."""
-    from tabulate import tabulate
-
-    return tabulate(_cells(df, digits), headers=list(df.columns), tablefmt="simple",
-                    disable_numparse=True)
+    return _tabulate(list(df.columns), _cells(df, digits), "simple")
 
 
 def latex(df: Any, digits: int = 4) -> str:
     """A LaTeX table body with booktabs rules (needs ``\\usepackage{booktabs}``)."""
-    from tabulate import tabulate
-
-    return tabulate(_cells(df, digits), headers=list(df.columns), tablefmt="latex_booktabs",
-                    disable_numparse=True)
+    return _tabulate(list(df.columns), _cells(df, digits), "latex_booktabs")
 
 
 def write_table(df: Any, directory: Path, stem: str, digits: int = 4) -> list[Path]:

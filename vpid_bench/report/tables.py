@@ -41,6 +41,34 @@ def _paper_name_map(problem: str, names: list[str]) -> dict[str, str] | None:
     return None
 
 
+def mean_vector_summary(x: np.ndarray, true: np.ndarray, names: list[str], *, problem: str,
+                        optimizer: str, algorithm: str, ps: Any) -> dict[str, Any] | None:
+    """The mean of the finite rows of ``x`` (runs x parameters), its relative errors (%) and
+    NoRE against ``true``, and the paper's row in ``names`` order where the paper has one
+    (``paper``: table, note, mean, eps, nore; else ``None``). ``None`` when no row is finite.
+    No pandas: the single job's report uses this too."""
+    x = np.asarray(x, dtype=float)
+    x = x[np.all(np.isfinite(x), axis=1)]
+    if not len(x):
+        return None
+    true = np.asarray(true, dtype=float)
+    mean = x.mean(axis=0)
+    out: dict[str, Any] = {"n_runs": len(x), "mean": mean,
+                           "eps": relative_errors_percent(mean, true),
+                           "nore": nore_of(mean, true), "paper": None}
+    mapping = _paper_name_map(problem, names)
+    if mapping is None or algorithm != optimizer or ps is None:
+        return out
+    pub = paper.published(None, optimizer, int(ps))
+    if pub is not None:
+        out["paper"] = {
+            "table": pub["table"], "note": pub["note"], "nore": pub["nore"],
+            "mean": np.array([pub["mean"][mapping[p]] for p in names]),
+            "eps": np.array([pub["eps"][mapping[p]] for p in names]),
+        }
+    return out
+
+
 def mean_vector_table(df: Any) -> Any:
     """Long table: context, problem, ps, algorithm, n_runs, source (ours | paper |
     difference), quantity (mean | eps_percent), one column per parameter, nore, note.
@@ -50,48 +78,60 @@ def mean_vector_table(df: Any) -> Any:
     import pandas as pd
 
     ok = df[df["status"] == "ok"]
-    ptable = None
     rows: list[dict[str, Any]] = []
     for (context, algorithm), g in ok.groupby(["context", "algorithm"], sort=True):
         names = _params_of(g)
         true_cols = [f"true.{p}" for p in names]
         if not names or not all(c in g for c in true_cols) or g[true_cols].isna().any().any():
             continue
-        x = g[[f"x.{p}" for p in names]].to_numpy(float)
-        x = x[np.all(np.isfinite(x), axis=1)]
-        if not len(x):
+        mv = mean_vector_summary(
+            g[[f"x.{p}" for p in names]].to_numpy(float), g[true_cols].iloc[0].to_numpy(float),
+            names, problem=g["problem"].iloc[0], optimizer=g["optimizer"].iloc[0],
+            algorithm=algorithm, ps=g["ps"].iloc[0])
+        if mv is None:
             continue
-        true = g[true_cols].iloc[0].to_numpy(float)
-        mean = x.mean(axis=0)
-        eps = relative_errors_percent(mean, true)
+        mean, eps = mv["mean"], mv["eps"]
         base = {"context": context, "problem": g["problem"].iloc[0], "ps": g["ps"].iloc[0],
-                "algorithm": algorithm, "n_runs": len(x)}
+                "algorithm": algorithm, "n_runs": mv["n_runs"]}
         rows.append({**base, "source": "ours", "quantity": "mean", **dict(zip(names, mean)),
                      "nore": np.nan, "note": ""})
         rows.append({**base, "source": "ours", "quantity": "eps_percent",
-                     **dict(zip(names, eps)), "nore": nore_of(mean, true), "note": ""})
-        mapping = _paper_name_map(base["problem"], names)
-        if mapping is None:
-            continue
-        if ptable is None:
-            ptable = paper.paper_table()
-        pub = paper.published(ptable, g["optimizer"].iloc[0], int(base["ps"]))
-        if pub is None or algorithm != g["optimizer"].iloc[0]:
+                     **dict(zip(names, eps)), "nore": mv["nore"], "note": ""})
+        pub = mv["paper"]
+        if pub is None:
             continue
         note = f"Table {pub['table']}" + (f"; {pub['note']}" if pub["note"] else "")
-        pmean = {p: pub["mean"][mapping[p]] for p in names}
-        peps = {p: pub["eps"][mapping[p]] for p in names}
-        rows.append({**base, "source": "paper", "quantity": "mean", **pmean, "nore": np.nan,
-                     "note": note})
-        rows.append({**base, "source": "paper", "quantity": "eps_percent", **peps,
-                     "nore": pub["nore"], "note": note})
+        rows.append({**base, "source": "paper", "quantity": "mean",
+                     **dict(zip(names, pub["mean"])), "nore": np.nan, "note": note})
+        rows.append({**base, "source": "paper", "quantity": "eps_percent",
+                     **dict(zip(names, pub["eps"])), "nore": pub["nore"], "note": note})
         rows.append({**base, "source": "difference", "quantity": "mean",
-                     **{p: m - pmean[p] for p, m in zip(names, mean, strict=True)},
-                     "nore": np.nan, "note": "ours - paper"})
+                     **dict(zip(names, mean - pub["mean"])), "nore": np.nan,
+                     "note": "ours - paper"})
         rows.append({**base, "source": "difference", "quantity": "eps_percent",
-                     **{p: e - peps[p] for p, e in zip(names, eps, strict=True)},
-                     "nore": nore_of(mean, true) - pub["nore"], "note": "ours - paper"})
+                     **dict(zip(names, eps - pub["eps"])), "nore": mv["nore"] - pub["nore"],
+                     "note": "ours - paper"})
     return pd.DataFrame(rows)
+
+
+def metric_stats(m: np.ndarray, f: np.ndarray) -> dict[str, float]:
+    """Statistics of the per-run metric ``m`` and objective ``f`` of the successful runs:
+    median, q1, q3, iqr, mean, sd (sample; NaN for one run), best, worst; f_median, f_mean,
+    f_sd, f_best, f_worst. Empty for no run. No pandas."""
+    m, f = np.asarray(m, dtype=float), np.asarray(f, dtype=float)
+    if not len(m):
+        return {}
+    with np.errstate(invalid="ignore"):
+        q1, q3 = np.nan_to_num(np.percentile(m, [25, 75]), nan=np.inf)
+        return {
+            "median": float(np.median(m)), "q1": float(q1), "q3": float(q3),
+            "iqr": float(q3 - q1), "mean": float(np.mean(m)),
+            "sd": float(np.std(m, ddof=1)) if len(m) > 1 else np.nan,
+            "best": float(np.min(m)), "worst": float(np.max(m)),
+            "f_median": float(np.median(f)), "f_mean": float(np.mean(f)),
+            "f_sd": float(np.std(f, ddof=1)) if len(f) > 1 else np.nan,
+            "f_best": float(np.min(f)), "f_worst": float(np.max(f)),
+        }
 
 
 def run_stats_table(df: Any, meanvec: Any | None = None) -> Any:
@@ -111,15 +151,7 @@ def run_stats_table(df: Any, meanvec: Any | None = None) -> Any:
             "n_runs": len(ok), "n_failed": int((g["status"] != "ok").sum()),
         }
         if len(m):
-            with np.errstate(invalid="ignore"):
-                q1, q3 = np.nan_to_num(np.percentile(m, [25, 75]), nan=np.inf)
-            med = float(np.median(m))
-            row.update(median=med, q1=float(q1), q3=float(q3), iqr=float(q3 - q1),
-                       mean=float(np.mean(m)), sd=float(np.std(m, ddof=1)) if len(m) > 1
-                       else np.nan, best=float(np.min(m)), worst=float(np.max(m)))
-            row.update(f_median=float(np.median(f)), f_mean=float(np.mean(f)),
-                       f_sd=float(np.std(f, ddof=1)) if len(f) > 1 else np.nan,
-                       f_best=float(np.min(f)), f_worst=float(np.max(f)))
+            row.update(metric_stats(m, f))
             row.update(evaluations_median=float(ok["evaluations"].median()),
                        evaluations_max=float(ok["evaluations"].max()),
                        budget=g["budget"].iloc[0],
