@@ -71,6 +71,11 @@ def write_and_print(folder: Path, short: bool) -> bool:
 
             report = build_report([folder], folder / REPORT_SUBDIR)
     except Exception as exc:  # the report must not crash a sweep
+        from .load import NoRecordsError
+
+        if isinstance(exc, NoRecordsError):  # every job failed: its error line said why
+            print(f"report: none, no run was recorded in {folder}", file=sys.stderr, flush=True)
+            return False
         log.debug("report failed", exc_info=True)
         message = f"report: not written for {folder} ({type(exc).__name__}: {exc})"
         print(message, file=sys.stderr, flush=True)
