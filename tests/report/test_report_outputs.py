@@ -158,7 +158,7 @@ def test_cli_exit_codes(tmp_path, capsys):
     assert "(2 run records)" in captured.out and (out / "report.md").is_file()
 
 
-def test_callback_writes_report_and_honours_report_false(tmp_path):
+def test_callback_writes_report_and_honours_report_false(tmp_path, monkeypatch, capsys):
     from omegaconf import OmegaConf
 
     from vpid_bench import cli
@@ -179,9 +179,20 @@ def test_callback_writes_report_and_honours_report_false(tmp_path):
     text = (job / "report" / "report.md").read_text()
     assert "(single job)" in text and "vpid-bench-report" in text
     assert not (job / "report" / "figures").exists() and cli._FAILURES == []
-    # A report that cannot be built prints one line and notes a failure; it never raises.
+    # No record at all (every job failed, each said why): one quiet line, no extra failure.
+    capsys.readouterr()
     cb.on_multirun_end(OmegaConf.create({"hydra": {"sweep": {"dir": str(tmp_path / "none")}}}))
-    assert len(cli._FAILURES) == 1 and "report" in cli._FAILURES[0]
+    assert cli._FAILURES == [] and "no run was recorded" in capsys.readouterr().err
+    # A report that cannot be built prints one line and notes a failure; it never raises.
+    import vpid_bench.report.build as build
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("disk full")
+
+    monkeypatch.setattr(build, "build_report", broken)
+    cb.on_multirun_end(OmegaConf.create({"hydra": {"sweep": {"dir": str(sweep)}}}))
+    assert len(cli._FAILURES) == 1 and "disk full" in cli._FAILURES[0]
+    assert capsys.readouterr().err.count("\n") == 1
     cli._FAILURES.clear()
 
 
