@@ -140,8 +140,34 @@ def _is_interpolation(value: Any) -> bool:
     return isinstance(value, str) and "${" in value
 
 
+def yaml_presets(group: str) -> dict[str, str]:
+    """Presets shipped as ``conf/<group>/<name>.yaml``, each mapped to the registered plugin
+    name it extends (the first entry of its defaults list, followed through other presets)."""
+    from omegaconf import OmegaConf
+
+    folder = importlib.resources.files("vpid_bench.conf").joinpath(group)
+    if not folder.is_dir():
+        return {}
+    parent: dict[str, str | None] = {}
+    for entry in folder.iterdir():
+        if entry.name.endswith(".yaml"):
+            node = OmegaConf.create(entry.read_text())
+            bases = [d for d in node.get("defaults", []) if isinstance(d, str) and d != "_self_"]
+            parent[entry.name[: -len(".yaml")]] = bases[0] if bases else None
+    out: dict[str, str] = {}
+    for name in parent:
+        current, seen = name, set()
+        while current in parent and current not in seen and parent[current] is not None:
+            seen.add(current)
+            current = parent[current]
+        if current is not None and current not in parent:
+            out[name] = current
+    return out
+
+
 def _unknown_name(kind: str, name: Any, registry: Registry) -> ConfigError:
-    table = registry.optimizers if kind == "optimizer" else registry.problems
+    table = {**(registry.optimizers if kind == "optimizer" else registry.problems),
+             **yaml_presets(kind)}
     allowed = "one of " + ", ".join(sorted(table)) if table else "none is registered"
     failed = getattr(registry.pm, "vpid_bench_info", None)
     if failed is not None and failed.failed:
@@ -222,8 +248,14 @@ def check_overrides(
 ) -> dict[str, list[str]]:
     """Check every override; return the problem and optimizer names the command selects."""
     parsed = parse_overrides(overrides)
-    choices = {g: [defaults[g]] if g in defaults else [] for g in GROUPS}
-    names = {"problem": registry.problems, "optimizer": registry.optimizers}
+    # A choice is a registered plugin name or a YAML preset (conf/<group>/), which stands
+    # for the plugin it extends when its keys are checked.
+    names: dict[str, dict[str, str]] = {}
+    for group, table in (("problem", registry.problems), ("optimizer", registry.optimizers)):
+        presets = {k: v for k, v in yaml_presets(group).items() if v in table}
+        names[group] = {**presets, **{n: n for n in table}}
+    choices = {g: [names[g].get(defaults[g], defaults[g])] if g in defaults else []
+               for g in GROUPS}
     # Group choices first: the keys under a group are checked against what is selected.
     for o in parsed:
         key = o.key_or_group
@@ -235,10 +267,10 @@ def check_overrides(
             for v in values:
                 if not isinstance(v, str) or v not in names[key]:
                     raise _unknown_name(key, v, registry)
-            choices[key] = [str(v) for v in values]
+            choices[key] = [names[key][str(v)] for v in values]
     for group in GROUPS:
         for name in choices[group]:
-            if name not in names[group]:
+            if name not in names[group].values():
                 raise _unknown_name(group, name, registry)
     for o in parsed:
         key = o.key_or_group

@@ -66,3 +66,14 @@ def test_sweep_dirs_are_named_by_overrides(compose_config):
     assert cfg.hydra.sweep.subdir == "optimizer=random,problem=functions"
     assert str(cfg.hydra.sweep.dir).startswith("outputs/")
     assert str(cfg.hydra.run.dir).startswith("outputs/")
+
+
+def test_a_yaml_preset_extends_a_registered_problem(compose_config, registry):
+    from vpid_bench.preflight import check_overrides, yaml_presets
+
+    assert yaml_presets("problem")["vehicle_long_record"] == "vehicle"
+    cfg = compose_config(["problem=vehicle_long_record", "optimizer=de4"])
+    assert cfg.problem.name == "vehicle" and cfg.problem.record.extra == 0.5
+    chosen = check_overrides(["problem=vehicle_long_record", "problem.record.extra=1"], registry,
+                             {"problem": "vehicle", "optimizer": "de4"})
+    assert chosen["problem"] == ["vehicle"]
