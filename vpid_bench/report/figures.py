@@ -84,8 +84,17 @@ def convergence(traces: Any, path: Path) -> Path | str:
     fig, axes = plt.subplots(nrow, ncol, figsize=(6.5 * ncol, 4.2 * nrow), squeeze=False)
     for ax, context in zip(axes.flat, contexts, strict=False):
         d = data[data["context"] == context]
-        sns.lineplot(data=d, x="evaluations", y="best", hue="algorithm", estimator="median",
-                     errorbar=("pi", 50), ax=ax)
+        # Quartiles per (optimizer, grid point) in one groupby: what seaborn's lineplot with
+        # estimator="median", errorbar=("pi", 50) draws, at a fraction of its cost.
+        q = d.groupby(["algorithm", "evaluations"])["best"].quantile([0.25, 0.5, 0.75])
+        q = q.unstack()
+        algorithms = sorted(d["algorithm"].unique())
+        for colour, algorithm in zip(sns.color_palette(n_colors=len(algorithms)), algorithms,
+                                     strict=True):
+            a = q.loc[algorithm]
+            ax.plot(a.index, a[0.5], color=colour, label=algorithm, drawstyle="steps-post")
+            ax.fill_between(a.index, a[0.25], a[0.75], color=colour, alpha=0.2, step="post",
+                            linewidth=0)
         if _use_log(d["best"].to_numpy(float)):
             ax.set_yscale("log")
         n = d.groupby("algorithm")["run_id"].nunique()
