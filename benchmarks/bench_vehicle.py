@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
-import time
+import timeit
 
 import numpy as np
 from vpid_vehicle.config import VehicleConfig
@@ -52,14 +52,8 @@ def baseline_newmark(problem: VehicleProblem, X: np.ndarray) -> np.ndarray:
 
 
 def best_time(fn, repeats: int, number: int) -> float:
-    """Best wall time of ``number`` calls over ``repeats`` repeats, per call (s)."""
-    best = np.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(number):
-            fn()
-        best = min(best, (time.perf_counter() - t0) / number)
-    return best
+    """Best wall time per call (s) over ``repeats`` timings of ``number`` calls (stdlib timeit)."""
+    return min(timeit.repeat(fn, repeat=repeats, number=number)) / number
 
 
 def cold_start_s() -> float:
