@@ -219,6 +219,64 @@ class Optimizer(abc.ABC):
         return False
 
 
+class GenerationalOptimizer(Optimizer):
+    """An optimizer that proposes whole generations: the shared ask/tell handshake.
+
+    ``ask`` returns the pending generation (asking again before ``tell`` returns the same
+    rows): first the initial population, ``ps`` vectors uniform in the box, then whatever
+    :meth:`next_generation` builds. ``tell`` must receive that whole generation; it hands the
+    proposed rows and their values to :meth:`start` (the initial population) or
+    :meth:`advance` (every later generation, which also counts ``generation``). ``done`` is
+    true after ``params.iterations`` generations, so a run uses the initial population plus
+    ``iterations`` generations of evaluations.
+    """
+
+    def __init__(self, params: OptimizerParams, bounds: Bounds, rng: np.random.Generator) -> None:
+        super().__init__(params, bounds, rng)
+        self.generation = 0  # generations completed after the initial population
+        self._started = False
+        self._pending: np.ndarray | None = None
+
+    def initial_population(self) -> np.ndarray:
+        """``ps`` candidates uniform in the box (clipped, so rounding cannot leave it)."""
+        U = self.bounds.sample(self.rng, self.params.ps)
+        return np.minimum(np.maximum(U, self.bounds.lower), self.bounds.upper)
+
+    @abc.abstractmethod
+    def next_generation(self) -> np.ndarray:
+        """The candidates of the next generation, built from what ``start``/``advance`` kept."""
+
+    @abc.abstractmethod
+    def start(self, X: np.ndarray, f: np.ndarray) -> None:
+        """Keep the evaluated initial population."""
+
+    @abc.abstractmethod
+    def advance(self, X: np.ndarray, f: np.ndarray) -> None:
+        """Take in one evaluated generation (selection, elitism, bookkeeping)."""
+
+    def ask(self) -> np.ndarray:
+        if self._pending is None:
+            self._pending = self.next_generation() if self._started else self.initial_population()
+        return self._pending.copy()
+
+    def tell(self, X: np.ndarray, f: np.ndarray) -> None:
+        if self._pending is None or X.shape != self._pending.shape:
+            raise ValueError("tell() must follow ask() with the whole population it returned")
+        f = np.asarray(f, dtype=float).reshape(-1)
+        X = self._pending  # the rows this optimizer proposed (the runner evaluates copies)
+        if self._started:
+            self.advance(X, f)
+            self.generation += 1
+        else:
+            self.start(X, f)
+            self._started = True
+        self._pending = None
+
+    @property
+    def done(self) -> bool:
+        return self._started and self.generation >= self.params.iterations
+
+
 def relative_errors_percent(x: Sequence[float], x_true: Sequence[float]) -> np.ndarray:
     """Relative error of each parameter, ``100 * (x - x_true) / x_true`` (percent)."""
     x = np.asarray(x, dtype=float)

@@ -18,7 +18,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from vpid_bench.api import Bounds, ConfigError, Optimizer, OptimizerParams
+from vpid_bench.api import Bounds, ConfigError, GenerationalOptimizer, OptimizerParams
 
 from .kernels import (
     BOUNDS_RULES,
@@ -60,7 +60,7 @@ def check_draw(value: str) -> None:
         raise ConfigError("optimizer.draw", value, "one of " + ", ".join(DRAW_CHOICES))
 
 
-class DifferentialEvolution(Optimizer):
+class DifferentialEvolution(GenerationalOptimizer):
     """Generational DE with binomial crossover and greedy one-to-one selection.
 
     Subclasses set ``Params``, ``mutation`` (a key of :data:`vpid_de.kernels.MUTATIONS`) and
@@ -89,10 +89,8 @@ class DifferentialEvolution(Optimizer):
         self._dim = bounds.dim
         self._fused = None  # the compiled generation, loaded on first use (engine "numba")
         self._F = np.empty(params.ps)  # buffer for a scalar F broadcast to every target
-        self.generation = 0  # generations completed after the initial population
         self.population: np.ndarray | None = None
         self.fitness: np.ndarray | None = None
-        self._pending: np.ndarray | None = None
 
     # -- what a variant customises ------------------------------------------------------------
     def factors(self) -> dict[str, Any]:
@@ -144,27 +142,12 @@ class DifferentialEvolution(Optimizer):
         U = crossover_from_uniforms(X, V, self.params.CR, u[:, c : c + dim], u[:, c + dim])
         return self._repair(U, X, self._lower, self._upper, u[:, c + dim + 1 :])
 
-    def ask(self) -> np.ndarray:
-        if self._pending is None:
-            if self.population is None:
-                U = self.bounds.sample(self.rng, self.params.ps)
-                self._pending = np.minimum(np.maximum(U, self._lower), self._upper)
-            else:
-                self._pending = self.trials()
-        return self._pending.copy()
+    # -- GenerationalOptimizer: the handshake lives in the core, only selection is here ----------
+    def next_generation(self) -> np.ndarray:
+        return self.trials()
 
-    def tell(self, X: np.ndarray, f: np.ndarray) -> None:
-        if self._pending is None or X.shape != self._pending.shape:
-            raise ValueError("tell() must follow ask() with the whole population it returned")
-        f = np.asarray(f, dtype=float).reshape(-1)
-        X = self._pending  # the rows this optimizer proposed (the runner evaluates copies)
-        if self.population is None:
-            self.population, self.fitness = X, f
-        else:
-            self.population, self.fitness = greedy_selection(self.population, self.fitness, X, f)
-            self.generation += 1
-        self._pending = None
+    def start(self, X: np.ndarray, f: np.ndarray) -> None:
+        self.population, self.fitness = X, f
 
-    @property
-    def done(self) -> bool:
-        return self.population is not None and self.generation >= self.params.iterations
+    def advance(self, X: np.ndarray, f: np.ndarray) -> None:
+        self.population, self.fitness = greedy_selection(self.population, self.fitness, X, f)

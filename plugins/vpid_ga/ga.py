@@ -23,7 +23,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from vpid_bench.api import Bounds, ConfigError, Optimizer, OptimizerParams
+from vpid_bench.api import Bounds, ConfigError, GenerationalOptimizer, OptimizerParams
 
 from .operators import (
     AdaptiveStep,
@@ -63,7 +63,7 @@ def default_elite_count(ps: int) -> int:
     return math.floor(0.05 * ps)
 
 
-class GeneticAlgorithm(Optimizer):
+class GeneticAlgorithm(GenerationalOptimizer):
     """MATLAB-R2014b-like GA: rank scaling, stochastic uniform selection, elitism, scattered
     crossover, adaptive-feasible mutation; ``iterations`` generations after the initial
     population."""
@@ -77,14 +77,12 @@ class GeneticAlgorithm(Optimizer):
         self.n_xover = matlab_round(params.crossover_fraction * (ps - self.n_elite))
         self.n_mutate = ps - self.n_elite - self.n_xover
         self.n_parents = 2 * self.n_xover + self.n_mutate
-        self.generation = 0  # generations completed after the initial population
         self.population: np.ndarray | None = None
         self.scores: np.ndarray | None = None
         self.best_history: list[float] = []  # best score after each completed generation
         self._step = AdaptiveStep()
         self._elites: np.ndarray | None = None
         self._elite_scores: np.ndarray | None = None
-        self._pending: np.ndarray | None = None
 
     def _children(self) -> np.ndarray:
         """Elites are set aside; returns the ``ps - n_elite`` children to evaluate."""
@@ -101,29 +99,15 @@ class GeneticAlgorithm(Optimizer):
         )
         return np.vstack([xover, mutants])
 
-    def ask(self) -> np.ndarray:
-        if self._pending is None:
-            if self.population is None:
-                U = self.bounds.sample(self.rng, self.params.ps)
-                self._pending = np.minimum(np.maximum(U, self.bounds.lower), self.bounds.upper)
-            else:
-                self._pending = self._children()
-        return self._pending.copy()
+    # -- GenerationalOptimizer: the handshake lives in the core ---------------------------------
+    def next_generation(self) -> np.ndarray:
+        return self._children()
 
-    def tell(self, X: np.ndarray, f: np.ndarray) -> None:
-        if self._pending is None or X.shape != self._pending.shape:
-            raise ValueError("tell() must follow ask() with the whole population it returned")
-        f = np.asarray(f, dtype=float).reshape(-1)
-        X = np.array(X, dtype=float)
-        if self.population is None:
-            self.population, self.scores = X, f
-        else:
-            self.population = np.vstack([self._elites, X])
-            self.scores = np.concatenate([self._elite_scores, f])
-            self.generation += 1
-            self.best_history.append(float(np.min(self.scores)))
-        self._pending = None
+    def start(self, X: np.ndarray, f: np.ndarray) -> None:
+        self.population, self.scores = X, f
 
-    @property
-    def done(self) -> bool:
-        return self.population is not None and self.generation >= self.params.iterations
+    def advance(self, X: np.ndarray, f: np.ndarray) -> None:
+        """Elites carried over unevaluated, then the children just evaluated."""
+        self.population = np.vstack([self._elites, X])
+        self.scores = np.concatenate([self._elite_scores, f])
+        self.best_history.append(float(np.min(self.scores)))
