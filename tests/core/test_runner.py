@@ -7,7 +7,14 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from vpid_bench.api import Bounds, Optimizer, OptimizerContractError, OptimizerParams, Problem
+from vpid_bench.api import (
+    Bounds,
+    GenerationalOptimizer,
+    Optimizer,
+    OptimizerContractError,
+    OptimizerParams,
+    Problem,
+)
 from vpid_bench.runner import run
 
 
@@ -141,3 +148,32 @@ def test_bounds_reject_inverted_box():
 
     with pytest.raises(ConfigError, match="bounds.b"):
         Bounds(np.zeros(2), np.array([1.0, -1.0]), ("a", "b"))
+
+
+class Shrink(GenerationalOptimizer):
+    """Each generation halves every member: records what start/advance received."""
+
+    def next_generation(self):
+        return self.pop / 2.0
+
+    def start(self, X, f):
+        self.pop, self.seen = X, [f]
+
+    def advance(self, X, f):
+        self.pop = X
+        self.seen.append(f)
+
+
+def test_generational_handshake_and_schedule():
+    problem = CountingSphere()
+    opt = Shrink(OptimizerParams(ps=4, iterations=3), problem.bounds, np.random.default_rng(0))
+    X0 = opt.ask()
+    np.testing.assert_array_equal(opt.ask(), X0)  # asking again before tell: same rows
+    assert np.all(problem.bounds.contains(X0))
+    with pytest.raises(ValueError, match="whole population"):
+        opt.tell(X0[:2], np.zeros(2))
+    result = run(problem, opt, budget=1000)
+    assert result.stopped_by == "optimizer" and opt.done and opt.generation == 3
+    assert result.evaluations == problem.calls == 4 * (3 + 1)
+    np.testing.assert_allclose(opt.pop, X0 / 8.0)
+    np.testing.assert_allclose(opt.seen[-1], np.sum((X0 / 8.0) ** 2, axis=1))
