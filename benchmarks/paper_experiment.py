@@ -26,7 +26,7 @@ import tempfile
 import time
 from pathlib import Path
 
-CLI = [sys.executable, "-c", "from vpid_bench.cli import main; main()"]
+CLI = [sys.executable, "-c", "from vpid_bench.shell.main import main; main()"]
 
 
 def _env() -> dict[str, str]:

@@ -26,7 +26,7 @@ def compose_config(registry) -> Iterator:
     from hydra import compose, initialize_config_module
     from hydra.core.global_hydra import GlobalHydra
 
-    from vpid_bench.config_store import register_configs
+    from vpid_bench.shell.config_store import register_configs
 
     register_configs(registry)
 

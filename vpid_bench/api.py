@@ -101,17 +101,19 @@ class Bounds:
         return np.all((X >= self.lower) & (X <= self.upper), axis=1)
 
     def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
-        """``n`` candidates drawn uniformly in the box, shape ``(n, dim)``."""
-        return self.lower + rng.random((n, self.dim)) * self.width
+        """``n`` candidates drawn uniformly in the box, shape ``(n, dim)``; never past a bound
+        (``lower + u * width`` can round one ulp above ``upper``: it is clipped)."""
+        X = self.lower + rng.random((n, self.dim)) * self.width
+        return np.minimum(np.maximum(X, self.lower), self.upper)
 
 
 @dataclasses.dataclass(frozen=True)
 class ProblemConfig:
     """Base of every problem's ``Config``: the benchmark protocol of that problem.
 
-    ``ps`` is the population size optimizers read (by interpolation, ``${problem.ps}``) and
-    ``iterations`` the number of generations after the initial population, so the default
-    budget of a run is ``ps * (iterations + 1)`` evaluations.
+    ``ps`` is the population size (candidates an optimizer proposes per generation) and
+    ``iterations`` the number of generations after the initial population; the default budget
+    of a run is ``ps * (iterations + 1)`` evaluations (see :mod:`vpid_bench.spec`).
     """
 
     ps: int = 20
@@ -175,13 +177,24 @@ class Problem(abc.ABC):
         """Write files a job should keep beside its records (e.g. the fitted reference)."""
         return []
 
+    def content_digest(self) -> str | None:
+        """A digest of the data this problem reads beyond its config (e.g. the SHA-256 of a
+        measured record file), or ``None``. It enters every run id, so editing the data makes
+        a resumed job run again instead of reusing results from the old data."""
+        return None
+
+    def set_threads(self, n: int) -> None:
+        """How many threads ``evaluate`` may use (the job's ``threads`` key); results must not
+        depend on it. Default: ignored."""
+        return None
+
 
 @dataclasses.dataclass(frozen=True)
 class OptimizerParams:
     """Base of every optimizer's ``Params``.
 
-    ``ps`` and ``iterations`` default to the problem's protocol: the config node built for an
-    optimizer sets them to ``${problem.ps}`` and ``${problem.iterations}``.
+    ``ps`` and ``iterations`` are a copy of the problem's protocol, filled in by the job
+    (:func:`vpid_bench.spec.parse_job`); they are not settable on the optimizer.
     """
 
     ps: int = 20
@@ -238,9 +251,8 @@ class GenerationalOptimizer(Optimizer):
         self._pending: np.ndarray | None = None
 
     def initial_population(self) -> np.ndarray:
-        """``ps`` candidates uniform in the box (clipped, so rounding cannot leave it)."""
-        U = self.bounds.sample(self.rng, self.params.ps)
-        return np.minimum(np.maximum(U, self.bounds.lower), self.bounds.upper)
+        """``ps`` candidates uniform in the box."""
+        return self.bounds.sample(self.rng, self.params.ps)
 
     @abc.abstractmethod
     def next_generation(self) -> np.ndarray:

@@ -1,51 +1,54 @@
-"""``run_from_config``: one job (one problem, one optimizer, ``runs`` independent runs).
+"""Run a job: a parsed job spec, the plugin registry and a folder in; run records out.
 
-This is a plain function of a composed config, so tests call it directly; the Hydra CLI
-(:mod:`vpid_bench.cli`) is a thin shell around it.
+:func:`run_from_config` is a plain function of a composed config, so tests call it directly;
+the command's shell (:mod:`vpid_bench.shell`) calls it once per job.
 
 Seeds: run ``i`` of a job draws its optimizer randomness from
-``numpy.random.default_rng(SeedSequence(seed, spawn_key=(i,)))``, the same stream
+``numpy.random.default_rng(SeedSequence(seed, spawn_key=(i,)))``, the stream
 ``SeedSequence(seed).spawn(runs)[i]`` gives, so runs are independent and any single run can be
-repeated alone. The measurement noise is seeded by the problem's own ``noise.seed`` (a problem
-concern), so every optimizer of a comparison fits the same noisy record.
+repeated alone.
 
-Resume: a run whose complete record (status ``ok``) already exists in the job directory is
-skipped; missing, corrupt and failed runs are run again. Crash isolation: an exception inside
-one run is written into that run's record (status ``failed``) and the job goes on.
+Resume: a run whose complete record (status ``ok``, same run id) exists in the job folder is
+skipped; missing, corrupt and failed runs are run again. The run id hashes everything that
+determines a result, the plugins' versions and the content of data files included, so runs
+recorded under another plugin release or another data file are run again, never reused.
+
+Crash isolation: an exception (``SystemExit`` included) inside one run is written into that
+run's record (status ``failed``) and the job goes on; only ``KeyboardInterrupt`` stops it.
+
+Timing: before the first timed run the job makes one untimed warm-up run of at most two
+batches, so compiled kernels (numba) are compiled before any run is timed; its cost is the
+summary's ``warmup_s``.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import datetime as _dt
-import functools
-import importlib.metadata
 import logging
-import platform
-import socket
+import signal
 import sys
+import threading
 import time
-import traceback
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from . import records as rec
-from .api import ConfigError, Optimizer, Problem, VpidBenchError, nore, relative_errors_percent
-from .params import build_dataclass, to_plain
+from .api import Optimizer, Problem
 from .plugins import Registry
 from .runner import RunResult, run
+from .spec import Job, parse_job
 
 log = logging.getLogger(__name__)
-
-TOP_LEVEL_KEYS = ("problem", "optimizer", "seed", "runs", "budget", "resume", "progress", "report")
 
 
 @dataclasses.dataclass
 class JobSummary:
-    """What a job did: where, how many runs were run, skipped and failed."""
+    """What a job did: where, how many runs were run, skipped and failed, and how long."""
 
     job_dir: Path
     problem: str
@@ -56,104 +59,66 @@ class JobSummary:
     failed: list[int]
     record_paths: list[Path]
     wall_time_s: float
+    warmup_s: float = 0.0
 
 
-def _plain(cfg: Any) -> Any:
-    """An OmegaConf node (or anything) as plain Python containers, interpolations resolved."""
-    try:
-        from omegaconf import DictConfig, ListConfig, OmegaConf
-
-        if isinstance(cfg, (DictConfig, ListConfig)):
-            return OmegaConf.to_container(cfg, resolve=True)
-    except ImportError:  # pragma: no cover - hydra is a base dependency
-        pass
-    return to_plain(cfg)
+class RunTimeoutError(Exception):
+    """A run went past the job's ``run_timeout_s``."""
 
 
-def _int_key(cfg: Mapping, key: str, minimum: int, allow_none: bool = False) -> int | None:
-    value = cfg.get(key)
-    if value is None and allow_none:
-        return None
-    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-        allowed = f"an integer >= {minimum}" + (" or null" if allow_none else "")
-        raise ConfigError(key, value, allowed)
-    return value
+class ProblemCache:
+    """Problems built in this process, by (class, name, config).
 
+    The jobs of a sweep that share a problem config (ten optimizers at the same ``ps``) share
+    one instance, so a costly set-up (a reference simulation) is done once per process, not
+    once per job. ``evaluate`` is a pure function of the config, so this changes no result.
+    """
 
-@functools.lru_cache(maxsize=8)
-def package_versions(extra: tuple[str, ...] = ()) -> dict[str, str]:
-    """Versions of Python and of the packages that can change a result (looked up once per
-    process: reading package metadata costs milliseconds, a record is written per run)."""
-    out = {"python": platform.python_version()}
-    for dist in ("vpid-bench", "numpy", "scipy", "numba", "hydra-core", "pluggy", *extra):
+    def __init__(self, size: int = 8) -> None:
+        self.size = size
+        self._items: dict[Any, Problem] = {}
+
+    def get(self, job: Job) -> Problem:
+        """The problem of ``job``, built or re-used."""
+        key: Any = (job.problem_cls, job.problem_name, job.problem_config)
         try:
-            out[dist] = importlib.metadata.version(dist)
-        except importlib.metadata.PackageNotFoundError:
-            continue
-    return out
+            hash(key)
+        except TypeError:  # a config with unhashable values: build it every time
+            return build_problem_from_job(job)
+        if key not in self._items:
+            if len(self._items) >= self.size:
+                self._items.pop(next(iter(self._items)))
+            self._items[key] = build_problem_from_job(job)
+        return self._items[key]
 
 
-@functools.lru_cache(maxsize=64)
-def _plugin_distribution(module_name: str) -> str | None:
-    """The distribution that ships ``module_name``: found through the ``vpid_bench`` entry
-    points first (milliseconds), through every installed package's file list otherwise
-    (``packages_distributions`` reads them all: a tenth of a second or more)."""
-    top = module_name.split(".")[0]
-    for ep in importlib.metadata.entry_points(group="vpid_bench"):
-        if ep.module.split(".")[0] == top and getattr(ep, "dist", None) is not None:
-            return ep.dist.metadata["Name"]
-    dists = importlib.metadata.packages_distributions().get(top, [])
-    return dists[0] if dists else None
-
-
-def _check_protocol(prefix: str, obj: Any) -> None:
-    """``ps`` and ``iterations`` of a problem or optimizer must be integers >= 1."""
-    for key in ("ps", "iterations"):
-        value = getattr(obj, key, None)
-        if value is not None and (not isinstance(value, int) or value < 1):
-            raise ConfigError(f"{prefix}.{key}", value, "an integer >= 1")
-
-
-#: Problems built in this process, by (class, name, config): the jobs of a sweep that share a
-#: problem config (9 optimizers x the same ``ps``) share one instance, so a costly set-up
-#: (the vehicle's reference simulation) is done once per process, not once per job. A
-#: problem's ``evaluate`` is a pure function of its config (see Problem), so this changes no
-#: result; the launcher tests compare records of the basic launcher (shared instances) and
-#: of joblib workers (fresh ones).
-_PROBLEMS: dict[Any, Problem] = {}
-_PROBLEMS_MAX = 8
+def build_problem_from_job(job: Job) -> Problem:
+    """A new problem instance of ``job`` (its plugin's own set-up runs here)."""
+    problem = job.problem_cls(job.problem_config)
+    problem.name = job.problem_name
+    return problem
 
 
 def build_problem(registry: Registry, cfg: Mapping) -> Problem:
-    """The problem named by ``cfg['name']``, built from the rest of ``cfg`` (or re-used)."""
-    name = cfg.get("name")
-    cls = registry.problem(name)
+    """The problem named by ``cfg['name']``, built from the rest of ``cfg`` (tests, scripts)."""
+    from .params import build_dataclass
+    from .spec import check_protocol
+
+    cls = registry.problem(cfg.get("name"))
     config = build_dataclass(cls.Config, cfg, prefix="problem")
-    try:
-        key: Any = (cls, name, config)
-        hash(key)
-    except TypeError:  # a config with unhashable values: build it every time
-        key = None
-    if key is not None and key in _PROBLEMS:
-        return _PROBLEMS[key]
+    check_protocol(config)
     problem = cls(config)
-    problem.name = name
-    if key is not None:
-        if len(_PROBLEMS) >= _PROBLEMS_MAX:
-            _PROBLEMS.pop(next(iter(_PROBLEMS)))
-        _PROBLEMS[key] = problem
+    problem.name = cfg.get("name")
     return problem
 
 
 def optimizer_params(registry: Registry, cfg: Mapping) -> tuple[type[Optimizer], Any]:
-    """The optimizer class named by ``cfg['name']`` and its validated ``Params``."""
+    """The optimizer class named by ``cfg['name']`` and its validated ``Params`` (the protocol
+    keys ``ps``/``iterations`` may be given here: scripts and tests build optimizers alone)."""
+    from .params import build_dataclass
+
     cls = registry.optimizer(cfg.get("name"))
     return cls, build_dataclass(cls.Params, cfg, prefix="optimizer")
-
-
-def default_budget(problem_cfg: Mapping) -> int:
-    """The paper's protocol: an initial population plus ``iterations`` generations of ``ps``."""
-    return int(problem_cfg["ps"]) * (int(problem_cfg["iterations"]) + 1)
 
 
 def run_rng(seed: int, run_index: int) -> np.random.Generator:
@@ -161,90 +126,8 @@ def run_rng(seed: int, run_index: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(run_index,)))
 
 
-def _result_section(result: RunResult, problem: Problem) -> dict[str, Any]:
-    section: dict[str, Any] = {
-        "x_best": result.x_best,
-        "f_best": result.f_best,
-        "evaluations": result.evaluations,
-        "batches": result.batches,
-        "stopped_by": result.stopped_by,
-        "nore": None,
-        "rel_error_percent": None,
-    }
-    x_true = problem.x_true
-    if x_true is not None and np.all(np.isfinite(result.x_best)):
-        section["rel_error_percent"] = relative_errors_percent(result.x_best, x_true)
-        section["nore"] = nore(result.x_best, x_true)
-    return section
-
-
-def make_record(
-    *,
-    rid: str,
-    run_index: int,
-    problem: Problem,
-    optimizer_name: str,
-    optimizer_plugin: str | None,
-    params: Any,
-    seed: int,
-    budget: int,
-    config: Mapping[str, Any],
-    result: RunResult | None,
-    error: BaseException | None,
-    started_at: str,
-    wall_time_s: float,
-) -> dict[str, Any]:
-    """Assemble the JSON record of one run (status ``ok`` with a result, or ``failed``)."""
-    b = problem.bounds
-    x_true = problem.x_true
-    record: dict[str, Any] = {
-        "schema": rec.SCHEMA,
-        "run_id": rid,
-        "run_index": run_index,
-        "status": "ok" if error is None else "failed",
-        "error": None,
-        "problem": {
-            "name": problem.name,
-            "config": to_plain(problem.config),
-            "info": problem.describe(),
-        },
-        "optimizer": {
-            "name": optimizer_name, "plugin": optimizer_plugin, "params": to_plain(params)
-        },
-        "seeds": {"seed": seed, "run_index": run_index, "spawn_key": [run_index]},
-        "budget": budget,
-        "parameters": {
-            "names": list(b.names),
-            "units": list(b.units),
-            "lower": b.lower,
-            "upper": b.upper,
-            "true": x_true,
-        },
-        "result": None,
-        "trace": None,
-        "config": config,
-        "versions": dict(package_versions()),
-        "timing": {
-            "started_at": started_at,
-            "wall_time_s": wall_time_s,
-            "host": socket.gethostname(),
-        },
-    }
-    if result is not None:
-        record["result"] = _result_section(result, problem)
-        record["trace"] = {"evaluations": result.trace_evaluations, "best": result.trace_best}
-        record["timing"]["run_time_s"] = result.wall_time_s
-    if error is not None:
-        record["error"] = {
-            "type": type(error).__name__,
-            "message": str(error),
-            "traceback": "".join(traceback.format_exception(error)),
-        }
-    return record
-
-
 def _existing_ok(path: Path, rid: str) -> bool:
-    if not path.exists():
+    if not path.is_file():
         return False
     try:
         record = rec.read_record(path)
@@ -254,104 +137,163 @@ def _existing_ok(path: Path, rid: str) -> bool:
     return record["run_id"] == rid and record["status"] == "ok"
 
 
-def run_from_config(
-    cfg: Mapping[str, Any],
-    job_dir: str | Path,
-    registry: Registry | None = None,
-) -> JobSummary:
-    """Run one job described by a composed config and write its records into ``job_dir``.
+@contextlib.contextmanager
+def _time_limit(seconds: float | None) -> Iterator[None]:
+    """Raise :class:`RunTimeoutError` in this thread after ``seconds`` of wall time (POSIX main
+    thread only; elsewhere no limit is applied and a warning says so)."""
+    if seconds is None:
+        yield
+        return
+    if threading.current_thread() is not threading.main_thread() or not hasattr(
+            signal, "setitimer"):
+        log.warning("run_timeout_s needs the main thread of a POSIX process; not applied")
+        yield
+        return
 
-    Raises :class:`ConfigError` (before any run starts) for a bad config value.
-    """
-    plain = _plain(cfg)
-    config = {k: v for k, v in plain.items() if k != "hydra"}
-    unknown = sorted(set(config) - set(TOP_LEVEL_KEYS))
-    if unknown:
-        raise ConfigError(
-            unknown[0], config[unknown[0]], "known top-level keys are " + ", ".join(TOP_LEVEL_KEYS)
-        )
-    seed = _int_key(config, "seed", 0)
-    runs = _int_key(config, "runs", 1)
-    if not (isinstance(config.get("problem"), Mapping)
-            and isinstance(config.get("optimizer"), Mapping)):
-        raise ConfigError("problem/optimizer", None, "both config groups must be selected")
-    problem_cfg = dict(config["problem"])
-    optimizer_cfg = dict(config["optimizer"])
-    registry = registry if registry is not None else Registry()
+    def _expired(signum: int, frame: Any) -> None:
+        raise RunTimeoutError(f"the run took longer than run_timeout_s={seconds:g} s")
 
-    problem = build_problem(registry, problem_cfg)
-    opt_cls, params = optimizer_params(registry, optimizer_cfg)
-    opt_name = optimizer_cfg["name"]
-    budget = _int_key(config, "budget", 1, allow_none=True) or default_budget(
-        to_plain(problem.config)
+    previous = signal.signal(signal.SIGALRM, _expired)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+@contextlib.contextmanager
+def _one_blas_thread() -> Iterator[None]:
+    """numpy's and scipy's BLAS/OpenMP pools limited to one thread for the job, unless the
+    user set a thread count in the environment: a problem's own threads (``threads``) and the
+    launcher's workers share the cores, and oversubscribed BLAS threads slow them all down."""
+    import os
+
+    if any(os.environ.get(v) for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+                                       "MKL_NUM_THREADS", "VPID_BENCH_BLAS_THREADS")):
+        yield
+        return
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        yield
+
+
+def _warm_up(job: Job, problem: Problem) -> float:
+    """One untimed run of at most two batches, so compilation is not timed (see module)."""
+    t0 = time.perf_counter()
+    try:
+        optimizer = job.optimizer_cls(job.params, problem.bounds,
+                                      np.random.default_rng(np.random.SeedSequence(job.spec.seed,
+                                                                                   spawn_key=(2**31,))))
+        run(problem, optimizer, min(job.budget, 2 * job.problem_config.ps))
+    except Exception:  # noqa: BLE001 - the timed runs will meet and record the same fault
+        log.debug("warm-up failed", exc_info=True)
+    return time.perf_counter() - t0
+
+
+def _job_key(job: Job, registry: Registry | None, problem: Problem) -> dict[str, Any]:
+    plugins = {}
+    if registry is not None:
+        for kind, name in (("problem", job.problem_name), ("optimizer", job.optimizer_name)):
+            source = registry.provenance(kind, name)
+            plugins[kind] = [source.get("distribution"), source.get("version")]
+    return rec.job_key(
+        {**job.problem_settings(), "name": job.problem_name},
+        {**job.optimizer_settings(), "name": job.optimizer_name},
+        job.spec.seed, job.budget, plugins=plugins, data=problem.content_digest(),
     )
-    _check_protocol("problem", problem.config)
-    _check_protocol("optimizer", params)
-    # Build one optimizer up front so a bad parameter stops the job before any run.
-    opt_cls(params, problem.bounds, run_rng(seed, 0))
-    plugin = _plugin_distribution(opt_cls.__module__)
 
+
+def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
+            problems: ProblemCache | None = None) -> JobSummary:
+    """Run every run of ``job`` and write one record per run into ``job_dir/records``."""
+    problem = (problems or ProblemCache(size=1)).get(job)
+    if job.spec.threads is not None:
+        problem.set_threads(job.spec.threads)
+    # Build one optimizer up front: a fault in its constructor stops the job before any run.
+    job.optimizer_cls(job.params, problem.bounds, run_rng(job.spec.seed, 0))
+    provenance = {kind: (registry.provenance(kind, name) if registry is not None else {})
+                  for kind, name in (("problem", job.problem_name),
+                                     ("optimizer", job.optimizer_name))}
     job_dir = Path(job_dir)
     job_dir.mkdir(parents=True, exist_ok=True)
     problem.write_artifacts(job_dir)
-    key = rec.job_key(
-        to_plain(problem.config) | {"name": problem.name},
-        {"name": opt_name, **to_plain(params)},
-        seed,
-        budget,
+    key = _job_key(job, registry, problem)
+    spec = job.spec
+    summary = JobSummary(job_dir, job.problem_name, job.optimizer_name, spec.runs, 0, 0, [],
+                         [], 0.0)
+    start = time.perf_counter()
+    bar = _progress_bar(spec.runs, f"{job.optimizer_name} on {job.problem_name}",
+                        enabled=spec.progress)
+    warmed = False
+    with _one_blas_thread():
+        try:
+            for i in range(spec.runs):
+                rid = rec.run_id(key, i)
+                path = rec.record_path(job_dir, i, rid)
+                summary.record_paths.append(path)
+                if spec.resume and _existing_ok(path, rid):
+                    summary.skipped += 1
+                    bar.update(1)
+                    continue
+                if not warmed:
+                    summary.warmup_s = _warm_up(job, problem)
+                    warmed = True
+                record = _one_run(job, problem, i, rid, provenance, summary)
+                rec.write_record(path, record)
+                summary.ran += 1
+                bar.update(1)
+                if record["result"] is not None:
+                    bar.set_postfix_str(_postfix(record), refresh=False)
+        finally:
+            bar.close()
+            summary.wall_time_s = time.perf_counter() - start
+    return summary
+
+
+def _one_run(job: Job, problem: Problem, i: int, rid: str, provenance: Mapping[str, Any],
+             summary: JobSummary) -> dict[str, Any]:
+    started = _dt.datetime.now(_dt.timezone.utc).isoformat()
+    t0 = time.perf_counter()
+    result: RunResult | None = None
+    error: BaseException | None = None
+    try:
+        with _time_limit(job.spec.run_timeout_s):
+            optimizer = job.optimizer_cls(job.params, problem.bounds, run_rng(job.spec.seed, i))
+            optimizer.name = job.optimizer_name
+            result = run(problem, optimizer, job.budget)
+    except KeyboardInterrupt:
+        raise
+    except BaseException as exc:  # crash isolation: record it (SystemExit too), go on
+        error = exc
+        summary.failed.append(i)
+        log.error("run %d of %s on %s failed: %s: %s", i, job.optimizer_name, job.problem_name,
+                  type(exc).__name__, exc)
+    return rec.make_record(
+        rid=rid, run_index=i, problem=problem, problem_name=job.problem_name,
+        problem_settings=job.problem_settings(), problem_plugin=provenance["problem"],
+        optimizer_name=job.optimizer_name, optimizer_settings=job.optimizer_settings(),
+        optimizer_plugin=provenance["optimizer"], seed=job.spec.seed, budget=job.budget,
+        result=result, error=error, started_at=started, wall_time_s=time.perf_counter() - t0,
     )
 
-    resume = bool(config.get("resume", True))
-    progress = bool(config.get("progress", True))
-    summary = JobSummary(job_dir, problem.name, opt_name, runs, 0, 0, [], [], 0.0)
-    start = time.perf_counter()
-    bar = _progress_bar(runs, f"{opt_name} on {problem.name}", enabled=progress)
-    try:
-        for i in range(runs):
-            rid = rec.run_id(key, i)
-            path = rec.record_path(job_dir, i, rid)
-            summary.record_paths.append(path)
-            if resume and _existing_ok(path, rid):
-                summary.skipped += 1
-                bar.update(1)
-                continue
-            started = _dt.datetime.now(_dt.timezone.utc).isoformat()
-            t0 = time.perf_counter()
-            result: RunResult | None = None
-            error: BaseException | None = None
-            try:
-                optimizer = opt_cls(params, problem.bounds, run_rng(seed, i))
-                optimizer.name = opt_name
-                result = run(problem, optimizer, budget)
-            except (KeyboardInterrupt, SystemExit):
-                raise
-            except Exception as exc:  # crash isolation: record it, go on with the next run
-                error = exc
-                summary.failed.append(i)
-                log.error("run %d of %s on %s failed: %s: %s", i, opt_name, problem.name,
-                          type(exc).__name__, exc)
-            record = make_record(
-                rid=rid, run_index=i, problem=problem, optimizer_name=opt_name,
-                optimizer_plugin=plugin, params=params, seed=seed, budget=budget, config=config,
-                result=result, error=error, started_at=started,
-                wall_time_s=time.perf_counter() - t0,
-            )
-            rec.write_record(path, record)
-            summary.ran += 1
-            bar.update(1)
-            if result is not None:
-                bar.set_postfix_str(_postfix(record), refresh=False)
-    finally:
-        bar.close()
-        summary.wall_time_s = time.perf_counter() - start
-    return summary
+
+def run_from_config(cfg: Any, job_dir: str | Path, registry: Registry | None = None,
+                    problems: ProblemCache | None = None) -> JobSummary:
+    """Parse and check the composed config ``cfg`` (:func:`vpid_bench.spec.parse_job`), then
+    run the job into ``job_dir``. Raises :class:`~vpid_bench.api.ConfigError` (before any
+    run) for a bad value."""
+    registry = registry if registry is not None else Registry()
+    return run_job(parse_job(cfg, registry), job_dir, registry, problems)
 
 
 def _postfix(record: Mapping[str, Any]) -> str:
     res = record["result"]
     text = f"f={res['f_best']:.3g}" if res["f_best"] is not None else "f=inf"
-    if res.get("nore") is not None:
-        text += f" NoRE={res['nore']:.2f}%"
+    for name, value in (res.get("metrics") or {}).items():
+        if value is not None:
+            text += f" {name}={value:.3g}"
     return text
 
 
@@ -376,4 +318,4 @@ def _progress_bar(total: int, desc: str, enabled: bool) -> Any:
                 mininterval=0.5)
 
 
-__all__ = ["JobSummary", "run_from_config", "run_rng", "default_budget", "VpidBenchError"]
+__all__ = ["JobSummary", "ProblemCache", "RunTimeoutError", "run_from_config", "run_job", "run_rng"]

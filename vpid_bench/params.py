@@ -154,18 +154,11 @@ def dataclass_defaults(cls: type) -> dict[str, Any]:
     return out
 
 
-def hydra_node(
-    cls: type, name: str, interpolations: Mapping[str, str] | None = None
-) -> dict[str, Any]:
-    """The Hydra config node of a plugin: ``{"name": name, **defaults}``.
-
-    ``interpolations`` replaces some defaults by interpolation strings, e.g.
-    ``{"ps": "${problem.ps}"}``, so an optimizer reads its population size from the problem's
-    protocol unless the user overrides it.
+def hydra_node(cls: type, name: str, exclude: tuple[str, ...] = ()) -> dict[str, Any]:
+    """The Hydra config node of a plugin: ``{"name": name, **defaults}`` without the keys in
+    ``exclude`` (an optimizer's protocol copy ``ps``/``iterations``, which the job fills in
+    from the problem), so a third-party plugin needs no YAML to be usable as ``<group>=<name>``.
     """
     node: dict[str, Any] = {"name": name}
-    node.update(dataclass_defaults(cls))
-    for key, expr in (interpolations or {}).items():
-        if key in node:
-            node[key] = expr
+    node.update({k: v for k, v in dataclass_defaults(cls).items() if k not in exclude})
     return node

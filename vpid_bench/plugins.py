@@ -22,6 +22,7 @@ import pluggy
 
 from . import hookspecs
 from .api import ConfigError, Optimizer, OptimizerParams, PluginError, Problem, ProblemConfig
+from .records.provenance import distribution_provenance
 
 ENTRY_POINT_GROUP = "vpid_bench"
 BLOCK_ENV = "VPID_BENCH_BLOCK_PLUGINS"
@@ -33,10 +34,12 @@ class PluginLoadWarning(UserWarning):
 
 @dataclasses.dataclass
 class PluginManagerInfo:
-    """What happened while loading plugins: skipped (blocked) and failed entry points."""
+    """What happened while loading plugins: skipped (blocked) and failed entry points, and
+    where each loaded plugin came from (its distribution, version and requirements)."""
 
     blocked: list[str] = dataclasses.field(default_factory=list)
     failed: dict[str, str] = dataclasses.field(default_factory=dict)
+    sources: dict[str, dict[str, Any]] = dataclasses.field(default_factory=dict)
 
 
 def _blocked_names() -> set[str]:
@@ -91,6 +94,7 @@ def get_plugin_manager(
             )
             continue
         _register(pm, plugin, ep.name, owner)
+        info.sources[ep.name] = distribution_provenance(getattr(ep, "dist", None))
     for name, plugin in extra_plugins:
         _register(pm, plugin, name, name)
     try:
@@ -158,11 +162,36 @@ class Registry:
                 table[name] = cls
                 self._owner[(kind, name)] = _plugin
 
-            impl.function(register=register)
+            before = dict(table)
+            try:
+                impl.function(register=register)
+            except PluginError:
+                raise
+            except Exception as exc:  # a broken hook must not stop the other plugins
+                for key in set(table) - set(before):  # undo what it half registered
+                    del table[key]
+                    self._owner.pop((kind, key), None)
+                info = getattr(self.pm, "vpid_bench_info", None)
+                if info is not None:
+                    info.failed[plugin_name] = f"{type(exc).__name__}: {exc}"
+                warnings.warn(
+                    f"vpid-bench plugin {plugin_name!r} failed to register its {kind}s and was "
+                    f"skipped: {type(exc).__name__}: {exc}",
+                    PluginLoadWarning,
+                    stacklevel=2,
+                )
 
     def owner(self, kind: str, name: str) -> str:
         """The name of the plugin that registered ``kind`` ``name``."""
         return self._owner[(kind, name)]
+
+    def provenance(self, kind: str, name: str) -> dict[str, Any]:
+        """Where ``kind`` ``name`` comes from: ``{"plugin", "distribution", "version",
+        "requires"}`` (the last three empty for a plugin no distribution ships)."""
+        plugin = self._owner[(kind, name)]
+        info = getattr(self.pm, "vpid_bench_info", None)
+        source = info.sources.get(plugin, {}) if info is not None else {}
+        return {"plugin": plugin, **source}
 
     def optimizer(self, name: str) -> type[Optimizer]:
         """The optimizer class registered as ``name``; a clear error lists the known names."""

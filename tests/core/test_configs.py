@@ -7,7 +7,8 @@ from importlib import resources
 
 import pytest
 
-from vpid_bench.experiment import build_problem, optimizer_params
+from vpid_bench.api import ConfigError
+from vpid_bench.spec import parse_job
 
 
 def _yaml_presets(group: str) -> list[str]:
@@ -24,12 +25,12 @@ def test_every_problem_and_optimizer_composes_and_builds(registry, compose_confi
     for problem in problems:
         for optimizer in optimizers:
             cfg = compose_config([f"problem={problem}", f"optimizer={optimizer}"])
-            assert cfg.optimizer.ps == cfg.problem.ps  # interpolated protocol
-            assert cfg.optimizer.iterations == cfg.problem.iterations
-            built = build_problem(registry, cfg.problem)
-            assert built.bounds.dim >= 1
-            cls, params = optimizer_params(registry, cfg.optimizer)
-            assert params.ps == cfg.problem.ps
+            assert "ps" not in cfg.optimizer and "iterations" not in cfg.optimizer
+            job = parse_job(cfg, registry)  # every plugin's own checks run here
+            assert job.params.ps == cfg.problem.ps  # the protocol, copied from the problem
+            assert job.params.iterations == cfg.problem.iterations
+            assert job.budget == cfg.problem.ps * (cfg.problem.iterations + 1)
+            assert job.problem_cls(job.problem_config).bounds.dim >= 1
 
 
 def test_protocol_defaults_are_the_papers(compose_config):
@@ -38,14 +39,17 @@ def test_protocol_defaults_are_the_papers(compose_config):
     assert cfg.budget is None
 
 
-def test_problem_ps_override_reaches_the_optimizer(compose_config):
+def test_problem_ps_override_reaches_the_optimizer(compose_config, registry):
     cfg = compose_config(["problem=functions", "optimizer=random", "problem.ps=30"])
-    assert cfg.optimizer.ps == 30
+    job = parse_job(cfg, registry)
+    assert (job.params.ps, job.budget) == (30, 30 * 51)
 
 
-def test_optimizer_can_override_its_own_population(compose_config):
-    cfg = compose_config(["problem=functions", "optimizer=random", "optimizer.ps=7"])
-    assert (cfg.optimizer.ps, cfg.problem.ps) == (7, 20)
+def test_the_protocol_cannot_be_set_on_the_optimizer(compose_config, registry):
+    """``optimizer.ps=7`` would decouple the budget from the population: refused."""
+    cfg = compose_config(["problem=functions", "optimizer=random", "+optimizer.ps=7"])
+    with pytest.raises(ConfigError, match="set problem.ps"):
+        parse_job(cfg, registry)
 
 
 def test_unknown_key_is_refused_by_struct_mode(compose_config):
@@ -63,17 +67,23 @@ def test_sweep_dirs_are_named_by_overrides(compose_config):
     with initialize_config_module(version_base="1.3", config_module="vpid_bench.conf"):
         cfg = compose("config", overrides=["problem=functions", "optimizer=random"],
                       return_hydra_config=True)
+    from vpid_bench.shell.callbacks import ensure_job_dir_resolver
+
+    ensure_job_dir_resolver()
     assert cfg.hydra.sweep.subdir == "optimizer=random,problem=functions"
     assert str(cfg.hydra.sweep.dir).startswith("outputs/")
     assert str(cfg.hydra.run.dir).startswith("outputs/")
 
 
 def test_a_yaml_preset_extends_a_registered_problem(compose_config, registry):
-    from vpid_bench.preflight import check_overrides, yaml_presets
+    from vpid_bench.shell.argv import parse_command_line
+    from vpid_bench.shell.preflight import plan
+    from vpid_bench.shell.presets import yaml_presets
 
     assert yaml_presets("problem")["vehicle_long_record"] == "vehicle"
     cfg = compose_config(["problem=vehicle_long_record", "optimizer=de4"])
     assert cfg.problem.name == "vehicle" and cfg.problem.record.extra == 0.5
-    chosen = check_overrides(["problem=vehicle_long_record", "problem.record.extra=1"], registry,
-                             {"problem": "vehicle", "optimizer": "de4"})
-    assert chosen["problem"] == ["vehicle"]
+    checked = plan(parse_command_line(["problem=vehicle_long_record", "problem.record.extra=1"]),
+                   registry)
+    assert [j.problem_name for j in checked.jobs] == ["vehicle"]
+    assert checked.jobs[0].problem_config.record.extra == 1.0

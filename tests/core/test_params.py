@@ -62,11 +62,11 @@ def test_name_and_private_keys_are_metadata():
     assert build_dataclass(Outer, {"name": "x", "_target_": "y"}) == Outer()
 
 
-def test_hydra_node_interpolates_protocol_keys():
+def test_hydra_node_leaves_out_the_protocol_keys():
     @dataclass(frozen=True)
     class P:
         ps: int = 20
         F: float = 0.5
 
-    node = hydra_node(P, "mine", {"ps": "${problem.ps}", "missing": "${x}"})
-    assert node == {"name": "mine", "ps": "${problem.ps}", "F": 0.5}
+    assert hydra_node(P, "mine", exclude=("ps", "iterations")) == {"name": "mine", "F": 0.5}
+    assert hydra_node(P, "mine") == {"name": "mine", "ps": 20, "F": 0.5}

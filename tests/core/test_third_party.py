@@ -61,7 +61,8 @@ def test_installed_plugin_runs_from_the_command_line(installed_plugin, tmp_path)
     rec = json.loads(records[0].read_text())
     assert rec["optimizer"]["name"] == "local_search"
     assert rec["optimizer"]["params"]["sigma"] == 0.05
-    assert rec["optimizer"]["plugin"] == "my-local-search"
+    assert rec["optimizer"]["plugin"]["distribution"] == "my-local-search"
+    assert rec["optimizer"]["plugin"]["version"] == "0.1.0"
     assert rec["result"]["evaluations"] == 20 * 4
 
 

@@ -158,52 +158,6 @@ def test_cli_exit_codes(tmp_path, capsys):
     assert "(2 run records)" in captured.out and (out / "report.md").is_file()
 
 
-def test_callback_writes_report_and_honours_report_false(tmp_path, monkeypatch, capsys):
-    from omegaconf import OmegaConf
-
-    from vpid_bench import cli
-    from vpid_bench.report.callback import ReportCallback
-
-    sweep = tmp_path / "sweep"
-    objective_job(sweep, "a", 20, [1.0, 2.0])
-    objective_job(sweep, "b", 20, [3.0, 4.0])
-    cb = ReportCallback()
-    cb.on_multirun_end(OmegaConf.create({"report": False, "hydra": {"sweep": {"dir": str(sweep)}}}))
-    assert not (sweep / "report").exists()
-    cli._FAILURES.clear()
-    cb.on_multirun_end(OmegaConf.create({"report": True, "hydra": {"sweep": {"dir": str(sweep)}}}))
-    assert (sweep / "report" / "report.md").is_file() and cli._FAILURES == []
-    job = sweep / "optimizer=a,ps=20,seed=0"
-    cb.on_run_end(OmegaConf.create({"hydra": {"runtime": {"output_dir": str(job)}}}))
-    # A single job gets the light report: no figures, the command for the full one.
-    text = (job / "report" / "report.md").read_text()
-    assert "(single job)" in text and "vpid-bench-report" in text
-    assert not (job / "report" / "figures").exists() and cli._FAILURES == []
-    # No record at all (every job failed, each said why): one quiet line, no extra failure.
-    capsys.readouterr()
-    cb.on_multirun_end(OmegaConf.create({"hydra": {"sweep": {"dir": str(tmp_path / "none")}}}))
-    assert cli._FAILURES == [] and "no run was recorded" in capsys.readouterr().err
-    # A report that cannot be built prints one line and notes a failure; it never raises.
-    import vpid_bench.report.build as build
-
-    def broken(*args, **kwargs):
-        raise RuntimeError("disk full")
-
-    monkeypatch.setattr(build, "build_report", broken)
-    cb.on_multirun_end(OmegaConf.create({"hydra": {"sweep": {"dir": str(sweep)}}}))
-    assert len(cli._FAILURES) == 1 and "disk full" in cli._FAILURES[0]
-    assert capsys.readouterr().err.count("\n") == 1
-    cli._FAILURES.clear()
-
-
-def test_importing_the_callback_is_cheap():
-    code = ("import sys, vpid_bench.report.callback; "
-            "print(sorted(m for m in ('pandas', 'seaborn', 'matplotlib', 'scikit_posthocs') "
-            "if m in sys.modules))")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert out.stdout.strip() == "[]"
-
-
 def test_real_sweep_ends_with_a_report(tmp_path):
     """`vpid-bench -m ...` end to end: the callback writes the report into the sweep dir."""
     exe = Path(sys.executable).with_name("vpid-bench")

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from vpid_bench import records as rec
 
-CLI = [sys.executable, "-c", "from vpid_bench.cli import main; main()"]
+CLI = [sys.executable, "-c", "from vpid_bench.shell.main import main; main()"]
 
 
 def cli_env(extra: Mapping[str, str] | None = None) -> dict[str, str]:

@@ -39,23 +39,46 @@ PREFLIGHT = [
      "'vehicle' has no such key; keys under problem.noise are level, model, seed"),
     (["foo=1"], "error: foo=1 is not allowed: known top-level keys are problem, optimizer"),
     (["+foo=1"], "error: foo=1 is not allowed: known top-level keys are"),
-    (["runs=0"], "error: runs=0 is not allowed: an integer >= 1"),
-    (["runs=abc"], "error: runs='abc' is not allowed: an integer >= 1"),
+    (["runs=0"], "error: runs=0 is not allowed: an integer from 1 to 10000"),
+    (["runs=abc"], "error: runs='abc' is not allowed: an integer"),
     (["seed=-1"], "error: seed=-1 is not allowed: an integer >= 0"),
-    (["seed=1.5"], "error: seed=1.5 is not allowed: an integer >= 0"),
+    (["seed=1.5"], "error: seed=1.5 is not allowed: an integer"),
     (["-m", "seed=0,-3"], "error: seed=-3 is not allowed: an integer >= 0"),
-    (["budget=0"], "error: budget=0 is not allowed: an integer >= 1 or null"),
+    (["budget=0"], "error: budget=0 is not allowed: an integer from 1 to 1000000000 or null"),
     (["resume=maybe"], "error: resume='maybe' is not allowed: true or false"),
-    (["problem.iterations=0"], "error: problem.iterations=0 is not allowed: an integer >= 1"),
-    (["problem.ps=0"], "error: problem.ps=0 is not allowed: an integer >= 1"),
-    (["optimizer=de1", "optimizer.ps=-2"], "error: optimizer.ps=-2 is not allowed: an integer"),
+    (["problem.iterations=0"],
+     "error: problem.iterations=0 is not allowed: an integer from 1 to 1000000"),
+    (["problem.ps=0"], "error: problem.ps=0 is not allowed: an integer from 1 to 10000"),
+    (["optimizer=de1", "optimizer.ps=-2"], "error: optimizer.ps=-2 is not allowed: not "
+     "settable on the optimizer: the protocol is the problem's, set problem.ps"),
     (["problem.noise.level=abc"],
      "error: problem.noise.level='abc' is not allowed: a real number"),
     (["problem.noise.level=nan"], "error: problem.noise.level=nan is not allowed: a real number"),
     (["problem.dt=fast"], "error: problem.dt='fast' is not allowed: a real number"),
     (["problem.name=x"], "error: problem.name='x' is not allowed: choose the problem with"),
     (["runs=[1"], "error: override='runs=[1' is not allowed: key=value"),
-    (["problem/x=1"], "error: problem/x='1' is not allowed: config groups are"),
+    (["optimizer=de1,de4"], "error: optimizer='de1,de4' is not allowed: one value here; to "
+     "run every value, start a sweep with -m"),
+    (["-m", "runs=range(20,10)"], "error: runs='range(20,10)' is not allowed: a sweep with at "
+     "least one value"),
+    (["-m", "runs=range(0,1,0)"], "error: runs='range(0,1,0)' is not allowed: range(start, "
+     "stop[, step]) with a step that is not 0"),
+    (["-m", "problem.noise.level=interval(0,1)"], "error: problem.noise.level='interval(0,1)' "
+     "is not allowed: a list of values"),
+    (["-m", "seed=range(0,100000)"], "error: seed='range(0,100000)' is not allowed: a sweep of "
+     "at most 10000 values"),
+    (["~problem"], "error: ~problem='' is not allowed: a problem for every job"),
+    (["hydra/launcher=nosuch"], "error: hydra/launcher='nosuch' is not allowed: one of basic, "
+     "joblib"),
+    (["hydra/launcher=joblib", "hydra.launcher.n_jobs=abc"], "error: hydra.launcher.n_jobs='abc'"
+     " is not allowed: Value 'abc' of type 'str' could not be converted to Integer"),
+    (["hydra/launcher=${oc.decode:'1'}"], "error: hydra/launcher=\"${oc.decode:'1'}\" is not "
+     "allowed: a config name, not an interpolation"),
+    (["-m", "optimizer=de1,de4", "--cfg", "job"], "error: --cfg='job' is not allowed: a single "
+     "run's config"),
+    (["-m", "hydra.sweep.dir="], "error: hydra.sweep.dir='' is not allowed: a folder name"),
+    (["problem/x=1"], "error: problem/x='1' is not allowed: config groups are problem, "
+     "optimizer and Hydra's"),
 ]
 
 
@@ -69,7 +92,7 @@ def in_tmp(tmp_path, monkeypatch):
 
 
 def _main_error(argv: list[str], capsys) -> tuple[int, str]:
-    from vpid_bench.cli import main
+    from vpid_bench.shell.main import main
 
     with pytest.raises(SystemExit) as exit_info:
         main(argv)
@@ -201,7 +224,7 @@ def faulty_registry() -> Registry:
 
 def _faulty_config(fault: str) -> dict:
     return {"problem": {"name": "functions", "ps": 5, "iterations": 3, "dim": 3},
-            "optimizer": {"name": "faulty", "ps": 5, "iterations": 3, "fault": fault},
+            "optimizer": {"name": "faulty", "fault": fault},
             "seed": 0, "runs": 3, "progress": False}
 
 
@@ -290,7 +313,7 @@ def test_broken_and_colliding_plugins(tmp_path):
     missing = run_cli([*FUNCTIONS, "optimizer=brokenopt"], tmp_path, env=env)
     assert missing.returncode == 2
     assert missing.stderr.splitlines()[-1].endswith(
-        "(plugins that failed to import: broken: ImportError: needs libfoo)")
+        "(plugins that failed to load: broken: ImportError: needs libfoo)")
 
     dup_site = tmp_path / "dup"
     _fake_distribution(dup_site, "vpid_dup", {"dup": "vpid_dup_mod"}, {"vpid_dup_mod": DUPLICATE})
@@ -302,7 +325,7 @@ def test_broken_and_colliding_plugins(tmp_path):
 
 
 def test_corrupt_job_status_and_record_are_reported_not_fatal(tmp_path):
-    from vpid_bench.jobstatus import read_job_status
+    from vpid_bench.records import read_job_status
 
     (tmp_path / "job.json").write_text("{not json")
     assert read_job_status(tmp_path) is None

@@ -206,7 +206,7 @@ def test_job_writes_records_and_reference(tmp_path, registry):
 
     cfg = {
         "problem": hydra_node(VehicleConfig, "vehicle") | {"iterations": 1, "ps": 4},
-        "optimizer": {"name": "random", "ps": 4, "iterations": 1},
+        "optimizer": {"name": "random"},
         "seed": 0, "runs": 2, "progress": False, "report": False,
     }
     summary = run_from_config(cfg, tmp_path, registry=registry)

@@ -27,8 +27,7 @@ from typing import Any
 import numpy as np
 
 from ..api import VpidBenchError
-from ..jobstatus import read_job_status
-from ..records import CorruptRecordError, iter_record_files, read_record
+from ..records import CorruptRecordError, iter_record_files, read_job_status, read_record
 
 #: Problem-config keys that never define a context of their own (ps is taken from the optimizer).
 PROBLEM_KEYS_IGNORED = ("ps",)

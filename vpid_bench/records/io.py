@@ -1,4 +1,4 @@
-"""Run records: one JSON file per run, written atomically, named deterministically.
+"""Run records on disk: the schema version, atomic JSON writes, reading and checking.
 
 A record says everything needed to repeat a run (config, seeds, versions) and to judge it
 (best vector in physical units, objective, NoRE and relative errors where true values are
@@ -19,20 +19,26 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
-import tempfile
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-SCHEMA = "vpid-bench/run-record/1"
+from ..fileio import write_text_atomic
+
+SCHEMA = "vpid-bench/run-record/2"
+#: Schemas of earlier vpid-bench versions: recognised, so a reader can say so in one line.
+OLD_SCHEMAS = ("vpid-bench/run-record/1",)
 RECORDS_DIR = "records"
 
 
 class CorruptRecordError(ValueError):
     """A record file exists but is not a complete, valid run record."""
+
+
+class OldRecordError(CorruptRecordError):
+    """A complete record written by an earlier vpid-bench (an older schema version)."""
 
 
 def _jsonable(obj: Any) -> Any:
@@ -63,9 +69,11 @@ def stable_hash(obj: Any, length: int = 16) -> str:
     return hashlib.sha256(canonical_json(obj).encode()).hexdigest()[:length]
 
 
-def job_key(problem: Mapping, optimizer: Mapping, seed: int, budget: int) -> dict[str, Any]:
-    """What determines every run of a job, apart from the run index."""
-    return {"problem": problem, "optimizer": optimizer, "seed": seed, "budget": budget}
+def job_key(problem: Mapping, optimizer: Mapping, seed: int, budget: int,
+            **more: Any) -> dict[str, Any]:
+    """What determines every run of a job, apart from the run index (``more``: further
+    determinants, e.g. plugin versions and the content hash of a data file)."""
+    return {"problem": problem, "optimizer": optimizer, "seed": seed, "budget": budget, **more}
 
 
 def run_id(key: Mapping[str, Any], run_index: int) -> str:
@@ -78,31 +86,15 @@ def record_path(job_dir: Path, run_index: int, rid: str) -> Path:
     return Path(job_dir) / RECORDS_DIR / f"run-{run_index:03d}-{rid}.json"
 
 
+def write_json_atomic(path: Path, obj: Any) -> Path:
+    """``obj`` as strict, indented JSON (sorted keys), written with :func:`write_text_atomic`."""
+    text = json.dumps(_jsonable(obj), indent=1, sort_keys=True, allow_nan=False) + "\n"
+    return write_text_atomic(path, text)
+
+
 def write_record(path: Path, record: Mapping[str, Any]) -> Path:
-    """Write ``record`` to ``path`` atomically: a temporary file in the same folder, fsync,
-    then ``os.replace``. A crash at any moment leaves either no file or a complete one."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    text = json.dumps(_jsonable(record), indent=1, sort_keys=True, allow_nan=False) + "\n"
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; records are meant to be shared
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
-
-
-def _umask() -> int:
-    """The process umask (read by setting and restoring it; there is no getter)."""
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+    """Write a run record atomically (see :func:`write_json_atomic`)."""
+    return write_json_atomic(path, record)
 
 
 REQUIRED_KEYS = (
@@ -117,7 +109,6 @@ REQUIRED_KEYS = (
     "parameters",
     "result",
     "trace",
-    "config",
     "versions",
     "timing",
 )
@@ -130,7 +121,13 @@ def read_record(path: Path) -> dict[str, Any]:
         record = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise CorruptRecordError(f"{path}: not a readable JSON run record ({exc})") from exc
-    if not isinstance(record, dict) or record.get("schema") != SCHEMA:
+    schema = record.get("schema") if isinstance(record, dict) else None
+    if schema in OLD_SCHEMAS:
+        raise OldRecordError(
+            f"{path}: written by an older vpid-bench ({schema}); this version reads {SCHEMA}: "
+            "run the job again to include it"
+        )
+    if schema != SCHEMA:
         raise CorruptRecordError(f"{path}: not a vpid-bench run record (schema != {SCHEMA!r})")
     missing = [k for k in REQUIRED_KEYS if k not in record]
     if missing:

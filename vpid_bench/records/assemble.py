@@ -1,0 +1,111 @@
+"""Assembling a run record (schema 2): what a run was, what it found, what produced it.
+
+Each setting is stored once: the problem's settings (the protocol ``ps``/``iterations``
+included) under ``problem.config``, the optimizer's own settings under ``optimizer.params``,
+the job's ``seed`` under ``seeds`` and the run's ``budget`` at the top. Fields::
+
+    schema, run_id, run_index, status ("ok" | "failed"), error (type, message, traceback)
+    problem     name, plugin (provenance), config, info (the problem's describe())
+    optimizer   name, plugin (provenance), params
+    seeds       seed, spawn_key           budget
+    parameters  names, units, lower, upper, true (null when unknown)
+    result      x_best, f_best, evaluations, batches, stopped_by, metrics, rel_error_percent
+    trace       evaluations, best         (best-so-far after every evaluated batch)
+    versions    python and the numerical stack
+    timing      started_at, wall_time_s, run_time_s, host   (the only non-deterministic part)
+"""
+
+from __future__ import annotations
+
+import socket
+import traceback
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from ..api import Problem, relative_errors_percent
+from ..runner import RunResult
+from .io import SCHEMA
+from .provenance import package_versions
+
+
+def _metrics(problem: Problem, x: np.ndarray) -> dict[str, Any]:
+    """The problem's named metrics of ``x`` (empty when it has none or ``x`` is not finite)."""
+    metrics = getattr(problem, "metrics", None)
+    if metrics is None or not np.all(np.isfinite(x)):
+        return {}
+    return {str(k): float(v) for k, v in (metrics(x) or {}).items()}
+
+
+def result_section(result: RunResult, problem: Problem) -> dict[str, Any]:
+    """The ``result`` section: the loop's own best, and how far it is from a known truth."""
+    section: dict[str, Any] = {
+        "x_best": result.x_best,
+        "f_best": result.f_best,
+        "evaluations": result.evaluations,
+        "batches": result.batches,
+        "stopped_by": result.stopped_by,
+        "metrics": _metrics(problem, result.x_best),
+        "rel_error_percent": None,
+    }
+    x_true = problem.x_true
+    if x_true is not None and np.all(np.isfinite(result.x_best)):
+        section["rel_error_percent"] = relative_errors_percent(result.x_best, x_true)
+    return section
+
+
+def error_section(error: BaseException) -> dict[str, str]:
+    """Type, message and traceback of the exception that failed a run."""
+    return {
+        "type": type(error).__name__,
+        "message": str(error),
+        "traceback": "".join(traceback.format_exception(error)),
+    }
+
+
+def make_record(
+    *,
+    rid: str,
+    run_index: int,
+    problem: Problem,
+    problem_name: str,
+    problem_settings: Mapping[str, Any],
+    problem_plugin: Mapping[str, Any],
+    optimizer_name: str,
+    optimizer_settings: Mapping[str, Any],
+    optimizer_plugin: Mapping[str, Any],
+    seed: int,
+    budget: int,
+    result: RunResult | None,
+    error: BaseException | None,
+    started_at: str,
+    wall_time_s: float,
+) -> dict[str, Any]:
+    """The JSON record of one run: status ``ok`` with a result, or ``failed`` with an error."""
+    b = problem.bounds
+    record: dict[str, Any] = {
+        "schema": SCHEMA,
+        "run_id": rid,
+        "run_index": run_index,
+        "status": "ok" if error is None else "failed",
+        "error": None if error is None else error_section(error),
+        "problem": {"name": problem_name, "plugin": dict(problem_plugin),
+                    "config": dict(problem_settings), "info": problem.describe()},
+        "optimizer": {"name": optimizer_name, "plugin": dict(optimizer_plugin),
+                      "params": dict(optimizer_settings)},
+        "seeds": {"seed": seed, "spawn_key": [run_index]},
+        "budget": budget,
+        "parameters": {"names": list(b.names), "units": list(b.units), "lower": b.lower,
+                       "upper": b.upper, "true": problem.x_true},
+        "result": None,
+        "trace": None,
+        "versions": dict(package_versions()),
+        "timing": {"started_at": started_at, "wall_time_s": wall_time_s,
+                   "host": socket.gethostname()},
+    }
+    if result is not None:
+        record["result"] = result_section(result, problem)
+        record["trace"] = {"evaluations": result.trace_evaluations, "best": result.trace_best}
+        record["timing"]["run_time_s"] = result.wall_time_s
+    return record

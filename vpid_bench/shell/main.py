@@ -1,0 +1,245 @@
+"""The ``vpid-bench`` command: read the command line, check everything, hand over to Hydra.
+
+1. Read the command line (:mod:`.argv`); ``--version`` prints vpid-bench's version and every
+   plugin's, and stops.
+2. Load the plugins and store a Hydra config node per plugin and for the job spec.
+3. Pre-flight (:mod:`.preflight`): every point of the sweep composed and parsed by the same
+   function the job uses; the output folder resolved once, locked against a second command,
+   and proven writable. Anything wrong: one line, exit 2, nothing written.
+4. Hydra runs the jobs (any launcher). Each job writes its ``job.json``; the report callback
+   writes ``report/status.json``. When Hydra returns, the exit code is decided from those
+   files, so it is right whatever process ran the jobs.
+
+Exit status: 0 all runs ok; 1 some run, job or report failed (records and ``job.json`` say
+why); 2 refused before anything ran; 130 interrupted (every completed run is kept).
+``VPID_BENCH_DEBUG=1`` shows tracebacks.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import sys
+import warnings
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, NoReturn
+
+from ..api import VpidBenchError
+
+DEBUG_ENV = "VPID_BENCH_DEBUG"
+log = logging.getLogger("vpid_bench")
+
+
+def debug_enabled() -> bool:
+    """True when ``VPID_BENCH_DEBUG`` asks for tracebacks."""
+    return os.environ.get(DEBUG_ENV, "") not in ("", "0", "false", "no")
+
+
+def one_line(exc: BaseException) -> str:
+    """An exception as one line: our own errors as they are, others with their type."""
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    if isinstance(exc, (VpidBenchError, ValueError)):
+        return text
+    return f"{type(exc).__name__}: {text}"
+
+
+def _refuse(exc: BaseException) -> NoReturn:
+    if debug_enabled():
+        raise exc
+    print(f"error: {one_line(exc)}", file=sys.stderr, flush=True)
+    sys.exit(2)
+
+
+class JobTask:
+    """Hydra's task function: runs one job, writes its ``job.json``, never raises (one failed
+    job must not stop the sweep). The registry and the problem cache are rebuilt in a launcher's
+    worker process (they are not pickled)."""
+
+    __module__ = __name__
+
+    def __init__(self, registry: Any = None) -> None:
+        self._registry = registry
+        self._problems: Any = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {"_registry": None, "_problems": None}
+
+    def __call__(self, cfg: Any) -> float | None:
+        from hydra.core.hydra_config import HydraConfig
+
+        from ..experiment import ProblemCache, run_from_config
+        from ..plugins import Registry
+        from ..records import write_job_status
+
+        if self._registry is None:
+            self._registry = _load_registry()
+        if self._problems is None:
+            self._problems = ProblemCache()
+        hydra_cfg = HydraConfig.get()
+        job_dir = Path(hydra_cfg.runtime.output_dir)
+        multirun = hydra_cfg.mode.name == "MULTIRUN"
+        try:
+            summary = run_from_config(cfg, job_dir, self._registry, self._problems)
+        except KeyboardInterrupt:
+            write_job_status(job_dir, "interrupted", "interrupted by the user")
+            raise
+        except Exception as exc:  # noqa: BLE001 - crash isolation: report, go on
+            if debug_enabled():
+                log.exception("job failed")
+            message = f"error: {one_line(exc)}"
+            print(message + (f" [{job_dir}]" if multirun else ""), file=sys.stderr, flush=True)
+            try:
+                write_job_status(job_dir, "error", one_line(exc))
+            except OSError as os_exc:
+                print(f"error: cannot write the status of {job_dir} ({os_exc.strerror})",
+                      file=sys.stderr)
+            return None
+        assert isinstance(self._registry, Registry)
+        write_job_status(job_dir, "failed_runs" if summary.failed else "ok", summary)
+        print(f"{summary.optimizer} on {summary.problem}: {summary.ran} run(s) done, "
+              f"{summary.skipped} already recorded, {len(summary.failed)} failed, "
+              f"{summary.wall_time_s:.1f} s -> {job_dir}", file=sys.stderr, flush=True)
+        return None
+
+
+def _load_registry() -> Any:
+    """The plugin registry; a plugin that fails to import or register is reported once."""
+    from ..plugins import PluginLoadWarning, Registry
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PluginLoadWarning)
+        registry = Registry()
+    seen = set()
+    for w in caught:
+        if issubclass(w.category, PluginLoadWarning):
+            text = str(w.message)
+            if text not in seen:
+                seen.add(text)
+                print(f"warning: {text}", file=sys.stderr)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return registry
+
+
+def _hydra_entry(argv: Sequence[str], task: Any) -> None:
+    import hydra
+
+    decorated = hydra.main(version_base="1.3", config_path="pkg://vpid_bench.conf",
+                           config_name="config")(task)
+    saved = sys.argv
+    sys.argv = [saved[0] if saved else "vpid-bench", *argv]
+    try:
+        decorated()
+    finally:
+        sys.argv = saved
+
+
+def print_versions(registry: Any) -> None:
+    """vpid-bench's version, then every plugin's distribution and version."""
+    from .. import __version__
+
+    print(f"vpid-bench {__version__}")
+    info = getattr(registry.pm, "vpid_bench_info", None)
+    for plugin, source in sorted((info.sources if info else {}).items()):
+        where = f"{source.get('distribution')} {source.get('version')}" if source else "?"
+        print(f"  plugin {plugin}: {where}")
+
+
+def _failures(folder: Path | None, multirun: bool) -> list[str]:
+    """What went wrong, read from the disk: job statuses of this invocation and the report's
+    status. Prints the sweep summary."""
+    from .callbacks import REPORT_STATUS, REPORT_SUBDIR
+    from .resume import collect_job_statuses
+
+    if folder is None:
+        return []
+    invocation = os.environ.get("VPID_BENCH_INVOCATION")
+    statuses = collect_job_statuses(folder, invocation)
+    bad = [s for s in statuses if s.get("status") != "ok"]
+    out = []
+    if multirun:
+        print(f"sweep: {len(statuses)} job(s), {len(statuses) - len(bad)} ok, {len(bad)} not "
+              f"ok -> {folder}", file=sys.stderr)
+    for s in bad:
+        detail = s.get("detail")
+        if isinstance(detail, dict):
+            detail = f"runs {detail.get('failed')} failed (their records hold the errors)"
+        line = f"  {s.get('status')}: {s['job_dir']}: {detail}"
+        if multirun:
+            print(line, file=sys.stderr)
+        out.append(line)
+    try:
+        report = json.loads((folder / REPORT_SUBDIR / REPORT_STATUS).read_text("utf-8"))
+    except (OSError, ValueError):
+        report = None
+    if (isinstance(report, dict) and report.get("invocation") == invocation
+            and report.get("status") in ("failed", "problems")):
+        out.append(f"report: {report.get('status')}")
+    return out
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    """Console entry point ``vpid-bench``."""
+    from . import preflight
+    from .argv import parse_command_line
+    from .callbacks import ensure_job_dir_resolver
+    from .config_store import register_configs
+    from .resume import FolderLock, new_invocation
+
+    argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        cmd = parse_command_line(argv)
+        registry = _load_registry()
+    except VpidBenchError as exc:
+        _refuse(exc)
+    if cmd.version:
+        print_versions(registry)
+        return
+    new_invocation()
+    register_configs(registry)
+    ensure_job_dir_resolver()
+    task = JobTask(registry)
+    if cmd.custom_config or cmd.info in ("--help", "--hydra-help", "--shell-completion"):
+        _run_hydra(cmd.hydra_args, task)  # nothing runs: Hydra prints what was asked
+        return
+    try:
+        plan = preflight.plan(cmd, registry)
+        if cmd.info is not None:  # --cfg, --info: checked, now shown by Hydra
+            _run_hydra(cmd.hydra_args, task)
+            return
+        key = "hydra.sweep.dir" if plan.multirun else "hydra.run.dir"
+        lock = FolderLock(plan.output_dir, key)
+        preflight.check_writable(plan.output_dir, key)
+        lock.acquire()
+    except VpidBenchError as exc:
+        _refuse(exc)
+    try:
+        _run_hydra(plan.hydra_args, task)
+    except KeyboardInterrupt:
+        print("interrupted: every completed run is recorded; run the same command with "
+              "--resume to continue (only missing runs are run)", file=sys.stderr)
+        sys.exit(130)
+    finally:
+        lock.release()
+    if _failures(plan.output_dir, plan.multirun):
+        sys.exit(1)
+
+
+def _run_hydra(args: list[str], task: Any) -> None:
+    """Hydra's run; its own refusals (it prints them and exits 1) become one line, exit 2."""
+    try:
+        _hydra_entry(args, task)
+    except SystemExit as exc:
+        if exc.code not in (0, None):
+            sys.exit(2)
+        raise
+    except KeyboardInterrupt:
+        raise
+    except Exception as exc:  # noqa: BLE001 - a Hydra error outside any job
+        _refuse(exc)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

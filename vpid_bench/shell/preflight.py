@@ -1,0 +1,404 @@
+"""Pre-flight: every point of the command checked before any job runs.
+
+Hydra composes a job's config only when that job starts, so a bad value in the tenth point
+of a sweep would stop the sweep after nine jobs ran. The pre-flight expands the sweep exactly
+as Hydra's basic sweeper does (the cartesian product of the sweep overrides, the first
+outermost), composes each point and parses it with :func:`vpid_bench.spec.parse_job`, the
+function the job itself calls, so a plugin's own range checks in its dataclasses run too.
+Any bad value anywhere stops the command with one line naming the key, the value and what is
+allowed (exit 2), before any folder is written.
+
+Composition costs a fraction of a second, so points that differ only in plain ``key=value``
+settings share one composition per combination of config-group choices; their values are then
+set on a copy as Hydra would set them (struct mode: an unknown key is refused).
+
+The pre-flight also fixes the output folder: it resolves ``hydra.sweep.dir`` (or
+``hydra.run.dir``) once and hands the concrete folder to Hydra, so the command knows where its
+jobs write without asking Hydra afterwards.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+import os
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from ..api import ConfigError, VpidBenchError
+from ..plugins import Registry
+from ..spec import PROTOCOL_KEYS, TOP_LEVEL_KEYS, Job, parse_job
+from .argv import CommandLine
+
+GROUPS = ("problem", "optimizer")
+#: The most jobs one command may start (a typo in a range() should not plan a million).
+MAX_JOBS = 10_000
+
+
+@dataclasses.dataclass
+class Plan:
+    """What the pre-flight decided: the command line for Hydra, the output folder, the jobs."""
+
+    hydra_args: list[str]
+    output_dir: Path | None
+    multirun: bool
+    jobs: list[Job]
+    points: list[list[str]]
+
+
+def _parser() -> Any:
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+
+    return OverridesParser.create()
+
+
+def parse_overrides(overrides: Sequence[str]) -> list[Any]:
+    """Hydra's parsed ``Override`` objects; a syntax error is one ConfigError line."""
+    from hydra.errors import OverrideParseException
+
+    parser = _parser()
+    parsed = []
+    for text in overrides:
+        try:
+            parsed.extend(parser.parse_overrides([text]))
+        except OverrideParseException as exc:
+            first = str(exc).strip().splitlines()[0] if str(exc).strip() else "syntax error"
+            raise ConfigError("override", text, f"key=value, a sweep key=a,b,c (with -m) or "
+                              f"+key=value ({first})") from None
+    return parsed
+
+
+def _raw_value(override: Any) -> str:
+    return str(override.input_line).split("=", 1)[-1]
+
+
+def _group_names(group: str, registry: Registry) -> list[str]:
+    from .presets import yaml_presets
+
+    table = registry.problems if group == "problem" else registry.optimizers
+    return sorted({*table, *yaml_presets(group)})
+
+
+def _sweep_size(override: Any) -> int | None:
+    """How many values a sweep override stands for, without listing them (None: not a list
+    of values, e.g. ``interval()``, which only an optimizing sweeper can use)."""
+    from hydra.core.override_parser.types import ChoiceSweep, Glob, RangeSweep
+
+    value = override.value()
+    if isinstance(value, RangeSweep):
+        if not value.step:
+            raise ConfigError(override.key_or_group, _raw_value(override),
+                              "range(start, stop[, step]) with a step that is not 0")
+        return max(0, math.ceil((value.stop - value.start) / value.step))
+    if isinstance(value, (ChoiceSweep, Glob)):
+        return None if isinstance(value, Glob) else len(value.list)
+    return None
+
+
+def expand_points(parsed: list[Any], multirun: bool, registry: Registry,
+                  custom_sweeper: bool) -> list[list[str]]:
+    """The override strings of every job, in the order Hydra's basic sweeper runs them."""
+    from hydra.core.override_parser.types import Glob
+
+    axes: list[list[str]] = []
+    for o in parsed:
+        if not o.is_sweep_override():
+            axes.append([o.input_line])
+            continue
+        key = o.get_key_element()
+        if not multirun:
+            raise ConfigError(o.key_or_group, _raw_value(o),
+                              "one value here; to run every value, start a sweep with -m")
+        if custom_sweeper:  # an optimizing sweeper chooses values itself: check one setting
+            continue
+        value = o.value()
+        if isinstance(value, Glob):
+            if o.key_or_group not in GROUPS:
+                raise ConfigError(o.key_or_group, _raw_value(o), "glob() chooses among "
+                                  "problem or optimizer names")
+            names = value.filter(_group_names(o.key_or_group, registry))
+            if not names:
+                raise ConfigError(o.key_or_group, _raw_value(o), "a pattern matching one of "
+                                  + ", ".join(_group_names(o.key_or_group, registry)))
+            axes.append([f"{key}={n}" for n in names])
+            continue
+        size = _sweep_size(o)
+        if size is None:
+            raise ConfigError(o.key_or_group, _raw_value(o), "a list of values (a,b,c, "
+                              "range(), choice()); interval() needs an optimizing sweeper such "
+                              "as hydra/sweeper=optuna")
+        if size > MAX_JOBS:
+            raise ConfigError(o.key_or_group, _raw_value(o),
+                              f"a sweep of at most {MAX_JOBS} values")
+        axes.append([f"{key}={s}" for s in o.sweep_string_iterator()])
+    for o, axis in zip(parsed, axes, strict=False):
+        if o.key_or_group in GROUPS and not o.is_delete():
+            for text in axis:
+                _check_choice(o.key_or_group, text.split("=", 1)[1], registry)
+    count = math.prod(len(a) for a in axes)
+    if count == 0:
+        empty = next(o for o, a in zip(parsed, axes, strict=False) if not a)
+        raise ConfigError(empty.key_or_group, _raw_value(empty),
+                          "a sweep with at least one value (this one is empty: no job would run)")
+    if count > MAX_JOBS:
+        raise ConfigError("-m", f"{count} jobs", f"at most {MAX_JOBS} jobs in one command")
+    return [list(p) for p in itertools.product(*axes)]
+
+
+def _check_choice(group: str, name: str, registry: Registry) -> None:
+    """A problem or optimizer name must be registered (or a YAML preset); the error lists
+    the known names and the plugins that failed to load."""
+    names = _group_names(group, registry)
+    if name.strip("'\"") in names:
+        return
+    allowed = "one of " + ", ".join(names) if names else "none is registered"
+    info = getattr(registry.pm, "vpid_bench_info", None)
+    if info is not None and info.failed:
+        allowed += " (plugins that failed to load: " + ", ".join(
+            f"{n}: {why}" for n, why in sorted(info.failed.items())) + ")"
+    raise ConfigError(group, name, allowed)
+
+
+def _is_structural(o: Any) -> bool:
+    """Overrides that need Hydra's composition: config-group choices and hydra settings."""
+    key = o.key_or_group
+    return ("/" in key or key in GROUPS or key == "hydra" or key.startswith("hydra.")
+            or o.package is not None)
+
+
+def _apply(cfg: Any, o: Any) -> None:
+    """Set one plain ``key=value`` override on a composed config, as Hydra would."""
+    from omegaconf import OmegaConf, open_dict
+
+    key, value = o.key_or_group, o.value()
+    head, _, rest = key.partition(".")
+    if head in GROUPS and rest == "name":
+        raise ConfigError(key, value, f"choose the {head} with {head}=<name> instead")
+    if o.is_delete():
+        with open_dict(cfg):
+            if OmegaConf.select(cfg, key, default="<missing>") == "<missing>":
+                raise ConfigError(key, "~", "a key that exists (nothing to delete)")
+            parent, _, leaf = key.rpartition(".")
+            node = OmegaConf.select(cfg, parent) if parent else cfg
+            del node[leaf]
+        return
+    exists = OmegaConf.select(cfg, key, default="<missing>") != "<missing>"
+    if o.is_add() and exists:
+        raise ConfigError(key, value, "a new key for +key=value (this one exists: drop the +)")
+    if o.is_add() or o.is_force_add():
+        with open_dict(cfg):
+            OmegaConf.update(cfg, key, value, merge=True, force_add=True)
+        return
+    if not exists:
+        raise _unknown_key(cfg, key, value)
+    OmegaConf.update(cfg, key, value, merge=True)
+
+
+def _unknown_key(cfg: Any, key: str, value: Any) -> ConfigError:
+    """The error for ``key=value`` where ``key`` does not exist: names the keys that do."""
+    from omegaconf import DictConfig, OmegaConf
+
+    parts = key.split(".")
+    for depth in range(len(parts) - 1, -1, -1):
+        parent = ".".join(parts[:depth])
+        node = OmegaConf.select(cfg, parent) if parent else cfg
+        if isinstance(node, DictConfig):
+            keys = sorted(str(k) for k in node if str(k) != "name")
+            if not parent:
+                return ConfigError(key, value, "known top-level keys are problem, optimizer, "
+                                   + ", ".join(TOP_LEVEL_KEYS) + "; problem.<key> and "
+                                   "optimizer.<key> set a plugin's parameters")
+            if parent == "optimizer" and parts[1] in PROTOCOL_KEYS:
+                return ConfigError(key, value, "not settable on the optimizer: the protocol "
+                                   f"is the problem's, set problem.{parts[1]}")
+            owner = parent.split(".")[0]
+            name = OmegaConf.select(cfg, f"{owner}.name")
+            who = f"{owner} {name!r}" if owner in GROUPS and name else parent
+            return ConfigError(key, value, f"{who} has no such key; keys under {parent} are "
+                               + (", ".join(keys) or "(none)"))
+    return ConfigError(key, value, "a key of the config")
+
+
+def _hydra_error(exc: BaseException) -> ConfigError:
+    """A Hydra or OmegaConf composition error as one ConfigError line (the innermost cause
+    that names a key is used)."""
+    from hydra.errors import MissingConfigException
+
+    if isinstance(exc, MissingConfigException):
+        missing = str(getattr(exc, "missing_cfg_file", "") or "")
+        group, _, name = missing.rpartition("/")
+        options = sorted(getattr(exc, "options", None) or [])
+        if group and options:
+            return ConfigError(group, name, "one of " + ", ".join(options))
+    cause: BaseException | None = exc
+    while cause is not None:
+        key = getattr(cause, "full_key", None)
+        if key:
+            msg = " ".join(str(getattr(cause, "msg", cause)).split()).split(" full_key:")[0]
+            return ConfigError(str(key), getattr(cause, "value", None), msg)
+        cause = cause.__cause__ or cause.__context__
+    text = " ".join(str(exc).split())
+    if text.startswith("Could not override '"):
+        key = text.split("'")[1]
+        return ConfigError(key, "", "a key of the selected config (this one does not exist "
+                           "there; Hydra's own settings: vpid-bench --hydra-help)")
+    return ConfigError("override", "", text)
+
+
+def _compose(overrides: list[str], hydra: bool) -> Any:
+    from hydra import compose
+    from hydra.errors import HydraException
+    from omegaconf.errors import OmegaConfBaseException
+
+    try:
+        return compose(config_name="config", overrides=overrides, return_hydra_config=hydra)
+    except (HydraException, OmegaConfBaseException) as exc:
+        raise _hydra_error(exc) from None
+
+
+def check_points(points: list[list[str]], registry: Registry) -> tuple[list[Job], Any]:
+    """Compose and parse every point; returns the jobs and the first point's full config
+    (with its ``hydra`` node, for the output folder)."""
+    from hydra import initialize_config_module
+    from omegaconf import OmegaConf, open_dict
+    from omegaconf.errors import OmegaConfBaseException
+
+    parser = _parser()
+    base: dict[tuple[str, ...], Any] = {}
+    first_full = None
+    jobs = []
+    with initialize_config_module(version_base="1.3", config_module="vpid_bench.conf"):
+        for point in points:
+            parsed = parser.parse_overrides(point)
+            structural = tuple(o.input_line for o in parsed if _is_structural(o))
+            if structural not in base:
+                full = _compose(list(structural), hydra=True)
+                if first_full is None:
+                    first_full = full
+                task = OmegaConf.masked_copy(full, [k for k in full if k != "hydra"])
+                base[structural] = task
+            cfg = base[structural].copy()
+            OmegaConf.set_struct(cfg, True)
+            try:
+                for o in parsed:
+                    if not _is_structural(o):
+                        _apply(cfg, o)
+            except OmegaConfBaseException as exc:
+                raise _hydra_error(exc) from None
+            with open_dict(cfg):
+                cfg.pop("hydra", None)
+            jobs.append(parse_job(cfg, registry))
+    return jobs, first_full
+
+
+def _quote(path: str) -> str:
+    """A path as a quoted Hydra override value."""
+    return "'" + path.replace("\\", "\\\\").replace("'", "\\'") + "'"
+
+
+def output_dir(full_cfg: Any, multirun: bool) -> Path:
+    """The job's (``hydra.run.dir``) or sweep's (``hydra.sweep.dir``) folder, resolved once."""
+    from omegaconf import OmegaConf
+    from omegaconf.errors import OmegaConfBaseException
+
+    key = "hydra.sweep.dir" if multirun else "hydra.run.dir"
+    try:
+        value = OmegaConf.select(full_cfg, key)
+    except OmegaConfBaseException as exc:
+        raise ConfigError(key, "${...}", f"a folder ({' '.join(str(exc).split()[:10])})"
+                          ) from None
+    if value is None or not str(value).strip():
+        raise ConfigError(key, value if value is not None else "", "a folder name (empty "
+                          "would write into the current folder)")
+    return Path(str(value))
+
+
+def check_writable(directory: Path, key: str) -> None:
+    """Create ``directory`` if needed and prove a file can be written there."""
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=directory):
+            pass
+    except OSError as exc:
+        raise ConfigError(key, str(directory),
+                          f"a directory you can create and write to ({exc.strerror})") from None
+
+
+def _raw_dir(full_cfg: Any, multirun: bool) -> str:
+    """The output-folder template as written (``outputs/multirun/${now:...}``)."""
+    from omegaconf import OmegaConf
+
+    section = OmegaConf.to_container(full_cfg.hydra.sweep if multirun else full_cfg.hydra.run,
+                                     resolve=False)
+    return str(section.get("dir", ""))
+
+
+def _resume_folder(cmd: CommandLine, full_cfg: Any, key: str) -> Path | None:
+    """The folder ``--resume`` continues, or None for a new one (said on stderr)."""
+    import sys
+
+    from .resume import find_previous
+
+    if cmd.resume:
+        folder = Path(cmd.resume)
+        if not folder.is_dir():
+            raise ConfigError("--resume", cmd.resume, "an existing sweep or run folder")
+        return folder
+    if any(a.startswith(key + "=") for a in cmd.overrides):
+        return None  # the folder is named on the command line: that is the one continued
+    root = output_root(_raw_dir(full_cfg, cmd.multirun))
+    folder = find_previous(root, cmd.overrides, cmd.multirun)
+    if folder is None:
+        print(f"resume: no earlier {'sweep' if cmd.multirun else 'run'} under {root} has "
+              "these overrides; starting a new one", file=sys.stderr)
+    return folder
+
+
+def plan(cmd: CommandLine, registry: Registry) -> Plan:
+    """Check the command line and fix the output folder (``--resume``: an earlier one).
+    Raises :class:`ConfigError` (one line) for anything bad; writes nothing."""
+    parsed = parse_overrides(cmd.overrides)
+    for o in parsed:
+        value = o.value()
+        if ((o.key_or_group in GROUPS or o.key_or_group.startswith("hydra/"))
+                and isinstance(value, str) and "${" in value):
+            raise ConfigError(o.key_or_group, value, "a config name, not an interpolation")
+    for o in parsed:
+        group = o.key_or_group
+        if "/" in group and not group.startswith("hydra/"):
+            raise ConfigError(group, _raw_value(o), "config groups are problem, optimizer and "
+                              "Hydra's hydra/<group> (launcher, sweeper, ...)")
+        if group in GROUPS and o.is_delete():
+            raise ConfigError(f"~{group}", "", f"a {group} for every job: choose another one "
+                              f"with {group}=<name>")
+    custom_sweeper = any(o.key_or_group == "hydra/sweeper" and o.value() != "basic"
+                         for o in parsed)
+    points = expand_points(parsed, cmd.multirun, registry, custom_sweeper)
+    try:
+        jobs, full = check_points(points, registry)
+    except VpidBenchError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - anything else Hydra raises: one line too
+        raise _hydra_error(exc) from None
+    key = "hydra.sweep.dir" if cmd.multirun else "hydra.run.dir"
+    folder = _resume_folder(cmd, full, key) if cmd.resume is not None else None
+    if folder is not None:
+        import sys
+
+        print(f"resume: continuing {folder}", file=sys.stderr)
+    else:
+        folder = output_dir(full, cmd.multirun)
+    hydra_args = [a for a in cmd.hydra_args if not a.startswith(key + "=")]
+    hydra_args.append(f"{key}={_quote(str(folder))}")
+    return Plan(hydra_args, folder, cmd.multirun, jobs, points)
+
+
+def output_root(path_template: str) -> Path:
+    """The part of an output-dir template before its first interpolation (``${now:...}``)."""
+    head = path_template.split("${", 1)[0]
+    if "${" in path_template:
+        head = head if head.endswith(("/", os.sep)) else os.path.dirname(head)
+    return Path(head or ".")

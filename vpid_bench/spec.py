@@ -1,0 +1,185 @@
+"""The job spec: every top-level setting of a job, typed, and the one function that checks it.
+
+A *job* is ``runs`` independent runs of one optimizer on one problem. Everything a job needs
+comes from one composed config, and :func:`parse_job` is the only place that turns that config
+into typed objects: the job calls it, and the command's pre-flight calls it for every point of
+a sweep before the first job starts, so a bad value anywhere stops the whole command before any
+work, with one line naming the key, the value and what is allowed.
+
+The protocol
+------------
+A problem's config carries the benchmark protocol of that problem, stated once, here:
+
+* ``problem.ps``: the population size, i.e. how many candidates an optimizer proposes per
+  generation (an optimizer that has no population uses it as its batch size);
+* ``problem.iterations``: the number of generations after the initial population.
+
+The default budget of a run is ``ps * (iterations + 1)`` evaluations (``budget`` overrides
+it). Optimizers receive ``ps`` and ``iterations`` in their ``Params`` as a copy of the
+protocol; they cannot be set on the optimizer (``optimizer.ps=7`` is refused: it would
+silently decouple the budget from the population).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from typing import Any
+
+from .api import ConfigError, Optimizer, OptimizerParams, Problem, ProblemConfig
+from .params import build_dataclass, to_plain
+from .plugins import Registry
+
+#: Keys of the protocol, stored in the problem's config only.
+PROTOCOL_KEYS = ("ps", "iterations")
+
+#: Caps that keep a typo from asking for hours or gigabytes (see docs/sweeps.md).
+MAX_RUNS = 10_000
+MAX_PS = 10_000
+MAX_ITERATIONS = 1_000_000
+MAX_BUDGET = 10**9
+
+
+@dataclasses.dataclass(frozen=True)
+class JobSpec:
+    """The top-level keys of a job (``vpid-bench seed=3 runs=10 ...``).
+
+    ``seed``: the optimizer's randomness; run ``i`` uses ``SeedSequence(seed, spawn_key=(i,))``.
+    ``runs``: independent runs per job. ``budget``: evaluations per run (null: the protocol's
+    ``ps * (iterations + 1)``). ``resume``: skip runs whose complete record already exists.
+    ``progress``: a progress bar on stderr. ``report``: write a report at the end of a job or
+    a sweep. ``threads``: threads a problem may use to evaluate a batch (null: every core);
+    results never depend on it. ``run_timeout_s``: wall-time limit of one run in seconds (null:
+    none); a run past it is recorded as failed.
+    """
+
+    seed: int = 0
+    runs: int = 30
+    budget: int | None = None
+    resume: bool = True
+    progress: bool = True
+    report: bool = True
+    threads: int | None = None
+    run_timeout_s: float | None = None
+
+    def __post_init__(self) -> None:
+        _check_int("seed", self.seed, 0, 2**63 - 1)
+        _check_int("runs", self.runs, 1, MAX_RUNS)
+        if self.budget is not None:
+            _check_int("budget", self.budget, 1, MAX_BUDGET, nullable=True)
+        if self.threads is not None:
+            _check_int("threads", self.threads, 1, 1024, nullable=True)
+        if self.run_timeout_s is not None and not 0 < self.run_timeout_s < float("inf"):
+            raise ConfigError("run_timeout_s", self.run_timeout_s,
+                              "a positive number of seconds or null")
+
+
+#: The top-level keys, in the order they are documented.
+TOP_LEVEL_KEYS = tuple(f.name for f in dataclasses.fields(JobSpec))
+#: Keys that never change a result (they may differ between a sweep and its resume).
+OPERATIONAL_KEYS = ("resume", "progress", "report", "threads")
+
+
+def _check_int(key: str, value: int, low: int, high: int, nullable: bool = False) -> None:
+    if not low <= value <= high:
+        allowed = (f"an integer >= {low}" if high >= 2**62 else
+                   f"an integer from {low} to {high}") + (" or null" if nullable else "")
+        raise ConfigError(key, value, allowed)
+
+
+def check_protocol(config: ProblemConfig) -> None:
+    """``problem.ps`` and ``problem.iterations``: whole numbers within the caps."""
+    _check_int("problem.ps", config.ps, 1, MAX_PS)
+    _check_int("problem.iterations", config.iterations, 1, MAX_ITERATIONS)
+
+
+def offers_residuals(problem_cls: type[Problem]) -> bool:
+    """Whether a problem class implements :meth:`Problem.residuals`."""
+    return getattr(problem_cls, "residuals", None) is not Problem.residuals
+
+
+@dataclasses.dataclass(frozen=True)
+class Job:
+    """A parsed, checked job: its spec, the problem and optimizer classes with their typed
+    settings, and the budget of each run."""
+
+    spec: JobSpec
+    problem_name: str
+    problem_cls: type[Problem]
+    problem_config: ProblemConfig
+    optimizer_name: str
+    optimizer_cls: type[Optimizer]
+    params: OptimizerParams
+    budget: int
+
+    def problem_settings(self) -> dict[str, Any]:
+        """The problem's settings as plain data (the protocol included)."""
+        return to_plain(self.problem_config)
+
+    def optimizer_settings(self) -> dict[str, Any]:
+        """The optimizer's own settings as plain data (the protocol copy left out: it is the
+        problem's, recorded there)."""
+        return {k: v for k, v in to_plain(self.params).items() if k not in PROTOCOL_KEYS}
+
+
+def plain_config(cfg: Any) -> dict[str, Any]:
+    """A composed config (OmegaConf node or mapping) as plain data, interpolations resolved,
+    the ``hydra`` node dropped. An interpolation that cannot be resolved is a ConfigError."""
+    try:
+        from omegaconf import DictConfig, OmegaConf
+        from omegaconf.errors import OmegaConfBaseException
+    except ImportError:  # pragma: no cover - hydra is a base dependency
+        return {k: v for k, v in to_plain(cfg).items() if k != "hydra"}
+    if isinstance(cfg, DictConfig):
+        try:
+            plain = OmegaConf.to_container(cfg, resolve=True)
+        except OmegaConfBaseException as exc:
+            key = getattr(exc, "full_key", None) or "config"
+            raise ConfigError(str(key), "${...}", f"an interpolation that resolves "
+                              f"({' '.join(str(exc).split()[:12])})") from None
+    else:
+        plain = to_plain(cfg)
+    return {str(k): v for k, v in plain.items() if k != "hydra"}
+
+
+def _group(config: Mapping[str, Any], group: str) -> tuple[str, dict[str, Any]]:
+    node = config.get(group)
+    if not isinstance(node, Mapping) or not isinstance(node.get("name"), str):
+        raise ConfigError(group, node, f"a registered {group}, chosen with {group}=<name>")
+    return node["name"], dict(node)
+
+
+def parse_job(cfg: Any, registry: Registry) -> Job:
+    """Check a composed config and build the job it describes (no simulation, no file I/O
+    beyond what a plugin's config checks do). Raises :class:`ConfigError` naming the first
+    bad key."""
+    config = plain_config(cfg)
+    unknown = sorted(set(config) - {*TOP_LEVEL_KEYS, "problem", "optimizer"})
+    if unknown:
+        raise ConfigError(unknown[0], config[unknown[0]], "known top-level keys are problem, "
+                          "optimizer, " + ", ".join(TOP_LEVEL_KEYS))
+    spec = build_dataclass(JobSpec, {k: config[k] for k in TOP_LEVEL_KEYS if k in config})
+    problem_name, problem_cfg = _group(config, "problem")
+    optimizer_name, optimizer_cfg = _group(config, "optimizer")
+    problem_cls = registry.problem(problem_name)
+    optimizer_cls = registry.optimizer(optimizer_name)
+    problem_config = build_dataclass(problem_cls.Config, problem_cfg, prefix="problem")
+    check_protocol(problem_config)
+    for key in PROTOCOL_KEYS:
+        if key in optimizer_cfg:
+            raise ConfigError(f"optimizer.{key}", optimizer_cfg[key],
+                              f"not settable on the optimizer: the protocol is the problem's, "
+                              f"set problem.{key}")
+    protocol = {k: getattr(problem_config, k) for k in PROTOCOL_KEYS}
+    params = build_dataclass(optimizer_cls.Params, {**optimizer_cfg, **protocol},
+                             prefix="optimizer")
+    if getattr(optimizer_cls, "wants_residuals", False) and not offers_residuals(problem_cls):
+        raise ConfigError("optimizer", optimizer_name,
+                          f"an optimizer that does not need residual vectors: problem "
+                          f"{problem_name!r} does not provide them")
+    budget = spec.budget or problem_config.ps * (problem_config.iterations + 1)
+    if budget > MAX_BUDGET:
+        raise ConfigError("problem.iterations", problem_config.iterations,
+                          f"a protocol of at most {MAX_BUDGET} evaluations per run")
+    return Job(spec, problem_name, problem_cls, problem_config, optimizer_name, optimizer_cls,
+               params, budget)
