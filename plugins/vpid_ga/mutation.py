@@ -2,14 +2,15 @@
 
 ``adaptfeasible`` (the default): the structure of MATLAB's ``mutationadaptfeasible`` for
 bound constraints, as public derivatives of MathWorks' file show it (see docs/optimizers.md).
-For each parent ``x``:
+For each parent ``x`` (all parents at once, as arrays):
 
 1. :func:`box_directions`: a random mesh-adaptive basis of ``dim`` directions (a random
-   lower-triangular matrix with ``±1/sqrt(step)`` on the diagonal and integers in
-   ``0 ... 1/sqrt(step)`` below it, rows and columns permuted together), plus the tangent
+   lower-triangular matrix with ``±1/sqrt(step)`` on the diagonal and integers from 0 to
+   about ``1/sqrt(step)`` below it, rows and columns permuted together), plus the tangent
    cone of the active bounds (the unit vector of every coordinate within ``tol`` of a bound);
-2. :func:`trial_directions`: every direction twice, in a random order, with MATLAB's signs
-   (see there: the sign belongs to the trial's position, not to the direction);
+2. :func:`trial_order` and :func:`trial_directions`: every direction twice, in a random
+   order, with MATLAB's signs (see there: the sign belongs to the trial's position, not to
+   the direction);
 3. :func:`first_feasible`: the child is ``x + step * d`` for the first trial ``d`` that stays
    inside the box, else the parent itself. No scaling by the box width, no halving.
 
@@ -32,60 +33,90 @@ def _matlab_round(values: np.ndarray) -> np.ndarray:
 
 
 def box_directions(
-    x: np.ndarray,
+    X: np.ndarray,
     step: float,
     lower: np.ndarray,
     upper: np.ndarray,
     rng: np.random.Generator,
     tol: float = ACTIVE_TOL,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """MATLAB's ``boxdirections`` with a mesh-adaptive (MADS) basis.
+    """MATLAB's ``boxdirections`` with a mesh-adaptive (MADS) basis, for each row of ``X``.
 
-    Returns ``(basis, tangent)``, directions as columns: ``basis`` is ``dim x dim``,
+    Returns ``(basis, active)``. ``basis[i]`` is ``dim x dim`` with the directions as columns:
     ``P L P^T`` for a random permutation ``P`` and a lower-triangular ``L`` whose diagonal is
-    ``±p`` (random signs) and whose entries below the diagonal are
-    ``round((p + 1) U - 0.5)``, ``U ~ U(0, 1)``, i.e. integers in ``0 ... round(p)``, with
-    ``p = 1/sqrt(step)``; ``tangent`` holds the unit vectors of the coordinates whose lower or
-    upper bound is active (``|x - bound| <= tol``, in the parameters' units)."""
-    dim = x.size
-    active = (np.abs(x - lower) <= tol) | (np.abs(x - upper) <= tol)
-    tangent = np.eye(dim)[:, active]
+    ``±p`` (random signs) and whose entries below the diagonal are ``round((p + 1) U - 0.5)``,
+    ``U ~ U(0, 1)``, i.e. integers from 0 to about ``p``, with ``p = 1/sqrt(step)``.
+    ``active[i, j]`` says that coordinate ``j`` of ``X[i]`` is within ``tol`` (in the
+    parameters' units) of its lower or upper bound; the tangent cone of the active bounds is
+    spanned by the unit vectors of those coordinates."""
+    n, dim = X.shape
+    active = (np.abs(X - lower) <= tol) | (np.abs(X - upper) <= tol)
     p = 1.0 / np.sqrt(step)
-    below = np.tril(_matlab_round((p + 1.0) * rng.random((dim, dim)) - 0.5), -1)
-    diagonal = p * np.sign(rng.random(dim) - 0.5)
-    if np.any(diagonal == 0.0):  # a draw of exactly 0.5: MATLAB draws one sign for all of them
+    below = np.tril(_matlab_round((p + 1.0) * rng.random((n, dim, dim)) - 0.5), -1)
+    diagonal = p * np.sign(rng.random((n, dim)) - 0.5)
+    if np.any(diagonal == 0.0):  # a draw of exactly 0.5: MATLAB draws one sign for them
         diagonal[diagonal == 0.0] = p * np.sign(0.5 - rng.random())
-    order = rng.permutation(dim)
-    basis = (below + np.diag(diagonal))[np.ix_(order, order)]
-    return basis, tangent
+    L = below + diagonal[:, :, None] * np.eye(dim)
+    order = np.argsort(rng.random((n, dim)), axis=1)  # one random permutation per row
+    rows = np.arange(n)[:, None, None]
+    return L[rows, order[:, :, None], order[:, None, :]], active
 
 
-def trial_directions(basis: np.ndarray, tangent: np.ndarray, order: np.ndarray) -> np.ndarray:
-    """The signed search directions in the order they are tried, one per row.
+def trial_directions(
+    basis: np.ndarray, active: np.ndarray, order: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The signed search directions of each parent in the order they are tried.
 
-    As in MATLAB: the list of slots is every basis direction twice, then every tangent
-    direction twice; the signs are ``+`` for the first ``n_basis`` trials, ``-`` for the next
-    ``n_basis``, ``+`` for the next ``n_tangent``, ``-`` for the last ``n_tangent``; trial ``k``
-    uses slot ``order[k]`` (``order`` a permutation of ``2 (n_basis + n_tangent)``) with the
-    sign of position ``k``. So a direction is not always tried with both signs: both of its
-    slots may fall on positions of the same sign."""
-    n_basis, n_tangent = basis.shape[1], tangent.shape[1]
-    directions = np.hstack([basis, tangent])
-    slots = np.concatenate([np.arange(n_basis), np.arange(n_basis),
-                            n_basis + np.arange(n_tangent), n_basis + np.arange(n_tangent)])
-    signs = np.concatenate([np.ones(n_basis), -np.ones(n_basis),
-                            np.ones(n_tangent), -np.ones(n_tangent)])
-    return signs[:, None] * directions[:, slots[order]].T
+    As in MATLAB, per parent with ``nt`` active bounds the slots are every basis column twice,
+    then every tangent direction twice: ``b_0 .. b_{d-1}, b_0 .. b_{d-1}, t_1 .. t_nt,
+    t_1 .. t_nt`` (``t`` the unit vectors of the active coordinates, in coordinate order),
+    padded to ``4 d`` slots. ``order[i]`` lists slot numbers in trial order, the ``2 (d + nt)``
+    real slots first (a random permutation of them). The sign belongs to the trial's
+    POSITION ``k``, not to its slot: ``+`` for ``k < d``, ``-`` for ``k < 2 d``, ``+`` for
+    ``k < 2 d + nt``, ``-`` after that. So a direction is not always tried with both signs:
+    both of its slots may fall on positions of the same sign.
+
+    Returns ``(trials, valid)``: ``trials[i, k]`` is the ``k``-th direction (a ``dim``
+    vector), ``valid[i, k]`` false for the padding."""
+    n, dim, _ = basis.shape
+    nt = active.sum(axis=1)[:, None]
+    table = np.concatenate([basis, np.broadcast_to(np.eye(dim), (n, dim, dim))], axis=2)
+    r = np.arange(2 * dim)
+    active_first = np.argsort(~active, axis=1, kind="stable")  # active coordinates first
+    tangent_cols = dim + np.take_along_axis(active_first, r[None, :] % np.maximum(nt, 1), axis=1)
+    slot_cols = np.concatenate([np.broadcast_to(np.concatenate([r[:dim], r[:dim]]),
+                                                (n, 2 * dim)), tangent_cols], axis=1)
+    cols = np.take_along_axis(slot_cols, order, axis=1)  # table column of each trial
+    trials = np.take_along_axis(table, cols[:, None, :], axis=2).transpose(0, 2, 1)
+    k = np.arange(4 * dim)[None, :]
+    signs = np.where((k < dim) | ((k >= 2 * dim) & (k < 2 * dim + nt)), 1.0, -1.0)
+    return signs[:, :, None] * trials, k < 2 * (dim + nt)
+
+
+def trial_order(active: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """A random trial order per parent for :func:`trial_directions`: a uniform random
+    permutation of the ``2 (d + nt)`` real slots, followed by the padding."""
+    n, dim = active.shape
+    nt = active.sum(axis=1)[:, None]
+    real = np.arange(4 * dim)[None, :] < 2 * (dim + nt)
+    return np.argsort(np.where(real, rng.random((n, 4 * dim)), np.inf), axis=1, kind="stable")
 
 
 def first_feasible(
-    x: np.ndarray, step: float, trials: np.ndarray, lower: np.ndarray, upper: np.ndarray
+    X: np.ndarray,
+    step: float,
+    trials: np.ndarray,
+    valid: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
 ) -> np.ndarray:
-    """``x + step * trials[k]`` for the first ``k`` that lies inside ``[lower, upper]``
-    (bounds included, no tolerance), else a copy of ``x``."""
-    mutants = x + step * trials
-    inside = np.flatnonzero(np.all((mutants >= lower) & (mutants <= upper), axis=1))
-    return mutants[inside[0]].copy() if inside.size else x.copy()
+    """Per row: ``X[i] + step * trials[i, k]`` for the first valid ``k`` that lies inside
+    ``[lower, upper]`` (bounds included, no tolerance), else a copy of ``X[i]``."""
+    mutants = X[:, None, :] + step * trials
+    inside = valid & np.all((mutants >= lower) & (mutants <= upper), axis=2)
+    first = np.argmax(inside, axis=1)
+    chosen = mutants[np.arange(len(X)), first]
+    return np.where(inside.any(axis=1)[:, None], chosen, X)
 
 
 def mutationadaptfeasible(
@@ -98,17 +129,12 @@ def mutationadaptfeasible(
     tol: float = ACTIVE_TOL,
 ) -> np.ndarray:
     """MATLAB's adaptive-feasible mutation for a box: one child per entry of ``parents``
-    (row indices into ``population``). ``step`` is in the parameters' own units; each child
-    is inside the box. Per parent, ``rng`` draws the basis (``dim x dim`` and ``dim``
-    uniforms, a permutation of ``dim``) and then the trial order (a permutation)."""
-    children = np.empty((len(parents), population.shape[1]))
-    for i, parent in enumerate(parents):
-        x = population[parent]
-        basis, tangent = box_directions(x, step, lower, upper, rng, tol)
-        order = rng.permutation(2 * (basis.shape[1] + tangent.shape[1]))
-        children[i] = first_feasible(x, step, trial_directions(basis, tangent, order),
-                                     lower, upper)
-    return children
+    (row indices into ``population``), all parents at once. ``step`` is in the parameters'
+    own units; every child is inside the box."""
+    X = population[parents]
+    basis, active = box_directions(X, step, lower, upper, rng, tol)
+    trials, valid = trial_directions(basis, active, trial_order(active, rng))
+    return first_feasible(X, step, trials, valid, lower, upper)
 
 
 def mutation_scaled_halving(
