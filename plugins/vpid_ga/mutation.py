@@ -80,14 +80,14 @@ def trial_directions(
     vector), ``valid[i, k]`` false for the padding."""
     n, dim, _ = basis.shape
     nt = active.sum(axis=1)[:, None]
+    # direction table per parent: columns 0 .. d-1 the basis, d .. 2d-1 the unit vectors
     table = np.concatenate([basis, np.broadcast_to(np.eye(dim), (n, dim, dim))], axis=2)
     r = np.arange(2 * dim)
     active_first = np.argsort(~active, axis=1, kind="stable")  # active coordinates first
-    tangent_cols = dim + np.take_along_axis(active_first, r[None, :] % np.maximum(nt, 1), axis=1)
-    slot_cols = np.concatenate([np.broadcast_to(np.concatenate([r[:dim], r[:dim]]),
-                                                (n, 2 * dim)), tangent_cols], axis=1)
+    tangent_cols = dim + np.take_along_axis(active_first, r % np.maximum(nt, 1), axis=1)
+    slot_cols = np.concatenate([np.broadcast_to(r % dim, (n, 2 * dim)), tangent_cols], axis=1)
     cols = np.take_along_axis(slot_cols, order, axis=1)  # table column of each trial
-    trials = np.take_along_axis(table, cols[:, None, :], axis=2).transpose(0, 2, 1)
+    trials = table[np.arange(n)[:, None], :, cols]  # (n, 4d, d)
     k = np.arange(4 * dim)[None, :]
     signs = np.where((k < dim) | ((k >= 2 * dim) & (k < 2 * dim + nt)), 1.0, -1.0)
     return signs[:, :, None] * trials, k < 2 * (dim + nt)
