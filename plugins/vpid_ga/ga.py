@@ -6,31 +6,33 @@ One generation (``stepGA``): from the current population and scores,
    ``n_mutate = ps - n_elite - n_xover``, ``n_parents = 2 n_xover + n_mutate``;
 2. expectations by rank scaling, ``n_parents`` parents by stochastic uniform selection, then
    shuffled (a random permutation, as ``stepGA`` does against locality effects);
-3. the ``n_elite`` best members pass unchanged and are NOT evaluated again (their scores are
-   kept); ``n_xover`` scattered-crossover children come from the first ``2 n_xover``
-   parents, ``n_mutate`` adaptive-feasible mutation children from the rest.
+3. the next population is ``[elites; crossover children; mutation children]``: the
+   ``n_elite`` best members copied unchanged, ``n_xover`` scattered-crossover children from
+   the first ``2 n_xover`` parents, ``n_mutate`` mutation children from the rest
+   (``optimizer.mutation``: MATLAB's adaptive-feasible operator by default).
 
-So the initial population costs ``ps`` evaluations and every generation ``ps - n_elite``:
-``ask`` returns only the children, and the run records' trace shows steps of
-``ps - n_elite``. The initial population is uniform in the bounds (``gacreationuniform``).
+As in ``stepGA``, the WHOLE next population is scored, elites included: ``ask`` returns all
+``ps`` rows every generation, so a run spends exactly ``ps * (iterations + 1)`` evaluations,
+like the DE variants. The initial population is uniform in the bounds
+(``gacreationuniform``).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from typing import ClassVar
+from typing import ClassVar, Literal
 
 import numpy as np
 
 from vpid_bench.api import Bounds, ConfigError, GenerationalOptimizer, OptimizerParams
 
+from .mutation import MUTATIONS
 from .operators import (
     AdaptiveStep,
     crossoverscattered,
     fitscalingrank,
     matlab_round,
-    mutationadaptfeasible,
     selectionstochunif,
 )
 
@@ -39,10 +41,15 @@ from .operators import (
 class GAParams(OptimizerParams):
     """``elite_count``: members copied unchanged into the next generation; ``-1`` (default)
     means R2014b's default ``floor(0.05 * ps)`` (1 at ps = 20 and at ps = 30).
-    ``crossover_fraction``: MATLAB's CrossoverFraction, default 0.8."""
+    ``crossover_fraction``: MATLAB's CrossoverFraction, default 0.8.
+    ``mutation``: ``adaptfeasible`` (MATLAB's ``mutationadaptfeasible`` structure: steps in
+    the parameters' units along a random mesh-adaptive basis and the tangent cone of active
+    bounds) or ``scaled_halving`` (the project's earlier operator: a random direction scaled
+    by the box width, halved until feasible)."""
 
     elite_count: int = -1
     crossover_fraction: float = 0.8
+    mutation: Literal["adaptfeasible", "scaled_halving"] = "adaptfeasible"
 
     def __post_init__(self) -> None:
         if self.ps < 2:
@@ -66,7 +73,7 @@ def default_elite_count(ps: int) -> int:
 class GeneticAlgorithm(GenerationalOptimizer):
     """MATLAB-R2014b-like GA: rank scaling, stochastic uniform selection, elitism, scattered
     crossover, adaptive-feasible mutation; ``iterations`` generations after the initial
-    population."""
+    population, each of ``ps`` evaluations."""
 
     Params: ClassVar[type[OptimizerParams]] = GAParams
 
@@ -81,33 +88,28 @@ class GeneticAlgorithm(GenerationalOptimizer):
         self.scores: np.ndarray | None = None
         self.best_history: list[float] = []  # best score after each completed generation
         self._step = AdaptiveStep()
-        self._elites: np.ndarray | None = None
-        self._elite_scores: np.ndarray | None = None
+        self._mutate = MUTATIONS[params.mutation]
 
-    def _children(self) -> np.ndarray:
-        """Elites are set aside; returns the ``ps - n_elite`` children to evaluate."""
+    # -- GenerationalOptimizer: the handshake lives in the core ---------------------------------
+    def next_generation(self) -> np.ndarray:
+        """``[elites; crossover children; mutation children]``, ``ps`` rows, all to be scored."""
         X, s = self.population, self.scores
         expectation = fitscalingrank(s, self.n_parents)
         parents = selectionstochunif(expectation, self.n_parents, self.rng)
         parents = parents[self.rng.permutation(self.n_parents)]
-        elite = np.argsort(s, kind="stable")[: self.n_elite]
-        self._elites, self._elite_scores = X[elite].copy(), s[elite].copy()
+        elites = X[np.argsort(s, kind="stable")[: self.n_elite]]
         xover = crossoverscattered(X, parents[: 2 * self.n_xover], self.rng)
         step = self._step.update(self.generation + 1, self.best_history)
-        mutants = mutationadaptfeasible(
+        mutants = self._mutate(
             X, parents[2 * self.n_xover :], step, self.bounds.lower, self.bounds.upper, self.rng
         )
-        return np.vstack([xover, mutants])
-
-    # -- GenerationalOptimizer: the handshake lives in the core ---------------------------------
-    def next_generation(self) -> np.ndarray:
-        return self._children()
+        return np.vstack([elites, xover, mutants])
 
     def start(self, X: np.ndarray, f: np.ndarray) -> None:
         self.population, self.scores = X, f
 
     def advance(self, X: np.ndarray, f: np.ndarray) -> None:
-        """Elites carried over unevaluated, then the children just evaluated."""
-        self.population = np.vstack([self._elites, X])
-        self.scores = np.concatenate([self._elite_scores, f])
+        """The evaluated generation replaces the population; the elites' scores are the new
+        ones (``stepGA`` scores them again), which matters only for a noisy objective."""
+        self.population, self.scores = X, f
         self.best_history.append(float(np.min(self.scores)))

@@ -8,10 +8,10 @@ function it emulates, so each is tested alone:
 * :func:`selectionstochunif`: stochastic uniform (universal) sampling on a wheel laid out by
   the expectations, one random offset, equal steps;
 * :func:`crossoverscattered`: each gene from parent 1 or parent 2 with probability 1/2;
-* :class:`AdaptiveStep` and :func:`mutationadaptfeasible`: a step length that grows after an
-  improving generation and shrinks after a stalled one, and a random direction along which
-  the step is shortened until the child is inside the bounds (see the docs for how close
-  this is to MathWorks' closed source).
+* :class:`AdaptiveStep`: the step-size rule of ``mutationadaptfeasible``, a step that grows
+  after an improving generation and shrinks after a stalled one.
+
+The two mutation operators that use the step live in :mod:`vpid_ga.mutation`.
 """
 
 from __future__ import annotations
@@ -65,7 +65,10 @@ class AdaptiveStep:
     from generation 3 on, ``step = min(1, 4 step)`` when the best score of the previous
     generation improved on the one before, else ``step = max(sqrt(eps), step / 4)``.
 
-    ``step`` is a fraction of the box width."""
+    MATLAB keeps the step in a persistent variable and compares ``state.Best(end)`` with
+    ``state.Best(end-1)``, the best scores after the last two completed generations. The
+    step is in the parameters' own units for ``mutation=adaptfeasible`` and a fraction of the
+    box width for ``mutation=scaled_halving``."""
 
     step: float = 1.0
 
@@ -81,38 +84,3 @@ class AdaptiveStep:
         return self.step
 
 
-def mutationadaptfeasible(
-    population: np.ndarray,
-    parents: np.ndarray,
-    step: float,
-    lower: np.ndarray,
-    upper: np.ndarray,
-    rng: np.random.Generator,
-    max_halvings: int = 60,
-) -> np.ndarray:
-    """Adaptive-feasible mutation for a box: child = ``x + s * step * (upper - lower) * d``.
-
-    ``d`` is a random direction (uniform on ``[-1, 1]`` per coordinate) in the tangent cone of
-    the active bounds (a component that would leave a face the parent sits on is reversed),
-    and ``s`` starts at 1 and is halved until the child is inside the box. After
-    ``max_halvings`` halvings the child is the parent itself (practically never). The result
-    is clipped exactly so rounding never leaves the box."""
-    X = population[parents]
-    n, dim = X.shape
-    width = upper - lower
-    d = rng.uniform(-1.0, 1.0, size=(n, dim))
-    # Tangent cone of the active bounds: at (within sqrt(eps) of) a face, a component pointing
-    # out of the box is turned inwards, so shrinking the step always reaches a feasible child.
-    tol = np.sqrt(np.finfo(float).eps) * width
-    d = np.where((X <= lower + tol) & (d < 0) | (X >= upper - tol) & (d > 0), -d, d)
-    move = step * width * d
-    scale = np.ones((n, 1))
-    for _ in range(max_halvings):
-        child = X + scale * move
-        bad = ~np.all((child >= lower) & (child <= upper), axis=1)
-        if not bad.any():
-            break
-        scale[bad] *= 0.5
-    else:
-        child = np.where(bad[:, None], X, child)
-    return np.minimum(np.maximum(child, lower), upper)

@@ -1,0 +1,183 @@
+"""The GA's two mutation operators for a bounded problem, chosen by ``optimizer.mutation``.
+
+``adaptfeasible`` (the default): the structure of MATLAB's ``mutationadaptfeasible`` for
+bound constraints, as public derivatives of MathWorks' file show it (see docs/optimizers.md).
+For each parent ``x`` (all parents at once, as arrays):
+
+1. :func:`box_directions`: a random mesh-adaptive basis of ``dim`` directions (a random
+   lower-triangular matrix with ``±1/sqrt(step)`` on the diagonal and integers from 0 to
+   about ``1/sqrt(step)`` below it, rows and columns permuted together), plus the tangent
+   cone of the active bounds (the unit vector of every coordinate within ``tol`` of a bound);
+2. :func:`trial_order` and :func:`trial_directions`: every direction twice, in a random
+   order, with MATLAB's signs (see there: the sign belongs to the trial's position, not to
+   the direction);
+3. :func:`first_feasible`: the child is ``x + step * d`` for the first trial ``d`` that stays
+   inside the box, else the parent itself. No scaling by the box width, no halving.
+
+``scaled_halving``: the project's earlier operator, :func:`mutation_scaled_halving`: a dense
+random direction scaled by ``step`` times the box width, halved until the child is inside.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: MATLAB's binding tolerance for bounds in ``mutationadaptfeasible``:
+#: ``max(sqrt(eps), TolCon)`` with ``gaoptimset``'s default ``TolCon = 1e-6``.
+ACTIVE_TOL = max(float(np.sqrt(np.finfo(float).eps)), 1e-6)
+
+
+def _matlab_round(values: np.ndarray) -> np.ndarray:
+    """MATLAB's ``round`` element-wise (half away from zero)."""
+    return np.sign(values) * np.floor(np.abs(values) + 0.5)
+
+
+def box_directions(
+    X: np.ndarray,
+    step: float,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    rng: np.random.Generator,
+    tol: float = ACTIVE_TOL,
+) -> tuple[np.ndarray, np.ndarray]:
+    """MATLAB's ``boxdirections`` with a mesh-adaptive (MADS) basis, for each row of ``X``.
+
+    Returns ``(basis, active)``. ``basis[i]`` is ``dim x dim`` with the directions as columns:
+    ``P L P^T`` for a random permutation ``P`` and a lower-triangular ``L`` whose diagonal is
+    ``±p`` (random signs) and whose entries below the diagonal are ``round((p + 1) U - 0.5)``,
+    ``U ~ U(0, 1)``, i.e. integers from 0 to about ``p``, with ``p = 1/sqrt(step)``.
+    ``active[i, j]`` says that coordinate ``j`` of ``X[i]`` is within ``tol`` (in the
+    parameters' units) of its lower or upper bound; the tangent cone of the active bounds is
+    spanned by the unit vectors of those coordinates."""
+    n, dim = X.shape
+    active = (np.abs(X - lower) <= tol) | (np.abs(X - upper) <= tol)
+    p = 1.0 / np.sqrt(step)
+    below = np.tril(_matlab_round((p + 1.0) * rng.random((n, dim, dim)) - 0.5), -1)
+    diagonal = p * np.sign(rng.random((n, dim)) - 0.5)
+    if np.any(diagonal == 0.0):  # a draw of exactly 0.5: MATLAB draws one sign for them
+        diagonal[diagonal == 0.0] = p * np.sign(0.5 - rng.random())
+    L = below + diagonal[:, :, None] * np.eye(dim)
+    order = np.argsort(rng.random((n, dim)), axis=1)  # one random permutation per row
+    rows = np.arange(n)[:, None, None]
+    return L[rows, order[:, :, None], order[:, None, :]], active
+
+
+def trial_directions(
+    basis: np.ndarray, active: np.ndarray, order: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The signed search directions of each parent in the order they are tried.
+
+    As in MATLAB, per parent with ``nt`` active bounds the slots are every basis column twice,
+    then every tangent direction twice: ``b_0 .. b_{d-1}, b_0 .. b_{d-1}, t_1 .. t_nt,
+    t_1 .. t_nt`` (``t`` the unit vectors of the active coordinates, in coordinate order),
+    padded to ``4 d`` slots. ``order[i]`` lists slot numbers in trial order, the ``2 (d + nt)``
+    real slots first (a random permutation of them). The sign belongs to the trial's
+    POSITION ``k``, not to its slot: ``+`` for ``k < d``, ``-`` for ``k < 2 d``, ``+`` for
+    ``k < 2 d + nt``, ``-`` after that. So a direction is not always tried with both signs:
+    both of its slots may fall on positions of the same sign.
+
+    Returns ``(trials, valid)``: ``trials[i, k]`` is the ``k``-th direction (a ``dim``
+    vector), ``valid[i, k]`` false for the padding."""
+    n, dim, _ = basis.shape
+    nt = active.sum(axis=1)[:, None]
+    # direction table per parent: columns 0 .. d-1 the basis, d .. 2d-1 the unit vectors
+    table = np.concatenate([basis, np.broadcast_to(np.eye(dim), (n, dim, dim))], axis=2)
+    r = np.arange(2 * dim)
+    active_first = np.argsort(~active, axis=1, kind="stable")  # active coordinates first
+    tangent_cols = dim + np.take_along_axis(active_first, r % np.maximum(nt, 1), axis=1)
+    slot_cols = np.concatenate([np.broadcast_to(r % dim, (n, 2 * dim)), tangent_cols], axis=1)
+    cols = np.take_along_axis(slot_cols, order, axis=1)  # table column of each trial
+    trials = table[np.arange(n)[:, None], :, cols]  # (n, 4d, d)
+    k = np.arange(4 * dim)[None, :]
+    signs = np.where((k < dim) | ((k >= 2 * dim) & (k < 2 * dim + nt)), 1.0, -1.0)
+    return signs[:, :, None] * trials, k < 2 * (dim + nt)
+
+
+def trial_order(active: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """A random trial order per parent for :func:`trial_directions`: a uniform random
+    permutation of the ``2 (d + nt)`` real slots, followed by the padding."""
+    n, dim = active.shape
+    nt = active.sum(axis=1)[:, None]
+    real = np.arange(4 * dim)[None, :] < 2 * (dim + nt)
+    return np.argsort(np.where(real, rng.random((n, 4 * dim)), np.inf), axis=1, kind="stable")
+
+
+def first_feasible(
+    X: np.ndarray,
+    step: float,
+    trials: np.ndarray,
+    valid: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+) -> np.ndarray:
+    """Per row: ``X[i] + step * trials[i, k]`` for the first valid ``k`` that lies inside
+    ``[lower, upper]`` (bounds included, no tolerance), else a copy of ``X[i]``."""
+    mutants = X[:, None, :] + step * trials
+    inside = valid & np.all((mutants >= lower) & (mutants <= upper), axis=2)
+    first = np.argmax(inside, axis=1)
+    chosen = mutants[np.arange(len(X)), first]
+    return np.where(inside.any(axis=1)[:, None], chosen, X)
+
+
+def mutationadaptfeasible(
+    population: np.ndarray,
+    parents: np.ndarray,
+    step: float,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    rng: np.random.Generator,
+    tol: float = ACTIVE_TOL,
+) -> np.ndarray:
+    """MATLAB's adaptive-feasible mutation for a box: one child per entry of ``parents``
+    (row indices into ``population``), all parents at once. ``step`` is in the parameters'
+    own units; every child is inside the box."""
+    X = population[parents]
+    basis, active = box_directions(X, step, lower, upper, rng, tol)
+    trials, valid = trial_directions(basis, active, trial_order(active, rng))
+    return first_feasible(X, step, trials, valid, lower, upper)
+
+
+def mutation_scaled_halving(
+    population: np.ndarray,
+    parents: np.ndarray,
+    step: float,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    rng: np.random.Generator,
+    max_halvings: int = 60,
+) -> np.ndarray:
+    """The project's earlier operator: child = ``x + s * step * (upper - lower) * d``.
+
+    ``d`` is a random direction (uniform on ``[-1, 1]`` per coordinate) in the tangent cone of
+    the active bounds (a component that would leave a face the parent sits on is reversed),
+    and ``s`` starts at 1 and is halved until the child is inside the box. After
+    ``max_halvings`` halvings the child is the parent itself (practically never). The result
+    is clipped exactly so rounding never leaves the box. ``step`` is a fraction of the box
+    width."""
+    X = population[parents]
+    n, dim = X.shape
+    width = upper - lower
+    d = rng.uniform(-1.0, 1.0, size=(n, dim))
+    # Tangent cone of the active bounds: at (within sqrt(eps) of) a face, a component pointing
+    # out of the box is turned inwards, so shrinking the step always reaches a feasible child.
+    tol = np.sqrt(np.finfo(float).eps) * width
+    d = np.where((X <= lower + tol) & (d < 0) | (X >= upper - tol) & (d > 0), -d, d)
+    move = step * width * d
+    scale = np.ones((n, 1))
+    for _ in range(max_halvings):
+        child = X + scale * move
+        bad = ~np.all((child >= lower) & (child <= upper), axis=1)
+        if not bad.any():
+            break
+        scale[bad] *= 0.5
+    else:
+        child = np.where(bad[:, None], X, child)
+    return np.minimum(np.maximum(child, lower), upper)
+
+
+#: ``optimizer.mutation`` -> operator; both take ``(population, parents, step, lower, upper,
+#: rng)`` and return one child per parent.
+MUTATIONS = {
+    "adaptfeasible": mutationadaptfeasible,
+    "scaled_halving": mutation_scaled_halving,
+}
