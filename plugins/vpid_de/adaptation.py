@@ -29,21 +29,28 @@ SPREAD = 0.1
 def sample_cr(rng: np.random.Generator, mu: np.ndarray | float, size: int) -> np.ndarray:
     """``size`` crossover rates ``CR_i ~ N(mu_i, 0.1)`` clipped to [0, 1]; ``CR_i = 0`` where
     ``mu_i`` is NaN (L-SHADE's terminal value). ``mu``: a scalar or ``(size,)``."""
-    mu = np.broadcast_to(np.asarray(mu, dtype=float), (size,))
-    cr = np.clip(rng.normal(np.nan_to_num(mu), SPREAD), 0.0, 1.0)
-    return np.where(np.isnan(mu), 0.0, cr)
+    mu = np.asarray(mu, dtype=float)
+    terminal = np.isnan(mu)
+    has_terminal = bool(terminal.any())
+    if has_terminal:
+        mu = np.where(terminal, 0.0, mu)
+    cr = mu + SPREAD * rng.standard_normal(size)
+    np.minimum(np.maximum(cr, 0.0, out=cr), 1.0, out=cr)
+    if has_terminal:
+        cr[terminal] = 0.0
+    return cr
 
 
 def sample_f(rng: np.random.Generator, mu: np.ndarray | float, size: int) -> np.ndarray:
     """``size`` scale factors ``F_i ~ Cauchy(mu_i, 0.1)``: a draw above 1 becomes 1, a draw
     ``<= 0`` is drawn again (so ``F_i`` is in (0, 1]). ``mu``: a scalar or ``(size,)``."""
-    mu = np.broadcast_to(np.asarray(mu, dtype=float), (size,))
+    mu = np.asarray(mu, dtype=float)
     F = mu + SPREAD * rng.standard_cauchy(size)
     bad = F <= 0.0
     while bad.any():
-        F[bad] = mu[bad] + SPREAD * rng.standard_cauchy(int(bad.sum()))
+        F[bad] = (mu[bad] if mu.ndim else mu) + SPREAD * rng.standard_cauchy(int(bad.sum()))
         bad = F <= 0.0
-    return np.minimum(F, 1.0)
+    return np.minimum(F, 1.0, out=F)
 
 
 def improvement_weights(delta: np.ndarray) -> np.ndarray:

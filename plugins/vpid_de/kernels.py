@@ -121,7 +121,7 @@ def pbest_indices(rng: np.random.Generator, f: np.ndarray, count: np.ndarray | i
     in ``1..ps``, or a ``(ps,)`` array of them (SHADE draws ``p_i`` per target). The member is
     uniform among the ``count`` best, and may be the target itself (as in JADE)."""
     order = np.argsort(f, kind="stable")
-    count = np.broadcast_to(np.asarray(count, dtype=np.intp), f.shape)
+    count = np.asarray(count, dtype=np.intp)
     return order[np.minimum((rng.random(f.shape[0]) * count).astype(np.intp), count - 1)]
 
 
