@@ -14,7 +14,7 @@ generations ``done`` is true, so a run uses exactly ``ps * (iterations + 1)`` ev
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 
@@ -23,12 +23,14 @@ from vpid_bench.api import Bounds, ConfigError, GenerationalOptimizer, Optimizer
 from .kernels import (
     BOUNDS_RULES,
     MUTATIONS,
+    BoundsRule,
     crossover_from_uniforms,
     greedy_selection,
     indices_from_keys,
 )
 
-DRAW_CHOICES = ("generation", "vector")
+#: the choices of the ``draw`` key of DE6 and DE7
+Draw = Literal["generation", "vector"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -39,25 +41,18 @@ class DEParams(OptimizerParams):
     ``bounds``: what happens to a trial coordinate outside the box (the paper is silent):
     ``reinit`` (default: a fresh uniform value in the box, what scipy's
     ``differential_evolution`` does, so results compare with the most used implementation),
-    ``clip``, ``reflect`` or ``midpoint`` (half way between the parent and the face).
+    ``clip``, ``reflect`` or ``midpoint`` (half way between the parent and the face). A
+    ``Literal``: :mod:`vpid_bench.params` refuses any other value and lists these.
     """
 
     CR: float = 0.9
-    bounds: str = "reinit"
+    bounds: BoundsRule = "reinit"
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.CR <= 1.0:
             raise ConfigError("optimizer.CR", self.CR, "a number in [0, 1]")
-        if self.bounds not in BOUNDS_RULES:
-            raise ConfigError("optimizer.bounds", self.bounds, "one of " + ", ".join(BOUNDS_RULES))
         if self.iterations < 0:
             raise ConfigError("problem.iterations", self.iterations, "an integer >= 0")
-
-
-def check_draw(value: str) -> None:
-    """Validate a ``draw`` option (DE6, DE7): ``generation`` or ``vector``."""
-    if value not in DRAW_CHOICES:
-        raise ConfigError("optimizer.draw", value, "one of " + ", ".join(DRAW_CHOICES))
 
 
 class DifferentialEvolution(GenerationalOptimizer):

@@ -1,4 +1,5 @@
-"""``optimizer=de1`` ... ``de8``: the DE family of Gökdağ (2014), registered with vpid-bench."""
+"""``optimizer=de1`` ... ``de8`` (Gökdağ 2014) and ``jade``, ``shade``, ``lshade`` (the
+success-history adaptive DE family), registered with vpid-bench."""
 
 from __future__ import annotations
 
@@ -6,11 +7,12 @@ from collections.abc import Callable
 
 from vpid_bench import hookimpl
 
+from .adaptive_de import ADAPTIVE
 from .variants import STRATEGIES
 
 
 @hookimpl
 def vpid_bench_register_optimizers(register: Callable[[str, type], None]) -> None:
-    """Register DE1-DE8 under their lower-case names."""
-    for name, cls in STRATEGIES.items():
+    """Register DE1-DE8, JADE, SHADE and L-SHADE under their lower-case names."""
+    for name, cls in {**STRATEGIES, **ADAPTIVE}.items():
         register(name, cls)

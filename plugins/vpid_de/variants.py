@@ -10,13 +10,14 @@ name to the class.
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
+from typing import Any, Literal
 
 from vpid_bench.api import ConfigError
 
-from .base import DEParams, DifferentialEvolution, check_draw
+from .base import DEParams, DifferentialEvolution, Draw
 
-EQ15_FORMS = ("das", "printed")
+#: the choices of DE8's ``eq15`` key
+Eq15Form = Literal["das", "printed"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -68,11 +69,10 @@ class DE6Params(DEParams):
     K: float = 0.5
     F_min: float = -2.0
     F_max: float = 2.0
-    draw: str = "generation"
+    draw: Draw = "generation"
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check_draw(self.draw)
         if not self.F_min <= self.F_max:
             raise ConfigError("optimizer.F_max", self.F_max, f"a number >= F_min={self.F_min}")
 
@@ -87,11 +87,10 @@ class DE7Params(DEParams):
 
     R_min: float = 0.5
     R_max: float = 1.0
-    draw: str = "generation"
+    draw: Draw = "generation"
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check_draw(self.draw)
         if not self.R_min <= self.R_max:
             raise ConfigError("optimizer.R_max", self.R_max, f"a number >= R_min={self.R_min}")
 
@@ -108,15 +107,10 @@ class DE8Params(DEParams):
 
     R_max: float = 1.2
     R_min: float = 0.4
-    eq15: str = "das"
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if self.eq15 not in EQ15_FORMS:
-            raise ConfigError("optimizer.eq15", self.eq15, "one of " + ", ".join(EQ15_FORMS))
+    eq15: Eq15Form = "das"
 
 
-def eq15(k: int, k_max: int, r_max: float, r_min: float, form: str = "das") -> float:
+def eq15(k: int, k_max: int, r_max: float, r_min: float, form: Eq15Form = "das") -> float:
     """Eq. 15's scale factor at generation ``k`` (0-based) of ``k_max``."""
     r = (r_max - r_min) * (k_max - k) / k_max
     return r + r_min if form == "das" else r

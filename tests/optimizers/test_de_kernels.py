@@ -1,12 +1,20 @@
-"""DE building blocks on tiny hand-built populations, checked against hand-computed vectors."""
+"""DE building blocks on tiny hand-built populations, checked against hand-computed vectors.
+
+``draw_indices`` and ``binomial_crossover`` are the generator-drawing forms the adaptive DEs
+(JADE, SHADE, L-SHADE) use; DE1-DE8 use ``indices_from_keys`` and ``crossover_from_uniforms``
+on one block of uniforms per generation. Both forms are tested here."""
 
 from __future__ import annotations
 
+from typing import get_args
+
 import numpy as np
 import pytest
+from vpid_de.fused import BOUNDS_IDS
 from vpid_de.kernels import (
     BOUNDS_RULES,
     MUTATIONS,
+    BoundsRule,
     best1,
     best2,
     binomial_crossover,
@@ -128,6 +136,28 @@ def test_crossover_cr_one_takes_the_whole_mutant_and_rate_matches_cr():
     U = binomial_crossover(Xp, V, 0.3, rng)
     # expected fraction: 0.3 + 0.7 / 10 = 0.37 (the forced gene); sd ~ 0.0034 over 2000 genes
     assert abs(U.mean() - 0.37) < 0.02
+
+
+def test_crossover_takes_one_rate_per_target():
+    rng = np.random.default_rng(6)
+    Xp, V = np.zeros((3, 2000)), np.ones((3, 2000))
+    U = binomial_crossover(Xp, V, np.array([[0.0], [0.5], [1.0]]), rng)
+    # row 0: only the forced gene; row 1: about half (sd 0.011, allow 5 sd); row 2: all
+    assert U[0].sum() == 1.0 and abs(U[1].mean() - 0.5) < 0.056 and U[2].all()
+
+
+def test_greedy_selection_ties_replace_only_when_asked():
+    Xp, U = np.array([[0.0], [1.0], [2.0]]), np.array([[10.0], [11.0], [12.0]])
+    fX, fU = np.array([1.0, 1.0, np.inf]), np.array([1.0, 2.0, np.inf])
+    np.testing.assert_array_equal(greedy_selection(Xp, fX, U, fU)[0][:, 0], [0.0, 1.0, 2.0])
+    Xn, fn = greedy_selection(Xp, fX, U, fU, ties=True)
+    np.testing.assert_array_equal(Xn[:, 0], [10.0, 1.0, 12.0])
+    np.testing.assert_array_equal(fn, [1.0, 1.0, np.inf])
+
+
+def test_bounds_choices_are_one_list():
+    # the Literal the params module validates, the numpy rules and the compiled ids agree
+    assert get_args(BoundsRule) == tuple(BOUNDS_RULES) == tuple(BOUNDS_IDS)
 
 
 def test_greedy_selection_strictly_better_replaces():

@@ -72,6 +72,19 @@ def test_bad_choices_name_the_key(name, key, value):
         build_dataclass(STRATEGIES[name].Params, {key: value}, prefix="optimizer")
 
 
+@pytest.mark.parametrize(
+    "name,key,listed",
+    [("de1", "bounds", "'reinit', 'clip', 'reflect', 'midpoint'"),
+     ("de6", "draw", "'generation', 'vector'"), ("de7", "draw", "'generation', 'vector'"),
+     ("de8", "eq15", "'das', 'printed'")],
+)
+def test_choice_keys_are_literals_that_list_their_choices(name, key, listed):
+    """The params module (and so the pre-flight) checks choice keys from their Literal type;
+    the dataclasses carry no hand-written check."""
+    with pytest.raises(ConfigError, match=f"optimizer.{key}='x' is not allowed: one of {listed}"):
+        build_dataclass(STRATEGIES[name].Params, {key: "x"}, prefix="optimizer")
+
+
 @pytest.mark.parametrize("name", sorted(MIN_PS))
 def test_population_size_minimum_per_strategy(name):
     n = MIN_PS[name]

@@ -1,0 +1,371 @@
+"""``optimizer=jade``, ``shade``, ``lshade``: the success-history adaptive DE family.
+
+* JADE (Zhang and Sanderson 2009): current-to-pbest/1 with an optional external archive; every
+  target draws its own ``CR_i ~ N(mu_CR, 0.1)`` and ``F_i ~ Cauchy(mu_F, 0.1)``, and after each
+  generation ``mu_CR`` moves a fraction ``c`` towards the mean CR of the successful trials,
+  ``mu_F`` towards the Lehmer mean of their F.
+* SHADE (Tanabe and Fukunaga 2013): JADE with ``H`` memory entries instead of one ``mu`` pair,
+  one entry rewritten per generation by means weighted by the improvements, and a random
+  p-best fraction ``p_i ~ U[2/N, 0.2]`` per target.
+* L-SHADE (Tanabe and Fukunaga 2014): SHADE whose population shrinks linearly with the
+  evaluations spent, from ``N_init`` to ``N_min`` at the end of the budget, and whose CR
+  memory can become "terminal" (CR = 0 from then on).
+
+All three are built on the kernels of :mod:`vpid_de.kernels` (index draws, current-to-pbest/1,
+Eq. 8 crossover, the bounds rules, one-to-one selection) and on :mod:`vpid_de.adaptation`
+and :mod:`vpid_de.population`. Defaults are the papers'; where the benchmark's protocol
+enters (the population size ``ps``, the budget) is said on each ``Params``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import ClassVar, Literal
+
+import numpy as np
+
+from vpid_bench.api import Bounds, ConfigError, GenerationalOptimizer, OptimizerParams
+
+from .adaptation import SuccessHistory, jade_update, sample_cr, sample_f
+from .kernels import (
+    BOUNDS_RULES,
+    BoundsRule,
+    binomial_crossover,
+    current_to_pbest1,
+    draw_indices,
+    greedy_selection,
+    partner_indices,
+    pbest_indices,
+)
+from .population import Archive, lpsr_size, round_half_up, worst_removed
+
+#: current-to-pbest/1 needs the target and two other members (r1 != i, r2 != i, r1)
+MIN_POPULATION = 3
+
+
+@dataclasses.dataclass(frozen=True)
+class AdaptiveDEParams(OptimizerParams):
+    """Keys every member of the family has.
+
+    ``bounds``: the rule for a trial coordinate outside the box; default ``midpoint`` (half
+    way between the parent and the violated face), the rule of the JADE and SHADE papers and
+    of L-SHADE's code. ``reinit``, ``clip`` and ``reflect`` as for DE1-DE8.
+    """
+
+    bounds: BoundsRule = "midpoint"
+
+    def __post_init__(self) -> None:
+        if self.iterations < 0:
+            raise ConfigError("problem.iterations", self.iterations, "an integer >= 0")
+
+
+def _check_unit(key: str, value: float, closed_low: bool = False) -> None:
+    ok = 0.0 <= value <= 1.0 if closed_low else 0.0 < value <= 1.0
+    if not ok:
+        raise ConfigError(f"optimizer.{key}", value,
+                          "a number in [0, 1]" if closed_low else "a number in (0, 1]")
+
+
+class AdaptiveDE(GenerationalOptimizer):
+    """The generation shared by JADE, SHADE and L-SHADE; subclasses say how ``CR_i``, ``F_i``
+    and the p-best counts are drawn and learnt.
+
+    One generation (:meth:`next_generation`): for each target ``i`` of the current population
+    (``N`` members): ``CR_i``, ``F_i`` (:meth:`parameter_means`, :func:`sample_cr`,
+    :func:`sample_f`), ``pbest`` among the :meth:`pbest_counts` best, ``r1 != i`` from the
+    population, ``r2 != i, r1`` from the population and the archive; the mutant of
+    current-to-pbest/1, Eq. 8 crossover with ``CR_i``, the bounds rule. :meth:`advance` keeps
+    a trial that is better (``ties``: or equal), archives the parents that lost, and hands the
+    successes (strict improvements) to :meth:`adapt`. ``nfe`` counts evaluations told.
+    """
+
+    label: ClassVar[str] = "adaptive_de"
+    #: replace a member by an equally good trial (SHADE, L-SHADE) or only a better one (JADE)
+    ties: ClassVar[bool] = False
+
+    def __init__(self, params: AdaptiveDEParams, bounds: Bounds, rng: np.random.Generator) -> None:
+        super().__init__(params, bounds, rng)
+        self._repair = BOUNDS_RULES[params.bounds]
+        self.population: np.ndarray | None = None
+        self.fitness: np.ndarray | None = None
+        self.nfe = 0
+        self.archive = Archive(0, bounds.dim)
+        self._CR = self._F = np.empty(0)
+
+    def _require_population(self, key: str, value: int, size: int) -> None:
+        if size < MIN_POPULATION:
+            raise ConfigError(key, value, f"a population of at least {MIN_POPULATION} for "
+                              f"{self.label} (current-to-pbest/1 draws two vectors besides "
+                              "the target)")
+
+    # -- what a member of the family customises --------------------------------------------------
+    def initial_size(self) -> int:
+        """Rows of the initial population (JADE, SHADE: the protocol's ``ps``)."""
+        return self.params.ps
+
+    def trial_count(self) -> int:
+        """Trials in the next generation: one per member (L-SHADE cuts the last one short)."""
+        return len(self.population)
+
+    def parameter_means(self, n: int) -> tuple[np.ndarray | float, np.ndarray | float]:
+        """The means (``mu_CR``, ``mu_F``) the ``n`` targets draw their CR_i, F_i around."""
+        raise NotImplementedError
+
+    def pbest_counts(self, n: int) -> np.ndarray | int:
+        """How many of the best members each target's ``pbest`` is drawn from."""
+        raise NotImplementedError
+
+    def adapt(self, S_CR: np.ndarray, S_F: np.ndarray, delta: np.ndarray) -> None:
+        """Learn from one generation's successes: their CR_i, F_i and improvements."""
+        raise NotImplementedError
+
+    def after_generation(self) -> None:
+        """Hook after selection and adaptation (L-SHADE shrinks its population here)."""
+
+    # -- GenerationalOptimizer --------------------------------------------------------------------
+    def initial_population(self) -> np.ndarray:
+        U = self.bounds.sample(self.rng, self.initial_size())
+        return np.minimum(np.maximum(U, self.bounds.lower), self.bounds.upper)
+
+    def start(self, X: np.ndarray, f: np.ndarray) -> None:
+        self.population, self.fitness = X.copy(), f.copy()
+        self.nfe += len(X)
+
+    def next_generation(self) -> np.ndarray:
+        X, f, rng = self.population, self.fitness, self.rng
+        N = len(X)
+        mu_cr, mu_f = self.parameter_means(N)
+        CR = sample_cr(rng, mu_cr, N)
+        F = sample_f(rng, mu_f, N)
+        pbest = pbest_indices(rng, f, self.pbest_counts(N))
+        r1 = draw_indices(rng, N, 1)[:, 0]
+        XA = np.vstack([X, self.archive.rows]) if len(self.archive) else X
+        r2 = partner_indices(rng, r1, len(XA))
+        V = current_to_pbest1(X, pbest, r1, XA, r2, F[:, None])
+        U = binomial_crossover(X, V, CR[:, None], rng)
+        u = rng.random(U.shape) if self.params.bounds == "reinit" else None
+        U = self._repair(U, X, self.bounds.lower, self.bounds.upper, u)
+        n = self.trial_count()
+        self._CR, self._F = CR[:n], F[:n]
+        return U[:n]
+
+    def advance(self, U: np.ndarray, fU: np.ndarray) -> None:
+        n = len(U)
+        X, f = self.population[:n], self.fitness[:n]
+        success = fU < f
+        self.archive.add(X[success], self.rng)
+        delta = f[success] - fU[success]
+        X_new, f_new = greedy_selection(X, f, U, fU, ties=self.ties)
+        self.population[:n], self.fitness[:n] = X_new, f_new
+        self.nfe += n
+        self.adapt(self._CR[success], self._F[success], delta)
+        self.after_generation()
+
+
+# ------------------------------------------------------------------------------------------------
+# JADE
+
+
+@dataclasses.dataclass(frozen=True)
+class JADEParams(AdaptiveDEParams):
+    """JADE (Zhang and Sanderson 2009). Population ``N`` = the protocol's ``ps``; a run is the
+    initial population plus ``iterations`` generations of ``ps`` trials, like DE1-DE8.
+
+    ``c``: learning rate of ``mu_CR``, ``mu_F`` (paper: 0.1); ``p``: ``pbest`` is drawn from
+    the ``max(1, round(p N))`` best (paper: 0.05, the best one at N = 20); ``archive``: keep
+    up to ``N`` replaced parents for the second difference (paper: "JADE with archive", the
+    variant it recommends; ``false`` is "JADE without archive"). ``mu_CR``, ``mu_F`` start at
+    0.5 (paper).
+    """
+
+    c: float = 0.1
+    p: float = 0.05
+    archive: bool = True
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _check_unit("c", self.c)
+        _check_unit("p", self.p)
+
+
+class JADE(AdaptiveDE):
+    """JADE: one adaptive pair (``mu_CR``, ``mu_F``) for the whole population."""
+
+    Params = JADEParams
+    label = "jade"
+
+    def __init__(self, params: JADEParams, bounds: Bounds, rng: np.random.Generator) -> None:
+        super().__init__(params, bounds, rng)
+        self._require_population("problem.ps", params.ps, params.ps)
+        self.archive = Archive(params.ps if params.archive else 0, bounds.dim)
+        self.mu_cr, self.mu_f = 0.5, 0.5
+
+    def parameter_means(self, n: int) -> tuple[float, float]:
+        return self.mu_cr, self.mu_f
+
+    def pbest_counts(self, n: int) -> int:
+        return min(n, max(1, round_half_up(self.params.p * n)))
+
+    def adapt(self, S_CR: np.ndarray, S_F: np.ndarray, delta: np.ndarray) -> None:
+        self.mu_cr, self.mu_f = jade_update(self.mu_cr, self.mu_f, S_CR, S_F, self.params.c)
+
+
+# ------------------------------------------------------------------------------------------------
+# SHADE
+
+
+@dataclasses.dataclass(frozen=True)
+class SHADEParams(AdaptiveDEParams):
+    """SHADE (Tanabe and Fukunaga 2013). Population ``N`` = the protocol's ``ps``, archive of
+    up to ``N`` parents (paper: ``|A| = N``); a run is the initial population plus
+    ``iterations`` generations of ``ps`` trials.
+
+    ``H``: memory entries (paper: H = 100, with N = 100; a smaller H adapts faster, which
+    short runs may prefer); ``p_max``: upper end of ``p_i ~ U[2/N, p_max]`` (paper: 0.2; when
+    ``2/N > p_max``, ``p_i = 2/N``).
+    """
+
+    H: int = 100
+    p_max: float = 0.2
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.H < 1:
+            raise ConfigError("optimizer.H", self.H, "an integer >= 1")
+        _check_unit("p_max", self.p_max)
+
+
+class SHADE(AdaptiveDE):
+    """SHADE: success-history memories, improvement-weighted means, random p-best fraction."""
+
+    Params = SHADEParams
+    label = "shade"
+    ties = True
+
+    def __init__(self, params: SHADEParams, bounds: Bounds, rng: np.random.Generator) -> None:
+        super().__init__(params, bounds, rng)
+        self._require_population("problem.ps", params.ps, params.ps)
+        self.archive = Archive(params.ps, bounds.dim)
+        self.memory = SuccessHistory(params.H)
+
+    def parameter_means(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        return self.memory.means(self.rng, n)
+
+    def pbest_counts(self, n: int) -> np.ndarray:
+        p_min = 2.0 / n
+        p = self.rng.uniform(p_min, max(p_min, self.params.p_max), size=n)
+        return np.clip(np.floor(p * n + 0.5).astype(np.intp), 1, n)
+
+    def adapt(self, S_CR: np.ndarray, S_F: np.ndarray, delta: np.ndarray) -> None:
+        self.memory.update(S_CR, S_F, delta)
+
+
+# ------------------------------------------------------------------------------------------------
+# L-SHADE
+
+
+@dataclasses.dataclass(frozen=True)
+class LSHADEParams(AdaptiveDEParams):
+    """L-SHADE (Tanabe and Fukunaga 2014).
+
+    ``N_init``: the initial population. ``ps`` (default): the protocol's population size, so
+    L-SHADE starts from the same population as every other optimizer of a comparison and a
+    ``problem.ps`` sweep moves it too. ``paper``: ``round(N_init_rate * D)`` with
+    ``N_init_rate = 18`` (D = number of parameters: 162 on the vehicle), the paper's value,
+    tuned there for budgets of 10,000 D evaluations; at the protocol's budget (``ps * 51``,
+    about 113 D on the vehicle) it spends a sixth of the budget on the random initial
+    population and leaves about a dozen generations (measured in
+    ``benchmarks/bench_adaptive_de.py``). ``N_min``: the final population (paper: 4).
+
+    The population shrinks linearly in the evaluations spent, from ``N_init`` at the start to
+    ``N_min`` when ``max_evaluations`` are spent; the worst members go.
+    ``max_evaluations``: the budget the schedule is laid over; ``null`` (default) means the
+    protocol's ``ps * (iterations + 1)``, the run's default budget; set it to the run's
+    ``budget`` when that is given explicitly (the run loop stops the run at its own budget
+    either way). ``iterations`` plays no other part: L-SHADE is done when ``max_evaluations``
+    are spent, the last generation cut to what is left.
+
+    ``H``: memory entries (paper: 6); ``p``: ``pbest`` from the ``max(2, round(p N))`` best
+    (paper: 0.11); ``r_arc``: archive of up to ``round(r_arc N)`` parents, shrinking with N
+    (paper: 2.6).
+    """
+
+    N_init: Literal["ps", "paper"] = "ps"
+    N_init_rate: float = 18.0
+    N_min: int = 4
+    max_evaluations: int | None = None
+    H: int = 6
+    p: float = 0.11
+    r_arc: float = 2.6
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.N_min < MIN_POPULATION:
+            raise ConfigError("optimizer.N_min", self.N_min, f"an integer >= {MIN_POPULATION}")
+        if not self.N_init_rate > 0.0:
+            raise ConfigError("optimizer.N_init_rate", self.N_init_rate, "a positive number")
+        if self.max_evaluations is not None and self.max_evaluations < 1:
+            raise ConfigError("optimizer.max_evaluations", self.max_evaluations,
+                              "an integer >= 1, or null for ps * (iterations + 1)")
+        if self.H < 1:
+            raise ConfigError("optimizer.H", self.H, "an integer >= 1")
+        _check_unit("p", self.p)
+        if not self.r_arc >= 0.0:
+            raise ConfigError("optimizer.r_arc", self.r_arc, "a number >= 0")
+
+
+class LSHADE(AdaptiveDE):
+    """L-SHADE: SHADE with Lehmer-mean CR memory, terminal CR value and linear population
+    size reduction over the evaluation budget."""
+
+    Params = LSHADEParams
+    label = "lshade"
+    ties = True
+
+    def __init__(self, params: LSHADEParams, bounds: Bounds, rng: np.random.Generator) -> None:
+        super().__init__(params, bounds, rng)
+        if params.N_init == "ps":
+            n_init, key, value = params.ps, "problem.ps", params.ps
+        else:
+            n_init = round_half_up(params.N_init_rate * bounds.dim)
+            key, value = "optimizer.N_init_rate", params.N_init_rate
+        if n_init < params.N_min:
+            raise ConfigError(key, value, f"an initial population of at least N_min="
+                              f"{params.N_min} (it gives {n_init})")
+        self._require_population(key, value, n_init)
+        self.max_nfe = (params.max_evaluations if params.max_evaluations is not None
+                        else params.ps * (params.iterations + 1))
+        # never plan past the budget: a budget below N_init is one (cut) initial population
+        self.n_init = min(n_init, self.max_nfe)
+        self.archive = Archive(round_half_up(params.r_arc * self.n_init), bounds.dim)
+        self.memory = SuccessHistory(params.H, lehmer_cr=True, terminal=True)
+
+    def initial_size(self) -> int:
+        return self.n_init
+
+    def trial_count(self) -> int:
+        return min(len(self.population), self.max_nfe - self.nfe)
+
+    def parameter_means(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        return self.memory.means(self.rng, n)
+
+    def pbest_counts(self, n: int) -> int:
+        return min(n, max(2, round_half_up(self.params.p * n)))
+
+    def adapt(self, S_CR: np.ndarray, S_F: np.ndarray, delta: np.ndarray) -> None:
+        self.memory.update(S_CR, S_F, delta)
+
+    def after_generation(self) -> None:
+        planned = lpsr_size(self.nfe, self.max_nfe, self.n_init, self.params.N_min)
+        if planned < len(self.population):
+            self.population, self.fitness = worst_removed(self.population, self.fitness,
+                                                          planned)
+            self.archive.resize(round_half_up(self.params.r_arc * planned), self.rng)
+
+    @property
+    def done(self) -> bool:
+        return self._started and self.nfe >= self.max_nfe
+
+
+#: command-line name -> optimizer class
+ADAPTIVE: dict[str, type[AdaptiveDE]] = {cls.label: cls for cls in (JADE, SHADE, LSHADE)}

@@ -1,0 +1,70 @@
+"""Population bookkeeping of the adaptive DE family: the external archive and L-SHADE's
+linear population size reduction (LPSR).
+
+* :class:`Archive`: parents that lost to their trial (JADE's "inferior solutions"), a source
+  of the second difference vector of current-to-pbest/1; capped at ``capacity`` rows by
+  random deletion.
+* :func:`lpsr_size`: the population size L-SHADE plans after ``nfe`` evaluations (Tanabe
+  and Fukunaga 2014, Eq. 10), and :func:`worst_removed` the survivors of a reduction.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+class Archive:
+    """Up to ``capacity`` vectors of dimension ``dim`` (``capacity = 0`` keeps nothing).
+
+    :meth:`add` appends the new rows and, when that exceeds the capacity, keeps a uniformly
+    random subset of ``capacity`` rows of old and new together (JADE's rule; SHADE's text
+    deletes old rows first, a difference that only matters within one generation).
+    :meth:`resize` lowers the capacity (L-SHADE) and deletes rows at random to fit.
+    """
+
+    def __init__(self, capacity: int, dim: int) -> None:
+        self.capacity = int(capacity)
+        self.rows = np.empty((0, dim))
+
+    def __len__(self) -> int:
+        return self.rows.shape[0]
+
+    def add(self, X: np.ndarray, rng: np.random.Generator) -> None:
+        """Insert the rows of ``X``, then delete random rows down to the capacity."""
+        if len(X):
+            self.rows = np.vstack([self.rows, X])
+        self._fit(rng)
+
+    def resize(self, capacity: int, rng: np.random.Generator) -> None:
+        """Set a new capacity and delete random rows down to it."""
+        self.capacity = int(capacity)
+        self._fit(rng)
+
+    def _fit(self, rng: np.random.Generator) -> None:
+        if len(self) > self.capacity:
+            keep = np.sort(rng.choice(len(self), size=self.capacity, replace=False))
+            self.rows = self.rows[keep]
+
+
+def round_half_up(x: float) -> int:
+    """Round to the nearest integer, halves up (C's ``round`` for the positive values here;
+    Python's ``round`` would send 2.5 to 2)."""
+    return int(math.floor(x + 0.5))
+
+
+def lpsr_size(nfe: int, max_nfe: int, n_init: int, n_min: int) -> int:
+    """L-SHADE's planned population size after ``nfe`` of ``max_nfe`` evaluations:
+    ``round((n_min - n_init) / max_nfe * nfe + n_init)``, a straight line from ``n_init`` at
+    ``nfe = 0`` to ``n_min`` at ``max_nfe``, never below ``n_min``."""
+    return max(n_min, round_half_up((n_min - n_init) / max_nfe * nfe + n_init))
+
+
+def worst_removed(X: np.ndarray, f: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The population without its ``len(X) - n`` worst members (ties: the later row goes
+    first), order of the survivors kept."""
+    if n >= len(X):
+        return X, f
+    keep = np.sort(np.argsort(f, kind="stable")[:n])
+    return X[keep], f[keep]
