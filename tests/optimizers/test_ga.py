@@ -312,7 +312,7 @@ def test_records_show_ps_times_iterations_plus_one(compose_config, tmp_path):
         assert summary.ran == 2 and not summary.failed
         for path in summary.record_paths:
             record = read_record(path)
-            assert record["config"]["optimizer"]["mutation"] == "adaptfeasible"
+            assert record["optimizer"]["params"]["mutation"] == "adaptfeasible"
             assert record["result"]["evaluations"] == ps * (iterations + 1)
             steps = np.diff([0, *record["trace"]["evaluations"]]).tolist()
             assert steps == [ps] * (iterations + 1)

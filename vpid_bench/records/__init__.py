@@ -11,6 +11,7 @@ the content of data files), so a re-run of the same job recognises its records a
 plugin or data file does not reuse them.
 """
 
+from ..fileio import _umask, write_text_atomic
 from .assemble import make_record
 from .io import (
     OLD_SCHEMAS,
@@ -20,7 +21,6 @@ from .io import (
     CorruptRecordError,
     OldRecordError,
     _jsonable,
-    _umask,
     canonical_json,
     fingerprint,
     iter_record_files,
@@ -31,7 +31,6 @@ from .io import (
     stable_hash,
     write_json_atomic,
     write_record,
-    write_text_atomic,
 )
 from .provenance import distribution_provenance, package_versions
 from .status import JOB_STATUS_FILE, read_job_status, write_job_status
