@@ -218,6 +218,13 @@ class Optimizer(abc.ABC):
         self.bounds = bounds
         self.rng = rng
 
+    @classmethod
+    def check(cls, params: OptimizerParams) -> None:
+        """Checks that need the class as well as its ``Params`` (e.g. the smallest population
+        a strategy can work with); raise :class:`ConfigError`. The pre-flight calls it for
+        every job of a sweep before any job runs, so prefer it to checks in ``__init__``."""
+        return None
+
     @abc.abstractmethod
     def ask(self) -> np.ndarray:
         """The next candidates to evaluate, shape ``(n, dim)`` with ``n >= 1``."""

@@ -173,6 +173,7 @@ def parse_job(cfg: Any, registry: Registry) -> Job:
     protocol = {k: getattr(problem_config, k) for k in PROTOCOL_KEYS}
     params = build_dataclass(optimizer_cls.Params, {**optimizer_cfg, **protocol},
                              prefix="optimizer")
+    optimizer_cls.check(params)
     if getattr(optimizer_cls, "wants_residuals", False) and not offers_residuals(problem_cls):
         raise ConfigError("optimizer", optimizer_name,
                           f"an optimizer that does not need residual vectors: problem "

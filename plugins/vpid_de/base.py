@@ -68,16 +68,22 @@ class DifferentialEvolution(GenerationalOptimizer):
     #: "numba" (fused compiled generation) or "numpy" (reference kernels); same results
     engine: ClassVar[str] = "numba"
 
-    def __init__(self, params: DEParams, bounds: Bounds, rng: np.random.Generator) -> None:
-        super().__init__(params, bounds, rng)
-        self._kernel, self._n_random = MUTATIONS[self.mutation]
-        if params.ps < self._n_random + 1:
+    @classmethod
+    def check(cls, params: OptimizerParams) -> None:
+        """The mutation draws distinct vectors besides the target: ``ps`` must allow it."""
+        n_random = MUTATIONS[cls.mutation][1]
+        if params.ps < n_random + 1:
             raise ConfigError(
                 "problem.ps",
                 params.ps,
-                f"at least {self._n_random + 1} for {self.label} ({self.mutation} draws "
-                f"{self._n_random} distinct vectors besides the target)",
+                f"at least {n_random + 1} for {cls.label} ({cls.mutation} draws "
+                f"{n_random} distinct vectors besides the target)",
             )
+
+    def __init__(self, params: DEParams, bounds: Bounds, rng: np.random.Generator) -> None:
+        super().__init__(params, bounds, rng)
+        self.check(params)
+        self._kernel, self._n_random = MUTATIONS[self.mutation]
         self._repair = BOUNDS_RULES[params.bounds]
         self._lower = bounds.lower
         self._upper = bounds.upper

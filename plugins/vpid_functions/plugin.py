@@ -9,7 +9,9 @@ where a true value is 0, so ``x_true`` is offered only when no coordinate is zer
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -45,9 +47,17 @@ class FunctionsConfig(ProblemConfig):
     """``function``: sphere, rosenbrock or rastrigin; ``dim``: number of variables;
     ``half_width``: the box is [-half_width, half_width]^dim (null: the function's usual box)."""
 
-    function: str = "sphere"
+    function: Literal["sphere", "rosenbrock", "rastrigin"] = "sphere"
     dim: int = 10
     half_width: float | None = None
+
+    def __post_init__(self) -> None:
+        if not 2 <= self.dim <= 10_000:
+            raise ConfigError("problem.dim", self.dim, "an integer from 2 to 10000")
+        hw = self.half_width
+        if hw is not None and not (math.isfinite(hw) and 0 < hw <= 1e150):
+            raise ConfigError("problem.half_width", hw, "a positive number up to 1e150 or "
+                              "null (the function's usual box)")
 
 
 class FunctionsProblem(Problem):
@@ -57,14 +67,8 @@ class FunctionsProblem(Problem):
 
     def __init__(self, config: FunctionsConfig) -> None:
         super().__init__(config)
-        if config.function not in FUNCTIONS:
-            raise ConfigError("problem.function", config.function, "one of " + ", ".join(FUNCTIONS))
-        if config.dim < 2:
-            raise ConfigError("problem.dim", config.dim, "an integer >= 2")
         self._f, default_hw, self._opt = FUNCTIONS[config.function]
         hw = default_hw if config.half_width is None else config.half_width
-        if not hw > 0:
-            raise ConfigError("problem.half_width", hw, "a positive number")
         names = tuple(f"x{i + 1}" for i in range(config.dim))
         self._bounds = Bounds(np.full(config.dim, -hw), np.full(config.dim, hw), names)
 

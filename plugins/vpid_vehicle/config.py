@@ -130,6 +130,9 @@ class VehicleConfig(ProblemConfig):
     reference: ReferenceConfig = field(default_factory=ReferenceConfig)
     bounds: BoundsConfig = field(default_factory=BoundsConfig)
 
+    def __post_init__(self) -> None:
+        validate(self)  # at build time, so the pre-flight refuses a bad value before any job
+
 
 def _finite(key: str, value: float, allowed: str) -> None:
     if not math.isfinite(value):

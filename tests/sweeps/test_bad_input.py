@@ -132,8 +132,8 @@ def test_a_refused_command_loses_no_record(in_tmp, capsys):
 # ---- job level: the plugin's own checks, through run_from_config (before any run) ----
 
 JOB_ERRORS = [
-    (["problem=functions", "problem.function=nope"], "problem.function", "one of sphere"),
-    (["problem=functions", "problem.dim=1"], "problem.dim", "an integer >= 2"),
+    (["problem=functions", "problem.function=nope"], "problem.function", "one of 'sphere'"),
+    (["problem=functions", "problem.dim=1"], "problem.dim", "an integer from 2 to"),
     (["problem=functions", "problem.half_width=-1"], "problem.half_width", "a positive number"),
     (["problem.noise.level=-0.1"], "problem.noise.level", "a noise level >= 0"),
     (["problem.dt=0"], "problem.dt", "a time step > 0"),
@@ -157,6 +157,35 @@ def test_job_refuses_bad_values_before_any_run(overrides, key, allowed, compose_
     assert err.value.key == key
     assert allowed in err.value.allowed
     assert not list(tmp_path.rglob("run-*.json"))
+
+
+@pytest.mark.parametrize(("overrides", "key", "allowed"), JOB_ERRORS,
+                         ids=[" ".join(o) for o, _, _ in JOB_ERRORS])
+def test_preflight_refuses_a_plugins_own_check_in_any_sweep_point(overrides, key, allowed,
+                                                                   registry):
+    """The plugin's range check runs in the pre-flight for the second point of a sweep too,
+    so no job of the sweep runs."""
+    from vpid_bench.shell.argv import parse_command_line
+    from vpid_bench.shell.preflight import plan
+
+    good = {"problem.dt": "0.001", "problem.noise.level": "0.05", "problem.vehicle.a1": "1.468",
+            "problem.ps": "20", "optimizer.CR": "0.9", "problem.dim": "3",
+            "problem.half_width": "2", "problem.function": "sphere",
+            "problem.bounds.lower_factor": "0.5"}
+    swept = []
+    for o in overrides:
+        k, v = o.split("=", 1)
+        swept.append(f"{k}={good[k]},{v}" if k in good else o)
+    with pytest.raises(ConfigError) as err:
+        plan(parse_command_line(["-m", *swept, "runs=2"]), registry)
+    assert err.value.key == key and allowed in err.value.allowed
+
+
+def test_the_issue_command_exits_2_before_any_job_folder(in_tmp, capsys):
+    code, err = _main_error(["-m", "problem.dt=0.001,-1", "optimizer=de4", "runs=2",
+                             "hydra.sweep.dir=sweep"], capsys)
+    assert code == 2 and err.startswith("error: problem.dt=-1.0 is not allowed: a time step > 0")
+    assert err.count("\n") == 1 and not (in_tmp / "sweep").exists()
 
 
 @pytest.mark.parametrize(
@@ -269,10 +298,14 @@ def test_cli_exit_status_and_single_lines(tmp_path):
         "error: optimizer='nosuch' is not allowed: one of "
         + ", ".join(sorted(Registry().optimizers))  # every installed optimizer, sorted
     ]
-    job = run_cli([*FUNCTIONS, "problem.dim=1", "runs=1"], tmp_path)
-    assert job.returncode == 1
+    refused = run_cli([*FUNCTIONS, "problem.dim=1", "runs=1"], tmp_path)
+    assert refused.returncode == 2  # a plugin's range check: pre-flight, before any job
+    assert refused.stderr == "error: problem.dim=1 is not allowed: an integer from 2 to 10000\n"
+    job = run_cli(["problem.reference.file=missing.csv", "runs=1", "progress=false",
+                   "report=false"], tmp_path)
+    assert job.returncode == 1  # the file is read when the job builds the problem
     errors = [line for line in job.stderr.splitlines() if line.startswith("error:")]
-    assert errors == ["error: problem.dim=1 is not allowed: an integer >= 2"]
+    assert len(errors) == 1 and errors[0].startswith("error: problem.reference.file=")
     assert "Traceback" not in job.stderr
     debug = run_cli(["optimizer=nosuch"], tmp_path, env={"VPID_BENCH_DEBUG": "1"})
     assert debug.returncode != 0 and "Traceback" in debug.stderr
