@@ -169,6 +169,31 @@ class Problem(abc.ABC):
         """Residual vectors (measured minus computed, per sample), shape ``(n, m)``."""
         raise NotImplementedError(f"problem {self.name!r} does not provide residuals")
 
+    def residual_groups(self) -> np.ndarray:
+        """The group (channel) of each entry of a residual vector, shape ``(m,)``, int; an
+        objective that sums per-group norms (not squares) is fitted by reweighting each group.
+        Default: one group."""
+        m = self.residuals(self.bounds.sample(np.random.default_rng(0), 1)).shape[1]
+        return np.zeros(m, dtype=int)
+
+    def residual_sigma(self) -> np.ndarray | None:
+        """The standard deviation of the measurement noise in each residual group (units of
+        the residuals), shape ``(groups,)``, for the Fisher information; ``None`` when it is
+        not known (a measured record)."""
+        return None
+
+    def instance(self, index: int) -> Problem:
+        """Instance ``index`` of this problem (as COCO and IOHprofiler have them): run ``i`` of
+        every optimizer in a comparison fits instance ``i``, so runs pair by instance across
+        optimizers. An instance differs in its data (a noise record), never in its settings.
+        Default: the problem itself, every instance identical."""
+        return self
+
+    def instance_id(self) -> str | None:
+        """A short, stable name of this instance's data, stored in every record (runs with the
+        same id fit the same data); ``None`` when all instances are identical."""
+        return None
+
     def describe(self) -> dict[str, Any]:
         """Extra facts about this instance that go into every run record (JSON-able)."""
         return {}

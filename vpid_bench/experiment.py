@@ -205,9 +205,47 @@ def _job_key(job: Job, registry: Registry | None, problem: Problem) -> dict[str,
     )
 
 
+def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
+                paths: list[Path]) -> None:
+    """What the records allow, for a problem with residuals and a known truth: the Cramér–Rao
+    bounds of its design (``job_dir/identifiability.json``) and each instance's optimum
+    (``optima_dir/<key>.json``, shared by the jobs of a sweep; see :mod:`.analysis`)."""
+    from .analysis.identifiability import cramer_rao
+    from .analysis.optimum import update_instance_optimum
+    from .spec import offers_residuals
+
+    if problem.x_true is None or not offers_residuals(type(problem)):
+        return
+    target = job_dir / "identifiability.json"
+    if not target.is_file():
+        crb = cramer_rao(problem)
+        if crb is not None:
+            rec.write_json_atomic(target, crb)
+    bests: dict[int, list[tuple[np.ndarray, float]]] = {}
+    for path in paths:
+        try:
+            record = rec.read_record(path)
+        except rec.CorruptRecordError:
+            continue
+        res = record.get("result") or {}
+        x, f = res.get("x_best"), res.get("f_best")
+        if record["status"] == "ok" and x and None not in x and f is not None:
+            bests.setdefault(record["run_index"], []).append((np.asarray(x, float), f))
+    by_instance: dict[str | None, tuple[Problem, list]] = {}
+    for i in range(job.spec.runs):
+        inst = problem.instance(i)
+        entry = by_instance.setdefault(inst.instance_id(), (inst, []))
+        entry[1].extend(bests.get(i, []))
+    for inst, runs in by_instance.values():
+        update_instance_optimum(inst, job.problem_settings(), optima_dir, runs)
+
+
 def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
-            problems: ProblemCache | None = None) -> JobSummary:
-    """Run every run of ``job`` and write one record per run into ``job_dir/records``."""
+            problems: ProblemCache | None = None, optima_dir: Path | None = None
+            ) -> JobSummary:
+    """Run every run of ``job`` and write one record per run into ``job_dir/records``; then
+    write what the records allow (:func:`analyse_job`) into ``optima_dir`` (default
+    ``job_dir/optima``)."""
     problem = (problems or ProblemCache(size=1)).get(job)
     if job.spec.threads is not None:
         problem.set_threads(job.spec.threads)
@@ -240,7 +278,7 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
                 if not warmed:
                     summary.warmup_s = _warm_up(job, problem)
                     warmed = True
-                record = _one_run(job, problem, i, rid, provenance, summary)
+                record = _one_run(job, problem.instance(i), i, rid, provenance, summary)
                 rec.write_record(path, record)
                 summary.ran += 1
                 bar.update(1)
@@ -248,7 +286,13 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
                     bar.set_postfix_str(_postfix(record), refresh=False)
         finally:
             bar.close()
-            summary.wall_time_s = time.perf_counter() - start
+        try:
+            analyse_job(job, problem, job_dir, Path(optima_dir or job_dir / "optima"),
+                        summary.record_paths)
+        except Exception as exc:  # noqa: BLE001 - the runs are recorded; say what failed
+            log.warning("the optimum / identifiability analysis failed: %s: %s",
+                        type(exc).__name__, exc)
+        summary.wall_time_s = time.perf_counter() - start
     return summary
 
 
@@ -280,12 +324,13 @@ def _one_run(job: Job, problem: Problem, i: int, rid: str, provenance: Mapping[s
 
 
 def run_from_config(cfg: Any, job_dir: str | Path, registry: Registry | None = None,
-                    problems: ProblemCache | None = None) -> JobSummary:
+                    problems: ProblemCache | None = None, optima_dir: Path | None = None
+                    ) -> JobSummary:
     """Parse and check the composed config ``cfg`` (:func:`vpid_bench.spec.parse_job`), then
     run the job into ``job_dir``. Raises :class:`~vpid_bench.api.ConfigError` (before any
     run) for a bad value."""
     registry = registry if registry is not None else Registry()
-    return run_job(parse_job(cfg, registry), job_dir, registry, problems)
+    return run_job(parse_job(cfg, registry), job_dir, registry, problems, optima_dir)
 
 
 def _postfix(record: Mapping[str, Any]) -> str:

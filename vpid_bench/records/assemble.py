@@ -8,6 +8,7 @@ the job's ``seed`` under ``seeds`` and the run's ``budget`` at the top. Fields::
     problem     name, plugin (provenance), config, info (the problem's describe())
     optimizer   name, plugin (provenance), params
     seeds       seed, spawn_key           budget
+    instance    index (= run index), id (the instance's data; null: all instances identical)
     parameters  names, units, lower, upper, true (null when unknown)
     result      x_best, f_best, evaluations, batches, stopped_by, metrics, rel_error_percent
     trace       evaluations, best         (best-so-far after every evaluated batch)
@@ -95,6 +96,7 @@ def make_record(
         "optimizer": {"name": optimizer_name, "plugin": dict(optimizer_plugin),
                       "params": dict(optimizer_settings)},
         "seeds": {"seed": seed, "spawn_key": [run_index]},
+        "instance": {"index": run_index, "id": problem.instance_id()},
         "budget": budget,
         "parameters": {"names": list(b.names), "units": list(b.units), "lower": b.lower,
                        "upper": b.upper, "true": problem.x_true},

@@ -105,6 +105,7 @@ REQUIRED_KEYS = (
     "problem",
     "optimizer",
     "seeds",
+    "instance",
     "budget",
     "parameters",
     "result",
