@@ -147,7 +147,7 @@ def test_quarter_car_matches_an_independent_ode_solution(example):
     _, qc = example
     problem = qc.QuarterCar(qc.QuarterCarConfig())
     c, t = problem.config, problem.t
-    X = problem.bounds.sample(np.random.default_rng(1), 3)
+    X = problem.bounds.sample(np.random.default_rng(1), 2)
 
     def rhs(_t, s, ms, ks, cs, y):  # the two equations of the module docstring
         zs, zu, vs, vu = s
@@ -233,6 +233,7 @@ def test_one_plus_one_beats_random_search_on_a_sphere_and_stops(example):
         mine = run(problem, es.OnePlusOne(es.OnePlusOneParams(), problem.bounds, rng(seed)), 1020)
         base = run(problem, RandomSearch(OptimizerParams(), problem.bounds, rng(seed)), 1020)
         wins += mine.f_best < base.f_best
+        assert mine.stopped_by == "optimizer" and mine.evaluations < 1020
     assert wins == 5
 
 
