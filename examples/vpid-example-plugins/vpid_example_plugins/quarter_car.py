@@ -58,6 +58,8 @@ class QuarterCarConfig(ProblemConfig):  # inherits ps = 20, iterations = 50 (the
 
 
 class QuarterCar(Problem):
+    """The measured record is made once, here; evaluate() fits it for a batch of candidates."""
+
     Config = QuarterCarConfig
 
     def __init__(self, config: QuarterCarConfig) -> None:
