@@ -12,8 +12,8 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --upgrade "pip>=23.1"
 
-$(VENV)/.installed: $(BIN)/python pyproject.toml examples/vpid-random-search/pyproject.toml
-	$(BIN)/python -m pip install -e ".[test,joblib,submitit]" -e examples/vpid-random-search
+$(VENV)/.installed: $(BIN)/python pyproject.toml
+	$(BIN)/python -m pip install -e ".[test,joblib,submitit]"
 	touch $@
 
 install: $(VENV)/.installed

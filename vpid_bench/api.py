@@ -233,10 +233,12 @@ class Optimizer(abc.ABC):
     ``bounds``), evaluates it, and calls ``tell(X, f)`` with the same rows and their
     objective values (``inf`` for failed candidates). It stops when the budget is spent or
     ``done`` is true. ``tell`` is not called for a partial population cut by the budget.
+    An optimizer that has converged ends its run early by writing ``self.done = True``.
     """
 
     Params: ClassVar[type[OptimizerParams]] = OptimizerParams
     name: str = "optimizer"
+    _done: bool = False  # what ``self.done = ...`` stored (class default: not done)
 
     def __init__(self, params: OptimizerParams, bounds: Bounds, rng: np.random.Generator) -> None:
         self.params = params
@@ -260,8 +262,13 @@ class Optimizer(abc.ABC):
 
     @property
     def done(self) -> bool:
-        """True when the optimizer has finished its own schedule (e.g. its generations)."""
-        return False
+        """True when the optimizer wants its run to end; the run loop reads it before every
+        ``ask``. Settable: ``self.done = True`` (e.g. in ``tell``, once converged)."""
+        return self._done
+
+    @done.setter
+    def done(self, value: bool) -> None:
+        self._done = bool(value)
 
 
 class GenerationalOptimizer(Optimizer):
@@ -273,7 +280,8 @@ class GenerationalOptimizer(Optimizer):
     proposed rows and their values to :meth:`start` (the initial population) or
     :meth:`advance` (every later generation, which also counts ``generation``). ``done`` is
     true after ``params.iterations`` generations, so a run uses the initial population plus
-    ``iterations`` generations of evaluations.
+    ``iterations`` generations of evaluations; a subclass may end it sooner with
+    ``self.done = True``.
     """
 
     def __init__(self, params: OptimizerParams, bounds: Bounds, rng: np.random.Generator) -> None:
@@ -316,9 +324,11 @@ class GenerationalOptimizer(Optimizer):
             self._started = True
         self._pending = None
 
-    @property
+    @Optimizer.done.getter
     def done(self) -> bool:
-        return self._started and self.generation >= self.params.iterations
+        """True after ``params.iterations`` generations, or once a subclass set
+        ``self.done = True`` (the setter is the base class's)."""
+        return self._done or (self._started and self.generation >= self.params.iterations)
 
 
 def relative_errors_percent(x: Sequence[float], x_true: Sequence[float]) -> np.ndarray:

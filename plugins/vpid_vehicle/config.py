@@ -2,7 +2,7 @@
 
 Every field is a Hydra key under ``problem.``: ``problem.vehicle.m``, ``problem.bump.V``,
 ``problem.noise.level`` ... Units are SI except the bump speed ``V``, which is in km/h as in
-the paper. Defaults are the paper's vehicle and test (Gökdağ 2014, see ../shared/paper/NOTES.md).
+the paper. Defaults are the paper's vehicle and test (Gökdağ 2014, see docs/paper-notes.md).
 
 :func:`validate` raises :class:`vpid_bench.api.ConfigError` naming the key as the user types
 it, so a bad override fails in one line before any simulation starts.

@@ -3,7 +3,7 @@
 
 Times in s, heights in m. The record window is ``T = (L + w) / V + extra`` and the grid is
 ``t_k = k dt`` for ``k = 0 ... floor(T / dt)``. Two ways to feed a step input to a
-time-stepping integrator (NOTES.md):
+time-stepping integrator (docs/paper-notes.md):
 
 * ``point``: ``y_k = y(t_k)``, with ``start <= t_k < end`` judged with a 1e-9 s tolerance so
   an edge that falls on a grid point up to rounding counts as on the grid. Newmark then

@@ -51,10 +51,10 @@ def _ep(name: str, value: str) -> importlib.metadata.EntryPoint:
 
 def test_builtins_arrive_through_entry_points(registry):
     names = {ep.name for ep in importlib.metadata.entry_points(group="vpid_bench")}
-    assert {"functions", "random"} <= names
+    assert {"functions", "baselines"} <= names
     assert "functions" in registry.problems
     assert "random" in registry.optimizers
-    assert registry.owner("optimizer", "random") == "random"
+    assert registry.owner("optimizer", "random") == "baselines"
 
 
 def test_two_plugins_with_one_optimizer_name_is_an_error_naming_both(fake_modules):
