@@ -33,7 +33,8 @@ from typing import Any
 import numpy as np
 
 from . import records as rec
-from .api import ConfigError, Optimizer, Problem, VpidBenchError, nore, relative_errors_percent
+from .api import ConfigError, Optimizer, Problem, VpidBenchError, relative_errors_percent
+from .artifacts import best_vector, write_best_signals
 from .params import build_dataclass, to_plain
 from .plugins import Registry
 from .runner import RunResult, run
@@ -168,13 +169,13 @@ def _result_section(result: RunResult, problem: Problem) -> dict[str, Any]:
         "evaluations": result.evaluations,
         "batches": result.batches,
         "stopped_by": result.stopped_by,
-        "nore": None,
+        "metrics": {},
         "rel_error_percent": None,
     }
     x_true = problem.x_true
+    section["metrics"] = {str(k): float(v) for k, v in problem.metrics(result.x_best).items()}
     if x_true is not None and np.all(np.isfinite(result.x_best)):
         section["rel_error_percent"] = relative_errors_percent(result.x_best, x_true)
-        section["nore"] = nore(result.x_best, x_true)
     return section
 
 
@@ -344,14 +345,17 @@ def run_from_config(
     finally:
         bar.close()
         summary.wall_time_s = time.perf_counter() - start
+    best = best_vector(summary.record_paths)
+    if best is not None:
+        write_best_signals(job_dir, problem, *best)
     return summary
 
 
 def _postfix(record: Mapping[str, Any]) -> str:
     res = record["result"]
     text = f"f={res['f_best']:.3g}" if res["f_best"] is not None else "f=inf"
-    if res.get("nore") is not None:
-        text += f" NoRE={res['nore']:.2f}%"
+    for name, value in list((res.get("metrics") or {}).items())[:1]:
+        text += f" {name}={value:.4g}" if value is not None else f" {name}=inf"
     return text
 
 

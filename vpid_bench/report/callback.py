@@ -62,14 +62,9 @@ def write_and_print(folder: Path, short: bool) -> bool:
     notes a failure, returns False.
     """
     try:
-        if short:
-            from .light import light_report
+        from .build import build_report
 
-            report: Any = light_report(folder, folder / REPORT_SUBDIR)
-        else:
-            from .build import build_report
-
-            report = build_report([folder], folder / REPORT_SUBDIR)
+        report: Any = build_report([folder], folder / REPORT_SUBDIR, short=short)
     except Exception as exc:  # the report must not crash a sweep
         from .load import NoRecordsError
 
@@ -83,7 +78,7 @@ def write_and_print(folder: Path, short: bool) -> bool:
         return False
     print(f"\n{report.headline}\n\nreport: {report.report_md}", flush=True)
     if short:
-        from .light import full_report_command
+        from .build import full_report_command
 
         print(f"full report with figures: {full_report_command(folder)}", flush=True)
     bad = report.failures
