@@ -9,7 +9,7 @@ run (:meth:`vpid_bench.api.Problem.signals`), with the unit of each channel
 ``best_signals.csv`` layout (UTF-8)::
 
     # vpid-bench best signals 1
-    # source: {"run_index": 3, "f_best": 0.046, "ranked_by": "NoRE", "value": 22.3}
+    # source: {"run_index": 3, "f_best": 0.046, "ranked_by": "err", "value": 22.3}
     # units: {"t": "s", "z1''": "m/s^2", "z2''": "m/s^2"}
     t,z1'':measured,z1'':fitted,z2'':measured,z2'':fitted
     0.0,0.0,0.0,0.0,0.0

@@ -153,7 +153,7 @@ def optimizer_params(registry: Registry, cfg: Mapping) -> tuple[type[Optimizer],
 
 
 def default_budget(problem_cfg: Mapping) -> int:
-    """The paper's protocol: an initial population plus ``iterations`` generations of ``ps``."""
+    """The protocol: an initial population plus ``iterations`` generations of ``ps``."""
     return int(problem_cfg["ps"]) * (int(problem_cfg["iterations"]) + 1)
 
 

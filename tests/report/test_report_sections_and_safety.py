@@ -207,3 +207,16 @@ def test_a_vehicle_job_records_metrics_and_writes_its_best_signals(tmp_path, reg
     best = min(recs, key=lambda r: r["result"]["metrics"]["NoRE"])
     assert sig.source["run_index"] == best["run_index"] and sig.source["ranked_by"] == "NoRE"
     assert set(sig.channels) == {"z1''", "z2''"} and sig.t.size == 480
+
+
+def test_the_core_report_knows_no_problem():
+    """No word of one problem (its name, its paper, its metric) in the core report's code."""
+    import vpid_bench
+
+    root = Path(vpid_bench.__file__).parent
+    files = [*sorted((root / "report").glob("*.py")), root / "artifacts.py"]
+    pattern = re.compile(r"\b(vehicles?|paper|nore)\b", re.IGNORECASE)
+    hits = [f"{f.name}:{i}" for f in files
+            for i, line in enumerate(f.read_text(encoding="utf-8").splitlines(), start=1)
+            if pattern.search(line)]
+    assert hits == []
