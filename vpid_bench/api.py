@@ -1,6 +1,6 @@
 """The two interfaces every plugin implements: :class:`Problem` and :class:`Optimizer`.
 
-The core knows nothing about vehicles or evolutionary algorithms. A problem maps a population
+The core knows no particular problem or optimization algorithm. A problem maps a population
 of candidate vectors (rows) to objective values; an optimizer proposes populations (``ask``)
 and learns their values (``tell``). The run loop in :mod:`vpid_bench.runner` sits between the
 two and owns the evaluation budget, so an optimizer can neither overspend nor misreport.
@@ -140,7 +140,8 @@ class Problem(abc.ABC):
 
     @property
     def x_true(self) -> np.ndarray | None:
-        """The true parameter vector when it is known (enables NoRE), else ``None``."""
+        """The true parameter vector when it is known (the records then hold each parameter's
+        relative error), else ``None``."""
         return None
 
     @abc.abstractmethod
@@ -156,9 +157,23 @@ class Problem(abc.ABC):
 
         Returns ``{"t": times (s), "<channel>:measured": ..., "<channel>:fitted": ...}`` with
         one pair per measured channel (e.g. ``z1'':measured``), or ``None`` when the problem
-        has no signals (the default).
+        has no signals (the default). Every array has the length of ``t``. At the end of a job
+        the signals of its best run are written to ``best_signals.csv``
+        (:func:`vpid_bench.artifacts.write_best_signals`), which report sections plot.
         """
         return None
+
+    def signal_units(self) -> dict[str, str]:
+        """Unit of each channel of :meth:`signals`, e.g. ``{"z1''": "m/s^2"}``; a channel
+        missing here has no unit in files and plots. Default: none."""
+        return {}
+
+    def metrics(self, x: np.ndarray) -> dict[str, float]:
+        """Named accuracy metrics of an identified vector ``x`` (lower is better), e.g. an
+        error norm against the known truth. Stored in each run record as ``result.metrics``
+        (a non-finite value as ``null``); the report ranks by the first metric where every
+        run of a context has it, else by the objective. Default: none."""
+        return {}
 
     #: Optional capability for least-squares optimizers: a problem that sets this to True
     #: implements :meth:`residuals`. Each residual evaluation counts against the budget like
@@ -195,7 +210,9 @@ class Problem(abc.ABC):
         return None
 
     def describe(self) -> dict[str, Any]:
-        """Extra facts about this instance that go into every run record (JSON-able)."""
+        """Extra facts about this instance that go into every run record (JSON-able), under
+        ``problem.info``. The key ``f_at_true`` (the objective at :attr:`x_true`, where known)
+        is read by the report, which draws it as a reference line in the convergence figure."""
         return {}
 
     def write_artifacts(self, directory: Path) -> list[Path]:
@@ -337,7 +354,3 @@ def relative_errors_percent(x: Sequence[float], x_true: Sequence[float]) -> np.n
     x_true = np.asarray(x_true, dtype=float)
     return 100.0 * (x - x_true) / x_true
 
-
-def nore(x: Sequence[float], x_true: Sequence[float]) -> float:
-    """Norm of relative errors (the paper's NoRE): Euclidean norm of the errors in percent."""
-    return float(np.linalg.norm(relative_errors_percent(x, x_true)))

@@ -39,6 +39,7 @@ import numpy as np
 
 from . import records as rec
 from .api import Optimizer, Problem
+from .artifacts import best_vector, write_best_signals
 from .plugins import Registry
 from .runner import RunResult, run
 from .spec import Job, parse_job
@@ -293,6 +294,9 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
             log.warning("the optimum / identifiability analysis failed: %s: %s",
                         type(exc).__name__, exc)
         summary.wall_time_s = time.perf_counter() - start
+    best = best_vector(summary.record_paths)
+    if best is not None:  # the best run's own instance: its record is the one it fitted
+        write_best_signals(job_dir, problem.instance(int(best[1]["run_index"])), *best)
     return summary
 
 
@@ -336,9 +340,8 @@ def run_from_config(cfg: Any, job_dir: str | Path, registry: Registry | None = N
 def _postfix(record: Mapping[str, Any]) -> str:
     res = record["result"]
     text = f"f={res['f_best']:.3g}" if res["f_best"] is not None else "f=inf"
-    for name, value in (res.get("metrics") or {}).items():
-        if value is not None:
-            text += f" {name}={value:.3g}"
+    for name, value in list((res.get("metrics") or {}).items())[:1]:
+        text += f" {name}={value:.4g}" if value is not None else f" {name}=inf"
     return text
 
 

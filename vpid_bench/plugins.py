@@ -102,8 +102,8 @@ def get_plugin_manager(
     except pluggy.PluginValidationError as exc:
         raise PluginError(
             f"plugin {pm.get_name(exc.plugin)!r} implements a hook vpid-bench does not know: "
-            f"{exc}; the hooks are vpid_bench_register_optimizers and "
-            "vpid_bench_register_problems"
+            f"{exc}; the hooks are vpid_bench_register_optimizers, "
+            "vpid_bench_register_problems and vpid_bench_register_report_sections"
         ) from exc
     pm.vpid_bench_info = info  # type: ignore[attr-defined]
     return pm
@@ -126,6 +126,16 @@ class Registry:
         self._owner: dict[tuple[str, str], str] = {}
         self._collect("optimizer", self.pm.hook.vpid_bench_register_optimizers, self.optimizers)
         self._collect("problem", self.pm.hook.vpid_bench_register_problems, self.problems)
+        #: Report sections per problem name, in plugin load order: (plugin name, function).
+        self.report_sections: dict[str, list[tuple[str, Any]]] = {}
+        for impl in reversed(self.pm.hook.vpid_bench_register_report_sections.get_hookimpls()):
+            def add(problem: str, section: Any, _plugin: str = impl.plugin_name) -> None:
+                if not isinstance(problem, str) or not callable(section):
+                    raise PluginError(f"plugin {_plugin!r} registered report section "
+                                      f"{section!r} for {problem!r}: needs (name, callable)")
+                self.report_sections.setdefault(problem, []).append((_plugin, section))
+
+            impl.function(register=add)
 
     def _collect(self, kind: str, hook: Any, table: dict[str, Any]) -> None:
         base, params_attr, params_base = {

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from vpid_bench.api import Bounds, Problem
+from vpid_bench.api import Bounds, Problem, relative_errors_percent
 
 from .config import PARAM_NAMES, PARAM_UNITS, VehicleConfig, validate, window
 from .model import KnownConstants, physical
@@ -106,6 +106,13 @@ class VehicleProblem(Problem):
         R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
         return R.reshape(R.shape[0], -1)
 
+    def metrics(self, x: np.ndarray) -> dict[str, float]:
+        """``{"NoRE": ...}``: the paper's norm of relative errors of ``x`` (percent)."""
+        return {"NoRE": nore(x, self._x_true)}
+
+    def signal_units(self) -> dict[str, str]:
+        return {"z1''": "m/s²", "z2''": "m/s²"}
+
     def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
         fitted = self.responses(np.asarray(x, dtype=float).reshape(1, -1))[0]
         return {
@@ -162,3 +169,9 @@ class VehicleProblem(Problem):
         path = write_reference(directory / "reference.csv", self.t, self.reference,
                                self.reference_clean)
         return [path]
+
+
+def nore(x: np.ndarray, x_true: np.ndarray) -> float:
+    """Norm of relative errors (the paper's NoRE): the Euclidean norm of the relative errors
+    ``100 (x - x_true) / x_true`` in percent (NaN when ``x`` is not finite)."""
+    return float(np.linalg.norm(relative_errors_percent(x, x_true)))

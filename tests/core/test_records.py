@@ -58,14 +58,15 @@ def test_one_record_per_run_with_every_field(job):
     assert r["timing"]["wall_time_s"] > 0
 
 
-def test_nore_and_relative_errors_where_true_values_exist(tmp_path, compose_config):
+def test_relative_errors_where_true_values_exist(tmp_path, compose_config):
     cfg = compose_config(FAST[:-1] + ["problem.function=rosenbrock", "runs=1"])
     run_from_config(cfg, tmp_path)
     (r,) = _records(tmp_path)
     x = np.asarray(r["result"]["x_best"])
     eps = 100 * (x - 1.0) / 1.0
     np.testing.assert_allclose(r["result"]["rel_error_percent"], eps, rtol=1e-12)
-    assert isinstance(r["result"]["metrics"], dict)
+    # The functions problem reports no metrics: the norm of eps is the vehicle's business.
+    assert r["result"]["metrics"] == {} and "nore" not in r["result"]
 
 
 def test_same_config_and_seed_give_identical_records(job, tmp_path, compose_config):

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from vpid_bench.api import nore, relative_errors_percent
+from vpid_bench.api import relative_errors_percent
 from vpid_bench.records import SCHEMA, record_path, stable_hash, write_job_status, write_record
 
 PAPER_NAMES = ["m", "I", "m1", "m2", "k1", "k2", "c1", "c2", "a1"]
@@ -15,25 +15,36 @@ OV = np.array([505.10, 651.00, 28.58, 54.30, 15000, 15000, 1828.00, 1828.00, 1.4
 # The paper's DE4 mean vector at PS = 20 (Table II): its NoRE is 1.51 %.
 DE4_PS20_MEAN = np.array([506.68, 653.84, 28.64, 54.46, 15016.74, 14894.38, 1834.80,
                           1847.71, 1.471])
+UNITS = ["kg", "kg m^2", "kg", "kg", "N/m", "N/m", "N s/m", "N s/m", "m"]
+
+
+def nore(x, true) -> float:
+    """The norm of relative errors (%), computed here independently of the plugin."""
+    return float(np.sqrt(np.sum((100.0 * (np.asarray(x) - true) / true) ** 2)))
 
 
 def record(*, problem: str, optimizer: str, ps: int, run_index: int, x: np.ndarray | None,
            f: float | None, names: list[str], true: np.ndarray | None, seed: int = 0,
            problem_extra: dict[str, Any] | None = None, status: str = "ok",
-           trace_best: list[float] | None = None) -> dict[str, Any]:
-    """One run record in the schema of vpid_bench.experiment.make_record."""
-    pcfg = {"ps": ps, "iterations": 4, **(problem_extra or {})}
-    params = {"ps": ps, "iterations": 4}
-    budget = ps * 5
+           trace_best: list[float] | None = None, iterations: int = 4,
+           metrics: dict[str, float] | None = None, info: dict[str, Any] | None = None,
+           units: list[str] | None = None) -> dict[str, Any]:
+    """One run record in the schema of vpid_bench.experiment.make_record. With true values
+    and no ``metrics``, the record's metrics are ``{"NoRE": ...}`` as the vehicle's."""
+    pcfg = {"ps": ps, "iterations": iterations, **(problem_extra or {})}
+    params = {"ps": ps, "iterations": iterations}
+    budget = ps * (iterations + 1)
     rid = stable_hash([problem, pcfg, optimizer, params, seed, run_index])
     result = None
     trace = None
     if status == "ok":
         x = np.asarray(x, dtype=float)
         result = {"x_best": x.tolist(), "f_best": f, "evaluations": budget, "batches": 5,
-                  "stopped_by": "budget", "nore": None, "rel_error_percent": None}
+                  "stopped_by": "budget", "metrics": dict(metrics or {}),
+                  "rel_error_percent": None}
         if true is not None:
-            result["nore"] = nore(x, true)
+            if metrics is None:
+                result["metrics"] = {"NoRE": nore(x, true)}
             result["rel_error_percent"] = relative_errors_percent(x, true).tolist()
         best = trace_best or [f * (5 - i) for i in range(5)]
         trace = {"evaluations": [ps * (i + 1) for i in range(5)], "best": best}
@@ -41,11 +52,12 @@ def record(*, problem: str, optimizer: str, ps: int, run_index: int, x: np.ndarr
         "schema": SCHEMA, "run_id": rid, "run_index": run_index, "status": status,
         "error": None if status == "ok" else {"type": "RuntimeError", "message": "boom",
                                               "traceback": ""},
-        "problem": {"name": problem, "config": pcfg, "info": {}},
+        "problem": {"name": problem, "config": pcfg, "info": dict(info or {})},
         "optimizer": {"name": optimizer, "plugin": None, "params": params},
-        "seeds": {"seed": seed, "run_index": run_index, "spawn_key": [run_index]},
+        "seeds": {"seed": seed, "spawn_key": [run_index]},
+        "instance": {"index": run_index, "id": None},
         "budget": budget,
-        "parameters": {"names": names, "units": [""] * len(names),
+        "parameters": {"names": names, "units": list(units or [""] * len(names)),
                        "lower": [0.0] * len(names), "upper": [1.0] * len(names),
                        "true": None if true is None else list(map(float, true))},
         "result": result, "trace": trace, "config": {}, "versions": {},

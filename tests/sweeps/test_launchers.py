@@ -9,9 +9,10 @@ import importlib.util
 import pytest
 from sweep_helpers import fingerprints, run_cli
 
-# One job fails in every launcher (problem.dim=1 is refused by the functions problem).
-SWEEP = ["-m", "problem=functions", "optimizer=random,de1,ga", "problem.dim=1,4", "runs=3",
-         "problem.iterations=10", "progress=false", "report=false"]
+# Three jobs fail in every launcher: their record file does not exist (a file is read when the
+# job builds its problem, so the pre-flight cannot refuse it).
+SWEEP = ["-m", "optimizer=random,de1,ga", "problem.reference.file=null,missing.csv", "runs=3",
+         "problem.iterations=2", "progress=false", "report=false"]
 OK_JOBS = 3
 
 
@@ -26,7 +27,7 @@ def _check_failed_job_reported(done) -> None:
     assert "sweep: 6 job(s), 3 ok, 3 not ok" in done.stderr
     summary = [line for line in done.stderr.splitlines() if line.startswith("  error: ")]
     assert len(summary) == 3  # one line per failed job, whichever process ran it
-    assert all(line.endswith("problem.dim=1 is not allowed: an integer >= 2") for line in summary)
+    assert all("problem.reference.file='missing.csv' is not allowed" in line for line in summary)
     assert "Traceback" not in done.stderr
 
 

@@ -1,12 +1,17 @@
-"""Build a report from run records: tables, tests, figures, ``report.md``.
+"""Build a report from run records: tables, tests, figures, plugin sections, ``report.md``.
 
 :func:`build_report` reads the records below any number of job or sweep folders (merged),
 and writes into ``out_dir``::
 
-    report.md               the report, figures linked
-    runs.csv                one row per run (``pandas.read_csv("runs.csv")``)
-    tables/*.csv, *.tex     headline, Tables II/III reproduced, per-run statistics, tests
-    figures/*.png           convergence, per-run metric, relative-error heatmap, signals, CD
+    report.md               the report, figures linked (lines within 120 columns)
+    runs.csv                one row per run
+    tables/*.csv, *.tex     headline, run_stats, tests, and the tables of plugin sections
+    figures/*.png           convergence, per-run metric, error heatmap, CD diagrams, plugins'
+
+One pipeline serves both uses. ``short=True`` is a single job's report: the same headline,
+statistics and plugin sections, without significance tests and figures, and without
+importing pandas, matplotlib or scipy.stats (so a single job's command stays quick). The
+full report converts the same tidy rows into a pandas DataFrame for the tests and figures.
 
 It is honest whatever the numbers: every table says how many runs it rests on, the tests
 say when they could not be run, and nothing claims significance that the Holm-corrected
@@ -16,21 +21,28 @@ p-values do not show.
 from __future__ import annotations
 
 import dataclasses
+import datetime as _dt
 import logging
+import math
+import shlex
+import textwrap
 import warnings
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from . import render, tables
+from .load import LoadedRecords, NoRecordsError, load_records, reason, run_rows
+from .render import para
+from .safe import UnsafePathError, escape, inside, slug
+from .sections import Contribution, HeadlineColumn, ReportContext, Section
 
-from . import figures, paper, render, stats, tables
-from .light import sources_lines
-from .load import LoadedRecords, NoRecordsError, load_records, runs_frame, traces_frame
-
-__all__ = ["NoRecordsError", "Report", "build_report"]
+__all__ = ["NoRecordsError", "Report", "build_report", "full_report_command"]
 
 log = logging.getLogger(__name__)
+
+#: Significance level after Holm correction (the default of ``--alpha``).
+ALPHA = 0.05
 
 
 @dataclasses.dataclass
@@ -45,174 +57,325 @@ class Report:
     files: list[Path]
     skipped_figures: dict[str, str]
     loaded: LoadedRecords
+    section_errors: list[str] = dataclasses.field(default_factory=list)
 
     @property
     def failures(self) -> list[str]:
-        """One line per failed job, failed run or unreadable record file."""
-        return self.loaded.failures
+        """One line per failed job, failed run, unreadable record or failed plugin section."""
+        return self.loaded.failures + self.section_errors
 
 
-def _headline(stats_table: Any, verdicts: list[str]) -> Any:
-    """The short table: per context, optimizers by median per-run metric."""
-    import pandas as pd
-
-    t = stats_table
-    name = t["metric_name"]
-    h = pd.DataFrame({
-        "context": t["context"],
-        "rank": t["rank_median"],
-        "optimizer": t["algorithm"],
-        "n": t["n_runs"],
-        "metric": name,
-        "median": t.get("median"),
-        "IQR": [f"[{render.fmt(a)}, {render.fmt(b)}]" for a, b in
-                zip(t.get("q1", np.nan * t["n_runs"]), t.get("q3", np.nan * t["n_runs"]),
-                    strict=True)],
-        "mean-vector NoRE": t["meanvec_nore"],
-        "rank by mean-vector NoRE": t["rank_meanvec_nore"],
-        "paper NoRE": t["paper_nore"],
-        "median f": t.get("f_median"),
-    })
-    if verdicts and any(verdicts):
-        h["vs random"] = verdicts
-    return h.dropna(axis=1, how="all")
+def full_report_command(job_dir: str | Path) -> str:
+    """The command that builds the full report (figures included) of ``job_dir`` in place."""
+    job = Path(job_dir)
+    return f"vpid-bench-report {shlex.quote(str(job))} -o {shlex.quote(str(job / 'report'))}"
 
 
-def _sources_text(paths: list[Path], loaded: LoadedRecords, df: Any) -> list[str]:
-    failed = df[df["status"] != "ok"]
-    return sources_lines(paths, loaded, list(zip(
-        failed["algorithm"], failed["context"], failed["run_index"], failed["seed"],
-        failed["error"], strict=True)))
+class _Names:
+    """File names claimed in this report: a second file with the same safe name gets
+    ``-2``, ``-3``, ... instead of overwriting the first."""
+
+    def __init__(self, root: Path) -> None:
+        self.root = root
+        self.used: set[Path] = set()
+
+    def claim(self, path: Path) -> Path:
+        inside(self.root, path)
+        stem, suffix, n = path.stem, path.suffix, 1
+        while path in self.used:
+            n += 1
+            path = path.with_name(f"{stem}-{n}{suffix}")
+        self.used.add(path)
+        return path
+
+    def file(self, kind: str, name: str, suffix: str) -> Path:
+        return self.claim(self.root / kind / (slug(name) + suffix))
+
+
+def sources_lines(paths: Iterable[Path], loaded: LoadedRecords,
+                  rows: Sequence[Mapping[str, Any]]) -> list[str]:
+    """Where the records came from, what was skipped, which jobs and runs failed."""
+    n = len(loaded.records)
+    n_ok = sum(r["status"] == "ok" for r in loaded.records)
+    lines = [para(f"Built {_dt.datetime.now(_dt.timezone.utc):%Y-%m-%d %H:%M UTC} from {n} run "
+                  f"record(s) ({n_ok} ok, {n - n_ok} failed) found in:"), ""]
+    lines += [f"- `{escape(p)}`" for p in paths]
+    notes = []
+    if loaded.duplicates:
+        notes.append(f"{loaded.duplicates} duplicate record(s) (same run id) were counted once.")
+    for p, why in loaded.skipped:
+        notes.append(f"**Skipped unreadable record** `{escape(p)}`: {escape(reason(p, why))}")
+    for d, why in loaded.failed_jobs:
+        notes.append(f"**Job not ok** `{escape(d)}`: {escape(why)}")
+    for r in rows:
+        if r["status"] != "ok":
+            notes.append(f"**Failed run** {escape(r['algorithm'])} on {escape(r['context'])}, "
+                         f"run {escape(r['run_index'])} (seed {escape(r['seed'])}): "
+                         f"{escape(r['error'])}")
+    if notes:
+        lines += ["", "Problems found:", ""]
+        lines += [textwrap.fill(f"- {t}", width=render.PROSE_WIDTH,
+                                       subsequent_indent="  ", break_long_words=False)
+                  for t in notes]
+    return lines
 
 
 HOW_TO_READ = """\
-## How to read this report
+**Metric.** Each problem may report accuracy metrics of an identified vector (`result.metrics`
+in the records, e.g. a norm of relative errors against the known truth). Runs are judged by
+the problem's first metric where every run of the context has it, otherwise by the best
+objective value `f` found. Lower is better for both; the headline names the metric.
 
-- **Metric.** Where the problem knows the true parameters, runs are judged by NoRE, the
-  Euclidean norm of the relative errors of the identified parameters in percent,
-  `NoRE = ||100 (x - x_true) / x_true||`; otherwise by the best objective value `f` found.
-  Lower is better for both. The column `metric` says which one a row uses.
-- **Context.** Optimizers are compared within a context: one problem, one population size
-  `ps` and one value of every other setting that varies across the records (noise level,
-  noise seed, budget). Runs of different optimizer seeds are pooled.
-- **Two rankings.** The paper ranks by the NoRE of the *mean* of the identified vectors
-  (`mean-vector NoRE`). Averaging vectors can hide scatter (errors of opposite sign cancel),
-  so this report ranks by the *median per-run* metric (`rank`), and shows both.
-- **Significance.** Within a context: Kruskal–Wallis over all optimizers, then two-sided
-  Mann–Whitney U for every pair, Holm-corrected over the pairs of that context;
-  "significant" means `p_holm < {alpha}`. Effect size: Vargha–Delaney
-  `A12 = P(metric_a > metric_b) + ties/2` (below 0.5: `a` tends to be better; |A12 - 0.5| of
-  0.06 / 0.14 / 0.21 = small / medium / large). Across contexts (blocks): Friedman on the
-  median metric per block, Nemenyi post-hoc for the critical-difference diagram, pairwise
-  Wilcoxon signed-rank tests with Holm correction. With few runs or blocks, tests have little
-  power: "not significant" is not "equal".
-- **Baseline.** Random search, when it was run, is the line a useful optimizer must clear
-  (significantly lower per-run metric at the same budget).
-"""
+**Context.** Optimizers are compared within a context: one problem, one population size `ps`
+and one value of every other setting that varies across the records (noise level, noise seed,
+budget). Runs of different optimizer seeds are pooled.
+
+**Significance.** Within a context: Kruskal–Wallis over all optimizers, then two-sided
+Mann–Whitney U for every pair, Holm-corrected over the pairs of that context; "significant"
+means `p_holm < {alpha}`. Effect size: Vargha–Delaney `A12 = P(metric_a > metric_b) + ties/2`
+(below 0.5: `a` tends to be better). Across contexts (blocks): Friedman on the median metric
+per block, Nemenyi post-hoc, pairwise Wilcoxon signed-rank with Holm. With few runs or blocks
+the tests have little power: "not significant" is not "equal".
+
+**Baseline.** `{baseline}`, when it was run, is the line a useful optimizer must clear
+(a significantly lower per-run metric at the same budget)."""
 
 
-def _mean_vector_md(meanvec: Any) -> list[str]:
-    lines = ["## Tables II and III reproduced: the mean identified vector", ""]
-    if meanvec is None or meanvec.empty:
-        return lines + ["No context has true parameter values: the mean-vector table needs "
-                        "them (the per-run statistics below use the objective).", ""]
-    text = ("Mean over the successful runs of the identified vectors, its relative errors "
-            "ε (%) and their norm NoRE (%).")
-    if (meanvec["source"] == "paper").any():
-        text += (f" `paper`: the published values, {paper.CITATION} (Table III's DE2 row "
-                 "repaired, see the note). `difference` = ours − paper.")
-    lines += [text, ""]
-    for context, g in meanvec.groupby("context", sort=True):
-        params = [c for c in g.columns if c not in {"context", "problem", "ps", "algorithm",
-                                                     "n_runs", "source", "quantity", "nore",
-                                                     "note"} and g[c].notna().any()]
-        rows = g.copy()
-        rows["row"] = rows["source"] + " " + rows["quantity"].map(
-            {"mean": "mean", "eps_percent": "ε (%)"})
-        show = rows[["algorithm", "n_runs", "row", *params, "nore"]].rename(
-            columns={"n_runs": "n", "nore": "NoRE (%)"})
-        lines += [f"### {context}", "", render.markdown(show), ""]
-        notes = sorted({n for n in g["note"] if n and n != "ours - paper"})
-        lines += [f"- {n}" for n in notes] + ([""] if notes else [])
+def _verdict_short(v: str) -> str:
+    """The headline's compact form of a baseline verdict."""
+    for long, short in (("beats it (p_holm=", "yes, p="), ("does not clear it (p_holm=", "no, p="),
+                        ("WORSE than it (p_holm=", "WORSE, p=")):
+        if v.startswith(long):
+            return short + v[len(long):].rstrip(")")
+    return v
+
+
+def _headline(summary: list[dict[str, Any]], verdicts: list[str],
+              extra: list[HeadlineColumn], baseline: str
+              ) -> tuple[list[str], list[list[Any]], list[str], list[list[Any]]]:
+    """(headers, rows) of the headline for Markdown/terminal (compact, in priority order,
+    context first) and for the CSV (every column)."""
+    any_failed = any(s["n_failed"] for s in summary)
+    metric = {s["context"]: s["metric_name"] for s in summary}
+    show_f = any(m != "f_best" for m in metric.values())
+    has_verdict = any(verdicts)
+    md_h = ["context", "rank", "optimizer", "n"] + (["failed"] if any_failed else []) + [
+        "metric", "median", "IQR"] + (["median f"] if show_f else []) + [c.name for c in extra] + (
+        [f"beats {baseline}?"] if has_verdict else [])
+    csv_h = ["context", "rank", "optimizer", "n", "failed", "metric", "median", "q1", "q3",
+             "mean", "sd", "best", "worst", "median f"] + [c.name for c in extra] + (
+        [f"vs {baseline}"] if has_verdict else [])
+    md_rows, csv_rows = [], []
+    for s, v in zip(summary, verdicts, strict=True):
+        key = (s["context"], s["algorithm"])
+        q1, q3 = s.get("q1", math.nan), s.get("q3", math.nan)
+        iqr = f"[{render.fmt(q1)}, {render.fmt(q3)}]" if s["n_runs"] else ""
+        ex = [c.values.get(key) for c in extra]
+        md_rows.append([s["context"], s["rank"], s["algorithm"], s["n_runs"]]
+                       + ([s["n_failed"]] if any_failed else [])
+                       + [s["metric_name"], s.get("median"), iqr]
+                       + ([s.get("f_median")] if show_f else []) + ex
+                       + ([_verdict_short(v)] if has_verdict else []))
+        csv_rows.append([s["context"], s["rank"], s["algorithm"], s["n_runs"], s["n_failed"],
+                         s["metric_name"]] + [s.get(k) for k in (
+                             "median", "q1", "q3", "mean", "sd", "best", "worst", "f_median")]
+                        + ex + ([v] if has_verdict else []))
+    return md_h, md_rows, csv_h, csv_rows
+
+
+STATS_MD = [("optimizer", "algorithm"), ("n", "n_runs"), ("median", "median"), ("q1", "q1"),
+            ("q3", "q3"), ("mean", "mean"), ("sd", "sd"), ("best", "best"), ("worst", "worst"),
+            ("median f", "f_median"), ("best f", "f_best"), ("evaluations", "evaluations_max"),
+            ("s/run", "wall_time_mean_s")]
+
+
+def _by_context(items: Sequence[Mapping[str, Any]]) -> dict[str, list[Mapping[str, Any]]]:
+    out: dict[str, list[Mapping[str, Any]]] = {}
+    for s in items:
+        out.setdefault(s["context"], []).append(s)
+    return out
+
+
+def _stats_md(summary: list[dict[str, Any]]) -> list[str]:
+    lines = ["## Per-run statistics", "",
+             para("Per context: the per-run metric (median, quartiles, mean, sample sd, best, "
+                  "worst), the objective `f` (median, best), the evaluations used and the mean "
+                  "wall time per run in seconds (a shared machine: indicative only). Columns "
+                  "that do not fit in 120 characters, and more, are in `tables/run_stats.csv`."),
+             ""]
+    for context, g in _by_context(summary).items():
+        lines += [f"### {escape(context)} ({escape(g[0]['metric_name'])})", "",
+                  render.markdown([h for h, _ in STATS_MD],
+                                  [[s.get(k) for _, k in STATS_MD] for s in g], keep=3), ""]
     return lines
 
 
-def _tests_md(kw: Any, pairs: Any, fr: stats.FriedmanResult, alpha: float) -> list[str]:
+def _tests_md(kw: Any, pairs: Any, fr: Any, alpha: float) -> list[str]:
     lines = ["## Statistical tests", "", "### Kruskal–Wallis per context", "",
-             render.markdown(kw), ""]
+             render.markdown(["context", "k", "H", "p", "note"],
+                             [[r.context, r.k, r.H, r.p, r.note] for r in kw.itertuples()],
+                             keep=2), ""]
     lines += [f"### Pairwise Mann–Whitney U, Holm-corrected within each context "
               f"(significant: p_holm < {alpha})", ""]
-    lines += [render.markdown(pairs) if not pairs.empty else "No pair to compare.", ""]
+    if pairs.empty:
+        lines += ["No pair to compare.", ""]
+    for context, g in pairs.groupby("context", sort=True):
+        sig = g[g["significant"]]
+        lines += [para(f"{escape(context)}: {len(sig)} of {len(g)} pairs differ significantly"
+                       + (" (below); every pair, with U, raw p and effect size, is in "
+                          "`tables/pairwise.csv`." if len(sig) else
+                          "; every pair is in `tables/pairwise.csv`.")), ""]
+        if len(sig):
+            lines += [render.markdown(
+                ["better", "worse", "median better", "median worse", "p_holm", "A12", "effect"],
+                [[r.better, r.b if r.better == r.a else r.a,
+                  r.median_a if r.better == r.a else r.median_b,
+                  r.median_b if r.better == r.a else r.median_a, r.p_holm,
+                  r.A12 if r.better == r.a else 1 - r.A12, r.effect]
+                 for r in sig.itertuples()], keep=2), ""]
     lines += ["### Friedman across blocks", ""]
-    if fr.note and fr.mean_ranks is None:
-        lines += [f"Friedman test {fr.note}.", ""]
-        return lines
-    lines += [f"Blocks (contexts): {len(fr.blocks)}; optimizers present in every block: "
-              f"{', '.join(fr.algorithms)}. Friedman χ² = {render.fmt(fr.statistic)}, "
-              f"p = {render.fmt(fr.p)}. {fr.note}", "",
-              "Mean rank per optimizer (1 = best): " + ", ".join(
-                  f"{a} {r:.2f}" for a, r in fr.mean_ranks.items()), "",
-              "Nemenyi post-hoc p-values:", "",
-              render.markdown(fr.nemenyi.reset_index(names="optimizer")), "",
-              f"Pairwise Wilcoxon signed-rank on the block medians, Holm-corrected "
-              f"(significant: p_holm < {alpha}):", "", render.markdown(fr.wilcoxon), ""]
+    if fr.mean_ranks is None:
+        return lines + [para(f"Friedman test {fr.note}."), ""]
+    lines += [para(f"Blocks (contexts): {len(fr.blocks)}; optimizers present in every block: "
+                   f"{escape(', '.join(fr.algorithms))}. Friedman χ² = {render.fmt(fr.statistic)},"
+                   f" p = {render.fmt(fr.p)}. {fr.note}"), "",
+              para("Mean rank per optimizer (1 = best): " + ", ".join(
+                  f"{escape(a)} {r:.2f}" for a, r in fr.mean_ranks.items())), ""]
+    sig = fr.wilcoxon[fr.wilcoxon["significant"]] if fr.wilcoxon is not None else []
+    lines += [para(f"Pairwise Wilcoxon signed-rank on the block medians, Holm-corrected: "
+                   f"{len(sig)} of {len(fr.wilcoxon)} pairs significant (p_holm < {alpha})"
+                   + (": " + "; ".join(f"{escape(r.a)} vs {escape(r.b)} "
+                                       f"(p_holm={r.p_holm:.2g})" for r in sig.itertuples())
+                      if len(sig) else "") + ". All pairs: `tables/friedman_wilcoxon.csv`; "
+                   "Nemenyi p-values: `tables/nemenyi.csv`."), ""]
     return lines
 
 
-def _signals_figure(df: Any, records: list[dict], problem: str, path: Path,
-                    registry: Any = None) -> Path | str:
-    ok = df[(df["problem"] == problem) & (df["status"] == "ok") & np.isfinite(df["metric"])]
-    if ok.empty:
-        return "no successful run"
-    best = ok.loc[ok["metric"].idxmin()]
-    rec = next(r for r in records if r["run_id"] == best["run_id"])
-    x = rec["result"]["x_best"]
-    if x is None or any(v is None for v in x):
-        return "the best vector is not finite"
-    try:
-        from ..experiment import build_problem
-        from ..plugins import Registry
-
-        registry = registry if registry is not None else Registry()
-        prob = build_problem(registry, {**rec["problem"]["config"], "name": problem})
-        sig = prob.signals(np.asarray(x, dtype=float))
-    except Exception as exc:  # a report must not die on a plugin's fault
-        return f"could not rebuild the problem ({type(exc).__name__}: {exc})"
-    title = (f"Measured vs fitted signals of the best run: {best['algorithm']}, "
-             f"{best['context']}, {best['metric_name']} = {render.fmt(best['metric'])}"
-             + (" %" if best["metric_name"] == "NoRE" else ""))
-    return figures.signals(sig, title, path, getattr(prob, "signal_units", None))
+#: A per-context critical-difference diagram needs this many successful runs per optimizer.
+CD_MIN_RUNS = 5
+#: The critical-difference diagram across blocks needs this many blocks (contexts).
+CD_MIN_BLOCKS = 5
 
 
-def _figures(df: Any, loaded: LoadedRecords, meanvec: Any, pairs: Any,
-             fr: stats.FriedmanResult | None, fdir: Path, short: bool, alpha: float,
-             registry: Any) -> dict[str, Path | str]:
-    """Draw every figure; a value is the PNG path or why the figure was not drawn."""
+def _figures(df: Any, loaded: LoadedRecords, rows: list[dict[str, Any]], pairs: Any, fr: Any,
+             names: _Names, alpha: float) -> dict[str, Path | str]:
+    """Draw every core figure; a value is the PNG path or why the figure was not drawn."""
+    from . import figures, stats
+    from .load import traces_frame
+
     figs: dict[str, Path | str] = {}
     problems = sorted(df["problem"].unique())
-    traces = traces_frame(loaded.records, df)
-    figs["Convergence"] = figures.convergence(traces, fdir / "convergence.png")
+    figs["Convergence"] = figures.convergence(
+        traces_frame(loaded.records, rows), names.file("figures", "convergence", ".png"),
+        f_at_true(loaded.records, rows))
     for p in problems:
-        figs[f"Per-run metric, {p}"] = figures.runs_metric(df, p, fdir / f"runs_{p}.png")
-        figs[f"Relative errors of the mean vector, {p}"] = figures.rel_error_heatmap(
-            meanvec, p, fdir / f"rel_error_{p}.png")
-        figs[f"Measured vs fitted signals, best run, {p}"] = _signals_figure(
-            df, loaded.records, p, fdir / f"signals_{p}.png", registry)
-    if not short:
-        for context in sorted(df["context"].unique()):
-            ranks = stats.mean_ranks_in_context(df, context)
-            title = (f"{context}: mean rank of the per-run metric among all runs; bars join "
-                     f"optimizers not significantly different (Mann–Whitney, Holm, α={alpha})")
-            figs[f"Critical-difference diagram, {context}"] = figures.cd_diagram(
-                ranks, stats.pvalue_matrix(pairs, context), title,
-                fdir / f"cd_{figures.slug(context)}.png", alpha)
-        if fr is not None and fr.mean_ranks is not None:
-            figs["Critical-difference diagram across blocks"] = figures.cd_diagram(
-                fr.mean_ranks, fr.nemenyi,
-                f"Across {len(fr.blocks)} blocks: mean rank of the median metric; bars join "
-                f"optimizers not significantly different (Nemenyi, α={alpha})",
-                fdir / "cd_blocks.png", alpha)
+        figs[f"Per-run metric, {p}"] = figures.runs_metric(
+            df, p, names.file("figures", f"runs_{p}", ".png"))
+        figs[f"Median per-run absolute relative error per parameter, {p}"] = figures.error_heatmap(
+            df, p, names.file("figures", f"errors_{p}", ".png"))
+    for context in sorted(df["context"].unique()):
+        g = df[(df["context"] == context) & (df["status"] == "ok")]
+        n = g.groupby("algorithm").size()
+        title = f"Critical-difference diagram, {context}"
+        if len(n) < 2 or n.min() < CD_MIN_RUNS:
+            figs[title] = (f"needs at least 2 optimizers with at least {CD_MIN_RUNS} successful "
+                           f"runs each (found {len(n)} optimizer(s), fewest runs {n.min()})")
+            continue
+        metric = g["metric_name"].iloc[0]
+        figs[title] = figures.cd_diagram(
+            stats.mean_ranks_in_context(df, context), stats.pvalue_matrix(pairs, context),
+            f"{context}: bars join optimizers not significantly different "
+            f"(Mann–Whitney, Holm, α={alpha})",
+            f"mean rank of each optimizer's runs among all {len(g)} runs of the context, "
+            f"by per-run {metric} (1 = best)",
+            names.file("figures", f"cd_{context}", ".png"), alpha)
+    title = "Critical-difference diagram across blocks"
+    if fr is None or fr.mean_ranks is None or len(fr.blocks) < CD_MIN_BLOCKS:
+        found = 0 if fr is None else len(fr.blocks)
+        figs[title] = (f"needs a Friedman test over at least {CD_MIN_BLOCKS} blocks (contexts) "
+                       f"with the same optimizers; found {found}")
+    else:
+        figs[title] = figures.cd_diagram(
+            fr.mean_ranks, fr.nemenyi,
+            f"Across {len(fr.blocks)} blocks: bars join optimizers not significantly different "
+            f"(Nemenyi, α={alpha})",
+            "mean rank of each optimizer's median per-run metric over the blocks (1 = best)",
+            names.file("figures", "cd_blocks", ".png"), alpha)
     return figs
+
+
+def f_at_true(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
+              ) -> dict[str, float]:
+    """Per context, the objective at the true parameters (``problem.info.f_at_true`` of the
+    records), when every record of the context carries the same finite number."""
+    context = {r["run_id"]: r["context"] for r in rows}
+    seen: dict[str, set[float]] = {}
+    for rec in records:
+        info = (rec.get("problem") or {}).get("info") or {}
+        v = info.get("f_at_true") if isinstance(info, Mapping) else None
+        ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+        seen.setdefault(context[rec["run_id"]], set()).add(float(v) if ok else math.nan)
+    return {c: next(iter(v)) for c, v in seen.items()
+            if len(v) == 1 and not math.isnan(next(iter(v)))}
+
+
+def _plugin_sections(registry: Any, rows: list[dict[str, Any]], loaded: LoadedRecords,
+                     out_dir: Path, short: bool, alpha: float, names: _Names
+                     ) -> tuple[list[tuple[str, Section]], list[HeadlineColumn], list[str]]:
+    """Call the section functions registered for the problems in the rows."""
+    if registry is None:
+        from ..plugins import Registry
+
+        registry = Registry()
+    by_id = {r["run_id"]: r for r in loaded.records}
+    sections: list[tuple[str, Section]] = []
+    columns: list[HeadlineColumn] = []
+    errors: list[str] = []
+    for problem in sorted({r["problem"] for r in rows}):
+        funcs = getattr(registry, "report_sections", {}).get(problem, [])
+        prows = tuple(r for r in rows if r["problem"] == problem)
+        ctx = ReportContext(problem=problem, rows=prows,
+                            records=tuple(by_id[r["run_id"]] for r in prows),
+                            out_dir=out_dir, short=short, alpha=alpha, _claim=names.claim)
+        for plugin, func in funcs:
+            try:
+                contrib = func(ctx)
+                if contrib is None:
+                    continue
+                if not isinstance(contrib, Contribution):
+                    raise TypeError(f"returned {type(contrib).__name__}, not a Contribution")
+                for sec in contrib.sections:
+                    if not isinstance(sec, Section):
+                        raise TypeError(f"a section is a {type(sec).__name__}, not a Section")
+                    kept = []
+                    for f in sec.files:
+                        try:
+                            kept.append(inside(out_dir, Path(f)))
+                        except UnsafePathError as exc:
+                            errors.append(f"report section of plugin {plugin!r}: {exc}")
+                    sections.append((plugin, dataclasses.replace(sec, files=tuple(kept))))
+                columns += [c for c in contrib.headline if isinstance(c, HeadlineColumn)]
+            except Exception as exc:  # a plugin's fault costs its section, not the report
+                log.debug("report section failed", exc_info=True)
+                errors.append(f"report section of plugin {plugin!r} for problem {problem!r} "
+                              f"failed: {type(exc).__name__}: {exc}")
+    return sections, columns, errors
+
+
+def _section_md(section: Section, out_dir: Path) -> list[str]:
+    lines = [f"## {escape(section.title)}", ""]
+    if section.text:
+        lines += [section.text.rstrip(), ""]
+    links = []
+    for f in section.files:
+        rel = Path(f).resolve().relative_to(out_dir.resolve()).as_posix()
+        if rel.endswith(".png"):
+            lines += [f"![{escape(Path(rel).stem)}]({rel})", ""]
+        else:
+            links.append(f"`{rel}`")
+    if links:
+        lines += [para("Files: " + ", ".join(links) + "."), ""]
+    return lines
 
 
 def build_report(
@@ -220,16 +383,15 @@ def build_report(
     out_dir: str | Path,
     *,
     short: bool = False,
-    alpha: float = stats.ALPHA,
+    alpha: float = ALPHA,
     baseline: str = tables.BASELINE,
     registry: Any = None,
 ) -> Report:
     """Read the records below ``paths`` and write the report into ``out_dir``.
 
-    ``short`` (a single job's report) skips the significance tests and the comparison
-    figures. ``registry`` (default: the installed plugins) rebuilds the best run's problem
-    for the measured-vs-fitted figure. Raises :class:`NoRecordsError` when no readable
-    record exists.
+    ``short``: a single job's report (no tests, no figures, no pandas). ``registry``
+    (default: the installed plugins) provides the problems' report sections. Raises
+    :class:`NoRecordsError` when no readable record exists.
     """
     paths = [Path(p) for p in paths]
     out_dir = Path(out_dir)
@@ -239,66 +401,102 @@ def build_report(
         raise NoRecordsError(
             f"no run records (records/run-*.json) below {', '.join(map(str, paths))}{extra}"
         )
-    df = runs_frame(loaded.records)
-    tdir, fdir = out_dir / "tables", out_dir / "figures"
+    rows = run_rows(loaded.records)
+    summary = tables.summarize(rows)
     out_dir.mkdir(parents=True, exist_ok=True)
+    names = _Names(out_dir)
     written: list[Path] = []
-    runs_csv = out_dir / "runs.csv"
-    df.to_csv(runs_csv, index=False)
-    written.append(runs_csv)
+    columns: list[str] = []
+    for r in rows:
+        columns += [k for k in r if k not in columns]
+    written.append(render.write_csv(names.claim(out_dir / "runs.csv"), columns,
+                                    [[r.get(k) for k in columns] for r in rows]))
 
-    meanvec = tables.mean_vector_table(df)
-    st = tables.run_stats_table(df, meanvec)
-    kw = stats.kruskal_by_context(df)
-    pairs = stats.pairwise_by_context(df, alpha)
-    verdicts = tables.baseline_verdicts(st, pairs, baseline)
-    st["vs_baseline"] = verdicts
-    head = _headline(st, verdicts)
-    for table, stem in ((head, "headline"), (st, "run_stats"), (meanvec, "mean_vector"),
-                        (kw, "kruskal"), (pairs, "pairwise")):
-        if table is not None and not table.empty:
-            written += render.write_table(table, tdir, stem)
-    fr = None if short else stats.friedman_across_blocks(df, alpha)
-    if fr is not None and fr.mean_ranks is not None:
-        written += render.write_table(fr.wilcoxon, tdir, "friedman_wilcoxon")
+    def table(stem: str, headers: Sequence[str], body: Sequence[Sequence[Any]]) -> None:
+        path = names.file("tables", stem, ".csv")
+        written.append(render.write_csv(path, headers, body))
+        tex = path.with_suffix(".tex")
+        tex.write_text(render.latex(headers, body) + "\n", encoding="utf-8")
+        written.append(tex)
 
-    with warnings.catch_warnings():
-        # seaborn 0.13 calls matplotlib APIs that newer matplotlib deprecates: not our news.
-        warnings.simplefilter("ignore", DeprecationWarning)
-        warnings.simplefilter("ignore", PendingDeprecationWarning)
-        figs = _figures(df, loaded, meanvec, pairs, fr, fdir, short, alpha, registry)
+    df = kw = pairs = fr = None
+    figs: dict[str, Path | str] = {}
+    if not short:
+        from . import stats
+        from .load import runs_frame
+
+        df = runs_frame(rows)
+        kw = stats.kruskal_by_context(df)
+        pairs = stats.pairwise_by_context(df, alpha)
+        fr = stats.friedman_across_blocks(df, alpha)
+        for stem, t in (("kruskal", kw), ("pairwise", pairs)):
+            if not t.empty:
+                table(stem, *render.frame_rows(t))
+        if fr.mean_ranks is not None:
+            table("friedman_wilcoxon", *render.frame_rows(fr.wilcoxon))
+            table("nemenyi", *render.frame_rows(fr.nemenyi.reset_index(names="optimizer")))
+    verdicts = tables.baseline_verdicts(summary, pairs, baseline)
+    for s, v in zip(summary, verdicts, strict=True):
+        s[f"vs_{baseline}"] = v
+    sections, extra, section_errors = _plugin_sections(
+        registry, rows, loaded, out_dir, short, alpha, names)
+    md_h, md_rows, csv_h, csv_rows = _headline(summary, verdicts, extra, baseline)
+    table("headline", csv_h, csv_rows)
+    stat_keys: list[str] = []
+    for s in summary:
+        stat_keys += [k for k in s if k not in stat_keys]
+    table("run_stats", stat_keys, [[s.get(k) for k in stat_keys] for s in summary])
+    if not short:
+        with warnings.catch_warnings():
+            # seaborn 0.13 calls matplotlib APIs that newer matplotlib deprecates: not our news.
+            warnings.simplefilter("ignore", DeprecationWarning)
+            warnings.simplefilter("ignore", PendingDeprecationWarning)
+            figs = _figures(df, loaded, rows, pairs, fr, names, alpha)
     skipped = {k: v for k, v in figs.items() if isinstance(v, str)}
     written += [v for v in figs.values() if isinstance(v, Path)]
+    for _, sec in sections:
+        written += list(sec.files)
 
     lines = ["# vpid-bench report" + (" (single job)" if short else ""), ""]
-    lines += _sources_text(paths, loaded, df)
-    lines += ["", HOW_TO_READ.format(alpha=alpha), "## Headline", "",
-              "Per context, optimizers ranked by the median per-run metric (n = successful "
-              "runs).", ""]
-    for context, g in head.groupby("context", sort=True):
-        lines += [f"### {context}", "", render.markdown(g.drop(columns="context")), ""]
-    lines += _mean_vector_md(meanvec)
-    lines += ["## Per-run statistics", "",
-              "Per-run metric: median, quartiles, IQR, mean, sample sd, best and worst; "
-              "objective `f`: median, mean, sd, best, worst; evaluations used; wall time per "
-              "run (s, measured on a shared machine: indicative only).", ""]
-    show = st.drop(columns=["problem", "optimizer"], errors="ignore")
-    lines += [render.markdown(show), ""]
+    lines += sources_lines(paths, loaded, rows)
+    if short and len(paths) == 1:
+        lines += ["", para("A single job's report: statistics, no tests, no figures. The full "
+                           "report with figures:"), "",
+                  f"    {escape(full_report_command(paths[0]))}"]
+    lines += ["", "## How to read this report", "",
+              HOW_TO_READ.format(alpha=alpha, baseline=escape(baseline)), "",
+              "## Headline", "",
+              para("Per context, optimizers ranked by the median per-run metric (`n`: successful "
+                   "runs; IQR: the quartiles of the per-run metric). Every column, with more "
+                   "statistics, is in `tables/headline.csv`."), ""]
+    for context, idx in _by_context([{"context": r[0], "i": i} for i, r in
+                                     enumerate(md_rows)]).items():
+        body = [md_rows[x["i"]][1:] for x in idx]
+        lines += [f"### {escape(context)}", "", render.markdown(md_h[1:], body, keep=6), ""]
+    for _, sec in sections:
+        lines += _section_md(sec, out_dir)
+    if section_errors:
+        lines += [para("Not built: " + "; ".join(escape(e) for e in section_errors) + "."), ""]
+    lines += _stats_md(summary)
     if not short:
         lines += _tests_md(kw, pairs, fr, alpha)
-    lines += ["## Figures", ""]
-    for title, v in figs.items():
-        if isinstance(v, Path):
-            lines += [f"### {title}", "", f"![{title}]({v.relative_to(out_dir).as_posix()})", ""]
-        else:
-            lines += [f"- {title}: not drawn ({v})."]
-    lines += ["", "## Files", "",
-              "- `runs.csv`: every run, one row each: `pandas.read_csv('runs.csv')`.",
-              "- `tables/`: each table as CSV (full precision) and LaTeX (booktabs).",
-              "- `figures/`: the PNG figures above.", ""]
-    md = out_dir / "report.md"
+        lines += ["## Figures", ""]
+        for title, v in figs.items():
+            if isinstance(v, Path):
+                rel = v.relative_to(out_dir).as_posix()
+                lines += [f"### {escape(title)}", "", f"![{escape(title)}]({rel})", ""]
+        if skipped:
+            lines += [para("Not drawn: " + "; ".join(f"{escape(k)} ({escape(v)})"
+                                                     for k, v in skipped.items()) + "."), ""]
+    lines += ["## Files", "",
+              para("`runs.csv`: every run, one row each (`pandas.read_csv('runs.csv')`). "
+                   "`tables/`: each table as CSV (full precision) and LaTeX (booktabs)."
+                   + ("" if short else " `figures/`: the PNG figures above.")), ""]
+    md = names.claim(out_dir / "report.md")
     md.write_text("\n".join(lines), encoding="utf-8")
     written.append(md)
-    headline = render.terminal(head)
-    problems = sorted(df["problem"].unique())
-    return Report(out_dir, md, headline, len(loaded.records), problems, written, skipped, loaded)
+    term_h = md_h
+    headline = render.terminal(term_h, md_rows)
+    problems = sorted({r["problem"] for r in rows})
+    return Report(out_dir, md, headline, len(loaded.records), problems, written, skipped,
+                  loaded, section_errors)

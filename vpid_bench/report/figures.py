@@ -1,12 +1,14 @@
-"""The report's figures (seaborn/matplotlib, PNG, Agg backend), each readable on its own.
+"""The core report's figures (seaborn/matplotlib, PNG, Agg backend), each readable alone.
 
 Every function writes one PNG and returns its path, or returns a string saying why the
-figure was skipped (no data of that kind). Lower is better on every metric axis.
+figure was not drawn. Lower is better on every metric axis. Problem-specific figures (e.g.
+measured vs fitted signals) come from the problem's plugin through a report section.
 """
 
 from __future__ import annotations
 
-import re
+import math
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -24,14 +26,11 @@ def _plt() -> Any:
     return plt
 
 
-def slug(text: str) -> str:
-    """A file-name-safe form of ``text``."""
-    return re.sub(r"[^A-Za-z0-9._=-]+", "_", text).strip("_") or "x"
-
-
 def metric_label(metric_name: str) -> str:
     """Axis label of the per-run metric."""
-    return "NoRE of the best vector (%)" if metric_name == "NoRE" else "best objective value f"
+    if metric_name == "f_best":
+        return "best objective value f"
+    return f"{metric_name} of the best vector"
 
 
 def _save(fig: Any, path: Path) -> Path:
@@ -44,6 +43,24 @@ def _save(fig: Any, path: Path) -> Path:
 def _use_log(values: np.ndarray) -> bool:
     v = values[np.isfinite(values)]
     return bool(v.size and np.all(v > 0) and v.max() / v.min() > 50)
+
+
+def set_log_y(ax: Any, values: np.ndarray) -> str:
+    """A logarithmic y axis when every finite value is positive, else a symmetric-log one
+    (linear within the smallest non-zero magnitude); returns the scale name."""
+    v = values[np.isfinite(values)]
+    if v.size and np.all(v > 0):
+        from matplotlib.ticker import FuncFormatter, NullFormatter
+
+        ax.set_yscale("log")
+        plain = FuncFormatter(lambda y, _: f"{y:g}")
+        ax.yaxis.set_major_formatter(plain)
+        # A narrow range gets labelled minor ticks too (else it may show one label or none).
+        ax.yaxis.set_minor_formatter(plain if v.max() / v.min() < 100 else NullFormatter())
+        return "log"
+    nonzero = np.abs(v[v != 0])
+    ax.set_yscale("symlog", linthresh=float(nonzero.min()) if nonzero.size else 1.0)
+    return "symlog"
 
 
 def convergence_frame(traces: Any, max_points: int = 200) -> Any:
@@ -67,13 +84,17 @@ def convergence_frame(traces: Any, max_points: int = 200) -> Any:
     return pd.concat(out, ignore_index=True) if out else pd.DataFrame()
 
 
-def convergence(traces: Any, path: Path) -> Path | str:
-    """Median best objective vs evaluations per optimizer, IQR band, one panel per context."""
+def convergence(traces: Any, path: Path, f_true: Mapping[str, float] | None = None
+                ) -> Path | str:
+    """Median best objective vs evaluations per optimizer, IQR band, one panel per context,
+    on a logarithmic y axis; a dashed line at the objective of the true parameters where
+    ``f_true[context]`` is known (no optimizer should need to go below it)."""
     if traces is None or traces.empty:
         return "no traces in the records"
     import seaborn as sns
 
     plt = _plt()
+    f_true = dict(f_true or {})
     data = convergence_frame(traces)
     data = data[np.isfinite(data["best"])]
     if data.empty:
@@ -95,13 +116,19 @@ def convergence(traces: Any, path: Path) -> Path | str:
             ax.plot(a.index, a[0.5], color=colour, label=algorithm, drawstyle="steps-post")
             ax.fill_between(a.index, a[0.25], a[0.75], color=colour, alpha=0.2, step="post",
                             linewidth=0)
-        if _use_log(d["best"].to_numpy(float)):
-            ax.set_yscale("log")
+        values = d["best"].to_numpy(float)
+        ft = f_true.get(context)
+        if ft is not None and math.isfinite(ft):
+            ax.axhline(ft, color="black", ls="--", lw=1.0,
+                       label=f"f at the true parameters ({ft:.4g})")
+            values = np.append(values, ft)
+        scale = set_log_y(ax, values)
         n = d.groupby("algorithm")["run_id"].nunique()
         ax.set_title(f"{context}\n(runs per optimizer: {', '.join(map(str, sorted(set(n))))})")
         ax.set_xlabel("objective evaluations used")
-        ax.set_ylabel("best objective value so far")
-        ax.legend(title="optimizer (median, IQR band)", fontsize=8, title_fontsize=8)
+        ax.set_ylabel("best objective value so far" + (" (log scale)" if scale == "log"
+                                                       else " (symmetric log scale)"))
+        ax.legend(title="optimizer (median, IQR band)", fontsize=8, title_fontsize=8, loc="best")
     for ax in list(axes.flat)[len(contexts):]:
         ax.set_visible(False)
     fig.suptitle("Convergence: median best objective vs evaluations (band = interquartile range)")
@@ -117,7 +144,8 @@ def runs_metric(df: Any, problem: str, path: Path) -> Path | str:
     d = df[(df["problem"] == problem) & (df["status"] == "ok") & np.isfinite(df["metric"])]
     if d.empty:
         return f"no successful runs with a finite metric for {problem}"
-    name = d["metric_name"].iloc[0]
+    names = sorted(d["metric_name"].unique())
+    name = names[0] if len(names) == 1 else "metric"
     order = sorted(d["algorithm"].unique())
     hue_order = sorted(d["context"].unique())
     fig, ax = plt.subplots(figsize=(max(6.0, 0.9 * len(order) * max(1, len(hue_order)) + 2), 4.6))
@@ -134,70 +162,66 @@ def runs_metric(df: Any, problem: str, path: Path) -> Path | str:
     return _save(fig, path)
 
 
-def rel_error_heatmap(meanvec: Any, problem: str, path: Path) -> Path | str:
-    """Signed relative error (%) of each parameter of the mean identified vector."""
+def error_label(v: float) -> str:
+    """A cell of the error heatmap: readable from 1e-3 % to thousands of percent."""
+    if not math.isfinite(v):
+        return ""
+    if v == 0:
+        return "0"
+    if v >= 100:
+        return f"{v:.0f}"
+    if v >= 1e-3:
+        return f"{v:.3g}"
+    return f"{v:.0e}"
+
+
+def error_heatmap(df: Any, problem: str, path: Path) -> Path | str:
+    """Median over the successful runs of each parameter's |relative error| (%), per
+    optimizer and context, on a logarithmic colour scale (per-run errors, not the error of
+    the mean vector, which hides scatter: errors of opposite sign cancel in a mean)."""
+    import matplotlib.colors as mcolors
     import seaborn as sns
 
     plt = _plt()
-    if meanvec is None or meanvec.empty:
-        return "no true parameter values in the records"
-    d = meanvec[(meanvec["problem"] == problem) & (meanvec["source"] == "ours")
-                & (meanvec["quantity"] == "eps_percent")]
-    if d.empty:
-        return f"no true parameter values for {problem}"
-    params = [c for c in d.columns if c not in {"context", "problem", "ps", "algorithm",
-                                                 "n_runs", "source", "quantity", "nore", "note"}
-              and d[c].notna().any()]
-    mat = d.set_index(d["algorithm"] + "  |  " + d["context"])[params].astype(float)
-    lim = float(np.nanmax(np.abs(mat.to_numpy()))) or 1.0
-    fig, ax = plt.subplots(figsize=(1.0 * len(params) + 4, 0.45 * len(mat) + 2))
-    sns.heatmap(mat, annot=len(params) <= 12, fmt=".2f", cmap="RdBu_r", center=0.0,
-                vmin=-lim, vmax=lim, cbar_kws={"label": "relative error ε of the mean (%)"},
-                ax=ax)
+    eps_cols = [c for c in df.columns if c.startswith("eps.")]
+    d = df[(df["problem"] == problem) & (df["status"] == "ok")]
+    eps_cols = [c for c in eps_cols if d[c].notna().any()]
+    if d.empty or not eps_cols:
+        return f"no relative errors for {problem} (the problem has no true parameter values)"
+    med = d.groupby(["algorithm", "context"], sort=True)[eps_cols].agg(
+        lambda s: float(np.median(np.abs(s.dropna()))) if s.notna().any() else np.nan)
+    med.index = [f"{a}  |  {c}" for a, c in med.index]
+    med.columns = [c[4:] for c in eps_cols]
+    vals = med.to_numpy(float)
+    pos = vals[np.isfinite(vals) & (vals > 0)]
+    vmin = max(float(pos.min()), 1e-4) if pos.size else 1e-3
+    vmax = max(float(pos.max()), vmin * 10) if pos.size else 1.0
+    annot = np.vectorize(error_label)(vals) if len(med.columns) <= 14 else False
+    fig, ax = plt.subplots(figsize=(0.9 * len(med.columns) + 4, 0.42 * len(med) + 2))
+    sns.heatmap(med.clip(lower=vmin), annot=annot, fmt="", cmap="viridis_r",
+                norm=mcolors.LogNorm(vmin=vmin, vmax=vmax),
+                cbar_kws={"label": "median per-run |relative error| (%), log scale"}, ax=ax)
+    from matplotlib.ticker import FuncFormatter
+
+    ax.collections[0].colorbar.ax.yaxis.set_major_formatter(FuncFormatter(lambda y, _: f"{y:g}"))
     ax.set_xlabel("parameter")
     ax.set_ylabel("optimizer  |  context")
-    ax.set_title(f"Relative error of the mean identified vector per parameter (%), {problem}")
+    ax.set_title(f"Median per-run |relative error| of each parameter (%), {problem}")
     return _save(fig, path)
 
 
-def signals(sig: dict[str, np.ndarray] | None, title: str, path: Path,
-            units: dict[str, str] | None = None) -> Path | str:
-    """Measured vs fitted signals of one run (the paper's Fig. 2), one panel per channel."""
-    if not sig or "t" not in sig:
-        return "the problem provides no signals"
-    plt = _plt()
-    channels = sorted({k.rsplit(":", 1)[0] for k in sig if ":" in k})
-    if not channels:
-        return "the problem provides no signal channels"
-    units = units or {}
-    t = np.asarray(sig["t"], dtype=float)
-    fig, axes = plt.subplots(len(channels), 1, figsize=(7.5, 2.8 * len(channels)),
-                             squeeze=False, sharex=True)
-    for ax, ch in zip(axes[:, 0], channels, strict=True):
-        unit = units.get(ch) or ("m/s²" if ch.endswith("''") else "")
-        for kind, style in (("measured", dict(color="0.35", lw=1.0)),
-                            ("fitted", dict(color="C3", lw=1.4, ls="--"))):
-            y = sig.get(f"{ch}:{kind}")
-            if y is not None:
-                ax.plot(t, np.asarray(y, dtype=float), label=kind, **style)
-        ax.set_ylabel(f"{ch}" + (f" ({unit})" if unit else ""))
-        ax.legend(fontsize=8, loc="upper right")
-        ax.grid(alpha=0.3)
-    axes[-1, 0].set_xlabel("time t (s)")
-    fig.suptitle(title)
-    fig.tight_layout()
-    return _save(fig, path)
-
-
-def cd_diagram(ranks: Any, pvalues: Any, title: str, path: Path, alpha: float) -> Path | str:
-    """Critical-difference diagram (scikit-posthocs): mean ranks on the axis, bars join the
-    optimizers that are not significantly different at ``alpha``."""
+def cd_diagram(ranks: Any, pvalues: Any, title: str, axis_label: str, path: Path,
+               alpha: float) -> Path | str:
+    """Critical-difference diagram (scikit-posthocs): mean ranks on the axis (described by
+    ``axis_label``), bars join the optimizers not significantly different at ``alpha``."""
     if ranks is None or len(ranks) < 2:
         return "fewer than 2 optimizers to compare"
     import scikit_posthocs as sp
 
     plt = _plt()
-    fig, ax = plt.subplots(figsize=(8, 1.2 + 0.35 * len(ranks)))
-    sp.critical_difference_diagram(ranks, pvalues, ax=ax, alpha=alpha)
-    ax.set_title(title + "\naxis: mean rank (1 = best)", fontsize=9)
+    fig, ax = plt.subplots(figsize=(8, 1.4 + 0.35 * len(ranks)))
+    sp.critical_difference_diagram(ranks, pvalues, ax=ax, alpha=alpha,
+                                   label_fmt_left="{label} ({rank:.1f})",
+                                   label_fmt_right="({rank:.1f}) {label}")
+    ax.set_title(f"{title}\naxis: {axis_label}", fontsize=9)
     return _save(fig, path)

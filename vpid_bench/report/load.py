@@ -93,6 +93,90 @@ def _job_dirs_below(paths: Iterable[Path]) -> set[Path]:
     return found
 
 
+def _is_num(v: Any, nullable: bool = True) -> bool:
+    return (v is None and nullable) or (isinstance(v, (int, float)) and not isinstance(v, bool))
+
+
+def _is_int(v: Any, nullable: bool = True) -> bool:
+    return (v is None and nullable) or (isinstance(v, int) and not isinstance(v, bool))
+
+
+def _num_list(v: Any, n: int | None = None) -> bool:
+    return isinstance(v, list) and all(_is_num(x) for x in v) and (n is None or len(v) == n)
+
+
+def check_record(record: Mapping[str, Any]) -> str | None:
+    """The first field of a (schema-valid) record whose value has the wrong type, as
+    ``"<field>: <what was expected>"``, or ``None`` when every field the report reads is
+    well-typed. Records are untrusted input: the report skips a bad one with this line."""
+    def field(path: str, ok: bool, expected: str) -> str | None:
+        return None if ok else f"{path}: expected {expected}"
+
+    get = record.get
+    checks: list[tuple[str, Any, str]] = [
+        ("run_id", lambda: isinstance(get("run_id"), str) and get("run_id"), "a text"),
+        ("run_index", lambda: _is_int(get("run_index"), False), "an integer"),
+        ("status", lambda: get("status") in ("ok", "failed"), "'ok' or 'failed'"),
+        ("problem", lambda: isinstance(get("problem"), Mapping), "a mapping"),
+        ("problem.name", lambda: isinstance(get("problem").get("name"), str), "a text"),
+        ("problem.config", lambda: isinstance(get("problem").get("config") or {}, Mapping),
+         "a mapping"),
+        ("problem.info", lambda: isinstance(get("problem").get("info") or {}, Mapping),
+         "a mapping"),
+        ("optimizer", lambda: isinstance(get("optimizer"), Mapping), "a mapping"),
+        ("optimizer.name", lambda: isinstance(get("optimizer").get("name"), str), "a text"),
+        ("optimizer.params", lambda: isinstance(get("optimizer").get("params") or {}, Mapping),
+         "a mapping"),
+        ("seeds", lambda: isinstance(get("seeds") or {}, Mapping), "a mapping"),
+        ("seeds.seed", lambda: _is_int((get("seeds") or {}).get("seed")), "an integer"),
+        ("budget", lambda: _is_int(get("budget")), "an integer or null"),
+        ("parameters", lambda: isinstance(get("parameters"), Mapping), "a mapping"),
+        ("parameters.names", lambda: isinstance(get("parameters").get("names") or [], list)
+         and all(isinstance(n, str) for n in get("parameters").get("names") or []),
+         "a list of texts"),
+        ("parameters.units", lambda: isinstance(get("parameters").get("units") or [], list)
+         and all(isinstance(u, str) for u in get("parameters").get("units") or []),
+         "a list of texts"),
+        ("parameters.true", lambda: get("parameters").get("true") is None
+         or _num_list(get("parameters")["true"]), "a list of numbers or null"),
+        ("result", lambda: get("result") is None or isinstance(get("result"), Mapping),
+         "a mapping or null"),
+        ("result", lambda: get("status") != "ok" or isinstance(get("result"), Mapping),
+         "a mapping for an ok run"),
+        ("result.x_best", lambda: (get("result") or {}).get("x_best") is None
+         or _num_list(get("result")["x_best"]), "a list of numbers"),
+        ("result.f_best", lambda: _is_num((get("result") or {}).get("f_best")), "a number"),
+        ("result.evaluations", lambda: _is_int((get("result") or {}).get("evaluations")),
+         "an integer"),
+        ("result.metrics", lambda: isinstance((get("result") or {}).get("metrics") or {},
+                                              Mapping)
+         and all(isinstance(k, str) and _is_num(v)
+                 for k, v in ((get("result") or {}).get("metrics") or {}).items()),
+         "a mapping of names to numbers"),
+        ("result.rel_error_percent",
+         lambda: (get("result") or {}).get("rel_error_percent") is None
+         or _num_list(get("result")["rel_error_percent"]), "a list of numbers"),
+        ("result.stopped_by", lambda: isinstance((get("result") or {}).get("stopped_by"),
+                                                 (str, type(None))), "a text"),
+        ("trace", lambda: isinstance(get("trace") or {}, Mapping), "a mapping"),
+        ("trace.evaluations", lambda: _num_list((get("trace") or {}).get("evaluations") or []),
+         "a list of numbers"),
+        ("trace.best", lambda: _num_list((get("trace") or {}).get("best") or []),
+         "a list of numbers"),
+        ("timing", lambda: isinstance(get("timing") or {}, Mapping), "a mapping"),
+        ("timing.wall_time_s", lambda: _is_num((get("timing") or {}).get("wall_time_s")),
+         "a number"),
+        ("timing.run_time_s", lambda: _is_num((get("timing") or {}).get("run_time_s")),
+         "a number"),
+        ("error", lambda: isinstance(get("error") or {}, Mapping), "a mapping or null"),
+    ]
+    for path, test, expected in checks:
+        bad = field(path, bool(test()), expected)
+        if bad:
+            return bad
+    return None
+
+
 def load_records(paths: Iterable[str | Path]) -> LoadedRecords:
     """Read every run record below ``paths`` (files or folders, any number, merged)."""
     paths = [Path(p) for p in paths]
@@ -112,6 +196,10 @@ def load_records(paths: Iterable[str | Path]) -> LoadedRecords:
             record = read_record(path)
         except CorruptRecordError as exc:
             skipped.append((path, str(exc)))
+            continue
+        bad = check_record(record)
+        if bad:
+            skipped.append((path, f"field {bad}"))
             continue
         job_dirs.add(path.parent.parent)
         if record["run_id"] in seen:
@@ -150,11 +238,6 @@ def _fmt(value: Any) -> str:
     if isinstance(value, float) and value.is_integer():
         return f"{value:g}"
     return str(value)
-
-
-def _num(value: Any, missing: float = math.inf) -> float:
-    """A record number as float: ``None`` (a non-finite value in JSON) becomes ``missing``."""
-    return missing if value is None else float(value)
 
 
 def grouping(records: list[dict[str, Any]]) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
@@ -241,100 +324,129 @@ def run_labels(records: list[dict[str, Any]]) -> list[RunLabel]:
     return out
 
 
-def metric_of(record: dict[str, Any], use_nore: bool) -> float:
-    """A run's metric: its NoRE when ``use_nore`` (``inf`` when an ok run has none: a
-    non-finite vector ranks last), else its best objective (``inf`` when not finite); NaN for
-    a failed run."""
+def _num(value: Any, missing: float = math.inf) -> float:
+    """A record number as float: ``None`` (a non-finite value in JSON) becomes ``missing``;
+    ``-Infinity`` stays ``-inf``; the strings ``inf``/``-inf``/``nan`` are read too."""
+    if value is None:
+        return missing
+    return float(value)
+
+
+def _metrics(record: Mapping[str, Any]) -> dict[str, float]:
+    """``result.metrics`` of an ok record, ``null`` (non-finite) as ``inf``."""
     res = record.get("result") or {}
-    if record["status"] != "ok":
-        return math.nan
-    if use_nore:
-        return _num(res.get("nore"))
-    return _num(res.get("f_best")) if res else math.nan
+    return {str(k): _num(v) for k, v in (res.get("metrics") or {}).items()}
 
 
-def has_true(record: dict[str, Any]) -> bool:
-    """Whether the record knows the true parameter values."""
-    return (record.get("parameters") or {}).get("true") is not None
+def choose_metrics(records: list[dict[str, Any]], labels: list[RunLabel]) -> dict[str, str]:
+    """Per context, the headline metric: the first of the problem's metrics (in the order of
+    the context's first ok record) that every ok run of the context has; else ``f_best``."""
+    names: dict[str, list[str]] = {}
+    sets: dict[str, list[set[str]]] = {}
+    for r, lab in zip(records, labels, strict=True):
+        if r["status"] != "ok" or not r.get("result"):
+            continue
+        keys = list(((r.get("result") or {}).get("metrics") or {}).keys())
+        names.setdefault(lab.context, keys)
+        sets.setdefault(lab.context, []).append(set(keys))
+    out = {}
+    for lab in labels:
+        first = names.get(lab.context, [])
+        common = [k for k in first if all(k in s for s in sets.get(lab.context, []))]
+        out[lab.context] = common[0] if common else "f_best"
+    return out
 
 
-def runs_frame(records: list[dict[str, Any]]) -> Any:
-    """The tidy table of all runs (a pandas DataFrame, one row per record).
+def run_rows(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The tidy table of all runs as plain rows (one mapping per record, sorted by context,
+    algorithm, seed and run index). No pandas: the single job's report uses it too.
 
     Columns: ``context``, ``problem``, ``ps``, ``algorithm``, ``optimizer``, one column per
     varying config key (``problem.<key>``, ``optimizer.<key>``), ``seed``, ``run_index``,
-    ``status``, ``f_best``, ``nore`` (percent, NaN when no true values), ``metric`` (NoRE
-    where every run of the context has it, else ``f_best``) and ``metric_name``,
-    ``evaluations``, ``budget``, ``wall_time_s``, ``run_time_s``, ``stopped_by``, ``error``,
-    ``x.<param>``, ``eps.<param>`` (relative error, percent), ``true.<param>``, ``run_id``,
-    ``file``.
-    Failed runs have NaN results. Non-finite objective values are ``inf``.
+    ``status``, ``f_best``, ``metric.<name>`` per metric the problem reports (``inf`` where
+    the record has ``null``), ``metric`` (the context's headline metric, see
+    :func:`choose_metrics`; ``inf`` for an ok run without a finite value) and
+    ``metric_name``, ``evaluations``, ``budget``, ``wall_time_s``, ``run_time_s``,
+    ``stopped_by``, ``error``, ``x.<param>``, ``eps.<param>`` (relative error, percent),
+    ``true.<param>``, ``run_id``, ``file``. Failed runs have NaN results. A ``null``
+    objective (no finite value found) is ``inf``.
     """
-    import pandas as pd
-
+    labels = run_labels(records)
+    chosen = choose_metrics(records, labels)
+    metric_names: list[str] = []
+    for r in records:
+        for k in _metrics(r):
+            if k not in metric_names:
+                metric_names.append(k)
     rows = []
-    for r, lab in zip(records, run_labels(records), strict=True):
-        pname = r["problem"]["name"]
-        oname = r["optimizer"]["name"]
-        context, algorithm, ps = lab.context, lab.algorithm, lab.ps
-        pvary, ovary = lab.problem_vary, lab.optimizer_vary
+    for r, lab in zip(records, labels, strict=True):
         res = r.get("result") or {}
         ok = r["status"] == "ok" and bool(res)
         timing = r.get("timing") or {}
         error = r.get("error") or {}
+        mets = _metrics(r) if ok else {}
+        f = _num(res.get("f_best")) if ok else math.nan
+        name = chosen[lab.context]
         row: dict[str, Any] = {
-            "context": context,
-            "problem": pname,
-            "ps": ps,
-            "algorithm": algorithm,
-            "optimizer": oname,
-            **{f"problem.{k}": _fmt(v) for k, v in pvary.items() if k != "budget"},
-            **{f"optimizer.{k}": _fmt(v) for k, v in ovary.items()},
+            "context": lab.context,
+            "problem": r["problem"]["name"],
+            "ps": lab.ps,
+            "algorithm": lab.algorithm,
+            "optimizer": r["optimizer"]["name"],
+            **{f"problem.{k}": _fmt(v) for k, v in lab.problem_vary.items() if k != "budget"},
+            **{f"optimizer.{k}": _fmt(v) for k, v in lab.optimizer_vary.items()},
             "seed": (r.get("seeds") or {}).get("seed"),
             "run_index": r.get("run_index"),
             "status": r["status"],
-            "f_best": _num(res.get("f_best")) if ok else np.nan,
-            "nore": (_num(res.get("nore")) if ok and res.get("nore") is not None else np.nan),
-            "evaluations": res.get("evaluations", np.nan) if ok else np.nan,
+            "f_best": f,
+            **{f"metric.{k}": mets.get(k, math.nan) for k in metric_names},
+            "metric": (f if name == "f_best" else mets.get(name, math.inf)) if ok else math.nan,
+            "metric_name": name,
+            "evaluations": res.get("evaluations", math.nan) if ok else math.nan,
             "budget": r.get("budget"),
-            "wall_time_s": _num(timing.get("wall_time_s"), np.nan),
-            "run_time_s": _num(timing.get("run_time_s"), np.nan),
+            "wall_time_s": _num(timing.get("wall_time_s"), math.nan),
+            "run_time_s": _num(timing.get("run_time_s"), math.nan),
             "stopped_by": res.get("stopped_by") if ok else None,
             "error": (f"{error.get('type')}: {error.get('message')}" if error else None),
-            "has_true": has_true(r),
         }
-        names = (r.get("parameters") or {}).get("names") or []
-        x = res.get("x_best") or [None] * len(names)
-        eps = res.get("rel_error_percent") or [None] * len(names)
-        true = (r.get("parameters") or {}).get("true") or [None] * len(names)
-        for name, xi, ei, ti in zip(names, x, eps, true, strict=False):
-            row[f"x.{name}"] = _num(xi, np.nan) if ok else np.nan
-            row[f"eps.{name}"] = _num(ei, np.nan) if ok else np.nan
-            row[f"true.{name}"] = _num(ti, np.nan)
+        params = r.get("parameters") or {}
+        names = params.get("names") or []
+        n = len(names)
+        x = res.get("x_best") if ok and len(res.get("x_best") or []) == n else [None] * n
+        eps = res.get("rel_error_percent") if ok else None
+        eps = eps if eps is not None and len(eps) == n else [None] * n
+        true = params.get("true")
+        true = true if true is not None and len(true) == n else [None] * n
+        for pname, xi, ei, ti in zip(names, x, eps, true, strict=True):
+            row[f"x.{pname}"] = _num(xi, math.nan) if ok else math.nan
+            row[f"eps.{pname}"] = _num(ei, math.nan) if ok else math.nan
+            row[f"true.{pname}"] = _num(ti, math.nan)
         row["run_id"] = r["run_id"]
         row["file"] = r.get("_file")
         rows.append(row)
-    df = pd.DataFrame(rows)
-    if df.empty:
-        return df
-    # NoRE where every successful run of the context has true values; objective otherwise.
-    ok = df["status"] == "ok"
-    use_nore = df[ok].groupby("context")["has_true"].all()
-    df["metric_name"] = df["context"].map(lambda c: "NoRE" if use_nore.get(c, False) else "f_best")
-    df["metric"] = np.where(df["metric_name"] == "NoRE", df["nore"], df["f_best"])
-    # An ok run with true values but a non-finite x has no NoRE: rank it last.
-    df.loc[ok & (df["metric_name"] == "NoRE") & df["nore"].isna(), "metric"] = np.inf
-    df = df.drop(columns="has_true")
-    return df.sort_values(["context", "algorithm", "seed", "run_index"], kind="stable",
-                          ignore_index=True)
+    order = sorted(range(len(rows)), key=lambda i: (
+        rows[i]["context"], rows[i]["algorithm"], _sort_key(rows[i]["seed"]),
+        _sort_key(rows[i]["run_index"])))
+    return [rows[i] for i in order]
 
 
-def traces_frame(records: list[dict[str, Any]], runs: Any) -> Any:
-    """Best-so-far traces of the successful runs, long form: context, algorithm, run_id,
-    evaluations, best (``inf`` as NaN: nothing finite found yet)."""
+def _sort_key(value: Any) -> tuple[int, Any]:
+    return (0, value) if isinstance(value, int) else (1, str(value))
+
+
+def runs_frame(rows: list[dict[str, Any]]) -> Any:
+    """:func:`run_rows` as a pandas DataFrame (the full report's tests and figures)."""
     import pandas as pd
 
-    labels = runs.set_index("run_id")[["context", "algorithm"]].to_dict("index")
+    return pd.DataFrame(rows)
+
+
+def traces_frame(records: list[dict[str, Any]], rows: list[dict[str, Any]]) -> Any:
+    """Best-so-far traces of the successful runs, long form: context, algorithm, run_id,
+    evaluations, best (``null`` as NaN: nothing finite found yet)."""
+    import pandas as pd
+
+    labels = {r["run_id"]: {"context": r["context"], "algorithm": r["algorithm"]} for r in rows}
     parts = []
     for r in records:
         trace = r.get("trace") or {}

@@ -1,24 +1,51 @@
-"""Table rendering: Markdown (pipe tables), LaTeX (booktabs) and CSV, via tabulate/pandas
-(:func:`table` and :func:`fmt` need no pandas)."""
+"""Tables as text: Markdown pipe tables that fit in 120 columns, terminal tables, LaTeX
+(booktabs, via tabulate) and CSV, from plain headers and rows (no pandas needed).
+
+Numbers are formatted per column (:func:`format_column`), so a column never mixes ``14517``
+with ``1.513e+04``: a column of integers is printed as integers, a column whose values span
+a moderate range in fixed point with the same number of decimals, any other in scientific
+notation with four significant figures. Text cells of Markdown tables are escaped
+(:func:`.safe.escape`): they may come from records.
+"""
 
 from __future__ import annotations
 
+import csv
 import math
+import textwrap
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from .safe import escape
+
+#: The widest line a person reads in ``report.md`` (characters).
+MAX_WIDTH = 120
+#: Fixed-point columns show at most this many decimals.
+MAX_DECIMALS = 4
+#: Prose paragraphs are wrapped at this width.
+PROSE_WIDTH = 100
+
+
+def _number(value: Any) -> float | None:
+    """``value`` as a float when it is a number (not bool), else ``None``."""
+    if isinstance(value, bool) or value is None or isinstance(value, str):
+        return None
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return None
+
 
 def fmt(value: Any, digits: int = 4) -> str:
-    """A cell as text: floats to ``digits`` significant figures, NaN as an empty cell."""
+    """One value as text: ``digits`` significant figures, integers as integers, NaN and
+    ``None`` as an empty string, infinities as ``inf``/``-inf``."""
     if value is None:
         return ""
     if isinstance(value, bool):
         return "yes" if value else "no"
-    if isinstance(value, (int,)) and not isinstance(value, bool):
-        return str(value)
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
+    x = _number(value)
+    if x is None:
         return str(value)
     if math.isnan(x):
         return ""
@@ -29,45 +56,158 @@ def fmt(value: Any, digits: int = 4) -> str:
     return f"{x:.{digits}g}"
 
 
-def _cells(df: Any, digits: int) -> list[list[str]]:
-    return [[fmt(v, digits) for v in row] for row in df.itertuples(index=False, name=None)]
+def format_column(values: Sequence[Any], digits: int = 4) -> list[str]:
+    """Every value of one column in the same number format (see the module docstring)."""
+    nums = [_number(v) for v in values]
+    finite = [x for x in nums if x is not None and math.isfinite(x)]
+    if not finite:
+        return [fmt(v, digits) for v in values]
+    if all(x.is_integer() and abs(x) < 1e9 for x in finite):
+        style, decimals = "int", 0
+    else:
+        amax = max(abs(x) for x in finite)
+        nonzero = [abs(x) for x in finite if x != 0.0]
+        amin = min(nonzero) if nonzero else amax
+        lead_min = math.floor(math.log10(amin)) if amin > 0 else 0
+        lead_max = math.floor(math.log10(amax)) if amax > 0 else 0
+        decimals = min(MAX_DECIMALS, max(0, digits - 1 - lead_min))
+        # Fixed point when the smallest value keeps `digits` figures and the largest needs
+        # at most 8 characters of digits; otherwise scientific for the whole column.
+        if amin >= 1e-3 and amax < 1e6 and (lead_max + 1) + decimals <= 8:
+            style = "fixed"
+        else:
+            style, decimals = "sci", digits - 1
+    out = []
+    for v, x in zip(values, nums, strict=True):
+        if x is None or not math.isfinite(x):
+            out.append(fmt(v, digits))
+        elif style == "int":
+            out.append(str(int(x)))
+        elif style == "fixed":
+            out.append(f"{x:.{decimals}f}")
+        else:
+            out.append(f"{x:.{decimals}e}")
+    return out
 
 
-def table(headers: list[str], rows: list[list[Any]], tablefmt: str = "github",
-          digits: int = 4) -> str:
-    """Rows of cells (formatted with :func:`fmt`) as a tabulate table; no pandas needed.
-    ``tablefmt``: ``github`` (Markdown), ``simple`` (terminal), ``latex_booktabs``."""
-    return _tabulate(headers, [[fmt(v, digits) for v in row] for row in rows], tablefmt)
+def cells(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4
+          ) -> list[list[str]]:
+    """The rows as text, each column formatted by :func:`format_column`."""
+    cols = [format_column([r[j] for r in rows], digits) for j in range(len(headers))]
+    return [[cols[j][i] for j in range(len(headers))] for i in range(len(rows))]
 
 
-def _tabulate(headers: list[str], cells: list[list[str]], tablefmt: str) -> str:
+def _numeric_columns(rows: Sequence[Sequence[Any]], n: int) -> list[bool]:
+    return [bool(rows) and all(_number(r[j]) is not None or r[j] is None for r in rows)
+            for j in range(n)]
+
+
+def _pipe(headers: list[str], text: list[list[str]], right: list[bool]) -> str:
+    widths = [max([len(h), 3, *(len(r[j]) for r in text)]) for j, h in enumerate(headers)]
+
+    def line(cells_: list[str]) -> str:
+        return "| " + " | ".join(
+            c.rjust(w) if right[j] else c.ljust(w) for j, (c, w) in enumerate(
+                zip(cells_, widths, strict=True))) + " |"
+
+    rule = "|" + "|".join(("-" * (w + 1) + ":") if right[j] else ("-" * (w + 2))
+                          for j, w in enumerate(widths)) + "|"
+    return "\n".join([line(headers), rule, *(line(r) for r in text)])
+
+
+def _width(headers: list[str], text: list[list[str]]) -> int:
+    widths = [max([len(h), 3, *(len(r[j]) for r in text)]) for j, h in enumerate(headers)]
+    return sum(widths) + 3 * len(widths) + 1
+
+
+def _shorten(s: str, n: int) -> str:
+    return s if len(s) <= n else s[: max(1, n - 1)] + "…"
+
+
+def markdown(headers: Sequence[str], rows: Sequence[Sequence[Any]], *, keep: int | None = None,
+             max_width: int = MAX_WIDTH, digits: int = 4) -> str:
+    """A GitHub pipe table no wider than ``max_width``.
+
+    The first ``keep`` columns (default all) are always shown; the others are dropped from
+    the right until the table fits. If it still does not fit, the longest text cells are
+    shortened (with ``…``). Text cells and headers are escaped; numbers are aligned right.
+    """
+    headers = [escape(h) for h in headers]
+    if not rows:
+        return "_(empty)_"
+    rows = [list(r) for r in rows]
+    numeric = _numeric_columns(rows, len(headers))
+    text = [[escape(c) for c in r] for r in cells(headers, rows, digits)]
+    keep = len(headers) if keep is None else max(1, keep)
+    cols = list(range(len(headers)))
+    while _width([headers[j] for j in cols], [[r[j] for j in cols] for r in text]) > max_width \
+            and len(cols) > keep:
+        cols.pop()
+    h = [headers[j] for j in cols]
+    t = [[r[j] for j in cols] for r in text]
+    right = [numeric[j] for j in cols]
+    limit = max(8, max((len(c) for r in t for c in r), default=8))
+    while _width(h, t) > max_width and limit > 8:
+        limit -= 1
+        t = [[_shorten(c, limit) for c in r] for r in t]
+        h = [_shorten(c, max(limit, 8)) for c in h]
+    return _pipe(h, t, right)
+
+
+def terminal(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4) -> str:
+    """A plain-text table for the terminal: columns separated by two spaces."""
+    text = cells(headers, rows, digits)
+    numeric = _numeric_columns(rows, len(headers))
+    widths = [max([len(h), *(len(r[j]) for r in text)]) for j, h in enumerate(headers)]
+
+    def line(cs: Sequence[str]) -> str:
+        return "  ".join(c.rjust(w) if numeric[j] else c.ljust(w)
+                         for j, (c, w) in enumerate(zip(cs, widths, strict=True))).rstrip()
+
+    return "\n".join([line(list(headers)), "  ".join("-" * w for w in widths),
+                      *(line(r) for r in text)])
+
+
+def latex(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4) -> str:
+    """A LaTeX table body with booktabs rules (needs ``\\usepackage{booktabs}``)."""
     from tabulate import tabulate
 
-    return tabulate(cells, headers=list(headers), tablefmt=tablefmt, disable_numparse=True)
+    return tabulate(cells(headers, rows, digits), headers=list(headers),
+                    tablefmt="latex_booktabs", disable_numparse=True)
 
 
-def markdown(df: Any, digits: int = 4) -> str:
-    """A GitHub pipe table."""
-    if df is None or df.empty:
-        return "_(empty)_"
-    return _tabulate(list(df.columns), _cells(df, digits), "github")
+def write_csv(path: Path, headers: Sequence[str], rows: Sequence[Sequence[Any]]) -> Path:
+    """``headers`` and ``rows`` as CSV at full precision (NaN and ``None`` as empty cells)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(headers)
+        for r in rows:
+            w.writerow([_csv_cell(v) for v in r])
+    return path
 
 
-def terminal(df: Any, digits: int = 4) -> str:
-    """A plain-text table for the terminal."""
-    return _tabulate(list(df.columns), _cells(df, digits), "simple")
+def _csv_cell(v: Any) -> Any:
+    """A CSV cell: floats at full precision (``repr``), NaN and ``None`` empty."""
+    if v is None or isinstance(v, (bool, str)):
+        return "" if v is None else v
+    x = _number(v)
+    if x is None:
+        return v
+    if math.isnan(x):
+        return ""
+    if float(x).is_integer() and not isinstance(v, float) and type(v).__name__.startswith(
+            ("int", "uint")):
+        return int(x)
+    return repr(x)
 
 
-def latex(df: Any, digits: int = 4) -> str:
-    """A LaTeX table body with booktabs rules (needs ``\\usepackage{booktabs}``)."""
-    return _tabulate(list(df.columns), _cells(df, digits), "latex_booktabs")
+def frame_rows(df: Any) -> tuple[list[str], list[list[Any]]]:
+    """A pandas DataFrame as (headers, rows)."""
+    return [str(c) for c in df.columns], [list(r) for r in df.itertuples(index=False)]
 
 
-def write_table(df: Any, directory: Path, stem: str, digits: int = 4) -> list[Path]:
-    """Write ``<stem>.csv`` (full precision) and ``<stem>.tex`` (booktabs) into ``directory``."""
-    directory.mkdir(parents=True, exist_ok=True)
-    csv = directory / f"{stem}.csv"
-    tex = directory / f"{stem}.tex"
-    df.to_csv(csv, index=False)
-    tex.write_text(latex(df, digits) + "\n", encoding="utf-8")
-    return [csv, tex]
+def para(text: str, width: int = PROSE_WIDTH) -> str:
+    """A prose paragraph wrapped at ``width`` (long words, e.g. paths, are not broken)."""
+    return textwrap.fill(" ".join(text.split()), width=width, break_long_words=False,
+                         break_on_hyphens=False)

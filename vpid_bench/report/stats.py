@@ -11,7 +11,7 @@ ranks differ, Nemenyi's post-hoc test (scikit-posthocs) gives the pairs for the 
 difference diagram, and pairwise Wilcoxon signed-rank tests with Holm correction give a
 second opinion. Too few groups, runs or blocks for a test give a note, not an error.
 
-Lower metric is better everywhere (NoRE in percent, or the objective).
+Lower metric is better everywhere (a problem metric, or the objective).
 """
 
 from __future__ import annotations

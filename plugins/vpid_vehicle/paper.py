@@ -2,11 +2,12 @@
 
 Source: H. Gökdağ, "Vehicle Parameter Identification Using DE Algorithms", Journal of
 Multidisciplinary Engineering Science and Technology (JMEST) 1(5), 2014. The CSV
-``data/paper_tables.csv`` holds, per table and algorithm (DE1 ... DE8, GA), the mean of the 30
-identified vectors (``quantity = mean``), each parameter's relative error in percent with the
-NoRE (``quantity = eps_percent``), and the optimum values (``algorithm = OV``). Table III's DE2
-row is repaired as the project's paper notes say (the extracted text lost three decimal points:
-53, 42, -73 are 0.53, 0.42, -0.73); its ``note`` column says so.
+``data/paper_tables.csv`` (package data of this plugin) holds, per table and algorithm (DE1
+... DE8, GA), the mean of the 30 identified vectors (``quantity = mean``), each parameter's
+relative error in percent with the NoRE (``quantity = eps_percent``), and the optimum values
+(``algorithm = OV``). Table III's DE2 row is repaired (the extracted text lost three decimal
+points: 53, 42, -73 are 0.53, 0.42, -0.73, as the listed means give); its ``note`` column
+says so.
 """
 
 from __future__ import annotations
@@ -22,12 +23,10 @@ CITATION = (
 )
 #: The paper's parameter order (the vehicle problem's unknowns, Eq. 4).
 PARAMETERS = ("m", "I", "m1", "m2", "k1", "k2", "c1", "c2", "a1")
-#: The problem the published values belong to.
-PAPER_PROBLEM = "vehicle"
 
 
 def _open_csv() -> Any:
-    return resources.files("vpid_bench.report").joinpath("data/paper_tables.csv").open(
+    return resources.files("vpid_vehicle").joinpath("data/paper_tables.csv").open(
         encoding="utf-8"
     )
 
@@ -45,8 +44,7 @@ def paper_table() -> Any:
 
 @functools.cache
 def paper_rows() -> tuple[dict[str, str], ...]:
-    """The published tables as plain rows of text, read with the csv module (no pandas: the
-    single job's report uses this)."""
+    """The published tables as plain rows of text, read with the csv module (no pandas)."""
     with _open_csv() as fh:
         return tuple(csv.DictReader(fh))
 
