@@ -28,7 +28,6 @@ class VehicleProblem(Problem):
 
     Config = VehicleConfig
     name = "vehicle"
-    has_residuals = True
 
     def __init__(self, config: VehicleConfig) -> None:
         super().__init__(config)
@@ -105,6 +104,23 @@ class VehicleProblem(Problem):
         R = self.reference[None] - self.responses(X)
         R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
         return R.reshape(R.shape[0], -1)
+
+    def residual_groups(self) -> np.ndarray:
+        """0 for the z1'' entries of a residual vector, 1 for the z2'' entries, ``(2 N,)``:
+        Eq. (3) takes one norm per group."""
+        return np.repeat(np.arange(2), self.t.size)
+
+    def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Eq. (3) and the residuals of the rows of ``X`` from one simulation: ``f`` (n,) is
+        the sum of the two channel norms of ``R`` (n, 2 N) over the reference's; inf (both)
+        where a candidate is non-physical or its simulation fails."""
+        R = self.residuals(X)
+        N = self.t.size
+        den = float(np.linalg.norm(self.reference, axis=1).sum())
+        with np.errstate(invalid="ignore", over="ignore"):
+            f = (np.linalg.norm(R[:, :N], axis=1) + np.linalg.norm(R[:, N:], axis=1)) / den
+        f[~np.isfinite(f)] = np.inf
+        return f, R
 
     def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
         fitted = self.responses(np.asarray(x, dtype=float).reshape(1, -1))[0]
