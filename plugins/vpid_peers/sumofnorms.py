@@ -81,25 +81,40 @@ class LocalModel:
 def box_step(
     H: np.ndarray, g: np.ndarray, damping: np.ndarray, lower: np.ndarray, upper: np.ndarray
 ) -> np.ndarray:
-    """Approximately ``argmin 1/2 p^T (H + D) p + g^T p`` over ``lower <= p <= upper``
-    (``D = diag(damping)``; ``lower <= 0 <= upper``): solve, fix the coordinates that
-    leave the box at their face, solve again for the others, until no new one leaves."""
+    """``argmin 1/2 p^T (H + D) p + g^T p`` over ``lower <= p <= upper`` (``D =
+    diag(damping)``, ``H + D`` positive definite, ``lower <= 0 <= upper``).
+
+    A primal active-set method (Nocedal and Wright, Numerical Optimization, 16.3) from the
+    feasible point 0: minimise over the free coordinates, step towards that minimiser until a
+    face blocks (that coordinate joins the working set), and at a subspace minimiser release
+    the fixed coordinate whose multiplier has the wrong sign; stop when none has."""
     n = g.size
     M = H + np.diag(damping)
     p = np.zeros(n)
-    free = np.ones(n, dtype=bool)
-    for _ in range(n + 1):
-        fixed = ~free
-        rhs = -g[free] - M[np.ix_(free, fixed)] @ p[fixed]
-        try:
-            p[free] = np.linalg.solve(M[np.ix_(free, free)], rhs)
-        except np.linalg.LinAlgError:
-            p[free] = np.linalg.lstsq(M[np.ix_(free, free)], rhs, rcond=None)[0]
-        out = free & ((p < lower) | (p > upper))
-        if not np.any(out):
+    fixed = ((lower >= 0) & (g > 0)) | ((upper <= 0) & (g < 0))  # on a face, pushed out
+    for _ in range(10 * n + 10):
+        free = ~fixed
+        target = p.copy()
+        if np.any(free):
+            rhs = -g[free] - M[np.ix_(free, fixed)] @ p[fixed]
+            try:
+                target[free] = np.linalg.solve(M[np.ix_(free, free)], rhs)
+            except np.linalg.LinAlgError:
+                target[free] = np.linalg.lstsq(M[np.ix_(free, free)], rhs, rcond=None)[0]
+        d = target - p
+        with np.errstate(divide="ignore", invalid="ignore"):
+            room = np.where(d < 0, (lower - p) / d, np.where(d > 0, (upper - p) / d, np.inf))
+        room[fixed] = np.inf
+        block = int(np.argmin(room))
+        if room[block] < 1.0:
+            p = p + max(room[block], 0.0) * d
+            p[block] = lower[block] if d[block] < 0 else upper[block]
+            fixed[block] = True
+            continue
+        p = target
+        grad = M @ p + g
+        wrong = fixed & (((p <= lower) & (grad < 0)) | ((p >= upper) & (grad > 0)))
+        if not np.any(wrong):
             break
-        p = np.clip(p, lower, upper)
-        free &= ~out
-        if not np.any(free):
-            break
+        fixed[int(np.argmax(np.where(wrong, np.abs(grad), -1.0)))] = False
     return np.clip(p, lower, upper)
