@@ -45,6 +45,24 @@ def test_box_step_is_the_newton_step_inside_and_stays_in_the_box():
     assert p[0] == 0.2 and p[1] == pytest.approx((-g[1] - H[1, 0] * 0.2) / H[1, 1])
 
 
+def test_box_step_solves_bounded_quadratics_like_scipy_lsq_linear():
+    """Random convex quadratics over boxes around 0: the active-set step equals scipy's
+    bounded least squares on the same quadratic (M = L L^T: 1/2 ||L^T p + L^-1 g||^2)."""
+    from scipy.optimize import lsq_linear
+
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        B = rng.normal(size=(6, 6))
+        M, g = B @ B.T + 0.1 * np.eye(6), rng.normal(size=6) * 3
+        lower, upper = -rng.uniform(0, 0.5, 6), rng.uniform(0, 0.5, 6)
+        lower[0] = 0.0  # a coordinate on its face
+        L = np.linalg.cholesky(M)
+        expected = lsq_linear(L.T, -np.linalg.solve(L, g), bounds=(lower, upper),
+                              method="bvls", tol=1e-14).x
+        np.testing.assert_allclose(box_step(M, g, np.zeros(6), lower, upper), expected,
+                                   atol=1e-10)
+
+
 def _linear(m=12, d=4, seed=0, groups=None):
     rng = np.random.default_rng(seed)
     return LinearLSQ(rng.normal(size=(m, d)), rng.normal(size=m), -5.0, 5.0, groups)
