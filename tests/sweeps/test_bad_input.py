@@ -239,12 +239,12 @@ def test_a_problem_that_raises_fails_its_runs_not_the_command(faulty_registry, t
 # ---- the real command: exit status, one line, tracebacks only when asked ----
 
 
-def test_cli_exit_status_and_single_lines(tmp_path):
+def test_cli_exit_status_and_single_lines(tmp_path, registry):
     bad = run_cli(["optimizer=nosuch"], tmp_path)
     assert bad.returncode == 2
     assert bad.stderr.splitlines() == [
         "error: optimizer='nosuch' is not allowed: one of "
-        "de1, de2, de3, de4, de5, de6, de7, de8, ga, random"
+        + ", ".join(sorted(registry.optimizers))
     ]
     job = run_cli([*FUNCTIONS, "problem.dim=1", "runs=1"], tmp_path)
     assert job.returncode == 1
