@@ -175,21 +175,38 @@ class Problem(abc.ABC):
         run of a context has it, else by the objective. Default: none."""
         return {}
 
-    #: Optional capability for least-squares optimizers: a problem that sets this to True
-    #: implements :meth:`residuals`. Each residual evaluation counts against the budget like
-    #: a scalar one (the run loop will route it through the same counter).
-    has_residuals: ClassVar[bool] = False
-
+    # -- residual-aware evaluation (least-squares optimizers) ---------------------------------
     def residuals(self, X: np.ndarray) -> np.ndarray:
-        """Residual vectors (measured minus computed, per sample), shape ``(n, m)``."""
+        """Residual vectors of the rows of ``X`` (measured minus computed, in the problem's
+        units), shape ``(n, m)``. Optional: a problem that overrides this has residuals
+        (:attr:`has_residuals`) and can serve an optimizer with ``wants_residuals``."""
         raise NotImplementedError(f"problem {self.name!r} does not provide residuals")
 
+    @property
+    def has_residuals(self) -> bool:
+        """True when this problem's class overrides :meth:`residuals`."""
+        return type(self).residuals is not Problem.residuals
+
     def residual_groups(self) -> np.ndarray:
-        """The group (channel) of each entry of a residual vector, shape ``(m,)``, int; an
-        objective that sums per-group norms (not squares) is fitted by reweighting each group.
-        Default: one group."""
-        m = self.residuals(self.bounds.sample(np.random.default_rng(0), 1)).shape[1]
-        return np.zeros(m, dtype=int)
+        """The group (channel) of each residual entry, int array of shape ``(m,)``.
+
+        An objective that is a sum of group norms (the vehicle's Eq. 3: one norm per
+        measured channel) tells least-squares optimizers which entries share a norm. The
+        default is one group (all zeros); it learns ``m`` from one residual evaluation at the
+        lower corner of the box, made once and not counted (override it when ``m`` is known).
+        """
+        if not hasattr(self, "_residual_groups_default"):
+            m = np.asarray(self.residuals(self.bounds.lower[None].copy())).shape[1]
+            self._residual_groups_default = np.zeros(m, dtype=int)
+        return self._residual_groups_default.copy()
+
+    def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Objective values ``(n,)`` and residuals ``(n, m)`` of the rows of ``X``.
+
+        The default calls :meth:`residuals` and :meth:`evaluate`; a problem whose objective
+        is a function of its residuals overrides this to compute both from one simulation.
+        """
+        return np.asarray(self.evaluate(X), dtype=float), np.asarray(self.residuals(X), float)
 
     def residual_sigma(self) -> np.ndarray | None:
         """The standard deviation of the measurement noise in each residual group (units of
@@ -251,11 +268,23 @@ class Optimizer(abc.ABC):
     objective values (``inf`` for failed candidates). It stops when the budget is spent or
     ``done`` is true. ``tell`` is not called for a partial population cut by the budget.
     An optimizer that has converged ends its run early by writing ``self.done = True``.
+
+    An optimizer that sets ``wants_residuals = True`` gets residual vectors too: the run loop
+    evaluates each batch with :meth:`Problem.evaluate_with_residuals`, calls
+    ``tell(X, f, residuals=R)`` (``R`` of shape ``(n, m)``; each row still one evaluation) and,
+    before the first ``ask``, stores the problem's ``residual_groups()`` in
+    ``self.residual_groups``. A problem without residuals is refused before the run
+    (:func:`check_compatible`). When the run ends, normally or not, the run loop calls
+    :meth:`close`.
     """
 
     Params: ClassVar[type[OptimizerParams]] = OptimizerParams
     name: str = "optimizer"
     _done: bool = False  # what ``self.done = ...`` stored (class default: not done)
+    #: True: ``tell`` receives ``residuals=R`` beside ``f`` (the problem must have residuals).
+    wants_residuals: ClassVar[bool] = False
+    #: Set by the run loop when ``wants_residuals``: the group of each residual entry, ``(m,)``.
+    residual_groups: np.ndarray | None = None
 
     def __init__(self, params: OptimizerParams, bounds: Bounds, rng: np.random.Generator) -> None:
         self.params = params
@@ -275,7 +304,13 @@ class Optimizer(abc.ABC):
 
     @abc.abstractmethod
     def tell(self, X: np.ndarray, f: np.ndarray) -> None:
-        """Receive the objective values ``f`` (shape ``(n,)``) of the rows ``X`` from ``ask``."""
+        """Receive the objective values ``f`` (shape ``(n,)``) of the rows ``X`` from ``ask``
+        (and ``residuals=R``, shape ``(n, m)``, when ``wants_residuals``)."""
+
+    def close(self) -> None:
+        """Release what the optimizer holds (a worker thread, ...); the run loop calls it once
+        the run is over, however it ended. The default does nothing."""
+        return None
 
     @property
     def done(self) -> bool:
@@ -348,9 +383,34 @@ class GenerationalOptimizer(Optimizer):
         return self._done or (self._started and self.generation >= self.params.iterations)
 
 
+def check_compatible(
+    problem: Problem, optimizer: type[Optimizer] | Optimizer, name: str | None = None
+) -> None:
+    """Refuse an optimizer that wants residuals on a problem that has none, before any run.
+
+    ``optimizer`` is the class (or an instance) and ``name`` the name the user typed (default:
+    the optimizer's ``name``). Raises :class:`ConfigError` with key ``optimizer``, naming both.
+    """
+    if not getattr(optimizer, "wants_residuals", False) or getattr(problem, "has_residuals", False):
+        return
+    if name is None:
+        name = getattr(optimizer, "name", None)
+        if name in (None, Optimizer.name):
+            name = optimizer.__name__ if isinstance(optimizer, type) else type(optimizer).__name__
+    problem_name = getattr(problem, "name", type(problem).__name__)
+    raise ConfigError(
+        "optimizer",
+        name,
+        f"optimizer {name!r} fits residual vectors and problem {problem_name!r} has none "
+        "(it does not implement residuals()); pick an optimizer that needs only f",
+    )
+
+
 def relative_errors_percent(x: Sequence[float], x_true: Sequence[float]) -> np.ndarray:
     """Relative error of each parameter, ``100 * (x - x_true) / x_true`` (percent)."""
     x = np.asarray(x, dtype=float)
     x_true = np.asarray(x_true, dtype=float)
     return 100.0 * (x - x_true) / x_true
 
+# The bridge for optimizers that own their loop lives in its own module; it is part of this API.
+from .bridge import LoopOptimizer  # noqa: E402, F401

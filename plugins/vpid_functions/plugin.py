@@ -5,6 +5,9 @@ Cheap enough to test and compare optimizers in seconds, and proof that the core 
 nothing about vehicles. The true minimiser is known (``x_true``), but NoRE is not defined
 where a true value is 0, so ``x_true`` is offered only when no coordinate is zero
 (Rosenbrock: all ones); the report then ranks by objective.
+
+Each function is a sum of squares, and ``residuals`` returns the terms (one group), so
+least-squares optimizers run here too.
 """
 
 from __future__ import annotations
@@ -33,6 +36,28 @@ def rastrigin(X: np.ndarray) -> np.ndarray:
     """10 d + sum(x^2 - 10 cos(2 pi x)); minimum 0 at x = 0."""
     return 10.0 * X.shape[1] + np.sum(X * X - 10.0 * np.cos(2.0 * np.pi * X), axis=1)
 
+
+def sphere_residuals(X: np.ndarray) -> np.ndarray:
+    """r = x, so sum(r^2) is the sphere."""
+    return X.copy()
+
+
+def rosenbrock_residuals(X: np.ndarray) -> np.ndarray:
+    """10 (x_{i+1} - x_i^2) then 1 - x_i, so sum(r^2) is Rosenbrock."""
+    return np.hstack([10.0 * (X[:, 1:] - X[:, :-1] ** 2), 1.0 - X[:, :-1]])
+
+
+def rastrigin_residuals(X: np.ndarray) -> np.ndarray:
+    """sqrt(10 + x^2 - 10 cos(2 pi x)) (the radicand is >= x^2 >= 0), so sum(r^2) is
+    Rastrigin."""
+    return np.sqrt(np.maximum(10.0 + X * X - 10.0 * np.cos(2.0 * np.pi * X), 0.0))
+
+
+RESIDUALS = {
+    "sphere": sphere_residuals,
+    "rosenbrock": rosenbrock_residuals,
+    "rastrigin": rastrigin_residuals,
+}
 
 FUNCTIONS = {
     # name: (function, default half-width of the box, minimiser coordinate)
@@ -84,6 +109,14 @@ class FunctionsProblem(Problem):
 
     def evaluate(self, X: np.ndarray) -> np.ndarray:
         return self._f(np.atleast_2d(np.asarray(X, dtype=float)))
+
+    def residuals(self, X: np.ndarray) -> np.ndarray:
+        """Residuals whose sum of squares is the function (one group), ``(n, m)``."""
+        return RESIDUALS[self.config.function](np.atleast_2d(np.asarray(X, dtype=float)))
+
+    def residual_groups(self) -> np.ndarray:
+        m = 2 * (self.config.dim - 1) if self.config.function == "rosenbrock" else self.config.dim
+        return np.zeros(m, dtype=int)
 
     def describe(self) -> dict:
         return {"f_min": 0.0, "x_min": float(self._opt)}

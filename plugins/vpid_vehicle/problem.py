@@ -28,7 +28,6 @@ class VehicleProblem(Problem):
 
     Config = VehicleConfig
     name = "vehicle"
-    has_residuals = True
 
     def __init__(self, config: VehicleConfig) -> None:
         super().__init__(config)
@@ -112,6 +111,23 @@ class VehicleProblem(Problem):
 
     def signal_units(self) -> dict[str, str]:
         return {"z1''": "m/s²", "z2''": "m/s²"}
+
+    def residual_groups(self) -> np.ndarray:
+        """0 for the z1'' entries of a residual vector, 1 for the z2'' entries, ``(2 N,)``:
+        Eq. (3) takes one norm per group."""
+        return np.repeat(np.arange(2), self.t.size)
+
+    def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Eq. (3) and the residuals of the rows of ``X`` from one simulation: ``f`` (n,) is
+        the sum of the two channel norms of ``R`` (n, 2 N) over the reference's; inf (both)
+        where a candidate is non-physical or its simulation fails."""
+        R = self.residuals(X)
+        N = self.t.size
+        den = float(np.linalg.norm(self.reference, axis=1).sum())
+        with np.errstate(invalid="ignore", over="ignore"):
+            f = (np.linalg.norm(R[:, :N], axis=1) + np.linalg.norm(R[:, N:], axis=1)) / den
+        f[~np.isfinite(f)] = np.inf
+        return f, R
 
     def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
         fitted = self.responses(np.asarray(x, dtype=float).reshape(1, -1))[0]

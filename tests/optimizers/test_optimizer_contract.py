@@ -31,6 +31,19 @@ class CountingProblem:
         self.outside += int(np.sum(~self.bounds.contains(X)))
         return self.inner.evaluate(X)
 
+    # the residual path (least-squares optimizers), counted the same way
+    @property
+    def has_residuals(self):
+        return self.inner.has_residuals
+
+    def residual_groups(self):
+        return self.inner.residual_groups()
+
+    def evaluate_with_residuals(self, X):
+        self.evaluated += len(X)
+        self.outside += int(np.sum(~self.bounds.contains(X)))
+        return self.inner.evaluate_with_residuals(X)
+
 
 def _run(registry, name: str, seed: int, function: str = "rastrigin"):
     problem = build_problem(registry, {"name": "functions", "function": function, "dim": DIM,

@@ -291,7 +291,7 @@ def test_a_problem_that_raises_fails_its_runs_not_the_command(faulty_registry, t
 # ---- the real command: exit status, one line, tracebacks only when asked ----
 
 
-def test_cli_exit_status_and_single_lines(tmp_path):
+def test_cli_exit_status_and_single_lines(tmp_path, registry):
     bad = run_cli(["optimizer=nosuch"], tmp_path)
     assert bad.returncode == 2
     assert bad.stderr.splitlines() == [

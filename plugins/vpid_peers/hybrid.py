@@ -1,0 +1,67 @@
+"""``optimizer=de_lsq``: DE4 (current-to-best/1, Gökdağ 2014) for a fraction of the nominal
+budget, then :mod:`vpid_peers.lsq` from DE4's best vector (later starts uniform random).
+
+The nominal budget is the protocol's ``ps * (iterations + 1)``: DE4 runs its initial
+population and ``round(fraction * (iterations + 1)) - 1`` generations (at least the initial
+population), with Table I's F = 0.6 and CR = 0.9. The least-squares phase then runs until the
+run's budget ends.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from vpid_de.variants import DE4, DE4Params
+
+from vpid_bench.api import Bounds, ConfigError, LoopOptimizer
+
+from .lsq import LSQParams, check_scaling, multistart
+
+
+@dataclasses.dataclass(frozen=True)
+class DELSQParams(LSQParams):
+    """``fraction``: share of the nominal budget ``ps * (iterations + 1)`` given to DE4, in
+    [0, 1] (0: only the initial population). ``F``, ``CR``: DE4's (Table I). The other keys
+    are :class:`~vpid_peers.lsq.LSQParams`'."""
+
+    fraction: float = 0.5
+    F: float = 0.6
+    CR: float = 0.9
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not 0.0 <= self.fraction <= 1.0:
+            raise ConfigError("optimizer.fraction", self.fraction, "a number in [0, 1]")
+
+    def de_generations(self) -> int:
+        """Generations of DE4 after its initial population."""
+        return max(0, round(self.fraction * (self.iterations + 1)) - 1)
+
+
+class DELeastSquares(LoopOptimizer):
+    """DE4 first, least squares from its best vector next."""
+
+    Params = DELSQParams
+    wants_residuals = True
+
+    def __init__(self, params: DELSQParams, bounds: Bounds, rng: np.random.Generator) -> None:
+        super().__init__(params, bounds, rng)
+        check_scaling(params, bounds)
+        self._de_params = DE4Params(ps=params.ps, iterations=params.de_generations(),
+                                    F=params.F, CR=params.CR)
+
+    def minimize(self, evaluate: Callable[[np.ndarray], Any]) -> None:
+        de = DE4(self._de_params, self.bounds, self.rng)
+        best_x, best_f = None, np.inf
+        while not de.done:
+            X = de.ask()
+            f, _ = evaluate(X)
+            de.tell(X, f)
+            i = int(np.argmin(f))
+            if f[i] < best_f:
+                best_x, best_f = X[i].copy(), float(f[i])
+        multistart(evaluate, self.params, self.bounds, self.residual_groups, self.rng,
+                   first=best_x)

@@ -1,0 +1,96 @@
+"""``optimizer=lsq``: multistart trust-region least squares on the residuals, reweighted so
+that it minimises a sum of group norms (the vehicle's Eq. 3) rather than a sum of squares.
+
+Every start, the first included, is a uniform random point in the box (never the box's
+centre: for the vehicle that is the true vector). A descent (:mod:`vpid_peers.solver`) runs
+to convergence, then the next start is drawn, until the run's budget ends it. Every
+evaluation, finite-difference Jacobians included, goes through the run loop and is counted.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from vpid_bench.api import Bounds, ConfigError, LoopOptimizer, OptimizerParams
+
+from .coordinates import Coordinates, Scaling
+from .solver import Solver, SolverSettings
+
+
+@dataclasses.dataclass(frozen=True)
+class LSQParams(OptimizerParams):
+    """``scaling``: the solver's coordinates, ``auto`` (``log`` when every lower bound is
+    positive, else ``box``), ``log`` or ``box``. ``broyden``: rank-one Jacobian updates
+    between finite-difference Jacobians. ``inner``: IRLS sweeps of the local model per
+    iteration. ``fd_step``: finite-difference step in solver coordinates (a relative step
+    in ``log``). ``ftol``: relative decrease of the objective below which a descent has
+    converged and the next start is drawn. ``ps`` and ``iterations`` are not used."""
+
+    scaling: Scaling = "auto"
+    broyden: bool = True
+    inner: int = 1
+    fd_step: float = 1e-7
+    ftol: float = 1e-10
+
+    def __post_init__(self) -> None:
+        if self.inner < 1:
+            raise ConfigError("optimizer.inner", self.inner, "an integer >= 1")
+        if not 0.0 < self.fd_step < 0.1:
+            raise ConfigError("optimizer.fd_step", self.fd_step, "a number in (0, 0.1)")
+        if not 0.0 < self.ftol < 1.0:
+            raise ConfigError("optimizer.ftol", self.ftol, "a number in (0, 1)")
+
+    def solver_settings(self) -> SolverSettings:
+        """The descent settings these parameters stand for."""
+        return SolverSettings(fd_step=self.fd_step, inner=self.inner, broyden=self.broyden,
+                              ftol=self.ftol)
+
+
+def check_scaling(params: LSQParams, bounds: Bounds) -> None:
+    """``scaling=log`` needs a box with positive lower bounds."""
+    if params.scaling == "log" and not np.all(bounds.lower > 0):
+        raise ConfigError("optimizer.scaling", "log", "auto or box: the box has lower bounds <= 0")
+
+
+def multistart(
+    evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+    params: LSQParams,
+    bounds: Bounds,
+    groups: np.ndarray,
+    rng: np.random.Generator,
+    first: np.ndarray | None = None,
+) -> None:
+    """Descents from ``first`` (when given) and then from uniform random points, forever:
+    the budget of the run ends it."""
+    check_scaling(params, bounds)
+    coords = Coordinates(bounds, params.scaling)
+    solver = Solver(evaluate, coords, groups, params.solver_settings())
+    x0 = first
+    while True:
+        if x0 is None:
+            x0 = bounds.sample(rng, 1)[0]
+        solver.descend(coords.to_u(x0))
+        x0 = None
+
+
+class LeastSquares(LoopOptimizer):
+    """Multistart IRLS trust-region least squares on the problem's residuals."""
+
+    Params = LSQParams
+    wants_residuals = True
+
+    def __init__(self, params: LSQParams, bounds: Bounds, rng: np.random.Generator) -> None:
+        super().__init__(params, bounds, rng)
+        check_scaling(params, bounds)
+
+    def minimize(self, evaluate: Callable[[np.ndarray], Any]) -> None:
+        multistart(evaluate, self.params, self.bounds, self._groups(), self.rng)
+
+    def _groups(self) -> np.ndarray:
+        if self.residual_groups is None:
+            raise RuntimeError("lsq needs residual_groups: run it through vpid_bench.runner.run")
+        return self.residual_groups

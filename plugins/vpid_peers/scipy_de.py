@@ -1,0 +1,85 @@
+"""``optimizer=scipy_de``: ``scipy.optimize.differential_evolution``, through the bridge.
+
+Vectorised (one call per generation of ``ps`` rows) with deferred updating, so each
+generation is one batch, as for DE1-DE8. scipy's ``popsize`` is a multiplier of the
+dimension; to get exactly ``ps`` members the initial population is passed as ``init``: ``ps``
+rows uniform in the box drawn from the run's generator (scipy then takes the population size
+from that array). ``maxiter`` is ``iterations``, so the run uses ``ps * (iterations + 1)``
+evaluations like DE1-DE8; the convergence test is off by default (``tol = 0``) and there is
+no polishing. scipy draws its own random numbers from the run's generator too.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from typing import Any, Literal
+
+import numpy as np
+
+from vpid_bench.api import ConfigError, LoopOptimizer, OptimizerParams
+
+Strategy = Literal[
+    "best1bin", "best1exp", "rand1bin", "rand1exp", "rand2bin", "rand2exp",
+    "randtobest1bin", "randtobest1exp", "currenttobest1bin", "currenttobest1exp",
+    "best2bin", "best2exp",
+]
+
+
+@dataclasses.dataclass(frozen=True)
+class ScipyDEParams(OptimizerParams):
+    """``strategy``: scipy's name (default ``best1bin``, scipy's). ``F``: the mutation
+    factor, or with ``F_max`` the lower end of scipy's dithering (a factor drawn from
+    U(F, F_max) each generation; scipy's default 0.5 to 1); ``F_max: null`` keeps ``F``
+    constant. ``CR``: scipy's ``recombination`` (default 0.7). ``tol``: scipy's relative
+    convergence tolerance (0: run every generation, the same budget as DE1-DE8)."""
+
+    strategy: Strategy = "best1bin"
+    F: float = 0.5
+    F_max: float | None = 1.0
+    CR: float = 0.7
+    tol: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.F <= 2.0:
+            raise ConfigError("optimizer.F", self.F, "a number in (0, 2]")
+        if self.F_max is not None and not self.F <= self.F_max < 2.0:
+            raise ConfigError("optimizer.F_max", self.F_max, f"null or a number in [F={self.F}, 2)")
+        if not 0.0 <= self.CR <= 1.0:
+            raise ConfigError("optimizer.CR", self.CR, "a number in [0, 1]")
+        if not self.tol >= 0.0:
+            raise ConfigError("optimizer.tol", self.tol, "a number >= 0")
+        if self.ps < 5:
+            raise ConfigError("problem.ps", self.ps, "at least 5 (scipy's smallest population)")
+
+
+class ScipyDE(LoopOptimizer):
+    """scipy's differential evolution, one generation per batch."""
+
+    Params = ScipyDEParams
+
+    def minimize(self, evaluate: Callable[[np.ndarray], Any]) -> Any:
+        from scipy.optimize import differential_evolution
+
+        p, b = self.params, self.bounds
+        init = np.clip(b.sample(self.rng, p.ps), b.lower, b.upper)
+
+        def batch(xt: np.ndarray) -> np.ndarray:
+            # scipy passes (dim, S); its unit-cube scaling may round one ulp out of the box
+            return evaluate(np.clip(np.atleast_2d(xt.T), b.lower, b.upper))
+
+        return differential_evolution(
+            batch,
+            list(zip(b.lower, b.upper)),
+            strategy=p.strategy,
+            maxiter=p.iterations,
+            init=init,
+            mutation=p.F if p.F_max is None else (p.F, p.F_max),
+            recombination=p.CR,
+            tol=p.tol,
+            atol=0.0,
+            polish=False,
+            updating="deferred",
+            vectorized=True,
+            rng=self.rng,
+        )
