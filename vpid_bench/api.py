@@ -167,6 +167,11 @@ class Problem(abc.ABC):
         """Residual vectors (measured minus computed, per sample), shape ``(n, m)``."""
         raise NotImplementedError(f"problem {self.name!r} does not provide residuals")
 
+    def set_threads(self, n: int) -> None:
+        """How many threads ``evaluate`` may use for a large batch (``n >= 1``). The default
+        ignores it; a problem that uses it must give the same results for every ``n``."""
+        return None
+
     def describe(self) -> dict[str, Any]:
         """Extra facts about this instance that go into every run record (JSON-able)."""
         return {}
