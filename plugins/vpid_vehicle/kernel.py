@@ -2,10 +2,12 @@
 
 Why it is fast. One Newmark step of one candidate is a chain of dependent operations
 (predictor, residual, solve, corrector), so a loop over candidates runs at the latency of that
-chain. Here the population sits in lanes instead: every per-candidate quantity is an array
-whose innermost, contiguous axis is the candidate, and the time loop is outside the lane loop,
-so the compiler vectorises across candidates (AVX2: 4 lanes per instruction) and many
-independent chains are in flight at once.
+chain. Here the population sits in blocks of ``LANES`` candidates instead: every coefficient,
+state and read-out of a block lives in one flat array with the candidate as the innermost,
+contiguous axis, at offsets known at compile time (so the compiler sees that nothing
+aliases). For each block the time loop is outside the lane loop, so the compiler vectorises
+across candidates (AVX2: 4 lanes per instruction) and 10 independent dot products per lane
+are in flight at once.
 
 What it computes. Newmark's step (see :mod:`vpid_vehicle.newmark`) keeps equilibrium at every
 step, ``M a_k + C v_k + K d_k = F_k``, so the acceleration is a linear function of the state
@@ -16,7 +18,9 @@ step, ``M a_k + C v_k + K d_k = F_k``, so the acceleration is a linear function 
 with ``A`` (8x8), ``U``, ``V`` (8x2) computed once per candidate from ``M``, ``C``, ``K``,
 ``dt``, ``gamma`` and ``beta`` (``y_k`` = the two tyre inputs, m). The kernel iterates the
 shifted state ``s_k = x_k - V y_k``, for which ``s_{k+1} = A s_k + W y_k`` with
-``W = A V + U``: 8 x 10 multiply-adds per step. The two measured channels are read-outs,
+``W = A V + U``: 8 state terms per row, plus the 2 input terms on the steps where an input
+is non-zero (added after the state terms, so skipping zero terms changes nothing). The two
+measured channels are two more rows,
 ``z_k = R x_k = R s_k + (R V) y_k`` with ``z1'' = x'' - a1 theta''`` and
 ``z2'' = x'' + a2 theta''`` (the road force acts on the wheel rows only, so the body
 accelerations have no direct input term). Eq. (3) is accumulated on the fly, so the objective
@@ -28,9 +32,10 @@ samplings and several ``gamma``, ``beta``. No fast-math: each candidate's arithm
 same whichever lane, chunk or thread it lands in, so results are bit-identical for any batch
 composition and thread count (tested).
 
-Threads. The compiled functions release the GIL; a large batch is cut into contiguous chunks
-evaluated by a small thread pool (one per thread count, made on first use). Batches smaller
-than ``threads * MIN_PER_THREAD`` run in the calling thread.
+Threads. The compiled functions release the GIL; a batch of at least ``2 * MIN_PER_THREAD``
+candidates is cut into up to ``threads`` contiguous chunks of at least ``MIN_PER_THREAD``,
+evaluated by a small thread pool (made on first use) and the calling thread. Smaller batches
+run in the calling thread and pay no hand-off.
 
 Importing this module imports numba; it is imported lazily on the first evaluation. The
 compiled code is cached on disk (``cache=True``).
