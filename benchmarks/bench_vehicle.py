@@ -116,6 +116,20 @@ def measure(ps: int, rounds: int, seconds: float = 0.02) -> dict[str, dict[str, 
             "cpu": {n: np.array(v) for n, v in cpu.items()}}
 
 
+def setup_cost(ps: int, rounds: int) -> float:
+    """CPU microseconds per candidate of the SoA kernel on a 1-sample window: the
+    per-candidate set-up plus the share of the call overhead (one thread, minimum)."""
+    problem = VehicleProblem(VehicleConfig())
+    k, cfg = problem.known, problem.config
+    one = kernel.Setup(k.L, k.kt1, k.kt2, problem.model.y[:1], cfg.dt, cfg.newmark.gamma,
+                       cfg.newmark.beta)
+    X = problem.bounds.sample(np.random.default_rng(0), ps)
+    ref = np.array(problem.reference[:, :1])
+    fn = functools.partial(one.objective, X, ref, 1)
+    fn()
+    return min(1e6 * timed(fn, max(1, 4000 // ps))[1] / ps for _ in range(rounds))
+
+
 def report(ps: int, res: dict[str, dict[str, np.ndarray]]) -> None:
     wall, cpu = res["wall"], res["cpu"]
     print(f"\nPS = {ps} (us per candidate; {len(wall['numpy'])} interleaved rounds)")
@@ -217,6 +231,8 @@ def main() -> None:
     cold = cold_start_s()
     for ps in (int(p) for p in args.ps.split(",")):
         report(ps, measure(ps, args.rounds))
+        print(f"soa-1 on a 1-sample window (set-up + call): {setup_cost(ps, args.rounds):.2f} "
+              "us per candidate (cpu min)")
     if args.threshold:
         threshold(args.rounds)
     print(f"\ncold start (new process: build problem + first evaluate): {cold:.2f} s")
