@@ -1,27 +1,47 @@
-"""Speed of ``problem=vehicle``: microseconds per candidate and the ratio to a plain loop.
+"""Speed of ``problem=vehicle``: microseconds per candidate of four ways to compute Eq. (3).
 
-Run as a script (prints a table; timings are the best of several interleaved repeats, so
-the ratio is measured side by side in one run even on a shared machine)::
+Run as a script (prints tables, ratios and the command)::
 
     MPLBACKEND=Agg .venv/bin/python benchmarks/bench_vehicle.py
+    MPLBACKEND=Agg .venv/bin/python benchmarks/bench_vehicle.py --threshold   # thread hand-off
 
 or with pytest-benchmark: ``.venv/bin/python -m pytest benchmarks/bench_vehicle.py``.
 
-The baseline is kept here on purpose: a straightforward numpy Newmark loop vectorised over
-the population (precomputed inverse of S, einsum mat-vecs), so the ratio cannot drift when
-the package changes. Target: <= 15 us per candidate at PS = 20, dt = 1 ms, and >= 30x.
+Compared side by side, in one process, at PS = 20 and 600 (dt = 1 ms, the paper's window):
+
+* ``numpy``: a straightforward numpy Newmark loop over time, vectorised over the population
+  (kept here so the ratio cannot drift when the package changes);
+* ``previous``: the previous compiled kernel (one candidate at a time, scalar Newmark),
+  copied unchanged into ``benchmarks/previous_kernel.py``;
+* ``soa-1``: the package's structure-of-arrays kernel, one thread;
+* ``soa-all``: the same with every core this process may use.
+
+The machine is shared and noisy, so the variants are timed in interleaved rounds (each round
+times every variant once) and the tables give the minimum and the median over the rounds;
+ratios are medians of the per-round ratios. Wall time (``perf_counter``) is what a user
+waits for; for the single-thread variants the thread's CPU time (``thread_time``) is also
+given, as it is much less sensitive to other processes.
 """
 
 from __future__ import annotations
 
+import argparse
+import functools
+import os
+import shlex
 import subprocess
 import sys
-import timeit
+import time
+from collections.abc import Callable
 
 import numpy as np
+from vpid_vehicle import kernel
 from vpid_vehicle.config import VehicleConfig
 from vpid_vehicle.model import matrices, response_rows, tyre_input
 from vpid_vehicle.problem import VehicleProblem
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import previous_kernel  # noqa: E402  (the baseline beside this script)
 
 
 def baseline_newmark(problem: VehicleProblem, X: np.ndarray) -> np.ndarray:
@@ -51,9 +71,120 @@ def baseline_newmark(problem: VehicleProblem, X: np.ndarray) -> np.ndarray:
     return num / np.linalg.norm(ref, axis=1).sum()
 
 
-def best_time(fn, repeats: int, number: int) -> float:
-    """Best wall time per call (s) over ``repeats`` timings of ``number`` calls (stdlib timeit)."""
-    return min(timeit.repeat(fn, repeat=repeats, number=number)) / number
+def variants(problem: VehicleProblem, X: np.ndarray) -> dict[str, Callable[[], np.ndarray]]:
+    """The four ways to compute Eq. (3) for ``X``, as calls without arguments."""
+    cfg, k = problem.config, problem.known
+    y, ref = problem.model.y, problem.reference
+    setup = problem.model._kernel_setup()
+    everyone = kernel.available_threads()
+    return {
+        "numpy": lambda: baseline_newmark(problem, X),
+        "previous": lambda: previous_kernel.evaluate(X, k.L, k.kt1, k.kt2, y, cfg.dt,
+                                                     cfg.newmark.gamma, cfg.newmark.beta, ref),
+        "soa-1": lambda: setup.objective(X, ref, 1),
+        "soa-all": lambda: setup.objective(X, ref, everyone),
+    }
+
+
+def timed(fn: Callable[[], object], number: int) -> tuple[float, float]:
+    """Wall and CPU (this thread) seconds per call over ``number`` calls."""
+    w, c = time.perf_counter(), time.thread_time()
+    for _ in range(number):
+        fn()
+    return (time.perf_counter() - w) / number, (time.thread_time() - c) / number
+
+
+def measure(ps: int, rounds: int, seconds: float = 0.02) -> dict[str, dict[str, np.ndarray]]:
+    """Per-candidate wall and CPU microseconds of every variant over interleaved rounds."""
+    problem = VehicleProblem(VehicleConfig())
+    X = problem.bounds.sample(np.random.default_rng(0), ps)
+    fns = variants(problem, X)
+    expected = fns["numpy"]()
+    numbers = {}
+    for name, fn in fns.items():  # compile or load, check, and size each timing
+        np.testing.assert_allclose(fn(), expected, rtol=1e-10, atol=0, err_msg=name)
+        once, _ = timed(fn, 1)
+        numbers[name] = max(1, int(seconds / max(once, 1e-9)))
+    wall = {name: [] for name in fns}
+    cpu = {name: [] for name in fns}
+    for _ in range(rounds):
+        for name, fn in fns.items():
+            w, c = timed(fn, numbers[name])
+            wall[name].append(1e6 * w / ps)
+            cpu[name].append(1e6 * c / ps)
+    return {"wall": {n: np.array(v) for n, v in wall.items()},
+            "cpu": {n: np.array(v) for n, v in cpu.items()}}
+
+
+def setup_cost(ps: int, rounds: int) -> float:
+    """CPU microseconds per candidate of the SoA kernel on a 1-sample window: the
+    per-candidate set-up plus the share of the call overhead (one thread, minimum)."""
+    problem = VehicleProblem(VehicleConfig())
+    k, cfg = problem.known, problem.config
+    one = kernel.Setup(k.L, k.kt1, k.kt2, problem.model.y[:1], cfg.dt, cfg.newmark.gamma,
+                       cfg.newmark.beta)
+    X = problem.bounds.sample(np.random.default_rng(0), ps)
+    ref = np.array(problem.reference[:, :1])
+    fn = functools.partial(one.objective, X, ref, 1)
+    fn()
+    return min(1e6 * timed(fn, max(1, 4000 // ps))[1] / ps for _ in range(rounds))
+
+
+def report(ps: int, res: dict[str, dict[str, np.ndarray]]) -> None:
+    wall, cpu = res["wall"], res["cpu"]
+    print(f"\nPS = {ps} (us per candidate; {len(wall['numpy'])} interleaved rounds)")
+    print(f"{'variant':>9} {'wall min':>9} {'wall med':>9} {'cpu min':>8} "
+          f"{'previous/this (wall med)':>25} {'(cpu med)':>10}")
+    for name in wall:
+        single = name != "soa-all"
+        cpu_min = f"{cpu[name].min():8.2f}" if single else f"{'-':>8}"
+        r_wall = np.median(wall["previous"] / wall[name])
+        r_cpu = f"{np.median(cpu['previous'] / cpu[name]):10.2f}" if single else f"{'-':>10}"
+        print(f"{name:>9} {wall[name].min():9.2f} {np.median(wall[name]):9.2f} {cpu_min} "
+              f"{r_wall:25.2f} {r_cpu}")
+    print(f"numpy / soa-1 (wall med): {np.median(wall['numpy'] / wall['soa-1']):.0f}x; "
+          f"soa-1 / soa-all (wall med): {np.median(wall['soa-1'] / wall['soa-all']):.2f}x "
+          f"with {kernel.available_threads()} threads")
+
+
+def threshold(rounds: int) -> None:
+    """Small batches on one thread against every thread, with the chunking forced
+    (MIN_PER_THREAD = 1): the wall-time ratio (what a user gains when cores are free) and the
+    extra CPU time the hand-off costs per call, summed over threads (``process_time``; much
+    less sensitive to other processes than the wall time)."""
+    problem = VehicleProblem(VehicleConfig())
+    setup, ref = problem.model._kernel_setup(), problem.reference
+    threads = kernel.available_threads()
+    saved, kernel.MIN_PER_THREAD = kernel.MIN_PER_THREAD, 1
+    try:
+        print(f"\nthread hand-off ({threads} threads, chunking forced; current "
+              f"MIN_PER_THREAD = {saved}):")
+        print(f"{'batch':>6} {'1 thread us (cpu min)':>22} {'extra cpu us (min)':>19} "
+              f"{'wall 1 thread / all (median)':>29}")
+        for n in (8, 16, 32, 48, 64, 96, 128, 256):
+            X = problem.bounds.sample(np.random.default_rng(1), n)
+            one = functools.partial(setup.objective, X, ref, 1)
+            many = functools.partial(setup.objective, X, ref, threads)
+            one(), many()
+            number = max(2, 2000 // n)
+            cpu1, cpun, ratios = [], [], []
+            for _ in range(rounds):
+                (a, ca), (b, cb) = timed_process(one, number), timed_process(many, number)
+                cpu1.append(ca)
+                cpun.append(cb)
+                ratios.append(a / b)
+            print(f"{n:>6} {1e6 * min(cpu1):22.1f} {1e6 * (min(cpun) - min(cpu1)):19.1f} "
+                  f"{np.median(ratios):29.2f}")
+    finally:
+        kernel.MIN_PER_THREAD = saved
+
+
+def timed_process(fn: Callable[[], object], number: int) -> tuple[float, float]:
+    """Wall and CPU (all threads of this process) seconds per call over ``number`` calls."""
+    w, c = time.perf_counter(), time.process_time()
+    for _ in range(number):
+        fn()
+    return (time.perf_counter() - w) / number, (time.process_time() - c) / number
 
 
 def cold_start_s() -> float:
@@ -66,30 +197,19 @@ def cold_start_s() -> float:
     return float(out.stdout.strip())
 
 
-def measure(ps: int = 20, rounds: int = 5) -> dict[str, float]:
-    problem = VehicleProblem(VehicleConfig())
-    X = problem.bounds.sample(np.random.default_rng(0), ps)
-    fast = problem.evaluate(X)  # compile or load the kernel before timing
-    slow = baseline_newmark(problem, X)
-    assert np.allclose(fast, slow, rtol=1e-10, atol=0), "fast path and baseline disagree"
-    t_fast, t_slow = np.inf, np.inf
-    for _ in range(rounds):  # interleaved, so both see the same machine load
-        t_fast = min(t_fast, best_time(lambda: problem.evaluate(X), 3, 50))
-        t_slow = min(t_slow, best_time(lambda: baseline_newmark(problem, X), 1, 3))
-    return {
-        "ps": ps,
-        "samples": problem.t.size,
-        "fast_us_per_candidate": 1e6 * t_fast / ps,
-        "baseline_us_per_candidate": 1e6 * t_slow / ps,
-        "ratio": t_slow / t_fast,
-    }
-
-
 def test_fast_evaluate(benchmark):
     problem = VehicleProblem(VehicleConfig())
     X = problem.bounds.sample(np.random.default_rng(0), 20)
     problem.evaluate(X)
     benchmark(problem.evaluate, X)
+
+
+def test_previous_kernel(benchmark):
+    problem = VehicleProblem(VehicleConfig())
+    X = problem.bounds.sample(np.random.default_rng(0), 20)
+    fn = variants(problem, X)["previous"]
+    fn()
+    benchmark(fn)
 
 
 def test_baseline_newmark(benchmark):
@@ -99,13 +219,23 @@ def test_baseline_newmark(benchmark):
 
 
 def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rounds", type=int, default=21, help="interleaved rounds (default 21)")
+    ap.add_argument("--ps", default="20,600", help="population sizes (default 20,600)")
+    ap.add_argument("--threshold", action="store_true",
+                    help="also time small batches on 1 thread against all threads")
+    args = ap.parse_args()
+    print("command:", shlex.join([os.path.relpath(sys.executable), *sys.argv]))
+    print(f"cores usable: {kernel.available_threads()}, os.getloadavg(): "
+          f"{tuple(round(x, 1) for x in os.getloadavg())}")
     cold = cold_start_s()
-    print(f"{'PS':>4} {'samples':>8} {'fast us/cand':>13} {'baseline us/cand':>17} {'ratio':>7}")
-    for ps in (20, 30):
-        r = measure(ps)
-        print(f"{r['ps']:>4} {r['samples']:>8} {r['fast_us_per_candidate']:>13.2f} "
-              f"{r['baseline_us_per_candidate']:>17.1f} {r['ratio']:>7.1f}")
-    print(f"cold start (new process: build problem + first evaluate): {cold:.2f} s")
+    for ps in (int(p) for p in args.ps.split(",")):
+        report(ps, measure(ps, args.rounds))
+        print(f"soa-1 on a 1-sample window (set-up + call): {setup_cost(ps, args.rounds):.2f} "
+              "us per candidate (cpu min)")
+    if args.threshold:
+        threshold(args.rounds)
+    print(f"\ncold start (new process: build problem + first evaluate): {cold:.2f} s")
 
 
 if __name__ == "__main__":

@@ -93,6 +93,16 @@ class ProblemCache:
         return self._items[key]
 
 
+def available_cores() -> int:
+    """The cores this process may run on (the default of the ``threads`` key)."""
+    import os
+
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):  # not Linux
+        return max(1, os.cpu_count() or 1)
+
+
 def build_problem_from_job(job: Job) -> Problem:
     """A new problem instance of ``job`` (its plugin's own set-up runs here)."""
     problem = job.problem_cls(job.problem_config)
@@ -248,8 +258,7 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
     write what the records allow (:func:`analyse_job`) into ``optima_dir`` (default
     ``job_dir/optima``)."""
     problem = (problems or ProblemCache(size=1)).get(job)
-    if job.spec.threads is not None:
-        problem.set_threads(job.spec.threads)
+    problem.set_threads(job.spec.threads or available_cores())
     # Build one optimizer up front: a fault in its constructor stops the job before any run.
     job.optimizer_cls(job.params, problem.bounds, run_rng(job.spec.seed, 0))
     provenance = {kind: (registry.provenance(kind, name) if registry is not None else {})

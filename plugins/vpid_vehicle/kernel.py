@@ -1,62 +1,125 @@
-"""The fast path: Newmark-beta for the 4-DOF half-car, compiled with numba.
+"""The fast path: Newmark-beta for the 4-DOF half-car as a structure-of-arrays kernel (numba).
 
-Same arithmetic as :func:`vpid_vehicle.newmark.newmark` (predictor, one solve with the
-precomputed inverse of S = M + gamma dt C + beta dt^2 K, corrector), written out in scalars
-for this model's structure: M is diagonal, K[2,3] = C[2,3] = 0, the road acts on the wheel
-rows only. Every candidate is independent, so a population is a plain loop.
+Why it is fast. One Newmark step of one candidate is a chain of dependent operations
+(predictor, residual, solve, corrector), so a loop over candidates runs at the latency of that
+chain. Here the population sits in blocks of ``LANES`` candidates instead: every coefficient,
+state and read-out of a block lives in one flat array with the candidate as the innermost,
+contiguous axis, at offsets known at compile time (so the compiler sees that nothing
+aliases). For each block the time loop is outside the lane loop, so the compiler vectorises
+across candidates (AVX2: 4 lanes per instruction) and 10 independent dot products per lane
+are in flight at once.
+
+What it computes. Newmark's step (see :mod:`vpid_vehicle.newmark`) keeps equilibrium at every
+step, ``M a_k + C v_k + K d_k = F_k``, so the acceleration is a linear function of the state
+``x_k = [d_k, v_k]`` (8 numbers) and the input; the whole step is the linear recurrence
+
+    x_{k+1} = A x_k + U y_k + V y_{k+1}
+
+with ``A`` (8x8), ``U``, ``V`` (8x2) computed once per candidate from ``M``, ``C``, ``K``,
+``dt``, ``gamma`` and ``beta`` (``y_k`` = the two tyre inputs, m). The kernel iterates the
+shifted state ``s_k = x_k - V y_k``, for which ``s_{k+1} = A s_k + W y_k`` with
+``W = A V + U``: 8 state terms per row, plus the 2 input terms on the steps where an input
+is non-zero (added after the state terms, so skipping zero terms changes nothing). The two
+measured channels are two more rows,
+``z_k = R x_k = R s_k + (R V) y_k`` with ``z1'' = x'' - a1 theta''`` and
+``z2'' = x'' + a2 theta''`` (the road force acts on the wheel rows only, so the body
+accelerations have no direct input term). Eq. (3) is accumulated on the fly, so the objective
+never stores a response; :func:`body_accelerations` stores them for ``responses()``.
+
+The rounding differs from the step-by-step Newmark, not the scheme: the tests hold this
+kernel to the plain numpy Newmark within 1e-10 of the largest acceleration, for both input
+samplings and several ``gamma``, ``beta``. No fast-math: each candidate's arithmetic is the
+same whichever lane, chunk or thread it lands in, so results are bit-identical for any batch
+composition and thread count (tested).
+
+Threads. The compiled functions release the GIL; a batch of at least ``2 * MIN_PER_THREAD``
+candidates is cut into up to ``threads`` contiguous chunks of at least ``MIN_PER_THREAD``,
+evaluated by a small thread pool (made on first use) and the calling thread. Smaller batches
+run in the calling thread and pay no hand-off.
 
 Importing this module imports numba; it is imported lazily on the first evaluation. The
-compiled code is cached on disk (``cache=True``), so later processes load it instead of
-compiling (about a second versus several).
+compiled code is cached on disk (``cache=True``).
 """
 
 from __future__ import annotations
 
+import functools
+import os
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 from numba import njit
 
+#: Candidates per block (SIMD lanes): the innermost, contiguous axis of every block array.
+LANES = 4
+#: Rows of the coefficient table: 8 state rows, then the z1'' and z2'' read-outs.
+N_ROWS = 10
+#: Terms per row: 8 state coefficients, then the two input coefficients.
+N_TERMS = 10
+_ROW = N_TERMS * LANES  # floats between two rows of the table in a block
+_STATE = N_ROWS * _ROW  # offset of the state (8 slots), then the read-outs (2 slots)
+#: Floats per block: table, state, read-outs; everything a lane touches in the time loop is
+#: in this one flat array at compile-time offsets, so the compiler sees that nothing aliases.
+BLOCK = _STATE + 10 * LANES
+_Z1 = _STATE + 8 * LANES  # read-out slots
+_Z2 = _STATE + 9 * LANES
+#: Smallest number of candidates per thread worth a thread hand-off (measured with
+#: ``benchmarks/bench_vehicle.py --threshold``; see docs/vehicle.md).
+MIN_PER_THREAD = 48
 
-@njit(cache=True, error_model="numpy")
-def _inverse_sym4(S: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover - compiled
+_OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
+
+
+@njit(**_OPTS)
+def _inverse_spd4(S: np.ndarray, work: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
     """Inverse of a 4x4 matrix by Gauss-Jordan without pivoting (S is SPD for a physical
-    candidate; a non-positive pivot gives inf/NaN, caught by the caller)."""
-    A = S.copy()
+    candidate; a non-positive pivot gives inf/NaN, which the caller turns into f = inf).
+    ``work`` is 4x4 scratch."""
     for i in range(4):
         for j in range(4):
+            work[i, j] = S[i, j]
             out[i, j] = 1.0 if i == j else 0.0
     for i in range(4):
-        p = 1.0 / A[i, i]
+        p = 1.0 / work[i, i]
         for j in range(4):
-            A[i, j] *= p
+            work[i, j] *= p
             out[i, j] *= p
         for r in range(4):
             if r != i:
-                f = A[r, i]
+                f = work[r, i]
                 if f != 0.0:
                     for j in range(4):
-                        A[r, j] -= f * A[i, j]
+                        work[r, j] -= f * work[i, j]
                         out[r, j] -= f * out[i, j]
 
 
-@njit(cache=True, error_model="numpy")
-def _candidate(
-    x: np.ndarray,
-    L: float,
-    kt1: float,
-    kt2: float,
-    y1: np.ndarray,
-    y2: np.ndarray,
-    dt: float,
-    gamma: float,
-    beta: float,
-    z: np.ndarray,
-    S: np.ndarray,
-    Si: np.ndarray,
+@njit(**_OPTS)
+def _physical(x: np.ndarray, L: float) -> bool:  # pragma: no cover - compiled
+    """Masses and inertia > 0, stiffness and damping >= 0, all finite, 0 < a1 < L (the same
+    rule as :func:`vpid_vehicle.model.physical`)."""
+    ok = x[8] > 0.0 and x[8] < L
+    for i in range(9):
+        if not np.isfinite(x[i]) or (i < 4 and x[i] <= 0.0) or x[i] < 0.0:
+            ok = False
+    return ok
+
+
+@njit(**_OPTS)
+def _coefficients(
+    x: np.ndarray, L: float, kt1: float, kt2: float, dt: float, gamma: float, beta: float,
+    y10: float, y20: float, blk: np.ndarray, lane: int, ws: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
-    """Fill ``z[0, k]`` and ``z[1, k]`` with z1'' and z2'' (m/s^2) at ``t_k`` for the
-    candidate ``x`` (m, I, m1, m2, k1, k2, c1, c2, a1). ``y1``, ``y2``: tyre inputs (m) as
-    sampled for the integrator; ``S``, ``Si``: 4x4 scratch. Non-physical: inf or NaN."""
-    N = y1.shape[0]
+    """Write lane ``lane`` of a block: the table entry (row r, term t) at
+    ``blk[r * _ROW + t * LANES + lane]`` and the initial shifted state ``-V y_0`` (slot r at
+    ``blk[_STATE + r * LANES + lane]``), for the candidate ``x`` (physical units).
+
+    ``ws`` is scratch of shape (9, 8, 8) reused for every candidate (no allocation here).
+    Derivation (module docstring): ``a = G x + M^-1 F`` with ``G = -M^-1 [K, C]``; predictor
+    ``x* = Q x + H M^-1 F_k`` with ``Q = P + H G``, ``P = [[I, dt I], [0, I]]``,
+    ``H = [ca I; cv I]``; solve ``a' = Si (F' - [K, C] x*)``; corrector ``x' = x* + E a'``
+    with ``E = [bd I; gd I]``. So ``A = Q - E T Q`` with ``T = Si [K, C]``,
+    ``U = (I - E T) H M^-1 B`` and ``V = E Si B`` (``B``: tyre stiffnesses on the wheel rows).
+    """
     ca = dt * dt * (0.5 - beta)
     cv = dt * (1.0 - gamma)
     bd = beta * dt * dt
@@ -64,155 +127,329 @@ def _candidate(
     m, I, m1, m2 = x[0], x[1], x[2], x[3]
     k1, k2, c1, c2, a1 = x[4], x[5], x[6], x[7], x[8]
     a2 = L - a1
-    K00 = k1 + k2
-    K01 = a2 * k2 - a1 * k1
-    K02 = -k1
-    K03 = -k2
-    K11 = k1 * a1 * a1 + k2 * a2 * a2
-    K12 = a1 * k1
-    K13 = -a2 * k2
-    K22 = k1 + kt1
-    K33 = k2 + kt2
-    C00 = c1 + c2
-    C01 = a2 * c2 - a1 * c1
-    C02 = -c1
-    C03 = -c2
-    C11 = c1 * a1 * a1 + c2 * a2 * a2
-    C12 = a1 * c1
-    C13 = -a2 * c2
-    C22 = c1
-    C33 = c2
-    S[0, 0] = m + gd * C00 + bd * K00
-    S[0, 1] = gd * C01 + bd * K01
-    S[0, 2] = gd * C02 + bd * K02
-    S[0, 3] = gd * C03 + bd * K03
-    S[1, 1] = I + gd * C11 + bd * K11
-    S[1, 2] = gd * C12 + bd * K12
-    S[1, 3] = gd * C13 + bd * K13
-    S[2, 2] = m1 + gd * C22 + bd * K22
-    S[2, 3] = 0.0
-    S[3, 3] = m2 + gd * C33 + bd * K33
+    KC = ws[0, :4, :]  # [K, C], 4x8
+    S = ws[1, :4, :4]
+    Si = ws[1, 4:, :4]
+    G = ws[2, :4, :]  # 4x8
+    T = ws[2, 4:, :]  # 4x8
+    Q = ws[3]  # 8x8
+    A = ws[4]  # 8x8
+    TQ = ws[5, :4, :]  # 4x8
+    UV = ws[5, 4:, :]  # rows: U[:,0], U[:,1], V[:,0], V[:,1] (each 8)
+    work = ws[6, :4, :4]
+    TH = ws[6, 4:, :4]  # T H, 4x4
+    # K (columns 0..3) and C (columns 4..7), Eq. (2b, 2c) with the K[3,1] erratum fixed.
+    for i in range(4):
+        for c in range(8):
+            KC[i, c] = 0.0
+    for off, s1, s2, t1, t2 in ((0, k1, k2, kt1, kt2), (4, c1, c2, 0.0, 0.0)):
+        KC[0, off + 0] = s1 + s2
+        KC[0, off + 1] = a2 * s2 - a1 * s1
+        KC[0, off + 2] = -s1
+        KC[0, off + 3] = -s2
+        KC[1, off + 1] = s1 * a1 * a1 + s2 * a2 * a2
+        KC[1, off + 2] = a1 * s1
+        KC[1, off + 3] = -a2 * s2
+        KC[2, off + 2] = s1 + t1
+        KC[3, off + 3] = s2 + t2
+        for r in range(4):
+            for c in range(r):
+                KC[r, off + c] = KC[c, off + r]
+    mass = (m, I, m1, m2)
     for r in range(4):
-        for c in range(r):
-            S[r, c] = S[c, r]
-    _inverse_sym4(S, Si)
-    s00, s01, s02, s03 = Si[0, 0], Si[0, 1], Si[0, 2], Si[0, 3]
-    s10, s11, s12, s13 = Si[1, 0], Si[1, 1], Si[1, 2], Si[1, 3]
-    s20, s21, s22, s23 = Si[2, 0], Si[2, 1], Si[2, 2], Si[2, 3]
-    s30, s31, s32, s33 = Si[3, 0], Si[3, 1], Si[3, 2], Si[3, 3]
-    d0 = d1 = d2 = d3 = 0.0
-    v0 = v1 = v2 = v3 = 0.0
-    a0 = 0.0
-    a1_ = 0.0
-    a2_ = kt1 * y1[0] / m1
-    a3 = kt2 * y2[0] / m2
-    z[0, 0] = a0 - a1 * a1_
-    z[1, 0] = a0 + a2 * a1_
-    for k in range(1, N):
-        p0 = d0 + dt * v0 + ca * a0
-        p1 = d1 + dt * v1 + ca * a1_
-        p2 = d2 + dt * v2 + ca * a2_
-        p3 = d3 + dt * v3 + ca * a3
-        q0 = v0 + cv * a0
-        q1 = v1 + cv * a1_
-        q2 = v2 + cv * a2_
-        q3 = v3 + cv * a3
-        r0 = -(K00 * p0 + K01 * p1 + K02 * p2 + K03 * p3) - (
-            C00 * q0 + C01 * q1 + C02 * q2 + C03 * q3)
-        r1 = -(K01 * p0 + K11 * p1 + K12 * p2 + K13 * p3) - (
-            C01 * q0 + C11 * q1 + C12 * q2 + C13 * q3)
-        r2 = kt1 * y1[k] - (K02 * p0 + K12 * p1 + K22 * p2) - (
-            C02 * q0 + C12 * q1 + C22 * q2)
-        r3 = kt2 * y2[k] - (K03 * p0 + K13 * p1 + K33 * p3) - (
-            C03 * q0 + C13 * q1 + C33 * q3)
-        a0 = s00 * r0 + s01 * r1 + s02 * r2 + s03 * r3
-        a1_ = s10 * r0 + s11 * r1 + s12 * r2 + s13 * r3
-        a2_ = s20 * r0 + s21 * r1 + s22 * r2 + s23 * r3
-        a3 = s30 * r0 + s31 * r1 + s32 * r2 + s33 * r3
-        d0 = p0 + bd * a0
-        d1 = p1 + bd * a1_
-        d2 = p2 + bd * a2_
-        d3 = p3 + bd * a3
-        v0 = q0 + gd * a0
-        v1 = q1 + gd * a1_
-        v2 = q2 + gd * a2_
-        v3 = q3 + gd * a3
-        z[0, k] = a0 - a1 * a1_
-        z[1, k] = a0 + a2 * a1_
+        for c in range(4):
+            S[r, c] = gd * KC[r, 4 + c] + bd * KC[r, c]
+        S[r, r] += mass[r]
+    _inverse_spd4(S, work, Si)
+    for r in range(4):
+        inv_m = 1.0 / mass[r]
+        for c in range(8):
+            G[r, c] = -KC[r, c] * inv_m
+            t = 0.0
+            for q in range(4):
+                t += Si[r, q] * KC[q, c]
+            T[r, c] = t
+    for r in range(8):
+        for c in range(8):
+            Q[r, c] = 0.0
+    for i in range(4):
+        Q[i, i] = 1.0
+        Q[i, 4 + i] = dt
+        Q[4 + i, 4 + i] = 1.0
+        for c in range(8):
+            Q[i, c] += ca * G[i, c]
+            Q[4 + i, c] += cv * G[i, c]
+    # T Q = T P + (T H) G: the structure of P and H halves the work of a plain 4x8x8 product.
+    for r in range(4):
+        for i in range(4):
+            TH[r, i] = ca * T[r, i] + cv * T[r, 4 + i]
+    for r in range(4):
+        for c in range(8):
+            t = T[r, c] + (dt * T[r, c - 4] if c >= 4 else 0.0)
+            for i in range(4):
+                t += TH[r, i] * G[i, c]
+            TQ[r, c] = t
+    for i in range(4):
+        for c in range(8):
+            A[i, c] = Q[i, c] - bd * TQ[i, c]
+            A[4 + i, c] = Q[4 + i, c] - gd * TQ[i, c]
+    # Input columns: y1 acts on wheel row 2 through kt1, y2 on row 3 through kt2.
+    for col in range(2):
+        w = 2 + col
+        kt = kt1 if col == 0 else kt2
+        hd = ca * kt / mass[w]  # H M^-1 B, displacement part (row w)
+        hv = cv * kt / mass[w]  # velocity part (row 4 + w)
+        for i in range(4):
+            th = T[i, w] * hd + T[i, 4 + w] * hv
+            ui = (hd if i == w else 0.0) - bd * th
+            vi = (hv if i == w else 0.0) - gd * th
+            UV[col, i] = ui
+            UV[col, 4 + i] = vi
+            UV[2 + col, i] = bd * Si[i, w] * kt
+            UV[2 + col, 4 + i] = gd * Si[i, w] * kt
+    # Table rows 0..7: s_{k+1} = A s_k + W y_k with W = A V + U.
+    for r in range(8):
+        for c in range(8):
+            blk[r * _ROW + c * LANES + lane] = A[r, c]
+        for col in range(2):
+            t = 0.0
+            for c in range(8):
+                t += A[r, c] * UV[2 + col, c]
+            blk[r * _ROW + (8 + col) * LANES + lane] = t + UV[col, r]
+        blk[_STATE + r * LANES + lane] = -(UV[2, r] * y10 + UV[3, r] * y20)
+    # Rows 8, 9: z1'' = G[0] - a1 G[1], z2'' = G[0] + a2 G[1]; their input terms are R V.
+    for out, lever in ((8, -a1), (9, a2)):
+        o = out * _ROW + lane
+        for c in range(8):
+            blk[o + c * LANES] = G[0, c] + lever * G[1, c]
+        for col in range(2):
+            t = 0.0
+            for c in range(8):
+                t += blk[o + c * LANES] * UV[2 + col, c]
+            blk[o + (8 + col) * LANES] = t
 
 
-@njit(cache=True, error_model="numpy")
-def simulate(
-    X: np.ndarray, L: float, kt1: float, kt2: float, y1: np.ndarray, y2: np.ndarray,
-    dt: float, gamma: float, beta: float, out: np.ndarray,
+@njit(**_OPTS)
+def _row(c: np.ndarray, o: int, s0: float, s1: float, s2: float, s3: float, s4: float,
+         s5: float, s6: float, s7: float) -> float:  # pragma: no cover - compiled
+    """The 8 state terms of one row of the table applied to one lane (the row's first entry
+    at ``c[o]``, the next terms ``LANES`` apart)."""
+    return (((c[o] * s0 + c[o + LANES] * s1) + (c[o + 2 * LANES] * s2 + c[o + 3 * LANES] * s3))
+            + ((c[o + 4 * LANES] * s4 + c[o + 5 * LANES] * s5)
+               + (c[o + 6 * LANES] * s6 + c[o + 7 * LANES] * s7)))
+
+
+@njit(**_OPTS)
+def _prepare_block(
+    X: np.ndarray, j0: int, L: float, kt1: float, kt2: float, dt: float, gamma: float,
+    beta: float, y10: float, y20: float, blk: np.ndarray, ok: np.ndarray, ws: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
-    """``out[j]`` = z1'', z2'' of row ``j`` of ``X``, shape ``(n, 2, N)``."""
-    S = np.empty((4, 4))
-    Si = np.empty((4, 4))
-    for j in range(X.shape[0]):
-        _candidate(X[j], L, kt1, kt2, y1, y2, dt, gamma, beta, out[j], S, Si)
+    """Fill the block ``blk`` (BLOCK floats) with the table and initial state of rows
+    ``j0 ... j0 + LANES - 1`` of ``X``. Lanes past the end of ``X`` and non-physical rows keep
+    zero coefficients (their state stays 0: no NaN in flight); ``ok[l]`` says which are real."""
+    blk[:] = 0.0
+    for lane in range(LANES):
+        j = j0 + lane
+        ok[lane] = j < X.shape[0] and _physical(X[j], L)
+        if ok[lane]:
+            _coefficients(X[j], L, kt1, kt2, dt, gamma, beta, y10, y20, blk, lane, ws)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**_OPTS)
+def _step_block(blk: np.ndarray, u1: float, u2: float) -> None:  # pragma: no cover - compiled
+    """One time step of every lane of the block: the read-out slots get z1'', z2'' at the
+    current step, then the state advances, ``s <- A s + W y``. The input terms are added
+    after the 8 state terms (the same order for every lane); they are skipped when both
+    inputs are 0, which is most steps with point sampling (a skipped term would add 0)."""
+    for lane in range(LANES):
+        s = _STATE + lane
+        s0, s1, s2, s3 = blk[s], blk[s + LANES], blk[s + 2 * LANES], blk[s + 3 * LANES]
+        s4, s5 = blk[s + 4 * LANES], blk[s + 5 * LANES]
+        s6, s7 = blk[s + 6 * LANES], blk[s + 7 * LANES]
+        z1 = _row(blk, _ROW * 8 + lane, s0, s1, s2, s3, s4, s5, s6, s7)
+        z2 = _row(blk, _ROW * 9 + lane, s0, s1, s2, s3, s4, s5, s6, s7)
+        n0 = _row(blk, lane, s0, s1, s2, s3, s4, s5, s6, s7)
+        n1 = _row(blk, _ROW + lane, s0, s1, s2, s3, s4, s5, s6, s7)
+        n2 = _row(blk, _ROW * 2 + lane, s0, s1, s2, s3, s4, s5, s6, s7)
+        n3 = _row(blk, _ROW * 3 + lane, s0, s1, s2, s3, s4, s5, s6, s7)
+        n4 = _row(blk, _ROW * 4 + lane, s0, s1, s2, s3, s4, s5, s6, s7)
+        n5 = _row(blk, _ROW * 5 + lane, s0, s1, s2, s3, s4, s5, s6, s7)
+        n6 = _row(blk, _ROW * 6 + lane, s0, s1, s2, s3, s4, s5, s6, s7)
+        n7 = _row(blk, _ROW * 7 + lane, s0, s1, s2, s3, s4, s5, s6, s7)
+        blk[s], blk[s + LANES], blk[s + 2 * LANES], blk[s + 3 * LANES] = n0, n1, n2, n3
+        blk[s + 4 * LANES], blk[s + 5 * LANES] = n4, n5
+        blk[s + 6 * LANES], blk[s + 7 * LANES] = n6, n7
+        blk[s + 8 * LANES], blk[s + 9 * LANES] = z1, z2
+    if u1 != 0.0 or u2 != 0.0:
+        for r in range(10):
+            for lane in range(LANES):
+                o = r * _ROW + 8 * LANES + lane  # input terms of table row r (slot r)
+                i = _STATE + r * LANES + lane
+                blk[i] = blk[i] + blk[o] * u1 + blk[o + LANES] * u2
+
+
+@njit(**_OPTS)
 def objective(
     X: np.ndarray, L: float, kt1: float, kt2: float, y1: np.ndarray, y2: np.ndarray,
     dt: float, gamma: float, beta: float, ref: np.ndarray, f: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
     """``f[j]`` = Eq. (3) for row ``j`` of ``X`` against ``ref`` (2, N); inf for a
-    non-physical candidate (mass <= 0, negative stiffness or damping, a1 outside (0, L),
-    non-finite values) or a non-finite response."""
+    non-physical candidate or a non-finite response. No response is stored."""
+    n = X.shape[0]
     N = y1.shape[0]
     den = np.sqrt(np.sum(ref[0] ** 2)) + np.sqrt(np.sum(ref[1] ** 2))
-    z = np.empty((2, N))
-    S = np.empty((4, 4))
-    Si = np.empty((4, 4))
-    for j in range(X.shape[0]):
-        x = X[j]
-        ok = x[8] > 0.0 and x[8] < L
-        for i in range(9):
-            if not np.isfinite(x[i]) or (i < 4 and x[i] <= 0.0) or x[i] < 0.0:
-                ok = False
-        if not ok:
-            f[j] = np.inf
-            continue
-        _candidate(x, L, kt1, kt2, y1, y2, dt, gamma, beta, z, S, Si)
-        e1 = 0.0
-        e2 = 0.0
+    blk = np.empty(BLOCK)
+    ok = np.empty(LANES, dtype=np.bool_)
+    ws = np.empty((7, 8, 8))
+    err = np.empty((2, LANES))
+    for j0 in range(0, n, LANES):
+        _prepare_block(X, j0, L, kt1, kt2, dt, gamma, beta, y1[0], y2[0], blk, ok, ws)
+        err[:] = 0.0
         for k in range(N):
-            u = ref[0, k] - z[0, k]
-            w = ref[1, k] - z[1, k]
-            e1 += u * u
-            e2 += w * w
-        fj = (np.sqrt(e1) + np.sqrt(e2)) / den
-        f[j] = fj if np.isfinite(fj) else np.inf
+            _step_block(blk, y1[k], y2[k])
+            r1 = ref[0, k]
+            r2 = ref[1, k]
+            for lane in range(LANES):
+                e1 = r1 - blk[_Z1 + lane]
+                e2 = r2 - blk[_Z2 + lane]
+                err[0, lane] += e1 * e1
+                err[1, lane] += e2 * e2
+        for lane in range(min(LANES, n - j0)):
+            fj = (np.sqrt(err[0, lane]) + np.sqrt(err[1, lane])) / den
+            f[j0 + lane] = fj if (ok[lane] and np.isfinite(fj)) else np.inf
 
 
-def _inputs(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Fresh writable C-contiguous float64 copies, so every call has the same numba
-    signature (a read-only array would be a new type and trigger a second compilation)."""
-    X = np.array(np.atleast_2d(X), dtype=np.float64, order="C")
-    return X, np.array(y[:, 0], dtype=np.float64), np.array(y[:, 1], dtype=np.float64)
+@njit(**_OPTS)
+def simulate(
+    X: np.ndarray, L: float, kt1: float, kt2: float, y1: np.ndarray, y2: np.ndarray,
+    dt: float, gamma: float, beta: float, out: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """``out[j]`` = z1'', z2'' (m/s^2) of row ``j`` of ``X``, shape ``(n, 2, N)``; rows of
+    non-physical candidates are NaN."""
+    n = X.shape[0]
+    N = y1.shape[0]
+    blk = np.empty(BLOCK)
+    ok = np.empty(LANES, dtype=np.bool_)
+    ws = np.empty((7, 8, 8))
+    for j0 in range(0, n, LANES):
+        _prepare_block(X, j0, L, kt1, kt2, dt, gamma, beta, y1[0], y2[0], blk, ok, ws)
+        for k in range(N):
+            _step_block(blk, y1[k], y2[k])
+            for lane in range(min(LANES, n - j0)):
+                out[j0 + lane, 0, k] = blk[_Z1 + lane] if ok[lane] else np.nan
+                out[j0 + lane, 1, k] = blk[_Z2 + lane] if ok[lane] else np.nan
+
+
+def available_threads() -> int:
+    """Cores this process may run on (its CPU affinity where the OS reports it)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return os.cpu_count() or 1
+
+
+@functools.cache
+def _pool(workers: int) -> ThreadPoolExecutor:
+    """A pool of ``workers`` threads, made on first use and kept (the calling thread takes one
+    chunk itself, so ``threads`` threads need ``threads - 1`` workers)."""
+    return ThreadPoolExecutor(max_workers=workers, thread_name_prefix="vpid-kernel")
+
+
+def chunks(n: int, threads: int) -> list[tuple[int, int]]:
+    """Contiguous ``[start, stop)`` ranges of ``n`` candidates, one per thread used: at most
+    ``threads`` ranges, each of at least ``MIN_PER_THREAD`` candidates (one range for a small
+    batch, so it pays no hand-off)."""
+    parts = max(1, min(int(threads), n // MIN_PER_THREAD))
+    edges = [n * i // parts for i in range(parts + 1)]
+    return [(edges[i], edges[i + 1]) for i in range(parts)]
+
+
+def _run_chunked(fn, X: np.ndarray, args: tuple, out: np.ndarray, threads: int) -> None:
+    """``fn(X[a:b], *args, out[a:b])`` over the chunks, in parallel when there are several.
+    Every candidate's arithmetic is independent of the chunking, so the result is too."""
+    if threads <= 1 or X.shape[0] < 2 * MIN_PER_THREAD:
+        fn(X, *args, out)
+        return
+    parts = chunks(X.shape[0], threads)
+    pool = _pool(len(parts) - 1)
+    futures = [pool.submit(fn, X[a:b], *args, out[a:b]) for a, b in parts[1:]]
+    a, b = parts[0]
+    fn(X[a:b], *args, out[a:b])
+    for fut in futures:
+        fut.result()
+
+
+def as_kernel_array(A: np.ndarray) -> np.ndarray:
+    """``A`` itself if it is already a writable C-contiguous float64 array, else such a copy:
+    every call then has the same numba signature (a read-only or strided array would be a new
+    type and trigger another compilation)."""
+    A = np.asarray(A)
+    if A.dtype == np.float64 and A.flags.c_contiguous and A.flags.writeable:
+        return A
+    return np.array(A, dtype=np.float64, order="C")
+
+
+class Setup:
+    """What a model's simulations share: the known constants and Newmark settings, with the
+    tyre inputs ``y`` (N, 2; m) split into contiguous columns once (units as in
+    :class:`vpid_vehicle.model.KnownConstants`, ``dt`` in s)."""
+
+    def __init__(self, L: float, kt1: float, kt2: float, y: np.ndarray, dt: float,
+                 gamma: float, beta: float) -> None:
+        y = np.asarray(y, dtype=np.float64)
+        self.y1 = np.array(y[:, 0], dtype=np.float64)
+        self.y2 = np.array(y[:, 1], dtype=np.float64)
+        self.consts = (float(L), float(kt1), float(kt2))
+        self.newmark = (float(dt), float(gamma), float(beta))
+        self._ref: tuple[np.ndarray | None, np.ndarray | None] = (None, None)
+
+    def _reference(self, ref: np.ndarray) -> np.ndarray:
+        """``ref`` as the kernel takes it. A read-only reference (the problem's) is copied once
+        and the copy reused while the same array object comes back."""
+        if ref is self._ref[0]:
+            return self._ref[1]
+        out = as_kernel_array(ref)
+        if isinstance(ref, np.ndarray) and not ref.flags.writeable and ref.base is None:
+            self._ref = (ref, out)
+        return out
+
+    @property
+    def samples(self) -> int:
+        return int(self.y1.shape[0])
+
+    def objective(self, X: np.ndarray, ref: np.ndarray, threads: int = 1) -> np.ndarray:
+        """Eq. (3) of every row of ``X`` (n, 9) against ``ref`` (2, N), shape ``(n,)``.
+        ``threads``: how many threads a large batch may use (the result does not depend on
+        it)."""
+        X = as_kernel_array(np.atleast_2d(X))
+        f = np.empty(X.shape[0])
+        args = (*self.consts, self.y1, self.y2, *self.newmark, self._reference(ref))
+        _run_chunked(objective, X, args, f, threads)
+        return f
+
+    def responses(self, X: np.ndarray, threads: int = 1) -> np.ndarray:
+        """z1'' and z2'' (m/s^2) of every row of ``X``, shape ``(n, 2, N)``; NaN rows for
+        non-physical candidates."""
+        X = as_kernel_array(np.atleast_2d(X))
+        out = np.empty((X.shape[0], 2, self.samples))
+        _run_chunked(simulate, X, (*self.consts, self.y1, self.y2, *self.newmark), out, threads)
+        return out
 
 
 def evaluate(
     X: np.ndarray, L: float, kt1: float, kt2: float, y: np.ndarray, dt: float, gamma: float,
-    beta: float, ref: np.ndarray,
+    beta: float, ref: np.ndarray, threads: int = 1,
 ) -> np.ndarray:
-    """Eq. (3) for every row of ``X`` against the reference ``ref`` (2, N), shape ``(n,)``."""
-    X, y1, y2 = _inputs(X, y)
-    f = np.empty(X.shape[0])
-    objective(X, float(L), float(kt1), float(kt2), y1, y2, float(dt), float(gamma), float(beta),
-              np.array(ref, dtype=np.float64, order="C"), f)
-    return f
+    """Eq. (3) for every row of ``X`` against the reference ``ref`` (2, N), shape ``(n,)``;
+    ``y``: tyre inputs as sampled for the integrator, ``(N, 2)``. (One-off convenience: a
+    :class:`Setup` made once avoids re-splitting ``y`` on every call.)"""
+    return Setup(L, kt1, kt2, y, dt, gamma, beta).objective(X, ref, threads)
 
 
 def body_accelerations(
     X: np.ndarray, L: float, kt1: float, kt2: float, y: np.ndarray, dt: float, gamma: float,
-    beta: float,
+    beta: float, threads: int = 1,
 ) -> np.ndarray:
-    """z1'' and z2'' (m/s^2) of every row of ``X``, shape ``(n, 2, N)``; ``y`` is ``(N, 2)``."""
-    X, y1, y2 = _inputs(X, y)
-    out = np.empty((X.shape[0], 2, y1.shape[0]))
-    simulate(X, float(L), float(kt1), float(kt2), y1, y2, float(dt), float(gamma), float(beta),
-             out)
-    return out
+    """z1'' and z2'' (m/s^2) of every row of ``X``, shape ``(n, 2, N)``; ``y`` is ``(N, 2)``.
+    Rows of non-physical candidates are NaN."""
+    return Setup(L, kt1, kt2, y, dt, gamma, beta).responses(X, threads)

@@ -77,6 +77,15 @@ class VehicleProblem(Problem):
     def x_true(self) -> np.ndarray | None:
         return self._x_true.copy()
 
+    def set_threads(self, n: int) -> None:
+        """Let the Newmark kernel spread a large batch (at least ``kernel.MIN_PER_THREAD``
+        candidates per thread) over ``n`` threads; results are bit-identical for every n."""
+        from vpid_bench.api import ConfigError
+
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ConfigError("threads", n, "an integer >= 1")
+        self.model.set_threads(int(n))
+
     def responses(self, X: np.ndarray) -> np.ndarray:
         """z1'' and z2'' (m/s^2) computed for the rows of ``X``, ``(n, 2, N)``; NaN rows for
         non-physical candidates (a mass <= 0, a1 outside (0, L), ...)."""

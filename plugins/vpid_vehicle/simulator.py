@@ -7,7 +7,9 @@ imported on first use; if numba is missing it falls back to the plain numpy Newm
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -36,11 +38,31 @@ class Simulator:
     stride: int = 1
     t: np.ndarray = field(init=False, repr=False)
     y: np.ndarray = field(init=False, repr=False)
+    #: Threads a large batch may use (see :meth:`set_threads`); never changes a result.
+    threads: int = field(init=False, default=1, compare=False)
+    _setup: Any = field(init=False, default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         t = time_grid(self.T, self.dt)
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "y", sample(self.bump, t, self.sampling, self.gamma))
+
+    def set_threads(self, n: int) -> None:
+        """Let the compiled kernel spread a large batch over ``n`` threads (``n >= 1``). An
+        execution setting, not part of the simulation: results are bit-identical for any n."""
+        object.__setattr__(self, "threads", int(n))
+
+    def _kernel_setup(self) -> Any:
+        """The kernel's :class:`~vpid_vehicle.kernel.Setup` for this grid, made on first use;
+        None when numba cannot be imported."""
+        if self._setup is None:
+            kernel = _kernel()
+            if kernel is None:  # pragma: no cover - numba is a dependency
+                return None
+            k = self.known
+            object.__setattr__(self, "_setup", kernel.Setup(k.L, k.kt1, k.kt2, self.y, self.dt,
+                                                            self.gamma, self.beta))
+        return self._setup
 
     @property
     def t_out(self) -> np.ndarray:
@@ -55,20 +77,24 @@ class Simulator:
 
             out = exact_acc(X, self.known, self.bump, self.t)
         else:
-            out = newmark_fast(X, self.known, self.y, self.dt, self.gamma, self.beta)
-        return out[:, :, :: self.stride]
+            setup = self._kernel_setup()
+            if setup is None:  # pragma: no cover - numba is a dependency
+                from .newmark import body_accelerations as plain
+
+                out = plain(X, self.known, self.y, self.dt, self.gamma, self.beta)
+            else:
+                out = setup.responses(X, self.threads)
+        return out if self.stride == 1 else out[:, :, :: self.stride]
 
 
     def objective(self, X: np.ndarray, reference: np.ndarray) -> np.ndarray:
         """Eq. (3) of the rows of ``X`` against ``reference`` (2, N), inf where a candidate is
         non-physical or its simulation fails. Newmark with stride 1 runs fully compiled."""
-        X = np.atleast_2d(np.asarray(X, dtype=float))
         if self.integrator == "newmark" and self.stride == 1:
-            kernel = _kernel()
-            if kernel is not None:
-                k = self.known
-                return kernel.evaluate(X, k.L, k.kt1, k.kt2, self.y, self.dt, self.gamma,
-                                       self.beta, reference)
+            setup = self._kernel_setup()
+            if setup is not None:
+                return setup.objective(X, reference, self.threads)
+        X = np.atleast_2d(np.asarray(X, dtype=float))
         f = np.full(X.shape[0], np.inf)
         ok = physical(X, self.known)
         if np.any(ok):
@@ -77,8 +103,10 @@ class Simulator:
         return f
 
 
+@functools.lru_cache(maxsize=1)
 def _kernel():
-    """The compiled kernel module, or None when numba cannot be imported."""
+    """The compiled kernel module (imported on first use), or None when numba cannot be
+    imported."""
     try:
         from . import kernel
     except ImportError:  # pragma: no cover - numba is a dependency
@@ -89,7 +117,7 @@ def _kernel():
 def newmark_fast(
     X: np.ndarray, known: KnownConstants, y: np.ndarray, dt: float, gamma: float, beta: float
 ) -> np.ndarray:
-    """The compiled kernel (plain numpy Newmark if numba cannot be imported)."""
+    """The compiled kernel, one call (plain numpy Newmark if numba cannot be imported)."""
     kernel = _kernel()
     if kernel is None:  # pragma: no cover - numba is a dependency
         from .newmark import body_accelerations as plain
