@@ -154,11 +154,13 @@ def test_the_job_records_a_library_failure_and_goes_on(tmp_path):
     base = {"seed": 0, "runs": 2, "progress": False, "report": False,
             "problem": {"name": "functions", "function": "sphere", "dim": 3, "ps": 5,
                         "iterations": 3}}
-    summary = run_from_config(base | {"optimizer": {"name": "toy_failing"}}, tmp_path / "a", registry)
+    summary = run_from_config(base | {"optimizer": {"name": "toy_failing"}}, tmp_path / "a",
+                              registry)
     assert summary.failed == [0, 1]
     record = read_record(summary.record_paths[0])
     assert record["status"] == "failed" and record["error"]["type"] == "LibraryError"
-    summary = run_from_config(base | {"optimizer": {"name": "toy_forever"}}, tmp_path / "b", registry)
+    summary = run_from_config(base | {"optimizer": {"name": "toy_forever"}}, tmp_path / "b",
+                              registry)
     assert not summary.failed
     record = read_record(summary.record_paths[1])
     assert record["status"] == "ok" and record["result"]["evaluations"] == 20
