@@ -13,7 +13,7 @@ $(BIN)/python:
 	$(BIN)/python -m pip install --upgrade "pip>=23.1"
 
 $(VENV)/.installed: $(BIN)/python pyproject.toml examples/vpid-random-search/pyproject.toml
-	$(BIN)/python -m pip install -e ".[test,joblib,submitit,peers]" -e examples/vpid-random-search
+	$(BIN)/python -m pip install -e ".[test,joblib,submitit,peers,tune]" -e examples/vpid-random-search
 	touch $@
 
 install: $(VENV)/.installed
