@@ -95,6 +95,7 @@ class NevergradOptimizer(Optimizer):
         self._ng: Any = None
         self._pending: list[Any] | None = None
         self._told = 0
+        self._stopped = False
 
     def _build(self) -> Any:
         import nevergrad as ng
@@ -121,7 +122,13 @@ class NevergradOptimizer(Optimizer):
         self._told += len(self._pending)
         self._pending = None
 
+    # Settable (``self.done = True``), like the core's ``done`` is about to become; a
+    # read-only property here would break a base class that assigns ``self.done``.
     @property
     def done(self) -> bool:
         """True once the protocol's budget ``ps * (iterations + 1)`` has been told."""
-        return self._told >= self.budget
+        return self._stopped or self._told >= self.budget
+
+    @done.setter
+    def done(self, value: bool) -> None:
+        self._stopped = bool(value)

@@ -1,5 +1,5 @@
 """``optimizer=cmaes`` (the ``cma`` package, extra ``peers``): seeding, bounds, stopping,
-quiet, and better than random search. Skipped when cma is not installed. About 5 s, most of it
+quiet, and better than random search. Skipped when cma is not installed. About 10 s, 3 s of it
 ``import cma`` (which loads scipy.stats and matplotlib)."""
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """``optimizer=nevergrad`` (extra ``peers``): the method name check, batches of ps, seeding,
 failures inside nevergrad recorded as failed runs, better than random search. Skipped when
-nevergrad is not installed. About 8 s, 3 of them ``import nevergrad``."""
+nevergrad is not installed. About 10 s, 3 of them ``import nevergrad``."""
 
 from __future__ import annotations
 
