@@ -1,5 +1,7 @@
-"""``optimizer=scipy_de``, ``lsq``, ``de_lsq``: the peers the paper's DE variants are compared
-with, registered with vpid-bench. Imports are light: scipy.optimize is imported on first use."""
+"""``optimizer=scipy_de``, ``lsq``, ``de_lsq``, ``cmaes``, ``nevergrad``, registered with
+vpid-bench. Imports are light: scipy.optimize is imported on first use, and ``cmaes`` and
+``nevergrad`` are registered only when their library (the ``peers`` extra) can be found, which
+does not import it (``import nevergrad`` alone costs about 3 s)."""
 
 from __future__ import annotations
 
@@ -10,11 +12,20 @@ from vpid_bench import hookimpl
 from .hybrid import DELeastSquares
 from .lsq import LeastSquares
 from .scipy_de import ScipyDE
+from .unit_box import library_available
 
 
 @hookimpl
 def vpid_bench_register_optimizers(register: Callable[[str, type], None]) -> None:
-    """One register call per optimizer."""
+    """One register call per optimizer; cmaes and nevergrad when their library is installed."""
     register("scipy_de", ScipyDE)
     register("lsq", LeastSquares)
     register("de_lsq", DELeastSquares)
+    if library_available("cma"):
+        from .cmaes import CMAES
+
+        register("cmaes", CMAES)
+    if library_available("nevergrad"):
+        from .nevergrad_opt import NevergradOptimizer
+
+        register("nevergrad", NevergradOptimizer)

@@ -26,7 +26,7 @@ FUNCTIONS = ["problem=functions", "optimizer=random", "progress=false", "report=
 
 # (command line, the start of the one error line)
 PREFLIGHT = [
-    (["optimizer=nosuch"], "error: optimizer='nosuch' is not allowed: one of de1,"),
+    (["optimizer=nosuch"], "error: optimizer='nosuch' is not allowed: one of "),
     (["problem=nosuch"], "error: problem='nosuch' is not allowed: one of "),
     (["-m", "optimizer=random,nosuch"], "error: optimizer='nosuch' is not allowed: one of"),
     (["-m", "optimizer=glob(zzz*)"], "error: optimizer='glob(zzz*)' is not allowed: a pattern"),

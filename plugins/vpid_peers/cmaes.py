@@ -1,0 +1,114 @@
+"""``optimizer=cmaes``: CMA-ES from the ``cma`` package (Hansen), as an ask/tell optimizer.
+
+* **Coordinates**: the search runs in the unit cube (:mod:`vpid_peers.unit_box`), so one
+  step size ``sigma0`` fits every parameter; candidates go back to physical units on ``ask``.
+* **Population**: ``popsize = ps`` from the protocol (cma's own default would be
+  ``4 + 3 ln(dim)``, 10 for the vehicle's 9 parameters).
+* **Start**: the mean starts at a point drawn uniformly in the box by the run's generator, not
+  the box's centre (on the vehicle problem the box is centred on the true parameters, so a
+  centred start would begin at the answer). ``sigma0`` is a fraction of the box width.
+* **Bounds**: cma's ``BoundTransform`` (its default boundary handler): the search distribution
+  lives in an unbounded space and every candidate is mapped into the box by a smooth
+  piecewise-quadratic transformation, so every asked candidate is inside.
+* **Randomness**: cma draws all its normal deviates through its ``randn`` option; it gets the
+  run's :class:`numpy.random.Generator` there. cma's ``seed`` option would re-seed numpy's
+  *global* generator instead, which other code in the same process shares; it is left unset.
+* **Stopping**: the optimizer is ``done`` when cma's own termination criteria fire
+  (``tolfun``, ``tolx``, ``tolfunhist``, ``tolflatfitness``, ... with cma's defaults) or when it
+  has used the protocol's ``ps * (iterations + 1)`` evaluations, the same schedule as the DE
+  variants (counted here: cma's ``maxfevals`` fires one generation late, it tests
+  ``countevals - 1 >= maxfevals``). ``stop_reasons`` keeps what ended it.
+* **Quiet**: ``verbose=-9`` and no data logging, so cma prints nothing and writes no files.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from vpid_bench.api import Bounds, ConfigError, Optimizer, OptimizerParams
+
+from .unit_box import to_physical
+
+
+@dataclass(frozen=True)
+class CMAESParams(OptimizerParams):
+    """``sigma0``: the initial step size as a fraction of the box width, in (0, 1].
+
+    The default 0.3 follows cma's advice that the optimum should lie within about
+    ``x0 ± 3 sigma0``: from a start anywhere in the unit cube, 3 × 0.3 covers the whole side.
+    """
+
+    sigma0: float = 0.3
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.sigma0) and 0.0 < self.sigma0 <= 1.0):
+            raise ConfigError("optimizer.sigma0", self.sigma0, "a fraction of the box in (0, 1]")
+        if self.ps < 2:
+            raise ConfigError("problem.ps", self.ps, "at least 2 for cmaes (it recombines the "
+                              "best half of each population)")
+
+
+class CMAES(Optimizer):
+    """CMA-ES (``cma.CMAEvolutionStrategy``) driven by the run loop's ask/tell."""
+
+    Params = CMAESParams
+
+    def __init__(self, params: CMAESParams, bounds: Bounds, rng: np.random.Generator) -> None:
+        super().__init__(params, bounds, rng)
+        import cma  # the extra; imported here so that registering the plugin stays cheap
+
+        dim = bounds.dim
+        options = {
+            "popsize": params.ps,
+            "bounds": [0.0, 1.0],
+            "BoundaryHandler": "BoundTransform",
+            "randn": self._standard_normal,
+            "seed": float("nan"),  # nan: cma neither reads nor re-seeds numpy's global RNG
+            "verbose": -9,
+            "verb_log": 0,
+            "verb_disp": 0,
+        }
+        x0 = rng.random(dim)
+        self._es = cma.CMAEvolutionStrategy(x0, params.sigma0, options)
+        self.schedule = params.ps * (params.iterations + 1)  # evaluations, as DE's generations
+        self._pending: list[np.ndarray] | None = None
+        self._done = False
+        self.stop_reasons: dict[str, Any] = {}
+
+    def _standard_normal(self, *shape: int) -> np.ndarray:
+        """cma's ``randn(lam, N)``: standard normal deviates from the run's generator."""
+        return self.rng.standard_normal(shape)
+
+    def ask(self) -> np.ndarray:
+        if self._pending is None:
+            self._pending = self._es.ask()
+        return to_physical(np.array(self._pending), self.bounds)
+
+    def tell(self, X: np.ndarray, f: np.ndarray) -> None:
+        if self._pending is None or len(X) != len(self._pending):
+            raise ValueError("tell() must follow ask() with the whole population it returned")
+        f = np.asarray(f, dtype=float).reshape(-1)
+        # cma ranks inf (a failed simulation) last; it refuses NaN, which the run loop never sends
+        self._es.tell(self._pending, f.tolist())
+        self._pending = None
+        stop = dict(self._es.stop())
+        if self._es.countevals >= self.schedule:
+            stop["schedule"] = self.schedule
+        if stop:
+            self.stop_reasons = stop
+            self.done = True
+
+    # The core's Optimizer.done is a read-only property today; these two make it settable
+    # here (``self.done = True``) and keep working once the base class makes it an attribute.
+    @property
+    def done(self) -> bool:
+        """True once cma's termination criteria have fired or the schedule is used up."""
+        return self._done
+
+    @done.setter
+    def done(self, value: bool) -> None:
+        self._done = bool(value)
