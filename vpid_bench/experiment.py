@@ -61,6 +61,10 @@ class JobSummary:
     record_paths: list[Path]
     wall_time_s: float
     warmup_s: float = 0.0
+    #: The job's search score, lower is better: the median relative gap of the runs' best to
+    #: their instance's optimum where the optimum is known, else the median best objective.
+    #: The command's task returns it, so an optimizing sweeper (Optuna) can tune on it.
+    score: float | None = None
 
 
 class RunTimeoutError(Exception):
@@ -217,16 +221,17 @@ def _job_key(job: Job, registry: Registry | None, problem: Problem) -> dict[str,
 
 
 def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
-                paths: list[Path]) -> None:
+                paths: list[Path]) -> dict[int, float]:
     """What the records allow, for a problem with residuals and a known truth: the Cramér–Rao
     bounds of its design (``job_dir/identifiability.json``) and each instance's optimum
-    (``optima_dir/<key>.json``, shared by the jobs of a sweep; see :mod:`.analysis`)."""
+    (``optima_dir/<key>.json``, shared by the jobs of a sweep; see :mod:`.analysis`).
+    Returns each run's relative gap ``(f_best - f*) / f*`` to its instance's optimum."""
     from .analysis.identifiability import cramer_rao
     from .analysis.optimum import update_instance_optimum
     from .spec import offers_residuals
 
     if problem.x_true is None or not offers_residuals(type(problem)):
-        return
+        return {}
     target = job_dir / "identifiability.json"
     if not target.is_file():
         crb = cramer_rao(problem)
@@ -242,13 +247,35 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
         x, f = res.get("x_best"), res.get("f_best")
         if record["status"] == "ok" and x and None not in x and f is not None:
             bests.setdefault(record["run_index"], []).append((np.asarray(x, float), f))
-    by_instance: dict[str | None, tuple[Problem, list]] = {}
+    by_instance: dict[str | None, tuple[Problem, list, list[int]]] = {}
     for i in range(job.spec.runs):
         inst = problem.instance(i)
-        entry = by_instance.setdefault(inst.instance_id(), (inst, []))
+        entry = by_instance.setdefault(inst.instance_id(), (inst, [], []))
         entry[1].extend(bests.get(i, []))
-    for inst, runs in by_instance.values():
-        update_instance_optimum(inst, job.problem_settings(), optima_dir, runs)
+        entry[2].append(i)
+    gaps: dict[int, float] = {}
+    for inst, runs, indices in by_instance.values():
+        f_opt = update_instance_optimum(inst, job.problem_settings(), optima_dir, runs)["f_opt"]
+        for i in indices:
+            for _, f in bests.get(i, []):
+                gaps[i] = (f - f_opt) / f_opt if f_opt > 0 else f - f_opt
+    return gaps
+
+
+def _score(gaps: Mapping[int, float], paths: list[Path]) -> float | None:
+    """The job's search score (see :class:`JobSummary`); ``inf`` when a run failed."""
+    if gaps:
+        values = list(gaps.values())
+    else:
+        values = []
+        for path in paths:
+            try:
+                record = rec.read_record(path)
+            except rec.CorruptRecordError:
+                continue
+            f = (record.get("result") or {}).get("f_best")
+            values.append(float("inf") if record["status"] != "ok" or f is None else float(f))
+    return float(np.median(values)) if values else None
 
 
 def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
@@ -296,12 +323,14 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
                     bar.set_postfix_str(_postfix(record), refresh=False)
         finally:
             bar.close()
+        gaps: dict[int, float] = {}
         try:
-            analyse_job(job, problem, job_dir, Path(optima_dir or job_dir / "optima"),
-                        summary.record_paths)
+            gaps = analyse_job(job, problem, job_dir, Path(optima_dir or job_dir / "optima"),
+                               summary.record_paths)
         except Exception as exc:  # noqa: BLE001 - the runs are recorded; say what failed
             log.warning("the optimum / identifiability analysis failed: %s: %s",
                         type(exc).__name__, exc)
+        summary.score = _score(gaps, summary.record_paths)
         summary.wall_time_s = time.perf_counter() - start
     best = best_vector(summary.record_paths)
     if best is not None:  # the best run's own instance: its record is the one it fitted

@@ -101,7 +101,7 @@ class JobTask:
         print(f"{summary.optimizer} on {summary.problem}: {summary.ran} run(s) done, "
               f"{summary.skipped} already recorded, {len(summary.failed)} failed, "
               f"{summary.wall_time_s:.1f} s -> {job_dir}", file=sys.stderr, flush=True)
-        return None
+        return summary.score  # what an optimizing sweeper (hydra/sweeper=optuna) minimises
 
 
 def _load_registry() -> Any:

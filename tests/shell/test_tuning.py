@@ -1,0 +1,49 @@
+"""A job returns its search score, so Hydra's Optuna sweeper can tune an optimizer on it."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "sweeps"))
+from sweep_helpers import run_cli  # noqa: E402
+
+from vpid_bench.experiment import run_from_config  # noqa: E402
+
+
+def test_the_score_is_the_median_relative_gap_to_each_instances_optimum(compose_config,
+                                                                        registry, tmp_path):
+    cfg = compose_config(["optimizer=de1", "problem.iterations=3", "runs=3", "progress=false"])
+    summary = run_from_config(cfg, tmp_path / "job", registry)
+    f_best = [json.loads(p.read_text())["result"]["f_best"] for p in summary.record_paths]
+    (optimum,) = [json.loads(p.read_text()) for p in (tmp_path / "job" / "optima").glob("*.json")]
+    gaps = [(f - optimum["f_opt"]) / optimum["f_opt"] for f in f_best]
+    assert min(gaps) >= 0  # the polish never ends above a run's best
+    assert summary.score == pytest.approx(float(np.median(gaps)), rel=1e-12)
+
+
+def test_without_an_optimum_the_score_is_the_median_best_objective(compose_config, registry,
+                                                                   tmp_path):
+    cfg = compose_config(["problem=functions", "optimizer=random", "problem.iterations=2",
+                          "runs=3", "progress=false"])
+    summary = run_from_config(cfg, tmp_path / "job", registry)
+    f_best = [json.loads(p.read_text())["result"]["f_best"] for p in summary.record_paths]
+    assert summary.score == pytest.approx(float(np.median(f_best)))
+
+
+@pytest.mark.skipif(importlib.util.find_spec("hydra_plugins.hydra_optuna_sweeper") is None,
+                    reason="the tune extra (hydra-optuna-sweeper) is not installed")
+def test_optuna_tunes_a_de_on_the_returned_score(tmp_path):
+    done = run_cli(["-m", "hydra/sweeper=optuna", "hydra.sweeper.n_trials=2",
+                    "problem=functions", "problem.dim=3", "optimizer=de1",
+                    "optimizer.F=interval(0.3,1.0)", "problem.iterations=3", "runs=2",
+                    "progress=false", "report=false", f"hydra.sweep.dir={tmp_path}/tune"],
+                   tmp_path)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "Best value:" in done.stdout + done.stderr
+    assert len(list((tmp_path / "tune").glob("*/job.json"))) == 2
