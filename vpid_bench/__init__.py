@@ -1,4 +1,4 @@
-"""vpid-bench: benchmark optimizers on vehicle parameter identification.
+"""vpid-bench: benchmark optimizers on parameter identification problems (see README.md).
 
 Plugins implement :class:`vpid_bench.api.Problem` or :class:`vpid_bench.api.Optimizer` and
 register them with the :data:`hookimpl` marker (see README.md, "Write an optimizer plugin").

@@ -190,7 +190,7 @@ class Problem(abc.ABC):
     def residual_groups(self) -> np.ndarray:
         """The group (channel) of each residual entry, int array of shape ``(m,)``.
 
-        An objective that is a sum of group norms (the vehicle's Eq. 3: one norm per
+        An objective that is a sum of group norms (e.g. one norm per
         measured channel) tells least-squares optimizers which entries share a norm. The
         default is one group (all zeros); it learns ``m`` from one residual evaluation at the
         lower corner of the box, made once and not counted (override it when ``m`` is known).

@@ -9,7 +9,7 @@ errors). ``J`` is a central-difference Jacobian of the residuals at the truth (t
 cancels: it is the Jacobian of the clean responses). The singular values of ``J`` scaled by
 the true values and by ``σ`` show how many parameter combinations the record pins down.
 
-The noise convention is the problem's (:meth:`Problem.residual_sigma`): the vehicle uses the
+The noise convention is the problem's (:meth:`Problem.residual_sigma`), e.g. the
 equivalent additive noise ``σ_c = level * rms(clean channel c)``.
 """
 

@@ -5,7 +5,7 @@ optimizer *searches* is judged against that minimum ``f*`` (the gap ``f_best - f
 well the record *identifies* the parameters by where the minimum ``x*`` lies.
 
 :func:`polish` is a deterministic local minimisation of a sum of residual-group norms
-(Eq. 3 of the vehicle, a least-squares sum for one group) by iteratively reweighted least
+(one norm per measured channel; a least-squares sum for one group) by iteratively reweighted least
 squares: each round weights group ``g`` by ``1 / ||r_g||`` at the current point and solves
 the weighted least-squares problem with scipy's trust-region reflective method inside the
 box; the fixed point is a stationary point of the sum of norms. It never returns a point

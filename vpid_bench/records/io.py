@@ -1,7 +1,7 @@
 """Run records on disk: the schema version, atomic JSON writes, reading and checking.
 
 A record says everything needed to repeat a run (config, seeds, versions) and to judge it
-(best vector in physical units, objective, NoRE and relative errors where true values are
+(best vector in physical units, objective, metrics and relative errors where true values are
 known, evaluations, trace, time). It is plain JSON (no pickle); non-finite floats are
 written as ``null``.
 
