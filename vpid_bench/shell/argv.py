@@ -86,6 +86,13 @@ def parse_command_line(argv: Sequence[str]) -> CommandLine:
                           "a single run's config: drop -m (or use --help)")
     if args.run and args.multirun:
         raise ConfigError("--run", True, "either --run or --multirun, not both")
+    if args.shell_completion:
+        import os
+
+        query = [o for o in args.overrides or [] if o.startswith("query=")]
+        if query and "COMP_LINE" not in os.environ:
+            raise ConfigError("-sc", query[0], "install=bash (or zsh, fish) to install "
+                              "completion; query= is what the installed completion runs")
     if resume is not None and (info or args.version):
         raise ConfigError(RESUME_FLAG, resume or True, "a command that runs jobs")
     return CommandLine(
