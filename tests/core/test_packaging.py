@@ -4,8 +4,9 @@ in editable mode and be missing from a wheel)."""
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
+
+import tomllib
 
 ROOT = Path(__file__).parents[2]
 
