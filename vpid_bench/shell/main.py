@@ -81,7 +81,9 @@ class JobTask:
         job_dir = Path(hydra_cfg.runtime.output_dir)
         multirun = hydra_cfg.mode.name == "MULTIRUN"
         try:
-            summary = run_from_config(cfg, job_dir, self._registry, self._problems)
+            # The jobs of a sweep share one folder of instance optima (each polished once).
+            optima = Path(str(hydra_cfg.sweep.dir)) / "optima" if multirun else None
+            summary = run_from_config(cfg, job_dir, self._registry, self._problems, optima)
         except KeyboardInterrupt:
             write_job_status(job_dir, "interrupted", "interrupted by the user")
             raise
