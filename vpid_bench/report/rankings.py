@@ -59,7 +59,8 @@ def search_summary(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
         out.append({"context": context, "algorithm": algorithm, "n": len(g),
                     "reached": reached, "share": reached / len(g),
                     "rel_gap_median": float(np.median(gaps)), "floor_median": med(floor_col),
-                    "to_opt_median": med(to_col)})
+                    "to_opt_median": med(to_col),
+                    "floor_name": floor_col[: -len("_floor")] if floor_col else ""})
     by_context: dict[str, list[dict[str, Any]]] = {}
     for s in out:
         by_context.setdefault(s["context"], []).append(s)
@@ -179,14 +180,14 @@ def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[s
     return text
 
 
-def search_table(context_rows: Sequence[Mapping[str, Any]], groups: Mapping[str, str] | None,
-                 metric_name: str) -> tuple[list[str], list[list[Any]]]:
+def search_table(context_rows: Sequence[Mapping[str, Any]], groups: Mapping[str, str] | None
+                 ) -> tuple[list[str], list[list[Any]]]:
     """(headers, rows) of one context's search-quality table (Markdown)."""
-    h = ["rank", "group", "optimizer", "n", "reached", "median rel_gap",
-         f"median floor ({metric_name})", "median to x*"]
+    h = ["rank", "group", "optimizer", "n", "reached", "median rel_gap", "median floor",
+         "median to x*", "AUC"]
     body = [[s["rank"], (groups or {}).get(s["algorithm"], "—"), s["algorithm"], s["n"],
              f"{s['reached']}/{s['n']}", s["rel_gap_median"], s["floor_median"],
-             s["to_opt_median"]] for s in context_rows]
+             s["to_opt_median"], s.get("auc", math.nan)] for s in context_rows]
     return h, body
 
 
@@ -197,14 +198,19 @@ def search_lines(context: str, search: Sequence[Mapping[str, Any]],
     rows = [s for s in search if s["context"] == context]
     if not rows:
         return []
-    h, body = search_table(rows, groups, metric_name)
+    h, body = search_table(rows, groups)
+    floor = rows[0].get("floor_name") or "rel_error"
+    floor = metric_name if metric_name.lower() == floor else floor
+    floor_text = (f"the {escape(floor)} of the instance's optimum x*" if floor != "rel_error" else
+                  "the norm of x*'s relative errors against the true values, %")
     how = (f"`group`: optimizers sharing a letter are not separated by the Holm-corrected "
            f"pairwise tests ({escape(test)}) on max(rel_gap, {REACHED:g})" if test else
            "`group`: not tested in a single job's report")
     return [para(f"By search quality: the share of runs reaching their instance's optimum "
                  f"(rel_gap <= {REACHED:g}), then the median rel_gap; the median floor "
-                 f"(the {escape(metric_name)} of the instance's optimum x*) and the median "
-                 f"distance to x* (percent of the true values). {how}."), "",
+                 f"({floor_text}: what the record allows), the median distance to x* "
+                 f"(percent of the true values) and the anytime AUC (area under the "
+                 f"fixed-target ECDF, 0 to 1). {how}."), "",
             markdown(h, body, keep=6), ""]
 
 
