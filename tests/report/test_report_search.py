@@ -210,10 +210,16 @@ def test_paired_report_ranks_twice_with_groups_and_explains_the_disagreement(tmp
 
 def test_ioh_export_loads_in_iohinspector(tmp_path):
     ih = pytest.importorskip("iohinspector")
+    from vpid_bench.report.ioh_export import export_ioh
+
     root = _paired_sweep(tmp_path)
-    build_report([root], root / "report")
+    loaded = load_records([root])
+    rows = run_rows(loaded.records)
+    add_optimum_columns(rows, loaded.records, load_optima([root], loaded.records))
+    files = export_ioh(tmp_path / "out" / "ioh", loaded.records, rows, tmp_path / "out")
+    assert len(files) == 6  # per optimizer: the JSON meta-data and one .dat
     dm = ih.DataManager()
-    dm.add_folder(str(root / "report" / "ioh"))
+    dm.add_folder(str(tmp_path / "out" / "ioh"))
     ov = dm.overview
     assert ov.height == 3 * N_INST
     assert sorted(set(ov["algorithm_name"])) == ["early", "good", "random"]
