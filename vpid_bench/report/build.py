@@ -133,12 +133,19 @@ objective value `f` found. Lower is better for both; the headline names the metr
 and one value of every other setting that varies across the records (noise level, noise seed,
 budget). Runs of different optimizer seeds are pooled.
 
-**Significance.** Within a context: Kruskal–Wallis over all optimizers, then two-sided
-Mann–Whitney U for every pair, Holm-corrected over the pairs of that context; "significant"
-means `p_holm < {alpha}`. Effect size: Vargha–Delaney `A12 = P(metric_a > metric_b) + ties/2`
-(below 0.5: `a` tends to be better). Across contexts (blocks): Friedman on the median metric
-per block, Nemenyi post-hoc, pairwise Wilcoxon signed-rank with Holm. With few runs or blocks
+**Significance.** Within a context, two-sided pairwise tests, Holm-corrected over the pairs of
+that context: the paired Wilcoxon signed-rank test over instances where the runs pair by
+instance (run i of every optimizer on the same, distinct instance i), else Mann–Whitney U;
+exact or permutation p-values for small samples. "Significant" means `p_holm < {alpha}`; the
+`group` letters of each ranking show which optimizers the tests cannot separate. Effect size:
+Vargha–Delaney `A12 = P(metric_a > metric_b) + ties/2` (below 0.5: `a` tends to be better).
+Across blocks (independent instances or contexts, at least 5): Friedman with a permutation
+p-value, Nemenyi post-hoc, pairwise Wilcoxon signed-rank with Holm. With few runs or blocks
 the tests have little power: "not significant" is not "equal".
+
+**Search quality.** Where the jobs wrote each instance's optimum (`optima/`), each run is also
+judged against the lowest objective its own record allows: `rel_gap = (f_best - f_opt) /
+|f_opt|`, the floor (the metric of that optimum) and the distance to it; see `runs.csv`.
 
 **Baseline.** `{baseline}`, when it was run, is the line a useful optimizer must clear
 (a significantly lower per-run metric at the same budget)."""
@@ -573,7 +580,9 @@ def build_report(
             context, mname, [s["algorithm"] for s in mrows if s["n_runs"]],
             None if short else {s["algorithm"]: s.get("group", "") for s in mrows}, srows,
             None if short else {s["algorithm"]: s.get("group", "") for s in srows})), ""]
-        why = rankings.disagreement(context, mname, mrows, srows, centred.get(context, False))
+        why = rankings.disagreement(context, mname, mrows, srows, centred.get(context, False),
+                                    None if short else {s["algorithm"]: s.get("group", "")
+                                                        for s in mrows})
         if why:
             lines += [para(why), ""]
     for _, sec in sections:

@@ -144,7 +144,8 @@ def verdict(context: str, metric_name: str, metric_order: Sequence[str],
 
 
 def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[str, Any]],
-                 search: Sequence[Mapping[str, Any]], centred: bool) -> str:
+                 search: Sequence[Mapping[str, Any]], centred: bool,
+                 metric_groups: Mapping[str, str] | None = None) -> str:
     """Why the two rankings of a context differ, in words ("" when they agree)."""
     mrank = {s["algorithm"]: s["rank"] for s in metric_rows if s.get("n_runs")}
     srank = {s["algorithm"]: s for s in search}
@@ -166,6 +167,13 @@ def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[s
             f"{m_order.index(a) + 1} by {escape(metric_name)} but {s_order.index(a) + 1} by "
             f"search quality (it reaches the optimum in {s['reached']} of {s['n']} runs, "
             f"median rel_gap {fmt(s['rel_gap_median'], 3)}). ")
+    passed = [b for b in m_order[m_order.index(a) + 1:] if s_order.index(b) < s_order.index(a)]
+    if metric_groups and passed:
+        same = [b for b in passed
+                if set(metric_groups.get(a, "")) & set(metric_groups.get(b, ""))]
+        if same:
+            text += (f"By {escape(metric_name)} the tests do not separate it from "
+                     f"{_names(same)}, which it passes there. ")
     if below:
         text += (f"Its median {escape(metric_name)} ({fmt(med, 3)}) is below the median floor "
                  f"({fmt(floor, 3)}), the {escape(metric_name)} of the record's own optimum: "
