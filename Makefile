@@ -13,7 +13,7 @@ $(BIN)/python:
 	$(BIN)/python -m pip install --upgrade "pip>=23.1"
 
 $(VENV)/.installed: $(BIN)/python pyproject.toml
-	$(BIN)/python -m pip install -e ".[test,joblib,submitit,peers,tune]"
+	$(BIN)/python -m pip install -e ".[test,ioh,joblib,submitit,peers,tune]"
 	touch $@
 
 install: $(VENV)/.installed

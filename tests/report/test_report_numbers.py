@@ -242,18 +242,28 @@ def test_a12_matches_a_direct_count():
 
 def test_friedman_needs_blocks_and_says_so(three_optimizers):
     fr = stats.friedman_across_blocks(runs_frame(three_optimizers))
-    assert fr.mean_ranks is None and "at least 2 blocks" in fr.note
+    assert fr.mean_ranks is None and "at least 5 blocks" in fr.note
+
+
+def test_friedman_is_not_run_on_fewer_than_five_blocks(tmp_path):
+    for ps in (20, 30, 40, 50):
+        for name, base in (("a", 1.0), ("b", 2.0), ("c", 3.0)):
+            objective_job(tmp_path, name, ps, [base + 0.1 * i for i in range(3)])
+    fr = stats.friedman_across_blocks(runs_frame(run_rows(load_records([tmp_path]).records)))
+    assert fr.mean_ranks is None and "found 4" in fr.note
 
 
 def test_friedman_across_population_sizes(tmp_path):
-    for ps in (20, 30, 40):
+    for ps in (20, 30, 40, 50, 60):
         for name, base in (("a", 1.0), ("b", 2.0), ("c", 3.0)):
             objective_job(tmp_path, name, ps, [base + 0.1 * i for i in range(3)])
     fr = stats.friedman_across_blocks(runs_frame(run_rows(load_records([tmp_path]).records)))
     assert list(fr.mean_ranks.index) == ["a", "b", "c"]
     np.testing.assert_allclose(fr.mean_ranks.to_numpy(), [1.0, 2.0, 3.0])
-    assert fr.statistic == pytest.approx(6.0)  # chi2 = 12 n / (k (k+1)) * sum(R^2) - 3n(k+1)
-    assert fr.p == pytest.approx(np.exp(-3.0))  # chi2 with 2 dof: survival exp(-x/2)
+    # chi2 = 12 / (n k (k+1)) * sum(R_j^2) - 3 n (k+1), rank sums 5, 10, 15: 70 - 60
+    assert fr.statistic == pytest.approx(10.0)
+    # Exact permutation p: 6 of the 6^5 arrangements within blocks are as extreme.
+    assert fr.p == pytest.approx(6 / 6**5) and fr.p_method.startswith("exact")
     assert set(fr.nemenyi.columns) == {"a", "b", "c"}
 
 

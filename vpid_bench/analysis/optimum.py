@@ -130,6 +130,7 @@ def update_instance_optimum(problem: Problem, settings: Mapping[str, Any], folde
     metrics = getattr(problem, "metrics", None)
     out = {
         "schema": SCHEMA, "problem": problem.name, "instance": problem.instance_id(),
+        "settings": dict(settings),  # lets a report match the file to its runs' records
         "x_opt": [float(v) for v in x_opt], "f_opt": float(f_opt),
         "f_true": _f_of(problem, x_true), "starts": starts,
         "metrics": ({str(k): float(v) for k, v in (metrics(x_opt) or {}).items()}

@@ -31,8 +31,9 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from . import render, tables
+from . import anytime, rankings, render, tables
 from .load import LoadedRecords, NoRecordsError, load_records, reason, run_rows
+from .optima import add_optimum_columns, load_optima
 from .render import para
 from .safe import UnsafePathError, escape, inside, slug
 from .sections import Contribution, HeadlineColumn, ReportContext, Section
@@ -58,11 +59,13 @@ class Report:
     skipped_figures: dict[str, str]
     loaded: LoadedRecords
     section_errors: list[str] = dataclasses.field(default_factory=list)
+    optima_errors: list[str] = dataclasses.field(default_factory=list)
 
     @property
     def failures(self) -> list[str]:
-        """One line per failed job, failed run, unreadable record or failed plugin section."""
-        return self.loaded.failures + self.section_errors
+        """One line per failed job, failed run, unreadable record, failed plugin section,
+        bad optimum file or run below its instance's optimum."""
+        return self.loaded.failures + self.section_errors + self.optima_errors
 
 
 def full_report_command(job_dir: str | Path) -> str:
@@ -130,12 +133,19 @@ objective value `f` found. Lower is better for both; the headline names the metr
 and one value of every other setting that varies across the records (noise level, noise seed,
 budget). Runs of different optimizer seeds are pooled.
 
-**Significance.** Within a context: Kruskal–Wallis over all optimizers, then two-sided
-Mann–Whitney U for every pair, Holm-corrected over the pairs of that context; "significant"
-means `p_holm < {alpha}`. Effect size: Vargha–Delaney `A12 = P(metric_a > metric_b) + ties/2`
-(below 0.5: `a` tends to be better). Across contexts (blocks): Friedman on the median metric
-per block, Nemenyi post-hoc, pairwise Wilcoxon signed-rank with Holm. With few runs or blocks
+**Significance.** Within a context, two-sided pairwise tests, Holm-corrected over the pairs of
+that context: the paired Wilcoxon signed-rank test over instances where the runs pair by
+instance (run i of every optimizer on the same, distinct instance i), else Mann–Whitney U;
+exact or permutation p-values for small samples. "Significant" means `p_holm < {alpha}`; the
+`group` letters of each ranking show which optimizers the tests cannot separate. Effect size:
+Vargha–Delaney `A12 = P(metric_a > metric_b) + ties/2` (below 0.5: `a` tends to be better).
+Across blocks (independent instances or contexts, at least 5): Friedman with a permutation
+p-value, Nemenyi post-hoc, pairwise Wilcoxon signed-rank with Holm. With few runs or blocks
 the tests have little power: "not significant" is not "equal".
+
+**Search quality.** Where the jobs wrote each instance's optimum (`optima/`), each run is also
+judged against the lowest objective its own record allows: `rel_gap = (f_best - f_opt) /
+|f_opt|`, the floor (the metric of that optimum) and the distance to it; see `runs.csv`.
 
 **Baseline.** `{baseline}`, when it was run, is the line a useful optimizer must clear
 (a significantly lower per-run metric at the same budget)."""
@@ -159,10 +169,10 @@ def _headline(summary: list[dict[str, Any]], verdicts: list[str],
     metric = {s["context"]: s["metric_name"] for s in summary}
     show_f = any(m != "f_best" for m in metric.values())
     has_verdict = any(verdicts)
-    md_h = ["context", "rank", "optimizer", "n"] + (["failed"] if any_failed else []) + [
+    md_h = ["context", "rank", "group", "optimizer", "n"] + (["failed"] if any_failed else []) + [
         "metric", "median", "IQR"] + (["median f"] if show_f else []) + [c.name for c in extra] + (
         [f"beats {baseline}?"] if has_verdict else [])
-    csv_h = ["context", "rank", "optimizer", "n", "failed", "metric", "median", "q1", "q3",
+    csv_h = ["context", "rank", "group", "optimizer", "n", "failed", "metric", "median", "q1", "q3",
              "mean", "sd", "best", "worst", "median f"] + [c.name for c in extra] + (
         [f"vs {baseline}"] if has_verdict else [])
     md_rows, csv_rows = [], []
@@ -171,12 +181,13 @@ def _headline(summary: list[dict[str, Any]], verdicts: list[str],
         q1, q3 = s.get("q1", math.nan), s.get("q3", math.nan)
         iqr = f"[{render.fmt(q1)}, {render.fmt(q3)}]" if s["n_runs"] else ""
         ex = [c.values.get(key) for c in extra]
-        md_rows.append([s["context"], s["rank"], s["algorithm"], s["n_runs"]]
+        md_rows.append([s["context"], s["rank"], s.get("group", "—"), s["algorithm"], s["n_runs"]]
                        + ([s["n_failed"]] if any_failed else [])
                        + [s["metric_name"], s.get("median"), iqr]
                        + ([s.get("f_median")] if show_f else []) + ex
                        + ([_verdict_short(v)] if has_verdict else []))
-        csv_rows.append([s["context"], s["rank"], s["algorithm"], s["n_runs"], s["n_failed"],
+        csv_rows.append([s["context"], s["rank"], s.get("group", ""), s["algorithm"], s["n_runs"],
+                         s["n_failed"],
                          s["metric_name"]] + [s.get(k) for k in (
                              "median", "q1", "q3", "mean", "sd", "best", "worst", "f_median")]
                         + ex + ([v] if has_verdict else []))
@@ -210,20 +221,44 @@ def _stats_md(summary: list[dict[str, Any]]) -> list[str]:
     return lines
 
 
-def _tests_md(kw: Any, pairs: Any, fr: Any, alpha: float) -> list[str]:
+def _friedman_md(fr: Any, label: str, alpha: float, files: str) -> list[str]:
+    """One Friedman result (across contexts or over the instances of one context)."""
+    if fr.mean_ranks is None:
+        return [para(f"{label}: Friedman test {fr.note}."), ""]
+    sig = fr.wilcoxon[fr.wilcoxon["significant"]]
+    return [para(f"{label}: {len(fr.blocks)} blocks ({fr.kind}); optimizers present in every "
+                 f"block: {escape(', '.join(fr.algorithms))}. Friedman χ² = "
+                 f"{render.fmt(fr.statistic)}, p = {render.fmt(fr.p)} ({fr.p_method}). "
+                 f"{fr.note}"), "",
+            para("Mean rank per optimizer (1 = best): " + ", ".join(
+                f"{escape(a)} {r:.2f}" for a, r in fr.mean_ranks.items())), "",
+            para(f"Pairwise Wilcoxon signed-rank over the blocks, Holm-corrected: {len(sig)} of "
+                 f"{len(fr.wilcoxon)} pairs significant (p_holm < {alpha})"
+                 + (": " + "; ".join(f"{escape(r.a)} vs {escape(r.b)} (p_holm={r.p_holm:.2g})"
+                                     for r in sig.itertuples()) if len(sig) else "")
+                 + f". {files}"), ""]
+
+
+def _tests_md(kw: Any, pairs: Any, fr: Any, alpha: float,
+              by_inst: Mapping[str, Mapping[str, Any]] | None = None) -> list[str]:
     lines = ["## Statistical tests", "", "### Kruskal–Wallis per context", "",
              render.markdown(["context", "k", "H", "p", "note"],
                              [[r.context, r.k, r.H, r.p, r.note] for r in kw.itertuples()],
                              keep=2), ""]
-    lines += [f"### Pairwise Mann–Whitney U, Holm-corrected within each context "
-              f"(significant: p_holm < {alpha})", ""]
+    lines += [f"### Pairwise tests on the per-run metric, Holm-corrected within each context "
+              f"(significant: p_holm < {alpha})", "",
+              para("Where every optimizer ran instance i in run i on instances that differ "
+                   "(the runs pair by instance), the paired Wilcoxon signed-rank test over "
+                   "the instances; otherwise the Mann–Whitney U test. Small samples get exact "
+                   "or permutation p-values (column `p_method`)."), ""]
     if pairs.empty:
         lines += ["No pair to compare.", ""]
     for context, g in pairs.groupby("context", sort=True):
         sig = g[g["significant"]]
-        lines += [para(f"{escape(context)}: {len(sig)} of {len(g)} pairs differ significantly"
-                       + (" (below); every pair, with U, raw p and effect size, is in "
-                          "`tables/pairwise.csv`." if len(sig) else
+        lines += [para(f"{escape(context)} ({escape(g['test'].iloc[0])}): {len(sig)} of "
+                       f"{len(g)} pairs differ significantly"
+                       + (" (below); every pair, with the statistic, raw p and effect size, "
+                          "is in `tables/pairwise.csv`." if len(sig) else
                           "; every pair is in `tables/pairwise.csv`.")), ""]
         if len(sig):
             lines += [render.markdown(
@@ -233,21 +268,19 @@ def _tests_md(kw: Any, pairs: Any, fr: Any, alpha: float) -> list[str]:
                   r.median_b if r.better == r.a else r.median_a, r.p_holm,
                   r.A12 if r.better == r.a else 1 - r.A12, r.effect]
                  for r in sig.itertuples()], keep=2), ""]
-    lines += ["### Friedman across blocks", ""]
-    if fr.mean_ranks is None:
-        return lines + [para(f"Friedman test {fr.note}."), ""]
-    lines += [para(f"Blocks (contexts): {len(fr.blocks)}; optimizers present in every block: "
-                   f"{escape(', '.join(fr.algorithms))}. Friedman χ² = {render.fmt(fr.statistic)},"
-                   f" p = {render.fmt(fr.p)}. {fr.note}"), "",
-              para("Mean rank per optimizer (1 = best): " + ", ".join(
-                  f"{escape(a)} {r:.2f}" for a, r in fr.mean_ranks.items())), ""]
-    sig = fr.wilcoxon[fr.wilcoxon["significant"]] if fr.wilcoxon is not None else []
-    lines += [para(f"Pairwise Wilcoxon signed-rank on the block medians, Holm-corrected: "
-                   f"{len(sig)} of {len(fr.wilcoxon)} pairs significant (p_holm < {alpha})"
-                   + (": " + "; ".join(f"{escape(r.a)} vs {escape(r.b)} "
-                                       f"(p_holm={r.p_holm:.2g})" for r in sig.itertuples())
-                      if len(sig) else "") + ". All pairs: `tables/friedman_wilcoxon.csv`; "
-                   "Nemenyi p-values: `tables/nemenyi.csv`."), ""]
+    lines += ["### Friedman across blocks", "",
+              para("Blocks must be independent: distinct problems or records. The test, "
+                   "Nemenyi's post-hoc test and the block Wilcoxon tests run only with at "
+                   "least 5 blocks; the Friedman p-value comes from permuting the optimizers' "
+                   "values within each block (exact when feasible)."), ""]
+    lines += _friedman_md(fr, "Across contexts", alpha,
+                          "All pairs: `tables/friedman_wilcoxon.csv`; Nemenyi p-values: "
+                          "`tables/nemenyi.csv`.")
+    for what, res in (by_inst or {}).items():
+        label = "per-run metric" if what == "metric" else "max(rel_gap, 1e-6)"
+        for context, r in res.items():
+            lines += _friedman_md(r, f"{escape(context)}, instances as blocks, {label}", alpha,
+                                  f"All pairs: `tables/friedman_instances_{what}.csv`.")
     return lines
 
 
@@ -258,7 +291,8 @@ CD_MIN_BLOCKS = 5
 
 
 def _figures(df: Any, loaded: LoadedRecords, rows: list[dict[str, Any]], pairs: Any, fr: Any,
-             names: _Names, alpha: float) -> dict[str, Path | str]:
+             names: _Names, alpha: float, by_inst: Mapping[str, Any] | None = None
+             ) -> dict[str, Path | str]:
     """Draw every core figure; a value is the PNG path or why the figure was not drawn."""
     from . import figures, stats
     from .load import traces_frame
@@ -282,12 +316,20 @@ def _figures(df: Any, loaded: LoadedRecords, rows: list[dict[str, Any]], pairs: 
                            f"runs each (found {len(n)} optimizer(s), fewest runs {n.min()})")
             continue
         metric = g["metric_name"].iloc[0]
+        inst = (by_inst or {}).get(context)
+        if inst is not None and inst.mean_ranks is None:
+            figs[title] = f"the runs pair by instance and the Friedman test {inst.note}"
+            continue
+        test = pairs[pairs["context"] == context]["test"].iloc[0]
         figs[title] = figures.cd_diagram(
-            stats.mean_ranks_in_context(df, context), stats.pvalue_matrix(pairs, context),
+            inst.mean_ranks if inst is not None else stats.mean_ranks_in_context(df, context),
+            stats.pvalue_matrix(pairs, context),
             f"{context}: bars join optimizers not significantly different "
-            f"(Mann–Whitney, Holm, α={alpha})",
-            f"mean rank of each optimizer's runs among all {len(g)} runs of the context, "
-            f"by per-run {metric} (1 = best)",
+            f"({test}, Holm, α={alpha})",
+            (f"mean rank of each optimizer over the {len(inst.blocks)} instances, by per-run "
+             f"{metric} (1 = best)") if inst is not None else
+            (f"mean rank of each optimizer's runs among all {len(g)} runs of the context, "
+             f"by per-run {metric} (1 = best)"),
             names.file("figures", f"cd_{context}", ".png"), alpha)
     title = "Critical-difference diagram across blocks"
     if fr is None or fr.mean_ranks is None or len(fr.blocks) < CD_MIN_BLOCKS:
@@ -378,6 +420,18 @@ def _section_md(section: Section, out_dir: Path) -> list[str]:
     return lines
 
 
+def _set_groups(summary: list[dict[str, Any]], pairs: Any, rank: str, n: str) -> None:
+    """Each row's rank group (compact letters from the Holm-corrected pairwise tests)."""
+    from .stats import rank_groups
+
+    for context, g in _by_context(summary).items():
+        order = [s["algorithm"] for s in sorted((s for s in g if s.get(n)),
+                                                key=lambda s: s[rank])]
+        letters = rank_groups(pairs, context, order) if order else {}
+        for s in g:
+            s["group"] = letters.get(s["algorithm"], "—")
+
+
 def build_report(
     paths: Iterable[str | Path],
     out_dir: str | Path,
@@ -402,7 +456,15 @@ def build_report(
             f"no run records (records/run-*.json) below {', '.join(map(str, paths))}{extra}"
         )
     rows = run_rows(loaded.records)
+    optima = load_optima(paths, loaded.records)
+    optima_errors = [f"bad optimum file {p}: {why}" for p, why in optima.skipped]
+    optima_errors += add_optimum_columns(rows, loaded.records, optima)
     summary = tables.summarize(rows)
+    search = rankings.search_summary(rows)
+    hits = anytime.run_hits(loaded.records, rows)
+    aucs = anytime.auc_table(hits)
+    for s in search:
+        s["auc"] = aucs.get((s["context"], s["algorithm"]), math.nan)
     out_dir.mkdir(parents=True, exist_ok=True)
     names = _Names(out_dir)
     written: list[Path] = []
@@ -419,7 +481,8 @@ def build_report(
         tex.write_text(render.latex(headers, body) + "\n", encoding="utf-8")
         written.append(tex)
 
-    df = kw = pairs = fr = None
+    df = kw = pairs = fr = spairs = None
+    by_inst: dict[str, dict[str, Any]] = {}
     figs: dict[str, Path | str] = {}
     if not short:
         from . import stats
@@ -429,12 +492,32 @@ def build_report(
         kw = stats.kruskal_by_context(df)
         pairs = stats.pairwise_by_context(df, alpha)
         fr = stats.friedman_across_blocks(df, alpha)
-        for stem, t in (("kruskal", kw), ("pairwise", pairs)):
+        sdf = rankings.search_test_frame(df)
+        sdf = sdf[sdf["context"].isin({s["context"] for s in search})]
+        spairs = stats.pairwise_by_context(sdf, alpha, "rel_gap_test")
+        by_inst = {"metric": stats.friedman_by_instances(df, alpha),
+                   "rel_gap": stats.friedman_by_instances(sdf, alpha, "rel_gap_test")}
+        for stem, t in (("kruskal", kw), ("pairwise", pairs), ("pairwise_search", spairs)):
             if not t.empty:
                 table(stem, *render.frame_rows(t))
         if fr.mean_ranks is not None:
             table("friedman_wilcoxon", *render.frame_rows(fr.wilcoxon))
             table("nemenyi", *render.frame_rows(fr.nemenyi.reset_index(names="optimizer")))
+        for what, res in by_inst.items():
+            if any(r.wilcoxon is not None for r in res.values()):
+                import pandas as pd
+
+                table(f"friedman_instances_{what}", *render.frame_rows(pd.concat(
+                    [r.wilcoxon.assign(context=c) for c, r in res.items()
+                     if r.wilcoxon is not None], ignore_index=True)))
+        _set_groups(summary, pairs, "rank", "n_runs")
+        _set_groups(search, spairs, "rank", "n")
+    if hits:
+        table("ert", anytime.ERT_HEADERS, anytime.ert_rows(hits))
+    if search:
+        keys = ["context", "rank", "group", "algorithm", "n", "reached", "share",
+                "rel_gap_median", "floor_median", "to_opt_median", "auc"]
+        table("search_quality", keys, [[s.get(k) for k in keys] for s in search])
     verdicts = tables.baseline_verdicts(summary, pairs, baseline)
     for s, v in zip(summary, verdicts, strict=True):
         s[f"vs_{baseline}"] = v
@@ -451,7 +534,13 @@ def build_report(
             # seaborn 0.13 calls matplotlib APIs that newer matplotlib deprecates: not our news.
             warnings.simplefilter("ignore", DeprecationWarning)
             warnings.simplefilter("ignore", PendingDeprecationWarning)
-            figs = _figures(df, loaded, rows, pairs, fr, names, alpha)
+            figs = _figures(df, loaded, rows, pairs, fr, names, alpha, by_inst.get("metric", {}))
+            for context in sorted({h.context for h in hits}):
+                figs[f"Fixed-target ECDF, {context}"] = anytime.ecdf_figure(
+                    hits, context, names.file("figures", f"ecdf_{context}", ".png"))
+        from .ioh_export import export_ioh
+
+        written += export_ioh(out_dir / "ioh", loaded.records, rows, out_dir)
     skipped = {k: v for k, v in figs.items() if isinstance(v, str)}
     written += [v for v in figs.values() if isinstance(v, Path)]
     for _, sec in sections:
@@ -466,20 +555,43 @@ def build_report(
     lines += ["", "## How to read this report", "",
               HOW_TO_READ.format(alpha=alpha, baseline=escape(baseline)), "",
               "## Headline", "",
-              para("Per context, optimizers ranked by the median per-run metric (`n`: successful "
-                   "runs; IQR: the quartiles of the per-run metric). Every column, with more "
-                   "statistics, is in `tables/headline.csv`."), ""]
+              para("Per context, two rankings. First by the problem's metric: the median "
+                   "per-run metric (`n`: successful runs; IQR: its quartiles); every column, "
+                   "with more statistics, is in `tables/headline.csv`. Then, where each "
+                   "instance's optimum is known, by search quality (`tables/search_quality.csv`"
+                   ", anytime AUC included)."), ""]
+    if optima_errors:
+        lines += [para("Instance optima: " + "; ".join(escape(e) for e in optima_errors)
+                       + "."), ""]
+    centred = rankings.box_centred(loaded.records, rows)
     for context, idx in _by_context([{"context": r[0], "i": i} for i, r in
                                      enumerate(md_rows)]).items():
         body = [md_rows[x["i"]][1:] for x in idx]
-        lines += [f"### {escape(context)}", "", render.markdown(md_h[1:], body, keep=6), ""]
+        mrows = [s for s in summary if s["context"] == context]
+        mname = mrows[0]["metric_name"]
+        lines += [f"### {escape(context)}", "", render.markdown(md_h[1:], body, keep=7), "",
+                  para(rankings.headline_groups_note(rankings.test_name(pairs, context),
+                                                     alpha)), ""]
+        srows = [s for s in search if s["context"] == context]
+        lines += rankings.search_lines(context, search, None if short else {
+            s["algorithm"]: s.get("group", "—") for s in srows}, mname,
+            rankings.test_name(spairs, context))
+        lines += [para(rankings.verdict(
+            context, mname, [s["algorithm"] for s in mrows if s["n_runs"]],
+            None if short else {s["algorithm"]: s.get("group", "") for s in mrows}, srows,
+            None if short else {s["algorithm"]: s.get("group", "") for s in srows})), ""]
+        why = rankings.disagreement(context, mname, mrows, srows, centred.get(context, False),
+                                    None if short else {s["algorithm"]: s.get("group", "")
+                                                        for s in mrows})
+        if why:
+            lines += [para(why), ""]
     for _, sec in sections:
         lines += _section_md(sec, out_dir)
     if section_errors:
         lines += [para("Not built: " + "; ".join(escape(e) for e in section_errors) + "."), ""]
     lines += _stats_md(summary)
     if not short:
-        lines += _tests_md(kw, pairs, fr, alpha)
+        lines += _tests_md(kw, pairs, fr, alpha, by_inst)
         lines += ["## Figures", ""]
         for title, v in figs.items():
             if isinstance(v, Path):
@@ -499,4 +611,4 @@ def build_report(
     headline = render.terminal(term_h, md_rows)
     problems = sorted({r["problem"] for r in rows})
     return Report(out_dir, md, headline, len(loaded.records), problems, written, skipped,
-                  loaded, section_errors)
+                  loaded, section_errors, optima_errors)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import math
 import warnings
 from typing import Any
 
@@ -58,10 +59,10 @@ def holm(pvalues: list[float]) -> list[float]:
     return adjusted.tolist()
 
 
-def _samples(df: Any) -> dict[str, np.ndarray]:
-    """Per algorithm, the metric of the successful runs (failed runs carry no value)."""
-    ok = df[(df["status"] == "ok") & df["metric"].notna()]
-    return {a: g["metric"].to_numpy(float) for a, g in ok.groupby("algorithm", sort=True)}
+def _samples(df: Any, value: str = "metric") -> dict[str, np.ndarray]:
+    """Per algorithm, ``value`` of the successful runs (failed runs carry no value)."""
+    ok = df[(df["status"] == "ok") & df[value].notna()]
+    return {a: g[value].to_numpy(float) for a, g in ok.groupby("algorithm", sort=True)}
 
 
 def kruskal_by_context(df: Any) -> Any:
@@ -92,44 +93,187 @@ def kruskal_by_context(df: Any) -> Any:
     return pd.DataFrame(rows)
 
 
-def pairwise_by_context(df: Any, alpha: float = ALPHA) -> Any:
-    """Two-sided Mann–Whitney U for every pair of algorithms of each context, Holm-corrected
-    within the context. Columns: context, a, b, n_a, n_b, median_a, median_b, U, p, p_holm,
-    A12 (= P(metric_a > metric_b) + ties/2; below 0.5 means a tends to be better), effect,
-    significant (p_holm < alpha), better (the algorithm with the lower median when
+#: Runs of a context pair by instance when every instance has an id (the data differ per
+#: instance) and each optimizer ran each instance at most once.
+def paired_by_instance(g: Any) -> bool:
+    """Whether the runs of one context (a DataFrame) pair by instance: every successful run
+    names an instance id (not just an index: identical instances give nothing to pair on)
+    and no optimizer has two runs on one instance."""
+    if "instance" not in g.columns:
+        return False
+    ok = g[g["status"] == "ok"]
+    if ok.empty or not all(isinstance(v, str) for v in ok["instance"]):
+        return False
+    return not ok.duplicated(["algorithm", "instance"]).any()
+
+
+def _by_instance(g: Any, value: str) -> dict[str, Any]:
+    """Per algorithm, ``value`` indexed by instance (successful runs with a value)."""
+    ok = g[(g["status"] == "ok") & g[value].notna()]
+    return {a: s.set_index("instance")[value].astype(float)
+            for a, s in ok.groupby("algorithm", sort=True)}
+
+
+#: Resamples of a permutation test (Monte Carlo when the exact enumeration is larger).
+N_RESAMPLES = 9999
+
+
+def _permutation(seed: int = 0) -> Any:
+    from scipy.stats import PermutationMethod
+
+    return PermutationMethod(n_resamples=N_RESAMPLES, rng=np.random.default_rng(seed))
+
+
+def wilcoxon_paired(x: np.ndarray, y: np.ndarray) -> tuple[float, float, str]:
+    """Two-sided Wilcoxon signed-rank test of paired ``x``, ``y``: (W, p, how p was got).
+    Exact without ties or zero differences (n <= 50), exhaustive permutation with them for
+    n <= 13 and a seeded permutation test (N_RESAMPLES resamples) up to n = 50, else the
+    normal approximation. All differences zero: p = 1."""
+    from scipy import stats
+
+    d = np.asarray(x, float) - np.asarray(y, float)
+    nz = d[d != 0]
+    if nz.size == 0:
+        return 0.0, 1.0, "all differences zero"
+    ties = np.unique(np.abs(nz)).size < nz.size or nz.size < d.size
+    if not ties and d.size <= 50:
+        method, how = "exact", "exact"
+    elif d.size <= 13:
+        method, how = "auto", "exact (all permutations)"
+    elif d.size <= 50:
+        method, how = _permutation(), f"permutation ({N_RESAMPLES} resamples)"
+    else:
+        method, how = "asymptotic", "normal approximation"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = stats.wilcoxon(x, y, method=method)
+    return float(res.statistic), float(res.pvalue), how
+
+
+def mann_whitney(x: np.ndarray, y: np.ndarray) -> tuple[float, float, str]:
+    """Two-sided Mann–Whitney U test: (U of ``x``, p, how p was got). Exact without ties
+    when the larger sample has at most 30 runs, a seeded permutation test with ties for at
+    most 40 runs in all, else the normal approximation (tie-corrected)."""
+    from scipy import stats
+
+    ties = np.unique(np.concatenate([x, y])).size < len(x) + len(y)
+    if not ties and max(len(x), len(y)) <= 30:
+        method, how = "exact", "exact"
+    elif ties and len(x) + len(y) <= 40:
+        method, how = _permutation(), f"permutation ({N_RESAMPLES} resamples)"
+    else:
+        method, how = "asymptotic", "normal approximation"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = stats.mannwhitneyu(x, y, alternative="two-sided", method=method)
+    return float(res.statistic), float(res.pvalue), how
+
+
+def a12(x: np.ndarray, y: np.ndarray) -> float:
+    """Vargha–Delaney A12 = P(X > Y) + P(X = Y)/2 over all pairs of the two samples."""
+    x, y = np.asarray(x, float)[:, None], np.asarray(y, float)[None, :]
+    return float(np.mean((x > y) + 0.5 * (x == y)))
+
+
+#: The name of each pairwise test as the tables give it.
+TEST_PAIRED = "Wilcoxon signed-rank, paired by instance"
+TEST_UNPAIRED = "Mann–Whitney U"
+
+
+def pairwise_by_context(df: Any, alpha: float = ALPHA, value: str = "metric") -> Any:
+    """Every pair of algorithms of each context compared on ``value`` (lower is better),
+    two-sided, Holm-corrected within the context: the paired Wilcoxon signed-rank test over
+    the instances both ran when the context's runs pair by instance
+    (:func:`paired_by_instance`), else Mann–Whitney U. Columns: context, a, b, test,
+    p_method, n_a, n_b, n_pairs, median_a, median_b, U (Mann–Whitney), W (Wilcoxon), p,
+    p_holm, A12 (= P(value_a > value_b) + ties/2; below 0.5 means a tends to be better),
+    effect, significant (p_holm < alpha), better (the algorithm the test finds lower when
     significant, else empty)."""
     import pandas as pd
-    from scipy import stats
 
     rows = []
     for context, g in df.groupby("context", sort=True):
-        samples = _samples(g)
+        samples = _samples(g, value)
+        paired = paired_by_instance(g)
+        inst = _by_instance(g, value) if paired else {}
         block = []
         for a, b in itertools.combinations(sorted(samples), 2):
             x, y = samples[a], samples[b]
-            row = {"context": context, "a": a, "b": b, "n_a": len(x), "n_b": len(y),
+            row = {"context": context, "a": a, "b": b,
+                   "test": TEST_PAIRED if paired else TEST_UNPAIRED, "p_method": "",
+                   "n_a": len(x), "n_b": len(y), "n_pairs": np.nan,
                    "median_a": float(np.median(x)) if len(x) else np.nan,
                    "median_b": float(np.median(y)) if len(y) else np.nan,
-                   "U": np.nan, "p": np.nan, "A12": np.nan, "effect": ""}
+                   "U": np.nan, "W": np.nan, "p": np.nan, "A12": np.nan, "effect": "",
+                   "_lower": ""}
             if len(x) and len(y):
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    res = stats.mannwhitneyu(x, y, alternative="two-sided")
-                row["U"], row["p"] = float(res.statistic), float(res.pvalue)
-                row["A12"] = a12_from_u(res.statistic, len(x), len(y))
+                row["A12"] = a12(x, y)
                 row["effect"] = a12_magnitude(row["A12"])
+            if paired:
+                common = inst[a].index.intersection(inst[b].index)
+                row["n_pairs"] = len(common)
+                if len(common):
+                    xa, yb = inst[a][common].to_numpy(), inst[b][common].to_numpy()
+                    row["W"], row["p"], row["p_method"] = wilcoxon_paired(xa, yb)
+                    d = xa - yb
+                    r = stats_rank(np.abs(d[d != 0]))
+                    plus, minus = r[d[d != 0] > 0].sum(), r[d[d != 0] < 0].sum()
+                    row["_lower"] = a if plus < minus else b if minus < plus else ""
+            elif len(x) and len(y):
+                row["U"], row["p"], row["p_method"] = mann_whitney(x, y)
+                row["_lower"] = a if row["A12"] < 0.5 else b if row["A12"] > 0.5 else ""
             block.append(row)
         for row, p_adj in zip(block, holm([r["p"] for r in block]), strict=True):
             row["p_holm"] = p_adj
             row["significant"] = bool(np.isfinite(p_adj) and p_adj < alpha)
-            better = ""
-            if row["significant"]:
-                better = row["a"] if row["A12"] < 0.5 else row["b"]
-            row["better"] = better
+            row["better"] = row.pop("_lower") if row["significant"] else ""
+            row.pop("_lower", None)
         rows.extend(block)
-    cols = ["context", "a", "b", "n_a", "n_b", "median_a", "median_b", "U", "p", "p_holm",
-            "A12", "effect", "significant", "better"]
+    cols = ["context", "a", "b", "test", "p_method", "n_a", "n_b", "n_pairs", "median_a",
+            "median_b", "U", "W", "p", "p_holm", "A12", "effect", "significant", "better"]
     return pd.DataFrame(rows, columns=cols)
+
+
+def stats_rank(values: np.ndarray) -> np.ndarray:
+    """Ranks 1..n of ``values`` (ties get their average rank)."""
+    from scipy.stats import rankdata
+
+    return rankdata(values) if len(values) else np.zeros(0)
+
+
+def compact_letters(order: list[str], different: set[frozenset[str]]) -> dict[str, str]:
+    """Compact letter display (Piepho 2004, insert-and-absorb): letters such that two
+    optimizers share a letter exactly when the tests do not separate them. ``order``: the
+    optimizers best first (the best gets ``a``); ``different``: the significantly different
+    pairs. Columns are split at each separated pair, columns inside others are absorbed."""
+    cols: list[frozenset[str]] = [frozenset(order)]
+    for pair in sorted(different, key=lambda p: sorted(order.index(x) for x in p)):
+        i, j = sorted(pair)
+        split: list[frozenset[str]] = []
+        for c in cols:
+            if i in c and j in c:
+                split += [c - {i}, c - {j}]
+            else:
+                split.append(c)
+        uniq = list(dict.fromkeys(c for c in split if c))
+        cols = [c for c in uniq if not any(c < d for d in uniq)]
+    rank = {name: k for k, name in enumerate(order)}
+    cols.sort(key=lambda c: sorted(rank[x] for x in c))
+    letters = "abcdefghijklmnopqrstuvwxyz"
+    out = {name: "" for name in order}
+    for k, c in enumerate(cols):
+        letter = letters[k] if k < len(letters) else f"<{k}>"
+        for name in sorted(c, key=rank.__getitem__):
+            out[name] += letter
+    return out
+
+
+def rank_groups(pairs: Any, context: str, order: list[str]) -> dict[str, str]:
+    """Letters of :func:`compact_letters` for one context from the ``significant`` column of
+    :func:`pairwise_by_context` (a pair not tested counts as not separated)."""
+    sub = pairs[(pairs["context"] == context) & pairs["significant"]]
+    diff = {frozenset((r.a, r.b)) for r in sub.itertuples() if r.a in order and r.b in order}
+    return compact_letters(order, diff)
 
 
 def pvalue_matrix(pairs: Any, context: str) -> Any:
@@ -154,62 +298,131 @@ def mean_ranks_in_context(df: Any, context: str) -> Any:
     return g.assign(_rank=ranks).groupby("algorithm")["_rank"].mean().sort_values()
 
 
+#: Friedman, Nemenyi and the block Wilcoxon tests need at least this many blocks.
+MIN_BLOCKS = 5
+
+
 @dataclasses.dataclass
 class FriedmanResult:
-    """Friedman test across blocks (contexts) on each algorithm's median per-run metric."""
+    """Friedman test over blocks (independent instances or problems) on one value per block
+    and algorithm, with its post-hoc tests."""
 
     blocks: list[str]
     algorithms: list[str]
     medians: Any = None  # DataFrame blocks x algorithms
     statistic: float = float("nan")
     p: float = float("nan")
+    p_method: str = ""
     mean_ranks: Any = None  # Series algorithm -> mean rank (1 = best)
     nemenyi: Any = None  # DataFrame of p-values
-    wilcoxon: Any = None  # DataFrame a, b, n_blocks, W, p, p_holm, significant
+    wilcoxon: Any = None  # DataFrame a, b, n_blocks, W, p, p_method, p_holm, significant
     note: str = ""
+    kind: str = "contexts"  # what the blocks are: "contexts" or "instances"
 
 
-def friedman_across_blocks(df: Any, alpha: float = ALPHA) -> FriedmanResult:
-    """Friedman over contexts as blocks, using the algorithms present in every block."""
-    import pandas as pd
-    import scikit_posthocs as sp
+def friedman_statistic(table: np.ndarray) -> float:
+    """Friedman's chi-square of a (blocks x algorithms) table, ranks within each block
+    (ties averaged) and the tie correction of scipy's ``friedmanchisquare``."""
     from scipy import stats
 
-    ok = df[(df["status"] == "ok") & df["metric"].notna()]
-    medians = ok.groupby(["context", "algorithm"])["metric"].median().unstack("algorithm")
-    medians = medians.dropna(axis=1, how="any")
-    blocks, algos = list(medians.index), list(medians.columns)
-    res = FriedmanResult(blocks, algos, medians)
-    if len(blocks) < 2:
-        res.note = ("not run: needs at least 2 blocks (contexts such as population sizes or "
-                    f"noise seeds in which the same optimizers ran); found {len(blocks)}")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return float(stats.friedmanchisquare(*np.asarray(table, float).T).statistic)
+
+
+def friedman_test(table: np.ndarray, seed: int = 0) -> tuple[float, float, str]:
+    """Friedman's chi-square and its permutation p-value: the algorithms' values are
+    permuted within each block (the null hypothesis), exactly when there are at most
+    N_RESAMPLES arrangements, else with N_RESAMPLES seeded random ones. Returns
+    (statistic, p, how p was got)."""
+    from scipy import stats
+
+    t = np.asarray(table, float)
+    n, k = t.shape
+    ranks = stats.rankdata(t, axis=1)
+
+    def rank_sums(*samples: np.ndarray, axis: int = -1) -> np.ndarray:
+        return np.sum(np.stack([np.sum(s, axis=axis) for s in samples]) ** 2, axis=0)
+
+    res = stats.permutation_test(tuple(ranks.T), rank_sums, permutation_type="samples",
+                                 alternative="greater", n_resamples=N_RESAMPLES,
+                                 vectorized=True, rng=np.random.default_rng(seed))
+    exact = math.factorial(k) ** n <= N_RESAMPLES
+    how = "exact (all permutations)" if exact else f"permutation ({N_RESAMPLES} resamples)"
+    return friedman_statistic(t), float(res.pvalue), how
+
+
+def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts"
+                      ) -> FriedmanResult:
+    """Friedman (permutation p), Nemenyi and pairwise Wilcoxon (exact, Holm) on a DataFrame
+    of blocks x algorithms (lower is better), run only with at least :data:`MIN_BLOCKS`
+    blocks and 3 algorithms; else the result carries a note saying why not."""
+    import pandas as pd
+    import scikit_posthocs as sp
+
+    table = table.dropna(axis=1, how="any")
+    blocks, algos = [str(b) for b in table.index], list(table.columns)
+    res = FriedmanResult(blocks, algos, table, kind=kind)
+    what = ("independent instances of the context" if kind == "instances" else
+            "contexts such as problems or independent records")
+    if len(blocks) < MIN_BLOCKS:
+        res.note = (f"not run: needs at least {MIN_BLOCKS} blocks ({what}) in which the same "
+                    f"optimizers ran; found {len(blocks)}")
         return res
     if len(algos) < 3:
         res.note = (f"not run: needs at least 3 optimizers present in every block; found "
                     f"{len(algos)}")
         return res
-    ranks = medians.rank(axis=1, method="average")
-    res.mean_ranks = ranks.mean().sort_values()
+    values = table.to_numpy(float)
+    res.mean_ranks = table.rank(axis=1, method="average").mean().sort_values()
+    res.statistic, res.p, res.p_method = friedman_test(values)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        fr = stats.friedmanchisquare(*[medians[a].to_numpy(float) for a in algos])
-        res.statistic, res.p = float(fr.statistic), float(fr.pvalue)
-        res.nemenyi = sp.posthoc_nemenyi_friedman(medians.to_numpy(float))
+        res.nemenyi = sp.posthoc_nemenyi_friedman(values)
     res.nemenyi.index = res.nemenyi.columns = algos
     rows = []
     for a, b in itertools.combinations(algos, 2):
-        x, y = medians[a].to_numpy(float), medians[b].to_numpy(float)
-        row = {"a": a, "b": b, "n_blocks": len(x), "W": np.nan, "p": np.nan}
-        if np.any(x != y):
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                w = stats.wilcoxon(x, y)
-            row["W"], row["p"] = float(w.statistic), float(w.pvalue)
-        rows.append(row)
+        x, y = table[a].to_numpy(float), table[b].to_numpy(float)
+        w, p, how = wilcoxon_paired(x, y)
+        rows.append({"a": a, "b": b, "n_blocks": len(x), "W": w, "p": p, "p_method": how})
     for row, p_adj in zip(rows, holm([r["p"] for r in rows]), strict=True):
         row["p_holm"] = p_adj
         row["significant"] = bool(np.isfinite(p_adj) and p_adj < alpha)
     res.wilcoxon = pd.DataFrame(rows)
-    if not np.isfinite(res.p):
+    if not np.isfinite(res.statistic):
         res.note = "undefined: the ranks are identical in every block"
     return res
+
+
+def friedman_across_blocks(df: Any, alpha: float = ALPHA, value: str = "metric"
+                           ) -> FriedmanResult:
+    """Friedman over contexts as blocks, on each algorithm's median ``value`` per context,
+    with the algorithms present in every block. Contexts whose runs fit the same instances
+    (e.g. two population sizes on one record) are not independent blocks: then the test is
+    not run (the instances of each context are its blocks, :func:`friedman_by_instances`)."""
+    ok = df[(df["status"] == "ok") & df[value].notna()]
+    medians = ok.groupby(["context", "algorithm"])[value].median().unstack("algorithm")
+    if "instance" in ok.columns and len(medians) >= 2:
+        sets = [frozenset(map(str, g["instance"])) for _, g in ok.groupby("context")]
+        if all(s == sets[0] for s in sets) and all(isinstance(v, str) for v in ok["instance"]):
+            res = FriedmanResult([str(b) for b in medians.index], list(medians.columns),
+                                 medians)
+            res.note = ("not run: the contexts fit the same instances, so they are not "
+                        "independent blocks (the instances of each context are)")
+            return res
+    return friedman_on_table(medians, alpha, "contexts")
+
+
+def friedman_by_instances(df: Any, alpha: float = ALPHA, value: str = "metric"
+                          ) -> dict[str, FriedmanResult]:
+    """Per context whose runs pair by instance: Friedman with the instances as blocks, on
+    each algorithm's ``value`` per instance (instances every algorithm ran)."""
+    out = {}
+    for context, g in df.groupby("context", sort=True):
+        if not paired_by_instance(g) or value not in g.columns:
+            continue
+        ok = g[(g["status"] == "ok") & g[value].notna()]
+        table = ok.pivot(index="instance", columns="algorithm", values=value).dropna(
+            axis=0, how="any")
+        out[str(context)] = friedman_on_table(table.astype(float), alpha, "instances")
+    return out

@@ -1,0 +1,176 @@
+"""Anytime performance against each instance's optimum: fixed-target ECDF, ERT and AUC.
+
+A *target* is a relative gap ``rel_gap = (f - f_opt) / |f_opt|`` (see :mod:`.optima`); the
+report uses the targets 1, 1e-1, ..., 1e-6. A run *hits* a target at the first evaluation
+count of its best-so-far trace whose relative gap is at most the target. The records keep the
+best after every evaluated batch, so a hit is counted at the end of the batch that reached it
+(never earlier than it can have happened).
+
+* **ECDF** (fixed-target, as COCO and IOHprofiler draw it): at ``e`` evaluations, the share
+  of (run, target) pairs hit within ``e`` evaluations.
+* **ERT** (expected running time) of a target: the evaluations spent by all runs until they
+  hit it (a run that never does counts its whole use), divided by the number of runs that hit
+  it; ``inf`` when none did.
+* **AUC**: the area under the ECDF over ``log(e)`` from 1 to the budget ``B``, divided by
+  ``log(B)`` (0: nothing hit; 1: every target hit at the first evaluation). A pair hit at
+  ``h`` evaluations adds ``log(B / h) / log(B)``, so AUC is the mean of that over all pairs.
+
+Numpy only; :func:`ecdf_figure` draws with matplotlib.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .optima import rel_gap
+
+#: The fixed targets on the relative gap to the instance's optimum.
+TARGETS: tuple[float, ...] = tuple(10.0 ** -k for k in range(7))
+
+
+@dataclasses.dataclass(frozen=True)
+class RunHits:
+    """When one run hit each target: evaluations (``nan`` = never), and what it used."""
+
+    context: str
+    algorithm: str
+    budget: float
+    used: float
+    hits: tuple[float, ...]
+
+
+def hit_times(evaluations: Sequence[float], gaps: Sequence[float],
+              targets: Sequence[float] = TARGETS) -> tuple[float, ...]:
+    """The first evaluation count at which ``gaps`` (relative gaps of the best-so-far after
+    each batch, in order) is at most each target; ``nan`` where never."""
+    ev = np.asarray(evaluations, float)
+    g = np.asarray(gaps, float)
+    out = []
+    for t in targets:
+        idx = np.flatnonzero(np.isfinite(g) & (g <= t))
+        out.append(float(ev[idx[0]]) if idx.size else math.nan)
+    return tuple(out)
+
+
+def run_hits(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]],
+             targets: Sequence[float] = TARGETS) -> list[RunHits]:
+    """:class:`RunHits` of every successful run whose instance's optimum is known."""
+    by_id = {r["run_id"]: r for r in records}
+    out = []
+    for row in rows:
+        f_opt = row.get("f_opt", math.nan)
+        if row["status"] != "ok" or not math.isfinite(float(f_opt)):
+            continue
+        trace = by_id[row["run_id"]].get("trace") or {}
+        ev, best = trace.get("evaluations") or [], trace.get("best") or []
+        if not ev or len(ev) != len(best):
+            continue
+        gaps = [rel_gap(float(b) - f_opt, f_opt) if b is not None else math.inf for b in best]
+        used = float(row["evaluations"]) if math.isfinite(float(row["evaluations"])) \
+            else float(ev[-1])
+        budget = float(row["budget"]) if row.get("budget") else used
+        out.append(RunHits(row["context"], row["algorithm"], max(budget, used), used,
+                           hit_times(ev, gaps, targets)))
+    return out
+
+
+def ecdf(runs: Sequence[RunHits], grid: Sequence[float]) -> np.ndarray:
+    """The share of (run, target) pairs hit within each number of evaluations of ``grid``."""
+    h = np.asarray([r.hits for r in runs], float).ravel()
+    grid = np.asarray(grid, float)
+    if not h.size:
+        return np.zeros(grid.shape)
+    hit = np.where(np.isfinite(h), h, np.inf)
+    return (hit[None, :] <= grid[:, None]).mean(axis=1)
+
+
+def ert(runs: Sequence[RunHits], target_index: int) -> float:
+    """Expected running time of one target (see the module); ``inf`` when no run hit it."""
+    hits = np.asarray([r.hits[target_index] for r in runs], float)
+    used = np.asarray([r.used for r in runs], float)
+    n_hit = int(np.isfinite(hits).sum())
+    if n_hit == 0:
+        return math.inf
+    return float(np.where(np.isfinite(hits), hits, used).sum() / n_hit)
+
+
+def auc(runs: Sequence[RunHits], budget: float | None = None) -> float:
+    """Area under the ECDF over log evaluations from 1 to the budget, normalised to [0, 1]."""
+    if not runs:
+        return math.nan
+    b = float(budget if budget is not None else max(r.budget for r in runs))
+    h = np.asarray([r.hits for r in runs], float).ravel()
+    if b <= 1:
+        return float(np.mean(np.isfinite(h) & (h <= b)))
+    h = np.where(np.isfinite(h) & (h <= b), np.maximum(h, 1.0), np.nan)
+    share = np.where(np.isfinite(h), np.log(b / np.where(np.isfinite(h), h, 1.0)) / np.log(b),
+                     0.0)
+    return float(share.mean())
+
+
+def _groups(runs: Sequence[RunHits]) -> dict[tuple[str, str], list[RunHits]]:
+    out: dict[tuple[str, str], list[RunHits]] = {}
+    for r in runs:
+        out.setdefault((r.context, r.algorithm), []).append(r)
+    return out
+
+
+def context_budget(runs: Sequence[RunHits], context: str) -> float:
+    """The largest budget of a context's runs (the common x range of its ECDF and AUC)."""
+    return max(r.budget for r in runs if r.context == context)
+
+
+def auc_table(runs: Sequence[RunHits]) -> dict[tuple[str, str], float]:
+    """AUC per (context, algorithm), over the context's budget."""
+    return {k: auc(g, context_budget(runs, k[0])) for k, g in _groups(runs).items()}
+
+
+def ert_rows(runs: Sequence[RunHits], targets: Sequence[float] = TARGETS) -> list[list[Any]]:
+    """Rows (context, algorithm, target, runs, hits, ert) for ``tables/ert.csv``."""
+    rows = []
+    for (context, algorithm), g in sorted(_groups(runs).items()):
+        for i, t in enumerate(targets):
+            n_hit = sum(math.isfinite(r.hits[i]) for r in g)
+            rows.append([context, algorithm, t, len(g), n_hit, ert(g, i)])
+    return rows
+
+
+ERT_HEADERS = ["context", "algorithm", "target_rel_gap", "runs", "hits", "ert"]
+
+
+def ecdf_figure(runs: Sequence[RunHits], context: str, path: Path) -> Path | str:
+    """The fixed-target ECDF of one context: one step line per optimizer, log x axis."""
+    sel = [r for r in runs if r.context == context]
+    if not sel:
+        return f"no run of {context} knows its instance's optimum"
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    b = context_budget(runs, context)
+    grid = np.unique(np.round(np.geomspace(1.0, max(b, 2.0), 300)))
+    fig, ax = plt.subplots(figsize=(7.0, 4.4))
+    for (_, algorithm), g in sorted(_groups(sel).items()):
+        ax.step(grid, ecdf(g, grid), where="post",
+                label=f"{algorithm} (AUC {auc(g, b):.2f}, {len(g)} runs)")
+    ax.set_xscale("log")
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_xlim(1, max(b, 2.0))
+    ax.set_xlabel("objective evaluations (log scale)")
+    ax.set_ylabel("share of (run, target) pairs reached")
+    ax.set_title(f"{context}: fixed-target ECDF, targets rel_gap = 1, 0.1, ..., 1e-6\n"
+                 "(relative gap to each instance's optimum; a batch's hit counts at its end)",
+                 fontsize=9)
+    ax.legend(fontsize=8, loc="upper left")
+    ax.grid(True, which="major", alpha=0.3)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return path

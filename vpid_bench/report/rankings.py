@@ -1,0 +1,241 @@
+"""The headline's second ranking, by search quality, and the words that compare it with the
+first (by the problem's metric).
+
+The metric ranking (the published question: how close to the truth does an optimizer end?)
+mixes two things on a noisy record: how well the optimizer searches, and where the record's
+own optimum ``x*`` lies. The search-quality ranking asks only the first: the share of runs
+that reach their instance's optimum (``rel_gap <= 1e-6``), then the median ``rel_gap``;
+beside it the identification columns, the median floor (the metric of ``x*``: what the
+record allows) and the median distance of the runs to ``x*``.
+
+Rank groups (compact letters, :func:`.stats.compact_letters`) come from the Holm-corrected
+pairwise tests of each ranking; the search ranking's tests compare ``max(rel_gap, 1e-6)``,
+so runs that both reached the optimum tie (differences below the polish's precision are not
+differences in search). Numpy only: the single job's report uses it too (without tests).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from .optima import REACHED, opt_column_names
+from .render import fmt, markdown, para
+from .safe import escape
+
+#: A box whose centre lies within this relative distance of every true value is "centred".
+CENTRED = 0.05
+
+
+def search_summary(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """Per context and algorithm whose successful runs all know their instance's optimum:
+    n, reached (runs with rel_gap <= REACHED), share, rel_gap_median, floor_median,
+    to_opt_median and rank (1 = largest share reached, then smallest median rel_gap).
+    Contexts with a run lacking an optimum are left out (no ranking on part of the runs)."""
+    floor_col, to_col = opt_column_names(rows)
+    groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
+    for r in rows:
+        if r["status"] == "ok":
+            groups.setdefault((r["context"], r["algorithm"]), []).append(r)
+    complete = {c for c, _ in groups}
+    for (c, _), g in groups.items():
+        if any(not math.isfinite(float(r.get("rel_gap", math.nan))) for r in g):
+            complete.discard(c)
+    out = []
+    for (context, algorithm), g in sorted(groups.items()):
+        if context not in complete:
+            continue
+        gaps = np.asarray([r["rel_gap"] for r in g], float)
+
+        def med(col: str | None, g: Sequence[Mapping[str, Any]] = g) -> float:
+            v = np.asarray([r.get(col, math.nan) for r in g], float) if col else np.zeros(0)
+            v = v[np.isfinite(v)]
+            return float(np.median(v)) if v.size else math.nan
+
+        reached = int(np.sum(gaps <= REACHED))
+        out.append({"context": context, "algorithm": algorithm, "n": len(g),
+                    "reached": reached, "share": reached / len(g),
+                    "rel_gap_median": float(np.median(gaps)), "floor_median": med(floor_col),
+                    "to_opt_median": med(to_col),
+                    "floor_name": floor_col[: -len("_floor")] if floor_col else ""})
+    by_context: dict[str, list[dict[str, Any]]] = {}
+    for s in out:
+        by_context.setdefault(s["context"], []).append(s)
+    ranked = []
+    for context in sorted(by_context):
+        g = sorted(by_context[context],
+                   key=lambda s: (-s["share"], s["rel_gap_median"], s["algorithm"]))
+        for i, s in enumerate(g, start=1):
+            s["rank"] = i
+        ranked += g
+    return ranked
+
+
+def search_test_frame(df: Any) -> Any:
+    """The runs with ``rel_gap_test = max(rel_gap, REACHED)`` (what the search ranking's
+    pairwise tests compare: reaching the optimum ties, whatever the last digits)."""
+    df = df.copy()
+    df["rel_gap_test"] = np.maximum(df["rel_gap"].to_numpy(float), REACHED)
+    df.loc[~np.isfinite(df["rel_gap"].to_numpy(float)), "rel_gap_test"] = np.nan
+    return df
+
+
+def box_centred(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
+                ) -> dict[str, bool]:
+    """Per context: whether every record's search box is centred on its true values (the
+    centre within :data:`CENTRED` of each true value, relative)."""
+    context = {r["run_id"]: r["context"] for r in rows}
+    out: dict[str, bool] = {}
+    for rec in records:
+        p = rec.get("parameters") or {}
+        lo, up, tr = p.get("lower"), p.get("upper"), p.get("true")
+        ok = False
+        try:
+            if lo and up and tr and len(lo) == len(up) == len(tr):
+                c = (np.asarray(lo, float) + np.asarray(up, float)) / 2
+                t = np.asarray(tr, float)
+                ok = bool(np.all(t != 0) and np.all(np.abs(c - t) <= CENTRED * np.abs(t)))
+        except (TypeError, ValueError):
+            ok = False
+        key = context.get(rec["run_id"])
+        if key is not None:
+            out[key] = out.get(key, True) and ok
+    return out
+
+
+def _names(items: Sequence[str]) -> str:
+    items = [escape(i) for i in items]
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
+
+
+def _best_group(order: Sequence[str], groups: Mapping[str, str] | None) -> list[str]:
+    """The optimizers that share the best-ranked optimizer's first letter (or it alone)."""
+    if not order:
+        return []
+    if not groups or not groups.get(order[0]):
+        return [order[0]]
+    letter = groups[order[0]][0]
+    return [a for a in order if letter in groups.get(a, "")]
+
+
+def verdict(context: str, metric_name: str, metric_order: Sequence[str],
+            metric_groups: Mapping[str, str] | None, search: Sequence[Mapping[str, Any]],
+            search_groups: Mapping[str, str] | None) -> str:
+    """One sentence: who leads the context by the metric and by search quality."""
+    tested = metric_groups is not None
+    lead = _best_group(metric_order, metric_groups)
+    what = ("share the best rank group" if len(lead) > 1 else "leads alone") if tested else \
+        "ranks first (not tested)"
+    text = f"Verdict for {escape(context)}: by {escape(metric_name)}, {_names(lead)} {what}"
+    if search:
+        order = [s["algorithm"] for s in search]
+        slead = _best_group(order, search_groups)
+        first = search[0]
+        swhat = ("share the best group" if len(slead) > 1 else "leads alone") \
+            if search_groups is not None else "ranks first (not tested)"
+        text += (f"; by search quality, {_names(slead)} {swhat} ({escape(first['algorithm'])} "
+                 f"reaches the instance's optimum in {first['reached']} of {first['n']} runs)")
+    else:
+        text += "; no search-quality ranking (no instance optimum known for every run)"
+    return text + "."
+
+
+def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[str, Any]],
+                 search: Sequence[Mapping[str, Any]], centred: bool,
+                 metric_groups: Mapping[str, str] | None = None) -> str:
+    """Why the two rankings of a context differ, in words ("" when they agree)."""
+    mrank = {s["algorithm"]: s["rank"] for s in metric_rows if s.get("n_runs")}
+    srank = {s["algorithm"]: s for s in search}
+    common = [a for a in mrank if a in srank]
+    if len(common) < 2:
+        return ""
+    m_order = sorted(common, key=mrank.__getitem__)
+    s_order = sorted(common, key=lambda a: srank[a]["rank"])
+    if m_order == s_order:
+        return ""
+    ahead = [a for a in m_order if m_order.index(a) < s_order.index(a)]
+    a = ahead[0]
+    by_metric = {s["algorithm"]: s for s in metric_rows}
+    s = srank[a]
+    floor = s["floor_median"]
+    med = by_metric[a].get("median", math.nan)
+    below = math.isfinite(floor) and math.isfinite(med) and med < floor
+    text = (f"The rankings of {escape(context)} disagree: {escape(a)} ranks "
+            f"{m_order.index(a) + 1} by {escape(metric_name)} but {s_order.index(a) + 1} by "
+            f"search quality (it reaches the optimum in {s['reached']} of {s['n']} runs, "
+            f"median rel_gap {fmt(s['rel_gap_median'], 3)}). ")
+    passed = [b for b in m_order[m_order.index(a) + 1:] if s_order.index(b) < s_order.index(a)]
+    if metric_groups and passed:
+        same = [b for b in passed
+                if set(metric_groups.get(a, "")) & set(metric_groups.get(b, ""))]
+        if same:
+            text += (f"By {escape(metric_name)} the tests do not separate it from "
+                     f"{_names(same)}, which it passes there. ")
+    if below:
+        text += (f"Its median {escape(metric_name)} ({fmt(med, 3)}) is below the median floor "
+                 f"({fmt(floor, 3)}), the {escape(metric_name)} of the record's own optimum: "
+                 "its runs end nearer the truth than the best fit of the data does, which "
+                 "searching better could not achieve. ")
+    text += (f"A lower {escape(metric_name)} without a lower objective means the runs stop "
+             "early in a favourable place rather than search well: ")
+    text += ("here the search box is centred on the true values, so an optimizer that stops "
+             f"early near the centre of the box scores a low {escape(metric_name)} without "
+             "searching well." if centred else
+             "for instance near the centre of a search box that is centred on the truth.")
+    return text
+
+
+def search_table(context_rows: Sequence[Mapping[str, Any]], groups: Mapping[str, str] | None
+                 ) -> tuple[list[str], list[list[Any]]]:
+    """(headers, rows) of one context's search-quality table (Markdown)."""
+    h = ["rank", "group", "optimizer", "n", "reached", "median rel_gap", "median floor",
+         "median to x*", "AUC"]
+    body = [[s["rank"], (groups or {}).get(s["algorithm"], "—"), s["algorithm"], s["n"],
+             f"{s['reached']}/{s['n']}", s["rel_gap_median"], s["floor_median"],
+             s["to_opt_median"], s.get("auc", math.nan)] for s in context_rows]
+    return h, body
+
+
+def search_lines(context: str, search: Sequence[Mapping[str, Any]],
+                 groups: Mapping[str, str] | None, metric_name: str, test: str | None
+                 ) -> list[str]:
+    """Markdown of one context's search-quality ranking (after its metric ranking)."""
+    rows = [s for s in search if s["context"] == context]
+    if not rows:
+        return []
+    h, body = search_table(rows, groups)
+    floor = rows[0].get("floor_name") or "rel_error"
+    floor = metric_name if metric_name.lower() == floor else floor
+    floor_text = (f"the {escape(floor)} of the instance's optimum x*" if floor != "rel_error" else
+                  "the norm of x*'s relative errors against the true values, %")
+    how = (f"`group`: optimizers sharing a letter are not separated by the Holm-corrected "
+           f"pairwise tests ({escape(test)}) on max(rel_gap, {REACHED:g})" if test else
+           "`group`: not tested in a single job's report")
+    return [para(f"By search quality: the share of runs reaching their instance's optimum "
+                 f"(rel_gap <= {REACHED:g}), then the median rel_gap; the median floor "
+                 f"({floor_text}: what the record allows), the median distance to x* "
+                 f"(percent of the true values) and the anytime AUC (area under the "
+                 f"fixed-target ECDF, 0 to 1). {how}."), "",
+            markdown(h, body, keep=6), ""]
+
+
+def headline_groups_note(test: str | None, alpha: float) -> str:
+    """The sentence under a metric ranking that says what ``group`` means."""
+    if not test:
+        return "`group`: not tested in a single job's report."
+    return (f"`group`: optimizers sharing a letter are not separated by the Holm-corrected "
+            f"pairwise tests ({escape(test)}, α={alpha}).")
+
+
+def test_name(pairs: Any, context: str) -> str | None:
+    """The pairwise test a context's table used (from :func:`.stats.pairwise_by_context`)."""
+    if pairs is None or pairs.empty:
+        return None
+    sub = pairs[pairs["context"] == context]
+    if sub.empty:
+        return None
+    methods = sorted(set(sub["p_method"]) - {""})
+    return f"{sub['test'].iloc[0]}; p: {', '.join(methods)}" if methods else sub["test"].iloc[0]
