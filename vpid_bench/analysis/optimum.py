@@ -40,6 +40,8 @@ POLISH_NEAR = 1.01
 #: polish would find ``x*`` again.
 SAME_BASIN = 1e-2
 SCHEMA = "vpid-bench/instance-optimum/1"
+#: An optimum file larger than this is not read (one of 1000 parameters is about 50 kB).
+MAX_BYTES = 1_000_000
 
 
 def _f_of(problem: Problem, x: np.ndarray) -> float:
@@ -131,7 +133,10 @@ def read_optimum(path: Path) -> dict[str, Any] | None:
     """An optimum file, checked; ``None`` when missing or not a valid optimum file (untrusted
     input: it is recomputed then)."""
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        path = Path(path)
+        if path.is_symlink() or path.stat().st_size > MAX_BYTES:
+            return None
+        data = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, ValueError):
         return None
     if not isinstance(data, dict) or data.get("schema") != SCHEMA:
