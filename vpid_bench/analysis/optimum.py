@@ -13,8 +13,8 @@ worse than where it started.
 
 :func:`update_instance_optimum` keeps one JSON file per instance in an ``optima`` folder
 shared by the jobs of a sweep: the polish from the truth is done once, and again from the best
-vector of any run that ends below the optimum known so far, or near it (within 1 %) but away
-from ``x*`` (another basin, perhaps lower), keeping the lowest. So ``f*`` is never above the
+vector of any run that ends below the optimum known so far or near it (within 1 %: it may sit
+in another basin, whose minimum is lower), keeping the lowest. So ``f*`` is never above the
 best of any run analysed with it.
 """
 
@@ -35,10 +35,6 @@ from ..records.io import stable_hash, write_json_atomic
 #: A run whose best is within this factor of the known optimum is polished too: it may sit in
 #: another basin whose minimum is lower.
 POLISH_NEAR = 1.01
-#: ... unless it ends above the optimum within this distance of ``x*`` (largest parameter
-#: difference relative to the true value): then it sits in the optimum's own basin, and a
-#: polish would find ``x*`` again.
-SAME_BASIN = 1e-2
 SCHEMA = "vpid-bench/instance-optimum/1"
 #: An optimum file larger than this is not read (one of 1000 parameters is about 50 kB).
 MAX_BYTES = 1_000_000
@@ -212,7 +208,6 @@ def update_instance_optimum(problem: Problem, settings: Mapping[str, Any], folde
     x_true = problem.x_true
     if x_true is None:
         raise ValueError("the optimum polish needs the true parameters")
-    scale = np.where(np.abs(x_true) > 0, np.abs(x_true), problem.bounds.width)
     path = Path(folder) / f"{instance_key(problem, settings)}.json"
     known = read_optimum(path)
     if known is None or len(known["x_opt"]) != problem.bounds.dim:
@@ -225,8 +220,6 @@ def update_instance_optimum(problem: Problem, settings: Mapping[str, Any], folde
     for x, f in run_bests:
         x = np.asarray(x, dtype=float)
         if not (np.all(np.isfinite(x)) and math.isfinite(f)) or f > POLISH_NEAR * f_opt:
-            continue
-        if f >= f_opt and np.max(np.abs(x - x_opt) / scale) < SAME_BASIN:
             continue
         x_new, f_new = polish(problem, x)
         starts += 1
