@@ -78,11 +78,17 @@ class NoiseConfig:
     ``model``: ``multiplicative`` (z (1 + level n), n ~ N(0, 1) per sample, the default
     reading of the paper's "5 %"), ``additive`` (z + level rms(z) n, rms per channel) or
     ``uniform`` (z (1 + level u), u ~ U(-1, 1)). ``seed`` seeds the noise generator only.
+
+    ``per_run``: true (the default) gives instance ``i`` of the problem (the record run ``i``
+    of every optimizer fits) its own noise record, drawn from
+    ``numpy.random.SeedSequence(seed, spawn_key=(i,))``; false keeps one record, drawn from
+    ``numpy.random.default_rng(seed)``, for every run.
     """
 
     level: float = 0.05
     model: str = "multiplicative"
     seed: int = 0
+    per_run: bool = True
 
 
 @dataclass(frozen=True)

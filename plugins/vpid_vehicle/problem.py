@@ -1,13 +1,17 @@
 """``problem=vehicle``: identify the 9 unknowns of Eq. (4) from two body accelerations.
 
-The reference record is made once per problem instance (synthetic: the true vehicle, an
-integrator, then noise drawn from ``problem.noise.seed``; or read from
-``problem.reference.file``) and shared by every run of the job. ``evaluate`` simulates a
-whole population per call with the compiled Newmark kernel (or the exact solver).
+The clean reference (the true vehicle through an integrator) is simulated once per problem;
+each *instance* adds its own noise record to it (``problem.noise.per_run``, see
+:meth:`VehicleProblem.instance`), so run ``i`` of every optimizer fits the same record ``i``.
+A measured record (``problem.reference.file``) is read once and is every instance's record.
+``evaluate`` simulates a whole population per call with the compiled Newmark kernel (or the
+exact solver).
 """
 
 from __future__ import annotations
 
+import copy
+import hashlib
 from pathlib import Path
 from typing import Any
 
@@ -53,6 +57,7 @@ class VehicleProblem(Problem):
             self.reference_source = "file"
             self.reference_clean: np.ndarray | None = None
             self.reference = read_measured(ref.file, self.t, config.dt)
+            self._digest: str | None = hashlib.sha256(Path(ref.file).read_bytes()).hexdigest()
         else:
             self.reference_source = "synthetic"
             dt_ref = config.dt if ref.dt is None else ref.dt
@@ -64,14 +69,76 @@ class VehicleProblem(Problem):
             clean = ref_sim(self._x_true[None])[0]
             if clean.shape[1] != self.t.size:  # pragma: no cover - guarded by validate()
                 raise RuntimeError("reference and model grids differ")
-            rng = np.random.default_rng(config.noise.seed)
             self.reference_clean = clean
-            self.reference = add_noise(clean, config.noise.level, config.noise.model, rng)
+            self.reference = self._noise_record(0)
+            self._digest = None
         self.reference.setflags(write=False)
+        self._index = 0
+        #: Instances made so far, by index, shared with every instance (0 is this problem).
+        self._instances: dict[int, VehicleProblem] = {0: self}
 
     @property
     def bounds(self) -> Bounds:
         return self._bounds
+
+    # -- instances: one noise record each ------------------------------------------------------
+    @property
+    def _instances_differ(self) -> bool:
+        """True when instances have different records: synthetic, noisy, ``noise.per_run``."""
+        nz = self.config.noise
+        return self.reference_source == "synthetic" and nz.level > 0 and nz.per_run
+
+    def _noise_record(self, index: int) -> np.ndarray:
+        """The noisy record of instance ``index`` (see :class:`~.config.NoiseConfig`)."""
+        nz = self.config.noise
+        seed = (np.random.SeedSequence(nz.seed, spawn_key=(index,)) if nz.per_run
+                else nz.seed)
+        assert self.reference_clean is not None
+        return add_noise(self.reference_clean, nz.level, nz.model, np.random.default_rng(seed))
+
+    def instance(self, index: int) -> VehicleProblem:
+        """Instance ``index``: the same vehicle, bump and simulator, with noise record
+        ``index`` (drawn from ``SeedSequence(noise.seed, spawn_key=(index,))``) when
+        ``noise.per_run`` is true and noise is added; otherwise this problem itself (every
+        instance identical). Instances are shallow copies that share the simulator (and its
+        threads); each is made once and kept, so asking again costs nothing."""
+        if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or index < 0:
+            raise ValueError(f"an instance index is an integer >= 0, not {index!r}")
+        if not self._instances_differ:
+            return self._instances[0]
+        index = int(index)
+        if index not in self._instances:
+            inst = copy.copy(self._instances[0])  # shares the simulator and this cache
+            inst._index = index
+            inst.reference = self._noise_record(index)
+            inst.reference.setflags(write=False)
+            inst.__dict__.pop("_f_true", None)
+            self._instances[index] = inst
+        return self._instances[index]
+
+    def instance_id(self) -> str | None:
+        """``"noise.seed=<seed>/<index>"`` when instances have their own records, else
+        ``None`` (a measured record, no noise, or ``noise.per_run=false``)."""
+        if not self._instances_differ:
+            return None
+        return f"noise.seed={self.config.noise.seed}/{self._index}"
+
+    def residual_sigma(self) -> np.ndarray | None:
+        """The equivalent additive noise of each channel (m/s^2), ``(2,)``:
+        ``σ_c = level × rms(clean channel c)``; for ``uniform`` noise the standard deviation
+        of ``level u`` is ``level / sqrt(3)``, so ``σ_c = level × rms_c / sqrt(3)``. For the
+        ``multiplicative`` model this is the rms of the per-sample standard deviations
+        ``level |z_k|`` over the record. ``None`` for a measured record or noise level 0."""
+        nz = self.config.noise
+        if self.reference_clean is None or nz.level <= 0:
+            return None
+        rms = np.sqrt(np.mean(self.reference_clean**2, axis=1))
+        return nz.level * rms / (np.sqrt(3.0) if nz.model == "uniform" else 1.0)
+
+    def content_digest(self) -> str | None:
+        """The SHA-256 of ``reference.file``'s bytes as read, or ``None`` for a synthetic
+        record (its config defines it)."""
+        return self._digest
 
     @property
     def x_true(self) -> np.ndarray | None:
@@ -184,11 +251,15 @@ class VehicleProblem(Problem):
                 "model": cfg.noise.model,
                 "level": cfg.noise.level,
                 "seed": cfg.noise.seed,
+                "per_run": cfg.noise.per_run,
+                "record": self.instance_id(),
                 **noise_summary(self.reference_clean, self.reference),
             }
         return info
 
     def write_artifacts(self, directory: Path) -> list[Path]:
+        """``reference.csv``: the clean and noisy record of *this* problem, i.e. instance 0
+        for the problem a job builds (each run's own record is instance ``run_index``)."""
         directory = Path(directory)
         directory.mkdir(parents=True, exist_ok=True)
         path = write_reference(directory / "reference.csv", self.t, self.reference,

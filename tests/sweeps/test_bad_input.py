@@ -36,7 +36,7 @@ PREFLIGHT = [
     (["problem=functions", "problem.bar.x=1"],
      "error: problem.bar.x=1 is not allowed: problem 'functions' has no such key"),
     (["problem.noise.levle=0.1"], "error: problem.noise.levle=0.1 is not allowed: problem "
-     "'vehicle' has no such key; keys under problem.noise are level, model, seed"),
+     "'vehicle' has no such key; keys under problem.noise are level, model, per_run, seed"),
     (["foo=1"], "error: foo=1 is not allowed: known top-level keys are problem, optimizer"),
     (["+foo=1"], "error: foo=1 is not allowed: known top-level keys are"),
     (["runs=0"], "error: runs=0 is not allowed: an integer from 1 to 10000"),

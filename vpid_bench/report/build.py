@@ -299,9 +299,11 @@ def _figures(df: Any, loaded: LoadedRecords, rows: list[dict[str, Any]], pairs: 
 
     figs: dict[str, Path | str] = {}
     problems = sorted(df["problem"].unique())
+    from .identifiability import reference_levels
+
     figs["Convergence"] = figures.convergence(
         traces_frame(loaded.records, rows), names.file("figures", "convergence", ".png"),
-        f_at_true(loaded.records, rows))
+        *reference_levels(loaded.records, rows))
     for p in problems:
         figs[f"Per-run metric, {p}"] = figures.runs_metric(
             df, p, names.file("figures", f"runs_{p}", ".png"))
@@ -373,8 +375,11 @@ def _plugin_sections(registry: Any, rows: list[dict[str, Any]], loaded: LoadedRe
     sections: list[tuple[str, Section]] = []
     columns: list[HeadlineColumn] = []
     errors: list[str] = []
+    from . import identifiability
+
     for problem in sorted({r["problem"] for r in rows}):
-        funcs = getattr(registry, "report_sections", {}).get(problem, [])
+        funcs = [("vpid-bench", identifiability.section),  # the core's, for every problem
+                 *getattr(registry, "report_sections", {}).get(problem, [])]
         prows = tuple(r for r in rows if r["problem"] == problem)
         ctx = ReportContext(problem=problem, rows=prows,
                             records=tuple(by_id[r["run_id"]] for r in prows),

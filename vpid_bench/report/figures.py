@@ -84,17 +84,20 @@ def convergence_frame(traces: Any, max_points: int = 200) -> Any:
     return pd.concat(out, ignore_index=True) if out else pd.DataFrame()
 
 
-def convergence(traces: Any, path: Path, f_true: Mapping[str, float] | None = None
-                ) -> Path | str:
+def convergence(traces: Any, path: Path, f_true: Mapping[str, float] | None = None,
+                f_opt: Mapping[str, float] | None = None) -> Path | str:
     """Median best objective vs evaluations per optimizer, IQR band, one panel per context,
     on a logarithmic y axis; a dashed line at the objective of the true parameters where
-    ``f_true[context]`` is known (no optimizer should need to go below it)."""
+    ``f_true[context]`` is known, and a dotted one at the record optimum ``f*`` (the lowest
+    objective the record allows) where ``f_opt[context]`` is; both are medians over the
+    context's instances (noise records)."""
     if traces is None or traces.empty:
         return "no traces in the records"
     import seaborn as sns
 
     plt = _plt()
     f_true = dict(f_true or {})
+    f_opt = dict(f_opt or {})
     data = convergence_frame(traces)
     data = data[np.isfinite(data["best"])]
     if data.empty:
@@ -120,8 +123,13 @@ def convergence(traces: Any, path: Path, f_true: Mapping[str, float] | None = No
         ft = f_true.get(context)
         if ft is not None and math.isfinite(ft):
             ax.axhline(ft, color="black", ls="--", lw=1.0,
-                       label=f"f at the true parameters ({ft:.4g})")
+                       label=f"f at the true parameters, median over instances ({ft:.4g})")
             values = np.append(values, ft)
+        fo = f_opt.get(context)
+        if fo is not None and math.isfinite(fo):
+            ax.axhline(fo, color="black", ls=":", lw=1.2,
+                       label=f"record optimum f*, median over instances ({fo:.4g})")
+            values = np.append(values, fo)
         scale = set_log_y(ax, values)
         n = d.groupby("algorithm")["run_id"].nunique()
         ax.set_title(f"{context}\n(runs per optimizer: {', '.join(map(str, sorted(set(n))))})")

@@ -1,0 +1,348 @@
+"""The report's identifiability section: what each record design can determine, and what the
+records actually allowed.
+
+It reads only files the jobs wrote (never rebuilds a problem): each job's
+``identifiability.json`` (the Cramér–Rao bounds of its design, :mod:`vpid_bench.analysis`)
+and the instances' optima (``<sweep>/optima/*.json`` or ``<job>/optima/*.json``). Every file
+from a results folder is untrusted: it is checked (types, finite numbers, sizes) and a bad one
+is skipped with one line in the section.
+
+A *design* is what defines a record apart from its noise draw: the problem and its settings
+without the protocol (``ps``, ``iterations``); the contexts ``<problem> ps=20`` and
+``<problem> ps=30`` share one design. Per design the section gives the bound of every
+parameter (relative standard deviation, %), the bounds' norm (comparable to a norm of relative
+errors, the per-run metric of a problem that knows its truth), the singular values
+and condition number of the scaled Jacobian, and beside them the measured *floor*: the
+context's headline metric of each instance's optimum ``x*``, median over the instances of the
+design, and per parameter the median ``|x*_j - θ_j| / |θ_j|``. A parameter whose bound exceeds
+:data:`UNDETERMINED_PERCENT` is one the design cannot determine.
+
+Also here, for the convergence figure: the median over the instances of a context of the
+objective at the truth and of the record optimum ``f*`` (:func:`reference_levels`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import statistics
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from ..analysis.optimum import find_optimum, load_optima, record_settings
+from ..records.io import stable_hash
+from .safe import escape
+from .sections import Contribution, ReportContext, Section
+
+#: A parameter whose Cramér–Rao bound (one relative standard deviation) exceeds this many
+#: percent is "not determined" by the design: even an efficient estimator would miss it by
+#: more than 10 % in one run of three, and a 95 % interval would span more than ±20 %.
+UNDETERMINED_PERCENT = 10.0
+#: Larger files are not read (an identifiability file of 1000 parameters is ~100 kB).
+MAX_BYTES = 1_000_000
+FILE = "identifiability.json"
+#: The noise convention, in words (each problem gives σ per residual group through
+#: ``Problem.residual_sigma``; this is the equivalent additive noise convention).
+CONVENTION = (
+    "Bounds: the Fisher information at the true parameters from a central-difference "
+    "Jacobian of the clean responses, under independent Gaussian noise of the equivalent "
+    "additive size σ_c = noise level × rms of the clean channel c (the problem's own "
+    "residual_sigma; for multiplicative noise this is the rms of its "
+    "per-sample standard deviations, for uniform noise it is divided by √3). `CRB %` is "
+    "the Cramér–Rao lower bound of a parameter's relative standard "
+    "deviation, 100·sqrt((F⁻¹)_jj)/|θ_j|; `CRB norm` the norm of those bounds (the rms "
+    "norm of relative errors an efficient unbiased estimator would reach). Singular "
+    "values: of the Jacobian whitened by σ and scaled by the true values.")
+
+
+def _finite(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def read_identifiability(path: Path, names: Sequence[str]) -> tuple[dict[str, Any] | None, str]:
+    """A job's ``identifiability.json``, checked against the records' parameter ``names``:
+    ``(data, "")``, or ``(None, why)`` for a file that is missing, too large, not JSON or
+    has a field of the wrong type, size or value."""
+    d = len(names)
+    try:
+        if path.is_symlink() or not path.is_file():
+            return None, "not a regular file"
+        size = path.stat().st_size
+        if size > MAX_BYTES:
+            return None, f"{size} bytes, more than {MAX_BYTES}"
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        return None, f"unreadable ({type(exc).__name__})"
+    if not isinstance(data, dict):
+        return None, "not a JSON object"
+    checks = (
+        ("names", data.get("names") == list(names), f"the records' parameter names {names}"),
+        ("crb_percent", isinstance(data.get("crb_percent"), list)
+         and len(data["crb_percent"]) == d
+         and all(_finite(v) and v >= 0 for v in data["crb_percent"]),
+         f"a list of {d} finite numbers >= 0"),
+        ("crb_norm_percent", _finite(data.get("crb_norm_percent"))
+         and data["crb_norm_percent"] >= 0, "a finite number >= 0"),
+        ("singular_values", isinstance(data.get("singular_values"), list)
+         and 1 <= len(data["singular_values"]) <= d
+         and all(_finite(v) and v >= 0 for v in data["singular_values"]),
+         f"a list of 1 to {d} finite numbers >= 0"),
+        ("condition_number", data.get("condition_number") is None
+         or (_finite(data["condition_number"]) and data["condition_number"] >= 1),
+         "a finite number >= 1 or null (infinite)"),
+        ("sigma", isinstance(data.get("sigma"), list) and 1 <= len(data["sigma"]) <= 10_000
+         and all(_finite(v) and v > 0 for v in data["sigma"]), "a list of numbers > 0"),
+    )
+    for key, ok, expected in checks:
+        if not ok:
+            return None, f"field {key}: expected {expected}"
+    return data, ""
+
+
+def _optima_folders(records: Iterable[Mapping[str, Any]]) -> list[Path]:
+    """``<sweep>/optima`` and ``<job>/optima`` of every job the records came from."""
+    folders: list[Path] = []
+    for rec in records:
+        job = Path(str(rec.get("_job_dir", ".")))
+        for folder in (job / "optima", job.parent / "optima"):
+            if folder not in folders:
+                folders.append(folder)
+    return folders
+
+
+def optima_by_run(records: Sequence[Mapping[str, Any]]) -> dict[str, Mapping[str, Any]]:
+    """The optimum of the instance each run fitted (checked files only), by ``run_id``."""
+    optima = load_optima(_optima_folders(records))
+    if not optima:
+        return {}
+    out = {}
+    for rec in records:
+        found = find_optimum(rec, optima)
+        if found is not None:
+            out[rec["run_id"]] = found
+    return out
+
+
+def _instance(rec: Mapping[str, Any]) -> Any:
+    inst = rec.get("instance")
+    return inst.get("id") if isinstance(inst, Mapping) else None
+
+
+def reference_levels(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
+                     ) -> tuple[dict[str, float], dict[str, float]]:
+    """Per context, the median over its instances of the objective at the truth
+    (``problem.info.f_at_true``) and of the record optimum ``f*`` (from the optima files);
+    a context is left out of a map when one of its instances lacks a finite value."""
+    context = {r["run_id"]: r["context"] for r in rows}
+    optima = optima_by_run(records)
+    f_true: dict[str, dict[Any, float]] = {}
+    f_opt: dict[str, dict[Any, float]] = {}
+    for rec in records:
+        c = context.get(rec["run_id"])
+        if c is None:
+            continue
+        info = (rec.get("problem") or {}).get("info") or {}
+        v = info.get("f_at_true") if isinstance(info, Mapping) else None
+        f_true.setdefault(c, {})[_instance(rec)] = float(v) if _finite(v) else math.nan
+        opt = optima.get(rec["run_id"])
+        f_opt.setdefault(c, {})[_instance(rec)] = float(opt["f_opt"]) if opt else math.nan
+
+    def medians(levels: dict[str, dict[Any, float]]) -> dict[str, float]:
+        return {c: statistics.median(v.values()) for c, v in levels.items()
+                if v and all(math.isfinite(x) for x in v.values())}
+
+    return medians(f_true), medians(f_opt)
+
+
+def _design_label(contexts: Sequence[str]) -> str:
+    """The contexts of a design without their protocol tokens (``ps=20``, ...)."""
+    labels = []
+    for c in contexts:
+        words = [w for w in c.split(" ") if not w.startswith(("ps=", "iterations=", "budget="))]
+        label = " ".join(words)
+        if label not in labels:
+            labels.append(label)
+    return " / ".join(labels)
+
+
+def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
+    """The record designs of ``ctx``'s runs with their bounds and measured floors, and one
+    line per skipped file."""
+    notes: list[str] = []
+    by_key: dict[str, dict[str, Any]] = {}
+    for row, rec in zip(ctx.rows, ctx.records, strict=True):
+        try:
+            key = stable_hash({"problem": ctx.problem,
+                               "settings": record_settings(rec["problem"].get("config") or {})})
+        except (TypeError, ValueError, AttributeError):
+            continue
+        d = by_key.setdefault(key, {"contexts": [], "records": [], "rows": [], "jobs": []})
+        if row["context"] not in d["contexts"]:
+            d["contexts"].append(row["context"])
+        d["records"].append(rec)
+        d["rows"].append(row)
+        job = ctx.job_dir(rec)
+        if job not in d["jobs"]:
+            d["jobs"].append(job)
+    optima = optima_by_run(ctx.records)
+    out = []
+    for d in by_key.values():
+        params = d["records"][0].get("parameters") or {}
+        names = list(params.get("names") or [])
+        true = params.get("true")
+        crb = None
+        for job in d["jobs"]:
+            path = job / FILE
+            if not path.exists() and not path.is_symlink():
+                continue
+            data, why = read_identifiability(path, names)
+            if data is None:
+                notes.append(f"skipped `{escape(path)}`: {escape(why)}")
+                continue
+            crb = data
+            break
+        if crb is None:
+            continue
+        metric = d["rows"][0].get("metric_name")
+        floors: dict[Any, float] = {}
+        errors: dict[Any, list[float]] = {}
+        for rec in d["records"]:
+            opt = optima.get(rec["run_id"])
+            if opt is None:
+                continue
+            value = (opt.get("metrics") or {}).get(metric)
+            if _finite(value):
+                floors[_instance(rec)] = float(value)
+            rec_true = (rec.get("parameters") or {}).get("true")
+            if (isinstance(rec_true, list) and len(rec_true) == len(names)
+                    and all(_finite(t) and t != 0 for t in rec_true)):
+                errors[_instance(rec)] = [abs(100.0 * (x - t) / t)
+                                          for x, t in zip(opt["x_opt"], rec_true, strict=True)]
+        out.append({
+            "label": _design_label(d["contexts"]), "contexts": sorted(d["contexts"]),
+            "names": names, "true": true, "crb": crb, "metric": metric,
+            "floor": statistics.median(floors.values()) if floors else None,
+            "floor_errors": ([statistics.median(e[j] for e in errors.values())
+                              for j in range(len(names))] if errors else None),
+            "instances": len(floors) if floors else len(errors),
+        })
+    out.sort(key=lambda x: x["label"])
+    labels = [x["label"] for x in out]
+    for x in out:
+        if labels.count(x["label"]) > 1:  # settings that differ beyond the context's keys
+            x["label"] += f" [{', '.join(x['contexts'])}]"
+    return out, notes
+
+
+def _figure(ctx: ReportContext, design: Mapping[str, Any]) -> Path:
+    """Bars: the bound of each parameter (%, log axis); dots: the median |error| of the
+    instances' optima; a dashed line at :data:`UNDETERMINED_PERCENT`."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import FuncFormatter
+
+    names = design["names"]
+    crb = design["crb"]["crb_percent"]
+    fig, ax = plt.subplots(figsize=(max(5.0, 0.7 * len(names) + 2.0), 3.8))
+    xs = range(len(names))
+    ax.bar(xs, [max(v, 1e-6) for v in crb], color="#4c72b0",
+           label="Cramér–Rao bound (relative sd, %)")
+    if design["floor_errors"] is not None:
+        ax.plot(xs, [max(v, 1e-6) for v in design["floor_errors"]], "o", color="#dd8452",
+                label=f"median |error| of the record optima x* ({design['instances']} "
+                      "instance(s))")
+    ax.axhline(UNDETERMINED_PERCENT, color="black", ls="--", lw=1.0,
+               label=f"{UNDETERMINED_PERCENT:g} %: above it, not determined")
+    ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda y, _: f"{y:g}"))
+    ax.set_xticks(list(xs), names)
+    ax.set_xlabel("parameter")
+    ax.set_ylabel("relative standard deviation / error (%, log scale)")
+    ax.set_title(f"What the record design {design['label']} can determine\n"
+                 f"(CRB norm {design['crb']['crb_norm_percent']:.3g} %)", fontsize=10)
+    ax.legend(fontsize=8, loc="best")
+    fig.tight_layout()
+    return ctx.save_figure(fig, f"identifiability_{design['label']}")
+
+
+def _design_text(ctx: ReportContext, design: Mapping[str, Any]) -> str:
+    crb = design["crb"]
+    names = design["names"]
+    bounds = crb["crb_percent"]
+    cond = crb.get("condition_number")
+    s = crb["singular_values"]
+    undetermined = [f"{escape(n)} ({ctx.fmt(b, 3)} %)" for n, b in zip(names, bounds, strict=True)
+                    if b > UNDETERMINED_PERCENT]
+    floor = design["floor"]
+    metric = escape(design["metric"])
+    text = (f"Record design **{escape(design['label'])}** (contexts: "
+            f"{escape(', '.join(design['contexts']))}). "
+            f"CRB norm {ctx.fmt(crb['crb_norm_percent'], 3)} %"
+            + (f"; measured floor: median {metric} of the record optima x* "
+               f"{ctx.fmt(floor, 3)} % over {design['instances']} instance(s)"
+               if floor is not None else "; no instance optimum was found for a measured floor")
+            + f". Condition number {ctx.fmt(cond, 3) if cond is not None else 'infinite'}; "
+            f"singular values {', '.join(ctx.fmt(v, 3) for v in s)}. ")
+    if undetermined:
+        text += (f"This design cannot determine {', '.join(undetermined)}: the bound exceeds "
+                 f"{UNDETERMINED_PERCENT:g} %.")
+    else:
+        text += f"Every parameter's bound is within {UNDETERMINED_PERCENT:g} %."
+    return ctx.para(text)
+
+
+def section(ctx: ReportContext) -> Contribution | None:
+    """The identifiability section of one problem's runs (``None`` when no job of it wrote
+    an ``identifiability.json``; a problem without residuals or truth writes none)."""
+    designs, notes = _designs(ctx)
+    if not designs:
+        if not notes:
+            return None
+        return Contribution(sections=(Section(
+            "Identifiability", ctx.para("Not built: " + "; ".join(notes) + ".")),))
+    files: list[Path] = []
+    rows = []
+    for d in designs:
+        for j, name in enumerate(d["names"]):
+            for context in d["contexts"]:
+                rows.append([context, d["label"], name, d["crb"]["crb_percent"][j],
+                             d["floor_errors"][j] if d["floor_errors"] is not None else None,
+                             d["instances"]])
+    files += ctx.write_table(
+        "identifiability",
+        ["context", "design", "parameter", "crb_percent", "floor_median_abs_error_percent",
+         "instances"], rows)
+    files += ctx.write_table(
+        "identifiability_designs",
+        ["design", "contexts", "crb_norm_percent", "floor_metric", "floor_median", "instances",
+         "condition_number", "singular_values", "sigma"],
+        [[d["label"], "; ".join(d["contexts"]), d["crb"]["crb_norm_percent"], d["metric"],
+          d["floor"], d["instances"], d["crb"].get("condition_number"),
+          " ".join(repr(float(v)) for v in d["crb"]["singular_values"]),
+          " ".join(repr(float(v)) for v in d["crb"]["sigma"])] for d in designs])
+    parts = [ctx.para(
+        f"What each record design allows, beside what the records gave. {CONVENTION} "
+        f"A parameter whose bound exceeds {UNDETERMINED_PERCENT:g} % is one this design "
+        "cannot determine. The measured floor is each instance's optimum x* (the lowest "
+        "objective its record allows, polished by the job): its metric, median over the "
+        "instances of the design, and per parameter the median |x*_j − θ_j|/|θ_j|. A floor "
+        "far above the bound means the noise draws are unlucky or the objective (a sum of "
+        "norms) is not the likelihood; a run cannot be expected to do better than its "
+        "record's x*."), ""]
+    for d in designs:
+        parts += [_design_text(ctx, d), ""]
+        body = [[n, b, (d["floor_errors"][j] if d["floor_errors"] is not None else None),
+                 "not determined" if b > UNDETERMINED_PERCENT else ""]
+                for j, (n, b) in enumerate(zip(d["names"], d["crb"]["crb_percent"],
+                                               strict=True))]
+        parts += [ctx.markdown_table(["parameter", "CRB %", "floor median |error| %", ""],
+                                     body, digits=3), ""]
+        if not ctx.short:
+            files.append(_figure(ctx, d))
+    if notes:
+        parts += [ctx.para("Skipped: " + "; ".join(notes) + "."), ""]
+    return Contribution(sections=(Section("Identifiability", "\n".join(parts).rstrip(),
+                                          tuple(files)),))
