@@ -60,10 +60,13 @@ def polish(problem: Problem, x0: np.ndarray, rounds: int = 30, tol: float = 1e-1
         w = 1.0 / np.sqrt(np.maximum(norms, 1e-300))[groups]  # squared: 1/||r_g|| per entry
 
         def weighted(z: np.ndarray, w: np.ndarray = w) -> np.ndarray:
-            res = problem.residuals((z * scale)[None])[0]
-            return np.where(np.isfinite(res), res, 1e150) * w
+            return _weighted_rows(problem, z[None], scale, w)[0]
 
-        sol = least_squares(weighted, x / scale, bounds=(b.lower / scale, b.upper / scale),
+        def jacobian(z: np.ndarray, w: np.ndarray = w) -> np.ndarray:
+            return _forward_jacobian(problem, z, scale, w, lo, hi)
+
+        lo, hi = b.lower / scale, b.upper / scale
+        sol = least_squares(weighted, x / scale, jac=jacobian, bounds=(lo, hi),
                             method="trf", x_scale=1.0, xtol=1e-15, ftol=1e-15, gtol=1e-15,
                             max_nfev=200)
         x_new = np.clip(sol.x * scale, b.lower, b.upper)
@@ -77,6 +80,29 @@ def polish(problem: Problem, x0: np.ndarray, rounds: int = 30, tol: float = 1e-1
         else:
             break
     return best_x, best_f
+
+
+def _weighted_rows(problem: Problem, Z: np.ndarray, scale: np.ndarray,
+                   w: np.ndarray) -> np.ndarray:
+    """Weighted residuals of the rows of ``Z`` (in units of ``scale``), non-finite entries
+    replaced by a huge value, ``(n, m)``."""
+    res = np.asarray(problem.residuals(Z * scale), dtype=float)
+    return np.where(np.isfinite(res), res, 1e150) * w
+
+
+def _forward_jacobian(problem: Problem, z: np.ndarray, scale: np.ndarray, w: np.ndarray,
+                      lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Forward differences of the weighted residuals at ``z``, ``(m, dim)``, all ``dim + 1``
+    points in one batched ``residuals`` call (a step ``sqrt(eps) max(1, |z_i|)``, as scipy's
+    ``2-point``, taken backwards where a forward step would leave the box)."""
+    h = np.sqrt(np.finfo(float).eps) * np.maximum(1.0, np.abs(z))
+    h = np.where(z + h > hi, -h, h)
+    h = np.where((z + h < lo) | (z + h > hi), 0.5 * (hi - lo) - np.abs(z - 0.5 * (lo + hi)), h)
+    Z = np.repeat(z[None], z.size + 1, axis=0)
+    Z[np.arange(1, z.size + 1), np.arange(z.size)] += h
+    h = Z[np.arange(1, z.size + 1), np.arange(z.size)] - z  # the steps actually taken
+    R = _weighted_rows(problem, Z, scale, w)
+    return ((R[1:] - R[0]) / h[:, None]).T
 
 
 def instance_key(problem: Problem, settings: Mapping[str, Any]) -> str:
