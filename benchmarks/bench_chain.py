@@ -110,7 +110,8 @@ def main() -> None:
     print(f"jobs: {len(jobs)}, runs: {len(jobs) * args.runs}, evaluations: {evaluations}")
     print(f"  runs alone (in process, lockstep): {alone:7.2f} s "
           f"({evaluations / alone:,.0f} evaluations/s)")
-    print(f"  CLI, report=false:                 {no_report:7.2f} s  = {no_report / alone:5.2f}x runs")
+    print(f"  CLI, report=false:                 {no_report:7.2f} s  = "
+          f"{no_report / alone:5.2f}x runs")
     print(f"  CLI, report included (the chain):  {chain:7.2f} s  = {chain / alone:5.2f}x runs "
           "(target <= 2)")
     print(f"  vpid-bench-report alone:           {report:7.2f} s  (its own process, imports "

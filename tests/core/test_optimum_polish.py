@@ -1,0 +1,36 @@
+"""The optimum polish's batched forward-difference Jacobian and its memo of the polish from
+the truth (vpid_bench.analysis.optimum)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vpid_bench.analysis import optimum
+from vpid_bench.experiment import build_problem
+
+
+def test_forward_jacobian_matches_the_analytic_one_inside_and_at_the_box(registry):
+    p = build_problem(registry, {"name": "functions", "function": "rosenbrock", "dim": 3})
+    scale, w = np.ones(3), np.ones(4)
+    lo, hi = p.bounds.lower, p.bounds.upper
+
+    def analytic(x):  # r = [10 (x2 - x1^2), 10 (x3 - x2^2), 1 - x1, 1 - x2]
+        return np.array([[-20 * x[0], 10, 0], [0, -20 * x[1], 10], [-1, 0, 0], [0, -1, 0]])
+
+    for z in (np.array([0.3, -1.2, 2.0]), hi.copy()):  # at the upper bound: backward steps
+        J = optimum._forward_jacobian(p, z, scale, w, lo, hi)
+        np.testing.assert_allclose(J, analytic(z), rtol=0, atol=1e-5 * np.abs(analytic(z)).max())
+
+
+def test_polish_reaches_the_minimum_and_the_truth_polish_is_memoised(registry):
+    p = build_problem(registry, {"name": "functions", "function": "rosenbrock", "dim": 4})
+    x, f = optimum.polish(p, np.array([0.5, 0.4, 0.3, 0.2]))
+    np.testing.assert_allclose(x, np.ones(4), atol=1e-6)
+    assert f < 1e-12
+    settings = {"function": "rosenbrock", "dim": 4, "ps": 20, "iterations": 50}
+    optimum._TRUTH_POLISH.clear()
+    a = optimum._polish_from_truth(p, settings)
+    b = optimum._polish_from_truth(p, {**settings, "ps": 30})  # the protocol is not the record
+    assert len(optimum._TRUTH_POLISH) == 1
+    np.testing.assert_array_equal(a[0], b[0])
+    assert a[1] == b[1]
