@@ -4,7 +4,8 @@ included, and the same runs in this process with nothing around them.
 Measures, side by side in one invocation (only ratios mean anything on a shared machine):
 
 * ``runs alone``: every job's runs in this process (problem built and kernel compiled
-  beforehand, untimed), in lockstep as the command runs them; no records, no analysis;
+  beforehand, untimed), in lockstep as the command runs them; no records, no analysis
+  (and, for comparison, the same runs one after another);
 * ``CLI, no report``: ``vpid-bench -m ... report=false`` (composition, pre-flight, problem
   build, warm-up, records, the optimum/identifiability analysis);
 * ``CLI, report``: the same with the report at the end (what a user runs);
@@ -45,8 +46,9 @@ def timed(cmd: list[str], cwd: Path) -> float:
     return wall
 
 
-def runs_alone(overrides: list[list[str]]) -> tuple[float, int]:
-    """Seconds the runs of the given jobs take in this process, and their evaluations."""
+def runs_alone(overrides: list[list[str]], lockstep: bool = True) -> tuple[float, int]:
+    """Seconds the runs of the given jobs take in this process, and their evaluations
+    (``lockstep=False``: one run after another, as before lockstep)."""
     import numpy as np
     from hydra import compose, initialize_config_module
     from hydra.core.global_hydra import GlobalHydra
@@ -73,7 +75,7 @@ def runs_alone(overrides: list[list[str]]) -> tuple[float, int]:
         optimizers = [job.optimizer_cls(job.params, problem.bounds, run_rng(job.spec.seed, i))
                       for i in range(job.spec.runs)]
         t0 = time.perf_counter()
-        if joins_lockstep(job, problem):
+        if lockstep and joins_lockstep(job, problem):
             results = run_many(problem, [Lane(problem.instance(i), o, job.budget, i)
                                          for i, o in enumerate(optimizers)])
         else:
@@ -103,6 +105,7 @@ def main() -> None:
     jobs = [[f"problem={args.problem}", f"optimizer={o}", f"problem.ps={ps}",
              f"runs={args.runs}", *extra] for o in optimizers for ps in sizes]
     alone, evaluations = runs_alone(jobs)
+    one_by_one, _ = runs_alone(jobs, lockstep=False)
     no_report = timed([*CLI, *sweep, "report=false", f"hydra.sweep.dir={root / 'noreport'}"],
                       root)
     chain = timed([*CLI, *sweep, f"hydra.sweep.dir={root / 'chain'}"], root)
@@ -110,6 +113,8 @@ def main() -> None:
     print(f"jobs: {len(jobs)}, runs: {len(jobs) * args.runs}, evaluations: {evaluations}")
     print(f"  runs alone (in process, lockstep): {alone:7.2f} s "
           f"({evaluations / alone:,.0f} evaluations/s)")
+    print(f"  runs alone, one after another:     {one_by_one:7.2f} s  (lockstep speed-up "
+          f"{one_by_one / alone:.2f}x)")
     print(f"  CLI, report=false:                 {no_report:7.2f} s  = "
           f"{no_report / alone:5.2f}x runs")
     print(f"  CLI, report included (the chain):  {chain:7.2f} s  = {chain / alone:5.2f}x runs "
