@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -36,11 +37,22 @@ def _env() -> dict[str, str]:
     return env
 
 
-def timed(cmd: list[str], cwd: Path) -> float:
-    """Wall time of one command (it must succeed)."""
-    t0 = time.perf_counter()
+#: CPU seconds (user + system) of each measurement, beside its wall time: on a machine shared
+#: with other work the CPU time varies much less than the wall time.
+CPU: dict[str, float] = {}
+
+
+def _children_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def timed(cmd: list[str], cwd: Path, name: str) -> float:
+    """Wall time of one command (it must succeed); its CPU time goes to ``CPU[name]``."""
+    c0, t0 = _children_cpu(), time.perf_counter()
     done = subprocess.run(cmd, cwd=cwd, env=_env(), capture_output=True, text=True, check=False)
     wall = time.perf_counter() - t0
+    CPU[name] = _children_cpu() - c0
     if done.returncode != 0:
         sys.exit(f"failed ({done.returncode}): {' '.join(cmd)}\n{done.stderr[-2000:]}")
     return wall
@@ -74,13 +86,15 @@ def runs_alone(overrides: list[list[str]], lockstep: bool = True) -> tuple[float
         problem.evaluate_instances(X, np.array([0, 1]))
         optimizers = [job.optimizer_cls(job.params, problem.bounds, run_rng(job.spec.seed, i))
                       for i in range(job.spec.runs)]
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         if lockstep and joins_lockstep(job, problem):
             results = run_many(problem, [Lane(problem.instance(i), o, job.budget, i)
                                          for i, o in enumerate(optimizers)])
         else:
             results = [run(problem.instance(i), o, job.budget) for i, o in enumerate(optimizers)]
         total += time.perf_counter() - t0
+        CPU["lockstep" if lockstep else "one by one"] = (
+            CPU.get("lockstep" if lockstep else "one by one", 0.0) + time.process_time() - c0)
         evaluations += sum(r.evaluations for r in results)
     return total, evaluations
 
@@ -107,9 +121,10 @@ def main() -> None:
     alone, evaluations = runs_alone(jobs)
     one_by_one, _ = runs_alone(jobs, lockstep=False)
     no_report = timed([*CLI, *sweep, "report=false", f"hydra.sweep.dir={root / 'noreport'}"],
-                      root)
-    chain = timed([*CLI, *sweep, f"hydra.sweep.dir={root / 'chain'}"], root)
-    report = timed([*REPORT, str(root / "noreport"), "-o", str(root / "report")], root)
+                      root, "no report")
+    chain = timed([*CLI, *sweep, f"hydra.sweep.dir={root / 'chain'}"], root, "chain")
+    report = timed([*REPORT, str(root / "noreport"), "-o", str(root / "report")], root,
+                   "report")
     print(f"jobs: {len(jobs)}, runs: {len(jobs) * args.runs}, evaluations: {evaluations}")
     print(f"  runs alone (in process, lockstep): {alone:7.2f} s "
           f"({evaluations / alone:,.0f} evaluations/s)")
@@ -122,6 +137,11 @@ def main() -> None:
     print(f"  vpid-bench-report alone:           {report:7.2f} s  (its own process, imports "
           "included)")
     print(f"  per job outside the runs (no report): {(no_report - alone) / len(jobs):.3f} s")
+    cpu = CPU
+    print(f"CPU seconds: runs alone {cpu['lockstep']:.2f} (one by one {cpu['one by one']:.2f}), "
+          f"CLI report=false {cpu['no report']:.2f} = {cpu['no report'] / cpu['lockstep']:.2f}x, "
+          f"chain {cpu['chain']:.2f} = {cpu['chain'] / cpu['lockstep']:.2f}x, "
+          f"report alone {cpu['report']:.2f}")
     print(f"outputs: {root}")
 
 
