@@ -6,7 +6,7 @@ VENV ?= .venv
 BIN := $(VENV)/bin
 export MPLBACKEND := Agg
 
-.PHONY: install demo test bench clean
+.PHONY: install demo test bench bench-scale test-scaleout clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -25,10 +25,29 @@ test: install
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest
 
+# Launchers beyond one process (Ray on a local instance, submitit's local executor): their
+# own environment, every extra in ONE pip run (the Ray launcher pins cloudpickle<3), so the
+# default install stays free of Ray. Records must be bit-identical to the basic launcher's.
+SCALEOUT_VENV ?= .venv-scaleout
+$(SCALEOUT_VENV)/.installed: pyproject.toml
+	$(PYTHON) -m venv $(SCALEOUT_VENV)
+	$(SCALEOUT_VENV)/bin/python -m pip install --upgrade "pip>=23.1"
+	$(SCALEOUT_VENV)/bin/python -m pip install -e ".[test,joblib,submitit,ray]"
+	touch $@
+
+test-scaleout: $(SCALEOUT_VENV)/.installed
+	$(SCALEOUT_VENV)/bin/python -m pytest -m scaleout tests/sweeps/test_launchers.py
+
+# Speed of the chain, lockstep and threads (minutes; see docs/sweeps.md)
+bench-scale: install
+	$(BIN)/python benchmarks/bench_chain.py
+	$(BIN)/python benchmarks/bench_threads_sweep.py
+	$(BIN)/python benchmarks/bench_large_study.py
+
 bench: install
 	$(BIN)/python benchmarks/bench_vehicle.py
 	$(BIN)/python benchmarks/bench_optimizers.py
 	$(BIN)/python benchmarks/paper_experiment.py
 
 clean:
-	rm -rf $(VENV) outputs/*/ .pytest_cache
+	rm -rf $(VENV) $(SCALEOUT_VENV) outputs/*/ .pytest_cache

@@ -221,6 +221,40 @@ class Problem(abc.ABC):
         Default: the problem itself, every instance identical."""
         return self
 
+    #: True when ``evaluate`` gives each row a value that depends only on that row (and the
+    #: instance): not on the other rows of the call, their order or count, nor on earlier
+    #: calls. Then a job may run its runs in lockstep, gathering their batches into one call
+    #: (:func:`vpid_bench.runner.run_many`), and records stay bit-identical. Default False:
+    #: a problem must say so (a noisy objective drawing from its own generator must not).
+    rows_independent: ClassVar[bool] = False
+
+    def evaluate_instances(self, X: np.ndarray, instance: np.ndarray) -> np.ndarray:
+        """Objective values of the rows of ``X`` (shape ``(n, dim)``), row ``j`` against
+        instance ``instance[j]`` (int array ``(n,)``), shape ``(n,)``: the gathered call of runs
+        in lockstep. Must equal ``self.instance(instance[j]).evaluate(X[j:j+1])`` for each row.
+
+        The default groups the rows by instance (instances that are the same object, e.g. the
+        problem itself, form one group) and calls each group's ``evaluate`` once. A problem
+        whose instances share an expensive part overrides it to evaluate every row in one go.
+        """
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        instance = np.asarray(instance, dtype=np.int64).reshape(-1)
+        if instance.shape != (X.shape[0],):
+            raise ValueError(f"evaluate_instances: {instance.shape[0]} instance indices for "
+                             f"{X.shape[0]} rows")
+        groups: dict[int, tuple[Problem, list[int]]] = {}
+        for i in np.unique(instance):
+            inst = self.instance(int(i))
+            groups.setdefault(id(inst), (inst, []))[1].append(int(i))
+        if len(groups) == 1:
+            inst = next(iter(groups.values()))[0]
+            return np.asarray(inst.evaluate(X), dtype=float).reshape(-1)
+        f = np.empty(X.shape[0])
+        for inst, indices in groups.values():
+            rows = np.flatnonzero(np.isin(instance, indices))
+            f[rows] = np.asarray(inst.evaluate(X[rows]), dtype=float).reshape(-1)
+        return f
+
     def instance_id(self) -> str | None:
         """A short, stable name of this instance's data, stored in every record (runs with the
         same id fit the same data); ``None`` when all instances are identical."""

@@ -16,6 +16,15 @@ recorded under another plugin release or another data file are run again, never 
 Crash isolation: an exception (``SystemExit`` included) inside one run is written into that
 run's record (status ``failed``) and the job goes on; only ``KeyboardInterrupt`` stops it.
 
+Lockstep: when the problem's values do not depend on the batch
+(:attr:`~vpid_bench.api.Problem.rows_independent`) and the optimizer asks and tells in the run
+loop's thread (not a :class:`~vpid_bench.api.LoopOptimizer`, no residuals), the runs still to
+do advance together (:func:`vpid_bench.runner.run_many`): one evaluation call per step for all
+of them, so small populations fill the kernel and its threads. Each run keeps its generator,
+budget and trace; its record is bit-identical to the one it gets alone (tested). Its
+``timing.wall_time_s`` is its own share: its optimizer's time plus its rows' share of each
+gathered evaluation.
+
 Timing: before the first timed run the job makes one untimed warm-up run of at most two
 batches, so compiled kernels (numba) are compiled before any run is timed; its cost is the
 summary's ``warmup_s``.
@@ -38,10 +47,10 @@ from typing import Any
 import numpy as np
 
 from . import records as rec
-from .api import Optimizer, Problem
+from .api import LoopOptimizer, Optimizer, Problem
 from .artifacts import best_vector, write_best_signals
 from .plugins import Registry
-from .runner import RunResult, run
+from .runner import Lane, RunResult, RunTimeoutError, run, run_many
 from .spec import Job, parse_job
 
 log = logging.getLogger(__name__)
@@ -65,10 +74,6 @@ class JobSummary:
     #: their instance's optimum where the optimum is known, else the median best objective.
     #: The command's task returns it, so an optimizing sweeper (Optuna) can tune on it.
     score: float | None = None
-
-
-class RunTimeoutError(Exception):
-    """A run went past the job's ``run_timeout_s``."""
 
 
 class ProblemCache:
@@ -194,10 +199,14 @@ def _one_blas_thread() -> Iterator[None]:
         yield
 
 
-def _warm_up(job: Job, problem: Problem) -> float:
-    """One untimed run of at most two batches, so compilation is not timed (see module)."""
+def _warm_up(job: Job, problem: Problem, lockstep: bool = False) -> float:
+    """One untimed run of at most two batches, so compilation is not timed (see module); in
+    lockstep also one gathered call over two instances (its own compiled path)."""
     t0 = time.perf_counter()
     try:
+        if lockstep:
+            X = problem.bounds.sample(np.random.default_rng(0), 2)
+            problem.evaluate_instances(X, np.array([0, min(1, job.spec.runs - 1)]))
         optimizer = job.optimizer_cls(job.params, problem.bounds,
                                       np.random.default_rng(np.random.SeedSequence(job.spec.seed,
                                                                                    spawn_key=(2**31,))))
@@ -301,9 +310,9 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
     start = time.perf_counter()
     bar = _progress_bar(spec.runs, f"{job.optimizer_name} on {job.problem_name}",
                         enabled=spec.progress)
-    warmed = False
     with _one_blas_thread():
         try:
+            todo: list[tuple[int, str, Path]] = []
             for i in range(spec.runs):
                 rid = rec.run_id(key, i)
                 path = rec.record_path(job_dir, i, rid)
@@ -312,10 +321,16 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
                     summary.skipped += 1
                     bar.update(1)
                     continue
-                if not warmed:
-                    summary.warmup_s = _warm_up(job, problem)
-                    warmed = True
-                record = _one_run(job, problem.instance(i), i, rid, provenance, summary)
+                todo.append((i, rid, path))
+            lockstep = len(todo) > 1 and joins_lockstep(job, problem)
+            if todo:
+                summary.warmup_s = _warm_up(job, problem, lockstep)
+            if lockstep:
+                done = _lockstep_runs(job, problem, todo, provenance, summary)
+            else:
+                done = ((path, _one_run(job, problem.instance(i), i, rid, provenance, summary))
+                        for i, rid, path in todo)
+            for path, record in done:
                 rec.write_record(path, record)
                 summary.ran += 1
                 bar.update(1)
@@ -365,6 +380,61 @@ def _one_run(job: Job, problem: Problem, i: int, rid: str, provenance: Mapping[s
     )
 
 
+def joins_lockstep(job: Job, problem: Problem) -> bool:
+    """Whether the runs of ``job`` can run in lockstep (see module): the problem's values do
+    not depend on the batch, and the optimizer asks and tells in the run loop's own thread and
+    needs only objective values."""
+    cls = job.optimizer_cls
+    return (bool(getattr(problem, "rows_independent", False))
+            and not getattr(cls, "wants_residuals", False)
+            and not issubclass(cls, LoopOptimizer))
+
+
+def _lockstep_runs(job: Job, problem: Problem, todo: list[tuple[int, str, Path]],
+                   provenance: Mapping[str, Any], summary: JobSummary
+                   ) -> Iterator[tuple[Path, dict[str, Any]]]:
+    """The runs ``todo`` (index, run id, record path) in lockstep; (path, record) of each, in
+    order. A run whose optimizer cannot be built fails alone, as in :func:`_one_run`."""
+    started = _dt.datetime.now(_dt.timezone.utc).isoformat()
+    timeout = job.spec.run_timeout_s
+    lanes: list[Lane] = []
+    outcomes: dict[int, RunResult | BaseException] = {}
+    built_s: dict[int, float] = {}
+    for i, _rid, _path in todo:
+        inst = problem.instance(i)
+        t0 = time.perf_counter()
+        try:
+            optimizer = job.optimizer_cls(job.params, inst.bounds, run_rng(job.spec.seed, i))
+            optimizer.name = job.optimizer_name
+            lanes.append(Lane(inst, optimizer, job.budget, instance=i))
+        except KeyboardInterrupt:
+            raise
+        except BaseException as exc:  # crash isolation: this run only
+            outcomes[i] = exc
+        built_s[i] = time.perf_counter() - t0
+        if timeout is not None and i not in outcomes and built_s[i] > timeout:
+            lanes.pop()
+            outcomes[i] = RunTimeoutError(f"the run took longer than run_timeout_s={timeout:g} s")
+    results = run_many(problem, lanes, timeout_s=None if timeout is None else timeout)
+    outcomes.update((lane.instance, out) for lane, out in zip(lanes, results))
+    for i, rid, path in todo:
+        out = outcomes[i]
+        result = out if isinstance(out, RunResult) else None
+        error = None if result is not None else out
+        if error is not None:
+            summary.failed.append(i)
+            log.error("run %d of %s on %s failed: %s: %s", i, job.optimizer_name,
+                      job.problem_name, type(error).__name__, error)
+        seconds = built_s[i] + (result.wall_time_s if result is not None else 0.0)
+        yield path, rec.make_record(
+            rid=rid, run_index=i, problem=problem.instance(i), problem_name=job.problem_name,
+            problem_settings=job.problem_settings(), problem_plugin=provenance["problem"],
+            optimizer_name=job.optimizer_name, optimizer_settings=job.optimizer_settings(),
+            optimizer_plugin=provenance["optimizer"], seed=job.spec.seed, budget=job.budget,
+            result=result, error=error, started_at=started, wall_time_s=seconds,
+        )
+
+
 def run_from_config(cfg: Any, job_dir: str | Path, registry: Registry | None = None,
                     problems: ProblemCache | None = None, optima_dir: Path | None = None
                     ) -> JobSummary:
@@ -404,4 +474,5 @@ def _progress_bar(total: int, desc: str, enabled: bool) -> Any:
                 mininterval=0.5)
 
 
-__all__ = ["JobSummary", "ProblemCache", "RunTimeoutError", "run_from_config", "run_job", "run_rng"]
+__all__ = ["JobSummary", "ProblemCache", "RunTimeoutError", "joins_lockstep", "run_from_config",
+           "run_job", "run_rng"]

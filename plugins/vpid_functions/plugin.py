@@ -89,6 +89,7 @@ class FunctionsProblem(Problem):
     """A test function over a symmetric box."""
 
     Config = FunctionsConfig
+    rows_independent = True  # row-wise numpy: a row's value ignores the rest of the batch
 
     def __init__(self, config: FunctionsConfig) -> None:
         super().__init__(config)

@@ -320,6 +320,42 @@ def objective(
 
 
 @njit(**_OPTS)
+def objective_rows(
+    X: np.ndarray, index: np.ndarray, L: float, kt1: float, kt2: float, y1: np.ndarray,
+    y2: np.ndarray, dt: float, gamma: float, beta: float, refs: np.ndarray, f: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """:func:`objective` with a reference per row: ``f[j]`` = Eq. (3) for row ``j`` of ``X``
+    against ``refs[index[j]]`` (``refs``: (m, 2, N)), for runs in lockstep that fit different
+    noise records. Each lane's arithmetic is :func:`objective`'s, in the same order, so every
+    value is bit-identical to evaluating the row against its reference alone (tested)."""
+    n = X.shape[0]
+    N = y1.shape[0]
+    dens = np.empty(refs.shape[0])
+    for m in range(refs.shape[0]):
+        dens[m] = np.sqrt(np.sum(refs[m, 0] ** 2)) + np.sqrt(np.sum(refs[m, 1] ** 2))
+    blk = np.empty(BLOCK)
+    ok = np.empty(LANES, dtype=np.bool_)
+    ws = np.empty((7, 8, 8))
+    err = np.empty((2, LANES))
+    lane_ref = np.zeros(LANES, dtype=np.int64)
+    for j0 in range(0, n, LANES):
+        _prepare_block(X, j0, L, kt1, kt2, dt, gamma, beta, y1[0], y2[0], blk, ok, ws)
+        for lane in range(LANES):
+            lane_ref[lane] = index[j0 + lane] if j0 + lane < n else 0
+        err[:] = 0.0
+        for k in range(N):
+            _step_block(blk, y1[k], y2[k])
+            for lane in range(LANES):
+                e1 = refs[lane_ref[lane], 0, k] - blk[_Z1 + lane]
+                e2 = refs[lane_ref[lane], 1, k] - blk[_Z2 + lane]
+                err[0, lane] += e1 * e1
+                err[1, lane] += e2 * e2
+        for lane in range(min(LANES, n - j0)):
+            fj = (np.sqrt(err[0, lane]) + np.sqrt(err[1, lane])) / dens[lane_ref[lane]]
+            f[j0 + lane] = fj if (ok[lane] and np.isfinite(fj)) else np.inf
+
+
+@njit(**_OPTS)
 def simulate(
     X: np.ndarray, L: float, kt1: float, kt2: float, y1: np.ndarray, y2: np.ndarray,
     dt: float, gamma: float, beta: float, out: np.ndarray,
@@ -364,17 +400,20 @@ def chunks(n: int, threads: int) -> list[tuple[int, int]]:
     return [(edges[i], edges[i + 1]) for i in range(parts)]
 
 
-def _run_chunked(fn, X: np.ndarray, args: tuple, out: np.ndarray, threads: int) -> None:
-    """``fn(X[a:b], *args, out[a:b])`` over the chunks, in parallel when there are several.
-    Every candidate's arithmetic is independent of the chunking, so the result is too."""
+def _run_chunked(fn, X: np.ndarray, args: tuple, out: np.ndarray, threads: int,
+                 rows: tuple = ()) -> None:
+    """``fn(X[a:b], *(r[a:b] for r in rows), *args, out[a:b])`` over the chunks, in parallel
+    when there are several (``rows``: further per-row arrays, cut like ``X``). Every
+    candidate's arithmetic is independent of the chunking, so the result is too."""
     if threads <= 1 or X.shape[0] < 2 * MIN_PER_THREAD:
-        fn(X, *args, out)
+        fn(X, *rows, *args, out)
         return
     parts = chunks(X.shape[0], threads)
     pool = _pool(len(parts) - 1)
-    futures = [pool.submit(fn, X[a:b], *args, out[a:b]) for a, b in parts[1:]]
+    futures = [pool.submit(fn, X[a:b], *(r[a:b] for r in rows), *args, out[a:b])
+               for a, b in parts[1:]]
     a, b = parts[0]
-    fn(X[a:b], *args, out[a:b])
+    fn(X[a:b], *(r[a:b] for r in rows), *args, out[a:b])
     for fut in futures:
         fut.result()
 
@@ -425,6 +464,24 @@ class Setup:
         f = np.empty(X.shape[0])
         args = (*self.consts, self.y1, self.y2, *self.newmark, self._reference(ref))
         _run_chunked(objective, X, args, f, threads)
+        return f
+
+    def objective_rows(self, X: np.ndarray, refs: np.ndarray, index: np.ndarray,
+                       threads: int = 1) -> np.ndarray:
+        """Eq. (3) of every row ``j`` of ``X`` (n, 9) against ``refs[index[j]]`` (``refs``:
+        (m, 2, N); ``index``: ints in ``[0, m)``, shape ``(n,)``), shape ``(n,)``; each value
+        bit-identical to :meth:`objective` against that reference alone."""
+        X = as_kernel_array(np.atleast_2d(X))
+        refs = as_kernel_array(refs)
+        index = np.ascontiguousarray(index, dtype=np.int64)
+        if refs.ndim != 3 or refs.shape[1:] != (2, self.samples):
+            raise ValueError(f"references of shape {refs.shape}, expected (m, 2, {self.samples})")
+        if index.shape != (X.shape[0],) or (index.size and not (
+                0 <= index.min() and index.max() < refs.shape[0])):
+            raise ValueError(f"index must hold {X.shape[0]} integers in [0, {refs.shape[0]})")
+        f = np.empty(X.shape[0])
+        args = (*self.consts, self.y1, self.y2, *self.newmark, refs)
+        _run_chunked(objective_rows, X, args, f, threads, rows=(index,))
         return f
 
     def responses(self, X: np.ndarray, threads: int = 1) -> np.ndarray:

@@ -103,6 +103,25 @@ class Simulator:
         return f
 
 
+    def objective_rows(self, X: np.ndarray, references: np.ndarray,
+                       index: np.ndarray) -> np.ndarray:
+        """Eq. (3) of each row ``j`` of ``X`` against ``references[index[j]]``
+        (``references``: (m, 2, N)), shape ``(n,)``: the gathered call of runs in lockstep that
+        fit different records. Each value equals :meth:`objective` of that row against its
+        reference alone (bit for bit on the compiled path)."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        index = np.asarray(index, dtype=np.int64).reshape(-1)
+        if self.integrator == "newmark" and self.stride == 1:
+            setup = self._kernel_setup()
+            if setup is not None:
+                return setup.objective_rows(X, references, index, self.threads)
+        f = np.empty(X.shape[0])
+        for m in np.unique(index):
+            rows = np.flatnonzero(index == m)
+            f[rows] = self.objective(X[rows], references[m])
+        return f
+
+
 @functools.lru_cache(maxsize=1)
 def _kernel():
     """The compiled kernel module (imported on first use), or None when numba cannot be

@@ -1,6 +1,10 @@
 """Launchers: the joblib launcher (2 worker processes) writes records bit-identical to the
 basic launcher's (apart from timing), and a job that fails in a worker process still makes
-the command exit non-zero and is named in the sweep summary."""
+the command exit non-zero and is named in the sweep summary.
+
+Beyond one process (marker ``scaleout``, excluded by default; ``make test-scaleout`` runs them
+in their own environment with the ``ray`` extra): Hydra's Ray launcher on a local Ray instance
+and submitit's launcher on its local executor write the same records as the basic launcher."""
 
 from __future__ import annotations
 
@@ -46,6 +50,7 @@ def test_joblib_records_are_bit_identical_to_basic(basic, tmp_path):
     assert fingerprints(tmp_path / "sweep") == fingerprints(cwd / "sweep")
 
 
+@pytest.mark.scaleout
 @pytest.mark.skipif(importlib.util.find_spec("hydra_plugins.hydra_submitit_launcher") is None,
                     reason="hydra-submitit-launcher not installed (extra 'submitit')")
 def test_submitit_local_records_match_basic(basic, tmp_path):
@@ -53,4 +58,18 @@ def test_submitit_local_records_match_basic(basic, tmp_path):
     done = run_cli([*SWEEP, "hydra/launcher=submitit_local", "hydra.sweep.dir=sweep"],
                    tmp_path, timeout=300)
     _check_failed_job_reported(done)
+    assert fingerprints(tmp_path / "sweep") == fingerprints(cwd / "sweep")
+
+
+@pytest.mark.scaleout
+def test_ray_local_records_match_basic(basic, tmp_path):
+    pytest.importorskip("ray", reason="Ray not installed (extra 'ray': make test-scaleout)")
+    if importlib.util.find_spec("hydra_plugins.hydra_ray_launcher") is None:
+        pytest.skip("hydra-ray-launcher not installed (extra 'ray': make test-scaleout)")
+    cwd, _ = basic
+    done = run_cli([*SWEEP, "hydra/launcher=ray", "+hydra.launcher.ray.init.num_cpus=2",
+                    "+hydra.launcher.ray.init.include_dashboard=false", "hydra.sweep.dir=sweep"],
+                   tmp_path, timeout=600)
+    _check_failed_job_reported(done)
+    assert "Ray" in done.stdout + done.stderr  # it ran in the Ray launcher
     assert fingerprints(tmp_path / "sweep") == fingerprints(cwd / "sweep")

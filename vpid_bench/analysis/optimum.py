@@ -65,13 +65,6 @@ def polish(problem: Problem, x0: np.ndarray, rounds: int = 30, tol: float = 1e-1
     scale = np.abs(problem.x_true) if problem.x_true is not None else b.width
     scale = np.where(scale > 0, scale, b.width)  # work in units of the true values
     lo, hi = b.lower / scale, b.upper / scale
-    d = x.size
-    eps = np.sqrt(np.finfo(float).eps)
-
-    def residuals_at(Z: np.ndarray) -> np.ndarray:
-        R = np.asarray(problem.residuals(Z * scale), dtype=float)
-        return np.where(np.isfinite(R), R, 1e150)
-
     for _ in range(rounds):
         r = problem.residuals(x[None])[0]
         if not np.all(np.isfinite(r)):
@@ -80,15 +73,10 @@ def polish(problem: Problem, x0: np.ndarray, rounds: int = 30, tol: float = 1e-1
         w = 1.0 / np.sqrt(np.maximum(norms, 1e-300))[groups]  # squared: 1/||r_g|| per entry
 
         def weighted(z: np.ndarray, w: np.ndarray = w) -> np.ndarray:
-            return residuals_at(z[None])[0] * w
+            return _weighted_rows(problem, z[None], scale, w)[0]
 
         def jac(z: np.ndarray, w: np.ndarray = w) -> np.ndarray:
-            h = eps * np.maximum(1.0, np.abs(z))
-            h = np.where(z + h > hi, -h, h)  # step inwards at an upper bound
-            Z = np.repeat(z[None], d + 1, axis=0)
-            Z[1 + np.arange(d), np.arange(d)] += h
-            R = residuals_at(Z) * w
-            return ((R[1:] - R[0]) / h[:, None]).T
+            return _forward_jacobian(problem, z, scale, w, lo, hi)
 
         sol = least_squares(weighted, x / scale, jac=jac, bounds=(lo, hi), method="trf",
                             x_scale=1.0, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=200)
@@ -103,6 +91,29 @@ def polish(problem: Problem, x0: np.ndarray, rounds: int = 30, tol: float = 1e-1
         else:
             break
     return best_x, best_f
+
+
+def _weighted_rows(problem: Problem, Z: np.ndarray, scale: np.ndarray,
+                   w: np.ndarray) -> np.ndarray:
+    """Weighted residuals of the rows of ``Z`` (in units of ``scale``), non-finite entries
+    replaced by a huge value, ``(n, m)``."""
+    res = np.asarray(problem.residuals(Z * scale), dtype=float)
+    return np.where(np.isfinite(res), res, 1e150) * w
+
+
+def _forward_jacobian(problem: Problem, z: np.ndarray, scale: np.ndarray, w: np.ndarray,
+                      lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Forward differences of the weighted residuals at ``z``, ``(m, dim)``, all ``dim + 1``
+    points in one batched ``residuals`` call (a step ``sqrt(eps) max(1, |z_i|)``, as scipy's
+    ``2-point``, taken backwards where a forward step would leave the box)."""
+    h = np.sqrt(np.finfo(float).eps) * np.maximum(1.0, np.abs(z))
+    h = np.where(z + h > hi, -h, h)
+    h = np.where((z + h < lo) | (z + h > hi), 0.5 * (hi - lo) - np.abs(z - 0.5 * (lo + hi)), h)
+    Z = np.repeat(z[None], z.size + 1, axis=0)
+    Z[np.arange(1, z.size + 1), np.arange(z.size)] += h
+    h = Z[np.arange(1, z.size + 1), np.arange(z.size)] - z  # the steps actually taken
+    R = _weighted_rows(problem, Z, scale, w)
+    return ((R[1:] - R[0]) / h[:, None]).T
 
 
 def record_settings(settings: Mapping[str, Any]) -> dict[str, Any]:
@@ -250,6 +261,8 @@ def _update(problem: Problem, settings: Mapping[str, Any], path: Path, x_true: n
         x_new, f_new = polish(problem, x)
         starts += 1
         changed = True
+        if f < f_opt:  # the run's own value (a batched evaluation may differ by an ulp)
+            x_opt, f_opt = x, float(f)
         if f_new < f_opt:
             x_opt, f_opt = x_new, f_new
     metrics = getattr(problem, "metrics", None)

@@ -1,0 +1,78 @@
+"""The vehicle's gathered evaluation (runs in lockstep fitting different noise records): each
+row against its own instance's reference, equal to per-instance evaluation."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+from vpid_vehicle.objective import add_noise
+
+from vpid_bench.experiment import ProblemCache, run_rng
+from vpid_bench.runner import Lane, run, run_many
+from vpid_bench.spec import parse_job
+
+
+@pytest.fixture(scope="module")
+def noisy(registry, compose_config):
+    """A vehicle problem whose instance i has its own noise record (as per-run noise will):
+    the same simulator, another reference."""
+    job = parse_job(compose_config(["problem=vehicle", "problem.iterations=2",
+                                    "problem.noise.level=0.05"]), registry)
+    base = ProblemCache().get(job)
+    instances = {}
+
+    def instance(i: int):
+        if i not in instances:
+            inst = copy.copy(base)
+            inst.reference = add_noise(base.reference_clean, 0.05, "multiplicative",
+                                       np.random.default_rng(100 + i))
+            inst.reference.setflags(write=False)
+            instances[i] = inst
+        return instances[i]
+
+    base.instance = instance
+    return job, base
+
+
+def test_kernel_rows_against_their_own_reference_equal_one_reference_at_a_time(noisy):
+    _, problem = noisy
+    rng = np.random.default_rng(1)
+    X = np.vstack([problem.bounds.sample(rng, 37), problem.bounds.lower[None] * 0.0])  # + a bad row
+    index = rng.integers(0, 5, X.shape[0])
+    f = problem.evaluate_instances(X, index)
+    alone = np.array([problem.instance(int(i)).evaluate(X[j:j + 1])[0]
+                      for j, i in enumerate(index)])
+    np.testing.assert_allclose(f, alone, rtol=1e-12, atol=0)
+    np.testing.assert_array_equal(f, alone)  # in fact bit for bit
+    assert np.isinf(f[-1]) and np.all(np.isfinite(f[:-1]))
+    refs = {int(i): problem.instance(int(i)).reference for i in index}
+    assert len({r.tobytes() for r in refs.values()}) == len(refs)  # the references differ
+
+
+def test_threads_do_not_change_gathered_values(noisy):
+    _, problem = noisy
+    rng = np.random.default_rng(2)
+    X = problem.bounds.sample(rng, 300)
+    index = np.repeat(np.arange(15), 20)
+    problem.set_threads(1)
+    one = problem.evaluate_instances(X, index)
+    problem.set_threads(2)
+    two = problem.evaluate_instances(X, index)
+    problem.set_threads(1)
+    np.testing.assert_array_equal(one, two)
+
+
+def test_lockstep_runs_on_distinct_instances_equal_runs_alone(noisy):
+    job, problem = noisy
+
+    def optimizer_for(i):
+        return job.optimizer_cls(job.params, problem.bounds, run_rng(0, i))
+
+    alone = [run(problem.instance(i), optimizer_for(i), job.budget) for i in range(4)]
+    together = run_many(problem, [Lane(problem.instance(i), optimizer_for(i), job.budget, i)
+                                  for i in range(4)])
+    for a, b in zip(alone, together):
+        np.testing.assert_array_equal(a.x_best, b.x_best)
+        assert a.trace_best == b.trace_best and a.f_best == b.f_best
