@@ -612,8 +612,17 @@ def build_report(
     md = names.claim(out_dir / "report.md")
     md.write_text("\n".join(lines), encoding="utf-8")
     written.append(md)
-    term_h = md_h
-    headline = render.terminal(term_h, md_rows)
+    headline = render.terminal(md_h, md_rows)
+    if search:  # the second ranking, and one verdict sentence per context, on the terminal too
+        keys = ["context", "rank", "group", "algorithm", "n", "reached", "rel_gap_median",
+                "floor_median"]
+        headline += "\n\nBy search quality (reached: runs at their instance's optimum):\n"
+        headline += render.terminal(
+            ["context", "rank", "group", "optimizer", "n", "reached", "median rel_gap",
+             "median floor"], [[s.get(k, "") for k in keys] for s in search])
+        verdicts = [line for line in lines if line.startswith("Verdict for ")]
+        if verdicts:
+            headline += "\n\n" + "\n".join(" ".join(v.split()) for v in verdicts)
     problems = sorted({r["problem"] for r in rows})
     return Report(out_dir, md, headline, len(loaded.records), problems, written, skipped,
                   loaded, section_errors, optima_errors)
