@@ -157,8 +157,9 @@ def ecdf_figure(runs: Sequence[RunHits], context: str, path: Path) -> Path | str
     b = context_budget(runs, context)
     grid = np.unique(np.round(np.geomspace(1.0, max(b, 2.0), 300)))
     fig, ax = plt.subplots(figsize=(7.0, 4.4))
-    for (_, algorithm), g in sorted(_groups(sel).items()):
-        ax.step(grid, ecdf(g, grid), where="post",
+    styles = ("-", "--", ":", "-.")  # the colour cycle has 10 colours: more lines, new dashes
+    for k, ((_, algorithm), g) in enumerate(sorted(_groups(sel).items())):
+        ax.step(grid, ecdf(g, grid), where="post", linestyle=styles[(k // 10) % len(styles)],
                 label=f"{algorithm} (AUC {auc(g, b):.2f}, {len(g)} runs)")
     ax.set_xscale("log")
     ax.set_ylim(-0.02, 1.02)
