@@ -194,10 +194,11 @@ def _warm_up(job: Job, problem: Problem) -> float:
     """One untimed run of at most two batches, so compilation is not timed (see module)."""
     t0 = time.perf_counter()
     try:
-        optimizer = job.optimizer_cls(job.params, problem.bounds,
-                                      np.random.default_rng(np.random.SeedSequence(job.spec.seed,
-                                                                                   spawn_key=(2**31,))))
-        run(problem, optimizer, min(job.budget, 2 * job.problem_config.ps))
+        with _time_limit(job.spec.run_timeout_s):  # a plugin that never returns: bounded here too
+            optimizer = job.optimizer_cls(
+                job.params, problem.bounds,
+                np.random.default_rng(np.random.SeedSequence(job.spec.seed, spawn_key=(2**31,))))
+            run(problem, optimizer, min(job.budget, 2 * job.problem_config.ps))
     except Exception:  # noqa: BLE001 - the timed runs will meet and record the same fault
         log.debug("warm-up failed", exc_info=True)
     return time.perf_counter() - t0

@@ -73,3 +73,18 @@ def read_only(folder: Path) -> Iterator[Path]:
         yield folder
     finally:
         subprocess.run([chattr, "-i", str(folder)], check=False)
+
+
+def plan_of(argv: Sequence[str]):
+    """The pre-flight's plan of ``vpid-bench <argv>`` (the config nodes registered first, as
+    the command does)."""
+    from vpid_bench.plugins import Registry
+    from vpid_bench.shell.argv import parse_command_line
+    from vpid_bench.shell.callbacks import ensure_job_dir_resolver
+    from vpid_bench.shell.config_store import register_configs
+    from vpid_bench.shell.preflight import plan
+
+    registry = Registry()
+    register_configs(registry)
+    ensure_job_dir_resolver()
+    return plan(parse_command_line(list(argv)), registry)

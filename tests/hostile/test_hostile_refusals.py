@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hostile_helpers import TINY, main_in_process
+from hostile_helpers import TINY, main_in_process, plan_of
 
 from vpid_bench.api import ConfigError
 
@@ -151,11 +151,8 @@ def test_a_reference_file_is_never_quoted(in_tmp, capsys, tmp_path):
     assert code == 2 and "root:x" not in err and "found no such header row" in err
 
 
-def test_a_utf8_bom_is_accepted(csv_files, registry):
-    from vpid_bench.shell.argv import parse_command_line
-    from vpid_bench.shell.preflight import plan
-
-    planned = plan(parse_command_line([f"problem.reference.file={csv_files['bom']}"]), registry)
+def test_a_utf8_bom_is_accepted(csv_files):
+    planned = plan_of([f"problem.reference.file={csv_files['bom']}"])
     assert planned.jobs[0].problem_config.reference.file == str(csv_files["bom"])
     from vpid_vehicle.problem import VehicleProblem
 
@@ -166,8 +163,12 @@ def test_a_utf8_bom_is_accepted(csv_files, registry):
 
 def test_memory_estimate_is_in_the_cap_message():
     """Case 12: the estimate is samples x candidates x bytes (plus the set-up per step)."""
-    from vpid_vehicle.config import (BYTES_PER_SAMPLE_CANDIDATE, BYTES_PER_STEP, RecordConfig,
-                                     VehicleConfig)
+    from vpid_vehicle.config import (
+        BYTES_PER_SAMPLE_CANDIDATE,
+        BYTES_PER_STEP,
+        RecordConfig,
+        VehicleConfig,
+    )
 
     with pytest.raises(ConfigError) as err:
         VehicleConfig(record=RecordConfig(extra=2000.0), ps=20)
@@ -177,24 +178,16 @@ def test_memory_estimate_is_in_the_cap_message():
     assert f"about {expected:.3g} GiB" in err.value.allowed
 
 
-def test_whole_number_floats_follow_one_rule(registry):
+def test_whole_number_floats_follow_one_rule():
     """Case 11: ``runs=2.0`` and ``problem.ps=1e3`` are both whole numbers: both accepted, as
     the same integers the job sees."""
-    from vpid_bench.shell.argv import parse_command_line
-    from vpid_bench.shell.preflight import plan
-
-    job = plan(parse_command_line(["runs=2.0", "problem.ps=1e3", "optimizer=random"]),
-               registry).jobs[0]
+    job = plan_of(["runs=2.0", "problem.ps=1e3", "optimizer=random"]).jobs[0]
     assert (job.spec.runs, job.problem_config.ps) == (2, 1000)
     assert isinstance(job.spec.runs, int) and isinstance(job.problem_config.ps, int)
 
 
-def test_quoted_sweep_values_are_accepted(registry):
+def test_quoted_sweep_values_are_accepted():
     """Case 15: a quoted value in a sweep (a file name with spaces can be swept)."""
-    from vpid_bench.shell.argv import parse_command_line
-    from vpid_bench.shell.preflight import plan
-
-    planned = plan(parse_command_line(["-m", "optimizer=de1", "optimizer.bounds='clip',reflect",
-                                       *FUNCTIONS]), registry)
+    planned = plan_of(["-m", "optimizer=de1", "optimizer.bounds='clip',reflect", *FUNCTIONS])
     assert [j.params.bounds for j in planned.jobs] == ["clip", "reflect"]
     assert len({d.name for d in planned.job_dirs}) == 2
