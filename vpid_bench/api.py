@@ -448,3 +448,7 @@ def relative_errors_percent(x: Sequence[float], x_true: Sequence[float]) -> np.n
 
 # The bridge for optimizers that own their loop lives in its own module; it is part of this API.
 from .bridge import LoopOptimizer  # noqa: E402, F401
+
+# Plugins write their files (artifacts) the way records are written: atomically, never
+# through a planted link.
+from .fileio import write_text_atomic  # noqa: E402, F401

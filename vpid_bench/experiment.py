@@ -204,13 +204,14 @@ def _warm_up(job: Job, problem: Problem, lockstep: bool = False) -> float:
     lockstep also one gathered call over two instances (its own compiled path)."""
     t0 = time.perf_counter()
     try:
-        if lockstep:
-            X = problem.bounds.sample(np.random.default_rng(0), 2)
-            problem.evaluate_instances(X, np.array([0, min(1, job.spec.runs - 1)]))
-        optimizer = job.optimizer_cls(job.params, problem.bounds,
-                                      np.random.default_rng(np.random.SeedSequence(job.spec.seed,
-                                                                                   spawn_key=(2**31,))))
-        run(problem, optimizer, min(job.budget, 2 * job.problem_config.ps))
+        with _time_limit(job.spec.run_timeout_s):  # a plugin that never returns: bounded here too
+            if lockstep:
+                X = problem.bounds.sample(np.random.default_rng(0), 2)
+                problem.evaluate_instances(X, np.array([0, min(1, job.spec.runs - 1)]))
+            optimizer = job.optimizer_cls(
+                job.params, problem.bounds,
+                np.random.default_rng(np.random.SeedSequence(job.spec.seed, spawn_key=(2**31,))))
+            run(problem, optimizer, min(job.budget, 2 * job.problem_config.ps))
     except Exception:  # noqa: BLE001 - the timed runs will meet and record the same fault
         log.debug("warm-up failed", exc_info=True)
     return time.perf_counter() - t0

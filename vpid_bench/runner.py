@@ -226,8 +226,9 @@ class _Alarm:
     :class:`RunTimeoutError` inside the call once ``seconds`` have passed (SIGALRM: POSIX main
     thread only; elsewhere only the soft check between steps of :func:`run_many` applies)."""
 
-    def __init__(self, enabled: bool) -> None:
-        self.enabled = (enabled and hasattr(signal, "setitimer")
+    def __init__(self, limit: float | None) -> None:
+        self.limit_s = limit
+        self.enabled = (limit is not None and hasattr(signal, "setitimer")
                         and threading.current_thread() is threading.main_thread())
         self._previous: Any = None
 
@@ -241,9 +242,8 @@ class _Alarm:
             signal.setitimer(signal.ITIMER_REAL, 0)
             signal.signal(signal.SIGALRM, self._previous)
 
-    @staticmethod
-    def _expired(signum: int, frame: Any) -> None:
-        raise RunTimeoutError("the run took longer than its time limit")
+    def _expired(self, signum: int, frame: Any) -> None:
+        raise _timeout_error(self.limit_s or 0.0)
 
     @contextlib.contextmanager
     def limit(self, seconds: float | None) -> Iterator[None]:
@@ -282,7 +282,7 @@ def run_many(problem: Problem, lanes: Sequence[Lane], timeout_s: float | None = 
         elif getattr(st.lane.optimizer, "wants_residuals", False):
             st.outcome = ValueError("an optimizer that wants residuals cannot run in lockstep")
     try:
-        with _Alarm(timeout_s is not None) as alarm:
+        with _Alarm(timeout_s) as alarm:
             while True:
                 active = [st for st in states if st.outcome is None]
                 if not active:

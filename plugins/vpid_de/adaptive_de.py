@@ -27,6 +27,7 @@ import numpy as np
 from vpid_bench.api import Bounds, ConfigError, GenerationalOptimizer, OptimizerParams
 
 from .adaptation import SuccessHistory, jade_update, sample_cr, sample_f
+from .base import check_finite
 from .kernels import (
     BOUNDS_RULES,
     BoundsRule,
@@ -55,6 +56,7 @@ class AdaptiveDEParams(OptimizerParams):
     bounds: BoundsRule = "midpoint"
 
     def __post_init__(self) -> None:
+        check_finite(self)
         if self.iterations < 0:
             raise ConfigError("problem.iterations", self.iterations, "an integer >= 0")
 

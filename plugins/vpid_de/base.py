@@ -29,6 +29,20 @@ from .kernels import (
     indices_from_keys,
 )
 
+#: Largest block of uniforms one generation draws, ``ps x (ps + 2 dim)`` floats (bytes): a
+#: population of about 8,000 at most (docs/sweeps.md lists the caps).
+MAX_RANDOM_BLOCK_BYTES = 512 * 1024**2
+
+
+def check_finite(params: OptimizerParams) -> None:
+    """Every real-valued parameter must be a finite number (``K=inf``, ``R_max=inf`` or an
+    infinite factor range make no sense and only produce degenerate or failing runs)."""
+    for f in dataclasses.fields(params):
+        value = getattr(params, f.name)
+        if isinstance(value, float) and not np.isfinite(value):
+            raise ConfigError(f"optimizer.{f.name}", value, "a finite number")
+
+
 #: the choices of the ``draw`` key of DE6 and DE7
 Draw = Literal["generation", "vector"]
 
@@ -49,6 +63,7 @@ class DEParams(OptimizerParams):
     bounds: BoundsRule = "reinit"
 
     def __post_init__(self) -> None:
+        check_finite(self)
         if not 0.0 <= self.CR <= 1.0:
             raise ConfigError("optimizer.CR", self.CR, "a number in [0, 1]")
         if self.iterations < 0:
@@ -72,6 +87,14 @@ class DifferentialEvolution(GenerationalOptimizer):
     def check(cls, params: OptimizerParams) -> None:
         """The mutation draws distinct vectors besides the target: ``ps`` must allow it."""
         n_random = MUTATIONS[cls.mutation][1]
+        block = 8.0 * params.ps * params.ps  # the dimension adds 2 dim columns: left out
+        if block > MAX_RANDOM_BLOCK_BYTES:
+            largest = int((MAX_RANDOM_BLOCK_BYTES / 8) ** 0.5)
+            raise ConfigError(
+                "problem.ps", params.ps,
+                f"at most {largest} for {cls.label} (each generation draws ps x (ps + 2 dim) "
+                f"uniforms: about {block / 1024**3:.3g} GiB at ps = {params.ps})",
+            )
         if params.ps < n_random + 1:
             raise ConfigError(
                 "problem.ps",

@@ -20,6 +20,19 @@ PARAM_NAMES: tuple[str, ...] = ("m", "I", "m1", "m2", "k1", "k2", "c1", "c2", "a
 PARAM_UNITS: tuple[str, ...] = ("kg", "kg m^2", "kg", "kg", "N/m", "N/m", "N s/m", "N s/m", "m")
 
 INTEGRATORS = ("newmark", "exact")
+
+#: Caps that keep a typo from asking for hours or gigabytes (docs/sweeps.md lists them).
+#: Samples of one simulated record: the model's grid, and the synthetic reference's finer grid.
+MAX_SAMPLES = 1_000_000
+#: Largest estimated memory of one job's simulations (bytes).
+MAX_MEMORY = 2 * 1024**3
+#: Bytes per simulated time step (the road input, the kernel's state and set-up) and per
+#: sample and candidate of a batch (the (ps, 2, N) responses of the residual path); measured
+#: with tracemalloc: about 113 and 16.
+BYTES_PER_STEP = 128
+BYTES_PER_SAMPLE_CANDIDATE = 16
+#: Largest bump height |h| in m (the paper's is 0.04 m).
+MAX_BUMP_HEIGHT = 1.0
 SAMPLINGS = ("point", "average")
 NOISE_MODELS = ("multiplicative", "additive", "uniform")
 
@@ -181,7 +194,10 @@ def validate(config: VehicleConfig) -> None:
     if not (math.isfinite(p.a1) and 0.0 < p.a1 < p.L):
         raise ConfigError("problem.vehicle.a1", p.a1, f"a value in (0, L) = (0, {p.L:g}) m")
     _positive("problem.bump.V", config.bump.V, "a speed > 0 (km/h)")
-    _finite("problem.bump.h", config.bump.h, "a finite bump height (m)")
+    h = config.bump.h
+    if not (math.isfinite(h) and 0 < abs(h) <= MAX_BUMP_HEIGHT):
+        raise ConfigError("problem.bump.h", h, f"a bump height with 0 < |h| <= "
+                          f"{MAX_BUMP_HEIGHT:g} m (0.04 in the paper; negative: a pothole)")
     _positive("problem.bump.w", config.bump.w, "a bump width > 0 (m)")
     _positive("problem.dt", config.dt, "a time step > 0 (s)")
     _choice("problem.integrator", config.integrator, INTEGRATORS)
@@ -214,6 +230,9 @@ def validate(config: VehicleConfig) -> None:
                 "problem.reference.dt", ref.dt,
                 f"null or a step dividing problem.dt = {config.dt:g} s (e.g. {config.dt / 10:g})",
             )
+    check_size(config, T)
+    if ref.file is not None:
+        check_reference_file(config, T)
     b = config.bounds
     _positive("problem.bounds.lower_factor", b.lower_factor, "a factor > 0")
     if not (math.isfinite(b.upper_factor) and b.upper_factor > b.lower_factor):
@@ -226,3 +245,59 @@ def validate(config: VehicleConfig) -> None:
             "problem.bounds.upper_factor", b.upper_factor,
             f"a factor with upper_factor * a1 < L, i.e. < {p.L / p.a1:.4g} (a2 = L - a1 > 0)",
         )
+
+
+def _gib(n_bytes: float) -> str:
+    return f"about {n_bytes / 1024**3:.3g} GiB"
+
+
+def estimated_memory(config: VehicleConfig, T: float) -> tuple[float, float, float]:
+    """(samples of the model's grid, steps of the reference's grid, estimated bytes) of a
+    job: every step costs :data:`BYTES_PER_STEP`, every sample of a batch of ``ps``
+    candidates :data:`BYTES_PER_SAMPLE_CANDIDATE` (floats: no array is made to count them)."""
+    samples = T / config.dt + 1
+    ref_dt = config.reference.dt if config.reference.file is None else None
+    steps = T / ref_dt + 1 if ref_dt else samples
+    n_bytes = (samples + steps) * BYTES_PER_STEP + samples * config.ps * BYTES_PER_SAMPLE_CANDIDATE
+    return samples, steps, n_bytes
+
+
+def _blame(config: VehicleConfig, T: float) -> tuple[str, float]:
+    """The key that made the record long: ``problem.dt`` when the step is finer (against the
+    paper's 1 ms) than the window is long (against its 0.48 s), else the largest term of the
+    window ``(L + w) / V + extra`` (a long ``L / V`` is a slow ``problem.bump.V``)."""
+    if 0.001 / config.dt > T / 0.48:
+        return "problem.dt", config.dt
+    v = config.bump.V / 3.6
+    terms = {"problem.bump.w": (config.bump.w / v, config.bump.w),
+             "problem.record.extra": (config.record.extra, config.record.extra),
+             "problem.bump.V": (config.vehicle.L / v, config.bump.V)}
+    key = max(terms, key=lambda k: terms[k][0])
+    return key, terms[key][1]
+
+
+def check_size(config: VehicleConfig, T: float) -> None:
+    """Refuse a record past :data:`MAX_SAMPLES` samples or a job past :data:`MAX_MEMORY`
+    (estimated), naming the key that made it large and the estimate."""
+    samples, steps, n_bytes = estimated_memory(config, T)
+    what = (f"this one: T = {T:.4g} s at problem.dt = {config.dt:g} s is {samples:.4g} samples, "
+            f"{_gib(n_bytes)} for ps = {config.ps} candidates")
+    if samples > MAX_SAMPLES:
+        key, value = _blame(config, T)
+        raise ConfigError(key, value, f"a record of at most {MAX_SAMPLES} samples ({what})")
+    if steps > MAX_SAMPLES:
+        raise ConfigError("problem.reference.dt", config.reference.dt,
+                          f"a reference of at most {MAX_SAMPLES} steps (this one: T = {T:.4g} s "
+                          f"at {config.reference.dt:g} s is {steps:.4g} steps, {_gib(n_bytes)})")
+    if n_bytes > MAX_MEMORY:
+        raise ConfigError("problem.ps", config.ps, f"a job of at most {_gib(MAX_MEMORY)} "
+                          f"({what})")
+
+
+def check_reference_file(config: VehicleConfig, T: float) -> None:
+    """Read ``problem.reference.file`` once, so a file that does not fit fails the command's
+    pre-flight (exit 2) rather than the job."""
+    from .reference_io import read_measured
+    from .road import time_grid
+
+    read_measured(config.reference.file, time_grid(T, config.dt), config.dt)

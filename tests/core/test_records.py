@@ -99,7 +99,7 @@ def test_run_streams_are_seedsequence_children():
 
 def test_atomic_write_leaves_no_temporary_file(tmp_path):
     path = rec.write_record(tmp_path / "records" / "run-000-x.json", {"a": np.float64(np.inf)})
-    assert json.loads(path.read_text()) == {"a": None}  # strict JSON: non-finite -> null
+    assert json.loads(path.read_text()) == {"a": "inf"}  # strict JSON, the sign kept
     assert [p.name for p in path.parent.iterdir()] == [path.name]
     assert path.stat().st_mode & 0o044 == 0o044 & ~_umask()  # readable by others, per umask
 

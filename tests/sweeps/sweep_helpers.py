@@ -39,3 +39,17 @@ def fingerprints(sweep_dir: Path) -> dict[str, str]:
         for p in rec.iter_record_files([sweep_dir])
     }
 
+
+
+def planned_job_dirs(args: Sequence[str]) -> list[Path]:
+    """The job folders the pre-flight plans for ``vpid-bench <args>`` (a sweep)."""
+    from vpid_bench.plugins import Registry
+    from vpid_bench.shell.argv import parse_command_line
+    from vpid_bench.shell.callbacks import ensure_job_dir_resolver
+    from vpid_bench.shell.config_store import register_configs
+    from vpid_bench.shell.preflight import plan
+
+    registry = Registry()
+    register_configs(registry)
+    ensure_job_dir_resolver()
+    return plan(parse_command_line(list(args)), registry).job_dirs

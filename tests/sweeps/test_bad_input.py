@@ -303,10 +303,9 @@ def test_cli_exit_status_and_single_lines(tmp_path, registry):
     assert refused.stderr == "error: problem.dim=1 is not allowed: an integer from 2 to 10000\n"
     job = run_cli(["problem.reference.file=missing.csv", "runs=1", "progress=false",
                    "report=false"], tmp_path)
-    assert job.returncode == 1  # the file is read when the job builds the problem
-    errors = [line for line in job.stderr.splitlines() if line.startswith("error:")]
-    assert len(errors) == 1 and errors[0].startswith("error: problem.reference.file=")
-    assert "Traceback" not in job.stderr
+    assert job.returncode == 2  # the vehicle's config reads the file: pre-flight, no job
+    assert job.stderr.splitlines() == ["error: problem.reference.file='missing.csv' is not "
+                                       "allowed: an existing CSV file (columns t, z1dd, z2dd)"]
     debug = run_cli(["optimizer=nosuch"], tmp_path, env={"VPID_BENCH_DEBUG": "1"})
     assert debug.returncode != 0 and "Traceback" in debug.stderr
 

@@ -11,19 +11,27 @@ from __future__ import annotations
 import importlib.util
 
 import pytest
-from sweep_helpers import fingerprints, run_cli
+from sweep_helpers import fingerprints, planned_job_dirs, run_cli
 
-# Three jobs fail in every launcher: their record file does not exist (a file is read when the
-# job builds its problem, so the pre-flight cannot refuse it).
-SWEEP = ["-m", "optimizer=random,de1,ga", "problem.reference.file=null,missing.csv", "runs=3",
+# Three jobs fail in every launcher: a folder planted where they write reference.csv (a fault
+# of the job folder, which no pre-flight can see), so the job fails after it started.
+SWEEP = ["-m", "optimizer=random,de1,ga", "problem.noise.seed=0,1", "runs=3",
          "problem.iterations=2", "progress=false", "report=false"]
 OK_JOBS = 3
+
+
+def _run(cwd, *extra, **kwargs):
+    args = [*SWEEP, *extra, "hydra.sweep.dir=sweep"]
+    for job_dir in planned_job_dirs([*args[:-1], f"hydra.sweep.dir={cwd / 'sweep'}"]):
+        if "problem.noise.seed=1" in job_dir.name:
+            (job_dir / "reference.csv").mkdir(parents=True)
+    return run_cli(args, cwd, **kwargs)
 
 
 @pytest.fixture(scope="module")
 def basic(tmp_path_factory):
     cwd = tmp_path_factory.mktemp("basic")
-    return cwd, run_cli([*SWEEP, "hydra.sweep.dir=sweep"], cwd)
+    return cwd, _run(cwd)
 
 
 def _check_failed_job_reported(done) -> None:
@@ -31,7 +39,8 @@ def _check_failed_job_reported(done) -> None:
     assert "sweep: 6 job(s), 3 ok, 3 not ok" in done.stderr
     summary = [line for line in done.stderr.splitlines() if line.startswith("  error: ")]
     assert len(summary) == 3  # one line per failed job, whichever process ran it
-    assert all("problem.reference.file='missing.csv' is not allowed" in line for line in summary)
+    assert all("problem.noise.seed=1" in line and "IsADirectoryError" in line
+               for line in summary)
     assert "Traceback" not in done.stderr
 
 
@@ -43,8 +52,7 @@ def test_basic_launcher_reports_the_failed_jobs(basic):
 
 def test_joblib_records_are_bit_identical_to_basic(basic, tmp_path):
     cwd, _ = basic
-    done = run_cli([*SWEEP, "hydra/launcher=joblib", "hydra.launcher.n_jobs=2",
-                    "hydra.sweep.dir=sweep"], tmp_path)
+    done = _run(tmp_path, "hydra/launcher=joblib", "hydra.launcher.n_jobs=2")
     _check_failed_job_reported(done)
     assert "Joblib.Parallel" in done.stdout + done.stderr  # it ran in the joblib launcher
     assert fingerprints(tmp_path / "sweep") == fingerprints(cwd / "sweep")
@@ -55,8 +63,7 @@ def test_joblib_records_are_bit_identical_to_basic(basic, tmp_path):
                     reason="hydra-submitit-launcher not installed (extra 'submitit')")
 def test_submitit_local_records_match_basic(basic, tmp_path):
     cwd, _ = basic
-    done = run_cli([*SWEEP, "hydra/launcher=submitit_local", "hydra.sweep.dir=sweep"],
-                   tmp_path, timeout=300)
+    done = _run(tmp_path, "hydra/launcher=submitit_local", timeout=300)
     _check_failed_job_reported(done)
     assert fingerprints(tmp_path / "sweep") == fingerprints(cwd / "sweep")
 

@@ -1,5 +1,6 @@
-"""Resume: a sweep killed with SIGKILL part-way and run again ends with exactly the records
-of an uninterrupted sweep (same files, same contents apart from timing)."""
+"""Resume: a sweep stopped part-way (SIGKILL, SIGTERM or SIGINT, i.e. Ctrl-C) and run again
+ends with exactly the records of an uninterrupted sweep (same files, same contents apart from
+timing), in bounded time."""
 
 from __future__ import annotations
 
@@ -36,10 +37,12 @@ def _count_records(root: Path) -> int:
     return sum(1 for _ in root.rglob("records/run-*.json"))
 
 
-def test_sigkill_then_resume_gives_the_uninterrupted_records(tmp_path, reference):
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM, signal.SIGINT],
+                         ids=["SIGKILL", "SIGTERM", "SIGINT"])
+def test_a_stopped_sweep_resumes_to_the_uninterrupted_records(tmp_path, reference, sig):
     proc = subprocess.Popen(
         [*CLI, *SWEEP], cwd=tmp_path, env=cli_env(), stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL, start_new_session=True,
+        stderr=subprocess.PIPE, text=True, start_new_session=True,
     )
     try:
         deadline = time.monotonic() + 90
@@ -47,9 +50,14 @@ def test_sigkill_then_resume_gives_the_uninterrupted_records(tmp_path, reference
             if proc.poll() is not None:
                 break
             time.sleep(0.005)
-        os.killpg(proc.pid, signal.SIGKILL)
+        os.killpg(proc.pid, sig)
     finally:
-        proc.wait(timeout=30)
+        _, stderr = proc.communicate(timeout=30)  # bounded: a stopped sweep ends
+    if sig == signal.SIGINT:  # Ctrl-C: the command says how to resume, exit 130
+        assert proc.returncode == 130, stderr
+        assert "run the same command with --resume" in stderr and "Traceback" not in stderr
+    else:
+        assert proc.returncode == -sig
     killed_with = _count_records(tmp_path)
     assert 0 < killed_with < TOTAL, "the kill should land part-way through the sweep"
     sweeps = list((tmp_path / "outputs" / "multirun").iterdir())

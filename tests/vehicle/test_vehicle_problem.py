@@ -148,7 +148,7 @@ def test_measured_file_with_wrong_columns_or_grid(tmp_path, default_problem):
         make(**{"reference.file": str(bad_grid)})
     short = tmp_path / "short.csv"
     short.write_text("t,z1dd,z2dd\n" + "".join(f"{x},1,1\n" for x in t[:100]))
-    with pytest.raises(ConfigError, match="480 finite samples"):
+    with pytest.raises(ConfigError, match="480 rows of samples"):
         make(**{"reference.file": str(short)})
     with pytest.raises(ConfigError, match="problem.reference.file"):
         make(**{"reference.file": str(tmp_path / "missing.csv")})

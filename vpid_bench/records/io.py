@@ -2,8 +2,10 @@
 
 A record says everything needed to repeat a run (config, seeds, versions) and to judge it
 (best vector in physical units, objective, metrics and relative errors where true values are
-known, evaluations, trace, time). It is plain JSON (no pickle); non-finite floats are
-written as ``null``.
+known, evaluations, trace, time). It is plain, strict JSON (no pickle); a non-finite float is
+written as the string ``"inf"``, ``"-inf"`` or ``"nan"`` (strict JSON has no such numbers), so
+its sign survives, and :func:`read_record` turns those strings in the numeric fields back into
+floats.
 
 Determinism: two runs of the same config and seed produce records that are identical except
 for the ``timing`` section (wall time, start time, host). :func:`fingerprint` drops that
@@ -41,8 +43,51 @@ class OldRecordError(CorruptRecordError):
     """A complete record written by an earlier vpid-bench (an older schema version)."""
 
 
+#: How a non-finite float is written (strict JSON has no inf or nan) and read back.
+NONFINITE_TEXT = {"inf": "inf", "-inf": "-inf", "nan": "nan"}
+NONFINITE_VALUE = {"inf": math.inf, "-inf": -math.inf, "nan": math.nan}
+#: The numeric fields of a record: (section, key); ``*`` marks a list or a mapping of numbers.
+NUMERIC_FIELDS = (
+    ("result", "f_best"), ("result", "x_best*"), ("result", "metrics*"),
+    ("result", "rel_error_percent*"), ("parameters", "true*"), ("trace", "best*"),
+    ("trace", "evaluations*"), ("timing", "wall_time_s"), ("timing", "run_time_s"),
+)
+
+
+def _nonfinite_kind(value: float) -> str:
+    return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+
+
+def decode_number(value: Any) -> Any:
+    """``"inf"``, ``"-inf"``, ``"nan"`` (how a record stores non-finite floats) as floats;
+    anything else unchanged (a reader's type check then judges it)."""
+    if isinstance(value, str) and value in NONFINITE_VALUE:
+        return NONFINITE_VALUE[value]
+    return value
+
+
+def decode_numbers(record: dict[str, Any]) -> dict[str, Any]:
+    """``record`` with the non-finite markers of its numeric fields turned into floats
+    (in place; returned for convenience)."""
+    for section, key in NUMERIC_FIELDS:
+        node = record.get(section)
+        many = key.endswith("*")
+        key = key.rstrip("*")
+        if not isinstance(node, dict) or key not in node:
+            continue
+        value = node[key]
+        if not many:
+            node[key] = decode_number(value)
+        elif isinstance(value, list):
+            node[key] = [decode_number(v) for v in value]
+        elif isinstance(value, dict):
+            node[key] = {k: decode_number(v) for k, v in value.items()}
+    return record
+
+
 def _jsonable(obj: Any) -> Any:
-    """Convert numpy scalars/arrays and non-finite floats into strict-JSON values."""
+    """Convert numpy scalars/arrays and non-finite floats (as ``"inf"``, ``"-inf"``, ``"nan"``)
+    into strict-JSON values."""
     if isinstance(obj, Mapping):
         return {str(k): _jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
@@ -51,7 +96,7 @@ def _jsonable(obj: Any) -> Any:
         return [_jsonable(v) for v in obj.tolist()]
     if isinstance(obj, (np.floating, float)):
         value = float(obj)
-        return value if math.isfinite(value) else None
+        return value if math.isfinite(value) else NONFINITE_TEXT[_nonfinite_kind(value)]
     if isinstance(obj, np.integer):
         return int(obj)
     if isinstance(obj, np.bool_):
@@ -133,7 +178,7 @@ def read_record(path: Path) -> dict[str, Any]:
     missing = [k for k in REQUIRED_KEYS if k not in record]
     if missing:
         raise CorruptRecordError(f"{path}: incomplete run record, missing {', '.join(missing)}")
-    return record
+    return decode_numbers(record)
 
 
 def fingerprint(record: Mapping[str, Any]) -> str:

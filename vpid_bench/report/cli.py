@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -44,6 +45,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"error: --alpha={args.alpha} is not allowed: a number between 0 and 1",
               file=sys.stderr)
         return _exit(2, argv)
+    bad_out = check_output_dir(args.out)
+    if bad_out:
+        print(f"error: -o {args.out} is not allowed: {bad_out}", file=sys.stderr)
+        return _exit(2, argv)
     from .build import NoRecordsError, build_report
 
     try:
@@ -52,11 +57,29 @@ def main(argv: Sequence[str] | None = None) -> int:
     except NoRecordsError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return _exit(2, argv)
+    except OSError as exc:  # the folder checked above became unwritable, or a full disk
+        print(f"error: the report could not be written into {args.out} "
+              f"({exc.strerror or type(exc).__name__})", file=sys.stderr)
+        return _exit(1, argv)
     print(report.headline)
     print(f"\nreport: {report.report_md} ({report.n_records} run records)")
     for line in report.failures:
         print(f"warning: {line}", file=sys.stderr)
     return _exit(1 if report.failures else 0, argv)
+
+
+def check_output_dir(out: Path) -> str | None:
+    """Why ``out`` cannot hold the report (an existing file, a device such as /dev/null, a
+    folder that cannot be created or written), or None. Creates the folder."""
+    if out.exists() and not out.is_dir():
+        return "a folder (this is an existing file)"
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as exc:
+        return f"a folder you can create and write to ({exc.strerror or type(exc).__name__})"
+    return None
 
 
 def _exit(code: int, argv: Sequence[str] | None) -> int:

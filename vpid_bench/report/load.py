@@ -28,6 +28,7 @@ import numpy as np
 
 from ..api import VpidBenchError
 from ..records import CorruptRecordError, iter_record_files, read_job_status, read_record
+from ..records.io import decode_number
 
 #: Problem-config keys that never define a context of their own (ps is taken from the optimizer).
 PROBLEM_KEYS_IGNORED = ("ps",)
@@ -325,11 +326,13 @@ def run_labels(records: list[dict[str, Any]]) -> list[RunLabel]:
 
 
 def _num(value: Any, missing: float = math.inf) -> float:
-    """A record number as float: ``None`` (a non-finite value in JSON) becomes ``missing``;
-    ``-Infinity`` stays ``-inf``; the strings ``inf``/``-inf``/``nan`` are read too."""
+    """A record number as float. :func:`~vpid_bench.records.read_record` has already turned
+    the markers ``"inf"``, ``"-inf"``, ``"nan"`` into floats, so ``-inf`` stays ``-inf``;
+    ``None`` (how records of earlier versions stored any non-finite value) becomes
+    ``missing``."""
     if value is None:
         return missing
-    return float(value)
+    return float(decode_number(value))
 
 
 def _metrics(record: Mapping[str, Any]) -> dict[str, float]:

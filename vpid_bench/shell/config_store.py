@@ -15,6 +15,17 @@ from ..plugins import Registry
 from ..spec import PROTOCOL_KEYS, JobSpec
 
 SPEC_NODE = "vpid_bench_spec"
+#: Hydra's default job logging without its file handler: Hydra configures logging before our
+#: task runs, so a job folder it cannot write would stop the whole sweep; the task opens the
+#: job's log file itself (``vpid_bench.log``, see :mod:`.main`), inside its error handling.
+JOB_LOGGING = {
+    "version": 1,
+    "formatters": {"simple": {"format": "[%(asctime)s][%(name)s][%(levelname)s] - %(message)s"}},
+    "handlers": {"console": {"class": "logging.StreamHandler", "formatter": "simple",
+                             "stream": "ext://sys.stdout"}},
+    "root": {"level": "INFO", "handlers": ["console"]},
+    "disable_existing_loggers": False,
+}
 
 
 def register_configs(registry: Registry) -> None:
@@ -23,6 +34,8 @@ def register_configs(registry: Registry) -> None:
     from hydra.core.config_store import ConfigStore
 
     cs = ConfigStore.instance()
+    cs.store(group="hydra/job_logging", name="vpid_bench", node=JOB_LOGGING,
+             provider="vpid-bench")
     cs.store(name=SPEC_NODE, node=dataclass_defaults(JobSpec), provider="vpid-bench")
     for name, cls in sorted(registry.optimizers.items()):
         cs.store(group="optimizer", name=name,

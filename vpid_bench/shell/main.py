@@ -69,41 +69,92 @@ class JobTask:
     def __call__(self, cfg: Any) -> float | None:
         from hydra.core.hydra_config import HydraConfig
 
-        from ..experiment import ProblemCache, run_from_config
-        from ..plugins import Registry
-        from ..records import write_job_status
-
-        if self._registry is None:
-            self._registry = _load_registry()
-        if self._problems is None:
-            self._problems = ProblemCache()
         hydra_cfg = HydraConfig.get()
         job_dir = Path(hydra_cfg.runtime.output_dir)
         multirun = hydra_cfg.mode.name == "MULTIRUN"
+        handler = _open_job_log(job_dir)
         try:
+            return self._run(cfg, hydra_cfg, job_dir, multirun)
+        finally:
+            if handler is not None:
+                logging.getLogger().removeHandler(handler)
+                handler.close()
+
+    def _run(self, cfg: Any, hydra_cfg: Any, job_dir: Path, multirun: bool) -> float | None:
+        """Run the job; its search score is what an optimizing sweeper (Optuna) minimises."""
+        from ..experiment import ProblemCache, run_from_config
+
+        try:
+            if self._registry is None:
+                self._registry = _load_registry()
+            if self._problems is None:
+                self._problems = ProblemCache()
+            if hydra_cfg.output_subdir is None:
+                _save_job_config(cfg, job_dir)
             # The jobs of a sweep share one folder of instance optima (each polished once).
             optima = Path(str(hydra_cfg.sweep.dir)) / "optima" if multirun else None
             summary = run_from_config(cfg, job_dir, self._registry, self._problems, optima)
         except KeyboardInterrupt:
-            write_job_status(job_dir, "interrupted", "interrupted by the user")
+            _write_status(job_dir, "interrupted", "interrupted by the user")
             raise
-        except Exception as exc:  # noqa: BLE001 - crash isolation: report, go on
+        except BaseException as exc:  # noqa: BLE001 - crash isolation (SystemExit too): go on
             if debug_enabled():
                 log.exception("job failed")
             message = f"error: {one_line(exc)}"
             print(message + (f" [{job_dir}]" if multirun else ""), file=sys.stderr, flush=True)
-            try:
-                write_job_status(job_dir, "error", one_line(exc))
-            except OSError as os_exc:
-                print(f"error: cannot write the status of {job_dir} ({os_exc.strerror})",
-                      file=sys.stderr)
+            _write_status(job_dir, "error", one_line(exc))
             return None
-        assert isinstance(self._registry, Registry)
-        write_job_status(job_dir, "failed_runs" if summary.failed else "ok", summary)
+        _write_status(job_dir, "failed_runs" if summary.failed else "ok", summary)
         print(f"{summary.optimizer} on {summary.problem}: {summary.ran} run(s) done, "
               f"{summary.skipped} already recorded, {len(summary.failed)} failed, "
               f"{summary.wall_time_s:.1f} s -> {job_dir}", file=sys.stderr, flush=True)
-        return summary.score  # what an optimizing sweeper (hydra/sweeper=optuna) minimises
+        return summary.score
+
+
+JOB_LOG = "vpid_bench.log"
+
+
+def _write_status(job_dir: Path, status: str, detail: Any) -> None:
+    """``job.json``, or one line on stderr (and a note for the summary) when it cannot be
+    written (a read-only folder, a full disk): the sweep goes on."""
+    from ..records import write_job_status
+
+    try:
+        write_job_status(job_dir, status, detail)
+    except OSError as exc:  # the summary finds the planned folder without a job.json
+        print(f"error: cannot write the status of {job_dir} ({exc.strerror})", file=sys.stderr,
+              flush=True)
+
+
+def _open_job_log(job_dir: Path) -> logging.Handler | None:
+    """The job's log file ``vpid_bench.log`` (what Hydra's default file handler wrote), added
+    here so that a folder that cannot be written fails its job, not the whole sweep (Hydra
+    configures its handlers before the task runs, outside any ``try``)."""
+    try:
+        handler = logging.FileHandler(job_dir / JOB_LOG, encoding="utf-8")
+    except OSError:
+        return None  # the job will meet the same fault and say so in one line
+    handler.setFormatter(logging.Formatter("[%(asctime)s][%(name)s][%(levelname)s] - "
+                                           "%(message)s"))
+    logging.getLogger().addHandler(handler)
+    return handler
+
+
+def _save_job_config(cfg: Any, job_dir: Path) -> None:
+    """``.hydra/config.yaml``, ``hydra.yaml`` and ``overrides.yaml`` as Hydra saves them, but
+    written atomically and inside the job's error handling (``hydra.output_subdir`` is null
+    in our config so that Hydra does not write them before the task runs)."""
+    from hydra.core.hydra_config import HydraConfig
+    from omegaconf import OmegaConf
+
+    from ..fileio import write_text_atomic
+
+    full = HydraConfig.instance().cfg
+    folder = job_dir / ".hydra"
+    write_text_atomic(folder / "config.yaml", OmegaConf.to_yaml(cfg))
+    write_text_atomic(folder / "hydra.yaml", OmegaConf.to_yaml(full))
+    write_text_atomic(folder / "overrides.yaml",
+                      OmegaConf.to_yaml(full.hydra.overrides.task))
 
 
 def _load_registry() -> Any:
@@ -149,9 +200,11 @@ def print_versions(registry: Any) -> None:
         print(f"  plugin {plugin}: {where}")
 
 
-def _failures(folder: Path | None, multirun: bool) -> list[str]:
+def _failures(folder: Path | None, multirun: bool,
+              planned: Sequence[Path] = ()) -> list[str]:
     """What went wrong, read from the disk: job statuses of this invocation and the report's
-    status. Prints the sweep summary."""
+    status; a planned job folder without a status of this invocation counts as failed (its
+    folder could not be written). Prints the sweep summary."""
     from .callbacks import REPORT_STATUS, REPORT_SUBDIR
     from .resume import collect_job_statuses
 
@@ -159,6 +212,12 @@ def _failures(folder: Path | None, multirun: bool) -> list[str]:
         return []
     invocation = os.environ.get("VPID_BENCH_INVOCATION")
     statuses = collect_job_statuses(folder, invocation)
+    seen = {os.path.abspath(s["job_dir"]) for s in statuses}
+    for job_dir in planned:
+        if os.path.abspath(job_dir) not in seen:
+            statuses.append({"status": "error", "detail": "job.json not written (the job could "
+                             "not write into its folder; its error line above says why)",
+                             "job_dir": str(job_dir)})
     bad = [s for s in statuses if s.get("status") != "ok"]
     out = []
     if multirun:
@@ -215,6 +274,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         lock = FolderLock(plan.output_dir, key)
         preflight.check_writable(plan.output_dir, key)
         lock.acquire()
+        preflight.create_job_dirs(plan)
     except VpidBenchError as exc:
         _refuse(exc)
     try:
@@ -225,7 +285,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         sys.exit(130)
     finally:
         lock.release()
-    if _failures(plan.output_dir, plan.multirun):
+    if _failures(plan.output_dir, plan.multirun, plan.job_dirs):
         sys.exit(1)
 
 

@@ -47,6 +47,9 @@ class Plan:
     multirun: bool
     jobs: list[Job]
     points: list[list[str]]
+    #: The folder of every job of a sweep, as Hydra's basic sweeper will name them (empty for a
+    #: single run, an optimizing sweeper or a custom ``hydra.sweep.subdir``).
+    job_dirs: list[Path] = dataclasses.field(default_factory=list)
 
 
 def _parser() -> Any:
@@ -393,7 +396,55 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
         folder = output_dir(full, cmd.multirun)
     hydra_args = [a for a in cmd.hydra_args if not a.startswith(key + "=")]
     hydra_args.append(f"{key}={_quote(str(folder))}")
-    return Plan(hydra_args, folder, cmd.multirun, jobs, points)
+    job_dirs = (planned_job_dirs(cmd.overrides, full, folder)
+                if cmd.multirun and not custom_sweeper else [])
+    return Plan(hydra_args, folder, cmd.multirun, jobs, points, job_dirs)
+
+
+def _is_hydra_key(o: Any) -> bool:
+    key = o.key_or_group
+    return key == "hydra" or key.startswith(("hydra.", "hydra/"))
+
+
+def planned_job_dirs(overrides: Sequence[str], full_cfg: Any, sweep_dir: Path) -> list[Path]:
+    """The job folders of a basic-sweeper sweep, named exactly as Hydra will name them
+    (its own sweep expansion and ``override_dirname``, then our
+    :func:`~vpid_bench.shell.callbacks.job_dir_name`). Empty when ``hydra.sweep.subdir`` is
+    not the default, so the names cannot be known in advance."""
+    from hydra._internal.config_loader_impl import get_overrides_dirname
+    from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
+    from omegaconf import OmegaConf
+
+    from .callbacks import JOB_DIR_RESOLVER, job_dir_name
+
+    sweep = OmegaConf.to_container(full_cfg.hydra.sweep, resolve=False)
+    if str(sweep.get("subdir")) != f"${{{JOB_DIR_RESOLVER}:${{hydra.job.override_dirname}}}}":
+        return []
+    naming = full_cfg.hydra.job.config.override_dirname
+    parser = _parser()
+    task = [o for o in parser.parse_overrides(list(overrides)) if not _is_hydra_key(o)]
+    dirs = []
+    for batch in BasicSweeper.split_arguments(task, None):
+        for job in batch:
+            name = get_overrides_dirname(parser.parse_overrides(job),
+                                         list(naming.exclude_keys), str(naming.item_sep),
+                                         str(naming.kv_sep))
+            dirs.append(Path(sweep_dir) / job_dir_name(name))
+    return dirs
+
+
+def create_job_dirs(plan: Plan) -> None:
+    """Create every planned job folder before the first job starts, so no job's set-up
+    (Hydra creates the folder before our task runs) can fail on it mid-sweep. A folder that
+    cannot be created (a file in its place, a full disk) refuses the command; one that exists
+    but cannot be written is left to its job, which fails alone and is reported."""
+    for job_dir in plan.job_dirs:
+        try:
+            job_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ConfigError("hydra.sweep.dir", str(plan.output_dir), f"a folder where every "
+                              f"job folder can be created ({job_dir.name}: {exc.strerror})"
+                              ) from None
 
 
 def output_root(path_template: str) -> Path:

@@ -1,0 +1,157 @@
+"""Issue 13, cases 9, 16 and 17: the report's untrusted input and output folder, two
+commands in one folder, non-finite objectives kept with their sign."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import subprocess
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hostile_helpers import CLI, TINY, cli_env, run_cli
+
+from vpid_bench import hookimpl
+from vpid_bench import records as rec
+from vpid_bench.api import Bounds, Problem, ProblemConfig
+from vpid_bench.experiment import run_from_config
+from vpid_bench.plugins import Registry, get_plugin_manager
+
+
+@pytest.fixture(scope="module")
+def sweep(tmp_path_factory, compose_config, registry) -> Path:
+    root = tmp_path_factory.mktemp("records") / "sweep"
+    run_from_config(compose_config([*TINY, "runs=3"]), root / "job", registry)
+    return root
+
+
+BAD_FIELDS = [
+    ("run_index", "three", "run_index: expected an integer"),
+    ("problem", ["x"], "problem: expected a mapping"),
+    ("result.f_best", "small", "result.f_best: expected a number"),
+    ("result.x_best", {"a": 1}, "result.x_best: expected a list of numbers"),
+    ("trace.best", "x", "trace.best: expected a list of numbers"),
+    ("seeds.seed", 1.5, "seeds.seed: expected an integer"),
+]
+
+
+@pytest.mark.parametrize(("field", "value", "line"), BAD_FIELDS, ids=[f for f, _, _ in BAD_FIELDS])
+def test_9_a_wrongly_typed_record_is_one_warning_line(field, value, line, sweep, tmp_path):
+    copy = tmp_path / "copy"
+    for p in rec.iter_record_files([sweep]):
+        target = copy / p.relative_to(sweep)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(p.read_text())
+    bad = sorted(copy.rglob("run-*.json"))[0]
+    data = json.loads(bad.read_text())
+    node = data
+    *parents, leaf = field.split(".")
+    for key in parents:
+        node = node[key]
+    node[leaf] = value
+    bad.write_text(json.dumps(data))
+    done = run_cli([str(copy), "-o", str(tmp_path / "out")], tmp_path, report=True)
+    assert "Traceback" not in done.stderr
+    assert done.returncode == 1
+    (warning,) = [w for w in done.stderr.splitlines() if bad.name in w]
+    assert warning.endswith(line)
+
+
+@pytest.mark.parametrize("target", ["file", "/dev/null", "read-only"])
+def test_9_report_output_that_cannot_be_a_folder_is_refused(target, sweep, tmp_path):
+    from hostile_helpers import read_only
+
+    if target == "file":
+        out = tmp_path / "afile"
+        out.write_text("x")
+    elif target == "/dev/null":
+        out = Path("/dev/null")
+    else:
+        out = tmp_path / "ro"
+    with read_only(tmp_path / "ro") if target == "read-only" else contextlib.nullcontext():
+        done = run_cli([str(sweep), "-o", str(out)], tmp_path, report=True)
+    assert done.returncode == 2
+    assert done.stderr.startswith(f"error: -o {out} is not allowed: a folder")
+    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
+
+
+def test_16_a_second_command_in_the_same_folder_is_refused(tmp_path):
+    """Two real processes: the second is refused in one line (exit 2) while the first runs;
+    the first finishes with every record."""
+    args = ["-m", "problem=functions", "optimizer=random,de1", "runs=4",
+            "problem.iterations=400", "problem.dim=6", "progress=false", "report=false",
+            "hydra.sweep.dir=shared"]
+    first = subprocess.Popen([*CLI, *args], cwd=tmp_path, env=cli_env(),
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while not list(tmp_path.rglob("records/run-*.json")) and time.monotonic() < deadline:
+            assert first.poll() is None, first.stderr.read()
+            time.sleep(0.02)
+        second = run_cli(args, tmp_path)
+        assert first.poll() is None, "the first command should still be running"
+    finally:
+        _, err = first.communicate(timeout=120)
+    assert second.returncode == 2
+    assert second.stderr.splitlines() == [
+        "error: hydra.sweep.dir='shared' is not allowed: a folder no other running vpid-bench "
+        "command is using (another one is running there)"]
+    assert first.returncode == 0, err
+    assert sum(1 for _ in tmp_path.rglob("records/run-*.json")) == 8
+
+
+# ---- 17: -inf kept with its sign ----
+
+
+class _MinusInf(Problem):
+    """f = -inf for a point in the lower-left quarter of the box, else the sphere."""
+
+    Config = ProblemConfig
+
+    @property
+    def bounds(self) -> Bounds:
+        return Bounds(np.full(2, -1.0), np.full(2, 1.0), ("a", "b"))
+
+    def evaluate(self, X: np.ndarray) -> np.ndarray:
+        f = np.sum(X**2, axis=1)
+        return np.where(np.all(X < -0.5, axis=1), -np.inf, f)
+
+
+class _Plugin:
+    @hookimpl
+    def vpid_bench_register_problems(self, register):
+        register("minus_inf", _MinusInf)
+
+
+def test_17_minus_inf_is_stored_and_reported_as_minus_inf(tmp_path):
+    import vpid_baselines.plugin as baselines
+
+    from vpid_bench.report.build import build_report
+    from vpid_bench.report.load import load_records, run_rows
+
+    pm = get_plugin_manager(entry_points=[], extra_plugins=[("baselines", baselines),
+                                                             ("minus", _Plugin())])
+    summary = run_from_config(
+        {"problem": {"name": "minus_inf", "ps": 20, "iterations": 5},
+         "optimizer": {"name": "random"}, "runs": 2, "progress": False},
+        tmp_path / "sweep" / "job", Registry(pm))
+    raw = json.loads(summary.record_paths[0].read_text())
+    assert raw["result"]["f_best"] == "-inf"  # strict JSON, the sign kept
+    assert rec.read_record(summary.record_paths[0])["result"]["f_best"] == -math.inf
+    rows = run_rows(load_records([tmp_path / "sweep"]).records)
+    assert [r["f_best"] for r in rows] == [-math.inf, -math.inf]
+    report = build_report([tmp_path / "sweep"], tmp_path / "out", short=True)
+    assert "-inf" in report.report_md.read_text()
+
+
+def test_17_old_records_with_null_still_read_as_inf():
+    from vpid_bench.records.io import decode_numbers
+    from vpid_bench.report.load import _num
+
+    assert _num(None) == math.inf and _num("-inf") == -math.inf and math.isnan(_num("nan"))
+    assert decode_numbers({"result": {"f_best": "nan", "x_best": ["inf", 1.0],
+                                          "metrics": {"m": "-inf"}}})["result"]["metrics"] == {
+        "m": -math.inf}
