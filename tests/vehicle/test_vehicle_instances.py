@@ -8,23 +8,12 @@ import json
 
 import numpy as np
 import pytest
+from vehicle_helpers import make
 from vpid_vehicle.config import VehicleConfig
 from vpid_vehicle.objective import add_noise
 from vpid_vehicle.problem import VehicleProblem
 
-from vpid_bench.params import build_dataclass, hydra_node
-
-
-def make(**overrides) -> VehicleProblem:
-    """A problem from dotted overrides, e.g. make(**{"noise.per_run": False})."""
-    tree: dict = {}
-    for key, value in overrides.items():
-        node = tree
-        *parents, leaf = key.split(".")
-        for part in parents:
-            node = node.setdefault(part, {})
-        node[leaf] = value
-    return VehicleProblem(build_dataclass(VehicleConfig, tree, prefix="problem"))
+from vpid_bench.params import hydra_node
 
 
 @pytest.fixture(scope="module")
