@@ -118,3 +118,18 @@ def test_corrupt_records_are_named(tmp_path, text, fragment):
     with pytest.raises(rec.CorruptRecordError, match=fragment) as info:
         rec.read_record(path)
     assert str(path) in str(info.value)
+
+
+def test_a_record_of_the_previous_schema_is_named_in_one_line(tmp_path, capsys):
+    """Schema 1 records (round one) are not misread: the report names them as older, once."""
+    from vpid_bench.report.cli import main as report_main
+
+    old = tmp_path / "sweep" / "job" / "records" / "run-000-abc.json"
+    old.parent.mkdir(parents=True)
+    old.write_text(json.dumps({"schema": "vpid-bench/run-record/1", "run_id": "abc"}))
+    with pytest.raises(rec.OldRecordError, match="older vpid-bench"):
+        rec.read_record(old)
+    code = report_main([str(tmp_path / "sweep"), "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2  # nothing readable: no report
+    assert err.count("older vpid-bench (vpid-bench/run-record/1)") == 1, err

@@ -456,7 +456,11 @@ def build_report(
     out_dir = Path(out_dir)
     loaded = load_records(paths)
     if not loaded.records:
-        extra = f" ({len(loaded.skipped)} unreadable)" if loaded.skipped else ""
+        extra = ""
+        if loaded.skipped:  # say why, from the first one: e.g. records of an older version
+            first, why = loaded.skipped[0]
+            extra = (f" ({len(loaded.skipped)} unreadable; {first}: "
+                     f"{' '.join(reason(first, why).split())})")
         raise NoRecordsError(
             f"no run records (records/run-*.json) below {', '.join(map(str, paths))}{extra}"
         )
