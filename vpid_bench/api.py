@@ -185,7 +185,7 @@ class Problem(abc.ABC):
     @property
     def has_residuals(self) -> bool:
         """True when this problem's class overrides :meth:`residuals`."""
-        return type(self).residuals is not Problem.residuals
+        return offers_residuals(self)
 
     def residual_groups(self) -> np.ndarray:
         """The group (channel) of each residual entry, int array of shape ``(m,)``.
@@ -417,21 +417,30 @@ class GenerationalOptimizer(Optimizer):
         return self._done or (self._started and self.generation >= self.params.iterations)
 
 
+def offers_residuals(problem: Problem | type[Problem]) -> bool:
+    """Whether a problem (an instance or its class) implements :meth:`Problem.residuals`."""
+    cls = problem if isinstance(problem, type) else type(problem)
+    return getattr(cls, "residuals", None) is not Problem.residuals
+
+
 def check_compatible(
-    problem: Problem, optimizer: type[Optimizer] | Optimizer, name: str | None = None
+    problem: Problem | type[Problem], optimizer: type[Optimizer] | Optimizer,
+    name: str | None = None, problem_name: str | None = None,
 ) -> None:
     """Refuse an optimizer that wants residuals on a problem that has none, before any run.
 
-    ``optimizer`` is the class (or an instance) and ``name`` the name the user typed (default:
-    the optimizer's ``name``). Raises :class:`ConfigError` with key ``optimizer``, naming both.
+    ``problem`` and ``optimizer`` are classes or instances; ``name`` and ``problem_name`` the
+    names the user typed (default: their ``name``). Raises :class:`ConfigError` with key
+    ``optimizer``, naming both. The pre-flight calls it with the classes, the run loop again.
     """
-    if not getattr(optimizer, "wants_residuals", False) or getattr(problem, "has_residuals", False):
+    if not getattr(optimizer, "wants_residuals", False) or offers_residuals(problem):
         return
     if name is None:
         name = getattr(optimizer, "name", None)
         if name in (None, Optimizer.name):
             name = optimizer.__name__ if isinstance(optimizer, type) else type(optimizer).__name__
-    problem_name = getattr(problem, "name", type(problem).__name__)
+    if problem_name is None:
+        problem_name = getattr(problem, "name", type(problem).__name__)
     raise ConfigError(
         "optimizer",
         name,

@@ -238,7 +238,7 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
     Returns each run's relative gap ``(f_best - f*) / f*`` to its instance's optimum."""
     from .analysis.identifiability import cramer_rao
     from .analysis.optimum import update_instance_optimum
-    from .spec import offers_residuals
+    from .api import offers_residuals
 
     if problem.x_true is None or not offers_residuals(type(problem)):
         return {}

@@ -26,7 +26,14 @@ import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
-from .api import ConfigError, Optimizer, OptimizerParams, Problem, ProblemConfig
+from .api import (
+    ConfigError,
+    Optimizer,
+    OptimizerParams,
+    Problem,
+    ProblemConfig,
+    check_compatible,
+)
 from .params import build_dataclass, to_plain
 from .plugins import Registry
 
@@ -91,11 +98,6 @@ def check_protocol(config: ProblemConfig) -> None:
     """``problem.ps`` and ``problem.iterations``: whole numbers within the caps."""
     _check_int("problem.ps", config.ps, 1, MAX_PS)
     _check_int("problem.iterations", config.iterations, 1, MAX_ITERATIONS)
-
-
-def offers_residuals(problem_cls: type[Problem]) -> bool:
-    """Whether a problem class implements :meth:`Problem.residuals`."""
-    return getattr(problem_cls, "residuals", None) is not Problem.residuals
 
 
 @dataclasses.dataclass(frozen=True)
@@ -174,10 +176,7 @@ def parse_job(cfg: Any, registry: Registry) -> Job:
     params = build_dataclass(optimizer_cls.Params, {**optimizer_cfg, **protocol},
                              prefix="optimizer")
     optimizer_cls.check(params)
-    if getattr(optimizer_cls, "wants_residuals", False) and not offers_residuals(problem_cls):
-        raise ConfigError("optimizer", optimizer_name,
-                          f"an optimizer that does not need residual vectors: problem "
-                          f"{problem_name!r} does not provide them")
+    check_compatible(problem_cls, optimizer_cls, optimizer_name, problem_name)
     budget = spec.budget or problem_config.ps * (problem_config.iterations + 1)
     if budget > MAX_BUDGET:
         raise ConfigError("problem.iterations", problem_config.iterations,
