@@ -36,9 +36,7 @@ import contextlib
 import dataclasses
 import datetime as _dt
 import logging
-import signal
 import sys
-import threading
 import time
 from collections.abc import Iterator, Mapping
 from pathlib import Path
@@ -159,27 +157,15 @@ def _existing_ok(path: Path, rid: str) -> bool:
 
 @contextlib.contextmanager
 def _time_limit(seconds: float | None) -> Iterator[None]:
-    """Raise :class:`RunTimeoutError` in this thread after ``seconds`` of wall time (POSIX main
-    thread only; elsewhere no limit is applied and a warning says so)."""
-    if seconds is None:
-        yield
-        return
-    if threading.current_thread() is not threading.main_thread() or not hasattr(
-            signal, "setitimer"):
+    """Raise :class:`RunTimeoutError` in this thread after ``seconds`` of wall time: the run
+    loop's own alarm (POSIX main thread only; elsewhere a warning says it is not applied)."""
+    from .runner import _Alarm
+
+    alarm = _Alarm(seconds)
+    if seconds is not None and not alarm.enabled:
         log.warning("run_timeout_s needs the main thread of a POSIX process; not applied")
+    with alarm, alarm.limit(seconds):
         yield
-        return
-
-    def _expired(signum: int, frame: Any) -> None:
-        raise RunTimeoutError(f"the run took longer than run_timeout_s={seconds:g} s")
-
-    previous = signal.signal(signal.SIGALRM, _expired)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, previous)
 
 
 @contextlib.contextmanager
