@@ -63,3 +63,18 @@ def loop_threads() -> list:
     import threading
 
     return [t for t in threading.enumerate() if t.name.startswith("vpid-bench loop")]
+
+
+def run_optimizer(registry, name: str, problem, seed: int, budget: int | None = None,
+                  **overrides):
+    """Run optimizer ``name`` on ``problem`` (its protocol's budget unless ``budget``);
+    returns the run result and the optimizer."""
+    from vpid_bench.experiment import optimizer_params
+    from vpid_bench.runner import run
+
+    cfg = problem.config
+    cls, params = optimizer_params(
+        registry, {"name": name, "ps": cfg.ps, "iterations": cfg.iterations, **overrides}
+    )
+    optimizer = cls(params, problem.bounds, np.random.default_rng(seed))
+    return run(problem, optimizer, budget or cfg.ps * (cfg.iterations + 1)), optimizer

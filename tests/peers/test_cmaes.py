@@ -6,10 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from peers_helpers import run_optimizer
 from scipy.stats import mannwhitneyu
 
 from vpid_bench.api import Bounds, ConfigError, Problem
-from vpid_bench.experiment import build_problem, optimizer_params
+from vpid_bench.experiment import build_problem
 from vpid_bench.params import build_dataclass
 from vpid_bench.runner import run
 
@@ -23,13 +24,7 @@ def _sphere(registry, dim: int, ps: int, iterations: int):
                                     "ps": ps, "iterations": iterations})
 
 
-def _run(registry, name: str, problem, seed: int, budget: int | None = None, **overrides):
-    cfg = problem.config
-    cls, params = optimizer_params(
-        registry, {"name": name, "ps": cfg.ps, "iterations": cfg.iterations, **overrides}
-    )
-    optimizer = cls(params, problem.bounds, np.random.default_rng(seed))
-    return run(problem, optimizer, budget or cfg.ps * (cfg.iterations + 1)), optimizer
+_run = run_optimizer
 
 
 def test_registered_so_the_contract_test_covers_it(registry):

@@ -10,13 +10,13 @@ import sys
 
 import numpy as np
 import pytest
+from peers_helpers import run_optimizer
 from scipy.stats import mannwhitneyu
 
 from vpid_bench.api import ConfigError
-from vpid_bench.experiment import build_problem, optimizer_params, run_from_config
+from vpid_bench.experiment import build_problem, run_from_config
 from vpid_bench.params import build_dataclass
 from vpid_bench.records import read_record
-from vpid_bench.runner import run
 
 ng = pytest.importorskip("nevergrad")
 
@@ -30,13 +30,7 @@ def _problem(registry, function: str = "sphere", dim: int = 5, ps: int = 10, ite
                                     "ps": ps, "iterations": iterations})
 
 
-def _run(registry, name: str, problem, seed: int, budget: int | None = None, **overrides):
-    cfg = problem.config
-    cls, params = optimizer_params(
-        registry, {"name": name, "ps": cfg.ps, "iterations": cfg.iterations, **overrides}
-    )
-    optimizer = cls(params, problem.bounds, np.random.default_rng(seed))
-    return run(problem, optimizer, budget or cfg.ps * (cfg.iterations + 1)), optimizer
+_run = run_optimizer
 
 
 def test_registered_so_the_contract_test_covers_it(registry):
