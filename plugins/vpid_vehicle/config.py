@@ -27,10 +27,10 @@ MAX_SAMPLES = 1_000_000
 #: Largest estimated memory of one job's simulations (bytes).
 MAX_MEMORY = 2 * 1024**3
 #: Bytes per simulated time step (the road input, the kernel's state and set-up) and per
-#: sample and candidate of a batch (the (ps, 2, N) responses of the residual path); measured
-#: with tracemalloc: about 113 and 16.
+#: sample and candidate of a batch (the responses and residuals of the residual path);
+#: measured with tracemalloc by benchmarks/memory_per_sample.py: about 112 and 35.
 BYTES_PER_STEP = 128
-BYTES_PER_SAMPLE_CANDIDATE = 16
+BYTES_PER_SAMPLE_CANDIDATE = 40
 #: Largest bump height |h| in m (the paper's is 0.04 m).
 MAX_BUMP_HEIGHT = 1.0
 SAMPLINGS = ("point", "average")
