@@ -123,7 +123,7 @@ def test_tables_and_tidy_runs(vehicle_report):
 
 def test_convergence_has_a_log_axis_and_the_truth_line(tmp_path):
     from vpid_bench.report import figures
-    from vpid_bench.report.build import f_at_true
+    from vpid_bench.report.identifiability import reference_levels
     from vpid_bench.report.load import traces_frame
 
     root = tmp_path / "s"
@@ -134,7 +134,7 @@ def test_convergence_has_a_log_axis_and_the_truth_line(tmp_path):
         write_job(root / algo, recs)
     loaded = load_records([root])
     rows = run_rows(loaded.records)
-    ft = f_at_true(loaded.records, rows)
+    ft, _ = reference_levels(loaded.records, rows)  # what the report draws
     assert ft == {"toy ps=10": 0.05}
     import matplotlib.pyplot as plt
 

@@ -348,21 +348,6 @@ def _figures(df: Any, loaded: LoadedRecords, rows: list[dict[str, Any]], pairs: 
     return figs
 
 
-def f_at_true(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
-              ) -> dict[str, float]:
-    """Per context, the objective at the true parameters (``problem.info.f_at_true`` of the
-    records), when every record of the context carries the same finite number."""
-    context = {r["run_id"]: r["context"] for r in rows}
-    seen: dict[str, set[float]] = {}
-    for rec in records:
-        info = (rec.get("problem") or {}).get("info") or {}
-        v = info.get("f_at_true") if isinstance(info, Mapping) else None
-        ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-        seen.setdefault(context[rec["run_id"]], set()).add(float(v) if ok else math.nan)
-    return {c: next(iter(v)) for c, v in seen.items()
-            if len(v) == 1 and not math.isnan(next(iter(v)))}
-
-
 def _plugin_sections(registry: Any, rows: list[dict[str, Any]], loaded: LoadedRecords,
                      out_dir: Path, short: bool, alpha: float, names: _Names
                      ) -> tuple[list[tuple[str, Section]], list[HeadlineColumn], list[str]]:
