@@ -88,11 +88,22 @@ def decode_numbers(record: dict[str, Any]) -> dict[str, Any]:
 def _jsonable(obj: Any) -> Any:
     """Convert numpy scalars/arrays and non-finite floats (as ``"inf"``, ``"-inf"``, ``"nan"``)
     into strict-JSON values."""
+    kind = type(obj)
+    if kind is float:  # the common leaves first: a record's traces are long lists of them
+        return obj if math.isfinite(obj) else NONFINITE_TEXT[_nonfinite_kind(obj)]
+    if kind is int or kind is str or kind is bool or obj is None:
+        return obj
+    if kind is list or kind is tuple:
+        if all(type(v) is int or (type(v) is float and math.isfinite(v)) for v in obj):
+            return list(obj)  # already strict JSON: no call per element
+        return [_jsonable(v) for v in obj]
     if isinstance(obj, Mapping):
         return {str(k): _jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
         return [_jsonable(v) for v in obj]
     if isinstance(obj, np.ndarray):
+        if obj.dtype.kind in "iub" or (obj.dtype.kind == "f" and np.isfinite(obj).all()):
+            return obj.tolist()
         return [_jsonable(v) for v in obj.tolist()]
     if isinstance(obj, (np.floating, float)):
         value = float(obj)
