@@ -133,3 +133,23 @@ def test_a_record_of_the_previous_schema_is_named_in_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 2  # nothing readable: no report
     assert err.count("older vpid-bench (vpid-bench/run-record/1)") == 1, err
+
+
+@pytest.mark.parametrize(
+    "value, expected",
+    [
+        ([1.0, 2, -0.5], [1.0, 2, -0.5]),  # the fast path: plain finite numbers
+        ([1.0, float("-inf"), float("nan")], [1.0, "-inf", "nan"]),
+        ((1, True, None, "x"), [1, True, None, "x"]),
+        (np.array([[1.0, np.inf], [2.0, -np.inf]]), [[1.0, "inf"], [2.0, "-inf"]]),
+        (np.array([3, 4], dtype=np.int32), [3, 4]),
+        ([np.float64(1.5), np.int64(2), np.bool_(True)], [1.5, 2, True]),
+        ({1: (np.float32(0.5),), "k": {"n": float("inf")}}, {"1": [0.5], "k": {"n": "inf"}}),
+    ],
+)
+def test_records_hold_strict_json_with_the_sign_of_infinities(tmp_path, value, expected):
+    """Every container and number type a record may hold, on the fast and the slow path."""
+    path = rec.write_record(tmp_path / "r.json", {"v": value})
+    text = path.read_text()
+    assert json.loads(text) == {"v": expected}
+    assert "Infinity" not in text and "NaN" not in text
