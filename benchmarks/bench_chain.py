@@ -9,7 +9,10 @@ Measures, side by side in one invocation (only ratios mean anything on a shared 
 * ``CLI, no report``: ``vpid-bench -m ... report=false`` (composition, pre-flight, problem
   build, warm-up, records, the optimum/identifiability analysis);
 * ``CLI, report``: the same with the report at the end (what a user runs);
-* ``report alone``: ``vpid-bench-report`` on the records of the previous sweep.
+* ``report alone``: ``vpid-bench-report`` on the records of the previous sweep;
+* ``fixed start``: a sweep of one job with one run of one generation, report off: what every
+  command pays before and after its jobs (interpreter, imports, Hydra, the pre-flight, the
+  kernel's compiled code loaded from numba's cache), whatever the size of the study.
 
 and prints chain / runs (target <= 2) and each part's share. Quick version:
 ``python benchmarks/bench_chain.py --optimizers de1,ga --runs 10``.
@@ -125,6 +128,9 @@ def main() -> None:
     chain = timed([*CLI, *sweep, f"hydra.sweep.dir={root / 'chain'}"], root, "chain")
     report = timed([*REPORT, str(root / "noreport"), "-o", str(root / "report")], root,
                    "report")
+    fixed = timed([*CLI, "-m", f"problem={args.problem}", f"optimizer={optimizers[0]}",
+                   "runs=1", "problem.iterations=1", "progress=false", "report=false", *extra,
+                   f"hydra.sweep.dir={root / 'fixed'}"], root, "fixed")
     print(f"jobs: {len(jobs)}, runs: {len(jobs) * args.runs}, evaluations: {evaluations}")
     print(f"  runs alone (in process, lockstep): {alone:7.2f} s "
           f"({evaluations / alone:,.0f} evaluations/s)")
@@ -136,7 +142,9 @@ def main() -> None:
           "(target <= 2)")
     print(f"  vpid-bench-report alone:           {report:7.2f} s  (its own process, imports "
           "included)")
-    print(f"  per job outside the runs (no report): {(no_report - alone) / len(jobs):.3f} s")
+    print(f"  fixed start (1 job, 1 run, 1 generation): {fixed:6.2f} s")
+    print(f"  per job outside the runs (no report): {(no_report - alone) / len(jobs):.3f} s, "
+          f"without the fixed start {(no_report - fixed - alone) / len(jobs):.3f} s")
     cpu = CPU
     print(f"CPU seconds: runs alone {cpu['lockstep']:.2f} (one by one {cpu['one by one']:.2f}), "
           f"CLI report=false {cpu['no report']:.2f} = {cpu['no report'] / cpu['lockstep']:.2f}x, "
