@@ -140,8 +140,9 @@ def thin_steps(x: np.ndarray, *ys: np.ndarray, max_points: int = MAX_CURVE_POINT
     keep[-1] = True  # the curve runs to the last evaluation
     x, ys = x[keep], tuple(y[keep] for y in ys)
     if x.size > max_points:
-        width = (x[-1] - x[0]) / (max_points - 1)
-        b = np.floor((x - x[0]) / width).astype(np.int64)
+        n_bins = max(max_points - 1, 1)
+        width = (x[-1] - x[0]) / n_bins
+        b = np.minimum(np.floor((x - x[0]) / width), n_bins - 1).astype(np.int64)
         last_of_bin = np.concatenate([b[1:] != b[:-1], [True]])
         last_of_bin[0] = True
         x, ys = x[last_of_bin], tuple(y[last_of_bin] for y in ys)
