@@ -27,7 +27,6 @@ import math
 import shlex
 import textwrap
 import time
-import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -296,18 +295,7 @@ CD_MIN_RUNS = 5
 CD_MIN_BLOCKS = 5
 
 
-def _figures(df: Any, loaded: LoadedRecords, rows: list[dict[str, Any]], pairs: Any, fr: Any,
-             names: _Names, alpha: float, by_inst: Mapping[str, Any] | None,
-             drawer: FigureDrawer, hits: Sequence[Any] = ()) -> dict[str, str | None]:
-    """Hand every core figure to ``drawer`` (plain data, drawn in a worker); returns the
-    figures' titles in report order, each with why it cannot be drawn or ``None`` (submitted
-    under its title)."""
-    from . import anytime, figures, stats
-    from .identifiability import reference_levels
-    from .load import trace_sets
-
-    figs: dict[str, str | None] = {}
-
+def _submitter(figs: dict[str, str | None], drawer: FigureDrawer) -> Any:
     def draw(title: str, data: Any, func: Any, *args: Any) -> None:
         """Submit ``func(data, *args)``, or keep ``data`` as the reason when it is text."""
         if isinstance(data, str):
@@ -316,6 +304,23 @@ def _figures(df: Any, loaded: LoadedRecords, rows: list[dict[str, Any]], pairs: 
         figs[title] = None
         drawer.submit(title, func, data, *args)
 
+    return draw
+
+
+def _early_figures(df: Any, loaded: LoadedRecords, rows: list[dict[str, Any]], names: _Names,
+                   drawer: FigureDrawer, hits: Sequence[Any]
+                   ) -> tuple[dict[str, str | None], dict[str, str | None]]:
+    """Hand the core figures that need no test result to ``drawer`` at once (the workers
+    draw them while this process runs the tests): convergence, per-run metric and error
+    heatmap per problem, and the ECDFs. Returns (the first three kinds, the ECDFs), titles
+    in report order, each with why it cannot be drawn or ``None`` (submitted under its
+    title)."""
+    from . import anytime, figures
+    from .identifiability import reference_levels
+    from .load import trace_sets
+
+    figs: dict[str, str | None] = {}
+    draw = _submitter(figs, drawer)
     traces = trace_sets(loaded.records, rows)
     draw("Convergence", figures.convergence_panels(traces, *reference_levels(loaded.records, rows))
          if traces else "no traces in the records", figures.draw_convergence,
@@ -327,6 +332,23 @@ def _figures(df: Any, loaded: LoadedRecords, rows: list[dict[str, Any]], pairs: 
         draw(f"Median per-run absolute relative error per parameter, {p}",
              figures.error_heatmap_data(df, p), figures.draw_error_heatmap,
              names.file("figures", f"errors_{p}", ".png"))
+    ecdfs: dict[str, str | None] = {}
+    for context in sorted({h.context for h in hits}):
+        title = f"Fixed-target ECDF, {context}"
+        ecdfs[title] = None
+        drawer.submit(title, anytime.ecdf_figure, [h for h in hits if h.context == context],
+                      context, names.file("figures", f"ecdf_{context}", ".png"))
+    return figs, ecdfs
+
+
+def _cd_figures(df: Any, pairs: Any, fr: Any, names: _Names, alpha: float,
+                by_inst: Mapping[str, Any] | None, drawer: FigureDrawer
+                ) -> dict[str, str | None]:
+    """Hand the critical-difference diagrams (they need the tests) to ``drawer``."""
+    from . import figures, stats
+
+    figs: dict[str, str | None] = {}
+    draw = _submitter(figs, drawer)
     for context in sorted(df["context"].unique()):
         g = df[(df["context"] == context) & (df["status"] == "ok")]
         n = g.groupby("algorithm").size()
@@ -362,11 +384,6 @@ def _figures(df: Any, loaded: LoadedRecords, rows: list[dict[str, Any]], pairs: 
              f"(Nemenyi, α={alpha})",
              "mean rank of each optimizer's median per-run metric over the blocks (1 = best)",
              names.file("figures", "cd_blocks", ".png"), alpha)
-    for context in sorted({h.context for h in hits}):
-        title = f"Fixed-target ECDF, {context}"
-        figs[title] = None
-        drawer.submit(title, anytime.ecdf_figure, [h for h in hits if h.context == context],
-                      context, names.file("figures", f"ecdf_{context}", ".png"))
     return figs
 
 
@@ -549,6 +566,9 @@ def _build(paths: Iterable[str | Path], out_dir: str | Path, short: bool, alpha:
 
         df = runs_frame(rows)
         lap("load")
+        assert drawer is not None
+        early, ecdfs = _early_figures(df, loaded, rows, names, drawer, hits)
+        lap("figures_submit")
         kw = stats.kruskal_by_context(df)
         pairs = stats.pairwise_by_context(df, alpha)
         fr = stats.friedman_across_blocks(df, alpha)
@@ -558,12 +578,8 @@ def _build(paths: Iterable[str | Path], out_dir: str | Path, short: bool, alpha:
         by_inst = {"metric": stats.friedman_by_instances(df, alpha),
                    "rel_gap": stats.friedman_by_instances(sdf, alpha, "rel_gap_test")}
         lap("stats")
-        assert drawer is not None
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", DeprecationWarning)
-            warnings.simplefilter("ignore", PendingDeprecationWarning)
-            fig_titles = _figures(df, loaded, rows, pairs, fr, names, alpha,
-                                  by_inst.get("metric", {}), drawer, hits)
+        fig_titles = {**early, **_cd_figures(df, pairs, fr, names, alpha,
+                                             by_inst.get("metric", {}), drawer), **ecdfs}
         lap("figures_submit")
         for stem, t in (("kruskal", kw), ("pairwise", pairs), ("pairwise_search", spairs)):
             if not t.empty:
