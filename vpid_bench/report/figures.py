@@ -30,8 +30,8 @@ import numpy as np
 
 #: Resolution of every PNG (dots per inch).
 DPI = 110
-#: zlib level of the PNG files: 1 writes them several times faster than the default 6, for
-#: files about a third larger (figures of lines and text compress well either way).
+#: zlib level of the PNG files: 1 instead of the default 6 saves about 5 % of the drawing time
+#: of the paper experiment's figures, for files 5-7 % larger.
 PNG_COMPRESS_LEVEL = 1
 #: A convergence curve keeps at most this many points (step corners; see :func:`thin_steps`).
 MAX_CURVE_POINTS = 400
@@ -128,7 +128,7 @@ def thin_steps(x: np.ndarray, *ys: np.ndarray, max_points: int = MAX_CURVE_POINT
     ``max_points - 1`` equal bins and each bin keeps its last point (the first point is
     kept too). Then the thinned curve's value at any x is the original's value at some
     x' in ``[x - w, x]``, ``w`` the bin width: exact at every kept point and off by at most
-    one bin (less than a pixel for a few hundred bins) in between. Returns (x, *ys)."""
+    one bin (about a pixel for a few hundred bins) in between. Returns (x, *ys)."""
     x = np.asarray(x, float)
     ys = tuple(np.asarray(y, float) for y in ys)
     if x.size <= 2:
