@@ -112,6 +112,14 @@ def _raising_figure(path: Path) -> Path:
     raise ValueError("this figure exploded")
 
 
+def _dies_in_a_worker(path: Path) -> Path:
+    """Kills the worker process that draws it (as the OOM killer would); draws when called
+    in the report's own process."""
+    if multiprocessing.parent_process() is not None:
+        os._exit(3)
+    return _ok_figure(path)
+
+
 def _raising_plugin_figure(n: int):
     raise RuntimeError(f"plugin figure {n} exploded")
 
@@ -136,6 +144,16 @@ def test_a_raising_figure_costs_that_figure_only(tmp_path, mode):
     assert out["ok2"] == tmp_path / "ok2.png" and _png_ok(out["ok2"])
     assert out["bad"] == "failed: ValueError: this figure exploded"
     assert not (tmp_path / "bad.png").exists()
+    assert _no_children()
+
+
+def test_figures_of_a_dead_worker_are_drawn_here(tmp_path):
+    with FigureDrawer("parallel", workers=2) as drawer:
+        drawer.submit("dies", _dies_in_a_worker, tmp_path / "dies.png")
+        drawer.submit("ok", _ok_figure, tmp_path / "ok.png")
+        out = drawer.results()
+    assert out == {"dies": tmp_path / "dies.png", "ok": tmp_path / "ok.png"}
+    assert _png_ok(out["dies"]) and _png_ok(out["ok"])
     assert _no_children()
 
 

@@ -104,10 +104,15 @@ class FigureDrawer:
             import multiprocessing
             from concurrent.futures import ProcessPoolExecutor
 
-            self._pool = ProcessPoolExecutor(
-                max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"),
-                initializer=_warm_up)
-            self._pool.submit(_ready)  # start the workers now: they import matplotlib
+            try:
+                self._pool = ProcessPoolExecutor(
+                    max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"),
+                    initializer=_warm_up)
+                self._pool.submit(_ready)  # start the workers now: they import matplotlib
+            except (OSError, ImportError, NotImplementedError) as exc:  # no semaphores, ...
+                log.warning("figure workers could not start (%s); drawing serially", exc)
+                self.terminate()
+                self.mode, self.workers = "serial", 0
 
     def __enter__(self) -> FigureDrawer:
         return self
@@ -129,14 +134,24 @@ class FigureDrawer:
                 log.debug("figure %r failed", key, exc_info=True)
                 self._done[key] = failure(exc)
             return
-        self._pending[key] = self._pool.submit(call, func, args, kwargs)
+        self._pending[key] = (self._pool.submit(call, func, args, kwargs), func, args, kwargs)
 
     def results(self) -> dict[Any, Any]:
-        """Every submitted key's result (waits for the workers), in submission order."""
-        for key, fut in list(self._pending.items()):
+        """Every submitted key's result (waits for the workers), in submission order. A
+        figure whose worker died (the pool broke: killed, out of memory) is drawn again
+        here, serially; one whose function raised is not."""
+        from concurrent.futures.process import BrokenProcessPool
+
+        for key, (fut, func, args, kwargs) in list(self._pending.items()):
             try:
                 self._done[key] = fut.result()
-            except Exception as exc:  # raised in the worker, or the worker died
+            except BrokenProcessPool:
+                log.warning("a figure worker died; drawing %r here", key)
+                try:
+                    self._done[key] = call(func, args, kwargs)
+                except Exception as exc:
+                    self._done[key] = failure(exc)
+            except Exception as exc:  # raised in the worker
                 log.debug("figure %r failed", key, exc_info=True)
                 self._done[key] = failure(exc)
             del self._pending[key]
