@@ -31,7 +31,7 @@ import numpy as np
 #: Resolution of every PNG (dots per inch).
 DPI = 110
 #: zlib level of the PNG files: 1 instead of the default 6 saves about 5 % of the drawing time
-#: of the paper experiment's figures, for files 5-7 % larger.
+#: of a 540-run report's figures, for files 5-7 % larger.
 PNG_COMPRESS_LEVEL = 1
 #: A convergence curve keeps at most this many points (step corners; see :func:`thin_steps`).
 MAX_CURVE_POINTS = 400
