@@ -260,9 +260,9 @@ def _signals_section(ctx: ReportContext) -> Section:
     src = sig.source
     where = (f"{row['algorithm']}, {row['context']}, the best run of its job (run "
              f"{src.get('run_index')}, {src.get('ranked_by')} = {ctx.fmt(src.get('value'))})")
-    fig = draw_signals(sig.t, sig.channels, sig.units,
-                       f"Measured vs fitted signals: {where}")
-    png = ctx.save_figure(fig, f"signals_{ctx.problem}")
+    # Drawn by the report's figure workers while it builds the rest (plain arrays in).
+    png = ctx.draw_figure(draw_signals, f"signals_{ctx.problem}", sig.t, sig.channels,
+                          sig.units, f"Measured vs fitted signals: {where}")
     text = ctx.para(
         f"The job of the best run by {ctx.escape(row['metric_name'])} "
         f"({ctx.escape(row['algorithm'])}, {ctx.escape(row['context'])}) recorded the signals "

@@ -149,11 +149,9 @@ def ecdf_figure(runs: Sequence[RunHits], context: str, path: Path) -> Path | str
     sel = [r for r in runs if r.context == context]
     if not sel:
         return f"no run of {context} knows its instance's optimum"
-    import matplotlib
+    from .figures import _plt, save
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = _plt()
     b = context_budget(runs, context)
     grid = np.unique(np.round(np.geomspace(1.0, max(b, 2.0), 300)))
     fig, ax = plt.subplots(figsize=(7.0, 4.4))
@@ -171,7 +169,4 @@ def ecdf_figure(runs: Sequence[RunHits], context: str, path: Path) -> Path | str
                  fontsize=9)
     ax.legend(fontsize=8, loc="upper left")
     ax.grid(True, which="major", alpha=0.3)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
-    return path
+    return save(fig, path)

@@ -26,12 +26,13 @@ import logging
 import math
 import shlex
 import textwrap
-import warnings
+import time
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from . import anytime, rankings, render, tables
+from .drawing import FigureDrawer, FigureMode
 from .load import LoadedRecords, NoRecordsError, load_records, reason, run_rows
 from .optima import add_optimum_columns, load_optima
 from .render import para
@@ -60,6 +61,10 @@ class Report:
     loaded: LoadedRecords
     section_errors: list[str] = dataclasses.field(default_factory=list)
     optima_errors: list[str] = dataclasses.field(default_factory=list)
+    #: Wall seconds of each phase (load, stats, figures_submit, sections, tables_md,
+    #: figures_wait, total) and how the figures were drawn ("parallel (N workers)"/"serial").
+    timings: dict[str, float] = dataclasses.field(default_factory=dict)
+    figures_mode: str = ""
 
     @property
     def failures(self) -> list[str]:
@@ -290,25 +295,60 @@ CD_MIN_RUNS = 5
 CD_MIN_BLOCKS = 5
 
 
-def _figures(df: Any, loaded: LoadedRecords, rows: list[dict[str, Any]], pairs: Any, fr: Any,
-             names: _Names, alpha: float, by_inst: Mapping[str, Any] | None = None
-             ) -> dict[str, Path | str]:
-    """Draw every core figure; a value is the PNG path or why the figure was not drawn."""
-    from . import figures, stats
-    from .load import traces_frame
+def _submitter(figs: dict[str, str | None], drawer: FigureDrawer) -> Any:
+    def draw(title: str, data: Any, func: Any, *args: Any) -> None:
+        """Submit ``func(data, *args)``, or keep ``data`` as the reason when it is text."""
+        if isinstance(data, str):
+            figs[title] = data
+            return
+        figs[title] = None
+        drawer.submit(title, func, data, *args)
 
-    figs: dict[str, Path | str] = {}
-    problems = sorted(df["problem"].unique())
+    return draw
+
+
+def _early_figures(df: Any, loaded: LoadedRecords, rows: list[dict[str, Any]], names: _Names,
+                   drawer: FigureDrawer, hits: Sequence[Any]
+                   ) -> tuple[dict[str, str | None], dict[str, str | None]]:
+    """Hand the core figures that need no test result to ``drawer`` at once (the workers
+    draw them while this process runs the tests): convergence, per-run metric and error
+    heatmap per problem, and the ECDFs. Returns (the first three kinds, the ECDFs), titles
+    in report order, each with why it cannot be drawn or ``None`` (submitted under its
+    title)."""
+    from . import anytime, figures
     from .identifiability import reference_levels
+    from .load import trace_sets
 
-    figs["Convergence"] = figures.convergence(
-        traces_frame(loaded.records, rows), names.file("figures", "convergence", ".png"),
-        *reference_levels(loaded.records, rows))
+    figs: dict[str, str | None] = {}
+    draw = _submitter(figs, drawer)
+    traces = trace_sets(loaded.records, rows)
+    draw("Convergence", figures.convergence_panels(traces, *reference_levels(loaded.records, rows))
+         if traces else "no traces in the records", figures.draw_convergence,
+         names.file("figures", "convergence", ".png"))
+    problems = sorted(df["problem"].unique())
     for p in problems:
-        figs[f"Per-run metric, {p}"] = figures.runs_metric(
-            df, p, names.file("figures", f"runs_{p}", ".png"))
-        figs[f"Median per-run absolute relative error per parameter, {p}"] = figures.error_heatmap(
-            df, p, names.file("figures", f"errors_{p}", ".png"))
+        draw(f"Per-run metric, {p}", figures.runs_metric_data(df, p), figures.draw_runs_metric,
+             names.file("figures", f"runs_{p}", ".png"))
+        draw(f"Median per-run absolute relative error per parameter, {p}",
+             figures.error_heatmap_data(df, p), figures.draw_error_heatmap,
+             names.file("figures", f"errors_{p}", ".png"))
+    ecdfs: dict[str, str | None] = {}
+    for context in sorted({h.context for h in hits}):
+        title = f"Fixed-target ECDF, {context}"
+        ecdfs[title] = None
+        drawer.submit(title, anytime.ecdf_figure, [h for h in hits if h.context == context],
+                      context, names.file("figures", f"ecdf_{context}", ".png"))
+    return figs, ecdfs
+
+
+def _cd_figures(df: Any, pairs: Any, fr: Any, names: _Names, alpha: float,
+                by_inst: Mapping[str, Any] | None, drawer: FigureDrawer
+                ) -> dict[str, str | None]:
+    """Hand the critical-difference diagrams (they need the tests) to ``drawer``."""
+    from . import figures, stats
+
+    figs: dict[str, str | None] = {}
+    draw = _submitter(figs, drawer)
     for context in sorted(df["context"].unique()):
         g = df[(df["context"] == context) & (df["status"] == "ok")]
         n = g.groupby("algorithm").size()
@@ -323,9 +363,9 @@ def _figures(df: Any, loaded: LoadedRecords, rows: list[dict[str, Any]], pairs: 
             figs[title] = f"the runs pair by instance and the Friedman test {inst.note}"
             continue
         test = pairs[pairs["context"] == context]["test"].iloc[0]
-        figs[title] = figures.cd_diagram(
+        draw(title, figures.cd_data(
             inst.mean_ranks if inst is not None else stats.mean_ranks_in_context(df, context),
-            stats.pvalue_matrix(pairs, context),
+            stats.pvalue_matrix(pairs, context)), figures.draw_cd,
             f"{context}: bars join optimizers not significantly different "
             f"({test}, Holm, α={alpha})",
             (f"mean rank of each optimizer over the {len(inst.blocks)} instances, by per-run "
@@ -339,19 +379,20 @@ def _figures(df: Any, loaded: LoadedRecords, rows: list[dict[str, Any]], pairs: 
         figs[title] = (f"needs a Friedman test over at least {CD_MIN_BLOCKS} blocks (contexts) "
                        f"with the same optimizers; found {found}")
     else:
-        figs[title] = figures.cd_diagram(
-            fr.mean_ranks, fr.nemenyi,
-            f"Across {len(fr.blocks)} blocks: bars join optimizers not significantly different "
-            f"(Nemenyi, α={alpha})",
-            "mean rank of each optimizer's median per-run metric over the blocks (1 = best)",
-            names.file("figures", "cd_blocks", ".png"), alpha)
+        draw(title, figures.cd_data(fr.mean_ranks, fr.nemenyi), figures.draw_cd,
+             f"Across {len(fr.blocks)} blocks: bars join optimizers not significantly different "
+             f"(Nemenyi, α={alpha})",
+             "mean rank of each optimizer's median per-run metric over the blocks (1 = best)",
+             names.file("figures", "cd_blocks", ".png"), alpha)
     return figs
 
 
 def _plugin_sections(registry: Any, rows: list[dict[str, Any]], loaded: LoadedRecords,
-                     out_dir: Path, short: bool, alpha: float, names: _Names
+                     out_dir: Path, short: bool, alpha: float, names: _Names,
+                     drawer: FigureDrawer | None = None
                      ) -> tuple[list[tuple[str, Section]], list[HeadlineColumn], list[str]]:
-    """Call the section functions registered for the problems in the rows."""
+    """Call the section functions registered for the problems in the rows (their
+    :meth:`~.sections.ReportContext.draw_figure` figures go to ``drawer``)."""
     if registry is None:
         from ..plugins import Registry
 
@@ -362,13 +403,20 @@ def _plugin_sections(registry: Any, rows: list[dict[str, Any]], loaded: LoadedRe
     errors: list[str] = []
     from . import identifiability
 
+    def draw(path: Path, func: Any, args: tuple[Any, ...], kwargs: dict[str, Any]) -> None:
+        from .drawing import save_drawn
+
+        assert drawer is not None
+        drawer.submit(("section", path), save_drawn, func, path, args, kwargs)
+
     for problem in sorted({r["problem"] for r in rows}):
         funcs = [("vpid-bench", identifiability.section),  # the core's, for every problem
                  *getattr(registry, "report_sections", {}).get(problem, [])]
         prows = tuple(r for r in rows if r["problem"] == problem)
         ctx = ReportContext(problem=problem, rows=prows,
                             records=tuple(by_id[r["run_id"]] for r in prows),
-                            out_dir=out_dir, short=short, alpha=alpha, _claim=names.claim)
+                            out_dir=out_dir, short=short, alpha=alpha, _claim=names.claim,
+                            _draw=draw if drawer is not None else None)
         for plugin, func in funcs:
             try:
                 contrib = func(ctx)
@@ -430,13 +478,44 @@ def build_report(
     alpha: float = ALPHA,
     baseline: str = tables.BASELINE,
     registry: Any = None,
+    figures: FigureMode = "auto",
+    workers: int | None = None,
 ) -> Report:
     """Read the records below ``paths`` and write the report into ``out_dir``.
 
     ``short``: a single job's report (no tests, no figures, no pandas). ``registry``
-    (default: the installed plugins) provides the problems' report sections. Raises
-    :class:`NoRecordsError` when no readable record exists.
+    (default: the installed plugins) provides the problems' report sections. ``figures``:
+    how the full report draws its figures: ``"parallel"`` in ``workers`` spawned worker
+    processes started at once (they import matplotlib while this process reads the
+    records and runs the tests), ``"serial"`` here one after another, ``"auto"`` parallel
+    when more than one core is available (:mod:`.drawing`). The files are the same either
+    way. Raises :class:`NoRecordsError` when no readable record exists.
     """
+    drawer = None if short else FigureDrawer(figures, workers)
+    try:
+        report = _build(paths, out_dir, short, alpha, baseline, registry, drawer)
+    except BaseException:  # an error or an interrupt: no worker is left behind
+        if drawer is not None:
+            drawer.terminate()
+        raise
+    if drawer is not None:
+        drawer.close()
+    return report
+
+
+def _build(paths: Iterable[str | Path], out_dir: str | Path, short: bool, alpha: float,
+           baseline: str, registry: Any, drawer: FigureDrawer | None) -> Report:
+    """:func:`build_report` with its figure drawer (``None`` in short mode)."""
+    t0 = time.perf_counter()
+    timings: dict[str, float] = {}
+    since = [t0]
+
+    def lap(name: str) -> None:
+        """Add the time since the last lap to phase ``name``."""
+        now = time.perf_counter()
+        timings[name] = timings.get(name, 0.0) + now - since[0]
+        since[0] = now
+
     paths = [Path(p) for p in paths]
     out_dir = Path(out_dir)
     loaded = load_records(paths)
@@ -450,6 +529,7 @@ def build_report(
             f"no run records (records/run-*.json) below {', '.join(map(str, paths))}{extra}"
         )
     rows = run_rows(loaded.records)
+    lap("load")
     optima = load_optima(paths, loaded.records)
     optima_errors = [f"bad optimum file {p}: {why}" for p, why in optima.skipped]
     optima_errors += add_optimum_columns(rows, loaded.records, optima)
@@ -478,11 +558,17 @@ def build_report(
     df = kw = pairs = fr = spairs = None
     by_inst: dict[str, dict[str, Any]] = {}
     figs: dict[str, Path | str] = {}
+    fig_titles: dict[str, str | None] = {}
+    lap("tables_md")
     if not short:
         from . import stats
         from .load import runs_frame
 
         df = runs_frame(rows)
+        lap("load")
+        assert drawer is not None
+        early, ecdfs = _early_figures(df, loaded, rows, names, drawer, hits)
+        lap("figures_submit")
         kw = stats.kruskal_by_context(df)
         pairs = stats.pairwise_by_context(df, alpha)
         fr = stats.friedman_across_blocks(df, alpha)
@@ -491,6 +577,10 @@ def build_report(
         spairs = stats.pairwise_by_context(sdf, alpha, "rel_gap_test")
         by_inst = {"metric": stats.friedman_by_instances(df, alpha),
                    "rel_gap": stats.friedman_by_instances(sdf, alpha, "rel_gap_test")}
+        lap("stats")
+        fig_titles = {**early, **_cd_figures(df, pairs, fr, names, alpha,
+                                             by_inst.get("metric", {}), drawer), **ecdfs}
+        lap("figures_submit")
         for stem, t in (("kruskal", kw), ("pairwise", pairs), ("pairwise_search", spairs)):
             if not t.empty:
                 table(stem, *render.frame_rows(t))
@@ -515,8 +605,10 @@ def build_report(
     verdicts = tables.baseline_verdicts(summary, pairs, baseline)
     for s, v in zip(summary, verdicts, strict=True):
         s[f"vs_{baseline}"] = v
+    lap("tables_md")
     sections, extra, section_errors = _plugin_sections(
-        registry, rows, loaded, out_dir, short, alpha, names)
+        registry, rows, loaded, out_dir, short, alpha, names, drawer)
+    lap("sections")
     md_h, md_rows, csv_h, csv_rows = _headline(summary, verdicts, extra, baseline)
     table("headline", csv_h, csv_rows)
     stat_keys: list[str] = []
@@ -524,17 +616,17 @@ def build_report(
         stat_keys += [k for k in s if k not in stat_keys]
     table("run_stats", stat_keys, [[s.get(k) for k in stat_keys] for s in summary])
     if not short:
-        with warnings.catch_warnings():
-            # seaborn 0.13 calls matplotlib APIs that newer matplotlib deprecates: not our news.
-            warnings.simplefilter("ignore", DeprecationWarning)
-            warnings.simplefilter("ignore", PendingDeprecationWarning)
-            figs = _figures(df, loaded, rows, pairs, fr, names, alpha, by_inst.get("metric", {}))
-            for context in sorted({h.context for h in hits}):
-                figs[f"Fixed-target ECDF, {context}"] = anytime.ecdf_figure(
-                    hits, context, names.file("figures", f"ecdf_{context}", ".png"))
         from .ioh_export import export_ioh
 
         written += export_ioh(out_dir / "ioh", loaded.records, rows, out_dir)
+        lap("tables_md")
+        assert drawer is not None
+        drawn = drawer.results()
+        lap("figures_wait")
+        figs = {t: (why if why is not None else _drawn(drawn.get(t))) for t, why in
+                fig_titles.items()}
+        sections, failed = _drop_failed_figures(sections, drawn)
+        section_errors += failed
     skipped = {k: v for k, v in figs.items() if isinstance(v, str)}
     written += [v for v in figs.values() if isinstance(v, Path)]
     for _, sec in sections:
@@ -613,5 +705,34 @@ def build_report(
         if verdicts:
             headline += "\n\n" + "\n".join(" ".join(v.split()) for v in verdicts)
     problems = sorted({r["problem"] for r in rows})
+    lap("tables_md")
+    timings["total"] = time.perf_counter() - t0
+    mode = ("" if drawer is None else f"parallel ({drawer.workers} workers)"
+            if drawer.mode == "parallel" else "serial")
     return Report(out_dir, md, headline, len(loaded.records), problems, written, skipped,
-                  loaded, section_errors, optima_errors)
+                  loaded, section_errors, optima_errors, timings, mode)
+
+
+def _drawn(result: Any) -> Path | str:
+    """A figure's result as the report keeps it: its path, or why it is missing."""
+    if isinstance(result, Path):
+        return result
+    return str(result) if result else "not drawn (no result from the figure worker)"
+
+
+def _drop_failed_figures(sections: list[tuple[str, Section]], drawn: Mapping[Any, Any]
+                         ) -> tuple[list[tuple[str, Section]], list[str]]:
+    """Sections without the figures their :meth:`~.sections.ReportContext.draw_figure`
+    failed to draw, and one line per such figure."""
+    errors, out = [], []
+    for plugin, sec in sections:
+        kept = []
+        for f in sec.files:
+            result = drawn.get(("section", Path(f)), Path(f))
+            if isinstance(result, Path):
+                kept.append(f)
+            else:
+                errors.append(f"report section of plugin {plugin!r}: figure "
+                              f"{Path(f).name} {result}")
+        out.append((plugin, dataclasses.replace(sec, files=tuple(kept))))
+    return out, errors

@@ -236,13 +236,19 @@ def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
 
 
 def _figure(ctx: ReportContext, design: Mapping[str, Any]) -> Path:
-    """Bars: the bound of each parameter (%, log axis); dots: the median |error| of the
-    instances' optima; a dashed line at :data:`UNDETERMINED_PERCENT`."""
-    import matplotlib
+    """The design's figure (:func:`draw_design`), drawn by the report's figure workers."""
+    data = {k: design[k] for k in ("names", "crb", "floor_errors", "instances", "label")}
+    return ctx.draw_figure(draw_design, f"identifiability_{design['label']}", data)
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+
+def draw_design(design: Mapping[str, Any]) -> Any:
+    """Bars: the bound of each parameter (%, log axis); dots: the median |error| of the
+    instances' optima; a dashed line at :data:`UNDETERMINED_PERCENT`. Returns the figure."""
     from matplotlib.ticker import FuncFormatter
+
+    from .figures import _plt
+
+    plt = _plt()
 
     names = design["names"]
     crb = design["crb"]["crb_percent"]
@@ -265,7 +271,7 @@ def _figure(ctx: ReportContext, design: Mapping[str, Any]) -> Path:
                  f"(CRB norm {design['crb']['crb_norm_percent']:.3g} %)", fontsize=10)
     ax.legend(fontsize=8, loc="best")
     fig.tight_layout()
-    return ctx.save_figure(fig, f"identifiability_{design['label']}")
+    return fig
 
 
 def _design_text(ctx: ReportContext, design: Mapping[str, Any]) -> str:

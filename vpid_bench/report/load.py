@@ -444,24 +444,50 @@ def runs_frame(rows: list[dict[str, Any]]) -> Any:
     return pd.DataFrame(rows)
 
 
+def trace_sets(records: list[dict[str, Any]], rows: list[dict[str, Any]]
+               ) -> dict[str, dict[str, list[tuple[np.ndarray, np.ndarray]]]]:
+    """Best-so-far traces of the successful runs in ``rows``:
+    ``out[context][algorithm]`` is a list of (evaluations, best) float arrays, one per run in
+    the order of ``rows`` (``null`` as NaN: nothing finite found yet). Plain numpy, what the
+    convergence figure needs (no DataFrame of every trace point)."""
+    by_id = {r["run_id"]: r for r in records}
+    out: dict[str, dict[str, list[tuple[np.ndarray, np.ndarray]]]] = {}
+    for row in rows:
+        r = by_id.get(row["run_id"])
+        if r is None or r["status"] != "ok":
+            continue
+        trace = r.get("trace") or {}
+        ev, best = trace.get("evaluations") or [], trace.get("best") or []
+        if not ev:
+            continue
+        out.setdefault(row["context"], {}).setdefault(row["algorithm"], []).append((
+            np.asarray(ev, dtype=float),
+            np.array([np.nan if b is None else b for b in best], dtype=float)))
+    return out
+
+
 def traces_frame(records: list[dict[str, Any]], rows: list[dict[str, Any]]) -> Any:
     """Best-so-far traces of the successful runs, long form: context, algorithm, run_id,
     evaluations, best (``null`` as NaN: nothing finite found yet)."""
     import pandas as pd
 
-    labels = {r["run_id"]: {"context": r["context"], "algorithm": r["algorithm"]} for r in rows}
-    parts = []
+    labels = {r["run_id"]: (r["context"], r["algorithm"]) for r in rows}
+    cols: dict[str, list[Any]] = {"context": [], "algorithm": [], "run_id": [],
+                                  "evaluations": [], "best": []}
     for r in records:
         trace = r.get("trace") or {}
         ev, best = trace.get("evaluations") or [], trace.get("best") or []
         if r["status"] != "ok" or not ev or r["run_id"] not in labels:
             continue
-        lab = labels[r["run_id"]]
-        parts.append(pd.DataFrame({
-            "context": lab["context"], "algorithm": lab["algorithm"], "run_id": r["run_id"],
-            "evaluations": np.asarray(ev, dtype=float),
-            "best": np.array([np.nan if b is None else b for b in best], dtype=float),
-        }))
-    if not parts:
+        context, algorithm = labels[r["run_id"]]
+        n = len(ev)
+        cols["context"] += [context] * n
+        cols["algorithm"] += [algorithm] * n
+        cols["run_id"] += [r["run_id"]] * n
+        cols["evaluations"].append(np.asarray(ev, dtype=float))
+        cols["best"].append(np.array([np.nan if b is None else b for b in best], dtype=float))
+    if not cols["run_id"]:
         return pd.DataFrame(columns=["context", "algorithm", "run_id", "evaluations", "best"])
-    return pd.concat(parts, ignore_index=True)
+    cols["evaluations"] = np.concatenate(cols["evaluations"])  # type: ignore[assignment]
+    cols["best"] = np.concatenate(cols["best"])  # type: ignore[assignment]
+    return pd.DataFrame(cols)

@@ -1,4 +1,4 @@
-"""Significance tests on the per-run metric, from scipy.stats, statsmodels and scikit-posthocs.
+"""Significance tests on the per-run metric, from scipy.stats (numpy for Holm and Nemenyi).
 
 Within a context (one problem, one population size, one noise setting), the runs of different
 optimizers are independent samples: Kruskal–Wallis tests whether any optimizer differs, and
@@ -7,9 +7,15 @@ all pairs of that context. The effect size is Vargha–Delaney's A12, computed f
 
 Across contexts (blocks: population sizes, noise seeds, problems), each optimizer's median
 per-run metric in each block is ranked within the block: the Friedman test asks whether the
-ranks differ, Nemenyi's post-hoc test (scikit-posthocs) gives the pairs for the critical
-difference diagram, and pairwise Wilcoxon signed-rank tests with Holm correction give a
-second opinion. Too few groups, runs or blocks for a test give a note, not an error.
+ranks differ, Nemenyi's post-hoc test gives the pairs for the critical difference diagram,
+and pairwise Wilcoxon signed-rank tests with Holm correction give a second opinion. Too few
+groups, runs or blocks for a test give a note, not an error.
+
+Holm's correction and Nemenyi's test are a few lines of numpy here (the same numbers as
+statsmodels' ``multipletests(method="holm")`` and scikit-posthocs'
+``posthoc_nemenyi_friedman``, which the tests check): importing those libraries costs more
+than the report's statistics themselves (scikit-posthocs imports matplotlib and seaborn,
+statsmodels' Holm runs a full garbage collection on every call).
 
 Lower metric is better everywhere (a problem metric, or the objective).
 """
@@ -17,6 +23,7 @@ Lower metric is better everywhere (a problem metric, or the objective).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 import math
 import warnings
@@ -46,17 +53,41 @@ def a12_magnitude(a12: float) -> str:
 
 
 def holm(pvalues: list[float]) -> list[float]:
-    """Holm–Bonferroni adjusted p-values (statsmodels ``multipletests(method='holm')``)."""
+    """Holm–Bonferroni adjusted p-values (the numbers of statsmodels'
+    ``multipletests(method='holm')``): the i-th smallest of m finite p-values times
+    ``m - i``, made non-decreasing in that order and capped at 1; NaN stays NaN."""
     if not pvalues:
         return []
-    from statsmodels.stats.multitest import multipletests
-
     p = np.asarray(pvalues, dtype=float)
     adjusted = np.full(p.shape, np.nan)
-    ok = np.isfinite(p)
-    if ok.any():
-        adjusted[ok] = multipletests(p[ok], method="holm")[1]
+    ok = np.flatnonzero(np.isfinite(p))
+    if ok.size:
+        q = p[ok]
+        order = np.argsort(q, kind="stable")
+        scaled = q[order] * np.arange(q.size, 0, -1)
+        adj = np.empty(q.size)
+        adj[order] = np.minimum(np.maximum.accumulate(scaled), 1.0)
+        adjusted[ok] = adj
     return adjusted.tolist()
+
+
+def nemenyi_friedman(values: np.ndarray) -> np.ndarray:
+    """Nemenyi's post-hoc p-values of a (blocks x algorithms) table (the numbers of
+    scikit-posthocs' ``posthoc_nemenyi_friedman``): ranks within each block (ties averaged),
+    for each pair the difference of mean ranks over ``sqrt(k (k + 1) / (6 n))`` times
+    ``sqrt(2)`` against the studentized range with k groups and infinite degrees of freedom.
+    A symmetric k x k matrix, diagonal 1."""
+    from scipy import stats
+
+    v = np.asarray(values, float)
+    n, k = v.shape
+    mean_ranks = stats.rankdata(v, axis=1).mean(axis=0)
+    iu = np.triu_indices(k, 1)
+    q = np.abs(mean_ranks[iu[0]] - mean_ranks[iu[1]]) / np.sqrt(k * (k + 1.0) / (6.0 * n))
+    out = np.ones((k, k))
+    out[iu] = stats.studentized_range.sf(q * np.sqrt(2.0), k, np.inf)
+    out[(iu[1], iu[0])] = out[iu]
+    return out
 
 
 def _samples(df: Any, value: str = "metric") -> dict[str, np.ndarray]:
@@ -129,9 +160,19 @@ def wilcoxon_paired(x: np.ndarray, y: np.ndarray) -> tuple[float, float, str]:
     Exact without ties or zero differences (n <= 50), exhaustive permutation with them for
     n <= 13 and a seeded permutation test (N_RESAMPLES resamples) up to n = 50, else the
     normal approximation. All differences zero: p = 1."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    # The same pair of samples is tested twice in a report (the pairwise tests of a context
+    # whose runs pair by instance, and the block Wilcoxon tests of its Friedman test): the
+    # result is a pure function of the values (the permutation test is seeded), so cache it.
+    return _wilcoxon_cached(x.tobytes(), y.tobytes())
+
+
+@functools.lru_cache(maxsize=4096)
+def _wilcoxon_cached(xb: bytes, yb: bytes) -> tuple[float, float, str]:
     from scipy import stats
 
-    d = np.asarray(x, float) - np.asarray(y, float)
+    x, y = np.frombuffer(xb, float), np.frombuffer(yb, float)
+    d = x - y
     nz = d[d != 0]
     if nz.size == 0:
         return 0.0, 1.0, "all differences zero"
@@ -358,7 +399,6 @@ def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts"
     of blocks x algorithms (lower is better), run only with at least :data:`MIN_BLOCKS`
     blocks and 3 algorithms; else the result carries a note saying why not."""
     import pandas as pd
-    import scikit_posthocs as sp
 
     table = table.dropna(axis=1, how="any")
     blocks, algos = [str(b) for b in table.index], list(table.columns)
@@ -378,8 +418,7 @@ def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts"
     res.statistic, res.p, res.p_method = friedman_test(values)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res.nemenyi = sp.posthoc_nemenyi_friedman(values)
-    res.nemenyi.index = res.nemenyi.columns = algos
+        res.nemenyi = pd.DataFrame(nemenyi_friedman(values), index=algos, columns=algos)
     rows = []
     for a, b in itertools.combinations(algos, 2):
         x, y = table[a].to_numpy(float), table[b].to_numpy(float)
