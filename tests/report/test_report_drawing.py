@@ -310,3 +310,24 @@ def test_nemenyi_matches_scikit_posthocs():
         np.testing.assert_allclose(stats.nemenyi_friedman(values),
                                    sp.posthoc_nemenyi_friedman(values).to_numpy(),
                                    rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_cd_bars_are_the_maximal_groups_scikit_posthocs_draws(seed):
+    """The CD diagram's bars (from the compact letter display) are the maximal cliques of the
+    'not significantly different' graph, as scikit-posthocs' own diagram computes them."""
+    sp_plotting = pytest.importorskip("scikit_posthocs._plotting")
+    import pandas as pd
+
+    from vpid_bench.report.figures import cd_bars
+
+    rng = np.random.default_rng(seed)
+    k = int(rng.integers(3, 9))
+    names = [f"o{i}" for i in range(k)]
+    p = rng.choice([0.001, 0.01, 0.2, 0.6], size=(k, k), p=[0.3, 0.2, 0.3, 0.2])
+    p = np.triu(p, 1) + np.triu(p, 1).T + np.eye(k)
+    same = pd.DataFrame(p >= 0.05, index=names, columns=names)
+    expected = {frozenset(c) for c in sp_plotting._find_maximal_cliques(same) if len(c) > 1}
+    bars = cd_bars(names, p, 0.05)
+    assert {frozenset(b) for b in bars} == expected
+    assert all(b == sorted(b, key=names.index) for b in bars)  # best first within a bar

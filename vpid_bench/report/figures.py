@@ -418,73 +418,67 @@ def cd_data(ranks: Any, pvalues: Any) -> dict[str, Any] | str:
     return {"ranks": items, "p": p}
 
 
-def _maximal_cliques(adjacent: np.ndarray) -> list[frozenset[int]]:
-    """Maximal cliques of a small undirected graph (Bron–Kerbosch with pivoting)."""
-    n = len(adjacent)
-    nbrs = [{j for j in range(n) if j != i and adjacent[i, j]} for i in range(n)]
-    out: list[frozenset[int]] = []
+def cd_bars(names: list[str], p: np.ndarray, alpha: float) -> list[list[str]]:
+    """The bars of a critical-difference diagram: each largest group (two or more) of
+    optimizers no pair of which differs significantly (``p >= alpha``), as the columns of the
+    compact letter display (:func:`vpid_bench.report.stats.compact_letters`), best first.
+    ``names``: best first; ``p``: their symmetric p-value matrix in that order."""
+    from .stats import compact_letters
 
-    def grow(r: set[int], p: set[int], x: set[int]) -> None:
-        if not p and not x:
-            out.append(frozenset(r))
-            return
-        pivot = max(p | x, key=lambda u: len(nbrs[u] & p))
-        for v in list(p - nbrs[pivot]):
-            grow(r | {v}, p & nbrs[v], x & nbrs[v])
-            p = p - {v}
-            x = x | {v}
-
-    grow(set(), set(range(n)), set())
-    return out
+    different = {frozenset((names[i], names[j])) for i in range(len(names))
+                 for j in range(i + 1, len(names)) if p[i, j] < alpha}
+    letters = compact_letters(list(names), different)
+    groups = sorted({letter for text in letters.values() for letter in text})
+    return [members for members in ([n for n in names if g in letters[n]] for g in groups)
+            if len(members) > 1]
 
 
 def draw_cd(data: Mapping[str, Any], title: str, axis_label: str, path: Path,
             alpha: float) -> Path | str:
-    """Critical-difference diagram: the mean ranks on an axis at the top (1 = best, left),
-    each optimizer's marker joined by an elbow to its label (the better half on the left,
-    ``name (rank)``, the other half on the right, ``(rank) name``), and a thick bar under the
-    axis joining each largest group of optimizers no pair of which differs significantly
-    (p >= ``alpha``); bars that would overlap are stacked."""
+    """Critical-difference diagram in Demšar's (2006) layout: the mean ranks on an axis at the
+    top (1 = best, on the left); under it one thick bar per group of :func:`cd_bars` (groups
+    that do not overlap share a level); each optimizer joined by an elbow line to its label,
+    the better half to labels on the left (best on the top row), the other half to labels on
+    the right (worst on the top row), so that no two lines cross."""
     plt = _plt()
-    items = data["ranks"]
-    k = len(items)
-    rank = np.array([r for _, r in items])
-    p = np.asarray(data["p"], float)
-    same = ~(p < alpha)
-    np.fill_diagonal(same, True)
-    bars = sorted(((sorted(c), rank[sorted(c)].min(), rank[sorted(c)].max())
-                   for c in _maximal_cliques(same) if len(c) > 1), key=lambda b: b[1])
-    levels: list[list[tuple[float, float]]] = []
-    fig, ax = plt.subplots(figsize=(8, 1.4 + 0.35 * k))
-    for members, lo, hi in bars:
-        for level, spans in enumerate(levels):
-            if not any(lo <= h and l_ <= hi for l_, h in spans):
-                spans.append((lo, hi))
-                y = -level - 1
-                break
-        else:
-            levels.append([(lo, hi)])
-            y = -len(levels)
-        ax.plot(rank[members], [y] * len(members), color="k", linewidth=2, zorder=3)
-    split = (k + 1) // 2
-    left, right = list(range(split)), list(range(k - 1, split - 1, -1))
-    for side, idx in (("left", left), ("right", right)):
-        xpos = rank[idx[0]] - 0.01 if side == "left" else rank[idx[0]] + 0.01
-        y = -len(levels) - 1
-        for colour_index, i in enumerate(idx):
-            colour = f"C{(colour_index + (0 if side == 'left' else len(left))) % 10}"
-            name, r = items[i]
-            ax.plot([xpos, r, r], [y, y, 0], color=colour)
-            ax.scatter(r, 0, color=colour, zorder=3)
-            label = f"{name} ({r:.1f})" if side == "left" else f"({r:.1f}) {name}"
-            ax.text(xpos, y, label, color=colour, va="center",
-                    ha="right" if side == "left" else "left")
-            y -= 1
+    names = [name for name, _ in data["ranks"]]
+    rank = {name: r for name, r in data["ranks"]}
+    levels: list[float] = []  # the right end of the last bar placed on each level
+    placed: list[tuple[float, float, int]] = []
+    for members in cd_bars(names, np.asarray(data["p"], float), alpha):
+        lo, hi = rank[members[0]], rank[members[-1]]
+        level = next((k for k, end in enumerate(levels) if lo > end + 0.05), len(levels))
+        levels[level:level + 1] = [hi]
+        placed.append((lo, hi, level))
+    step = 0.5  # vertical units between bar levels and between label rows
+    half = (len(names) + 1) // 2
+    lo_r, hi_r = min(rank.values()), max(rank.values())
+    margin = 0.25 * (hi_r - lo_r) + 0.5
+    left_x, right_x = lo_r - margin, hi_r + margin
+    rows = -step * (len(levels) + 1 + np.arange(half))
+    fig, ax = plt.subplots(figsize=(8, 1.3 + 0.3 * (half + len(levels))))
+    for lo, hi, level in placed:
+        ax.plot([lo - 0.03, hi + 0.03], [-step * (level + 1)] * 2, color="k", linewidth=3,
+                solid_capstyle="butt", zorder=3)
+    sides = [(names[:half], left_x, "right"), (names[half:][::-1], right_x, "left")]
+    for i, (group, x_label, align) in enumerate(sides):
+        for row, name in enumerate(group):
+            colour = f"C{(names.index(name)) % 10}"
+            r = rank[name]
+            ax.plot([r, r, x_label], [0, rows[row], rows[row]], color=colour, linewidth=1)
+            ax.scatter([r], [0], color=colour, zorder=4)
+            text = f"{name} ({r:.2f})" if i == 0 else f"({r:.2f}) {name}"
+            ax.text(x_label + (-0.05 if i == 0 else 0.05), rows[row], text, color=colour,
+                    va="center", ha=align, fontsize=9)
+    ax.set_xlim(left_x - 1.6 * margin, right_x + 1.6 * margin)
+    ax.set_ylim(rows[-1] - step, step)
+    ax.set_xticks(range(math.ceil(lo_r - 0.5), math.floor(hi_r + 0.5) + 1))
     ax.yaxis.set_visible(False)
-    for s in ("right", "left", "bottom"):
-        ax.spines[s].set_visible(False)
+    for side in ("right", "left", "bottom"):
+        ax.spines[side].set_visible(False)
+    ax.spines["top"].set_bounds(lo_r - 0.5, hi_r + 0.5)
     ax.xaxis.set_ticks_position("top")
-    ax.spines["top"].set_position("zero")
+    ax.spines["top"].set_position(("data", 0))
     ax.set_title(f"{title}\naxis: {axis_label}", fontsize=9)
     return save(fig, path)
 
