@@ -74,9 +74,8 @@ def test_ray_local_records_match_basic(basic, tmp_path):
     if importlib.util.find_spec("hydra_plugins.hydra_ray_launcher") is None:
         pytest.skip("hydra-ray-launcher not installed (extra 'ray': make test-scaleout)")
     cwd, _ = basic
-    done = run_cli([*SWEEP, "hydra/launcher=ray", "+hydra.launcher.ray.init.num_cpus=2",
-                    "+hydra.launcher.ray.init.include_dashboard=false", "hydra.sweep.dir=sweep"],
-                   tmp_path, timeout=600)
+    done = _run(tmp_path, "hydra/launcher=ray", "+hydra.launcher.ray.init.num_cpus=2",
+                "+hydra.launcher.ray.init.include_dashboard=false", timeout=600)
     _check_failed_job_reported(done)
     assert "Ray" in done.stdout + done.stderr  # it ran in the Ray launcher
     assert fingerprints(tmp_path / "sweep") == fingerprints(cwd / "sweep")
