@@ -331,3 +331,34 @@ def test_cd_bars_are_the_maximal_groups_scikit_posthocs_draws(seed):
     bars = cd_bars(names, p, 0.05)
     assert {frozenset(b) for b in bars} == expected
     assert all(b == sorted(b, key=names.index) for b in bars)  # best first within a bar
+
+
+@pytest.mark.parametrize(
+    ("file", "spec", "safe"),
+    [
+        (None, None, True),  # interactive, python -c, a notebook
+        ("/some/where/vpid-bench-report", None, True),  # our console scripts guard main()
+        ("/home/me/my_analysis.py", None, False),  # a user's script: may be unguarded
+        ("/x/pytest/__main__.py", "pytest.__main__", True),  # python -m: imported by name
+    ],
+)
+def test_auto_uses_workers_only_when_the_main_module_is_safe_to_import(
+        monkeypatch, file, spec, safe):
+    """A spawned worker imports the main module: an unguarded script would run again in
+    every worker, so "auto" draws serially for a script it does not know."""
+    import sys
+    import types
+
+    from vpid_bench.report import drawing
+
+    main = types.ModuleType("__main__")
+    if file is not None:
+        main.__file__ = file
+    main.__spec__ = types.SimpleNamespace(name=spec) if spec else None
+    monkeypatch.setitem(sys.modules, "__main__", main)
+    assert drawing.main_is_safe() is safe
+    with drawing.FigureDrawer("auto", workers=2) as auto:
+        assert auto.mode == ("parallel" if safe else "serial")
+    explicit = drawing.FigureDrawer("parallel", workers=1)  # the caller's choice, guarded
+    assert explicit.mode == "parallel"
+    explicit.terminate()

@@ -16,6 +16,13 @@ dicts, never the records) and drawn in a worker. The report collects the results
   exception (a KeyboardInterrupt too) cancels what is queued and terminates the workers.
 * ``mode="serial"`` draws in the calling process, one figure at a time (and ``"auto"`` does
   so when only one core is available): the same files, without workers.
+* A spawned worker imports the calling program's main module (as ``__mp_main__``), so a
+  script of the user's that builds a report from its top level, unguarded by
+  ``if __name__ == "__main__":``, would run again in every worker. ``"auto"`` therefore
+  uses workers only when that import is known to be harmless (:func:`main_is_safe`): the
+  ``vpid-bench`` and ``vpid-bench-report`` commands, ``python -c``, ``python -m``, an
+  interactive session or a notebook. A script of one's own asks for them with
+  ``figures="parallel"`` under such a guard.
 """
 
 from __future__ import annotations
@@ -48,6 +55,25 @@ def default_workers(cores: int | None = None) -> int:
     :data:`MAX_WORKERS`, and 0 (draw serially) on a single core."""
     cores = available_cores() if cores is None else cores
     return 0 if cores <= 1 else min(cores, MAX_WORKERS)
+
+
+#: The console scripts of this project: their main module calls ``main()`` only under
+#: ``if __name__ == "__main__":``, so a worker may import it.
+SAFE_SCRIPTS = ("vpid-bench", "vpid-bench-report")
+
+
+def main_is_safe() -> bool:
+    """Whether a spawned worker may import this program's main module without running it
+    again: no file (interactive, ``python -c``, a notebook), a module run with ``python -m``
+    (imported by name; such modules guard their entry point), or one of
+    :data:`SAFE_SCRIPTS`."""
+    import sys
+
+    main = sys.modules.get("__main__")
+    path = getattr(main, "__file__", None)
+    if main is None or path is None or getattr(main, "__spec__", None) is not None:
+        return True
+    return Path(path).name in SAFE_SCRIPTS
 
 
 def _warm_up() -> None:
@@ -95,6 +121,11 @@ class FigureDrawer:
         n = default_workers() if workers is None else int(workers)
         if mode == "parallel":
             n = max(n, 1)
+        elif mode == "auto" and n >= 1 and not main_is_safe():
+            log.info("figures drawn serially: this script's main module would run again in "
+                     "each worker (figures='parallel' under an `if __name__ == \"__main__\":` "
+                     "guard draws them in workers)")
+            n = 0
         self.mode = "parallel" if mode != "serial" and n >= 1 else "serial"
         self.workers = n if self.mode == "parallel" else 0
         self._pool: Any = None
