@@ -80,10 +80,11 @@ def test_9_report_output_that_cannot_be_a_folder_is_refused(target, sweep, tmp_p
 
 def test_16_a_second_command_in_the_same_folder_is_refused(tmp_path):
     """Two real processes: the second is refused in one line (exit 2) while the first runs;
-    the first finishes with every record."""
-    args = ["-m", "problem=functions", "optimizer=random,de1", "runs=4",
-            "problem.iterations=400", "problem.dim=6", "progress=false", "report=false",
-            "hydra.sweep.dir=shared"]
+    the first finishes with every record. The first command's first job is short (its
+    records say the command is under way) and its second one long (about 5 s here), so the
+    second command meets it running however fast the chain gets."""
+    args = ["-m", "problem=functions", "optimizer=de1", "problem.iterations=5,15000", "runs=4",
+            "problem.dim=6", "progress=false", "report=false", "hydra.sweep.dir=shared"]
     first = subprocess.Popen([*CLI, *args], cwd=tmp_path, env=cli_env(),
                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     try:
