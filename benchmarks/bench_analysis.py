@@ -23,16 +23,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from _shared import compose, registry_with_configs
+
 PAPER = "de1,de2,de3,de4,de5,de6,de7,de8,ga,random"
-
-
-def _compose(overrides: list[str]):
-    from hydra import compose, initialize_config_module
-    from hydra.core.global_hydra import GlobalHydra
-
-    GlobalHydra.instance().clear()
-    with initialize_config_module(version_base="1.3", config_module="vpid_bench.conf"):
-        return compose(config_name="config", overrides=overrides)
 
 
 def sweep(root: Path, optimizers: list[str], ps_values: list[int], runs: int, shared: bool,
@@ -40,11 +33,8 @@ def sweep(root: Path, optimizers: list[str], ps_values: list[int], runs: int, sh
     """Run the jobs; return seconds in runs, seconds in the analysis and polish counts."""
     from vpid_bench import experiment
     from vpid_bench.analysis import optimum
-    from vpid_bench.plugins import Registry
-    from vpid_bench.shell.config_store import register_configs
 
-    registry = Registry()
-    register_configs(registry)
+    registry = registry_with_configs()
     spent = {"analysis_s": 0.0, "polishes": 0}
     analyse, polish = experiment.analyse_job, optimum.polish
 
@@ -65,7 +55,7 @@ def sweep(root: Path, optimizers: list[str], ps_values: list[int], runs: int, sh
     try:
         for ps in ps_values:
             for name in optimizers:
-                cfg = _compose([f"optimizer={name}", f"problem.ps={ps}", f"runs={runs}",
+                cfg = compose([f"optimizer={name}", f"problem.ps={ps}", f"runs={runs}",
                                 "progress=false", "report=false", *extra])
                 job_dir = root / f"{name}-ps{ps}"
                 t0 = time.perf_counter()

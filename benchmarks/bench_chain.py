@@ -21,43 +21,20 @@ and prints chain / runs (target <= 2) and each part's share. Quick version:
 from __future__ import annotations
 
 import argparse
-import os
-import resource
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
-CLI = [sys.executable, "-c", "from vpid_bench.shell.main import main; main()"]
-REPORT = [sys.executable, "-c", "from vpid_bench.report.cli import main; main()"]
-
-
-def _env() -> dict[str, str]:
-    env = dict(os.environ)
-    env.setdefault("MPLBACKEND", "Agg")
-    env.setdefault("MPLCONFIGDIR", tempfile.mkdtemp(prefix="vpid-mpl-"))
-    return env
-
+from _shared import CLI, REPORT, compose, registry_with_configs, run_timed
 
 #: CPU seconds (user + system) of each measurement, beside its wall time: on a machine shared
 #: with other work the CPU time varies much less than the wall time.
 CPU: dict[str, float] = {}
 
 
-def _children_cpu() -> float:
-    r = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return r.ru_utime + r.ru_stime
-
-
 def timed(cmd: list[str], cwd: Path, name: str) -> float:
     """Wall time of one command (it must succeed); its CPU time goes to ``CPU[name]``."""
-    c0, t0 = _children_cpu(), time.perf_counter()
-    done = subprocess.run(cmd, cwd=cwd, env=_env(), capture_output=True, text=True, check=False)
-    wall = time.perf_counter() - t0
-    CPU[name] = _children_cpu() - c0
-    if done.returncode != 0:
-        sys.exit(f"failed ({done.returncode}): {' '.join(cmd)}\n{done.stderr[-2000:]}")
+    wall, CPU[name] = run_timed(cmd, cwd)
     return wall
 
 
@@ -65,23 +42,16 @@ def runs_alone(overrides: list[list[str]], lockstep: bool = True) -> tuple[float
     """Seconds the runs of the given jobs take in this process, and their evaluations
     (``lockstep=False``: one run after another, as before lockstep)."""
     import numpy as np
-    from hydra import compose, initialize_config_module
-    from hydra.core.global_hydra import GlobalHydra
 
     from vpid_bench.experiment import ProblemCache, available_cores, joins_lockstep, run_rng
-    from vpid_bench.plugins import Registry
     from vpid_bench.runner import Lane, run, run_many
-    from vpid_bench.shell.config_store import register_configs
     from vpid_bench.spec import parse_job
 
-    registry = Registry()
-    register_configs(registry)
+    registry = registry_with_configs()
     cache = ProblemCache()
     total, evaluations = 0.0, 0
     for job_overrides in overrides:
-        GlobalHydra.instance().clear()
-        with initialize_config_module(version_base="1.3", config_module="vpid_bench.conf"):
-            job = parse_job(compose(config_name="config", overrides=job_overrides), registry)
+        job = parse_job(compose(job_overrides), registry)
         problem = cache.get(job)
         problem.set_threads(job.spec.threads or available_cores())
         X = problem.bounds.sample(np.random.default_rng(0), 2)

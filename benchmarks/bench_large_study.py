@@ -13,27 +13,18 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import subprocess
-import sys
 import tempfile
-import time
 from pathlib import Path
 
-CLI = [sys.executable, "-c", "from vpid_bench.shell.main import main; main()"]
-REPORT = [sys.executable, "-c", "from vpid_bench.report.cli import main; main()"]
+from _shared import CLI, REPORT, run_timed
+
 OPTIMIZERS = "de1,de2,de4,de8,jade,shade,lshade,ga,cmaes,scipy_de"
 LAUNCHERS = {"basic": [], "joblib": ["hydra/launcher=joblib", "hydra.launcher.n_jobs=2"]}
 
 
 def timed(cmd: list[str], cwd: Path) -> float:
-    env = dict(os.environ, MPLBACKEND="Agg")
-    t0 = time.perf_counter()
-    done = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True, check=False)
-    wall = time.perf_counter() - t0
-    if done.returncode != 0:
-        sys.exit(f"failed ({done.returncode}): {' '.join(cmd)}\n{done.stderr[-2000:]}")
-    return wall
+    """Wall time of one command (it must succeed)."""
+    return run_timed(cmd, cwd)[0]
 
 
 def main() -> None:

@@ -16,22 +16,16 @@ import argparse
 import time
 
 import numpy as np
+from _shared import compose, registry_with_configs
 
 
 def _problem_and_starts(runs: int):
-    from hydra import compose, initialize_config_module
-
     from vpid_bench.experiment import ProblemCache, run_rng
-    from vpid_bench.plugins import Registry
     from vpid_bench.runner import run
-    from vpid_bench.shell.config_store import register_configs
     from vpid_bench.spec import parse_job
 
-    registry = Registry()
-    register_configs(registry)
-    with initialize_config_module(version_base="1.3", config_module="vpid_bench.conf"):
-        job = parse_job(compose(config_name="config",
-                                overrides=["optimizer=de1", f"runs={runs}"]), registry)
+    registry = registry_with_configs()
+    job = parse_job(compose(["optimizer=de1", f"runs={runs}"]), registry)
     problem = ProblemCache().get(job)
     problem.set_threads(1)
     starts = []

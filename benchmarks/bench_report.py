@@ -35,6 +35,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from _shared import cli_env
+
 BIN = Path(sys.executable).parent
 SWEEP = ["-m", "optimizer=de1,de2,de3,de4,de5,de6,de7,de8,ga", "problem.ps=20,30", "runs=30",
          "progress=false", "report=false"]
@@ -58,16 +60,12 @@ if __name__ == "__main__":
 """
 
 
-def _env() -> dict[str, str]:
-    return {**os.environ, "MPLBACKEND": "Agg"}
-
-
 def run_harness(records: Path, out: Path, mode: str, workers: str) -> dict:
     with tempfile.NamedTemporaryFile("w", suffix=".py", delete=False) as fh:
         fh.write(HARNESS)
     try:
         res = subprocess.run([sys.executable, fh.name, str(records), str(out), mode, workers],
-                             capture_output=True, text=True, check=True, env=_env())
+                             capture_output=True, text=True, check=True, env=cli_env())
     finally:
         os.unlink(fh.name)
     (line,) = [ln for ln in res.stdout.splitlines() if ln.startswith("JSON")]
@@ -79,7 +77,7 @@ def run_command(exe: str, records: Path, out: Path) -> dict:
     before = os.times()
     t0 = time.perf_counter()
     res = subprocess.run([exe, str(records), "-o", str(out)], capture_output=True, text=True,
-                         env=_env())
+                         env=cli_env())
     wall = time.perf_counter() - t0
     after = os.times()
     if res.returncode not in (0, 1):  # 1: written, with failed runs listed
@@ -111,7 +109,7 @@ def main() -> None:
             print(f"running the paper experiment into {records} ...", flush=True)
             t0 = time.perf_counter()
             subprocess.run([str(BIN / "vpid-bench"), *SWEEP, f"hydra.sweep.dir={records}"],
-                           check=True, capture_output=True, env=_env())
+                           check=True, capture_output=True, env=cli_env())
             print(f"  {time.perf_counter() - t0:.1f} s", flush=True)
         results: dict[str, list[dict]] = {"serial": [], "parallel": []}
         cli: dict[str, list[dict]] = {"vpid-bench-report": []}

@@ -13,24 +13,15 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
-import sys
 import tempfile
-import time
 from pathlib import Path
 
-CLI = [sys.executable, "-c", "from vpid_bench.shell.main import main; main()"]
+from _shared import CLI, run_timed
 
 
 def sweep(args: list[str], cwd: Path) -> float:
-    env = dict(os.environ, MPLBACKEND="Agg")
-    t0 = time.perf_counter()
-    done = subprocess.run([*CLI, *args], cwd=cwd, env=env, capture_output=True, text=True,
-                          check=False)
-    wall = time.perf_counter() - t0
-    if done.returncode != 0:
-        sys.exit(f"sweep failed ({done.returncode}): {' '.join(args)}\n{done.stderr[-2000:]}")
-    return wall
+    """Wall time of one ``vpid-bench`` invocation (it must succeed)."""
+    return run_timed([*CLI, *args], cwd)[0]
 
 
 def fingerprints(folder: Path) -> tuple[dict[str, str], int]:

@@ -26,25 +26,12 @@ import tempfile
 import time
 from pathlib import Path
 
-CLI = [sys.executable, "-c", "from vpid_bench.shell.main import main; main()"]
-
-
-def _env() -> dict[str, str]:
-    env = dict(os.environ)
-    env.setdefault("MPLBACKEND", "Agg")
-    env.setdefault("MPLCONFIGDIR", tempfile.mkdtemp(prefix="vpid-mpl-"))
-    return env
+from _shared import CLI, cli_env, run_timed
 
 
 def run_sweep(args: list[str], cwd: Path) -> float:
     """Wall time of one CLI invocation (it must succeed)."""
-    t0 = time.perf_counter()
-    done = subprocess.run([*CLI, *args], cwd=cwd, env=_env(), capture_output=True, text=True,
-                          check=False)
-    wall = time.perf_counter() - t0
-    if done.returncode != 0:
-        sys.exit(f"sweep failed ({done.returncode}): {' '.join(args)}\n{done.stderr[-2000:]}")
-    return wall
+    return run_timed([*CLI, *args], cwd)[0]
 
 
 def count_evaluations(sweep_dir: Path) -> dict[int, int]:
@@ -85,7 +72,7 @@ def startup(repeat: int = 3) -> tuple[float, float, float]:
         times = []
         for _ in range(repeat):
             t0 = time.perf_counter()
-            subprocess.run(cmd, cwd=cwd, env=_env(), capture_output=True, check=True)
+            subprocess.run(cmd, cwd=cwd, env=cli_env(), capture_output=True, check=True)
             times.append(time.perf_counter() - t0)
         return min(times)
 
