@@ -20,6 +20,27 @@ def registry():
     return Registry()
 
 
+@pytest.fixture
+def in_tmp(tmp_path, monkeypatch):
+    """Run in an empty folder; keep the invocation id of main() out of this process."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("VPID_BENCH_INVOCATION", "test")
+    monkeypatch.delenv("VPID_BENCH_DEBUG", raising=False)
+    return tmp_path
+
+
+@pytest.fixture(scope="session")
+def registry_of():
+    """``registry_of((name, plugin), ...)``: a registry of exactly these plugins (no installed
+    entry points), for tests that plant a misbehaving one."""
+    from vpid_bench.plugins import Registry, get_plugin_manager
+
+    def build(*plugins: tuple[str, object]) -> Registry:
+        return Registry(get_plugin_manager(entry_points=[], extra_plugins=list(plugins)))
+
+    return build
+
+
 @pytest.fixture(scope="session")
 def compose_config(registry) -> Iterator:
     """``compose_config(overrides)`` -> the composed config, as the CLI would build it."""

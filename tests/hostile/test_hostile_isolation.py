@@ -17,7 +17,7 @@ from hostile_helpers import TINY, error_lines, main_in_process, plan_of, read_on
 from vpid_bench import Optimizer, OptimizerParams, hookimpl
 from vpid_bench import records as rec
 from vpid_bench.experiment import run_from_config
-from vpid_bench.plugins import Registry, get_plugin_manager
+from vpid_bench.plugins import Registry
 
 SWEEP = ["-m", "problem=functions", "optimizer=random,de1,de4", "runs=2",
          "problem.iterations=2", "progress=false", "report=false"]
@@ -134,12 +134,10 @@ class _Plugin:
 
 
 @pytest.fixture(scope="module")
-def bad_registry() -> Registry:
+def bad_registry(registry_of) -> Registry:
     import vpid_functions.plugin as functions
 
-    pm = get_plugin_manager(entry_points=[], extra_plugins=[("functions", functions),
-                                                             ("bad", _Plugin())])
-    return Registry(pm)
+    return registry_of(("functions", functions), ("bad", _Plugin()))
 
 
 def _config(name: str, **spec) -> dict:

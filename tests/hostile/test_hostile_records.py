@@ -18,7 +18,6 @@ from vpid_bench import hookimpl
 from vpid_bench import records as rec
 from vpid_bench.api import Bounds, Problem, ProblemConfig
 from vpid_bench.experiment import run_from_config
-from vpid_bench.plugins import Registry, get_plugin_manager
 
 
 @pytest.fixture(scope="module")
@@ -127,18 +126,17 @@ class _Plugin:
         register("minus_inf", _MinusInf)
 
 
-def test_17_minus_inf_is_stored_and_reported_as_minus_inf(tmp_path):
+def test_17_minus_inf_is_stored_and_reported_as_minus_inf(tmp_path, registry_of):
     import vpid_baselines.plugin as baselines
 
     from vpid_bench.report.build import build_report
     from vpid_bench.report.load import load_records, run_rows
 
-    pm = get_plugin_manager(entry_points=[], extra_plugins=[("baselines", baselines),
-                                                             ("minus", _Plugin())])
+    registry = registry_of(("baselines", baselines), ("minus", _Plugin()))
     summary = run_from_config(
         {"problem": {"name": "minus_inf", "ps": 20, "iterations": 5},
          "optimizer": {"name": "random"}, "runs": 2, "progress": False},
-        tmp_path / "sweep" / "job", Registry(pm))
+        tmp_path / "sweep" / "job", registry)
     raw = json.loads(summary.record_paths[0].read_text())
     assert raw["result"]["f_best"] == "-inf"  # strict JSON, the sign kept
     assert rec.read_record(summary.record_paths[0])["result"]["f_best"] == -math.inf

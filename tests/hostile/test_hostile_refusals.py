@@ -28,14 +28,6 @@ def _csv(path, rows_of, encoding="utf-8"):
 
 
 @pytest.fixture
-def in_tmp(tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path)
-    monkeypatch.setenv("VPID_BENCH_INVOCATION", "test")
-    monkeypatch.delenv("VPID_BENCH_DEBUG", raising=False)
-    return tmp_path
-
-
-@pytest.fixture
 def csv_files(tmp_path):
     """Reference files: (name -> path) for the CSV cases of 13 and 14."""
     out = {

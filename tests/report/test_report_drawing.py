@@ -17,7 +17,6 @@ from report_synth import objective_job
 from test_report_outputs import _vehicle_sweep
 
 from vpid_bench import hookimpl
-from vpid_bench.plugins import Registry, get_plugin_manager
 from vpid_bench.report import figures, stats
 from vpid_bench.report.build import build_report
 from vpid_bench.report.drawing import FigureDrawer
@@ -172,11 +171,10 @@ def _figure_plugin() -> types.SimpleNamespace:
 
 
 @pytest.mark.parametrize("mode", ["parallel", "serial"])
-def test_a_plugin_figure_that_fails_is_dropped_and_reported(tmp_path, mode):
+def test_a_plugin_figure_that_fails_is_dropped_and_reported(tmp_path, mode, registry_of):
     objective_job(tmp_path / "s", "a", 10, [1.0, 2.0, 3.0, 4.0, 5.0])
     objective_job(tmp_path / "s", "b", 10, [2.0, 3.0, 4.0, 5.0, 6.0])
-    registry = Registry(get_plugin_manager(entry_points=[],
-                                           extra_plugins=[("figplug", _figure_plugin())]))
+    registry = registry_of(("figplug", _figure_plugin()))
     rep = build_report([tmp_path / "s"], tmp_path / "out", registry=registry, figures=mode,
                        workers=2)
     figs = tmp_path / "out" / "figures"
@@ -203,11 +201,10 @@ def _interrupting_plugin() -> types.SimpleNamespace:
         vpid_bench_register_report_sections=vpid_bench_register_report_sections)
 
 
-def test_no_worker_is_left_after_an_interrupt(tmp_path):
+def test_no_worker_is_left_after_an_interrupt(tmp_path, registry_of):
     objective_job(tmp_path / "s", "a", 10, [1.0, 2.0, 3.0, 4.0, 5.0])
     objective_job(tmp_path / "s", "b", 10, [2.0, 3.0, 4.0, 5.0, 6.0])
-    registry = Registry(get_plugin_manager(entry_points=[],
-                                           extra_plugins=[("irq", _interrupting_plugin())]))
+    registry = registry_of(("irq", _interrupting_plugin()))
     with pytest.raises(KeyboardInterrupt):
         build_report([tmp_path / "s"], tmp_path / "out", registry=registry,
                      figures="parallel", workers=2)

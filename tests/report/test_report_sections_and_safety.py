@@ -16,7 +16,7 @@ from report_synth import objective_job, record, write_job
 
 from vpid_bench import hookimpl
 from vpid_bench.artifacts import BadArtifactError, read_best_signals, write_best_signals
-from vpid_bench.plugins import Registry, get_plugin_manager
+from vpid_bench.plugins import Registry
 from vpid_bench.report.build import build_report
 from vpid_bench.report.safe import escape, slug
 from vpid_bench.report.sections import Contribution, HeadlineColumn, Section
@@ -60,10 +60,9 @@ def _toy_plugin(calls: list) -> types.SimpleNamespace:
 
 
 @pytest.fixture
-def toy_registry():
+def toy_registry(registry_of):
     calls: list = []
-    pm = get_plugin_manager(entry_points=[], extra_plugins=[("toyplug", _toy_plugin(calls))])
-    return Registry(pm), calls
+    return registry_of(("toyplug", _toy_plugin(calls))), calls
 
 
 @pytest.mark.parametrize("short", [False, True])

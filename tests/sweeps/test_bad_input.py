@@ -20,7 +20,7 @@ from vpid_bench import Optimizer, OptimizerParams, hookimpl
 from vpid_bench import records as rec
 from vpid_bench.api import ConfigError
 from vpid_bench.experiment import run_from_config
-from vpid_bench.plugins import Registry, get_plugin_manager
+from vpid_bench.plugins import Registry
 
 FUNCTIONS = ["problem=functions", "optimizer=random", "progress=false", "report=false"]
 
@@ -80,15 +80,6 @@ PREFLIGHT = [
     (["problem/x=1"], "error: problem/x='1' is not allowed: config groups are problem, "
      "optimizer and Hydra's"),
 ]
-
-
-@pytest.fixture
-def in_tmp(tmp_path, monkeypatch):
-    """Run in an empty folder; keep the invocation id of main() out of this process."""
-    monkeypatch.chdir(tmp_path)
-    monkeypatch.setenv("VPID_BENCH_INVOCATION", "test")
-    monkeypatch.delenv("VPID_BENCH_DEBUG", raising=False)
-    return tmp_path
 
 
 def _main_error(argv: list[str], capsys) -> tuple[int, str]:
@@ -243,12 +234,10 @@ class _FaultyPlugin:
 
 
 @pytest.fixture(scope="module")
-def faulty_registry() -> Registry:
+def faulty_registry(registry_of) -> Registry:
     import vpid_functions.plugin as functions
 
-    pm = get_plugin_manager(entry_points=[], extra_plugins=[("functions", functions),
-                                                             ("faulty", _FaultyPlugin())])
-    return Registry(pm)
+    return registry_of(("functions", functions), ("faulty", _FaultyPlugin()))
 
 
 def _faulty_config(fault: str) -> dict:
