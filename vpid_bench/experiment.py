@@ -47,6 +47,7 @@ import numpy as np
 from . import records as rec
 from .api import LoopOptimizer, Optimizer, Problem
 from .artifacts import best_vector, write_best_signals
+from .machine import available_cores
 from .plugins import Registry
 from .runner import Lane, RunResult, RunTimeoutError, run, run_many
 from .spec import Job, parse_job
@@ -98,16 +99,6 @@ class ProblemCache:
                 self._items.pop(next(iter(self._items)))
             self._items[key] = build_problem_from_job(job)
         return self._items[key]
-
-
-def available_cores() -> int:
-    """The cores this process may run on (the default of the ``threads`` key)."""
-    import os
-
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except (AttributeError, OSError):  # not Linux
-        return max(1, os.cpu_count() or 1)
 
 
 def build_problem_from_job(job: Job) -> Problem:

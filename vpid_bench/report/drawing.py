@@ -28,10 +28,11 @@ dicts, never the records) and drawn in a worker. The report collects the results
 from __future__ import annotations
 
 import logging
-import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, Literal
+
+from ..machine import available_cores
 
 log = logging.getLogger(__name__)
 
@@ -40,14 +41,6 @@ FigureMode = Literal["auto", "parallel", "serial"]
 MODES: tuple[str, ...] = ("auto", "parallel", "serial")
 #: At most this many worker processes draw the figures.
 MAX_WORKERS = 4
-
-
-def available_cores() -> int:
-    """The cores this process may run on (its CPU affinity where the OS says, else all)."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):  # not Linux
-        return os.cpu_count() or 1
 
 
 def default_workers(cores: int | None = None) -> int:
