@@ -124,7 +124,7 @@ def test_tables_and_tidy_runs(vehicle_report):
 def test_convergence_has_a_log_axis_and_the_truth_line(tmp_path):
     from vpid_bench.report import figures
     from vpid_bench.report.identifiability import reference_levels
-    from vpid_bench.report.load import traces_frame
+    from vpid_bench.report.load import trace_sets
 
     root = tmp_path / "s"
     for algo in ("a", "b"):
@@ -149,7 +149,8 @@ def test_convergence_has_a_log_axis_and_the_truth_line(tmp_path):
 
     plt.Figure.savefig = spy
     try:
-        out = figures.convergence(traces_frame(loaded.records, rows), tmp_path / "c.png", ft)
+        out = figures.draw_convergence(  # the report's path: plain traces -> panels -> figure
+            figures.convergence_panels(trace_sets(loaded.records, rows), ft), tmp_path / "c.png")
     finally:
         plt.Figure.savefig = original
     assert out == tmp_path / "c.png"

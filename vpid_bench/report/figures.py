@@ -11,9 +11,8 @@ Every figure comes in two halves so that the report can draw it in a worker proc
   ``draw_cd``) takes that data and a path, imports only matplotlib, writes one PNG and
   returns its path.
 
-The frame-taking functions ``convergence``, ``runs_metric``, ``error_heatmap`` and
-``cd_diagram`` do both in one call (the API the report had before). Every function returns
-the PNG path, or a string saying why the figure was not drawn. Lower is better on every
+A draw function returns the PNG path, a data function the data or a string saying why the
+figure cannot be drawn. Lower is better on every
 metric axis. Problem-specific figures (e.g. measured vs fitted signals) come from the
 problem's plugin through a report section.
 """
@@ -194,18 +193,6 @@ def convergence_panels(traces: TraceSets, f_true: Mapping[str, float] | None = N
     return panels
 
 
-def trace_sets_from_frame(traces: Any) -> dict[str, dict[str, list[tuple[np.ndarray,
-                                                                           np.ndarray]]]]:
-    """:func:`convergence_panels`' input from a long traces frame (context, algorithm,
-    run_id, evaluations, best; :func:`.load.traces_frame`)."""
-    out: dict[str, dict[str, list[tuple[np.ndarray, np.ndarray]]]] = {}
-    for (context, algorithm, _), r in traces.groupby(["context", "algorithm", "run_id"],
-                                                      sort=True):
-        out.setdefault(context, {}).setdefault(algorithm, []).append(
-            (r["evaluations"].to_numpy(float), r["best"].to_numpy(float)))
-    return out
-
-
 def draw_convergence(panels: Sequence[Mapping[str, Any]], path: Path) -> Path | str:
     """Median best objective vs evaluations per optimizer, IQR band, one panel per context,
     on a logarithmic y axis; a dashed line at the objective of the true parameters and a
@@ -244,15 +231,6 @@ def draw_convergence(panels: Sequence[Mapping[str, Any]], path: Path) -> Path | 
     fig.suptitle("Convergence: median best objective vs evaluations (band = interquartile range)")
     fig.tight_layout()
     return save(fig, path)
-
-
-def convergence(traces: Any, path: Path, f_true: Mapping[str, float] | None = None,
-                f_opt: Mapping[str, float] | None = None) -> Path | str:
-    """:func:`draw_convergence` of a long traces frame (:func:`.load.traces_frame`)."""
-    if traces is None or traces.empty:
-        return "no traces in the records"
-    return draw_convergence(convergence_panels(trace_sets_from_frame(traces), f_true, f_opt),
-                            path)
 
 
 # --- per-run metric --------------------------------------------------------------------------
@@ -316,14 +294,6 @@ def draw_runs_metric(data: Mapping[str, Any], path: Path) -> Path | str:
               title="context", fontsize=8, title_fontsize=8)
     return save(fig, path)
 
-
-def runs_metric(df: Any, problem: str, path: Path) -> Path | str:
-    """Per-run metric per optimizer, grouped by context (population size, noise, ...)."""
-    data = runs_metric_data(df, problem)
-    return data if isinstance(data, str) else draw_runs_metric(data, path)
-
-
-# --- error heatmap ---------------------------------------------------------------------------
 
 def error_label(v: float) -> str:
     """A cell of the error heatmap: readable from 1e-3 % to thousands of percent."""
@@ -396,12 +366,6 @@ def draw_error_heatmap(data: Mapping[str, Any], path: Path) -> Path | str:
     ax.set_ylabel("optimizer  |  context")
     ax.set_title(f"Median per-run |relative error| of each parameter (%), {data['problem']}")
     return save(fig, path)
-
-
-def error_heatmap(df: Any, problem: str, path: Path) -> Path | str:
-    """:func:`draw_error_heatmap` of the runs frame's rows of ``problem``."""
-    data = error_heatmap_data(df, problem)
-    return data if isinstance(data, str) else draw_error_heatmap(data, path)
 
 
 # --- critical-difference diagram -------------------------------------------------------------
@@ -481,10 +445,3 @@ def draw_cd(data: Mapping[str, Any], title: str, axis_label: str, path: Path,
     ax.spines["top"].set_position(("data", 0))
     ax.set_title(f"{title}\naxis: {axis_label}", fontsize=9)
     return save(fig, path)
-
-
-def cd_diagram(ranks: Any, pvalues: Any, title: str, axis_label: str, path: Path,
-               alpha: float) -> Path | str:
-    """Critical-difference diagram of mean ranks and a p-value matrix (:func:`draw_cd`)."""
-    data = cd_data(ranks, pvalues)
-    return data if isinstance(data, str) else draw_cd(data, title, axis_label, path, alpha)

@@ -464,30 +464,3 @@ def trace_sets(records: list[dict[str, Any]], rows: list[dict[str, Any]]
             np.asarray(ev, dtype=float),
             np.array([np.nan if b is None else b for b in best], dtype=float)))
     return out
-
-
-def traces_frame(records: list[dict[str, Any]], rows: list[dict[str, Any]]) -> Any:
-    """Best-so-far traces of the successful runs, long form: context, algorithm, run_id,
-    evaluations, best (``null`` as NaN: nothing finite found yet)."""
-    import pandas as pd
-
-    labels = {r["run_id"]: (r["context"], r["algorithm"]) for r in rows}
-    cols: dict[str, list[Any]] = {"context": [], "algorithm": [], "run_id": [],
-                                  "evaluations": [], "best": []}
-    for r in records:
-        trace = r.get("trace") or {}
-        ev, best = trace.get("evaluations") or [], trace.get("best") or []
-        if r["status"] != "ok" or not ev or r["run_id"] not in labels:
-            continue
-        context, algorithm = labels[r["run_id"]]
-        n = len(ev)
-        cols["context"] += [context] * n
-        cols["algorithm"] += [algorithm] * n
-        cols["run_id"] += [r["run_id"]] * n
-        cols["evaluations"].append(np.asarray(ev, dtype=float))
-        cols["best"].append(np.array([np.nan if b is None else b for b in best], dtype=float))
-    if not cols["run_id"]:
-        return pd.DataFrame(columns=["context", "algorithm", "run_id", "evaluations", "best"])
-    cols["evaluations"] = np.concatenate(cols["evaluations"])  # type: ignore[assignment]
-    cols["best"] = np.concatenate(cols["best"])  # type: ignore[assignment]
-    return pd.DataFrame(cols)
