@@ -58,20 +58,28 @@ class BestSignals:
 
 
 def best_vector(record_paths: Iterable[Path]) -> tuple[np.ndarray, dict[str, Any]] | None:
-    """The best identified vector among the ok records at ``record_paths`` and where it
-    comes from (``run_index``, ``f_best``, ``ranked_by``, ``value``), or ``None``.
+    """:func:`best_of` the readable records at ``record_paths``."""
+    from .records import CorruptRecordError, read_record
+
+    records = []
+    for path in record_paths:
+        try:
+            records.append(read_record(Path(path)))
+        except (CorruptRecordError, OSError):
+            continue
+    return best_of(records)
+
+
+def best_of(records: Iterable[Mapping[str, Any]]) -> tuple[np.ndarray, dict[str, Any]] | None:
+    """The best identified vector among the ok ``records`` (as read by
+    :func:`vpid_bench.records.read_record`) and where it comes from (``run_index``,
+    ``f_best``, ``ranked_by``, ``value``), or ``None``.
 
     Best means the lowest first metric (``result.metrics``) when every ok record has it,
     else the lowest objective ``f_best``; records with a non-finite vector are passed over.
     """
-    from .records import CorruptRecordError, read_record
-
     runs = []
-    for path in record_paths:
-        try:
-            r = read_record(Path(path))
-        except (CorruptRecordError, OSError):
-            continue
+    for r in records:
         res = r.get("result")
         if r.get("status") != "ok" or not isinstance(res, Mapping):
             continue

@@ -46,7 +46,7 @@ import numpy as np
 
 from . import records as rec
 from .api import LoopOptimizer, Optimizer, Problem
-from .artifacts import best_vector, write_best_signals
+from .artifacts import best_of, write_best_signals
 from .machine import available_cores
 from .plugins import Registry
 from .runner import Lane, RunResult, RunTimeoutError, run, run_many
@@ -208,7 +208,7 @@ def _job_key(job: Job, registry: Registry | None, problem: Problem) -> dict[str,
 
 
 def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
-                paths: list[Path]) -> dict[int, float]:
+                records: list[dict[str, Any]]) -> dict[int, float]:
     """What the records allow, for a problem with residuals and a known truth: the Cramér–Rao
     bounds of its design (``job_dir/identifiability.json``) and each instance's optimum
     (``optima_dir/<key>.json``, shared by the jobs of a sweep; see :mod:`.analysis`).
@@ -225,11 +225,7 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
         if crb is not None:
             rec.write_json_atomic(target, crb)
     bests: dict[int, list[tuple[np.ndarray, float]]] = {}
-    for path in paths:
-        try:
-            record = rec.read_record(path)
-        except rec.CorruptRecordError:
-            continue
+    for record in records:
         res = record.get("result") or {}
         x, f = res.get("x_best"), res.get("f_best")
         if record["status"] == "ok" and x and None not in x and f is not None:
@@ -249,20 +245,27 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
     return gaps
 
 
-def _score(gaps: Mapping[int, float], paths: list[Path]) -> float | None:
+def _score(gaps: Mapping[int, float], records: list[dict[str, Any]]) -> float | None:
     """The job's search score (see :class:`JobSummary`); ``inf`` when a run failed."""
     if gaps:
         values = list(gaps.values())
     else:
         values = []
-        for path in paths:
-            try:
-                record = rec.read_record(path)
-            except rec.CorruptRecordError:
-                continue
+        for record in records:
             f = (record.get("result") or {}).get("f_best")
             values.append(float("inf") if record["status"] != "ok" or f is None else float(f))
     return float(np.median(values)) if values else None
+
+
+def _read_records(paths: list[Path]) -> list[dict[str, Any]]:
+    """The job's readable records (an unreadable one is left out: resume runs it again)."""
+    records = []
+    for path in paths:
+        try:
+            records.append(rec.read_record(path))
+        except rec.CorruptRecordError:
+            continue
+    return records
 
 
 def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
@@ -316,16 +319,17 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
                     bar.set_postfix_str(_postfix(record), refresh=False)
         finally:
             bar.close()
+        records = _read_records(summary.record_paths)  # once, for all that follows
         gaps: dict[int, float] = {}
         try:
             gaps = analyse_job(job, problem, job_dir, Path(optima_dir or job_dir / "optima"),
-                               summary.record_paths)
+                               records)
         except Exception as exc:  # noqa: BLE001 - the runs are recorded; say what failed
             log.warning("the optimum / identifiability analysis failed: %s: %s",
                         type(exc).__name__, exc)
-        summary.score = _score(gaps, summary.record_paths)
+        summary.score = _score(gaps, records)
         summary.wall_time_s = time.perf_counter() - start
-    best = best_vector(summary.record_paths)
+    best = best_of(records)
     if best is not None:  # the best run's own instance: its record is the one it fitted
         write_best_signals(job_dir, problem.instance(int(best[1]["run_index"])), *best)
     return summary
