@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vpid_bench.experiment import build_problem, optimizer_params
+from vpid_bench.build import build_problem, optimizer_params
 from vpid_bench.plugins import Registry
 from vpid_bench.runner import run
 

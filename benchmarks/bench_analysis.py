@@ -50,7 +50,9 @@ def sweep(root: Path, optimizers: list[str], ps_values: list[int], runs: int, sh
         return polish(*a, **k)
 
     experiment.analyse_job, optimum.polish = timed_analyse, counted_polish
-    problems = experiment.ProblemCache()
+    from vpid_bench.build import ProblemCache
+
+    problems = ProblemCache()
     total = 0.0
     try:
         for ps in ps_values:

@@ -16,7 +16,7 @@ import timeit
 
 import numpy as np
 
-from vpid_bench.experiment import build_problem, optimizer_params
+from vpid_bench.build import build_problem, optimizer_params
 from vpid_bench.plugins import Registry
 
 MUTATIONS = ("adaptfeasible", "scaled_halving")

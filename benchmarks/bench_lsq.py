@@ -30,7 +30,7 @@ import timeit
 import numpy as np
 
 from vpid_bench.api import LoopOptimizer, OptimizerParams
-from vpid_bench.experiment import build_problem, optimizer_params, run_rng
+from vpid_bench.build import build_problem, optimizer_params, run_rng
 from vpid_bench.plugins import Registry
 from vpid_bench.runner import run
 

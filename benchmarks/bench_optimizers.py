@@ -19,7 +19,7 @@ import timeit
 
 import numpy as np
 
-from vpid_bench.experiment import build_problem, optimizer_params
+from vpid_bench.build import build_problem, optimizer_params
 from vpid_bench.plugins import Registry
 
 OPTIMIZERS = ("de1", "de2", "de3", "de4", "de5", "de6", "de7", "de8", "ga", "random")

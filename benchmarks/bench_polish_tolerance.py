@@ -20,7 +20,7 @@ from _shared import compose, registry_with_configs
 
 
 def _problem_and_starts(runs: int):
-    from vpid_bench.experiment import ProblemCache, run_rng
+    from vpid_bench.build import ProblemCache, run_rng
     from vpid_bench.runner import run
     from vpid_bench.spec import parse_job
 

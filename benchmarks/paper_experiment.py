@@ -48,7 +48,7 @@ def objective_cost(problem: str, ps: int, seconds: float = 1.0) -> float:
     """Seconds per evaluation of the objective alone, on batches of ``ps`` random candidates."""
     import numpy as np
 
-    from vpid_bench.experiment import build_problem
+    from vpid_bench.build import build_problem
     from vpid_bench.params import dataclass_defaults
     from vpid_bench.plugins import Registry
 

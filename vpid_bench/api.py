@@ -113,11 +113,25 @@ class ProblemConfig:
 
     ``ps`` is the population size (candidates an optimizer proposes per generation) and
     ``iterations`` the number of generations after the initial population; the default budget
-    of a run is ``ps * (iterations + 1)`` evaluations (see :mod:`vpid_bench.spec`).
+    of a run is :func:`default_budget` evaluations (see :mod:`vpid_bench.spec`).
     """
 
     ps: int = 20
     iterations: int = 50
+
+
+#: The problem's protocol keys: stored in the problem's config only, copied into every
+#: optimizer's ``Params`` by the job (never settable on the optimizer).
+PROTOCOL_KEYS = ("ps", "iterations")
+#: What the job fills into an optimizer's ``Params``: the protocol and the run's budget.
+FILLED_PARAMS = (*PROTOCOL_KEYS, "budget")
+
+
+def default_budget(ps: int, iterations: int) -> int:
+    """The default evaluation budget of a run under a protocol: the initial population plus
+    ``iterations`` generations of ``ps`` candidates, ``ps * (iterations + 1)``. The only place
+    this formula is written; an optimizer reads its run's budget from ``params.budget``."""
+    return ps * (iterations + 1)
 
 
 class Problem(abc.ABC):
@@ -286,12 +300,18 @@ class Problem(abc.ABC):
 class OptimizerParams:
     """Base of every optimizer's ``Params``.
 
-    ``ps`` and ``iterations`` are a copy of the problem's protocol, filled in by the job
-    (:func:`vpid_bench.spec.parse_job`); they are not settable on the optimizer.
+    ``ps`` and ``iterations`` are a copy of the problem's protocol and ``budget`` the number of
+    evaluations the run loop will allow this run, all three filled in by the job
+    (:func:`vpid_bench.spec.parse_job`); none is settable on the optimizer. An optimizer that
+    plans over its budget (a population-size schedule, a library's own budget) reads
+    :attr:`Optimizer.budget`, never a formula of its own. ``budget`` is ``None`` only when the
+    Params were built by hand; :attr:`Optimizer.budget` then falls back to the protocol's
+    default (:func:`default_budget`).
     """
 
     ps: int = 20
     iterations: int = 50
+    budget: int | None = None
 
 
 class Optimizer(abc.ABC):
@@ -324,6 +344,16 @@ class Optimizer(abc.ABC):
         self.params = params
         self.bounds = bounds
         self.rng = rng
+
+    @property
+    def budget(self) -> int:
+        """Evaluations the run loop allows this run (``params.budget``; built by hand without
+        one: the protocol's default, :func:`default_budget`). The loop stops the run there
+        whatever the optimizer does; this is for optimizers that plan over it."""
+        budget = getattr(self.params, "budget", None)
+        if budget is None:
+            budget = default_budget(self.params.ps, self.params.iterations)
+        return int(budget)
 
     @classmethod
     def check(cls, params: OptimizerParams) -> None:

@@ -10,20 +10,21 @@ recorded. It
 * for an optimizer that ``wants_residuals``: refuses a problem without residuals before any
   evaluation, evaluates each batch with ``problem.evaluate_with_residuals`` and tells
   ``tell(X, f, residuals=R)`` (each row still one evaluation),
-* keeps its own best vector and value and a trace of (evaluations used, best so far) after
-  every batch; an optimizer's own claim about its best is never used,
-* times the run with a monotonic clock,
+* keeps the books of every run in one :class:`Ledger` (evaluations used, batches, its own best
+  vector and value, a trace of (evaluations used, best so far) after every batch); an
+  optimizer's own claim about its best is never used,
+* times each run with a monotonic clock,
 * calls ``optimizer.close()`` when the run is over, however it ended (a loop-owning
   optimizer's worker thread is stopped there).
 
-:func:`run_many` runs several runs *in lockstep*: every step it asks each unfinished run for
-its batch, evaluates all the batches in one call (:meth:`Problem.evaluate_instances`, each row
-against its own run's instance) and hands every run its rows back. Each run keeps its own
-optimizer (so its own generator), budget, best and trace, and goes through exactly the steps
-:func:`run` takes, so its result is bit-identical to running it alone when the problem's
-values do not depend on which other rows share a call (:attr:`Problem.rows_independent`).
-Small populations then fill the problem's batch (30 runs of 20 candidates: 600 rows per
-call), which a threaded kernel needs to use several cores.
+There is one loop, :func:`run_many`, for one run or several. Several runs go *in lockstep*:
+every step it asks each unfinished run for its batch, evaluates the batches of the runs that
+need only values in one call (:meth:`Problem.evaluate_instances`, each row against its own
+run's instance) and hands every run its rows back. Each run keeps its own optimizer (so its
+own generator), ledger and time, and goes through exactly the steps it takes alone, so its
+result is bit-identical to running it alone when the problem's values do not depend on which
+other rows share a call (:attr:`Problem.rows_independent`). :func:`run` is the loop with one
+run, raising what ended it.
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ import dataclasses
 import signal
 import threading
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -53,10 +54,103 @@ class RunResult:
     trace_evaluations: list[int]
     trace_best: list[float]
     wall_time_s: float
-    stopped_by: str  # "budget" or "optimizer"
+    stopped_by: str  # "budget", "optimizer" or "max_batches"
 
 
-def _check_proposal(X: object, optimizer: Optimizer, dim: int) -> np.ndarray:
+class RunTimeoutError(Exception):
+    """A run went past its wall-time limit (the job's ``run_timeout_s``)."""
+
+
+@dataclasses.dataclass
+class Ledger:
+    """The books of one run: the only place where evaluations are counted and the best kept.
+
+    ``admit`` cuts a checked proposal to what is left of the budget; ``book`` takes in the
+    values of the admitted rows; ``result`` is the run as a :class:`RunResult`.
+    """
+
+    budget: int
+    dim: int
+    used: int = 0
+    batches: int = 0
+    best_f: float = np.inf
+    best_x: np.ndarray | None = None
+    trace_n: list[int] = dataclasses.field(default_factory=list)
+    trace_f: list[float] = dataclasses.field(default_factory=list)
+    stopped_by: str = "budget"
+    seconds: float = 0.0  # the run's own time: its ask/tell and its share of evaluations
+
+    @property
+    def spent(self) -> bool:
+        """True once the whole budget has been evaluated."""
+        return self.used >= self.budget
+
+    def admit(self, X: np.ndarray) -> tuple[np.ndarray, bool]:
+        """The rows of ``X`` the budget allows, and whether ``X`` was cut (the run then ends)."""
+        left = self.budget - self.used
+        return (X[:left], True) if X.shape[0] > left else (X, False)
+
+    def book(self, X: np.ndarray, f: np.ndarray) -> None:
+        """Count the evaluated rows ``X`` with values ``f``; update the best and the trace.
+        The first batch always sets a best vector (even when every value is ``inf``)."""
+        self.used += X.shape[0]
+        self.batches += 1
+        i = int(np.argmin(f))
+        if f[i] < self.best_f or self.batches == 1:
+            self.best_f = float(f[i])
+            self.best_x = X[i].copy()
+        self.trace_n.append(self.used)
+        self.trace_f.append(self.best_f)
+
+    def result(self) -> RunResult:
+        """The run so far, as a :class:`RunResult`."""
+        x = self.best_x if self.best_x is not None else np.full(self.dim, np.nan)
+        return RunResult(x_best=x, f_best=self.best_f, evaluations=self.used,
+                         budget=self.budget, batches=self.batches,
+                         trace_evaluations=self.trace_n, trace_best=self.trace_f,
+                         wall_time_s=self.seconds, stopped_by=self.stopped_by)
+
+
+@dataclasses.dataclass
+class Lane:
+    """One run of :func:`run_many`.
+
+    ``problem`` is the instance the run fits (checks, residuals and error messages use it),
+    ``instance`` its index for the group problem's
+    :meth:`~vpid_bench.api.Problem.evaluate_instances`. ``elapsed_s``: seconds the run has
+    spent before the loop (building its optimizer), counted against its time limit.
+    """
+
+    problem: Problem
+    optimizer: Optimizer
+    budget: int
+    instance: int = 0
+    elapsed_s: float = 0.0
+
+
+@dataclasses.dataclass
+class _Run:
+    """A lane in the loop: its ledger, its outcome once over, and the batch of this step."""
+
+    lane: Lane
+    ledger: Ledger
+    residuals: bool = False
+    outcome: RunResult | BaseException | None = None
+    X: np.ndarray | None = None
+    cut: bool = False
+
+    def finish(self) -> None:
+        self.outcome = self.ledger.result()
+
+    @property
+    def spent_s(self) -> float:
+        """Seconds counted against the run's time limit: before the loop and in it."""
+        return self.lane.elapsed_s + self.ledger.seconds
+
+
+def check_proposal(X: object, optimizer: Optimizer, dim: int) -> np.ndarray:
+    """A copy of ``ask()``'s answer as floats, or :class:`OptimizerContractError` saying what
+    is wrong with it (not an array, wrong shape, not finite, outside the box)."""
     name = getattr(optimizer, "name", type(optimizer).__name__)
     if not isinstance(X, np.ndarray):
         raise OptimizerContractError(
@@ -79,29 +173,38 @@ def _check_proposal(X: object, optimizer: Optimizer, dim: int) -> np.ndarray:
     return X
 
 
-def _evaluate(problem: Problem, X: np.ndarray, residuals: bool) -> tuple[np.ndarray, Any]:
-    """f (NaN mapped to inf) and, when asked, the residuals of the rows of ``X``."""
-    n = X.shape[0]
-    if residuals:
-        f, R = problem.evaluate_with_residuals(X)
-        R = np.asarray(R, dtype=float)
-        if R.ndim != 2 or R.shape[0] != n:
-            raise ValueError(
-                f"problem {problem.name!r}: evaluate_with_residuals() returned residuals of "
-                f"shape {R.shape}, expected ({n}, m)"
-            )
-    else:
-        f, R = problem.evaluate(X), None
+def _values(problem: Problem, f: Any, n: int) -> np.ndarray:
+    """``f`` checked to shape ``(n,)``, NaN mapped to ``inf``."""
     f = np.asarray(f, dtype=float).reshape(-1)
     if f.shape != (n,):
         raise ValueError(
             f"problem {problem.name!r}: evaluate() returned {f.shape}, expected ({n},)"
         )
-    return np.where(np.isnan(f), np.inf, f), R
+    return np.where(np.isnan(f), np.inf, f)
+
+
+def _with_residuals(problem: Problem, X: np.ndarray, groups: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Values and residuals of the rows of ``X``, both checked against the problem's groups."""
+    n = X.shape[0]
+    f, R = problem.evaluate_with_residuals(X)
+    R = np.asarray(R, dtype=float)
+    if R.ndim != 2 or R.shape[0] != n:
+        raise ValueError(
+            f"problem {problem.name!r}: evaluate_with_residuals() returned residuals of "
+            f"shape {R.shape}, expected ({n}, m)"
+        )
+    if R.shape[1] != groups.size:
+        raise ValueError(
+            f"problem {problem.name!r}: {R.shape[1]} residuals per row but "
+            f"residual_groups() has {groups.size} entries"
+        )
+    return _values(problem, f, n), R
 
 
 def run(problem: Problem, optimizer: Optimizer, budget: int, max_batches: int = 10**7) -> RunResult:
-    """Run ``optimizer`` on ``problem`` until ``budget`` evaluations are used or it is done.
+    """Run ``optimizer`` on ``problem`` until ``budget`` evaluations are used or it is done;
+    raise whatever ended the run otherwise (:func:`run_many` with one lane).
 
     ``max_batches`` guards against an optimizer that is never done and asks for nothing new;
     the budget normally ends the run long before. Raises :class:`~vpid_bench.api.ConfigError`
@@ -109,116 +212,10 @@ def run(problem: Problem, optimizer: Optimizer, budget: int, max_batches: int = 
     """
     if budget < 1:
         raise ValueError(f"budget must be at least 1, got {budget}")
-    try:
-        return _run(problem, optimizer, budget, max_batches)
-    finally:
-        close = getattr(optimizer, "close", None)
-        if close is not None:
-            close()
-
-
-def _run(problem: Problem, optimizer: Optimizer, budget: int, max_batches: int) -> RunResult:
-    wants_residuals = bool(getattr(optimizer, "wants_residuals", False))
-    if wants_residuals:
-        check_compatible(problem, optimizer)
-        optimizer.residual_groups = np.asarray(problem.residual_groups(), dtype=int).reshape(-1)
-    dim = problem.bounds.dim
-    used = 0
-    batches = 0
-    best_f = np.inf
-    best_x = np.full(dim, np.nan)
-    trace_n: list[int] = []
-    trace_f: list[float] = []
-    stopped_by = "budget"
-    start = time.perf_counter()
-    while used < budget:
-        if optimizer.done:
-            stopped_by = "optimizer"
-            break
-        if batches >= max_batches:
-            stopped_by = "max_batches"
-            break
-        X = _check_proposal(optimizer.ask(), optimizer, dim)
-        left = budget - used
-        cut = X.shape[0] > left
-        if cut:
-            X = X[:left]
-        f, R = _evaluate(problem, X, wants_residuals)
-        if R is not None and R.shape[1] != optimizer.residual_groups.size:
-            raise ValueError(
-                f"problem {problem.name!r}: {R.shape[1]} residuals per row but "
-                f"residual_groups() has {optimizer.residual_groups.size} entries"
-            )
-        used += X.shape[0]
-        batches += 1
-        i = int(np.argmin(f))
-        if f[i] < best_f or batches == 1:  # the first batch always sets a best vector
-            best_f = float(f[i])
-            best_x = X[i].copy()
-        trace_n.append(used)
-        trace_f.append(best_f)
-        if cut:
-            break
-        if R is None:
-            optimizer.tell(X, f.copy())
-        else:
-            optimizer.tell(X, f.copy(), residuals=R)
-    return RunResult(
-        x_best=best_x,
-        f_best=best_f,
-        evaluations=used,
-        budget=budget,
-        batches=batches,
-        trace_evaluations=trace_n,
-        trace_best=trace_f,
-        wall_time_s=time.perf_counter() - start,
-        stopped_by=stopped_by,
-    )
-
-
-class RunTimeoutError(Exception):
-    """A run went past its wall-time limit (the job's ``run_timeout_s``)."""
-
-
-@dataclasses.dataclass
-class Lane:
-    """One run of a lockstep group (:func:`run_many`).
-
-    ``problem`` is the instance the run fits (checks and error messages use it), ``instance``
-    its index for the group problem's :meth:`~vpid_bench.api.Problem.evaluate_instances`.
-    """
-
-    problem: Problem
-    optimizer: Optimizer
-    budget: int
-    instance: int = 0
-
-
-@dataclasses.dataclass
-class _LaneState:
-    """The bookkeeping :func:`_run` keeps in local variables, for one lane of a group."""
-
-    lane: Lane
-    dim: int
-    used: int = 0
-    batches: int = 0
-    best_f: float = np.inf
-    best_x: np.ndarray | None = None
-    trace_n: list[int] = dataclasses.field(default_factory=list)
-    trace_f: list[float] = dataclasses.field(default_factory=list)
-    stopped_by: str = "budget"
-    seconds: float = 0.0  # this run's own time: its ask/tell and its share of evaluations
-    outcome: RunResult | BaseException | None = None
-    X: np.ndarray | None = None  # the batch asked this step (already cut to the budget)
-    cut: bool = False
-
-    def finish(self) -> None:
-        self.outcome = RunResult(
-            x_best=self.best_x if self.best_x is not None else np.full(self.dim, np.nan),
-            f_best=self.best_f, evaluations=self.used, budget=self.lane.budget,
-            batches=self.batches, trace_evaluations=self.trace_n, trace_best=self.trace_f,
-            wall_time_s=self.seconds, stopped_by=self.stopped_by,
-        )
+    outcome = run_many(problem, [Lane(problem, optimizer, budget)], max_batches=max_batches)[0]
+    if isinstance(outcome, BaseException):
+        raise outcome
+    return outcome
 
 
 class _Alarm:
@@ -243,7 +240,7 @@ class _Alarm:
             signal.signal(signal.SIGALRM, self._previous)
 
     def _expired(self, signum: int, frame: Any) -> None:
-        raise _timeout_error(self.limit_s or 0.0)
+        raise timeout_error(self.limit_s or 0.0)
 
     @contextlib.contextmanager
     def limit(self, seconds: float | None) -> Iterator[None]:
@@ -257,7 +254,17 @@ class _Alarm:
             signal.setitimer(signal.ITIMER_REAL, 0)
 
 
-def _timeout_error(limit: float) -> RunTimeoutError:
+@contextlib.contextmanager
+def time_limit(seconds: float | None) -> Iterator[None]:
+    """Raise :class:`RunTimeoutError` in this thread after ``seconds`` of wall time (POSIX main
+    thread only; elsewhere nothing is raised)."""
+    alarm = _Alarm(seconds)
+    with alarm, alarm.limit(seconds):
+        yield
+
+
+def timeout_error(limit: float) -> RunTimeoutError:
+    """The error of a run that went past ``limit`` seconds."""
     return RunTimeoutError(f"the run took longer than run_timeout_s={limit:g} s")
 
 
@@ -266,156 +273,186 @@ def run_many(problem: Problem, lanes: Sequence[Lane], timeout_s: float | None = 
     """Run every lane in lockstep (see module); one outcome per lane, in order: its
     :class:`RunResult`, or the exception that ended it.
 
-    ``problem`` evaluates the gathered rows (``problem.evaluate_instances(X, instance)``).
-    A lane that raises (in its optimizer, a proposal check or its rows' evaluation) fails
-    alone: a gathered evaluation that raises is repeated lane by lane with each lane's own
-    ``problem.evaluate`` to find the culprit. ``timeout_s`` limits each run's own time (its
-    ``ask``/``tell`` plus its share of the gathered evaluations, in proportion to its rows);
-    a run past it ends with :class:`RunTimeoutError`. Lanes must not want residuals (they
-    run alone, with :func:`run`). ``KeyboardInterrupt`` stops the whole group (every
-    optimizer is closed first).
+    ``problem`` evaluates the gathered rows of the lanes that need only values
+    (``problem.evaluate_instances(X, instance)``); a lane that wants residuals is evaluated
+    alone by its own instance. A lane that raises (in its optimizer, a proposal check or its
+    rows' evaluation) fails alone: a gathered evaluation that raises is repeated lane by lane
+    with each lane's own ``problem.evaluate`` to find the culprit. ``timeout_s`` limits each
+    run's own time (its ``ask``/``tell`` plus its share of the gathered evaluations, in
+    proportion to its rows); a run past it ends with :class:`RunTimeoutError`.
+    ``KeyboardInterrupt`` stops the whole group (every optimizer is closed first).
     """
-    states = [_LaneState(lane, problem.bounds.dim) for lane in lanes]
-    for st in states:
-        if st.lane.budget < 1:
-            st.outcome = ValueError(f"budget must be at least 1, got {st.lane.budget}")
-        elif getattr(st.lane.optimizer, "wants_residuals", False):
-            st.outcome = ValueError("an optimizer that wants residuals cannot run in lockstep")
+    runs = [_start(lane, problem.bounds.dim) for lane in lanes]
     try:
         with _Alarm(timeout_s) as alarm:
             while True:
-                active = [st for st in states if st.outcome is None]
-                if not active:
+                asked = [r for r in runs if r.outcome is None
+                         and _ask(r, alarm, timeout_s, max_batches)]
+                if not asked:
                     break
-                asked = [st for st in active if _ask(st, alarm, timeout_s, max_batches)]
-                if asked:
-                    _evaluate_and_tell(problem, asked, alarm, timeout_s)
+                _evaluate_and_tell(problem, asked, alarm, timeout_s)
     finally:
-        for st in states:
-            close = getattr(st.lane.optimizer, "close", None)
-            if close is not None:
-                try:
-                    close()
-                except Exception as exc:  # noqa: BLE001 - a failing close fails its run only
-                    if not isinstance(st.outcome, BaseException):
-                        st.outcome = exc
-    return [st.outcome for st in states]
+        for r in runs:
+            _close(r)
+    return [r.outcome for r in runs]
 
 
-def _remaining(st: _LaneState, timeout_s: float | None) -> float | None:
-    return None if timeout_s is None else timeout_s - st.seconds
+def _start(lane: Lane, dim: int) -> _Run:
+    """A lane ready for the loop, or already failed (no budget, residuals the problem lacks)."""
+    r = _Run(lane, Ledger(lane.budget, dim))
+    if lane.budget < 1:
+        r.outcome = ValueError(f"budget must be at least 1, got {lane.budget}")
+        return r
+    opt = lane.optimizer
+    r.residuals = bool(getattr(opt, "wants_residuals", False))
+    if r.residuals:
+        try:
+            check_compatible(lane.problem, opt)
+            groups = lane.problem.residual_groups()
+            opt.residual_groups = np.asarray(groups, dtype=int).reshape(-1)
+        except Exception as exc:  # noqa: BLE001 - this run only
+            r.outcome = exc
+    return r
 
 
-def _guarded(st: _LaneState, alarm: _Alarm, timeout_s: float | None, fn: Any) -> bool:
-    """Call ``fn()`` as lane ``st`` (its time counted, its limit applied); an exception ends
-    the lane (its outcome) and returns False."""
+def _close(r: _Run) -> None:
+    close = getattr(r.lane.optimizer, "close", None)
+    if close is None:
+        return
+    try:
+        close()
+    except KeyboardInterrupt:
+        raise
+    except BaseException as exc:  # noqa: BLE001 - a failing close fails its run only
+        if not isinstance(r.outcome, BaseException):
+            r.outcome = exc
+
+
+def _remaining(r: _Run, timeout_s: float | None) -> float | None:
+    return None if timeout_s is None else timeout_s - r.spent_s
+
+
+def _guarded(r: _Run, alarm: _Alarm, timeout_s: float | None, fn: Callable[[], None]) -> bool:
+    """Call ``fn()`` as run ``r`` (its time counted, its limit applied); an exception ends the
+    run (its outcome) and returns False."""
     t0 = time.perf_counter()
     try:
-        with alarm.limit(_remaining(st, timeout_s)):
+        with alarm.limit(_remaining(r, timeout_s)):
             fn()
     except KeyboardInterrupt:
         raise
-    except BaseException as exc:  # noqa: BLE001 - crash isolation: this lane only
-        st.outcome = exc
+    except BaseException as exc:  # noqa: BLE001 - crash isolation: this run only
+        r.outcome = exc
         return False
     finally:
-        st.seconds += time.perf_counter() - t0
-    if timeout_s is not None and st.seconds > timeout_s:
-        st.outcome = _timeout_error(timeout_s)
+        r.ledger.seconds += time.perf_counter() - t0
+    return _within(r, timeout_s)
+
+
+def _within(r: _Run, timeout_s: float | None) -> bool:
+    """False (the run ended by a timeout) once the run's own time is past ``timeout_s``."""
+    if timeout_s is not None and r.spent_s > timeout_s:
+        r.outcome = timeout_error(timeout_s)
         return False
     return True
 
 
-def _ask(st: _LaneState, alarm: _Alarm, timeout_s: float | None, max_batches: int) -> bool:
-    """The top of :func:`_run`'s loop for one lane: stop, or ask and check its next batch."""
-    if st.used >= st.lane.budget:
-        st.finish()
+def _ask(r: _Run, alarm: _Alarm, timeout_s: float | None, max_batches: int) -> bool:
+    """The top of the loop for one run: stop (its outcome set), or ask and admit its batch."""
+    ledger, opt = r.ledger, r.lane.optimizer
+    r.X = None
+    if ledger.spent:
+        r.finish()
         return False
-    opt = st.lane.optimizer
 
     def ask() -> None:
         if opt.done:
-            st.stopped_by = "optimizer"
-            return
-        if st.batches >= max_batches:
-            st.stopped_by = "max_batches"
-            return
-        X = _check_proposal(opt.ask(), opt, st.dim)
-        left = st.lane.budget - st.used
-        st.cut = X.shape[0] > left
-        st.X = X[:left] if st.cut else X
+            ledger.stopped_by = "optimizer"
+        elif ledger.batches >= max_batches:
+            ledger.stopped_by = "max_batches"
+        else:
+            r.X, r.cut = ledger.admit(check_proposal(opt.ask(), opt, ledger.dim))
 
-    st.X = None
-    if not _guarded(st, alarm, timeout_s, ask):
+    if not _guarded(r, alarm, timeout_s, ask):
         return False
-    if st.X is None:
-        st.finish()
+    if r.X is None:
+        r.finish()
         return False
     return True
 
 
-def _evaluate_and_tell(problem: Problem, asked: list[_LaneState], alarm: _Alarm,
+def _evaluate_and_tell(problem: Problem, asked: list[_Run], alarm: _Alarm,
                        timeout_s: float | None) -> None:
-    """Evaluate the asked batches in one call, then do each lane's bookkeeping and ``tell``."""
-    X = np.concatenate([st.X for st in asked]) if len(asked) > 1 else asked[0].X
-    sizes = [st.X.shape[0] for st in asked]
-    index = np.repeat(np.array([st.lane.instance for st in asked], dtype=np.int64), sizes)
-    budget = None if timeout_s is None else sum(_remaining(st, timeout_s) for st in asked)
+    """Evaluate this step's batches, then book each run and ``tell`` its optimizer."""
+    gathered = [r for r in asked if not r.residuals]
+    values = _gathered_values(problem, gathered, alarm, timeout_s) if gathered else {}
+    for r in asked:
+        R = None
+        if r.residuals:
+            out: dict[str, Any] = {}
+
+            def evaluate(r: _Run = r, out: dict = out) -> None:
+                groups = r.lane.optimizer.residual_groups
+                out["f"], out["R"] = _with_residuals(r.lane.problem, r.X, groups)
+
+            if not _guarded(r, alarm, timeout_s, evaluate):
+                continue
+            f, R = out["f"], out["R"]
+        elif id(r) in values:
+            f = values[id(r)]
+        else:
+            continue
+        r.ledger.book(r.X, f)
+        if not _within(r, timeout_s):
+            continue
+        if r.cut:
+            r.finish()
+            continue
+        _tell(r, alarm, timeout_s, f, R)
+
+
+def _tell(r: _Run, alarm: _Alarm, timeout_s: float | None, f: np.ndarray,
+          R: np.ndarray | None) -> None:
+    opt, X = r.lane.optimizer, r.X
+    if R is None:
+        _guarded(r, alarm, timeout_s, lambda: opt.tell(X, f.copy()))
+    else:
+        _guarded(r, alarm, timeout_s, lambda: opt.tell(X, f.copy(), residuals=R))
+
+
+def _gathered_values(problem: Problem, runs: list[_Run], alarm: _Alarm,
+                     timeout_s: float | None) -> dict[int, np.ndarray]:
+    """The values of the batches of ``runs`` (by ``id``), from one call when they are several;
+    each run is charged its rows' share of that call's time. A run whose rows raise fails."""
+    if len(runs) == 1:  # one run: its own instance evaluates it (no gathering)
+        r = runs[0]
+        out: dict[int, np.ndarray] = {}
+
+        def alone() -> None:
+            out[id(r)] = _values(r.lane.problem, r.lane.problem.evaluate(r.X), r.X.shape[0])
+
+        _guarded(r, alarm, timeout_s, alone)
+        return out
+    X = np.concatenate([r.X for r in runs])
+    sizes = [r.X.shape[0] for r in runs]
+    index = np.repeat(np.array([r.lane.instance for r in runs], dtype=np.int64), sizes)
+    limit = None if timeout_s is None else sum(_remaining(r, timeout_s) for r in runs)
     t0 = time.perf_counter()
     try:
-        with alarm.limit(budget):
+        with alarm.limit(limit):
             f_all = _values(problem, problem.evaluate_instances(X, index), X.shape[0])
     except KeyboardInterrupt:
         raise
-    except BaseException:  # noqa: BLE001 - find the lane whose rows raise, fail it alone
-        f_all = None
+    except BaseException:  # noqa: BLE001 - find the runs whose rows raise, fail them alone
+        values: dict[int, np.ndarray] = {}
+        for r in runs:
+            values.update(_gathered_values(problem, [r], alarm, timeout_s))
+        return values
     share = (time.perf_counter() - t0) / X.shape[0]
+    values = {}
     start = 0
-    for st, n in zip(asked, sizes):
-        rows = slice(start, start + n)
+    for r, n in zip(runs, sizes):
+        r.ledger.seconds += share * n
+        values[id(r)] = f_all[start:start + n]
         start += n
-        if f_all is not None:
-            st.seconds += share * n
-            f = f_all[rows]
-        else:
-            alone: dict[str, np.ndarray] = {}
-
-            def evaluate_alone(st: _LaneState = st, alone: dict = alone) -> None:
-                inst = st.lane.problem
-                alone["f"] = _values(inst, inst.evaluate(st.X), st.X.shape[0])
-
-            if not _guarded(st, alarm, timeout_s, evaluate_alone):
-                continue
-            f = alone["f"]
-        _book(st, f)
-        if timeout_s is not None and st.seconds > timeout_s:
-            st.outcome = _timeout_error(timeout_s)
-            continue
-        if st.cut:
-            st.finish()
-            continue
-        Xs = st.X
-        _guarded(st, alarm, timeout_s, lambda st=st, Xs=Xs, f=f: st.lane.optimizer.tell(Xs,
-                                                                                     f.copy()))
-
-
-def _values(problem: Problem, f: Any, n: int) -> np.ndarray:
-    """``f`` as :func:`_evaluate` returns it (shape checked, NaN mapped to inf)."""
-    f = np.asarray(f, dtype=float).reshape(-1)
-    if f.shape != (n,):
-        raise ValueError(
-            f"problem {problem.name!r}: evaluate() returned {f.shape}, expected ({n},)"
-        )
-    return np.where(np.isnan(f), np.inf, f)
-
-
-def _book(st: _LaneState, f: np.ndarray) -> None:
-    """The bookkeeping of :func:`_run` after an evaluation: budget, best, trace."""
-    st.used += st.X.shape[0]
-    st.batches += 1
-    i = int(np.argmin(f))
-    if f[i] < st.best_f or st.batches == 1:
-        st.best_f = float(f[i])
-        st.best_x = st.X[i].copy()
-    st.trace_n.append(st.used)
-    st.trace_f.append(st.best_f)
+    return values

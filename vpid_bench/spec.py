@@ -14,10 +14,10 @@ A problem's config carries the benchmark protocol of that problem, stated once, 
   generation (an optimizer that has no population uses it as its batch size);
 * ``problem.iterations``: the number of generations after the initial population.
 
-The default budget of a run is ``ps * (iterations + 1)`` evaluations (``budget`` overrides
-it). Optimizers receive ``ps`` and ``iterations`` in their ``Params`` as a copy of the
-protocol; they cannot be set on the optimizer (``optimizer.ps=7`` is refused: it would
-silently decouple the budget from the population).
+The default budget of a run is :func:`~vpid_bench.api.default_budget`,
+``ps * (iterations + 1)`` evaluations (``budget`` overrides it). Optimizers receive ``ps``,
+``iterations`` and the run's ``budget`` in their ``Params``; none can be set on the optimizer
+(``optimizer.ps=7`` is refused: it would silently decouple the budget from the population).
 """
 
 from __future__ import annotations
@@ -27,18 +27,18 @@ from collections.abc import Mapping
 from typing import Any
 
 from .api import (
+    FILLED_PARAMS,
+    PROTOCOL_KEYS,
     ConfigError,
     Optimizer,
     OptimizerParams,
     Problem,
     ProblemConfig,
     check_compatible,
+    default_budget,
 )
 from .params import build_dataclass, to_plain
 from .plugins import Registry
-
-#: Keys of the protocol, stored in the problem's config only.
-PROTOCOL_KEYS = ("ps", "iterations")
 
 #: Caps that keep a typo from asking for hours or gigabytes (see docs/sweeps.md).
 MAX_RUNS = 10_000
@@ -119,9 +119,9 @@ class Job:
         return to_plain(self.problem_config)
 
     def optimizer_settings(self) -> dict[str, Any]:
-        """The optimizer's own settings as plain data (the protocol copy left out: it is the
-        problem's, recorded there)."""
-        return {k: v for k, v in to_plain(self.params).items() if k not in PROTOCOL_KEYS}
+        """The optimizer's own settings as plain data (what the job filled in left out: the
+        protocol is the problem's and the budget the job's, each recorded there)."""
+        return {k: v for k, v in to_plain(self.params).items() if k not in FILLED_PARAMS}
 
 
 def plain_config(cfg: Any) -> dict[str, Any]:
@@ -167,19 +167,19 @@ def parse_job(cfg: Any, registry: Registry) -> Job:
     optimizer_cls = registry.optimizer(optimizer_name)
     problem_config = build_dataclass(problem_cls.Config, problem_cfg, prefix="problem")
     check_protocol(problem_config)
-    for key in PROTOCOL_KEYS:
+    for key in FILLED_PARAMS:
         if key in optimizer_cfg:
+            where = "budget" if key == "budget" else f"problem.{key}"
             raise ConfigError(f"optimizer.{key}", optimizer_cfg[key],
-                              f"not settable on the optimizer: the protocol is the problem's, "
-                              f"set problem.{key}")
-    protocol = {k: getattr(problem_config, k) for k in PROTOCOL_KEYS}
-    params = build_dataclass(optimizer_cls.Params, {**optimizer_cfg, **protocol},
-                             prefix="optimizer")
-    optimizer_cls.check(params)
-    check_compatible(problem_cls, optimizer_cls, optimizer_name, problem_name)
-    budget = spec.budget or problem_config.ps * (problem_config.iterations + 1)
+                              f"not settable on the optimizer: the job fills it in, set {where}")
+    budget = spec.budget or default_budget(problem_config.ps, problem_config.iterations)
     if budget > MAX_BUDGET:
         raise ConfigError("problem.iterations", problem_config.iterations,
                           f"a protocol of at most {MAX_BUDGET} evaluations per run")
+    filled = {**{k: getattr(problem_config, k) for k in PROTOCOL_KEYS}, "budget": budget}
+    params = build_dataclass(optimizer_cls.Params, {**optimizer_cfg, **filled},
+                             prefix="optimizer")
+    optimizer_cls.check(params)
+    check_compatible(problem_cls, optimizer_cls, optimizer_name, problem_name)
     return Job(spec, problem_name, problem_cls, problem_config, optimizer_name, optimizer_cls,
                params, budget)

@@ -280,12 +280,9 @@ class LSHADEParams(AdaptiveDEParams):
     ``benchmarks/bench_adaptive_de.py``). ``N_min``: the final population (paper: 4).
 
     The population shrinks linearly in the evaluations spent, from ``N_init`` at the start to
-    ``N_min`` when ``max_evaluations`` are spent; the worst members go.
-    ``max_evaluations``: the budget the schedule is laid over; ``null`` (default) means the
-    protocol's ``ps * (iterations + 1)``, the run's default budget; set it to the run's
-    ``budget`` when that is given explicitly (the run loop stops the run at its own budget
-    either way). ``iterations`` plays no other part: L-SHADE is done when ``max_evaluations``
-    are spent, the last generation cut to what is left.
+    ``N_min`` when the run's budget (``self.budget``, handed over by the job) is spent; the
+    worst members go. ``iterations`` plays no part: L-SHADE is done when its budget is spent,
+    the last generation cut to what is left.
 
     ``H``: memory entries (paper: 6); ``p``: ``pbest`` from the ``max(2, round(p N))`` best
     (paper: 0.11); ``r_arc``: archive of up to ``round(r_arc N)`` parents, shrinking with N
@@ -295,7 +292,6 @@ class LSHADEParams(AdaptiveDEParams):
     N_init: Literal["ps", "paper"] = "ps"
     N_init_rate: float = 18.0
     N_min: int = 4
-    max_evaluations: int | None = None
     H: int = 6
     p: float = 0.11
     r_arc: float = 2.6
@@ -306,9 +302,6 @@ class LSHADEParams(AdaptiveDEParams):
             raise ConfigError("optimizer.N_min", self.N_min, f"an integer >= {MIN_POPULATION}")
         if not self.N_init_rate > 0.0:
             raise ConfigError("optimizer.N_init_rate", self.N_init_rate, "a positive number")
-        if self.max_evaluations is not None and self.max_evaluations < 1:
-            raise ConfigError("optimizer.max_evaluations", self.max_evaluations,
-                              "an integer >= 1, or null for ps * (iterations + 1)")
         if self.H < 1:
             raise ConfigError("optimizer.H", self.H, "an integer >= 1")
         _check_unit("p", self.p)
@@ -335,8 +328,7 @@ class LSHADE(AdaptiveDE):
             raise ConfigError(key, value, f"an initial population of at least N_min="
                               f"{params.N_min} (it gives {n_init})")
         self._require_population(key, value, n_init)
-        self.max_nfe = (params.max_evaluations if params.max_evaluations is not None
-                        else params.ps * (params.iterations + 1))
+        self.max_nfe = self.budget
         # never plan past the budget: a budget below N_init is one (cut) initial population
         self.n_init = min(n_init, self.max_nfe)
         self.archive = Archive(round_half_up(params.r_arc * self.n_init), bounds.dim)

@@ -15,7 +15,7 @@
   *global* generator instead, which other code in the same process shares; it is left unset.
 * **Stopping**: the optimizer is ``done`` when cma's own termination criteria fire
   (``tolfun``, ``tolx``, ``tolfunhist``, ``tolflatfitness``, ... with cma's defaults) or when it
-  has used the protocol's ``ps * (iterations + 1)`` evaluations, the same schedule as the DE
+  has used the run's budget (``self.budget``), the same schedule as the DE
   variants (counted here: cma's ``maxfevals`` fires one generation late, it tests
   ``countevals - 1 >= maxfevals``). ``stop_reasons`` keeps what ended it.
 * **Quiet**: ``verbose=-9`` and no data logging, so cma prints nothing and writes no files.
@@ -74,7 +74,7 @@ class CMAES(Optimizer):
         }
         x0 = rng.random(dim)
         self._es = cma.CMAEvolutionStrategy(x0, params.sigma0, options)
-        self.schedule = params.ps * (params.iterations + 1)  # evaluations, as DE's generations
+        self.schedule = self.budget  # evaluations: the run's budget
         self._pending: list[np.ndarray] | None = None
         self._done = False
         self.stop_reasons: dict[str, Any] = {}

@@ -1,10 +1,10 @@
 """``optimizer=de_lsq``: DE4 (current-to-best/1, Gökdağ 2014) for a fraction of the nominal
 budget, then :mod:`vpid_peers.lsq` from DE4's best vector (later starts uniform random).
 
-The nominal budget is the protocol's ``ps * (iterations + 1)``: DE4 runs its initial
-population and ``round(fraction * (iterations + 1)) - 1`` generations (at least the initial
-population), with Table I's F = 0.6 and CR = 0.9. The least-squares phase then runs until the
-run's budget ends.
+DE4 gets ``fraction`` of the run's budget (``self.budget``, handed over by the job): its
+initial population and ``round(fraction * budget / ps) - 1`` generations (at least the
+initial population), with Table I's F = 0.6 and CR = 0.9. The least-squares phase then runs
+until the run's budget ends.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from .lsq import LSQParams, check_scaling, multistart
 
 @dataclasses.dataclass(frozen=True)
 class DELSQParams(LSQParams):
-    """``fraction``: share of the nominal budget ``ps * (iterations + 1)`` given to DE4, in
+    """``fraction``: share of the run's budget given to DE4, in
     [0, 1] (0: only the initial population). ``F``, ``CR``: DE4's (Table I). The other keys
     are :class:`~vpid_peers.lsq.LSQParams`'."""
 
@@ -36,9 +36,9 @@ class DELSQParams(LSQParams):
         if not 0.0 <= self.fraction <= 1.0:
             raise ConfigError("optimizer.fraction", self.fraction, "a number in [0, 1]")
 
-    def de_generations(self) -> int:
-        """Generations of DE4 after its initial population."""
-        return max(0, round(self.fraction * (self.iterations + 1)) - 1)
+    def de_generations(self, budget: int) -> int:
+        """Generations of DE4 after its initial population, within a run of ``budget``."""
+        return max(0, round(self.fraction * budget / self.ps) - 1)
 
 
 class DELeastSquares(LoopOptimizer):
@@ -50,7 +50,7 @@ class DELeastSquares(LoopOptimizer):
     def __init__(self, params: DELSQParams, bounds: Bounds, rng: np.random.Generator) -> None:
         super().__init__(params, bounds, rng)
         check_scaling(params, bounds)
-        self._de_params = DE4Params(ps=params.ps, iterations=params.de_generations(),
+        self._de_params = DE4Params(ps=params.ps, iterations=params.de_generations(self.budget),
                                     F=params.F, CR=params.CR)
 
     def minimize(self, evaluate: Callable[[np.ndarray], Any]) -> None:

@@ -4,7 +4,7 @@
   An unknown name is refused in one line (:class:`ConfigError`, key ``optimizer.method``)
   that lists the closest registered names.
 * **Batches**: the nevergrad optimizer is built with ``num_workers = ps`` and
-  ``budget = ps * (iterations + 1)`` (the protocol's schedule, as for the DE variants); each
+  the run's ``budget`` (the evaluations the run loop allows, ``self.budget``); each
   ``ask`` asks nevergrad for ``ps`` candidates, each ``tell`` tells all of them.
   The optimizer is ``done`` once it has told that budget.
 * **Coordinates**: an ``ng.p.Array`` bounded to the unit cube (nevergrad's own bound handling),
@@ -89,7 +89,6 @@ class NevergradOptimizer(Optimizer):
 
     def __init__(self, params: NevergradParams, bounds: Bounds, rng: np.random.Generator) -> None:
         super().__init__(params, bounds, rng)
-        self.budget = params.ps * (params.iterations + 1)
         self._x0 = rng.random(bounds.dim)
         self._seed = int(rng.integers(2**32))
         self._ng: Any = None
@@ -126,7 +125,7 @@ class NevergradOptimizer(Optimizer):
     # read-only property here would break a base class that assigns ``self.done``.
     @property
     def done(self) -> bool:
-        """True once the protocol's budget ``ps * (iterations + 1)`` has been told."""
+        """True once the run's budget (``self.budget``) has been told."""
         return self._stopped or self._told >= self.budget
 
     @done.setter

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from vpid_bench.analysis import optimum
-from vpid_bench.experiment import build_problem
+from vpid_bench.build import build_problem
 
 
 def test_forward_jacobian_matches_the_analytic_one_inside_and_at_the_box(registry):

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from vpid_bench import records as rec
-from vpid_bench.experiment import run_from_config, run_rng
+from vpid_bench.build import run_rng
+from vpid_bench.experiment import run_from_config
 from vpid_bench.records import _umask
 
 FAST = ["problem=functions", "optimizer=random", "runs=3", "problem.iterations=4",

@@ -77,7 +77,7 @@ def test_a_full_disk_in_one_job_fails_that_job_only(tmp_path, monkeypatch, capsy
 
 def test_a_full_disk_leaves_reference_csv_whole(tmp_path, monkeypatch, registry):
     """Case 6: reference.csv is written atomically: a failed rewrite keeps the old file."""
-    from vpid_bench.experiment import build_problem
+    from vpid_bench.build import build_problem
 
     problem = build_problem(registry, {"name": "vehicle"})
     problem.write_artifacts(tmp_path)

@@ -73,7 +73,7 @@ def test_3_override_values_cannot_place_a_job_outside_its_sweep(tmp_path, monkey
                                                                 registry):
     """The issue's ``problem.reference.file=../../../x/ref.csv``: a valid file, so the
     command runs, and its job folder stays one level below the sweep."""
-    from vpid_bench.experiment import build_problem
+    from vpid_bench.build import build_problem
 
     (tmp_path / "x").mkdir()
     build_problem(registry, {"name": "vehicle"}).write_artifacts(tmp_path / "x")
@@ -122,7 +122,7 @@ CONTENT_DIGEST_MISSING = not any(
 @pytest.mark.xfail(CONTENT_DIGEST_MISSING, strict=True,
                    reason="VehicleProblem.content_digest comes with the identify branch")
 def test_4_editing_the_reference_file_runs_the_job_again(tmp_path, registry):
-    from vpid_bench.experiment import build_problem
+    from vpid_bench.build import build_problem
 
     problem = build_problem(registry, {"name": "vehicle"})
     problem.write_artifacts(tmp_path)
@@ -144,7 +144,7 @@ def test_4_editing_the_reference_file_runs_the_job_again(tmp_path, registry):
 
 
 def test_5_a_planted_link_is_replaced_never_followed(tmp_path, registry):
-    from vpid_bench.experiment import build_problem
+    from vpid_bench.build import build_problem
     from vpid_bench.records import write_job_status
 
     outside = tmp_path / "outside"

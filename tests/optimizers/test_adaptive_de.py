@@ -25,7 +25,7 @@ from vpid_de.kernels import current_to_pbest1, partner_indices, pbest_indices
 from vpid_de.population import Archive, lpsr_size, round_half_up, worst_removed
 
 from vpid_bench.api import Bounds, ConfigError
-from vpid_bench.experiment import build_problem, optimizer_params
+from vpid_bench.build import build_problem, optimizer_params
 from vpid_bench.params import build_dataclass
 from vpid_bench.runner import run
 
@@ -228,22 +228,22 @@ def test_worst_removed_keeps_the_best_in_order():
 
 
 def test_lshade_population_schedule_by_hand_and_budget_kept():
-    """N_init = 18 D = 72 (D = 4), N_min = 4, max_evaluations = 400: each generation has the
+    """N_init = 18 D = 72 (D = 4), N_min = 4, a budget of 400: each generation has the
     size planned after the previous one (hand-computed with lpsr_size above); the last one is
     cut to what the budget leaves."""
-    opt = make("lshade", N_init="paper", max_evaluations=400)
+    opt = make("lshade", N_init="paper", budget=400)
     sizes = drive(opt)
     assert sizes == [72, 72, 48, 39, 33, 27, 23, 19, 15, 13, 11, 9, 7, 6, 5, 1]
     assert sum(sizes) == 400 == opt.nfe and opt.done
     assert len(opt.population) == 4
 
 
-@pytest.mark.parametrize("budget,max_evaluations", [(400, None), (400, 400), (1000, 250),
-                                                    (50, None)])
-def test_lshade_never_exceeds_the_budget(budget, max_evaluations):
+@pytest.mark.parametrize("budget,handed", [(400, None), (400, 400), (1000, 250), (50, None)])
+def test_lshade_never_exceeds_the_budget(budget, handed):
     """Through the run loop: ps = 20, iterations = 19 gives 400 evaluations by default;
-    L-SHADE stops at its own max_evaluations and never asks for more."""
-    opt = make("lshade", ps=20, iterations=19, max_evaluations=max_evaluations, seed=1)
+    L-SHADE plans over the budget it is handed (params.budget), stops there and never asks
+    for more; the run loop's own budget cuts it where that is smaller."""
+    opt = make("lshade", ps=20, iterations=19, budget=handed, seed=1)
 
     class Sphere:
         name, bounds = "sphere", BOX4
@@ -252,15 +252,15 @@ def test_lshade_never_exceeds_the_budget(budget, max_evaluations):
             return sphere(X)
 
     result = run(Sphere(), opt, budget)
-    planned = max_evaluations or 400
+    planned = handed or 400
+    assert opt.budget == planned
     assert result.evaluations == min(budget, planned)
     assert opt.nfe <= planned
 
 
 @pytest.mark.parametrize("name", sorted(ADAPTIVE))
 def test_archive_size_is_kept_during_a_run(name):
-    opt = make(name, ps=12, iterations=40, **({"max_evaluations": 800} if name == "lshade"
-                                               else {}))
+    opt = make(name, ps=12, iterations=40, budget=800)
     while not opt.done:
         X = opt.ask()
         opt.tell(X, sphere(X))
@@ -314,7 +314,7 @@ PAPER_DEFAULTS = {
     "jade": {"c": 0.1, "p": 0.05, "archive": True, "bounds": "midpoint"},
     "shade": {"H": 100, "p_max": 0.2, "bounds": "midpoint"},
     "lshade": {"H": 6, "p": 0.11, "r_arc": 2.6, "N_min": 4, "N_init_rate": 18.0,
-               "N_init": "ps", "max_evaluations": None, "bounds": "midpoint"},
+               "N_init": "ps", "bounds": "midpoint"},
 }
 
 
@@ -329,7 +329,7 @@ def test_defaults(name):
     "name,key,value",
     [("jade", "c", 0.0), ("jade", "p", 1.5), ("jade", "bounds", "wrap"), ("shade", "H", 0),
      ("shade", "p_max", 0.0), ("lshade", "N_init", "huge"), ("lshade", "N_min", 2),
-     ("lshade", "max_evaluations", 0), ("lshade", "r_arc", -1.0), ("lshade", "p", 0.0),
+     ("lshade", "r_arc", -1.0), ("lshade", "p", 0.0),
      ("lshade", "N_init_rate", 0.0), ("jade", "archive", "yes")],
 )
 def test_bad_values_name_the_key(name, key, value):

@@ -27,7 +27,7 @@ from vpid_ga.operators import (
 )
 
 from vpid_bench.api import Bounds, ConfigError
-from vpid_bench.experiment import build_problem, optimizer_params
+from vpid_bench.build import build_problem, optimizer_params
 from vpid_bench.params import build_dataclass
 from vpid_bench.runner import run
 

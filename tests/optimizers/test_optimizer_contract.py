@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vpid_bench.experiment import build_problem, optimizer_params
+from vpid_bench.build import build_problem, optimizer_params
 from vpid_bench.plugins import Registry
 from vpid_bench.runner import run
 

@@ -14,7 +14,7 @@ import pytest
 from scipy.optimize import differential_evolution, rosen
 from scipy.stats import mannwhitneyu
 
-from vpid_bench.experiment import build_problem, optimizer_params
+from vpid_bench.build import build_problem, optimizer_params
 from vpid_bench.runner import run
 
 PS, ITERATIONS = 20, 50

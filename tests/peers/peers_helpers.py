@@ -69,7 +69,7 @@ def run_optimizer(registry, name: str, problem, seed: int, budget: int | None = 
                   **overrides):
     """Run optimizer ``name`` on ``problem`` (its protocol's budget unless ``budget``);
     returns the run result and the optimizer."""
-    from vpid_bench.experiment import optimizer_params
+    from vpid_bench.build import optimizer_params
     from vpid_bench.runner import run
 
     cfg = problem.config

@@ -10,7 +10,7 @@ from peers_helpers import run_optimizer
 from scipy.stats import mannwhitneyu
 
 from vpid_bench.api import Bounds, ConfigError, Problem
-from vpid_bench.experiment import build_problem
+from vpid_bench.build import build_problem
 from vpid_bench.params import build_dataclass
 from vpid_bench.runner import run
 

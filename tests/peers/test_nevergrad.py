@@ -14,7 +14,8 @@ from peers_helpers import run_optimizer
 from scipy.stats import mannwhitneyu
 
 from vpid_bench.api import ConfigError
-from vpid_bench.experiment import build_problem, run_from_config
+from vpid_bench.build import build_problem
+from vpid_bench.experiment import run_from_config
 from vpid_bench.params import build_dataclass
 from vpid_bench.records import read_record
 

@@ -9,7 +9,7 @@ from peers_helpers import loop_threads
 from scipy.stats import mannwhitneyu
 
 from vpid_bench.api import ConfigError
-from vpid_bench.experiment import build_problem, optimizer_params
+from vpid_bench.build import build_problem, optimizer_params
 from vpid_bench.runner import run
 
 PS, ITERATIONS = 10, 10

@@ -50,7 +50,7 @@ PREFLIGHT = [
      "error: problem.iterations=0 is not allowed: an integer from 1 to 1000000"),
     (["problem.ps=0"], "error: problem.ps=0 is not allowed: an integer from 1 to 10000"),
     (["optimizer=de1", "optimizer.ps=-2"], "error: optimizer.ps=-2 is not allowed: not "
-     "settable on the optimizer: the protocol is the problem's, set problem.ps"),
+     "settable on the optimizer: the job fills it in, set problem.ps"),
     (["problem.noise.level=abc"],
      "error: problem.noise.level='abc' is not allowed: a real number"),
     (["problem.noise.level=nan"], "error: problem.noise.level=nan is not allowed: a real number"),

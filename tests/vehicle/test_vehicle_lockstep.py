@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from vpid_vehicle.objective import add_noise
 
-from vpid_bench.experiment import ProblemCache, run_rng
+from vpid_bench.build import ProblemCache, run_rng
 from vpid_bench.runner import Lane, run, run_many
 from vpid_bench.spec import parse_job
 

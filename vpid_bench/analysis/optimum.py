@@ -21,7 +21,6 @@ best of any run analysed with it.
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import json
 import math
 import os
@@ -31,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ..api import Problem, ProblemConfig
+from ..api import PROTOCOL_KEYS, Problem
 from ..records.io import stable_hash, write_json_atomic
 
 #: A run whose best is within this factor of the known optimum is polished too: it may sit in
@@ -126,8 +125,7 @@ def record_settings(settings: Mapping[str, Any]) -> dict[str, Any]:
     """The problem settings that define a record: all but the benchmark protocol (``ps``,
     ``iterations``), which changes how optimizers search, never the data they fit. So the
     jobs of a sweep at ``ps`` 20 and 30 share each instance's optimum."""
-    protocol = {f.name for f in dataclasses.fields(ProblemConfig)}
-    return {str(k): v for k, v in settings.items() if k not in protocol}
+    return {str(k): v for k, v in settings.items() if k not in PROTOCOL_KEYS}
 
 
 def optimum_key(problem_name: str, settings: Mapping[str, Any], data: str | None,

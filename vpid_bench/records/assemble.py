@@ -21,7 +21,7 @@ from __future__ import annotations
 import socket
 import traceback
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -29,6 +29,10 @@ from ..api import Problem, relative_errors_percent
 from ..runner import RunResult
 from .io import SCHEMA
 from .provenance import package_versions
+
+if TYPE_CHECKING:  # the job's types; records sit below the job in the layers
+    from ..job_runs import RunOutcome
+    from ..spec import Job
 
 
 def _metrics(problem: Problem, x: np.ndarray) -> dict[str, Any]:
@@ -65,49 +69,37 @@ def error_section(error: BaseException) -> dict[str, str]:
     }
 
 
-def make_record(
-    *,
-    rid: str,
-    run_index: int,
-    problem: Problem,
-    problem_name: str,
-    problem_settings: Mapping[str, Any],
-    problem_plugin: Mapping[str, Any],
-    optimizer_name: str,
-    optimizer_settings: Mapping[str, Any],
-    optimizer_plugin: Mapping[str, Any],
-    seed: int,
-    budget: int,
-    result: RunResult | None,
-    error: BaseException | None,
-    started_at: str,
-    wall_time_s: float,
-) -> dict[str, Any]:
-    """The JSON record of one run: status ``ok`` with a result, or ``failed`` with an error."""
-    b = problem.bounds
+def make_record(job: Job, run: RunOutcome, rid: str, instance: Problem,
+                provenance: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
+    """The JSON record of one run of ``job``: status ``ok`` with a result, or ``failed`` with
+    an error. ``instance`` is the problem instance the run fitted, ``provenance`` the plugins'
+    (``{"problem": {...}, "optimizer": {...}}``). The one place a record is built."""
+    b = instance.bounds
+    result, error = run.result, run.error
     record: dict[str, Any] = {
         "schema": SCHEMA,
         "run_id": rid,
-        "run_index": run_index,
+        "run_index": run.index,
         "status": "ok" if error is None else "failed",
         "error": None if error is None else error_section(error),
-        "problem": {"name": problem_name, "plugin": dict(problem_plugin),
-                    "config": dict(problem_settings), "info": problem.describe()},
-        "optimizer": {"name": optimizer_name, "plugin": dict(optimizer_plugin),
-                      "params": dict(optimizer_settings)},
-        "seeds": {"seed": seed, "spawn_key": [run_index]},
-        "instance": {"index": run_index, "id": problem.instance_id()},
-        "budget": budget,
+        "problem": {"name": job.problem_name, "plugin": dict(provenance.get("problem") or {}),
+                    "config": job.problem_settings(), "info": instance.describe()},
+        "optimizer": {"name": job.optimizer_name,
+                      "plugin": dict(provenance.get("optimizer") or {}),
+                      "params": job.optimizer_settings()},
+        "seeds": {"seed": job.spec.seed, "spawn_key": [run.index]},
+        "instance": {"index": run.index, "id": instance.instance_id()},
+        "budget": job.budget,
         "parameters": {"names": list(b.names), "units": list(b.units), "lower": b.lower,
-                       "upper": b.upper, "true": problem.x_true},
+                       "upper": b.upper, "true": instance.x_true},
         "result": None,
         "trace": None,
         "versions": dict(package_versions()),
-        "timing": {"started_at": started_at, "wall_time_s": wall_time_s,
+        "timing": {"started_at": run.started_at, "wall_time_s": run.seconds,
                    "host": socket.gethostname()},
     }
     if result is not None:
-        record["result"] = result_section(result, problem)
+        record["result"] = result_section(result, instance)
         record["trace"] = {"evaluations": result.trace_evaluations, "best": result.trace_best}
         record["timing"]["run_time_s"] = result.wall_time_s
     return record

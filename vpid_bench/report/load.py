@@ -26,14 +26,15 @@ from typing import Any
 
 import numpy as np
 
-from ..api import VpidBenchError
+from ..api import FILLED_PARAMS, VpidBenchError
 from ..records import CorruptRecordError, iter_record_files, read_job_status, read_record
 from ..records.io import decode_number
 
 #: Problem-config keys that never define a context of their own (ps is taken from the optimizer).
 PROBLEM_KEYS_IGNORED = ("ps",)
-#: Optimizer parameters that never distinguish algorithm variants (they are the protocol).
-OPTIMIZER_KEYS_IGNORED = ("ps", "iterations")
+#: Optimizer parameters that never distinguish algorithm variants (the protocol and the
+#: budget the job fills in; records of older versions may hold them under the optimizer).
+OPTIMIZER_KEYS_IGNORED = FILLED_PARAMS
 
 
 class NoRecordsError(VpidBenchError):

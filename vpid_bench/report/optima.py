@@ -34,12 +34,12 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from ..api import PROTOCOL_KEYS
+
 #: The schema string of an optimum file (written by vpid_bench.analysis.optimum).
 SCHEMA = "vpid-bench/instance-optimum/1"
 #: A larger optimum file is not read (bytes): a real one holds a few vectors.
 MAX_BYTES = 1_000_000
-#: Problem settings that never change an instance's data (the protocol).
-PROTOCOL_KEYS = ("ps", "iterations")
 #: A run "reaches" its instance's optimum when its relative gap is at most this.
 REACHED = 1e-6
 

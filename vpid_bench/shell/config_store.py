@@ -10,9 +10,10 @@ protocol keys (``ps``, ``iterations``): the job copies them from the problem.
 
 from __future__ import annotations
 
+from ..api import FILLED_PARAMS
 from ..params import dataclass_defaults, hydra_node
 from ..plugins import Registry
-from ..spec import PROTOCOL_KEYS, JobSpec
+from ..spec import JobSpec
 
 SPEC_NODE = "vpid_bench_spec"
 #: Hydra's default job logging without its file handler: Hydra configures logging before our
@@ -26,10 +27,6 @@ JOB_LOGGING = {
     "root": {"level": "INFO", "handlers": ["console"]},
     "disable_existing_loggers": False,
 }
-#: The default sweeper: Hydra's basic sweeper without its second composition of every point
-#: (the pre-flight has checked them; see ``hydra_plugins.vpid_bench_sweeper``).
-SWEEPER = {"_target_": "hydra_plugins.vpid_bench_sweeper.PreflightSweeper",
-           "max_batch_size": None, "params": None}
 
 
 def register_configs(registry: Registry) -> None:
@@ -40,29 +37,11 @@ def register_configs(registry: Registry) -> None:
     cs = ConfigStore.instance()
     cs.store(group="hydra/job_logging", name="vpid_bench", node=JOB_LOGGING,
              provider="vpid-bench")
-    cs.store(group="hydra/sweeper", name="vpid_bench", node=SWEEPER, provider="vpid-bench")
     cs.store(name=SPEC_NODE, node=dataclass_defaults(JobSpec), provider="vpid-bench")
     for name, cls in sorted(registry.optimizers.items()):
         cs.store(group="optimizer", name=name,
-                 node=hydra_node(cls.Params, name, exclude=PROTOCOL_KEYS),
+                 node=hydra_node(cls.Params, name, exclude=FILLED_PARAMS),
                  provider=registry.owner("optimizer", name))
     for name, cls in sorted(registry.problems.items()):
         cs.store(group="problem", name=name, node=hydra_node(cls.Config, name),
                  provider=registry.owner("problem", name))
-
-
-def ensure_sweeper_known() -> None:
-    """Make the default sweeper (:data:`SWEEPER`) known to Hydra's plugin registry.
-
-    Hydra finds plugins by listing the folders of the ``hydra_plugins`` namespace package; an
-    editable install (``pip install -e .``, what ``make install`` does) serves the package
-    through an import hook that such a listing does not see (Hydra issue 3252, fixed only by
-    Hydra 1.4's entry points). The module imports fine, so it is registered here when the
-    scan missed it."""
-    from hydra.core.plugins import Plugins
-
-    plugins = Plugins.instance()  # first: its scan re-executes the modules it lists
-    if SWEEPER["_target_"] not in plugins.class_name_to_class:
-        from hydra_plugins.vpid_bench_sweeper import PreflightSweeper
-
-        plugins._register(PreflightSweeper)  # noqa: SLF001 - Hydra 1.3 has no public way

@@ -82,7 +82,8 @@ class JobTask:
 
     def _run(self, cfg: Any, hydra_cfg: Any, job_dir: Path, multirun: bool) -> float | None:
         """Run the job; its search score is what an optimizing sweeper (Optuna) minimises."""
-        from ..experiment import ProblemCache, run_from_config
+        from ..build import ProblemCache
+        from ..experiment import run_from_config
 
         try:
             if self._registry is None:
@@ -246,7 +247,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     from . import preflight
     from .argv import parse_command_line
     from .callbacks import ensure_job_dir_resolver
-    from .config_store import ensure_sweeper_known, register_configs
+    from .config_store import register_configs
     from .resume import FolderLock, new_invocation
 
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -260,7 +261,6 @@ def main(argv: Sequence[str] | None = None) -> None:
         return
     new_invocation()
     register_configs(registry)
-    ensure_sweeper_known()
     ensure_job_dir_resolver()
     task = JobTask(registry)
     if cmd.custom_config or cmd.info in ("--help", "--hydra-help", "--shell-completion"):

@@ -28,9 +28,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ..api import ConfigError, VpidBenchError
+from ..api import FILLED_PARAMS, ConfigError, VpidBenchError
 from ..plugins import Registry
-from ..spec import PROTOCOL_KEYS, TOP_LEVEL_KEYS, Job, parse_job
+from ..spec import TOP_LEVEL_KEYS, Job, parse_job
 from .argv import CommandLine
 
 GROUPS = ("problem", "optimizer")
@@ -214,9 +214,10 @@ def _unknown_key(cfg: Any, key: str, value: Any) -> ConfigError:
                 return ConfigError(key, value, "known top-level keys are problem, optimizer, "
                                    + ", ".join(TOP_LEVEL_KEYS) + "; problem.<key> and "
                                    "optimizer.<key> set a plugin's parameters")
-            if parent == "optimizer" and parts[1] in PROTOCOL_KEYS:
-                return ConfigError(key, value, "not settable on the optimizer: the protocol "
-                                   f"is the problem's, set problem.{parts[1]}")
+            if parent == "optimizer" and parts[1] in FILLED_PARAMS:
+                where = "budget" if parts[1] == "budget" else f"problem.{parts[1]}"
+                return ConfigError(key, value, "not settable on the optimizer: the job fills "
+                                   f"it in, set {where}")
             owner = parent.split(".")[0]
             name = OmegaConf.select(cfg, f"{owner}.name")
             who = f"{owner} {name!r}" if owner in GROUPS and name else parent

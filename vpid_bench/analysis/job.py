@@ -1,0 +1,73 @@
+"""What a job's records allow: the Cramér–Rao bounds of its design and each instance's
+optimum, and the job's search score."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..api import Problem, offers_residuals
+from ..records.io import write_json_atomic
+from ..spec import Job
+
+
+def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
+                records: list[dict[str, Any]]) -> dict[int, float]:
+    """For a problem with residuals and a known truth: the Cramér–Rao bounds of its design
+    (``job_dir/identifiability.json``) and each instance's optimum (``optima_dir/<key>.json``,
+    shared by the jobs of a sweep; see :mod:`.optimum`). Returns each run's relative gap
+    ``(f_best - f*) / f*`` to its instance's optimum (the absolute gap where ``f* <= 0``)."""
+    from .identifiability import cramer_rao
+    from .optimum import update_instance_optimum
+
+    if problem.x_true is None or not offers_residuals(type(problem)):
+        return {}
+    target = job_dir / "identifiability.json"
+    if not target.is_file():
+        crb = cramer_rao(problem)
+        if crb is not None:
+            write_json_atomic(target, crb)
+    bests = _run_bests(records)
+    by_instance: dict[str | None, tuple[Problem, list, list[int]]] = {}
+    for i in range(job.spec.runs):
+        inst = problem.instance(i)
+        entry = by_instance.setdefault(inst.instance_id(), (inst, [], []))
+        entry[1].extend(bests.get(i, []))
+        entry[2].append(i)
+    gaps: dict[int, float] = {}
+    for inst, runs, indices in by_instance.values():
+        f_opt = update_instance_optimum(inst, job.problem_settings(), optima_dir, runs)["f_opt"]
+        for i in indices:
+            for _, f in bests.get(i, []):
+                gaps[i] = (f - f_opt) / f_opt if f_opt > 0 else f - f_opt
+    return gaps
+
+
+def _run_bests(records: list[dict[str, Any]]) -> dict[int, list[tuple[np.ndarray, float]]]:
+    """Each ok run's best vector and value, by run index."""
+    bests: dict[int, list[tuple[np.ndarray, float]]] = {}
+    for record in records:
+        res = record.get("result") or {}
+        x, f = res.get("x_best"), res.get("f_best")
+        if record["status"] == "ok" and x and None not in x and f is not None:
+            bests.setdefault(record["run_index"], []).append((np.asarray(x, float), f))
+    return bests
+
+
+def job_score(gaps: Mapping[int, float], records: list[dict[str, Any]]) -> float | None:
+    """The job's search score, lower is better: the median relative gap of the runs' best to
+    their instance's optimum where the optimum is known, else the median best objective;
+    ``inf`` counts for a failed run. The command returns it, so an optimizing sweeper (Optuna)
+    can tune on it."""
+    if gaps:
+        values = list(gaps.values())
+    else:
+        values = []
+        for record in records:
+            f = (record.get("result") or {}).get("f_best")
+            values.append(math.inf if record["status"] != "ok" or f is None else float(f))
+    return float(np.median(values)) if values else None

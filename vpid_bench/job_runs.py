@@ -1,0 +1,127 @@
+"""A job's runs: which go together, the warm-up before them, and each run's outcome.
+
+Every run goes through the one run loop, :func:`vpid_bench.runner.run_many`. When the problem's
+values do not depend on the batch (:attr:`~vpid_bench.api.Problem.rows_independent`) and the
+optimizer asks and tells in the run loop's thread (not a
+:class:`~vpid_bench.api.LoopOptimizer`, no residuals), the runs still to do go in lockstep: one
+evaluation call per step for all of them, so small populations fill the kernel and its threads.
+Otherwise they go one at a time. Either way each run keeps its generator, budget and trace, and
+its record is bit-identical (tested). Its time is its own: its optimizer's constructor, ask and
+tell, plus its rows' share of each gathered evaluation.
+
+Timing: before the first timed run the job makes one untimed warm-up run of at most two
+batches, so compiled kernels (numba) are compiled before any run is timed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime as _dt
+import logging
+import time
+from collections.abc import Iterator, Sequence
+
+import numpy as np
+
+from .api import LoopOptimizer, Problem
+from .build import run_rng
+from .runner import Lane, RunResult, run, run_many, time_limit, timeout_error
+from .spec import Job
+
+log = logging.getLogger(__name__)
+
+
+@dataclasses.dataclass
+class RunOutcome:
+    """How run ``index`` ended: its result or the exception that ended it, when it started
+    (UTC, ISO 8601) and its own time in seconds."""
+
+    index: int
+    outcome: RunResult | BaseException
+    started_at: str
+    seconds: float
+
+    @property
+    def result(self) -> RunResult | None:
+        return self.outcome if isinstance(self.outcome, RunResult) else None
+
+    @property
+    def error(self) -> BaseException | None:
+        return None if isinstance(self.outcome, RunResult) else self.outcome
+
+
+def joins_lockstep(job: Job, problem: Problem) -> bool:
+    """Whether the runs of ``job`` can run in lockstep (see module)."""
+    cls = job.optimizer_cls
+    return (bool(getattr(problem, "rows_independent", False))
+            and not getattr(cls, "wants_residuals", False)
+            and not issubclass(cls, LoopOptimizer))
+
+
+def warm_up(job: Job, problem: Problem, lockstep: bool = False) -> float:
+    """One untimed run of at most two batches, so compilation is not timed (see module); in
+    lockstep also one gathered call over two instances (its own compiled path). Returns its
+    wall time (s). A fault here is left for the timed runs to meet and record."""
+    t0 = time.perf_counter()
+    try:
+        with time_limit(job.spec.run_timeout_s):  # a plugin that never returns: bounded here too
+            if lockstep:
+                X = problem.bounds.sample(np.random.default_rng(0), 2)
+                problem.evaluate_instances(X, np.array([0, min(1, job.spec.runs - 1)]))
+            optimizer = job.optimizer_cls(job.params, problem.bounds, run_rng(job.spec.seed, 2**31))
+            run(problem, optimizer, min(job.budget, 2 * job.problem_config.ps))
+    except Exception:  # noqa: BLE001 - the timed runs will meet and record the same fault
+        log.debug("warm-up failed", exc_info=True)
+    return time.perf_counter() - t0
+
+
+def run_outcomes(job: Job, problem: Problem, indices: Sequence[int], lockstep: bool
+                 ) -> Iterator[RunOutcome]:
+    """The outcome of each run in ``indices``, in order: all in one lockstep group, or one at
+    a time (each yielded as soon as it is over)."""
+    groups = [list(indices)] if lockstep else [[i] for i in indices]
+    for group in groups:
+        yield from _group(job, problem, group)
+
+
+def _now() -> str:
+    return _dt.datetime.now(_dt.timezone.utc).isoformat()
+
+
+def _group(job: Job, problem: Problem, indices: list[int]) -> list[RunOutcome]:
+    """Build an optimizer per run (a constructor that raises or passes the time limit fails its
+    run alone), then run the group through the one run loop."""
+    timeout = job.spec.run_timeout_s
+    started = _now()
+    lanes: list[Lane] = []
+    failed: dict[int, BaseException] = {}
+    built_s: dict[int, float] = {}
+    for i in indices:
+        inst = problem.instance(i)
+        t0 = time.perf_counter()
+        try:
+            with time_limit(timeout):
+                optimizer = job.optimizer_cls(job.params, inst.bounds, run_rng(job.spec.seed, i))
+            optimizer.name = job.optimizer_name
+            lanes.append(Lane(inst, optimizer, job.budget, instance=i,
+                              elapsed_s=time.perf_counter() - t0))
+        except KeyboardInterrupt:
+            raise
+        except BaseException as exc:  # noqa: BLE001 - crash isolation: this run only
+            failed[i] = exc
+        built_s[i] = time.perf_counter() - t0
+        if timeout is not None and i not in failed and built_s[i] > timeout:
+            lanes.pop()
+            failed[i] = timeout_error(timeout)
+    outcomes = dict(zip([lane.instance for lane in lanes],
+                        run_many(problem, lanes, timeout_s=timeout)))
+    outcomes.update(failed)
+    out = []
+    for i in indices:
+        o = outcomes[i]
+        seconds = built_s[i] + (o.wall_time_s if isinstance(o, RunResult) else 0.0)
+        if not isinstance(o, RunResult):
+            log.error("run %d of %s on %s failed: %s: %s", i, job.optimizer_name,
+                      job.problem_name, type(o).__name__, o)
+        out.append(RunOutcome(i, o, started, seconds))
+    return out
