@@ -37,6 +37,7 @@ from .api import (
     check_compatible,
     default_budget,
 )
+from .contract import check_problem_class
 from .params import build_dataclass, to_plain
 from .plugins import Registry
 
@@ -165,6 +166,7 @@ def parse_job(cfg: Any, registry: Registry) -> Job:
     optimizer_name, optimizer_cfg = _group(config, "optimizer")
     problem_cls = registry.problem(problem_name)
     optimizer_cls = registry.optimizer(optimizer_name)
+    check_problem_class(problem_cls, problem_name)
     problem_config = build_dataclass(problem_cls.Config, problem_cfg, prefix="problem")
     check_protocol(problem_config)
     for key in FILLED_PARAMS:

@@ -1,0 +1,115 @@
+"""The problem contract, grouped into capabilities, and the check that refuses half of one.
+
+A :class:`~vpid_bench.api.Problem` is a core (``Config``, ``bounds``, ``evaluate``) plus
+capabilities it may offer. Each capability is all or nothing: a problem that implements part
+of one would be used with the framework's default for the rest, and that gives wrong numbers
+without a word. The known case: a problem with ``instance(i)`` but no ``instance_id()`` fits
+a different record per run while its records say the runs share one; one optimum is polished
+and every run judged against instance 0's. So :func:`check_problem_class` refuses such a
+class before any run (the job spec's parse calls it, so the pre-flight does too), with one
+line naming what is missing.
+
+=============  =====================================================================  =========
+capability     members                                                                anchor
+=============  =====================================================================  =========
+core           Config, bounds, evaluate; optional: x_true, metrics, describe, name,    (always)
+               rows_independent
+residuals      residuals, residual_groups, evaluate_with_residuals, residual_sigma    residuals
+instances      instance, instance_id, evaluate_instances                              instance
+signals        signals, signal_units                                                  signals
+plumbing       write_artifacts, content_digest, set_threads                           (none)
+=============  =====================================================================  =========
+
+A capability is offered when its *anchor* is overridden; overriding any other member of it
+without the anchor is refused, and so is ``instance`` without ``instance_id``. A member that
+is a method in :class:`~vpid_bench.api.Problem` must stay a method (``instance_id = "a"`` is
+refused: it would fail as ``'str' object is not callable`` in the middle of a job).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import inspect
+
+from .api import ConfigError, Problem
+
+DOCS = "docs/architecture.md#the-problem-contract"
+
+
+@dataclasses.dataclass(frozen=True)
+class Capability:
+    """A group of :class:`~vpid_bench.api.Problem` members offered together."""
+
+    name: str
+    members: tuple[str, ...]
+    anchor: str | None  # the member whose override offers the capability (None: no anchor)
+    needs: tuple[str, ...] = ()  # members that must be overridden with the anchor
+    what: str = ""
+
+
+CAPABILITIES: tuple[Capability, ...] = (
+    Capability("core", ("Config", "name", "bounds", "evaluate", "x_true", "metrics",
+                        "describe", "rows_independent"), None,
+               what="the box, the objective, and optionally the truth and accuracy metrics"),
+    Capability("residuals", ("residuals", "residual_groups", "evaluate_with_residuals",
+                             "residual_sigma"), "residuals",
+               what="residual vectors, for least-squares optimizers and the identifiability "
+                    "analysis"),
+    Capability("instances", ("instance", "instance_id", "evaluate_instances"), "instance",
+               needs=("instance_id",),
+               what="a different record per run index, named so that runs pair by instance"),
+    Capability("signals", ("signals", "signal_units"), "signals",
+               what="measured and fitted channels, for the measured-vs-fitted figure"),
+    Capability("plumbing", ("write_artifacts", "content_digest", "set_threads"), None,
+               what="files kept beside the records, a digest of data files, threads"),
+)
+
+
+def overrides(cls: type, member: str) -> bool:
+    """Whether ``cls`` defines ``member`` differently from :class:`~vpid_bench.api.Problem`."""
+    return getattr(cls, member, None) is not getattr(Problem, member, None)
+
+
+def offered(cls: type[Problem]) -> list[str]:
+    """The capabilities ``cls`` offers (``core`` always)."""
+    return [c.name for c in CAPABILITIES if c.anchor is None and c.name == "core"
+            or c.anchor is not None and overrides(cls, c.anchor)]
+
+
+def check_problem_class(cls: type, name: str | None = None) -> None:
+    """Refuse a problem class that implements part of a capability (see the module), or
+    that replaced a method of the contract by something that is not callable. Raises
+    :class:`~vpid_bench.api.ConfigError` with key ``problem``, one line."""
+    label = name or getattr(cls, "name", None) or cls.__name__
+    if not (isinstance(cls, type) and issubclass(cls, Problem)):
+        raise ConfigError("problem", label, "a subclass of vpid_bench.Problem")
+    for cap in CAPABILITIES:
+        for member in cap.members:
+            _check_callable(cls, member, label)
+        if cap.anchor is None:
+            continue
+        done = [m for m in cap.members if overrides(cls, m)]
+        if not done:
+            continue
+        missing = [m for m in (cap.anchor, *cap.needs) if m not in done]
+        if missing:
+            raise ConfigError("problem", label, _half(cap, done, missing))
+
+
+def _half(cap: Capability, done: list[str], missing: list[str]) -> str:
+    have = ", ".join(f"{m}()" for m in done)
+    lack = " and ".join(f"{m}()" for m in missing)
+    return (f"a problem that offers the {cap.name!r} capability whole ({cap.what}): it "
+            f"implements {have} but not {lack}; implement {lack} too, or none of "
+            f"{', '.join(cap.members)} (see {DOCS})")
+
+
+def _check_callable(cls: type, member: str, label: str) -> None:
+    base = inspect.getattr_static(Problem, member, None)
+    if not callable(base) or isinstance(base, (property, type)):
+        return
+    mine = inspect.getattr_static(cls, member, None)
+    if isinstance(mine, (staticmethod, classmethod)) or callable(mine):
+        return
+    raise ConfigError("problem", label, f"{member} must be a method, like "
+                      f"Problem.{member}(), not a {type(mine).__name__} (see {DOCS})")
