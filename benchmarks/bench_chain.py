@@ -44,9 +44,7 @@ def runs_alone(overrides: list[list[str]], lockstep: bool = True) -> tuple[float
     import numpy as np
 
     from vpid_bench.build import ProblemCache, run_rng
-
     from vpid_bench.job_runs import joins_lockstep
-
     from vpid_bench.machine import available_cores
     from vpid_bench.runner import Lane, run, run_many
     from vpid_bench.spec import parse_job

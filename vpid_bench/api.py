@@ -276,8 +276,10 @@ class Problem(abc.ABC):
 
     def describe(self) -> dict[str, Any]:
         """Extra facts about this instance that go into every run record (JSON-able), under
-        ``problem.info``. The key ``f_at_true`` (the objective at :attr:`x_true`, where known)
-        is read by the report, which draws it as a reference line in the convergence figure."""
+        ``problem.info``. Two keys are read by the report: ``f_at_true`` (the objective at
+        :attr:`x_true`, where known), drawn as a reference line in the convergence figure, and
+        ``metric_units`` (``{"rms_error": "%"}``: the unit of each of :meth:`metrics`), printed
+        beside every metric value."""
         return {}
 
     def write_artifacts(self, directory: Path) -> list[Path]:

@@ -44,60 +44,76 @@ def _coerce(value: Any, tp: Any, key: str) -> Any:
     if tp is Any:
         return value
     if origin is Literal:
-        choices = get_args(tp)
-        if value in choices:
+        if value in get_args(tp):
             return value
         raise ConfigError(key, value, _type_name(tp))
     if origin in (Union, types.UnionType):
-        args = get_args(tp)
-        if value is None and type(None) in args:
-            return None
-        errors = []
-        for arg in args:
-            if arg is type(None):
-                continue
-            try:
-                return _coerce(value, arg, key)
-            except ConfigError as exc:
-                errors.append(exc)
-        raise ConfigError(key, value, _type_name(tp))
+        return _coerce_union(value, tp, key)
     if origin in (list, tuple) or tp in (list, tuple):
-        if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
-            raise ConfigError(key, value, f"a list ({_type_name(tp)})")
-        inner = get_args(tp)
-        item_tp = inner[0] if inner else Any
-        items = [_coerce(v, item_tp, f"{key}[{i}]") for i, v in enumerate(value)]
-        return tuple(items) if (origin is tuple or tp is tuple) else items
+        return _coerce_sequence(value, tp, origin, key)
     if _is_dataclass_type(tp):
         if isinstance(value, tp):
             return value
         if not isinstance(value, Mapping):
             raise ConfigError(key, value, f"a mapping of {tp.__name__} fields")
         return build_dataclass(tp, value, prefix=key)
-    if tp is bool:
-        if isinstance(value, bool):
-            return value
-        raise ConfigError(key, value, "true or false")
-    if tp is int:
-        if isinstance(value, bool):
-            raise ConfigError(key, value, "an integer")
-        if isinstance(value, int):
-            return value
-        if isinstance(value, float) and value.is_integer():
-            return int(value)
-        raise ConfigError(key, value, "an integer")
-    if tp is float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigError(key, value, "a real number")
-        value = float(value)
-        if math.isnan(value):
-            raise ConfigError(key, value, "a real number (not NaN)")
+    scalar = _SCALARS.get(tp)
+    return scalar(value, key) if scalar is not None else value
+
+
+def _coerce_union(value: Any, tp: Any, key: str) -> Any:
+    args = get_args(tp)
+    if value is None and type(None) in args:
+        return None
+    for arg in args:
+        if arg is type(None):
+            continue
+        try:
+            return _coerce(value, arg, key)
+        except ConfigError:
+            continue
+    raise ConfigError(key, value, _type_name(tp))
+
+
+def _coerce_sequence(value: Any, tp: Any, origin: Any, key: str) -> Any:
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
+        raise ConfigError(key, value, f"a list ({_type_name(tp)})")
+    inner = get_args(tp)
+    item_tp = inner[0] if inner else Any
+    items = [_coerce(v, item_tp, f"{key}[{i}]") for i, v in enumerate(value)]
+    return tuple(items) if (origin is tuple or tp is tuple) else items
+
+
+def _to_bool(value: Any, key: str) -> bool:
+    if isinstance(value, bool):
         return value
-    if tp is str:
-        if isinstance(value, str):
-            return value
-        raise ConfigError(key, value, "a string")
+    raise ConfigError(key, value, "true or false")
+
+
+def _to_int(value: Any, key: str) -> int:
+    if isinstance(value, int) and not isinstance(value, bool):
+        return value
+    if isinstance(value, float) and value.is_integer():
+        return int(value)
+    raise ConfigError(key, value, "an integer")
+
+
+def _to_float(value: Any, key: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ConfigError(key, value, "a real number")
+    value = float(value)
+    if math.isnan(value):
+        raise ConfigError(key, value, "a real number (not NaN)")
     return value
+
+
+def _to_str(value: Any, key: str) -> str:
+    if isinstance(value, str):
+        return value
+    raise ConfigError(key, value, "a string")
+
+
+_SCALARS = {bool: _to_bool, int: _to_int, float: _to_float, str: _to_str}
 
 
 def build_dataclass(cls: type[T], mapping: Mapping[str, Any] | None, prefix: str = "") -> T:

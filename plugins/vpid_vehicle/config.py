@@ -180,6 +180,19 @@ def window(config: VehicleConfig) -> float:
 
 def validate(config: VehicleConfig) -> None:
     """Raise ConfigError for the first value that makes no physical or numerical sense."""
+    _validate_vehicle(config)
+    _validate_simulation(config)
+    T = window(config)
+    if T < config.dt:
+        raise ConfigError("problem.dt", config.dt, f"a step no longer than the window T = {T:g} s")
+    _validate_noise_and_reference(config)
+    check_size(config, T)
+    if config.reference.file is not None:
+        check_reference_file(config, T)
+    _validate_bounds(config)
+
+
+def _validate_vehicle(config: VehicleConfig) -> None:
     p = config.vehicle
     for name in ("m", "m1", "m2"):
         _positive(f"problem.vehicle.{name}", getattr(p, name), "a mass > 0 (kg)")
@@ -194,6 +207,9 @@ def validate(config: VehicleConfig) -> None:
     if not (math.isfinite(p.a1) and 0.0 < p.a1 < p.L):
         raise ConfigError("problem.vehicle.a1", p.a1, f"a value in (0, L) = (0, {p.L:g}) m")
     _positive("problem.bump.V", config.bump.V, "a speed > 0 (km/h)")
+
+
+def _validate_simulation(config: VehicleConfig) -> None:
     h = config.bump.h
     if not (math.isfinite(h) and 0 < abs(h) <= MAX_BUMP_HEIGHT):
         raise ConfigError("problem.bump.h", h, f"a bump height with 0 < |h| <= "
@@ -210,9 +226,9 @@ def validate(config: VehicleConfig) -> None:
     extra = config.record.extra
     if not (math.isfinite(extra) and extra >= 0):
         raise ConfigError("problem.record.extra", extra, "seconds >= 0 recorded after the window")
-    T = window(config)
-    if T < config.dt:
-        raise ConfigError("problem.dt", config.dt, f"a step no longer than the window T = {T:g} s")
+
+
+def _validate_noise_and_reference(config: VehicleConfig) -> None:
     nz = config.noise
     if not (math.isfinite(nz.level) and nz.level >= 0):
         raise ConfigError("problem.noise.level", nz.level, "a noise level >= 0 (0.05 = 5 %)")
@@ -230,10 +246,10 @@ def validate(config: VehicleConfig) -> None:
                 "problem.reference.dt", ref.dt,
                 f"null or a step dividing problem.dt = {config.dt:g} s (e.g. {config.dt / 10:g})",
             )
-    check_size(config, T)
-    if ref.file is not None:
-        check_reference_file(config, T)
-    b = config.bounds
+
+
+def _validate_bounds(config: VehicleConfig) -> None:
+    p, b = config.vehicle, config.bounds
     _positive("problem.bounds.lower_factor", b.lower_factor, "a factor > 0")
     if not (math.isfinite(b.upper_factor) and b.upper_factor > b.lower_factor):
         raise ConfigError(

@@ -258,6 +258,7 @@ class VehicleProblem(Problem):
             "rear_excited_s": float(rear_in),
             "reference": {"source": self.reference_source},
             "f_at_true": self._f_at_true(),
+            "metric_units": {"NoRE": "%"},
         }
         ref = cfg.reference
         if self.reference_source == "file":

@@ -5,10 +5,9 @@
   its NoRE, and, only where the runs follow the paper's protocol (:func:`protocol_gaps`), the
   published row beside it. Elsewhere one line says why the paper's numbers are not shown.
   Headline columns: ``mean-vec NoRE`` and ``paper NoRE``.
-* **Measured vs fitted signals of the best run** (full report only): drawn from the
-  ``best_signals.csv`` the job wrote (:mod:`vpid_bench.artifacts`); the problem is never
-  rebuilt from a record. A residual panel (measured − fitted) under each channel; the legend
-  sits above the panels, off the rear axle's response at the end of the record.
+
+The measured-vs-fitted figure of the best run is the framework's (it draws one for every
+problem with signals: :mod:`vpid_bench.report.signals`).
 
 Nothing here imports pandas, numpy's heavy parts or matplotlib until a section is built.
 """
@@ -17,7 +16,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any
 
 from vpid_bench.report.sections import Contribution, HeadlineColumn, ReportContext, Section
@@ -191,95 +189,11 @@ def _mean_vector_section(ctx: ReportContext) -> tuple[Section | None, list[Headl
                    "\n".join(text), files), columns
 
 
-def draw_signals(t: Any, channels: Mapping[str, tuple[Any, Any]], units: Mapping[str, str],
-                 title: str) -> Any:
-    """The measured-vs-fitted figure: per channel a signal panel and, under it, a residual
-    panel (measured − fitted); one legend above all panels (off the data). Returns the
-    matplotlib figure."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    names = sorted(channels)
-    ratios = [r for _ in names for r in (3, 1.2)]
-    fig, axes = plt.subplots(2 * len(names), 1, figsize=(7.5, 3.6 * len(names) + 0.8),
-                             sharex=True, gridspec_kw={"height_ratios": ratios})
-    t = np.asarray(t, dtype=float)
-    for i, ch in enumerate(names):
-        measured, fitted = channels[ch]
-        unit = units.get(ch, "")
-        ax, axr = axes[2 * i], axes[2 * i + 1]
-        if measured is not None:
-            ax.plot(t, measured, color="0.35", lw=1.0, label="measured")
-        if fitted is not None:
-            ax.plot(t, fitted, color="C3", lw=1.3, ls="--", label="fitted")
-        ax.set_ylabel(f"{ch}" + (f" ({unit})" if unit else ""))
-        ax.grid(alpha=0.3)
-        if measured is not None and fitted is not None:
-            axr.plot(t, np.asarray(measured) - np.asarray(fitted), color="C0", lw=0.9,
-                     label="residual (measured − fitted)")
-        axr.axhline(0.0, color="0.6", lw=0.6)
-        axr.set_ylabel("residual" + (f"\n({unit})" if unit else ""))
-        axr.grid(alpha=0.3)
-    axes[-1].set_xlabel("time t (s)")
-    handles, labels = [], []
-    for ax in axes[:2]:
-        h, lab = ax.get_legend_handles_labels()
-        handles += h
-        labels += lab
-    fig.suptitle(title, fontsize=10)
-    fig.tight_layout(rect=(0, 0, 1, 0.93))
-    fig.legend(handles, labels, loc="upper center", ncol=3, fontsize=8, frameon=False,
-               bbox_to_anchor=(0.5, 0.955))
-    return fig
-
-
-def _best_run(ctx: ReportContext) -> tuple[Mapping[str, Any], Mapping[str, Any]] | None:
-    ok = [(row, rec) for row, rec in zip(ctx.rows, ctx.records, strict=True)
-          if row["status"] == "ok" and math.isfinite(row["metric"])]
-    return min(ok, key=lambda item: item[0]["metric"]) if ok else None
-
-
-def _signals_section(ctx: ReportContext) -> Section:
-    from vpid_bench.artifacts import BEST_SIGNALS, BadArtifactError, read_best_signals
-
-    title = "Measured vs fitted signals of the best run"
-    best = _best_run(ctx)
-    if best is None:
-        return Section(title, "Not drawn: no successful run with a finite metric.")
-    row, rec = best
-    path = Path(ctx.job_dir(rec)) / BEST_SIGNALS
-    try:
-        sig = read_best_signals(path)
-    except BadArtifactError as exc:
-        return Section(title, ctx.para(
-            f"Not drawn: {ctx.escape(exc)}. Each job writes `{BEST_SIGNALS}` (the signals of "
-            "its best run) since this version; rerun the job to get it."))
-    src = sig.source
-    where = (f"{row['algorithm']}, {row['context']}, the best run of its job (run "
-             f"{src.get('run_index')}, {src.get('ranked_by')} = {ctx.fmt(src.get('value'))})")
-    # Drawn by the report's figure workers while it builds the rest (plain arrays in).
-    png = ctx.draw_figure(draw_signals, f"signals_{ctx.problem}", sig.t, sig.channels,
-                          sig.units, f"Measured vs fitted signals: {where}")
-    text = ctx.para(
-        f"The job of the best run by {ctx.escape(row['metric_name'])} "
-        f"({ctx.escape(row['algorithm'])}, {ctx.escape(row['context'])}) recorded the signals "
-        "of its own best run: the measured reference and the response of the identified "
-        "vector, and under each channel the residual measured − fitted. The rear axle meets "
-        "the bump only in the record's last 18 ms: that end carries most of what identifies "
-        "m2, k2 and c2.")
-    return Section(title, text, (png,))
-
-
 def vehicle_sections(ctx: ReportContext) -> Contribution:
     """The vehicle's report sections (see the module docstring)."""
     sections = []
     mean_section, columns = _mean_vector_section(ctx)
     if mean_section is not None:
         sections.append(mean_section)
-    if not ctx.short:
-        sections.append(_signals_section(ctx))
     return Contribution(sections=tuple(sections), headline=tuple(columns))
 

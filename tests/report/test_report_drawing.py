@@ -1,13 +1,10 @@
-"""The report's figures drawn in worker processes: the same files as drawn serially, a
-failing figure costs that figure only, no worker outlives a report (nor an interrupted one),
-step curves thinned without losing a step, and the numpy Holm and Nemenyi against the
-libraries they replace."""
+"""The report's figures: the core's drawn in the report's process, one that fails costs that
+figure only, a plugin section's figure is drawn with save_figure (a section whose figure fails
+costs that section only, and says so), step curves thinned without losing a step, and the
+numpy Holm and Nemenyi against the libraries they replace."""
 
 from __future__ import annotations
 
-import multiprocessing
-import os
-import time
 import types
 from pathlib import Path
 
@@ -19,43 +16,7 @@ from test_report_outputs import _vehicle_sweep
 from vpid_bench import hookimpl
 from vpid_bench.report import figures, stats
 from vpid_bench.report.build import build_report
-from vpid_bench.report.drawing import FigureDrawer
 from vpid_bench.report.sections import Contribution, Section
-
-
-def _children() -> list[int]:
-    """Processes whose parent is this one (Linux /proc), plus multiprocessing's own list,
-    without multiprocessing's resource tracker: one helper per interpreter, started with
-    the first spawned process and ending with this process, not a figure worker."""
-    from multiprocessing import resource_tracker
-
-    me = os.getpid()
-    found = {p.pid for p in multiprocessing.active_children()}
-    proc = Path("/proc")
-    if proc.is_dir():
-        for d in proc.iterdir():
-            if not d.name.isdigit():
-                continue
-            try:
-                status = (d / "status").read_text()
-            except OSError:
-                continue
-            for line in status.splitlines():
-                if line.startswith("PPid:") and int(line.split()[1]) == me:
-                    found.add(int(d.name))
-    found.discard(getattr(resource_tracker._resource_tracker, "_pid", None))
-    return sorted(found)
-
-
-def _no_children(grace_s: float = 5.0) -> bool:
-    """Whether :func:`_children` is empty, allowing a terminated worker ``grace_s`` seconds
-    to be reaped (a process that is exiting still shows in /proc for a moment)."""
-    deadline = time.monotonic() + grace_s
-    while _children():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.05)
-    return True
 
 
 def _png_ok(path: Path) -> bool:
@@ -65,58 +26,35 @@ def _png_ok(path: Path) -> bool:
     return img.ndim == 3 and min(img.shape[:2]) > 100 and float(img[..., :3].std()) > 0.01
 
 
-def _md(path: Path) -> list[str]:
-    return [ln for ln in path.read_text().splitlines() if not ln.startswith("Built ")]
-
-
 @pytest.fixture(scope="module")
 def sweep(tmp_path_factory):
     return _vehicle_sweep(tmp_path_factory.mktemp("sweep"))
 
 
-def test_parallel_and_serial_write_the_same_report(sweep, tmp_path):
-    assert _no_children()
-    par = build_report([sweep], tmp_path / "par", figures="parallel", workers=2)
-    assert par.figures_mode == "parallel (2 workers)"
-    assert _no_children()  # every worker stopped with the report
-    ser = build_report([sweep], tmp_path / "ser", figures="serial")
-    assert ser.figures_mode == "serial"
-
-    def files(root: Path) -> list[str]:
-        return sorted(p.relative_to(root).as_posix() for p in root.rglob("*") if p.is_file())
-
-    assert files(par.out_dir) == files(ser.out_dir)
-    pngs = [f for f in files(par.out_dir) if f.endswith(".png")]
-    assert pngs == ["figures/cd_vehicle_ps=20.png", "figures/cd_vehicle_ps=30.png",
-                    "figures/convergence.png", "figures/errors_vehicle.png",
-                    "figures/runs_vehicle.png", "figures/signals_vehicle.png"]  # + a plugin's
+def test_the_core_figures_and_the_signals_figure_are_drawn(sweep, tmp_path):
+    rep = build_report([sweep], tmp_path / "out")
+    pngs = sorted(p.relative_to(rep.out_dir).as_posix()
+                  for p in rep.out_dir.rglob("*.png"))
+    assert {"figures/cd_vehicle_ps=20.png", "figures/cd_vehicle_ps=30.png",
+            "figures/convergence.png", "figures/errors_vehicle.png",
+            "figures/runs_vehicle.png", "figures/signals_vehicle.png"} <= set(pngs)
     for f in pngs:
-        assert _png_ok(par.out_dir / f) and _png_ok(ser.out_dir / f), f
-    assert _md(par.report_md) == _md(ser.report_md)
-    assert par.skipped_figures == ser.skipped_figures
-    for f in files(par.out_dir):
-        if f.startswith("tables/") or f == "runs.csv":
-            assert (par.out_dir / f).read_bytes() == (ser.out_dir / f).read_bytes(), f
+        assert _png_ok(rep.out_dir / f), f
+    md = rep.report_md.read_text()
+    assert "## Measured vs fitted signals of the best run" in md
 
 
-def _ok_figure(path: Path) -> Path:
-    import matplotlib.pyplot as plt
+def test_a_raising_core_figure_costs_that_figure_only(sweep, tmp_path, monkeypatch):
+    def explode(*args, **kwargs):
+        raise ValueError("this figure exploded")
 
-    fig, ax = plt.subplots()
-    ax.plot([0, 1], [1, 0])
-    return figures.save(fig, path)
-
-
-def _raising_figure(path: Path) -> Path:
-    raise ValueError("this figure exploded")
-
-
-def _dies_in_a_worker(path: Path) -> Path:
-    """Kills the worker process that draws it (as the OOM killer would); draws when called
-    in the report's own process."""
-    if multiprocessing.parent_process() is not None:
-        os._exit(3)
-    return _ok_figure(path)
+    monkeypatch.setattr(figures, "draw_error_heatmap", explode)
+    rep = build_report([sweep], tmp_path / "out")
+    title = "Median per-run absolute relative error per parameter, vehicle"
+    assert rep.skipped_figures[title] == "failed: ValueError: this figure exploded"
+    assert not (tmp_path / "out" / "figures" / "errors_vehicle.png").exists()
+    assert _png_ok(tmp_path / "out" / "figures" / "convergence.png")
+    assert "this figure exploded" in " ".join(rep.report_md.read_text().split())
 
 
 def _raising_plugin_figure(n: int):
@@ -131,99 +69,37 @@ def _plugin_line(values: list[float]):
     return fig
 
 
-@pytest.mark.parametrize("mode", ["parallel", "serial"])
-def test_a_raising_figure_costs_that_figure_only(tmp_path, mode):
-    with FigureDrawer(mode, workers=2) as drawer:
-        drawer.submit("ok", _ok_figure, tmp_path / "ok.png")
-        drawer.submit("bad", _raising_figure, tmp_path / "bad.png")
-        drawer.submit("ok2", _ok_figure, tmp_path / "ok2.png")
-        out = drawer.results()
-    assert list(out) == ["ok", "bad", "ok2"]
-    assert out["ok"] == tmp_path / "ok.png" and _png_ok(out["ok"])
-    assert out["ok2"] == tmp_path / "ok2.png" and _png_ok(out["ok2"])
-    assert out["bad"] == "failed: ValueError: this figure exploded"
-    assert not (tmp_path / "bad.png").exists()
-    assert _no_children()
-
-
-def test_figures_of_a_dead_worker_are_drawn_here(tmp_path):
-    with FigureDrawer("parallel", workers=2) as drawer:
-        drawer.submit("dies", _dies_in_a_worker, tmp_path / "dies.png")
-        drawer.submit("ok", _ok_figure, tmp_path / "ok.png")
-        out = drawer.results()
-    assert out == {"dies": tmp_path / "dies.png", "ok": tmp_path / "ok.png"}
-    assert _png_ok(out["dies"]) and _png_ok(out["ok"])
-    assert _no_children()
-
-
 def _figure_plugin() -> types.SimpleNamespace:
-    def section(ctx):
-        good = ctx.draw_figure(_plugin_line, "good line", [1.0, 2.0, 0.5])
-        bad = ctx.draw_figure(_raising_plugin_figure, "bad line", 7)
-        return Contribution(sections=(Section("Figures of a plugin", "text", (good, bad)),))
+    def good(ctx):
+        png = ctx.save_figure(_plugin_line([1.0, 2.0, 0.5]), "good line")
+        return Contribution(sections=(Section("Figures of a plugin", "text", (png,)),))
+
+    def bad(ctx):
+        png = ctx.save_figure(_raising_plugin_figure(7), "bad line")
+        return Contribution(sections=(Section("A failing plugin", "text", (png,)),))
 
     @hookimpl
     def vpid_bench_register_report_sections(register):
-        register("toy", section)
+        register("toy", good)
+        register("toy", bad)
 
     return types.SimpleNamespace(
         vpid_bench_register_report_sections=vpid_bench_register_report_sections)
 
 
-@pytest.mark.parametrize("mode", ["parallel", "serial"])
-def test_a_plugin_figure_that_fails_is_dropped_and_reported(tmp_path, mode, registry_of):
+def test_a_plugin_figure_that_fails_costs_its_section_and_is_reported(tmp_path, registry_of):
     objective_job(tmp_path / "s", "a", 10, [1.0, 2.0, 3.0, 4.0, 5.0])
     objective_job(tmp_path / "s", "b", 10, [2.0, 3.0, 4.0, 5.0, 6.0])
     registry = registry_of(("figplug", _figure_plugin()))
-    rep = build_report([tmp_path / "s"], tmp_path / "out", registry=registry, figures=mode,
-                       workers=2)
+    rep = build_report([tmp_path / "s"], tmp_path / "out", registry=registry)
     figs = tmp_path / "out" / "figures"
     assert _png_ok(figs / "good_line.png")
     assert not (figs / "bad_line.png").exists()
     md = rep.report_md.read_text()
-    assert "(figures/good_line.png)" in md and "bad_line.png)" not in md
-    (line,) = [e for e in rep.section_errors if "bad_line.png" in e]
+    assert "(figures/good_line.png)" in md and "A failing plugin" not in md.split("Not built")[0]
+    (line,) = [e for e in rep.section_errors if "exploded" in e]
     assert "figplug" in line and "RuntimeError: plugin figure 7 exploded" in line
     assert "Convergence" not in rep.skipped_figures  # the core figures are unaffected
-    assert _no_children()
-
-
-def _interrupting_plugin() -> types.SimpleNamespace:
-    def section(ctx):
-        ctx.draw_figure(_plugin_line, "queued line", [1.0, 2.0])
-        raise KeyboardInterrupt  # as if the user pressed Ctrl-C while the workers draw
-
-    @hookimpl
-    def vpid_bench_register_report_sections(register):
-        register("toy", section)
-
-    return types.SimpleNamespace(
-        vpid_bench_register_report_sections=vpid_bench_register_report_sections)
-
-
-def test_no_worker_is_left_after_an_interrupt(tmp_path, registry_of):
-    objective_job(tmp_path / "s", "a", 10, [1.0, 2.0, 3.0, 4.0, 5.0])
-    objective_job(tmp_path / "s", "b", 10, [2.0, 3.0, 4.0, 5.0, 6.0])
-    registry = registry_of(("irq", _interrupting_plugin()))
-    with pytest.raises(KeyboardInterrupt):
-        build_report([tmp_path / "s"], tmp_path / "out", registry=registry,
-                     figures="parallel", workers=2)
-    assert _no_children()
-
-
-def test_the_drawer_kills_its_workers_on_an_error_in_the_block(tmp_path):
-    with (pytest.raises(RuntimeError, match="main process failed"),
-          FigureDrawer("parallel", workers=2) as drawer):
-        drawer.submit("ok", _ok_figure, tmp_path / "ok.png")
-        assert len(_children()) >= 1  # the workers were started at once
-        raise RuntimeError("main process failed")
-    assert _no_children()
-
-
-def test_figure_modes_are_checked():
-    with pytest.raises(ValueError, match="auto, parallel, serial"):
-        FigureDrawer("threads")  # type: ignore[arg-type]
-    assert FigureDrawer("auto", workers=0).mode == "serial"  # a single core: serial
 
 
 # --- thinning of step curves ----------------------------------------------------------------
@@ -328,34 +204,3 @@ def test_cd_bars_are_the_maximal_groups_scikit_posthocs_draws(seed):
     bars = cd_bars(names, p, 0.05)
     assert {frozenset(b) for b in bars} == expected
     assert all(b == sorted(b, key=names.index) for b in bars)  # best first within a bar
-
-
-@pytest.mark.parametrize(
-    ("file", "spec", "safe"),
-    [
-        (None, None, True),  # interactive, python -c, a notebook
-        ("/some/where/vpid-bench-report", None, True),  # our console scripts guard main()
-        ("/home/me/my_analysis.py", None, False),  # a user's script: may be unguarded
-        ("/x/pytest/__main__.py", "pytest.__main__", True),  # python -m: imported by name
-    ],
-)
-def test_auto_uses_workers_only_when_the_main_module_is_safe_to_import(
-        monkeypatch, file, spec, safe):
-    """A spawned worker imports the main module: an unguarded script would run again in
-    every worker, so "auto" draws serially for a script it does not know."""
-    import sys
-    import types
-
-    from vpid_bench.report import drawing
-
-    main = types.ModuleType("__main__")
-    if file is not None:
-        main.__file__ = file
-    main.__spec__ = types.SimpleNamespace(name=spec) if spec else None
-    monkeypatch.setitem(sys.modules, "__main__", main)
-    assert drawing.main_is_safe() is safe
-    with drawing.FigureDrawer("auto", workers=2) as auto:
-        assert auto.mode == ("parallel" if safe else "serial")
-    explicit = drawing.FigureDrawer("parallel", workers=1)  # the caller's choice, guarded
-    assert explicit.mode == "parallel"
-    explicit.terminate()

@@ -159,7 +159,7 @@ def test_convergence_has_a_log_axis_and_the_truth_line(tmp_path):
 
 def test_signals_legend_stays_off_the_rear_axle_response():
     """The legend does not cover any data point of the last 18 ms in any panel."""
-    from vpid_vehicle.report import draw_signals
+    from vpid_bench.report.signals import draw_signals
 
     t = np.linspace(0.0, 0.48, 481)
     rear = np.where(t > 0.462, 400 * (t - 0.462), 0.0)

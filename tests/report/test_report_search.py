@@ -192,9 +192,14 @@ def test_paired_report_ranks_twice_with_groups_and_explains_the_disagreement(tmp
     flat = " ".join(md.split())  # prose is wrapped: compare phrases across line breaks
     assert "Wilcoxon signed-rank, paired by instance" in flat
     assert "By search quality" in md and "| reached |" in md and f"{N_INST}/{N_INST}" in md
-    assert "Verdict for vehicle ps=20: by NoRE, early leads alone" in flat
-    assert "by search quality, good leads alone" in flat
-    assert "The rankings of vehicle ps=20 disagree: early ranks 1 by NoRE but 2" in flat
+    # the first screen: the ranking, the floor beside it and a verdict to act on
+    results = flat.split("## Rankings in detail")[0]
+    assert "Ranked by NoRE, lower is better (floor 21.4)." in results
+    assert ("Verdict for vehicle ps=20: use good (it gets closest to each record's own "
+            "optimum)") in results
+    assert "More search will not help here" in results
+    assert ("The rankings of vehicle ps=20 disagree beyond ties (medians within 0.001 "
+            "relative count as equal): early ranks 1 by NoRE but 2") in flat
     assert "below the median floor" in flat and "centred on the true values" in flat
     # 6 instances are the blocks: Friedman runs per context; 1 context: not across contexts.
     assert "instances as blocks" in flat

@@ -31,10 +31,6 @@ def _parser() -> argparse.ArgumentParser:
                    help="significance level after Holm correction (default 0.05)")
     p.add_argument("--baseline", default="random",
                    help="optimizer name of the baseline to clear (default: random)")
-    p.add_argument("--figures", choices=("auto", "parallel", "serial"), default="auto",
-                   help="draw the figures in worker processes (parallel), one after another "
-                   "in this process (serial), or parallel when more than one core is "
-                   "available (auto, the default); the files are the same")
     return p
 
 
@@ -57,7 +53,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     try:
         report = build_report(args.paths, args.out, short=args.short, alpha=args.alpha,
-                              baseline=args.baseline, figures=args.figures)
+                              baseline=args.baseline)
     except NoRecordsError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return _exit(2, argv)

@@ -1,7 +1,7 @@
 """The core report's figures (matplotlib, PNG, Agg backend), each readable alone.
 
-Every figure comes in two halves so that the report can draw it in a worker process
-(:mod:`.drawing`):
+Every figure comes in two halves, so that what a figure shows can be tested without drawing
+it:
 
 * a *data* function (``convergence_panels``, ``runs_metric_data``, ``error_heatmap_data``,
   ``cd_data``) runs in the report's process and reduces the records or the runs frame to
@@ -13,8 +13,8 @@ Every figure comes in two halves so that the report can draw it in a worker proc
 
 A draw function returns the PNG path, a data function the data or a string saying why the
 figure cannot be drawn. Lower is better on every
-metric axis. Problem-specific figures (e.g. measured vs fitted signals) come from the
-problem's plugin through a report section.
+metric axis. Problem-specific figures come from the problem's plugin through a report
+section.
 """
 
 from __future__ import annotations

@@ -155,6 +155,28 @@ def reference_levels(records: Sequence[Mapping[str, Any]], rows: Sequence[Mappin
     return medians(f_true), medians(f_opt)
 
 
+def crb_norm_by_context(records: Sequence[Mapping[str, Any]],
+                        rows: Sequence[Mapping[str, Any]]) -> dict[str, float]:
+    """Per context, the norm of the Cramér–Rao bounds (percent) its jobs wrote (the first
+    readable ``identifiability.json`` of the context's jobs); contexts without one are left
+    out. For the report's first screen: what an efficient estimator could reach."""
+    out: dict[str, float] = {}
+    tried: set[Path] = set()
+    for row, rec in zip(rows, records, strict=True):
+        context = row["context"]
+        if context in out:
+            continue
+        path = Path(str(rec.get("_job_dir", "."))) / FILE
+        if path in tried:
+            continue
+        tried.add(path)
+        names = list((rec.get("parameters") or {}).get("names") or [])
+        data, _ = read_identifiability(path, names) if path.exists() else (None, "")
+        if data is not None:
+            out[context] = float(data["crb_norm_percent"])
+    return out
+
+
 def _design_label(contexts: Sequence[str]) -> str:
     """The contexts of a design without their protocol tokens (``ps=20``, ...)."""
     labels = []
@@ -166,10 +188,8 @@ def _design_label(contexts: Sequence[str]) -> str:
     return " / ".join(labels)
 
 
-def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
-    """The record designs of ``ctx``'s runs with their bounds and measured floors, and one
-    line per skipped file."""
-    notes: list[str] = []
+def _by_design(ctx: ReportContext) -> list[dict[str, Any]]:
+    """``ctx``'s runs grouped by design: contexts, records, rows and job folders of each."""
     by_key: dict[str, dict[str, Any]] = {}
     for row, rec in zip(ctx.rows, ctx.records, strict=True):
         try:
@@ -185,43 +205,62 @@ def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
         job = ctx.job_dir(rec)
         if job not in d["jobs"]:
             d["jobs"].append(job)
+    return list(by_key.values())
+
+
+def _first_bounds(jobs: Sequence[Path], names: Sequence[str], notes: list[str]
+                  ) -> dict[str, Any] | None:
+    """The first readable ``identifiability.json`` of ``jobs`` (a bad one is noted)."""
+    for job in jobs:
+        path = job / FILE
+        if not path.exists() and not path.is_symlink():
+            continue
+        data, why = read_identifiability(path, names)
+        if data is not None:
+            return data
+        notes.append(f"skipped `{escape(path)}`: {escape(why)}")
+    return None
+
+
+def _floors(d: Mapping[str, Any], names: Sequence[str], metric: Any,
+            optima: Mapping[str, Mapping[str, Any]]
+            ) -> tuple[dict[Any, float], dict[Any, list[float]]]:
+    """Per instance of a design: its optimum's metric, and its optimum's absolute relative
+    error per parameter (percent)."""
+    floors: dict[Any, float] = {}
+    errors: dict[Any, list[float]] = {}
+    for rec in d["records"]:
+        opt = optima.get(rec["run_id"])
+        if opt is None:
+            continue
+        value = (opt.get("metrics") or {}).get(metric)
+        if _finite(value):
+            floors[_instance(rec)] = float(value)
+        rec_true = (rec.get("parameters") or {}).get("true")
+        if (isinstance(rec_true, list) and len(rec_true) == len(names)
+                and all(_finite(t) and t != 0 for t in rec_true)):
+            errors[_instance(rec)] = [abs(100.0 * (x - t) / t)
+                                      for x, t in zip(opt["x_opt"], rec_true, strict=True)]
+    return floors, errors
+
+
+def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
+    """The record designs of ``ctx``'s runs with their bounds and measured floors, and one
+    line per skipped file."""
+    notes: list[str] = []
     optima = optima_by_run(ctx.records)
     out = []
-    for d in by_key.values():
+    for d in _by_design(ctx):
         params = d["records"][0].get("parameters") or {}
         names = list(params.get("names") or [])
-        true = params.get("true")
-        crb = None
-        for job in d["jobs"]:
-            path = job / FILE
-            if not path.exists() and not path.is_symlink():
-                continue
-            data, why = read_identifiability(path, names)
-            if data is None:
-                notes.append(f"skipped `{escape(path)}`: {escape(why)}")
-                continue
-            crb = data
-            break
+        crb = _first_bounds(d["jobs"], names, notes)
         if crb is None:
             continue
         metric = d["rows"][0].get("metric_name")
-        floors: dict[Any, float] = {}
-        errors: dict[Any, list[float]] = {}
-        for rec in d["records"]:
-            opt = optima.get(rec["run_id"])
-            if opt is None:
-                continue
-            value = (opt.get("metrics") or {}).get(metric)
-            if _finite(value):
-                floors[_instance(rec)] = float(value)
-            rec_true = (rec.get("parameters") or {}).get("true")
-            if (isinstance(rec_true, list) and len(rec_true) == len(names)
-                    and all(_finite(t) and t != 0 for t in rec_true)):
-                errors[_instance(rec)] = [abs(100.0 * (x - t) / t)
-                                          for x, t in zip(opt["x_opt"], rec_true, strict=True)]
+        floors, errors = _floors(d, names, metric, optima)
         out.append({
             "label": _design_label(d["contexts"]), "contexts": sorted(d["contexts"]),
-            "names": names, "true": true, "crb": crb, "metric": metric,
+            "names": names, "true": params.get("true"), "crb": crb, "metric": metric,
             "floor": statistics.median(floors.values()) if floors else None,
             "floor_errors": ([statistics.median(e[j] for e in errors.values())
                               for j in range(len(names))] if errors else None),
@@ -236,9 +275,9 @@ def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
 
 
 def _figure(ctx: ReportContext, design: Mapping[str, Any]) -> Path:
-    """The design's figure (:func:`draw_design`), drawn by the report's figure workers."""
+    """The design's figure (:func:`draw_design`)."""
     data = {k: design[k] for k in ("names", "crb", "floor_errors", "instances", "label")}
-    return ctx.draw_figure(draw_design, f"identifiability_{design['label']}", data)
+    return ctx.save_figure(draw_design(data), f"identifiability_{design['label']}")
 
 
 def draw_design(design: Mapping[str, Any]) -> Any:

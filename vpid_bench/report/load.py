@@ -361,6 +361,18 @@ def choose_metrics(records: list[dict[str, Any]], labels: list[RunLabel]) -> dic
     return out
 
 
+def metric_unit(record: Mapping[str, Any], name: str) -> str:
+    """The unit of metric ``name`` as the problem stated it (``problem.info.metric_units``,
+    from :meth:`~vpid_bench.api.Problem.describe`), or ``""``: a short plain string only (the
+    record is untrusted)."""
+    info = (record.get("problem") or {}).get("info")
+    units = info.get("metric_units") if isinstance(info, Mapping) else None
+    unit = units.get(name) if isinstance(units, Mapping) else None
+    if isinstance(unit, str) and len(unit) <= 16 and unit.isprintable():
+        return unit
+    return ""
+
+
 def run_rows(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """The tidy table of all runs as plain rows (one mapping per record, sorted by context,
     algorithm, seed and run index). No pandas: the single job's report uses it too.
@@ -406,6 +418,7 @@ def run_rows(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
             **{f"metric.{k}": mets.get(k, math.nan) for k in metric_names},
             "metric": (f if name == "f_best" else mets.get(name, math.inf)) if ok else math.nan,
             "metric_name": name,
+            "metric_unit": metric_unit(r, name),
             "evaluations": res.get("evaluations", math.nan) if ok else math.nan,
             "budget": r.get("budget"),
             "wall_time_s": _num(timing.get("wall_time_s"), math.nan),

@@ -28,6 +28,8 @@ from .safe import escape
 
 #: A box whose centre lies within this relative distance of every true value is "centred".
 CENTRED = 0.05
+#: Two medians within this relative distance are tied (never a disagreement to explain).
+TIE_RTOL = 1e-3
 
 
 def search_summary(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
@@ -111,81 +113,67 @@ def _names(items: Sequence[str]) -> str:
     return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
 
 
-def _best_group(order: Sequence[str], groups: Mapping[str, str] | None) -> list[str]:
-    """The optimizers that share the best-ranked optimizer's first letter (or it alone)."""
-    if not order:
-        return []
-    if not groups or not groups.get(order[0]):
-        return [order[0]]
-    letter = groups[order[0]][0]
-    return [a for a in order if letter in groups.get(a, "")]
-
-
-def verdict(context: str, metric_name: str, metric_order: Sequence[str],
-            metric_groups: Mapping[str, str] | None, search: Sequence[Mapping[str, Any]],
-            search_groups: Mapping[str, str] | None) -> str:
-    """One sentence: who leads the context by the metric and by search quality."""
-    tested = metric_groups is not None
-    lead = _best_group(metric_order, metric_groups)
-    what = ("share the best rank group" if len(lead) > 1 else "leads alone") if tested else \
-        "ranks first (not tested)"
-    text = f"Verdict for {escape(context)}: by {escape(metric_name)}, {_names(lead)} {what}"
-    if search:
-        order = [s["algorithm"] for s in search]
-        slead = _best_group(order, search_groups)
-        first = search[0]
-        swhat = ("share the best group" if len(slead) > 1 else "leads alone") \
-            if search_groups is not None else "ranks first (not tested)"
-        text += (f"; by search quality, {_names(slead)} {swhat} ({escape(first['algorithm'])} "
-                 f"reaches the instance's optimum in {first['reached']} of {first['n']} runs)")
-    else:
-        text += "; no search-quality ranking (no instance optimum known for every run)"
-    return text + "."
+def _tied(a: float, b: float, rtol: float) -> bool:
+    if not (math.isfinite(a) and math.isfinite(b)):
+        return a == b
+    return abs(a - b) <= rtol * max(abs(a), abs(b), 1e-300)
 
 
 def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[str, Any]],
                  search: Sequence[Mapping[str, Any]], centred: bool,
-                 metric_groups: Mapping[str, str] | None = None) -> str:
-    """Why the two rankings of a context differ, in words ("" when they agree)."""
-    mrank = {s["algorithm"]: s["rank"] for s in metric_rows if s.get("n_runs")}
+                 metric_groups: Mapping[str, str] | None = None,
+                 tie_rtol: float = TIE_RTOL) -> str:
+    """Why the two rankings of a context differ, in words (``""`` when they agree).
+
+    Orders that differ only within ties (medians within ``tie_rtol``, or runs that both reach
+    their optimum) are not a disagreement. An optimizer ahead by the metric is said to stop
+    early only when it reaches the optimum in fewer runs than one it passes and its median
+    gap is above the reach threshold; otherwise nothing is claimed about why."""
+    by_metric = {s["algorithm"]: s for s in metric_rows if s.get("n_runs")}
     srank = {s["algorithm"]: s for s in search}
-    common = [a for a in mrank if a in srank]
-    if len(common) < 2:
-        return ""
-    m_order = sorted(common, key=mrank.__getitem__)
+    common = [a for a in by_metric if a in srank]
+    m_order = sorted(common, key=lambda a: by_metric[a]["rank"])
     s_order = sorted(common, key=lambda a: srank[a]["rank"])
-    if m_order == s_order:
+
+    def really_passes(a: str, b: str) -> bool:
+        """a is ahead of b by the metric and behind it by search, beyond ties."""
+        ma, mb = by_metric[a].get("median", math.nan), by_metric[b].get("median", math.nan)
+        sa, sb = srank[a], srank[b]
+        search_tie = (sa["reached"] == sb["reached"] and (
+            _tied(sa["rel_gap_median"], sb["rel_gap_median"], tie_rtol)
+            or max(sa["rel_gap_median"], sb["rel_gap_median"]) <= REACHED))
+        return not _tied(ma, mb, tie_rtol) and not search_tie
+
+    pairs = [(a, b) for a in m_order for b in m_order[m_order.index(a) + 1:]
+             if s_order.index(b) < s_order.index(a) and really_passes(a, b)]
+    if not pairs:
         return ""
-    ahead = [a for a in m_order if m_order.index(a) < s_order.index(a)]
-    a = ahead[0]
-    by_metric = {s["algorithm"]: s for s in metric_rows}
+    a = pairs[0][0]
+    passed = [b for x, b in pairs if x == a]
     s = srank[a]
-    floor = s["floor_median"]
-    med = by_metric[a].get("median", math.nan)
-    below = math.isfinite(floor) and math.isfinite(med) and med < floor
-    text = (f"The rankings of {escape(context)} disagree: {escape(a)} ranks "
+    text = (f"The rankings of {escape(context)} disagree beyond ties (medians within "
+            f"{tie_rtol:g} relative count as equal): {escape(a)} ranks "
             f"{m_order.index(a) + 1} by {escape(metric_name)} but {s_order.index(a) + 1} by "
             f"search quality (it reaches the optimum in {s['reached']} of {s['n']} runs, "
             f"median rel_gap {fmt(s['rel_gap_median'], 3)}). ")
-    passed = [b for b in m_order[m_order.index(a) + 1:] if s_order.index(b) < s_order.index(a)]
-    if metric_groups and passed:
+    if metric_groups:
         same = [b for b in passed
                 if set(metric_groups.get(a, "")) & set(metric_groups.get(b, ""))]
         if same:
             text += (f"By {escape(metric_name)} the tests do not separate it from "
                      f"{_names(same)}, which it passes there. ")
-    if below:
+    stops_short = s["rel_gap_median"] > REACHED and all(
+        s["reached"] < srank[b]["reached"] or s["rel_gap_median"] > srank[b]["rel_gap_median"]
+        for b in passed)
+    floor, med = s["floor_median"], by_metric[a].get("median", math.nan)
+    if stops_short and math.isfinite(floor) and math.isfinite(med) and med < floor:
         text += (f"Its median {escape(metric_name)} ({fmt(med, 3)}) is below the median floor "
                  f"({fmt(floor, 3)}), the {escape(metric_name)} of the record's own optimum: "
-                 "its runs end nearer the truth than the best fit of the data does, which "
-                 "searching better could not achieve. ")
-    text += (f"A lower {escape(metric_name)} without a lower objective means the runs stop "
-             "early in a favourable place rather than search well: ")
-    text += ("here the search box is centred on the true values, so an optimizer that stops "
-             f"early near the centre of the box scores a low {escape(metric_name)} without "
-             "searching well." if centred else
-             "for instance near the centre of a search box that is centred on the truth.")
-    return text
+                 "its runs stop short of that optimum at points nearer the truth, which "
+                 "searching better could not achieve")
+        text += (": the search box is centred on the true values, so stopping early near its "
+                 "centre scores well without searching well." if centred else ".")
+    return text.rstrip()
 
 
 def search_table(context_rows: Sequence[Mapping[str, Any]], groups: Mapping[str, str] | None

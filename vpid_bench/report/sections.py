@@ -89,21 +89,11 @@ class ReportContext:
     short: bool
     alpha: float
     _claim: Callable[[Path], Path] = dataclasses.field(repr=False, default=lambda p: p)
-    #: How :meth:`draw_figure` hands a figure to the report's figure workers:
-    #: ``_draw(path, func, args, kwargs)``; ``None``: draw here and now.
-    _draw: Callable[[Path, Callable[..., Any], tuple[Any, ...], dict[str, Any]], None] | None = (
-        dataclasses.field(repr=False, default=None))
 
     @property
     def contexts(self) -> list[str]:
         """The contexts of this problem's runs, sorted."""
         return sorted({str(r["context"]) for r in self.rows})
-
-    def frame(self) -> Any:
-        """:attr:`rows` as a new pandas DataFrame (imports pandas)."""
-        import pandas as pd
-
-        return pd.DataFrame([dict(r) for r in self.rows])
 
     def job_dir(self, record: Mapping[str, Any]) -> Path:
         """The job folder a record was read from (where the job's artifacts are)."""
@@ -130,27 +120,11 @@ class ReportContext:
         return [csv_path, tex]
 
     def save_figure(self, fig: Any, name: str) -> Path:
-        """Save a matplotlib figure as ``figures/<name>.png`` and close it (drawn in this
-        process; :meth:`draw_figure` lets the report draw it in a worker instead)."""
+        """Save a matplotlib figure as ``figures/<name>.png``, close it, and return the path
+        (the one way a section draws a figure: build it with matplotlib, hand it here)."""
         from .figures import save
 
         return save(fig, self.path("figures", name, ".png"))
-
-    def draw_figure(self, func: Callable[..., Any], name: str, /, *args: Any,
-                    **kwargs: Any) -> Path:
-        """``figures/<name>.png`` drawn by ``func(*args, **kwargs)``, which returns a
-        matplotlib figure. The full report draws it in a worker process while it builds the
-        rest, so ``func`` must be a module-level function and its arguments plain,
-        picklable data (numpy arrays, lists, dicts); the file exists when the report is
-        written. Returns the path at once. A ``func`` that raises costs its figure only:
-        the report drops the file from the section and says why."""
-        path = self.path("figures", name, ".png")
-        if self._draw is None:
-            from .drawing import save_drawn
-
-            return save_drawn(func, path, args, kwargs)
-        self._draw(path, func, args, kwargs)
-        return path
 
     @staticmethod
     def markdown_table(headers: Sequence[str], rows: Sequence[Sequence[Any]],
@@ -174,5 +148,3 @@ class ReportContext:
         """One number as text (``digits`` significant figures)."""
         return render.fmt(value, digits)
 
-
-SectionFunction = Callable[[ReportContext], "Contribution | None"]

@@ -101,42 +101,50 @@ def _sweep_size(override: Any) -> int | None:
     return None
 
 
+def _axis(o: Any, multirun: bool, registry: Registry, custom_sweeper: bool
+          ) -> list[str] | None:
+    """The override strings one override contributes to the sweep (``None``: none, an
+    optimizing sweeper chooses its values)."""
+    from hydra.core.override_parser.types import Glob
+
+    if not o.is_sweep_override():
+        return [o.input_line]
+    key = o.get_key_element()
+    if not multirun:
+        raise ConfigError(o.key_or_group, _raw_value(o),
+                          "one value here; to run every value, start a sweep with -m")
+    if custom_sweeper:  # an optimizing sweeper chooses values itself: check one setting
+        return None
+    value = o.value()
+    if isinstance(value, Glob):
+        if o.key_or_group not in GROUPS:
+            raise ConfigError(o.key_or_group, _raw_value(o), "glob() chooses among "
+                              "problem or optimizer names")
+        names = value.filter(_group_names(o.key_or_group, registry))
+        if not names:
+            raise ConfigError(o.key_or_group, _raw_value(o), "a pattern matching one of "
+                              + ", ".join(_group_names(o.key_or_group, registry)))
+        return [f"{key}={n}" for n in names]
+    size = _sweep_size(o)
+    if size is None:
+        raise ConfigError(o.key_or_group, _raw_value(o), "a list of values (a,b,c, "
+                          "range(), choice()); interval() needs an optimizing sweeper such "
+                          "as hydra/sweeper=optuna")
+    if size > MAX_JOBS:
+        raise ConfigError(o.key_or_group, _raw_value(o),
+                          f"a sweep of at most {MAX_JOBS} values")
+    return [f"{key}={s}" for s in o.sweep_string_iterator()]
+
+
 def expand_points(parsed: list[Any], multirun: bool, registry: Registry,
                   custom_sweeper: bool) -> list[list[str]]:
     """The override strings of every job, in the order Hydra's basic sweeper runs them."""
-    from hydra.core.override_parser.types import Glob
 
     axes: list[list[str]] = []
     for o in parsed:
-        if not o.is_sweep_override():
-            axes.append([o.input_line])
-            continue
-        key = o.get_key_element()
-        if not multirun:
-            raise ConfigError(o.key_or_group, _raw_value(o),
-                              "one value here; to run every value, start a sweep with -m")
-        if custom_sweeper:  # an optimizing sweeper chooses values itself: check one setting
-            continue
-        value = o.value()
-        if isinstance(value, Glob):
-            if o.key_or_group not in GROUPS:
-                raise ConfigError(o.key_or_group, _raw_value(o), "glob() chooses among "
-                                  "problem or optimizer names")
-            names = value.filter(_group_names(o.key_or_group, registry))
-            if not names:
-                raise ConfigError(o.key_or_group, _raw_value(o), "a pattern matching one of "
-                                  + ", ".join(_group_names(o.key_or_group, registry)))
-            axes.append([f"{key}={n}" for n in names])
-            continue
-        size = _sweep_size(o)
-        if size is None:
-            raise ConfigError(o.key_or_group, _raw_value(o), "a list of values (a,b,c, "
-                              "range(), choice()); interval() needs an optimizing sweeper such "
-                              "as hydra/sweeper=optuna")
-        if size > MAX_JOBS:
-            raise ConfigError(o.key_or_group, _raw_value(o),
-                              f"a sweep of at most {MAX_JOBS} values")
-        axes.append([f"{key}={s}" for s in o.sweep_string_iterator()])
+        axis = _axis(o, multirun, registry, custom_sweeper)
+        if axis is not None:
+            axes.append(axis)
     for o, axis in zip(parsed, axes, strict=False):
         if o.key_or_group in GROUPS and not o.is_delete():
             for text in axis:

@@ -1,0 +1,280 @@
+"""The report's Markdown after its first screen: the rankings in detail, the plugin sections,
+the statistics and tests, the figures, how to read the report, where the records came from.
+
+Each function returns Markdown lines from computed data (:mod:`.compute`); none reads text
+written by another.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+import textwrap
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from . import rankings, render
+from .load import LoadedRecords, reason
+from .render import para
+from .safe import escape
+from .sections import HeadlineColumn, Section
+
+
+def sources_lines(paths: Iterable[Path], loaded: LoadedRecords,
+                  rows: Sequence[Mapping[str, Any]]) -> list[str]:
+    """Where the records came from, what was skipped, which jobs and runs failed."""
+    n = len(loaded.records)
+    n_ok = sum(r["status"] == "ok" for r in loaded.records)
+    lines = [para(f"Built {_dt.datetime.now(_dt.timezone.utc):%Y-%m-%d %H:%M UTC} from {n} run "
+                  f"record(s) ({n_ok} ok, {n - n_ok} failed) found in:"), ""]
+    lines += [f"- `{escape(p)}`" for p in paths]
+    notes = []
+    if loaded.duplicates:
+        notes.append(f"{loaded.duplicates} duplicate record(s) (same run id) were counted once.")
+    for p, why in loaded.skipped:
+        notes.append(f"**Skipped unreadable record** `{escape(p)}`: {escape(reason(p, why))}")
+    for d, why in loaded.failed_jobs:
+        notes.append(f"**Job not ok** `{escape(d)}`: {escape(why)}")
+    for r in rows:
+        if r["status"] != "ok":
+            notes.append(f"**Failed run** {escape(r['algorithm'])} on {escape(r['context'])}, "
+                         f"run {escape(r['run_index'])} (seed {escape(r['seed'])}): "
+                         f"{escape(r['error'])}")
+    if notes:
+        lines += ["", "Problems found:", ""]
+        lines += [textwrap.fill(f"- {t}", width=render.PROSE_WIDTH,
+                                       subsequent_indent="  ", break_long_words=False)
+                  for t in notes]
+    return lines
+
+
+HOW_TO_READ = """\
+**Metric.** Each problem may report accuracy metrics of an identified vector (`result.metrics`
+in the records, e.g. a norm of relative errors against the known truth). Runs are judged by
+the problem's first metric where every run of the context has it, otherwise by the best
+objective value `f` found. Lower is better for both; the headline names the metric.
+
+**Context.** Optimizers are compared within a context: one problem, one population size `ps`
+and one value of every other setting that varies across the records (noise level, noise seed,
+budget). Runs of different optimizer seeds are pooled.
+
+**Significance.** Within a context, two-sided pairwise tests, Holm-corrected over the pairs of
+that context: the paired Wilcoxon signed-rank test over instances where the runs pair by
+instance (run i of every optimizer on the same, distinct instance i), else Mann–Whitney U;
+exact or permutation p-values for small samples. "Significant" means `p_holm < {alpha}`; the
+`group` letters of each ranking show which optimizers the tests cannot separate. Effect size:
+Vargha–Delaney `A12 = P(metric_a > metric_b) + ties/2` (below 0.5: `a` tends to be better).
+Across blocks (independent instances or contexts, at least 5): Friedman with a permutation
+p-value, Nemenyi post-hoc, pairwise Wilcoxon signed-rank with Holm. With few runs or blocks
+the tests have little power: "not significant" is not "equal".
+
+**Search quality.** Where the jobs wrote each instance's optimum (`optima/`), each run is also
+judged against the lowest objective its own record allows: `rel_gap = (f_best - f_opt) /
+|f_opt|`, the floor (the metric of that optimum) and the distance to it; see `runs.csv`.
+
+**Baseline.** `{baseline}`, when it was run, is the line a useful optimizer must clear
+(a significantly lower per-run metric at the same budget)."""
+
+
+def verdict_short(v: str) -> str:
+    """The headline's compact form of a baseline verdict."""
+    for long, short in (("beats it (p_holm=", "yes, p="), ("does not clear it (p_holm=", "no, p="),
+                        ("WORSE than it (p_holm=", "WORSE, p=")):
+        if v.startswith(long):
+            return short + v[len(long):].rstrip(")")
+    return v
+
+
+def headline(summary: list[dict[str, Any]], verdicts: list[str],
+              extra: list[HeadlineColumn], baseline: str
+              ) -> tuple[list[str], list[list[Any]], list[str], list[list[Any]]]:
+    """(headers, rows) of the headline for Markdown/terminal (compact, in priority order,
+    context first) and for the CSV (every column)."""
+    any_failed = any(s["n_failed"] for s in summary)
+    metric = {s["context"]: s["metric_name"] for s in summary}
+    show_f = any(m != "f_best" for m in metric.values())
+    has_verdict = any(verdicts)
+    md_h = ["context", "rank", "group", "optimizer", "n"] + (["failed"] if any_failed else []) + [
+        "metric", "median", "IQR"] + (["median f"] if show_f else []) + [c.name for c in extra] + (
+        [f"beats {baseline}?"] if has_verdict else [])
+    csv_h = ["context", "rank", "group", "optimizer", "n", "failed", "metric", "median", "q1", "q3",
+             "mean", "sd", "best", "worst", "median f"] + [c.name for c in extra] + (
+        [f"vs {baseline}"] if has_verdict else [])
+    md_rows, csv_rows = [], []
+    for s, v in zip(summary, verdicts, strict=True):
+        key = (s["context"], s["algorithm"])
+        q1, q3 = s.get("q1", math.nan), s.get("q3", math.nan)
+        iqr = f"[{render.fmt(q1)}, {render.fmt(q3)}]" if s["n_runs"] else ""
+        ex = [c.values.get(key) for c in extra]
+        md_rows.append([s["context"], s["rank"], s.get("group", "—"), s["algorithm"], s["n_runs"]]
+                       + ([s["n_failed"]] if any_failed else [])
+                       + [s["metric_name"], s.get("median"), iqr]
+                       + ([s.get("f_median")] if show_f else []) + ex
+                       + ([verdict_short(v)] if has_verdict else []))
+        csv_rows.append([s["context"], s["rank"], s.get("group", ""), s["algorithm"], s["n_runs"],
+                         s["n_failed"],
+                         s["metric_name"]] + [s.get(k) for k in (
+                             "median", "q1", "q3", "mean", "sd", "best", "worst", "f_median")]
+                        + ex + ([v] if has_verdict else []))
+    return md_h, md_rows, csv_h, csv_rows
+
+
+STATS_MD = [("optimizer", "algorithm"), ("n", "n_runs"), ("median", "median"), ("q1", "q1"),
+            ("q3", "q3"), ("mean", "mean"), ("sd", "sd"), ("best", "best"), ("worst", "worst"),
+            ("median f", "f_median"), ("best f", "f_best"), ("evaluations", "evaluations_max"),
+            ("s/run", "wall_time_mean_s")]
+
+
+def by_context(items: Sequence[Mapping[str, Any]]) -> dict[str, list[Mapping[str, Any]]]:
+    out: dict[str, list[Mapping[str, Any]]] = {}
+    for s in items:
+        out.setdefault(s["context"], []).append(s)
+    return out
+
+
+def stats_md(summary: list[dict[str, Any]]) -> list[str]:
+    lines = ["## Per-run statistics", "",
+             para("Per context: the per-run metric (median, quartiles, mean, sample sd, best, "
+                  "worst), the objective `f` (median, best), the evaluations used and the mean "
+                  "wall time per run in seconds (a shared machine: indicative only). Columns "
+                  "that do not fit in 120 characters, and more, are in `tables/run_stats.csv`."),
+             ""]
+    for context, g in by_context(summary).items():
+        lines += [f"### {escape(context)} ({escape(g[0]['metric_name'])})", "",
+                  render.markdown([h for h, _ in STATS_MD],
+                                  [[s.get(k) for _, k in STATS_MD] for s in g], keep=3), ""]
+    return lines
+
+
+def _friedman_md(fr: Any, label: str, alpha: float, files: str) -> list[str]:
+    """One Friedman result (across contexts or over the instances of one context)."""
+    if fr.mean_ranks is None:
+        return [para(f"{label}: Friedman test {fr.note}."), ""]
+    sig = fr.wilcoxon[fr.wilcoxon["significant"]]
+    return [para(f"{label}: {len(fr.blocks)} blocks ({fr.kind}); optimizers present in every "
+                 f"block: {escape(', '.join(fr.algorithms))}. Friedman χ² = "
+                 f"{render.fmt(fr.statistic)}, p = {render.fmt(fr.p)} ({fr.p_method}). "
+                 f"{fr.note}"), "",
+            para("Mean rank per optimizer (1 = best): " + ", ".join(
+                f"{escape(a)} {r:.2f}" for a, r in fr.mean_ranks.items())), "",
+            para(f"Pairwise Wilcoxon signed-rank over the blocks, Holm-corrected: {len(sig)} of "
+                 f"{len(fr.wilcoxon)} pairs significant (p_holm < {alpha})"
+                 + (": " + "; ".join(f"{escape(r.a)} vs {escape(r.b)} (p_holm={r.p_holm:.2g})"
+                                     for r in sig.itertuples()) if len(sig) else "")
+                 + f". {files}"), ""]
+
+
+def tests_md(kw: Any, pairs: Any, fr: Any, alpha: float,
+              by_inst: Mapping[str, Mapping[str, Any]] | None = None) -> list[str]:
+    lines = ["## Statistical tests", "", "### Kruskal–Wallis per context", "",
+             render.markdown(["context", "k", "H", "p", "note"],
+                             [[r.context, r.k, r.H, r.p, r.note] for r in kw.itertuples()],
+                             keep=2), ""]
+    lines += [f"### Pairwise tests on the per-run metric, Holm-corrected within each context "
+              f"(significant: p_holm < {alpha})", "",
+              para("Where every optimizer ran instance i in run i on instances that differ "
+                   "(the runs pair by instance), the paired Wilcoxon signed-rank test over "
+                   "the instances; otherwise the Mann–Whitney U test. Small samples get exact "
+                   "or permutation p-values (column `p_method`)."), ""]
+    if pairs.empty:
+        lines += ["No pair to compare.", ""]
+    for context, g in pairs.groupby("context", sort=True):
+        sig = g[g["significant"]]
+        lines += [para(f"{escape(context)} ({escape(g['test'].iloc[0])}): {len(sig)} of "
+                       f"{len(g)} pairs differ significantly"
+                       + (" (below); every pair, with the statistic, raw p and effect size, "
+                          "is in `tables/pairwise.csv`." if len(sig) else
+                          "; every pair is in `tables/pairwise.csv`.")), ""]
+        if len(sig):
+            lines += [render.markdown(
+                ["better", "worse", "median better", "median worse", "p_holm", "A12", "effect"],
+                [[r.better, r.b if r.better == r.a else r.a,
+                  r.median_a if r.better == r.a else r.median_b,
+                  r.median_b if r.better == r.a else r.median_a, r.p_holm,
+                  r.A12 if r.better == r.a else 1 - r.A12, r.effect]
+                 for r in sig.itertuples()], keep=2), ""]
+    lines += ["### Friedman across blocks", "",
+              para("Blocks must be independent: distinct problems or records. The test, "
+                   "Nemenyi's post-hoc test and the block Wilcoxon tests run only with at "
+                   "least 5 blocks; the Friedman p-value comes from permuting the optimizers' "
+                   "values within each block (exact when feasible)."), ""]
+    lines += _friedman_md(fr, "Across contexts", alpha,
+                          "All pairs: `tables/friedman_wilcoxon.csv`; Nemenyi p-values: "
+                          "`tables/nemenyi.csv`.")
+    for what, res in (by_inst or {}).items():
+        label = "per-run metric" if what == "metric" else "max(rel_gap, 1e-6)"
+        for context, r in res.items():
+            lines += _friedman_md(r, f"{escape(context)}, instances as blocks, {label}", alpha,
+                                  f"All pairs: `tables/friedman_instances_{what}.csv`.")
+    return lines
+
+
+def section_md(section: Section, out_dir: Path) -> list[str]:
+    lines = [f"## {escape(section.title)}", ""]
+    if section.text:
+        lines += [section.text.rstrip(), ""]
+    links = []
+    for f in section.files:
+        rel = Path(f).resolve().relative_to(out_dir.resolve()).as_posix()
+        if rel.endswith(".png"):
+            lines += [f"![{escape(Path(rel).stem)}]({rel})", ""]
+        else:
+            links.append(f"`{rel}`")
+    if links:
+        lines += [para("Files: " + ", ".join(links) + "."), ""]
+    return lines
+
+
+
+
+def headline_md(data: Any, extra: list[HeadlineColumn]) -> list[str]:
+    """Both rankings of every context in full (every column; the first screen is a digest),
+    with the plugins' headline columns."""
+    md_h, md_rows, _, _ = headline(data.summary, data.baseline_verdicts, extra, data.baseline)
+    lines = ["## Rankings in detail", "",
+             para("Per context, two rankings. First by the problem's metric: the median "
+                  "per-run metric (`n`: successful runs; IQR: its quartiles) and the columns "
+                  "the problem's plugin adds; every column is in `tables/headline.csv`. Then, "
+                  "where each instance's optimum is known, by search quality "
+                  "(`tables/search_quality.csv`, anytime AUC included)."), ""]
+    if data.optima_errors:
+        lines += [para("Instance optima: " + "; ".join(escape(e) for e in data.optima_errors)
+                       + "."), ""]
+    for context, idx in by_context([{"context": r[0], "i": i}
+                                    for i, r in enumerate(md_rows)]).items():
+        mrows = data.metric_rows(context)
+        mname = mrows[0]["metric_name"]
+        lines += [f"### {escape(context)}", "",
+                  render.markdown(md_h[1:], [md_rows[x["i"]][1:] for x in idx], keep=7), "",
+                  para(rankings.headline_groups_note(data.test_name("metric", context),
+                                                     data.alpha)), ""]
+        lines += rankings.search_lines(context, data.search, data.groups("search", context),
+                                       mname, data.test_name("search", context))
+        why = rankings.disagreement(context, mname, mrows, data.search_rows(context),
+                                    data.centred.get(context, False),
+                                    data.groups("metric", context))
+        if why:
+            lines += [para(why), ""]
+    return lines
+
+
+def figures_md(figs: Mapping[str, Path | str], out_dir: Path) -> list[str]:
+    """The core figures, and one line naming those not drawn and why."""
+    lines = ["## Figures", ""]
+    for title, v in figs.items():
+        if isinstance(v, Path):
+            rel = v.relative_to(out_dir).as_posix()
+            lines += [f"### {escape(title)}", "", f"![{escape(title)}]({rel})", ""]
+    skipped = {k: v for k, v in figs.items() if isinstance(v, str)}
+    if skipped:
+        lines += [para("Not drawn: " + "; ".join(f"{escape(k)} ({escape(v)})"
+                                                 for k, v in skipped.items()) + "."), ""]
+    return lines
+
+
+def files_md(short: bool) -> list[str]:
+    return ["## Files", "",
+            para("`runs.csv`: every run, one row each (`pandas.read_csv('runs.csv')`). "
+                 "`tables/`: each table as CSV (full precision) and LaTeX (booktabs)."
+                 + ("" if short else " `figures/`: the PNG figures above.")), ""]

@@ -1,0 +1,162 @@
+"""The report's first stage: everything it says, computed from the records, as data.
+
+:func:`compute` reads the records below some folders and returns a :class:`ReportData`: the
+tidy rows, the per-context summaries of both rankings, the anytime hits, the floors and bounds,
+and (full report only) the significance tests and the rank groups. The later stages (tables,
+figures, Markdown, terminal) only read it. Short mode imports neither pandas nor scipy.stats.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from . import anytime, rankings, tables
+from .identifiability import crb_norm_by_context
+from .load import LoadedRecords, NoRecordsError, load_records, reason, run_rows
+from .optima import add_optimum_columns, load_optima
+
+
+@dataclasses.dataclass
+class Tests:
+    """The significance tests of a full report (pandas DataFrames and Friedman results)."""
+
+    df: Any
+    kw: Any
+    pairs: Any
+    fr: Any
+    spairs: Any
+    by_inst: dict[str, dict[str, Any]]
+
+
+@dataclasses.dataclass
+class ReportData:
+    """What the report says, before it is written anywhere."""
+
+    paths: list[Path]
+    short: bool
+    alpha: float
+    baseline: str
+    loaded: LoadedRecords
+    rows: list[dict[str, Any]]
+    summary: list[dict[str, Any]]  # by the problem's metric, per context and optimizer
+    search: list[dict[str, Any]]  # by search quality, where each instance's optimum is known
+    hits: list[Any]
+    optima_errors: list[str]
+    bounds: dict[str, float]  # per context: the norm of the Cramér–Rao bounds (%)
+    centred: dict[str, bool]  # per context: is the search box centred on the truth?
+    baseline_verdicts: list[str]
+    tests: Tests | None = None
+
+    @property
+    def contexts(self) -> list[str]:
+        """The contexts, in report order."""
+        return sorted({s["context"] for s in self.summary})
+
+    @property
+    def problems(self) -> list[str]:
+        return sorted({r["problem"] for r in self.rows})
+
+    def metric_rows(self, context: str) -> list[dict[str, Any]]:
+        return [s for s in self.summary if s["context"] == context]
+
+    def search_rows(self, context: str) -> list[dict[str, Any]]:
+        return [s for s in self.search if s["context"] == context]
+
+    def unit(self, context: str) -> str:
+        """The unit of the context's headline metric (``""`` when the problem gave none)."""
+        units = {r.get("metric_unit", "") for r in self.rows if r["context"] == context}
+        return units.pop() if len(units) == 1 else ""
+
+    def groups(self, which: str, context: str) -> dict[str, str] | None:
+        """Rank-group letters of a context's ranking (``"metric"`` or ``"search"``), or
+        ``None`` where no test was run (short mode)."""
+        if self.tests is None:
+            return None
+        items = self.metric_rows(context) if which == "metric" else self.search_rows(context)
+        return {s["algorithm"]: s.get("group", "") for s in items}
+
+    def test_name(self, which: str, context: str) -> str | None:
+        if self.tests is None:
+            return None
+        pairs = self.tests.pairs if which == "metric" else self.tests.spairs
+        return rankings.test_name(pairs, context)
+
+
+def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: str
+            ) -> ReportData:
+    """Load the records below ``paths`` and compute everything the report shows. Raises
+    :class:`~.load.NoRecordsError` when no readable record exists."""
+    paths = [Path(p) for p in paths]
+    loaded = load_records(paths)
+    if not loaded.records:
+        extra = ""
+        if loaded.skipped:  # say why, from the first one: e.g. records of an older version
+            first, why = loaded.skipped[0]
+            extra = (f" ({len(loaded.skipped)} unreadable; {first}: "
+                     f"{' '.join(reason(first, why).split())})")
+        raise NoRecordsError(
+            f"no run records (records/run-*.json) below {', '.join(map(str, paths))}{extra}")
+    rows = run_rows(loaded.records)
+    optima = load_optima(paths, loaded.records)
+    optima_errors = [f"bad optimum file {p}: {why}" for p, why in optima.skipped]
+    optima_errors += add_optimum_columns(rows, loaded.records, optima)
+    summary = tables.summarize(rows)
+    search = rankings.search_summary(rows)
+    hits = anytime.run_hits(loaded.records, rows)
+    aucs = anytime.auc_table(hits)
+    for s in search:
+        s["auc"] = aucs.get((s["context"], s["algorithm"]), math.nan)
+    tests = None if short else _tests(rows, search, alpha)
+    if tests is not None:
+        _set_groups(summary, tests.pairs)
+        _set_groups(search, tests.spairs)
+    verdicts = tables.baseline_verdicts(summary, None if tests is None else tests.pairs,
+                                        baseline)
+    for s, v in zip(summary, verdicts, strict=True):
+        s[f"vs_{baseline}"] = v
+    return ReportData(paths, short, alpha, baseline, loaded, rows, summary, search, hits,
+                      optima_errors, crb_norm_by_context(loaded.records, rows),
+                      rankings.box_centred(loaded.records, rows), verdicts, tests)
+
+
+def _tests(rows: list[dict[str, Any]], search: list[dict[str, Any]], alpha: float) -> Tests:
+    from . import stats
+    from .load import runs_frame
+
+    df = runs_frame(rows)
+    sdf = rankings.search_test_frame(df)
+    sdf = sdf[sdf["context"].isin({s["context"] for s in search})]
+    return Tests(df=df, kw=stats.kruskal_by_context(df),
+                 pairs=stats.pairwise_by_context(df, alpha),
+                 fr=stats.friedman_across_blocks(df, alpha),
+                 spairs=stats.pairwise_by_context(sdf, alpha, "rel_gap_test"),
+                 by_inst={"metric": stats.friedman_by_instances(df, alpha),
+                          "rel_gap": stats.friedman_by_instances(sdf, alpha, "rel_gap_test")})
+
+
+def _set_groups(items: list[dict[str, Any]], pairs: Any) -> None:
+    """Each row's rank group (compact letters from the Holm-corrected pairwise tests)."""
+    from .stats import rank_groups
+
+    by_context: dict[str, list[dict[str, Any]]] = {}
+    for s in items:
+        by_context.setdefault(s["context"], []).append(s)
+    for context, g in by_context.items():
+        n = "n_runs" if "n_runs" in g[0] else "n"
+        order = [s["algorithm"] for s in sorted((s for s in g if s.get(n)),
+                                                key=lambda s: s["rank"])]
+        letters = rank_groups(pairs, context, order) if order else {}
+        for s in g:
+            s["group"] = letters.get(s["algorithm"], "—")
+
+
+def by_context(items: Sequence[Mapping[str, Any]]) -> dict[str, list[Mapping[str, Any]]]:
+    """``items`` grouped by their ``context``, in order of appearance."""
+    out: dict[str, list[Mapping[str, Any]]] = {}
+    for s in items:
+        out.setdefault(s["context"], []).append(s)
+    return out

@@ -1,0 +1,219 @@
+"""The report's first screen: per context, which optimizer, how far from the truth, and why.
+
+The same :class:`ContextResult` feeds the top of ``report.md`` and the terminal, so the two
+never disagree (the terminal no longer re-reads the Markdown). Per context:
+
+* one ranking table by the problem's metric, with its unit, and beside it the search-quality
+  columns where each instance's optimum is known (runs that reach it, the median gap to it);
+* what the data allow: the floor (the metric of each instance's own optimum under the
+  objective that was optimised, median over the instances) and the Cramér–Rao bound norm
+  (what an efficient estimator could reach on such records);
+* one verdict an engineer identifying a system can act on: whom to use, how far from the
+  truth they end, and whether more search, a better estimator or better records would help.
+
+Medians within :data:`TIE_RTOL` of each other are ties: a ranking that differs from the other
+only within ties is never explained as anything.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from .body import verdict_short
+from .optima import REACHED
+from .rankings import TIE_RTOL
+from .render import fmt, markdown, para, terminal
+from .safe import escape
+
+#: A leader whose median metric is within this factor of the floor has searched enough.
+AT_FLOOR = 1.1
+#: A floor this many times the bound means the estimator, not the data, limits accuracy.
+ESTIMATOR_GAP = 2.0
+
+
+@dataclasses.dataclass
+class ContextResult:
+    """The first screen of one context, as data."""
+
+    context: str
+    metric: str
+    unit: str
+    headers: list[str]
+    rows: list[list[Any]]
+    floor: float
+    bound: float
+    verdict: str
+    tested: bool
+
+    def value(self, x: float) -> str:
+        """A metric value with its unit."""
+        return f"{fmt(x, 3)} {self.unit}".rstrip() if math.isfinite(x) else "n/a"
+
+
+def _names(items: Sequence[str]) -> str:
+    items = [escape(i) for i in items]
+    if not items:
+        return ""
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
+
+
+def _lead(items: Sequence[Mapping[str, Any]], groups: Mapping[str, str] | None,
+          value: str) -> list[Mapping[str, Any]]:
+    """The best group of a ranking: the items sharing the first one's rank-group letter, or
+    (untested) the first one and those tied with it within :data:`TIE_RTOL`."""
+    if not items:
+        return []
+    first = items[0]
+    if groups and groups.get(first["algorithm"]):
+        letter = groups[first["algorithm"]][0]
+        return [s for s in items if letter in groups.get(s["algorithm"], "")]
+    return [s for s in items if tied(s.get(value, math.nan), first.get(value, math.nan))]
+
+
+def tied(a: float, b: float) -> bool:
+    """Whether two medians are equal within :data:`TIE_RTOL` (relative)."""
+    if not (math.isfinite(a) and math.isfinite(b)):
+        return a == b
+    return abs(a - b) <= TIE_RTOL * max(abs(a), abs(b), 1e-300)
+
+
+def context_result(data: Any, context: str) -> ContextResult:
+    """The first screen of ``context`` from a :class:`~.compute.ReportData`."""
+    mrows = [s for s in data.metric_rows(context) if s.get("n_runs")]
+    mrows.sort(key=lambda s: s["rank"])
+    srows = {s["algorithm"]: s for s in data.search_rows(context)}
+    metric = mrows[0]["metric_name"] if mrows else "metric"
+    unit = data.unit(context)
+    mgroups, sgroups = data.groups("metric", context), data.groups("search", context)
+    label = f"median {metric}" + (f" ({unit})" if unit else "")
+    headers = ["rank", "optimizer", "n", label, "IQR"]
+    if mgroups is not None:
+        headers.insert(1, "group")
+    if srows:
+        headers += ["reached x*", "median rel_gap", "search rank"]
+    vs = f"vs_{data.baseline}"
+    show_vs = any(s.get(vs) not in (None, "", "baseline", "not tested") for s in mrows)
+    if show_vs:
+        headers.append(f"beats {data.baseline}?")
+    body = []
+    for s in mrows:
+        row: list[Any] = [s["rank"], s["algorithm"], s["n_runs"], s.get("median"),
+                          f"[{fmt(s.get('q1'))}, {fmt(s.get('q3'))}]"]
+        if mgroups is not None:
+            row.insert(1, mgroups.get(s["algorithm"], "—"))
+        q = srows.get(s["algorithm"])
+        if srows:
+            row += ([f"{q['reached']}/{q['n']}", q["rel_gap_median"],
+                     f"{q['rank']}" + (f" ({sgroups.get(q['algorithm'], '')})" if sgroups
+                                       else "")]
+                    if q else ["", "", ""])
+        if show_vs:
+            row.append(verdict_short(s.get(vs) or ""))
+        body.append(row)
+    floors = [q["floor_median"] for q in srows.values() if math.isfinite(q["floor_median"])]
+    floor = floors[0] if floors else math.nan
+    bound = data.bounds.get(context, math.nan)
+    result = ContextResult(context, metric, unit, headers, body, floor, bound, "",
+                           mgroups is not None)
+    result.verdict = _verdict(result, mrows, [srows[a] for a in sorted(
+        srows, key=lambda a: srows[a]["rank"])], mgroups, sgroups,
+        data.centred.get(context, False))
+    return result
+
+
+def _verdict(res: ContextResult, mrows: list[Mapping[str, Any]],
+             srows: list[Mapping[str, Any]], mgroups: Mapping[str, str] | None,
+             sgroups: Mapping[str, str] | None, centred: bool) -> str:
+    """One verdict: whom to use, how far from the truth, and what limits it."""
+    if not mrows:
+        return f"Verdict for {escape(res.context)}: no successful run to rank."
+    mlead = _lead(mrows, mgroups, "median")
+    slead = _lead(srows, sgroups, "rel_gap_median") if srows else []
+    in_s = {q["algorithm"] for q in slead}
+    both = [s["algorithm"] for s in mlead if s["algorithm"] in in_s]
+    if both or not slead:
+        pick = (both or [s["algorithm"] for s in mlead])[0]
+        first = srows[0]["algorithm"] if srows else pick
+        why = ("first by both rankings" if pick == mrows[0]["algorithm"] == first else
+               "in the best group of both rankings" if both else f"best by {escape(res.metric)}")
+        co = [s["algorithm"] for s in mlead if s["algorithm"] != pick]
+    else:
+        pick = slead[0]["algorithm"]
+        why = "it gets closest to each record's own optimum"
+        co = [q["algorithm"] for q in slead[1:]]
+    test = "" if res.tested else "; untested, a single job's report"
+    n = {s["algorithm"]: s["n_runs"] for s in mrows}
+    if co:
+        test += (f"; the tests do not separate it from {_names(co)} at {n.get(pick)} runs "
+                 "each")
+    use = [pick]
+    m = {s["algorithm"]: s["median"] for s in mrows}.get(pick, math.nan)
+    if res.metric == "f_best":  # no accuracy metric: the problem knows no truth
+        ends = f"It ends at a median objective value of {fmt(m, 4)}"
+    else:
+        ends = f"It ends a median {res.value(m)} {escape(res.metric)} from the truth"
+    text = f"Verdict for {escape(res.context)}: use {escape(pick)} ({why}{test}). {ends}"
+    text += _limits(res, m, srows, use, centred)
+    return text + "."
+
+
+def _limits(res: ContextResult, m: float, srows: Sequence[Mapping[str, Any]],
+            use: Sequence[str], centred: bool) -> str:
+    """What limits the leaders: search, the estimator (objective) or the data."""
+    floor, bound = res.floor, res.bound
+    parts = []
+    if math.isfinite(floor):
+        parts.append(f"; the records allow {res.value(floor)} under the objective that was "
+                     "optimised (floor: its own optimum's error, median over the instances)")
+    if math.isfinite(bound):
+        parts.append(f", an efficient estimator {res.value(bound)} (Cramér–Rao bound norm)")
+    if not math.isfinite(floor):
+        return "".join(parts)
+    reached = [q for q in srows if q["algorithm"] in use]
+    at_opt = any(q["reached"] >= q["n"] / 2 or q["rel_gap_median"] <= REACHED
+                 for q in reached)
+    if m < floor and not tied(m, floor) and not at_opt:
+        parts.append(". Ending below the floor is not better search: the runs stopped short "
+                     "of the optimum" + (" in a box centred on the truth" if centred else ""))
+    elif at_opt or m <= AT_FLOOR * floor:
+        parts.append(". More search will not help here")
+        if math.isfinite(bound) and floor > ESTIMATOR_GAP * bound:
+            parts.append(f": the objective, not the data, sets the floor ({fmt(floor / bound, 2)}"
+                         "× the bound), so a better estimator would")
+        else:
+            parts.append(": better records would (longer, other inputs or sensors)")
+    else:
+        parts.append(f". A larger budget or a better optimizer would still gain: the leaders "
+                     f"end {fmt(m / floor, 2)}× above the floor")
+    return "".join(parts)
+
+
+def results(data: Any) -> list[ContextResult]:
+    """The first screen of every context, in report order."""
+    return [context_result(data, c) for c in data.contexts]
+
+
+def markdown_lines(items: Sequence[ContextResult]) -> list[str]:
+    """The Results section of ``report.md`` (its first screen)."""
+    lines = ["## Results", ""]
+    for r in items:
+        unit = f" ({escape(r.unit)})" if r.unit else ""
+        levels = [f"{what} {r.value(v)}" for what, v in (("floor", r.floor), ("bound", r.bound))
+                  if math.isfinite(v)]
+        lines += [f"### {escape(r.context)}", "",
+                  para(f"Ranked by {escape(r.metric)}{unit}, lower is better"
+                       + (f" ({', '.join(levels)})." if levels else ".")), "",
+                  markdown(r.headers, r.rows, keep=5), "", para(r.verdict), ""]
+    return lines
+
+
+def terminal_text(items: Sequence[ContextResult]) -> str:
+    """The same first screen for the terminal: a table and a verdict per context."""
+    blocks = []
+    for r in items:
+        blocks.append(f"{r.context}\n" + terminal(r.headers, r.rows) + "\n"
+                      + " ".join(r.verdict.split()))
+    return "\n\n".join(blocks)

@@ -1,0 +1,74 @@
+"""The problems' report sections: the core's (identifiability, measured vs fitted signals)
+and those plugins register through ``vpid_bench_register_report_sections``. A section that
+raises, returns something else than a :class:`~.sections.Contribution` or names a file outside
+the report folder costs itself only: the report says what went wrong."""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from .safe import UnsafePathError, inside
+from .sections import Contribution, HeadlineColumn, ReportContext, Section
+
+log = logging.getLogger(__name__)
+
+
+def plugin_sections(registry: Any, data: Any, out_dir: Path, claim: Callable[[Path], Path]
+                    ) -> tuple[list[tuple[str, Section]], list[HeadlineColumn], list[str]]:
+    """Per problem of ``data`` (a :class:`~.compute.ReportData`): the core's sections
+    (identifiability, measured-vs-fitted signals), then the plugins'. Returns the sections
+    with their plugin's name, the headline columns they add, and one line per failure."""
+    from . import identifiability, signals
+
+    if registry is None:
+        from ..plugins import Registry
+
+        registry = Registry()
+    by_id = {r["run_id"]: r for r in data.loaded.records}
+    sections: list[tuple[str, Section]] = []
+    columns: list[HeadlineColumn] = []
+    errors: list[str] = []
+    for problem in data.problems:
+        funcs = [("vpid-bench", identifiability.section), ("vpid-bench", signals.section),
+                 *getattr(registry, "report_sections", {}).get(problem, [])]
+        prows = tuple(r for r in data.rows if r["problem"] == problem)
+        ctx = ReportContext(problem=problem, rows=prows,
+                            records=tuple(by_id[r["run_id"]] for r in prows),
+                            out_dir=out_dir, short=data.short, alpha=data.alpha, _claim=claim)
+        for plugin, func in funcs:
+            try:
+                contrib = func(ctx)
+                if contrib is None:
+                    continue
+                new, bad = _checked(contrib, plugin, out_dir)
+                sections += new
+                errors += bad
+                columns += [c for c in contrib.headline if isinstance(c, HeadlineColumn)]
+            except Exception as exc:  # a plugin's fault costs its section, not the report
+                log.debug("report section failed", exc_info=True)
+                errors.append(f"report section of plugin {plugin!r} for problem {problem!r} "
+                              f"failed: {type(exc).__name__}: {exc}")
+    return sections, columns, errors
+
+
+def _checked(contrib: Any, plugin: str, out_dir: Path
+             ) -> tuple[list[tuple[str, Section]], list[str]]:
+    """The sections of a contribution, each file checked to lie inside the report folder."""
+    if not isinstance(contrib, Contribution):
+        raise TypeError(f"returned {type(contrib).__name__}, not a Contribution")
+    out, errors = [], []
+    for sec in contrib.sections:
+        if not isinstance(sec, Section):
+            raise TypeError(f"a section is a {type(sec).__name__}, not a Section")
+        kept = []
+        for f in sec.files:
+            try:
+                kept.append(inside(out_dir, Path(f)))
+            except UnsafePathError as exc:
+                errors.append(f"report section of plugin {plugin!r}: {exc}")
+        out.append((plugin, dataclasses.replace(sec, files=tuple(kept))))
+    return out, errors
