@@ -48,6 +48,7 @@ bench: install
 	$(BIN)/python benchmarks/bench_vehicle.py
 	$(BIN)/python benchmarks/bench_optimizers.py
 	$(BIN)/python benchmarks/paper_experiment.py
+	$(BIN)/python benchmarks/bench_report.py
 
 clean:
 	rm -rf $(VENV) $(SCALEOUT_VENV) outputs/*/ .pytest_cache

@@ -1,20 +1,82 @@
 """vpid-bench: benchmark optimizers on parameter identification problems (see README.md).
 
-Plugins implement :class:`vpid_bench.api.Problem` or :class:`vpid_bench.api.Optimizer` and
-register them with the :data:`hookimpl` marker (see README.md, "Write an optimizer plugin").
+The plugin API is one import line: everything a problem, optimizer or report-section plugin
+uses is importable from here (``from vpid_bench import Problem, Optimizer, hookimpl, ...``).
+Plugins implement :class:`Problem` or :class:`Optimizer` and register them with the
+:data:`hookimpl` marker (see docs/architecture.md). The report-section helpers
+(:class:`ReportContext`, :class:`Section`, ...) and the artifact readers are imported only
+when first used, so importing this package stays light.
 """
 
-from .api import Bounds, Optimizer, OptimizerParams, Problem, ProblemConfig
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+from .api import (
+    FILLED_PARAMS,
+    PROTOCOL_KEYS,
+    Bounds,
+    ConfigError,
+    GenerationalOptimizer,
+    LoopOptimizer,
+    Optimizer,
+    OptimizerContractError,
+    OptimizerParams,
+    PluginError,
+    Problem,
+    ProblemConfig,
+    VpidBenchError,
+    check_compatible,
+    default_budget,
+    offers_residuals,
+    registered_optimizer,
+    relative_errors_percent,
+    write_text_atomic,
+)
 from .hookspecs import hookimpl
 
 __version__ = "0.1.0"
 
+#: Names served on first use: ``name -> module`` (the report's section helpers and the
+#: readers of a run's artifacts pull in the report's machinery).
+_LAZY = {
+    "Contribution": ".report.sections",
+    "HeadlineColumn": ".report.sections",
+    "ReportContext": ".report.sections",
+    "Section": ".report.sections",
+    "BestSignals": ".artifacts",
+    "read_best_signals": ".artifacts",
+}
+
 __all__ = [
+    "FILLED_PARAMS",
+    "PROTOCOL_KEYS",
     "Bounds",
+    "ConfigError",
+    "GenerationalOptimizer",
+    "LoopOptimizer",
     "Optimizer",
+    "OptimizerContractError",
     "OptimizerParams",
+    "PluginError",
     "Problem",
     "ProblemConfig",
+    "VpidBenchError",
+    "check_compatible",
+    "default_budget",
     "hookimpl",
+    "offers_residuals",
+    "registered_optimizer",
+    "relative_errors_percent",
+    "write_text_atomic",
     "__version__",
+    *_LAZY,
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """Import a lazily served name (PEP 562) on first use."""
+    if name not in _LAZY:
+        raise AttributeError(f"module 'vpid_bench' has no attribute {name!r}")
+    return getattr(importlib.import_module(_LAZY[name], __name__), name)

@@ -31,7 +31,8 @@ from typing import Any
 
 import numpy as np
 
-from .api import Bounds, Optimizer, OptimizerParams
+from .bounds import Bounds
+from .optimizer import Optimizer, OptimizerParams
 
 #: How long ``close`` waits for the library's loop to unwind (s); it normally takes microseconds.
 JOIN_TIMEOUT_S = 10.0

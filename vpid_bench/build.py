@@ -11,9 +11,10 @@ from typing import Any
 
 import numpy as np
 
-from .api import Optimizer, Problem
+from .optimizer import Optimizer
 from .params import build_dataclass
 from .plugins import Registry
+from .problem import Problem
 from .spec import Job, check_protocol
 
 

@@ -31,7 +31,8 @@ from __future__ import annotations
 import dataclasses
 import inspect
 
-from .api import ConfigError, Problem
+from .errors import ConfigError
+from .problem import Problem
 
 DOCS = "docs/architecture.md#the-problem-contract"
 

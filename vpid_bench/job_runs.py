@@ -23,8 +23,9 @@ from collections.abc import Iterator, Sequence
 
 import numpy as np
 
-from .api import LoopOptimizer, Problem
+from .bridge import LoopOptimizer
 from .build import run_rng
+from .problem import Problem
 from .runner import Lane, RunResult, run, run_many, time_limit, timeout_error
 from .spec import Job
 

@@ -18,7 +18,7 @@ import typing
 from collections.abc import Mapping
 from typing import Any, Literal, TypeVar, Union, get_args, get_origin
 
-from .api import ConfigError
+from .errors import ConfigError
 
 T = TypeVar("T")
 

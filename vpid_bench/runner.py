@@ -39,7 +39,9 @@ from typing import Any
 
 import numpy as np
 
-from .api import Optimizer, OptimizerContractError, Problem, check_compatible
+from .errors import OptimizerContractError
+from .optimizer import Optimizer, check_compatible
+from .problem import Problem
 
 
 @dataclasses.dataclass

@@ -26,20 +26,12 @@ import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
-from .api import (
-    FILLED_PARAMS,
-    PROTOCOL_KEYS,
-    ConfigError,
-    Optimizer,
-    OptimizerParams,
-    Problem,
-    ProblemConfig,
-    check_compatible,
-    default_budget,
-)
 from .contract import check_problem_class
+from .errors import ConfigError
+from .optimizer import Optimizer, OptimizerParams, check_compatible
 from .params import build_dataclass, to_plain
 from .plugins import Registry
+from .problem import FILLED_PARAMS, PROTOCOL_KEYS, Problem, ProblemConfig, default_budget
 
 #: Caps that keep a typo from asking for hours or gigabytes (see docs/sweeps.md).
 MAX_RUNS = 10_000

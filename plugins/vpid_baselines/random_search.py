@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vpid_bench.api import Optimizer, OptimizerParams
+from vpid_bench import Optimizer, OptimizerParams
 
 
 @dataclass(frozen=True)

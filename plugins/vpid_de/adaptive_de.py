@@ -24,7 +24,7 @@ from typing import ClassVar, Literal
 
 import numpy as np
 
-from vpid_bench.api import Bounds, ConfigError, GenerationalOptimizer, OptimizerParams
+from vpid_bench import Bounds, ConfigError, GenerationalOptimizer, OptimizerParams
 
 from .adaptation import SuccessHistory, jade_update, sample_cr, sample_f
 from .base import check_finite

@@ -18,7 +18,7 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 
-from vpid_bench.api import Bounds, ConfigError, GenerationalOptimizer, OptimizerParams
+from vpid_bench import Bounds, ConfigError, GenerationalOptimizer, OptimizerParams
 
 from .kernels import (
     BOUNDS_RULES,

@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Any, Literal
 
-from vpid_bench.api import ConfigError
+from vpid_bench import ConfigError
 
 from .base import DEParams, DifferentialEvolution, Draw
 

@@ -18,8 +18,7 @@ from typing import Literal
 
 import numpy as np
 
-from vpid_bench import Bounds, Problem, ProblemConfig, hookimpl
-from vpid_bench.api import ConfigError
+from vpid_bench import Bounds, ConfigError, Problem, ProblemConfig, hookimpl
 
 
 def sphere(X: np.ndarray) -> np.ndarray:

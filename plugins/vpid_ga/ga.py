@@ -25,7 +25,7 @@ from typing import ClassVar, Literal
 
 import numpy as np
 
-from vpid_bench.api import Bounds, ConfigError, GenerationalOptimizer, OptimizerParams
+from vpid_bench import Bounds, ConfigError, GenerationalOptimizer, OptimizerParams
 
 from .mutation import MUTATIONS
 from .operators import (

@@ -12,7 +12,7 @@ from typing import Literal
 
 import numpy as np
 
-from vpid_bench.api import Bounds
+from vpid_bench import Bounds
 
 Scaling = Literal["auto", "log", "box"]
 

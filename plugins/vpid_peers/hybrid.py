@@ -1,6 +1,8 @@
 """``optimizer=de_lsq``: DE4 (current-to-best/1, Gökdağ 2014) for a fraction of the nominal
 budget, then :mod:`vpid_peers.lsq` from DE4's best vector (later starts uniform random).
 
+DE4 is the installed ``optimizer=de4`` (looked up by name through the plugin registry, so this
+package does not import ``vpid_de``; without it ``de_lsq`` is refused with the installed names).
 DE4 gets ``fraction`` of the run's budget (``self.budget``, handed over by the job): its
 initial population and ``round(fraction * budget / ps) - 1`` generations (at least the
 initial population), with Table I's F = 0.6 and CR = 0.9. The least-squares phase then runs
@@ -10,15 +12,18 @@ until the run's budget ends.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from vpid_de.variants import DE4, DE4Params
 
-from vpid_bench.api import Bounds, ConfigError, LoopOptimizer
+from vpid_bench import Bounds, ConfigError, LoopOptimizer, Optimizer, registered_optimizer
 
 from .lsq import LSQParams, check_scaling, multistart
+
+#: The first stage's class, looked up once per process (a registry load costs about 50 ms).
+_first_stage = functools.cache(registered_optimizer)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -50,11 +55,12 @@ class DELeastSquares(LoopOptimizer):
     def __init__(self, params: DELSQParams, bounds: Bounds, rng: np.random.Generator) -> None:
         super().__init__(params, bounds, rng)
         check_scaling(params, bounds)
-        self._de_params = DE4Params(ps=params.ps, iterations=params.de_generations(self.budget),
-                                    F=params.F, CR=params.CR)
+        self._de_class: type[Optimizer] = _first_stage("de4")
+        self._de_params = self._de_class.Params(
+            ps=params.ps, iterations=params.de_generations(self.budget), F=params.F, CR=params.CR)
 
     def minimize(self, evaluate: Callable[[np.ndarray], Any]) -> None:
-        de = DE4(self._de_params, self.bounds, self.rng)
+        de = self._de_class(self._de_params, self.bounds, self.rng)
         best_x, best_f = None, np.inf
         while not de.done:
             X = de.ask()

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from vpid_bench.api import Bounds, ConfigError, LoopOptimizer, OptimizerParams
+from vpid_bench import Bounds, ConfigError, LoopOptimizer, OptimizerParams
 
 from .coordinates import Coordinates, Scaling
 from .solver import Solver, SolverSettings

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from vpid_bench.api import Bounds, ConfigError, Optimizer, OptimizerParams
+from vpid_bench import Bounds, ConfigError, Optimizer, OptimizerParams
 
 from .unit_box import to_physical
 

@@ -17,7 +17,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from vpid_bench.api import ConfigError, LoopOptimizer, OptimizerParams
+from vpid_bench import ConfigError, LoopOptimizer, OptimizerParams
 
 Strategy = Literal[
     "best1bin", "best1exp", "rand1bin", "rand1exp", "rand2bin", "rand2exp",

@@ -9,12 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vpid_bench.api import Bounds
-
-
-def to_unit(X: np.ndarray, bounds: Bounds) -> np.ndarray:
-    """Physical rows ``X`` (shape ``(n, dim)``) as unit-cube coordinates ``(X - lower) / width``."""
-    return (np.asarray(X, dtype=float) - bounds.lower) / bounds.width
+from vpid_bench import Bounds
 
 
 def to_physical(U: np.ndarray, bounds: Bounds) -> np.ndarray:

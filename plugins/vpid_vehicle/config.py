@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from vpid_bench.api import ConfigError, ProblemConfig
+from vpid_bench import ConfigError, ProblemConfig
 
 #: The unknowns of Eq. (4), in order, with their units.
 PARAM_NAMES: tuple[str, ...] = ("m", "I", "m1", "m2", "k1", "k2", "c1", "c2", "a1")

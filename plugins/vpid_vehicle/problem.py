@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from vpid_bench.api import Bounds, Problem, relative_errors_percent
+from vpid_bench import Bounds, Problem, relative_errors_percent
 
 from .config import PARAM_NAMES, PARAM_UNITS, VehicleConfig, validate, window
 from .model import KnownConstants, physical
@@ -148,7 +148,7 @@ class VehicleProblem(Problem):
     def set_threads(self, n: int) -> None:
         """Let the Newmark kernel spread a large batch (at least ``kernel.MIN_PER_THREAD``
         candidates per thread) over ``n`` threads; results are bit-identical for every n."""
-        from vpid_bench.api import ConfigError
+        from vpid_bench import ConfigError
 
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
             raise ConfigError("threads", n, "an integer >= 1")

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vpid_bench.api import ConfigError, write_text_atomic
+from vpid_bench import ConfigError, write_text_atomic
 
 HEADER = ("t", "z1dd_clean", "z2dd_clean", "z1dd_noisy", "z2dd_noisy")
 KEY = "problem.reference.file"

@@ -18,7 +18,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from vpid_bench.report.sections import Contribution, HeadlineColumn, ReportContext, Section
+from vpid_bench import Contribution, HeadlineColumn, ReportContext, Section
 
 #: Where the README explains why our NoRE differs from the paper's.
 WHY_LINK = ("README.md, section \"The paper's experiment, reproduced\" "

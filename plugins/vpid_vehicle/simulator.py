@@ -131,15 +131,3 @@ def _kernel():
     except ImportError:  # pragma: no cover - numba is a dependency
         return None
     return kernel
-
-
-def newmark_fast(
-    X: np.ndarray, known: KnownConstants, y: np.ndarray, dt: float, gamma: float, beta: float
-) -> np.ndarray:
-    """The compiled kernel, one call (plain numpy Newmark if numba cannot be imported)."""
-    kernel = _kernel()
-    if kernel is None:  # pragma: no cover - numba is a dependency
-        from .newmark import body_accelerations as plain
-
-        return plain(X, known, y, dt, gamma, beta)
-    return kernel.body_accelerations(X, known.L, known.kt1, known.kt2, y, dt, gamma, beta)

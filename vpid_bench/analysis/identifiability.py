@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ..api import Problem
+from ..problem import Problem
 
 #: Relative step of the central differences.
 STEP = 1e-6

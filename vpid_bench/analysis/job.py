@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ..api import Problem, offers_residuals
+from ..problem import Problem, offers_residuals
 from ..records.io import write_json_atomic
 from ..spec import Job
 

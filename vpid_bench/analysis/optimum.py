@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ..api import PROTOCOL_KEYS, Problem
+from ..problem import PROTOCOL_KEYS, Problem
 from ..records.io import stable_hash, write_json_atomic
 
 #: A run whose best is within this factor of the known optimum is polished too: it may sit in

@@ -25,7 +25,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..api import Problem, relative_errors_percent
+from ..bounds import relative_errors_percent
+from ..problem import Problem
 from ..runner import RunResult
 from .io import SCHEMA
 from .provenance import package_versions

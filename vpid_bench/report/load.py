@@ -26,7 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from ..api import FILLED_PARAMS, VpidBenchError
+from ..errors import VpidBenchError
+from ..problem import FILLED_PARAMS
 from ..records import CorruptRecordError, iter_record_files, read_job_status, read_record
 from ..records.io import decode_number
 

@@ -34,7 +34,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..api import PROTOCOL_KEYS
+from ..problem import PROTOCOL_KEYS
 
 #: The schema string of an optimum file (written by vpid_bench.analysis.optimum).
 SCHEMA = "vpid-bench/instance-optimum/1"

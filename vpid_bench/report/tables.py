@@ -19,16 +19,6 @@ import numpy as np
 BASELINE = "random"
 
 
-def param_names(rows: Sequence[Mapping[str, Any]]) -> list[str]:
-    """Parameter names present in the rows (keys ``x.<name>``), in first-seen order."""
-    out: list[str] = []
-    for r in rows:
-        for k in r:
-            if k.startswith("x.") and k[2:] not in out:
-                out.append(k[2:])
-    return out
-
-
 def metric_names(rows: Sequence[Mapping[str, Any]]) -> list[str]:
     """The problem metrics present in the rows (keys ``metric.<name>``), first-seen order."""
     out: list[str] = []

@@ -12,7 +12,7 @@ import argparse
 import dataclasses
 from collections.abc import Sequence
 
-from ..api import ConfigError
+from ..errors import ConfigError
 
 RESUME_FLAG = "--resume"
 

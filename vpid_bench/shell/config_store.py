@@ -10,9 +10,9 @@ protocol keys (``ps``, ``iterations``): the job copies them from the problem.
 
 from __future__ import annotations
 
-from ..api import FILLED_PARAMS
 from ..params import dataclass_defaults, hydra_node
 from ..plugins import Registry
+from ..problem import FILLED_PARAMS
 from ..spec import JobSpec
 
 SPEC_NODE = "vpid_bench_spec"

@@ -26,7 +26,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
-from ..api import VpidBenchError
+from ..errors import VpidBenchError
 
 DEBUG_ENV = "VPID_BENCH_DEBUG"
 log = logging.getLogger("vpid_bench")

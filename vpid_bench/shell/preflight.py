@@ -28,8 +28,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ..api import FILLED_PARAMS, ConfigError, VpidBenchError
+from ..errors import ConfigError, VpidBenchError
 from ..plugins import Registry
+from ..problem import FILLED_PARAMS
 from ..spec import TOP_LEVEL_KEYS, Job, parse_job
 from .argv import CommandLine
 

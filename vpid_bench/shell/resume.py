@@ -20,7 +20,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ..api import ConfigError
+from ..errors import ConfigError
 from ..records import JOB_STATUS_FILE, read_job_status
 from ..spec import OPERATIONAL_KEYS
 from .callbacks import INVOCATION_ENV

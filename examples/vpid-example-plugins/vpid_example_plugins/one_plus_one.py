@@ -11,8 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vpid_bench import Optimizer, OptimizerParams, hookimpl
-from vpid_bench.api import ConfigError
+from vpid_bench import ConfigError, Optimizer, OptimizerParams, hookimpl
 
 
 @dataclass(frozen=True)

@@ -20,8 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vpid_bench import Bounds, Problem, ProblemConfig, hookimpl
-from vpid_bench.api import ConfigError
+from vpid_bench import Bounds, ConfigError, Problem, ProblemConfig, hookimpl
 
 NAMES, UNITS = ("ms", "ks", "cs"), ("kg", "N/m", "N s/m")
 
