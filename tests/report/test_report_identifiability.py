@@ -188,3 +188,21 @@ def test_a_problem_without_bounds_gets_no_section(tmp_path, registry, compose_co
     run_from_config(cfg, tmp_path / "job", registry)
     report = build_report([tmp_path / "job"], tmp_path / "r", registry=registry, short=True)
     assert "## Identifiability" not in report.report_md.read_text()
+
+
+def test_the_first_screen_bound_is_each_contexts_own_whatever_the_record_order(sweep):
+    """The first screen's Cramér–Rao norm per context comes from that context's job, also
+    when the records are read in another order than the rows' (sorted by context): a
+    pairing by position once gave each verdict its neighbour's bound."""
+    from vpid_bench.report.identifiability import crb_norm_by_context
+    from vpid_bench.report.load import load_records, run_rows
+
+    records = load_records([sweep]).records
+    own = {"short4": "vehicle ps=4 record.extra=0", "short6": "vehicle ps=6 record.extra=0",
+           "long4": "vehicle ps=4 record.extra=0.5"}
+    expected = {ctx: json.loads((sweep / job / "identifiability.json").read_text())
+                ["crb_norm_percent"] for job, ctx in own.items()}
+    assert len(set(expected.values())) > 1  # the designs differ, so a mix-up would show
+    for order in (records, records[::-1], records[1::2] + records[::2]):
+        got = crb_norm_by_context(order, run_rows(order))
+        assert got == pytest.approx(expected, rel=1e-12)

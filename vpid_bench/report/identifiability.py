@@ -162,8 +162,9 @@ def crb_norm_by_context(records: Sequence[Mapping[str, Any]],
     out. For the report's first screen: what an efficient estimator could reach."""
     out: dict[str, float] = {}
     tried: set[Path] = set()
-    for row, rec in zip(rows, records, strict=True):
-        context = row["context"]
+    by_id = {r["run_id"]: r for r in records}  # rows are sorted, records are not
+    for row in rows:
+        context, rec = row["context"], by_id[row["run_id"]]
         if context in out:
             continue
         path = Path(str(rec.get("_job_dir", "."))) / FILE
