@@ -193,6 +193,16 @@ class Registry:
                     stacklevel=2,
                 )
 
+    def suites(self) -> dict[str, list[str]]:
+        """Each suite name the registered problems declare (``Problem.suites``), with its
+        problems in sorted order."""
+        out: dict[str, list[str]] = {}
+        for name, cls in sorted(self.problems.items()):
+            for suite in getattr(cls, "suites", ()) or ():
+                if isinstance(suite, str) and suite.isidentifier():
+                    out.setdefault(suite, []).append(name)
+        return out
+
     def owner(self, kind: str, name: str) -> str:
         """The name of the plugin that registered ``kind`` ``name``."""
         return self._owner[(kind, name)]

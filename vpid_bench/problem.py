@@ -148,6 +148,10 @@ class Problem(abc.ABC):
     #: a problem must say so (a noisy objective drawing from its own generator must not).
     rows_independent: ClassVar[bool] = False
 
+    #: The named suites this problem belongs to: ``vpid-bench -m suite=<name>`` sweeps every
+    #: registered problem whose class lists ``<name>`` here (with each one's defaults).
+    suites: ClassVar[tuple[str, ...]] = ()
+
     def evaluate_instances(self, X: np.ndarray, instance: np.ndarray) -> np.ndarray:
         """Objective values of the rows of ``X`` (shape ``(n, dim)``), row ``j`` against
         instance ``instance[j]`` (int array ``(n,)``), shape ``(n,)``: the gathered call of runs

@@ -12,6 +12,8 @@ from vpid_bench.runner import run
 
 PS, ITERATIONS, DIM = 20, 5, 4
 BUDGET = PS * (ITERATIONS + 1)
+#: Optimizers that use no randomness on purpose (the same answer for every seed).
+DETERMINISTIC = {"centre"}
 
 
 def _names() -> list[str]:
@@ -69,7 +71,7 @@ def test_contract(registry, name):
     np.testing.assert_array_equal(again.x_best, result.x_best)
     assert again.trace_best == result.trace_best
     other, _ = _run(registry, name, seed=2)
-    assert not np.array_equal(other.x_best, result.x_best)
+    assert np.array_equal(other.x_best, result.x_best) == (name in DETERMINISTIC)
 
 
 def test_compose_variant_parameters(compose_config):

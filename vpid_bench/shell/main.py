@@ -249,11 +249,13 @@ def main(argv: Sequence[str] | None = None) -> None:
     from .callbacks import ensure_job_dir_resolver
     from .config_store import register_configs
     from .resume import FolderLock, new_invocation
+    from .suites import expand_suites
 
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         cmd = parse_command_line(argv)
         registry = _load_registry()
+        cmd = expand_suites(cmd, registry)
     except VpidBenchError as exc:
         _refuse(exc)
     if cmd.version:
