@@ -13,6 +13,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from . import estimators
 from .api import (
     FILLED_PARAMS,
     PROTOCOL_KEYS,
@@ -65,6 +66,7 @@ __all__ = [
     "VpidBenchError",
     "check_compatible",
     "default_budget",
+    "estimators",
     "hookimpl",
     "offers_residuals",
     "registered_optimizer",

@@ -130,8 +130,10 @@ class Problem(abc.ABC):
 
     def residual_sigma(self) -> np.ndarray | None:
         """The standard deviation of the measurement noise in each residual group (units of
-        the residuals), shape ``(groups,)``, for the Fisher information; ``None`` when it is
-        not known (a measured record)."""
+        the residuals), shape ``(groups,)``, or of each residual entry, shape ``(m,)`` (noise
+        whose sigma varies along the record), for the Fisher information; ``None`` when it is
+        not known (a measured record). It is the noise that was simulated, whatever the
+        objective: the bound belongs to the data, not to the estimator."""
         return None
 
     def instance(self, index: int) -> Problem:

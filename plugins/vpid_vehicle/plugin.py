@@ -8,11 +8,24 @@ from vpid_bench import hookimpl
 
 from .problem import VehicleProblem
 from .report import vehicle_sections
+from .ride.full import RideFullProblem
+from .ride.half import RideHalfProblem
+from .ride.lateral import LateralProblem
+from .ride.magic import LateralMFProblem
+from .ride.quarter import RideQuarterProblem
+from .ride.suites import MEMBERS
 
 
 @hookimpl
 def vpid_bench_register_problems(register):
     register("vehicle", VehicleProblem)
+    register("ride_quarter", RideQuarterProblem)
+    register("ride_half", RideHalfProblem)
+    register("ride_full", RideFullProblem)
+    register("lateral", LateralProblem)
+    register("lateral_mf", LateralMFProblem)
+    for member in MEMBERS:
+        register(member.name, member)
 
 
 @hookimpl

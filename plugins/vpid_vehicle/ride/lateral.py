@@ -1,0 +1,173 @@
+"""``problem=lateral``: identify a car's cornering stiffnesses, yaw inertia and centre of
+gravity from a steering manoeuvre (the linear single-track, or bicycle, model).
+
+Model (SI units, small angles, constant forward speed ``vx``): the lateral velocity ``vy`` and
+the yaw rate ``r`` follow from the front and rear axle forces ``Fyf = Cf af``, ``Fyr = Cr ar``
+with the slip angles ``af = delta - (vy + lf r) / vx``, ``ar = -(vy - lr r) / vx``:
+
+    m (vy' + vx r) = Fyf + Fyr
+    Iz r'          = lf Fyf - lr Fyr
+
+Written on the core's form with ``q' = [vy, r]`` (``K = 0``):
+``M = diag(m, Iz)``, ``C = [[(Cf + Cr)/vx, m vx + (lf Cf - lr Cr)/vx],
+[(lf Cf - lr Cr)/vx, (lf^2 Cf + lr^2 Cr)/vx]]``, ``F = [Cf, lf Cf]`` times the steer angle
+``delta`` at the road wheels. Outputs: the yaw rate ``r`` (rad/s), the lateral acceleration
+``ay = vy' + vx r`` (m/s^2), the side slip ``beta = vy / vx`` (rad).
+
+**Known quantities**: the mass ``m`` (weighed) and the wheelbase ``L``; with them the scaling
+of ``m, Iz, Cf, Cr`` by one factor (which leaves ``r`` and ``ay`` unchanged) is broken.
+Identified: ``Cf, Cr, Iz, lf`` (``lr = L - lf``). Steady state: ``r / delta = vx / (L + K
+vx^2)`` with the understeer gradient ``K = (m / L) (lr / Cf - lf / Cr)`` (tested).
+
+**Manoeuvres** (``manoeuvre``): ``step`` (the steer ramps to ``steer_deg`` over 0.2 s from
+0.5 s on and holds), ``sine`` (``steer_deg`` amplitude at ``sine_hz`` from 0.5 s on).
+Record, noise, instances and objective: :mod:`.problem`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Literal
+
+import numpy as np
+
+from . import linear
+from .problem import RideModel, RideProblem, SuiteConfig, _check
+
+
+class SingleTrack(RideModel):
+    names = ("Cf", "Cr", "Iz", "lf")
+    units = ("N/rad", "N/rad", "kg m²", "m")
+    sets = {
+        # the reference car of openpilot's vehicle models (Honda Civic 2016 with 136 kg of
+        # cargo): axle cornering stiffnesses, understeering
+        "civic": {"Cf": 192150.0, "Cr": 202500.0, "Iz": 2500.0, "lf": 1.08,
+                  "m": 1462.0, "L": 2.70},
+        # MCC Smart ("Modellbildung und Simulation in der Fahrzeugtechnik", 2012, as cited in
+        # public code): oversteering, critical speed 35.8 m/s
+        "smart": {"Cf": 70000.0, "Cr": 90000.0, "Iz": 3000.0, "lf": 1.142,
+                  "m": 820.0, "L": 1.812},
+    }
+    sensors = {
+        "yaw": (("r", "rad/s"),),
+        "yaw_ay": (("r", "rad/s"), ("ay", "m/s²")),
+        "yaw_ay_beta": (("r", "rad/s"), ("ay", "m/s²"), ("beta", "rad")),
+    }
+
+    def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
+        ok = np.all(np.isfinite(X) & (X > 0), axis=1)
+        return ok & (X[:, 3] < known["L"])
+
+    def inputs(self, config: Any, known: dict[str, float], dt: float,
+               rng: np.random.Generator) -> np.ndarray:
+        """The steer angle at the road wheels (rad) ``(N, 1)``."""
+        t = np.arange(round(config.duration_s / dt)) * dt
+        amp = np.deg2rad(config.steer_deg)
+        if config.manoeuvre == "step":
+            delta = amp * np.clip((t - 0.5) / 0.2, 0.0, 1.0)
+        else:
+            delta = np.where(t >= 0.5, amp * np.sin(2 * np.pi * config.sine_hz * (t - 0.5)), 0)
+        return delta[:, None]
+
+    def system(self, X: np.ndarray, known: dict[str, float], sensors: str,
+               vx: float = 20.0) -> linear.LinearSystem:
+        X = np.atleast_2d(X)
+        n = X.shape[0]
+        Cf, Cr, Iz, lf = X.T
+        lr, m = known["L"] - lf, known["m"]
+        M = np.zeros((n, 2, 2))
+        M[:, 0, 0], M[:, 1, 1] = m, Iz
+        C = np.empty((n, 2, 2))
+        C[:, 0, 0] = (Cf + Cr) / vx
+        C[:, 0, 1] = m * vx + (lf * Cf - lr * Cr) / vx
+        C[:, 1, 0] = (lf * Cf - lr * Cr) / vx
+        C[:, 1, 1] = (lf**2 * Cf + lr**2 * Cr) / vx
+        F = np.stack([Cf, lf * Cf], axis=1)[:, :, None]
+        names = [c for c, _ in self.sensors[sensors]]
+        Pa = np.zeros((len(names), 2))
+        Pv = np.zeros((len(names), 2))
+        for j, c in enumerate(names):
+            if c == "r":
+                Pv[j, 1] = 1.0
+            elif c == "ay":
+                Pa[j, 0], Pv[j, 1] = 1.0, vx
+            else:  # beta
+                Pv[j, 0] = 1.0 / vx
+        return linear.LinearSystem(M, C, np.zeros((n, 2, 2)), F, Pa, np.zeros((len(names), 2)),
+                                   np.zeros((len(names), 1)), Pv)
+
+
+@dataclasses.dataclass(frozen=True)
+class LateralConfig(SuiteConfig):
+    """``parameter_set``: the published car (docs/suite.md); ``sensors``: the measured
+    channels; ``manoeuvre``: ``step`` or ``sine`` steer of ``steer_deg`` (degrees at the road
+    wheels) at ``speed_kmh``; ``sine_hz``: the sine's frequency. ``record_model``: the model
+    that makes the record, ``linear`` or ``magic_formula`` (a Magic Formula tyre per axle with
+    the truth's cornering stiffnesses: the linear model fitted with model error). Other keys:
+    :class:`.problem.SuiteConfig`."""
+
+    parameter_set: Literal["civic", "smart"] = "civic"
+    sensors: Literal["yaw", "yaw_ay", "yaw_ay_beta"] = "yaw_ay"
+    manoeuvre: Literal["step", "sine"] = "sine"
+    steer_deg: float = 2.0
+    sine_hz: float = 0.5
+    speed_kmh: float = 72.0
+    record_model: Literal["linear", "magic_formula"] = "linear"
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _check([
+            ("steer_deg", 0 < self.steer_deg <= 10, "an angle in (0, 10] degrees (linear "
+             "tyres: small slip angles)"),
+            ("sine_hz", 0 < self.sine_hz <= 5, "a frequency in (0, 5] Hz"),
+            ("speed_kmh", 10 <= self.speed_kmh <= 200, "a speed in [10, 200] km/h"),
+        ], self)
+
+
+class _SingleTrackAt(SingleTrack):
+    """The single-track model at one forward speed (the problem's)."""
+
+    def __init__(self, vx: float) -> None:
+        self.vx = vx
+
+    def system(self, X: np.ndarray, known: dict[str, float], sensors: str,
+               vx: float | None = None) -> linear.LinearSystem:
+        return super().system(X, known, sensors, self.vx if vx is None else vx)
+
+
+class LateralProblem(RideProblem):
+    """The linear single-track model identified from a steering manoeuvre."""
+
+    Config = LateralConfig
+    name = "lateral"
+    model = SingleTrack()
+
+    def __init__(self, config: LateralConfig, index: int = 0) -> None:
+        self.model = _SingleTrackAt(config.speed_kmh / 3.6)
+        super().__init__(config, index)
+
+    def _record(self, fine_u: np.ndarray, sub: int) -> np.ndarray:
+        """The linear model's record, or with ``record_model=magic_formula`` the Magic Formula
+        model's (tyre shape, friction and curvature of :mod:`.magic`, ``B`` from the truth's
+        cornering stiffness ``B C D``, ``D = mu x`` the static axle load) by RK4."""
+        if self.config.record_model == "linear":
+            return super()._record(fine_u, sub)
+        from .magic import CURVATURE, MU, SHAPE, MagicSingleTrack
+
+        Cf, Cr, Iz, lf = self._x_true
+        m, L = self.known["m"], self.known["L"]
+        Df, Dr = MU * m * 9.81 * (L - lf) / L, MU * m * 9.81 * lf / L
+        X = np.array([[Cf / (SHAPE * Df), SHAPE, Df, Cr / (SHAPE * Dr), SHAPE, Dr, Iz]])
+        known = {"m": m, "L": L, "lf": lf, "E": CURVATURE}
+        mf = MagicSingleTrack(self.config.speed_kmh / 3.6)
+        y = mf.simulate(X, known, self.config.sensors, fine_u, self.config.dt / sub, "exact")
+        return y[0, ::sub].T
+
+
+def steady_yaw_gain(X: np.ndarray, known: dict[str, float], vx: float) -> np.ndarray:
+    """``r / delta`` in steady state (1/s): ``vx / (L + K vx^2)``, ``K = (m / L) (lr / Cf -
+    lf / Cr)`` (rad per m/s^2), for the rows of ``X``."""
+    Cf, Cr, _, lf = np.atleast_2d(X).T
+    L, m = known["L"], known["m"]
+    K = m / L * ((L - lf) / Cf - lf / Cr)
+    return vx / (L + K * vx**2)

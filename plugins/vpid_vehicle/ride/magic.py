@@ -1,0 +1,118 @@
+"""``problem=lateral_mf``: the single-track model with a Magic Formula tyre per axle, the
+suite's first nonlinear identification (several basins are expected: the tyre curves trade
+off against each other and against the yaw inertia).
+
+Each axle's lateral force is ``Fy = D sin(C atan(B a - E (B a - atan(B a))))`` at its slip
+angle ``a`` (rad); the equations of motion are those of :mod:`.lateral` with these forces.
+Integrated by the classical Runge-Kutta method (RK4); the record by RK4 at
+``dt / record_substeps``, the fitted model at ``dt`` (a finer step, not the same solver run:
+no inverse crime; ``record=newmark`` here means the fitted model's step, on purpose).
+
+The box is ``[0.5, 1.5] x`` the set with the shape factors capped at 1.99; the spread of the
+random truth is kept below 0.35 so that ``C`` stays under it.
+
+**Known quantities**: the mass ``m``, the wheelbase ``L``, the centre of gravity ``lf`` and
+the curvature factor ``E``. Identified: ``Bf, Cf, Df, Br, Cr, Dr, Iz`` (7).
+
+**Parameter set** ``civic_mf`` (ours, derived and stated as such): the openpilot reference
+car of :mod:`.lateral` (m 1462 kg, Iz 2500 kg m², L 2.70 m, lf 1.08 m), with the shape factor
+``C = 1.4675``, the friction ``mu = 0.94`` and ``E = 0.004`` of the PAC2002 tyre file of a
+185/80R14 tyre published with Project Chrono (PCY1, PDY1, PEY1); ``D = mu x`` the static axle
+load, and ``B = C_alpha / (C D)`` so the small-slip cornering stiffness is the car's.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Literal
+
+import numpy as np
+
+from .lateral import SingleTrack
+from .problem import RideModel, RideProblem, SuiteConfig, _check
+
+G = 9.81  # m/s^2
+#: PAC2002 lateral coefficients of the 185/80R14 tyre file published with Project Chrono:
+#: shape factor (PCY1), friction (PDY1), curvature (PEY1).
+SHAPE, MU, CURVATURE = 1.4675, 0.94, 0.004
+
+
+def _civic_mf() -> dict[str, float]:
+    m, L, lf, mu, C, E = 1462.0, 2.70, 1.08, MU, SHAPE, CURVATURE
+    fz_f, fz_r = m * G * (L - lf) / L, m * G * lf / L
+    Df, Dr = mu * fz_f, mu * fz_r
+    return {"Bf": 192150.0 / (C * Df), "Cf": C, "Df": Df,
+            "Br": 202500.0 / (C * Dr), "Cr": C, "Dr": Dr, "Iz": 2500.0,
+            "m": m, "L": L, "lf": lf, "E": E}
+
+
+class MagicSingleTrack(RideModel):
+    names = ("Bf", "Cf", "Df", "Br", "Cr", "Dr", "Iz")
+    units = ("1/rad", "1", "N", "1/rad", "1", "N", "kg m²")
+    sets = {"civic_mf": _civic_mf()}
+    sensors = SingleTrack.sensors
+
+    def __init__(self, vx: float = 20.0) -> None:
+        self.vx = vx
+
+    def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
+        """Positive parameters, and shape factors C in (0, 2) (beyond 2 the curve folds)."""
+        ok = np.all(np.isfinite(X) & (X > 0), axis=1)
+        return ok & (X[:, 1] < 2) & (X[:, 4] < 2)
+
+    def box(self, nominal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``[0.5, 1.5] x`` the set, the shape factors capped at 1.99 (C < 2)."""
+        lower, upper = 0.5 * nominal, 1.5 * nominal
+        upper[[1, 4]] = np.minimum(upper[[1, 4]], 1.99)
+        return lower, upper
+
+    def inputs(self, config: Any, known: dict[str, float], dt: float,
+               rng: np.random.Generator) -> np.ndarray:
+        return SingleTrack().inputs(config, known, dt, rng)
+
+    def simulate(self, X: np.ndarray, known: dict[str, float], sensors: str, u: np.ndarray,
+                 dt: float, solver: str) -> np.ndarray:
+        from .kernel import mf_single_track
+
+        X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
+        y = np.empty((X.shape[0], u.shape[0], 3))
+        lf = known["lf"]
+        mf_single_track(X[:, :6].copy(), X[:, 6].copy(), np.ascontiguousarray(u[:, 0]), dt,
+                        known["m"], lf, known["L"] - lf, self.vx, known["E"], y)
+        keep = {"r": 0, "ay": 1, "beta": 2}
+        return y[:, :, [keep[c] for c, _ in self.sensors[sensors]]]
+
+
+@dataclasses.dataclass(frozen=True)
+class LateralMFConfig(SuiteConfig):
+    """As :class:`.lateral.LateralConfig`, with a larger default steer (4 degrees at 72
+    km/h reaches the tyres' nonlinear range) and ``record_substeps`` the RK4 record's."""
+
+    parameter_set: Literal["civic_mf"] = "civic_mf"
+    sensors: Literal["yaw", "yaw_ay", "yaw_ay_beta"] = "yaw_ay"
+    manoeuvre: Literal["step", "sine"] = "sine"
+    steer_deg: float = 4.0
+    sine_hz: float = 0.5
+    speed_kmh: float = 72.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _check([
+            ("spread", self.spread < 0.35, "a fraction in [0, 0.35): the shape factors "
+             "must stay below 2"),
+            ("steer_deg", 0 < self.steer_deg <= 15, "an angle in (0, 15] degrees"),
+            ("sine_hz", 0 < self.sine_hz <= 5, "a frequency in (0, 5] Hz"),
+            ("speed_kmh", 10 <= self.speed_kmh <= 200, "a speed in [10, 200] km/h"),
+        ], self)
+
+
+class LateralMFProblem(RideProblem):
+    """The Magic Formula single-track model identified from a steering manoeuvre."""
+
+    Config = LateralMFConfig
+    name = "lateral_mf"
+    model = MagicSingleTrack()
+
+    def __init__(self, config: LateralMFConfig, index: int = 0) -> None:
+        self.model = MagicSingleTrack(config.speed_kmh / 3.6)
+        super().__init__(config, index)

@@ -1,0 +1,323 @@
+"""What every ride problem of the suite shares: the record, its noise, the instances, the
+objective and the residuals; a model adds only its matrices (:class:`RideModel`).
+
+**Record.** The true vehicle's response by the exact solution for an input linear between
+samples (:func:`.linear.exact_foh`), at ``dt / record_substeps``, sampled every ``dt``; the
+fitted model is Newmark (average acceleration) at ``dt`` with the road sampled at ``dt``. The
+record is therefore not made by the fitted model (no inverse crime); ``record=newmark`` makes it
+with the fitted model, on purpose.
+
+**Noise**, per channel: additive Gaussian, ``sigma_c = noise_level x rms(clean channel c)``.
+
+**Instances.** Run ``i`` fits instance ``i``: from ``SeedSequence(seed, spawn_key=(i,))`` it
+draws the true vehicle (each identified parameter ``x nominal x U(1 - spread, 1 + spread)``;
+``truth=set`` uses the published set, the centre of the box), the random roads' phases and the
+noise. The box is fixed, ``[0.5, 1.5] x`` the published set.
+
+**Roads.** Every wheel follows a track (left or right) with a delay (the rear wheels by
+wheelbase / speed); the event starts 0.2 s into the record under the front wheels. The two
+tracks of an ISO road are independent realisations of the class.
+
+**Objective** (``objective``, :mod:`vpid_bench.estimators`): by default ``f = sum_c
+||measured_c - computed_c|| / ||measured_c||`` (the paper's Eq. 3, one norm per channel; the
+residuals are those differences over ``||measured_c||``, one group per channel); ``ols`` and
+``ml`` (weighted by ``sigma_c`` estimated from the record) are sums of squares. Metric: NoRE
+(%) against the instance's truth.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, ClassVar
+
+import numpy as np
+
+from vpid_bench import (
+    Bounds,
+    ConfigError,
+    Problem,
+    ProblemConfig,
+    estimators,
+    relative_errors_percent,
+)
+
+from . import linear, roads
+
+
+def _check(checks: list[tuple[str, bool, str]], config: Any) -> None:
+    """Raise :class:`ConfigError` for the first failed ``(key, ok, allowed)``."""
+    for key, ok, allowed in checks:
+        if not ok:
+            raise ConfigError(f"problem.{key}", getattr(config, key), allowed)
+
+
+@dataclasses.dataclass(frozen=True)
+class SuiteConfig(ProblemConfig):
+    """Keys every problem of the suite shares (a model's Config adds ``parameter_set``,
+    ``sensors`` and its input). ``duration_s`` of the record; ``dt`` its sampling (s).
+    ``noise_level``: sigma per channel as a fraction of its clean rms. ``seed``: the
+    instances' streams. ``truth``: ``random`` (a random place in the box) or ``set`` (the
+    published set, the box centre). ``spread``: the random truth's half-width as a fraction of
+    the set. ``record``: ``exact`` or ``newmark`` (inverse crime). ``record_substeps``: the
+    exact record's steps per sample. ``objective``: the estimator, ``eq3`` (the paper's
+    Eq. 3), ``ols`` or ``ml`` (:mod:`vpid_bench.estimators`)."""
+
+    duration_s: float = 3.0
+    dt: float = 0.001
+    noise_level: float = 0.05
+    seed: int = 0
+    truth: str = "random"
+    spread: float = 0.3
+    record: str = "exact"
+    record_substeps: int = 10
+    objective: str = "eq3"
+
+    def __post_init__(self) -> None:
+        estimators.check_objective(self.objective, self.noise_level)
+        _check([
+            ("truth", self.truth in ("random", "set"), "one of random, set"),
+            ("record", self.record in ("exact", "newmark"), "one of exact, newmark"),
+            ("duration_s", 0 < self.duration_s <= 60, "a duration in (0, 60] s"),
+            ("dt", 1e-5 <= self.dt <= 0.01, "a sampling step in [1e-5, 0.01] s"),
+            ("noise_level", 0 <= self.noise_level <= 1, "a fraction in [0, 1]"),
+            ("spread", 0 <= self.spread < 0.5, "a fraction in [0, 0.5): the box is 0.5-1.5x"),
+            ("record_substeps", 1 <= self.record_substeps <= 100, "an integer in [1, 100]"),
+        ], self)
+        if self.duration_s / self.dt > 200_000:
+            raise ConfigError("problem.duration_s", self.duration_s,
+                              "at most 200000 samples (duration_s / dt)")
+
+
+@dataclasses.dataclass(frozen=True)
+class RideConfig(SuiteConfig):
+    """The road of a ride problem: ``road`` is ``hump`` (3.7 m x 0.1 m), ``bump`` (0.1 m x
+    0.04 m), ``step`` (0.1 m) or ``iso8608`` (class ``road_class``), met at ``speed_kmh``."""
+
+    road: str = "hump"
+    road_class: str = "C"
+    speed_kmh: float = 30.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _check([
+            ("road", self.road in ("hump", "bump", "step", "iso8608"),
+             "one of hump, bump, step, iso8608"),
+            ("road_class", self.road_class in roads.ISO8608_GD0, "one of A, B, ..., H"),
+            ("speed_kmh", 0 < self.speed_kmh <= 200, "a speed in (0, 200] km/h"),
+        ], self)
+
+
+@dataclasses.dataclass(frozen=True)
+class Wheel:
+    """Where a wheel meets the road: its track (0 left, 1 right) and its delay behind the
+    front axle (s)."""
+
+    track: int
+    delay_s: float
+
+
+class RideModel:
+    """A linear ride model: the identified parameters, the published sets (identified and
+    known values), the sensor sets, the wheels and the matrices. Subclasses fill it in."""
+
+    names: ClassVar[tuple[str, ...]] = ()
+    units: ClassVar[tuple[str, ...]] = ()
+    sets: ClassVar[dict[str, dict[str, float]]] = {}
+    sensors: ClassVar[dict[str, tuple[tuple[str, str], ...]]] = {}
+
+    def wheels(self, known: dict[str, float], speed: float) -> tuple[Wheel, ...]:
+        """The wheels of the model at ``speed`` m/s."""
+        raise NotImplementedError
+
+    def inputs(self, config: Any, known: dict[str, float], dt: float,
+               rng: np.random.Generator) -> np.ndarray:
+        """The input channels ``(N, r)`` sampled every ``dt`` s over the record (default:
+        each wheel's road height, then their rates)."""
+        return wheel_inputs(config, self.wheels(known, config.speed_kmh / 3.6), dt, rng)
+
+    def system(self, X: np.ndarray, known: dict[str, float], sensors: str
+               ) -> linear.LinearSystem:
+        """The batch of linear systems of the rows ``X``; inputs ``[h_1..h_w, h'_1..h'_w]``
+        (each wheel's road height and its rate), outputs the ``sensors`` channels."""
+        raise NotImplementedError
+
+    def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
+        """Rows that describe a vehicle (default: every parameter finite and > 0)."""
+        return np.all(np.isfinite(X) & (X > 0), axis=1)
+
+    def box(self, nominal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The search box around the published set (default ``[0.5, 1.5] x`` it)."""
+        return 0.5 * nominal, 1.5 * nominal
+
+    def simulate(self, X: np.ndarray, known: dict[str, float], sensors: str, u: np.ndarray,
+                 dt: float, solver: str) -> np.ndarray:
+        """The ``sensors`` channels ``(n, N, p)`` of the rows ``X`` driven by ``u`` sampled
+        every ``dt``, from rest; ``solver`` is ``exact`` (the record's) or ``newmark`` (the
+        fitted model's). Default: the linear core."""
+        system = self.system(X, known, sensors)
+        step = linear.exact_foh(system, dt) if solver == "exact" else linear.newmark(system, dt)
+        return linear.simulate(step, u)
+
+
+def track_profile(cfg: RideConfig, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """The road height (m) of one track at distances ``x`` (m); the event starts where the
+    front wheels are 0.2 s into the record."""
+    start = 0.2 * cfg.speed_kmh / 3.6
+    if cfg.road == "hump":
+        return roads.hump(x, start)
+    if cfg.road == "bump":
+        return roads.bump(x, start)
+    if cfg.road == "step":
+        return roads.step(x, start)
+    return roads.iso8608(x, cfg.road_class, rng)
+
+
+def wheel_inputs(cfg: RideConfig, wheels: tuple[Wheel, ...], dt: float,
+                 rng: np.random.Generator) -> np.ndarray:
+    """``[h_1..h_w, h'_1..h'_w]`` (m, m/s) sampled every ``dt`` s over the record,
+    ``(N, 2 w)``."""
+    v = cfg.speed_kmh / 3.6
+    t = np.arange(round(cfg.duration_s / dt)) * dt
+    tracks = 1 + max(w.track for w in wheels)
+    lead = max(w.delay_s for w in wheels)
+    x_track = np.arange(-lead * v - 1.0, v * t[-1] + 1.0, min(roads.ISO8608_DX, v * dt))
+    profiles = [track_profile(cfg, np.maximum(x_track, 0.0), rng) for _ in range(tracks)]
+    h = np.stack([np.interp(v * (t - w.delay_s), x_track, profiles[w.track]) for w in wheels],
+                 axis=1)
+    return np.concatenate([h, np.gradient(h, dt, axis=0)], axis=1)
+
+
+class RideProblem(Problem):
+    """A ride model identified from a road record (see the module docstring)."""
+
+    model: ClassVar[RideModel]
+    rows_independent = True
+
+    def __init__(self, config: RideConfig, index: int = 0) -> None:
+        self.config = config
+        self._index = index
+        published = self.model.sets[config.parameter_set]
+        self.nominal = np.array([published[k] for k in self.model.names])
+        self.known = {k: v for k, v in published.items() if k not in self.model.names}
+        streams = np.random.SeedSequence(config.seed, spawn_key=(index,)).spawn(3)
+        truth_rng, road_rng, noise_rng = (np.random.default_rng(s) for s in streams)
+        factors = truth_rng.uniform(1 - config.spread, 1 + config.spread, self.nominal.size)
+        self._x_true = self.nominal * (factors if config.truth == "random" else 1.0)
+        sub = config.record_substeps if config.record == "exact" else 1
+        fine = self.model.inputs(config, self.known, config.dt / sub, road_rng)
+        self.u = fine[::sub]
+        self.t = np.arange(self.u.shape[0]) * config.dt
+        self.clean = self._record(fine, sub)
+        self.sigma = config.noise_level * np.sqrt(np.mean(self.clean**2, axis=1))
+        self.measured = self.clean + self.sigma[:, None] * noise_rng.standard_normal(
+            self.clean.shape)
+        self.scale = np.linalg.norm(self.measured, axis=1)
+        if np.any(self.scale <= 0):
+            raise ConfigError("problem.duration_s", config.duration_s, "a record in which "
+                              "every measured channel moves (one is zero throughout)")
+        plug_in = (estimators.plug_in_sigma(self.measured, config.noise_level, "additive")
+                   if config.objective == "ml" else None)
+        #: What a raw residual is multiplied by, ``(p, N)``: ``1 / ||measured_c||`` (Eq. 3),
+        #: ``1 / ||measured||`` (ols), ``1 / sigma`` plugged in from the record (ml).
+        self.weights = estimators.weights(config.objective, self.measured,
+                                          1.0 / self.scale[:, None], plug_in)
+
+    def _record(self, fine_u: np.ndarray, sub: int) -> np.ndarray:
+        """The true vehicle's clean channels ``(p, N)`` sampled every ``dt``."""
+        dt = self.config.dt / sub
+        y = self.model.simulate(self._x_true[None], self.known, self.config.sensors, fine_u, dt,
+                                self.config.record)
+        return y[0, ::sub].T
+
+    @property
+    def channels(self) -> tuple[tuple[str, str], ...]:
+        return self.model.sensors[self.config.sensors]
+
+    # --- core ---------------------------------------------------------------------------
+    @property
+    def bounds(self) -> Bounds:
+        lower, upper = self.model.box(self.nominal)
+        return Bounds(lower, upper, self.model.names, self.model.units)
+
+    @property
+    def x_true(self) -> np.ndarray:
+        return self._x_true.copy()
+
+    def responses(self, X: np.ndarray) -> np.ndarray:
+        """The fitted model's channels ``(n, p, N)`` for the rows of ``X``; NaN rows for a
+        row that is not a vehicle."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        out = np.full((X.shape[0], self.measured.shape[0], self.t.size), np.nan)
+        ok = self.model.physical(X, self.known)
+        if np.any(ok):
+            with np.errstate(all="ignore"):
+                out[ok] = self.model.simulate(X[ok], self.known, self.config.sensors, self.u,
+                                              self.config.dt, "newmark").transpose(0, 2, 1)
+        return out
+
+    def residuals(self, X: np.ndarray) -> np.ndarray:
+        """``measured_c - computed_c`` times the objective's weights (Eq. 3: over
+        ``||measured_c||``), channels one after another, ``(n, p N)``; inf rows where a
+        simulation fails."""
+        R = (self.measured[None] - self.responses(X)) * self.weights[None]
+        R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
+        return R.reshape(R.shape[0], -1)
+
+    def residual_groups(self) -> np.ndarray:
+        """The channels for Eq. 3 (one norm each), one group for the sums of squares."""
+        return estimators.groups(self.config.objective, self.measured.shape[0], self.t.size)
+
+    def residual_sigma(self) -> np.ndarray | None:
+        """The simulated noise's sigma of each residual entry, in the residuals' units."""
+        if self.config.noise_level <= 0:
+            return None
+        return (self.sigma[:, None] * self.weights).reshape(-1)
+
+    def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        R = self.residuals(X)
+        f = estimators.value(self.config.objective, R.reshape(R.shape[0], -1, self.t.size))
+        return f, R
+
+    def evaluate(self, X: np.ndarray) -> np.ndarray:
+        return self.evaluate_with_residuals(X)[0]
+
+    def metrics(self, x: np.ndarray) -> dict[str, float]:
+        """``{"NoRE": ...}``: the norm of the relative errors against this instance's truth
+        (percent)."""
+        return {"NoRE": float(np.linalg.norm(relative_errors_percent(x, self._x_true)))}
+
+    # --- instances ----------------------------------------------------------------------
+    def instance(self, index: int) -> RideProblem:
+        return self if index == self._index else type(self)(self.config, index)
+
+    def instance_id(self) -> str | None:
+        return f"seed={self.config.seed}/{self._index}"
+
+    # --- signals ------------------------------------------------------------------------
+    def signal_units(self) -> dict[str, str]:
+        return dict(self.channels)
+
+    def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        fitted = self.responses(np.asarray(x, dtype=float).reshape(1, -1))[0]
+        out = {"t": self.t.copy()}
+        for c, (name, _) in enumerate(self.channels):
+            out[f"{name}:measured"] = self.measured[c].copy()
+            out[f"{name}:fitted"] = fitted[c]
+        return out
+
+    def describe(self) -> dict[str, Any]:
+        cfg = self.config
+        exact = cfg.record == "exact"
+        return {
+            "samples": int(self.t.size),
+            "known": dict(self.known),
+            "record": {"solver": "exact first-order hold" if exact
+                       else "Newmark (the fitted model: inverse crime)",
+                       "dt_s": cfg.dt / (cfg.record_substeps if exact else 1)},
+            "fitted_model": {"solver": "Newmark average acceleration", "dt_s": cfg.dt},
+            "noise": {"model": "additive Gaussian", "sigma": self.sigma.tolist(),
+                      "channels": [c for c, _ in self.channels]},
+            "truth": self._x_true.tolist(),
+            "f_at_true": float(self.evaluate(self._x_true[None])[0]),
+            "metric_units": {"NoRE": "%"},
+        }

@@ -1,0 +1,86 @@
+"""``problem=ride_quarter``: identify a quarter car (2-DOF) from what it records on a road.
+
+Model (SI units): the sprung mass ``ms`` (body, height zs) on the suspension spring ``ks`` and
+damper ``cs`` above the unsprung mass ``mu`` (wheel, height zu), on the tyre (stiffness
+``kt``, damping ``ct``) over the road height h(t):
+
+    ms zs'' + cs (zs' - zu') + ks (zs - zu) = 0
+    mu zu'' - cs (zs' - zu') - ks (zs - zu) + ct zu' + kt zu = kt h + ct h'
+
+**Known quantity: the tyre.** With a road as input and only kinematic outputs, scaling every
+mass, stiffness and damping by one factor leaves the record unchanged; the tyre (``kt``,
+``ct``, measured on a tyre rig) is therefore known and ``ms, mu, ks, cs`` are identified.
+Record, noise, instances and objective: :mod:`.problem`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Literal
+
+import numpy as np
+
+from . import linear
+from .problem import RideConfig, RideModel, RideProblem, Wheel
+
+
+class QuarterCar(RideModel):
+    names = ("ms", "mu", "ks", "cs")
+    units = ("kg", "kg", "N/m", "N s/m")
+    sets = {
+        # IRI golden car ratios (mu/ms 0.15, ks/ms 63.3 s^-2, cs/ms 6.0 s^-1, kt/ms 653 s^-2;
+        # Sayers et al. 1986, ASTM E1926), scaled to a 250 kg corner
+        "golden_car": {"ms": 250.0, "mu": 37.5, "ks": 15825.0, "cs": 1500.0,
+                       "kt": 163250.0, "ct": 0.0},
+        # University of Michigan Control Tutorials, "Suspension: System Modeling" (1/4 bus)
+        "quarter_bus": {"ms": 2500.0, "mu": 320.0, "ks": 80000.0, "cs": 350.0,
+                        "kt": 500000.0, "ct": 15020.0},
+    }
+    sensors = {
+        "body": (("zs''", "m/s²"),),
+        "body_wheel": (("zs''", "m/s²"), ("zu''", "m/s²")),
+        "body_wheel_stroke": (("zs''", "m/s²"), ("zu''", "m/s²"), ("zs-zu", "m")),
+    }
+
+    def wheels(self, known: dict[str, float], speed: float) -> tuple[Wheel, ...]:
+        return (Wheel(0, 0.0),)
+
+    def system(self, X: np.ndarray, known: dict[str, float], sensors: str
+               ) -> linear.LinearSystem:
+        return quarter_system(X, known["kt"], known["ct"], sensors)
+
+
+def quarter_system(X: np.ndarray, kt: float, ct: float, sensors: str) -> linear.LinearSystem:
+    """The quarter cars of the rows ``X = [ms, mu, ks, cs]`` as a batch of linear systems;
+    inputs ``[h, h']``, outputs the ``sensors`` channels."""
+    X = np.atleast_2d(X)
+    n = X.shape[0]
+    ms, mu, ks, cs = X.T
+    M = np.zeros((n, 2, 2))
+    M[:, 0, 0], M[:, 1, 1] = ms, mu
+    K = np.stack([np.stack([ks, -ks], -1), np.stack([-ks, ks + kt], -1)], 1)
+    C = np.stack([np.stack([cs, -cs], -1), np.stack([-cs, cs + ct], -1)], 1)
+    F = np.zeros((n, 2, 2))
+    F[:, 1, 0], F[:, 1, 1] = kt, ct
+    rows = {"zs''": ([1, 0], [0, 0]), "zu''": ([0, 1], [0, 0]), "zs-zu": ([0, 0], [1, -1])}
+    names = [c for c, _ in QuarterCar.sensors[sensors]]
+    Pa = np.array([rows[c][0] for c in names], dtype=float)
+    Pq = np.array([rows[c][1] for c in names], dtype=float)
+    return linear.LinearSystem(M, C, K, F, Pa, Pq, np.zeros((len(names), 2)))
+
+
+@dataclasses.dataclass(frozen=True)
+class RideQuarterConfig(RideConfig):
+    """``parameter_set``: the published car (docs/suite.md); ``sensors``: the measured
+    channels; the other keys: :class:`.problem.RideConfig`."""
+
+    parameter_set: Literal["golden_car", "quarter_bus"] = "golden_car"
+    sensors: Literal["body", "body_wheel", "body_wheel_stroke"] = "body_wheel"
+
+
+class RideQuarterProblem(RideProblem):
+    """The quarter car identified from a road record."""
+
+    Config = RideQuarterConfig
+    name = "ride_quarter"
+    model = QuarterCar()

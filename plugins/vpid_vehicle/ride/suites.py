@@ -1,0 +1,78 @@
+"""The named suites of the vehicle plugin: each member is a problem of its own (a ride or
+lateral problem with member-specific defaults), registered under a stable name and listing the
+suite it belongs to, so ``vpid-bench -m suite=smoke optimizer=...`` sweeps them.
+
+* ``smoke``: every family once, short records and a small protocol (``iterations=10``), for a
+  first look in minutes;
+* ``vpid1``: the suite proper, 14 problems over the four families (quarter, half and full car,
+  single-track lateral), dimensions 4 to 9, three road inputs and two manoeuvres, every sensor
+  set, one problem with model error (the linear model fitted to a Magic Formula record) and
+  one with several basins (the Magic Formula model).
+
+A member's keys can still be changed on the command line; its defaults are what makes it the
+member (docs/suite.md lists them).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import typing
+from typing import Any
+
+from .full import RideFullProblem
+from .half import RideHalfProblem
+from .lateral import LateralProblem
+from .magic import LateralMFProblem
+from .quarter import RideQuarterProblem
+
+
+def member(base: type, name: str, suites: tuple[str, ...], **defaults: Any) -> type:
+    """A subclass of the problem ``base`` named ``name`` whose Config defaults are
+    ``defaults``, listed in ``suites``."""
+    hints = typing.get_type_hints(base.Config)
+    unknown = set(defaults) - set(hints)
+    if unknown:
+        raise TypeError(f"suite member {name}: {base.name} has no key {sorted(unknown)}")
+    config = dataclasses.make_dataclass(
+        f"{name}_Config", [(k, hints[k], dataclasses.field(default=v))
+                           for k, v in defaults.items()],
+        bases=(base.Config,), frozen=True)
+    config.__doc__ = (f"Suite member {name}: {base.name} with "
+                      + ", ".join(f"{k}={v}" for k, v in defaults.items())
+                      + f". Other keys: {base.name}'s.")
+    return type(name, (base,), {"Config": config, "name": name, "suites": suites,
+                                "__doc__": config.__doc__})
+
+
+SMOKE = dict(iterations=10, duration_s=2.0)
+
+MEMBERS: tuple[type, ...] = (
+    member(RideQuarterProblem, "smoke_quarter", ("smoke",), **SMOKE),
+    member(RideHalfProblem, "smoke_half", ("smoke",), **SMOKE),
+    member(RideFullProblem, "smoke_full", ("smoke",), **SMOKE),
+    member(LateralProblem, "smoke_lateral", ("smoke",), **SMOKE),
+    member(LateralMFProblem, "smoke_lateral_mf", ("smoke",), **SMOKE),
+    member(RideQuarterProblem, "vpid1_q_golden_hump", ("vpid1",)),
+    member(RideQuarterProblem, "vpid1_q_golden_iso_c", ("vpid1",), road="iso8608",
+           speed_kmh=80.0, sensors="body"),
+    member(RideQuarterProblem, "vpid1_q_bus_step", ("vpid1",), parameter_set="quarter_bus",
+           road="step", sensors="body_wheel_stroke"),
+    member(RideHalfProblem, "vpid1_h_gokdag_bump", ("vpid1",), road="bump", speed_kmh=20.0),
+    member(RideHalfProblem, "vpid1_h_gokdag_iso_b", ("vpid1",), road="iso8608",
+           road_class="B", speed_kmh=60.0, sensors="body_pitch_rate"),
+    member(RideHalfProblem, "vpid1_h_jazar_hump", ("vpid1",), parameter_set="jazar_half",
+           sensors="body_wheel"),
+    member(RideFullProblem, "vpid1_f_jazar_hump", ("vpid1",)),
+    member(RideFullProblem, "vpid1_f_jazar_iso_c", ("vpid1",), road="iso8608",
+           speed_kmh=60.0, sensors="body_rates"),
+    member(RideFullProblem, "vpid1_f_sym_iso_d", ("vpid1",), parameter_set="jazar_symmetric",
+           road="iso8608", road_class="D", sensors="body_wheel"),
+    member(LateralProblem, "vpid1_l_civic_sine", ("vpid1",)),
+    member(LateralProblem, "vpid1_l_smart_step", ("vpid1",), parameter_set="smart",
+           manoeuvre="step", sensors="yaw"),
+    member(LateralProblem, "vpid1_l_civic_step_beta", ("vpid1",), manoeuvre="step",
+           sensors="yaw_ay_beta"),
+    member(LateralProblem, "vpid1_l_civic_model_error", ("vpid1",), record_model="magic_formula",
+           steer_deg=4.0),
+    member(LateralMFProblem, "vpid1_mf_civic_sine", ("vpid1",)),
+)

@@ -1,0 +1,70 @@
+"""The named suites: ``-m suite=<name>`` becomes a sweep of its problems; bad uses are refused
+in one line; every member builds, knows its truth and fits its own record."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from vpid_vehicle.ride.suites import MEMBERS
+
+from vpid_bench import ConfigError
+from vpid_bench.shell.argv import parse_command_line
+from vpid_bench.shell.suites import expand_suites
+
+
+def test_the_suites_declared_by_the_vehicle_plugin(registry):
+    suites = registry.suites()
+    assert set(suites) >= {"smoke", "vpid1"}
+    assert len(suites["vpid1"]) >= 12
+    families = {"quarter": "_q_", "half": "_h_", "full": "_f_", "lateral": "_l_"}
+    for tag in families.values():
+        assert any(tag in name for name in suites["vpid1"]), tag
+    dims = {registry.problem(n)(registry.problem(n).Config()).bounds.dim
+            for n in suites["smoke"]}
+    assert min(dims) == 4 and max(dims) == 9
+
+
+def test_suite_becomes_a_problem_sweep(registry):
+    cmd = parse_command_line(["-m", "suite=smoke", "optimizer=random,lsq"])
+    out = expand_suites(cmd, registry)
+    problem = [o for o in out.overrides if o.startswith("problem=")]
+    assert problem == ["problem=" + ",".join(registry.suites()["smoke"])]
+    assert not any(o.startswith("suite=") for o in out.hydra_args)
+    assert "optimizer=random,lsq" in out.hydra_args
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["-m", "suite=nosuch"], "suite='nosuch' is not allowed: one of smoke, vpid1"),
+    (["suite=smoke"], "a sweep of its problems: add -m"),
+    (["-m", "suite=smoke", "problem=vehicle"], "either suite= or problem=, not both"),
+])
+def test_bad_suite_uses_are_refused_in_one_line(registry, argv, fragment):
+    with pytest.raises(ConfigError) as err:
+        expand_suites(parse_command_line(argv), registry)
+    assert fragment in str(err.value)
+
+
+def test_the_cli_refuses_an_unknown_suite_before_any_work(in_tmp, capsys):
+    from vpid_bench.shell.main import main
+
+    with pytest.raises(SystemExit) as done:
+        main(["-m", "suite=nosuch"])
+    assert done.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: suite='nosuch' is not allowed")
+
+
+@pytest.mark.parametrize("cls", MEMBERS, ids=lambda c: c.name)
+def test_every_member_builds_and_its_truth_fits_best(cls):
+    """Each member is a problem with its defaults: its truth is inside the box and, but for
+    the model-error member, scores better than the box centre; its name is its registry name.
+    With model error (the linear model fitted to a Magic Formula record) the truth is not the
+    best linear fit: the box centre fits better there, which is what the member shows."""
+    p = cls(cls.Config())
+    assert p.name == cls.name and cls.suites
+    x = p.x_true
+    assert np.all((x > p.bounds.lower) & (x < p.bounds.upper))
+    centre = (p.bounds.lower + p.bounds.upper) / 2
+    f_true, f_centre = p.evaluate(np.stack([x, centre]))
+    model_error = getattr(p.config, "record_model", "linear") != "linear"
+    assert np.isfinite(f_true) and (f_true < f_centre) != model_error
