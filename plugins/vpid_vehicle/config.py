@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from vpid_bench import ConfigError, ProblemConfig
+from vpid_bench import ConfigError, ProblemConfig, estimators
 
 #: The unknowns of Eq. (4), in order, with their units.
 PARAM_NAMES: tuple[str, ...] = ("m", "I", "m1", "m2", "k1", "k2", "c1", "c2", "a1")
@@ -135,7 +135,9 @@ class VehicleConfig(ProblemConfig):
     ``dt`` is the integration step and sample interval in s; ``integrator`` is ``newmark``
     (fast compiled kernel) or ``exact`` (matrix exponential, for validation); ``sampling`` is
     how the step input enters Newmark: ``point`` (y at t_k) or ``average`` (each step gets
-    the exact mean of y over the step; see :mod:`vpid_vehicle.road`).
+    the exact mean of y over the step; see :mod:`vpid_vehicle.road`). ``objective`` is the
+    estimator: ``eq3`` (the paper's), ``ols`` or ``ml`` (:mod:`vpid_bench.estimators`; ``ml``
+    weighs by the stated noise model, ``noise.model`` and ``noise.level``).
     """
 
     vehicle: VehicleParams = field(default_factory=VehicleParams)
@@ -148,6 +150,7 @@ class VehicleConfig(ProblemConfig):
     noise: NoiseConfig = field(default_factory=NoiseConfig)
     reference: ReferenceConfig = field(default_factory=ReferenceConfig)
     bounds: BoundsConfig = field(default_factory=BoundsConfig)
+    objective: str = "eq3"
 
     def __post_init__(self) -> None:
         validate(self)  # at build time, so the pre-flight refuses a bad value before any job
@@ -186,6 +189,7 @@ def validate(config: VehicleConfig) -> None:
     if T < config.dt:
         raise ConfigError("problem.dt", config.dt, f"a step no longer than the window T = {T:g} s")
     _validate_noise_and_reference(config)
+    estimators.check_objective(config.objective, config.noise.level)
     check_size(config, T)
     if config.reference.file is not None:
         check_reference_file(config, T)

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from vpid_bench import Bounds, Problem, relative_errors_percent
+from vpid_bench import Bounds, Problem, estimators, relative_errors_percent
 
 from .config import PARAM_NAMES, PARAM_UNITS, VehicleConfig, validate, window
 from .model import KnownConstants, physical
@@ -114,6 +114,7 @@ class VehicleProblem(Problem):
             inst.reference = self._noise_record(index)
             inst.reference.setflags(write=False)
             inst.__dict__.pop("_f_true", None)
+            inst.__dict__.pop("_weights", None)
             self._instances[index] = inst
         return self._instances[index]
 
@@ -125,16 +126,26 @@ class VehicleProblem(Problem):
         return f"noise.seed={self.config.noise.seed}/{self._index}"
 
     def residual_sigma(self) -> np.ndarray | None:
-        """The equivalent additive noise of each channel (m/s^2), ``(2,)``:
-        ``σ_c = level × rms(clean channel c)``; for ``uniform`` noise the standard deviation
-        of ``level u`` is ``level / sqrt(3)``, so ``σ_c = level × rms_c / sqrt(3)``. For the
-        ``multiplicative`` model this is the rms of the per-sample standard deviations
-        ``level |z_k|`` over the record. ``None`` for a measured record or noise level 0."""
+        """The simulated noise's standard deviation of each residual entry ``(2 N,)``, in
+        the residuals' units: ``level |z_k|`` per sample (multiplicative), ``level × rms(z_c)``
+        (additive), ``level |z_k| / √3`` (uniform), times the objective's weights. ``None``
+        for a measured record or noise level 0."""
         nz = self.config.noise
         if self.reference_clean is None or nz.level <= 0:
             return None
-        rms = np.sqrt(np.mean(self.reference_clean**2, axis=1))
-        return nz.level * rms / (np.sqrt(3.0) if nz.model == "uniform" else 1.0)
+        sigma = estimators.noise_sigma(self.reference_clean, nz.level, nz.model)
+        return (sigma * self._weighting()).reshape(-1)
+
+    def _weighting(self) -> np.ndarray:
+        """What a raw residual is multiplied by, ``(2, N)`` (:func:`estimators.weights`):
+        1 for Eq. 3 (its residuals are in m/s^2), per objective otherwise."""
+        if "_weights" not in self.__dict__:
+            nz, ref = self.config.noise, self.reference
+            sigma = (estimators.plug_in_sigma(ref, nz.level, nz.model)
+                     if self.config.objective == "ml" else None)
+            self._weights = estimators.weights(self.config.objective, ref, np.ones((2, 1)),
+                                               sigma)
+        return self._weights
 
     def content_digest(self) -> str | None:
         """The SHA-256 of ``reference.file``'s bytes as read, or ``None`` for a synthetic
@@ -166,8 +177,11 @@ class VehicleProblem(Problem):
         return out
 
     def evaluate(self, X: np.ndarray) -> np.ndarray:
-        """Eq. (3) for every row of ``X`` (shape ``(n, 9)``), ``inf`` where a simulation fails."""
+        """The objective (Eq. 3 by default, ``objective``) for every row of ``X`` (shape
+        ``(n, 9)``), ``inf`` where a simulation fails."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
+        if self.config.objective != "eq3":
+            return self.evaluate_with_residuals(X)[0]
         try:
             return self.model.objective(X, self.reference)
         except (ValueError, FloatingPointError, ZeroDivisionError, np.linalg.LinAlgError):
@@ -181,7 +195,8 @@ class VehicleProblem(Problem):
         instance = np.asarray(instance, dtype=np.int64).reshape(-1)
         numbers, index = np.unique(instance, return_inverse=True)
         insts = [self.instance(int(i)) for i in numbers]
-        if not all(getattr(inst, "model", None) is self.model for inst in insts):
+        shared = all(getattr(inst, "model", None) is self.model for inst in insts)
+        if self.config.objective != "eq3" or not shared:
             return super().evaluate_instances(X, instance)
         try:
             if len(insts) == 1:
@@ -196,11 +211,10 @@ class VehicleProblem(Problem):
             return super().evaluate_instances(X, instance)
 
     def residuals(self, X: np.ndarray) -> np.ndarray:
-        """Measured minus computed, z1'' samples then z2'' samples (m/s^2), ``(n, 2 N)``;
-        rows of non-physical candidates are inf. Note Eq. (3) is a sum of two norms, not
-        the norm of this vector, so a least-squares fit minimises a slightly different
-        objective."""
-        R = self.reference[None] - self.responses(X)
+        """Measured minus computed, z1'' samples then z2'' samples, ``(n, 2 N)``, times the
+        objective's weights (Eq. 3: none, m/s^2; ``ols``: over the record's norm; ``ml``: over
+        each sample's plug-in sigma); rows of non-physical candidates are inf."""
+        R = (self.reference[None] - self.responses(X)) * self._weighting()[None]
         R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
         return R.reshape(R.shape[0], -1)
 
@@ -212,9 +226,9 @@ class VehicleProblem(Problem):
         return {"z1''": "m/s²", "z2''": "m/s²"}
 
     def residual_groups(self) -> np.ndarray:
-        """0 for the z1'' entries of a residual vector, 1 for the z2'' entries, ``(2 N,)``:
-        Eq. (3) takes one norm per group."""
-        return np.repeat(np.arange(2), self.t.size)
+        """Eq. 3: 0 for the z1'' entries of a residual vector, 1 for the z2'' entries,
+        ``(2 N,)`` (one norm per group); one group (zeros) for the sums of squares."""
+        return estimators.groups(self.config.objective, 2, self.t.size)
 
     def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Eq. (3) and the residuals of the rows of ``X`` from one simulation: ``f`` (n,) is
@@ -222,6 +236,8 @@ class VehicleProblem(Problem):
         where a candidate is non-physical or its simulation fails."""
         R = self.residuals(X)
         N = self.t.size
+        if self.config.objective != "eq3":
+            return estimators.value(self.config.objective, R.reshape(R.shape[0], 2, N)), R
         den = float(np.linalg.norm(self.reference, axis=1).sum())
         with np.errstate(invalid="ignore", over="ignore"):
             f = (np.linalg.norm(R[:, :N], axis=1) + np.linalg.norm(R[:, N:], axis=1)) / den

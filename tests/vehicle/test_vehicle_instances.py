@@ -82,26 +82,31 @@ def test_without_noise_every_instance_is_identical():
 
 @pytest.mark.parametrize("model", ["multiplicative", "additive", "uniform"])
 def test_residual_sigma_is_the_standard_deviation_of_the_added_noise(problem, model):
-    """σ_c (the equivalent additive noise of channel c) against the noise actually drawn
-    over 100 instances: the rms of noisy - clean is σ_c within 4 standard errors. The error
-    of a mean of squares of ``a_k n_k`` is ``sqrt(Σ var(a_k² n_k²)) / Σ a_k²`` over the
-    samples, with ``var(n²) = 2`` (normal) or ``4/45`` (uniform on [-1, 1], E u² = 1/3), so
-    halved for the rms; large when the signal (multiplicative noise) is spiky."""
+    """σ_k, per sample, is the standard deviation of the noise actually drawn: over 100
+    instances the mean of (noise_k / σ_k)² is 1 within 4 standard errors in each channel
+    (``var((n/σ)²) = 2`` for normal noise, ``9 × 4/45`` for ``√3 u`` with u uniform on
+    [-1, 1]); where σ_k = 0 (multiplicative noise on a zero sample) no noise was drawn; and
+    σ_k is the stated formula (level |z_k|, level rms(z_c), level |z_k| / √3)."""
     q = make(**{"noise.model": model, "noise.level": 0.1})
     sigma = q.residual_sigma()
-    assert sigma.shape == (2,)
+    clean = q.reference_clean
+    assert sigma.shape == (clean.size,)
+    sigma = sigma.reshape(clean.shape)
     n = 100
-    noise = np.stack([q.instance(i).reference - q.reference_clean for i in range(n)])
-    realised = np.sqrt(np.mean(noise**2, axis=(0, 2)))
-    a = (q.reference_clean if model != "additive"
-         else np.ones_like(q.reference_clean))  # the per-sample noise scale, up to a factor
-    var_n2, e_n2 = (4 / 45, 1 / 3) if model == "uniform" else (2.0, 1.0)
-    se = 0.5 * np.sqrt(var_n2 * np.sum(a**4, axis=1) / n) / (e_n2 * np.sum(a**2, axis=1))
-    assert np.all(np.abs(realised / sigma - 1) < 4 * se), (realised / sigma - 1, se)
-    assert np.all(se < 0.02)  # the check has teeth: a wrong factor (e.g. sqrt 3) fails it
-    rms = np.sqrt(np.mean(q.reference_clean**2, axis=1))
-    factor = 1 / np.sqrt(3) if model == "uniform" else 1.0
-    np.testing.assert_allclose(sigma, 0.1 * factor * rms, rtol=1e-12)
+    noise = np.stack([q.instance(i).reference - clean for i in range(n)])
+    var = 9 * 4 / 45 if model == "uniform" else 2.0
+    for c in range(2):
+        noisy = sigma[c] > 0
+        z2 = (noise[:, c, noisy] / sigma[c, noisy]) ** 2
+        se = np.sqrt(var / z2.size)
+        assert abs(z2.mean() - 1) < 4 * se, (z2.mean(), se)
+        assert se < 0.01  # the check has teeth: a wrong factor (e.g. sqrt 3) fails it
+        assert np.all(noise[:, c, ~noisy] == 0)
+    rms = np.sqrt(np.mean(clean**2, axis=1, keepdims=True))
+    expected = {"multiplicative": 0.1 * np.abs(clean),
+                "additive": 0.1 * rms * np.ones_like(clean),
+                "uniform": 0.1 * np.abs(clean) / np.sqrt(3)}[model]
+    np.testing.assert_allclose(sigma, expected, rtol=1e-12)
 
 
 def test_a_measured_record_has_no_sigma_and_one_instance(tmp_path, problem):

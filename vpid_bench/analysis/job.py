@@ -18,9 +18,13 @@ from ..spec import Job
 def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
                 records: list[dict[str, Any]]) -> dict[int, float]:
     """For a problem with residuals and a known truth: the Cramér–Rao bounds of its design
-    (``job_dir/identifiability.json``) and each instance's optimum (``optima_dir/<key>.json``,
+    (``job_dir/identifiability.json``), the floors of each estimator where the problem offers
+    the choice (``job_dir/estimators.json``, :mod:`.estimator_floors`) and each instance's
+    optimum (``optima_dir/<key>.json``,
     shared by the jobs of a sweep; see :mod:`.optimum`). Returns each run's relative gap
     ``(f_best - f*) / f*`` to its instance's optimum (the absolute gap where ``f* <= 0``)."""
+    from .estimator_floors import FILE as FLOORS_FILE
+    from .estimator_floors import estimator_floors
     from .identifiability import cramer_rao
     from .optimum import update_instance_optimum
 
@@ -31,6 +35,11 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
         crb = cramer_rao(problem)
         if crb is not None:
             write_json_atomic(target, crb)
+    floors_file = job_dir / FLOORS_FILE
+    if not floors_file.is_file():
+        floors = estimator_floors(problem, job.spec.runs)
+        if floors is not None:
+            write_json_atomic(floors_file, floors)
     bests = _run_bests(records)
     by_instance: dict[str | None, tuple[Problem, list, list[int]]] = {}
     for i in range(job.spec.runs):

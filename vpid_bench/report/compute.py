@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from . import anytime, rankings, tables
+from . import anytime, estimator_floors, rankings, tables
 from .identifiability import crb_norm_by_context
 from .load import LoadedRecords, NoRecordsError, load_records, reason, run_rows
 from .optima import add_optimum_columns, load_optima
@@ -50,6 +50,8 @@ class ReportData:
     centred: dict[str, bool]  # per context: is the search box centred on the truth?
     baseline_verdicts: list[str]
     tests: Tests | None = None
+    #: per context: the floors of each estimator its job wrote (``estimators.json``)
+    estimator_floors: dict[str, dict[str, Any]] = dataclasses.field(default_factory=dict)
 
     @property
     def contexts(self) -> list[str]:
@@ -70,6 +72,20 @@ class ReportData:
         """The unit of the context's headline metric (``""`` when the problem gave none)."""
         units = {r.get("metric_unit", "") for r in self.rows if r["context"] == context}
         return units.pop() if len(units) == 1 else ""
+
+    def estimator(self, context: str) -> str | None:
+        """The objective the context's runs minimised (its ``problem.objective`` key, e.g.
+        ``eq3``, ``ml``) when they share one, else ``None`` (a problem without the key, or a
+        mix)."""
+        ids = {r["run_id"] for r in self.rows if r["context"] == context}
+        found = set()
+        for rec in self.loaded.records:
+            if rec["run_id"] in ids:
+                config = (rec.get("problem") or {}).get("config")
+                found.add(config.get("objective") if isinstance(config, dict) else None)
+        value = found.pop() if len(found) == 1 else None
+        return value if isinstance(value, str) and value.isidentifier() and len(value) <= 32 \
+            else None
 
     def groups(self, which: str, context: str) -> dict[str, str] | None:
         """Rank-group letters of a context's ranking (``"metric"`` or ``"search"``), or
@@ -120,7 +136,8 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
         s[f"vs_{baseline}"] = v
     return ReportData(paths, short, alpha, baseline, loaded, rows, summary, search, hits,
                       optima_errors, crb_norm_by_context(loaded.records, rows),
-                      rankings.box_centred(loaded.records, rows), verdicts, tests)
+                      rankings.box_centred(loaded.records, rows), verdicts, tests,
+                      estimator_floors.by_context(loaded.records, rows))
 
 
 def _tests(rows: list[dict[str, Any]], search: list[dict[str, Any]], alpha: float) -> Tests:

@@ -22,6 +22,8 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from ..estimators import DESCRIPTION
+from . import estimator_floors
 from .body import verdict_short
 from .optima import REACHED
 from .rankings import TIE_RTOL
@@ -47,6 +49,8 @@ class ContextResult:
     bound: float
     verdict: str
     tested: bool
+    estimator: str | None = None  # the objective the runs minimised (problem.objective)
+    floors: dict[str, Any] | None = None  # the floors of each estimator (estimators.json)
 
     def value(self, x: float) -> str:
         """A metric value with its unit."""
@@ -117,7 +121,8 @@ def context_result(data: Any, context: str) -> ContextResult:
     floor = floors[0] if floors else math.nan
     bound = data.bounds.get(context, math.nan)
     result = ContextResult(context, metric, unit, headers, body, floor, bound, "",
-                           mgroups is not None)
+                           mgroups is not None, data.estimator(context),
+                           data.estimator_floors.get(context))
     result.verdict = _verdict(result, mrows, [srows[a] for a in sorted(
         srows, key=lambda a: srows[a]["rank"])], mgroups, sgroups,
         data.centred.get(context, False))
@@ -160,14 +165,37 @@ def _verdict(res: ContextResult, mrows: list[Mapping[str, Any]],
     return text + "."
 
 
+def _estimator(res: ContextResult) -> str:
+    """The estimator a floor belongs to, in words: the objective the runs minimised."""
+    if res.estimator is None:
+        return "the objective that was optimised"
+    words = DESCRIPTION.get(res.estimator)
+    key = f"objective={escape(res.estimator)}"
+    return f"{words} ({key})" if words else f"the objective {key}"
+
+
+def _better(res: ContextResult) -> str:
+    """``" (the likelihood's optimum: 0.95 % on the first 5 instances)"``, when another
+    estimator's floor is known and lower."""
+    if not res.floors:
+        return ""
+    best = estimator_floors.best_other(res.floors)
+    if best is None or not best[1] < res.floor:
+        return ""
+    objective, value = best
+    return (f" ({DESCRIPTION[objective]}, objective={objective}, has its optimum a median "
+            f"{res.value(value)} from the truth on the first {res.floors['instances']} "
+            "instance(s))")
+
+
 def _limits(res: ContextResult, m: float, srows: Sequence[Mapping[str, Any]],
             use: Sequence[str], centred: bool) -> str:
     """What limits the leaders: search, the estimator (objective) or the data."""
     floor, bound = res.floor, res.bound
     parts = []
     if math.isfinite(floor):
-        parts.append(f"; the records allow {res.value(floor)} under the objective that was "
-                     "optimised (floor: its own optimum's error, median over the instances)")
+        parts.append(f"; the records allow {res.value(floor)} under {_estimator(res)} "
+                     "(floor: its own optimum's error, median over the instances)")
     if math.isfinite(bound):
         parts.append(f", an efficient estimator {res.value(bound)} (Cramér–Rao bound norm)")
     if not math.isfinite(floor):
@@ -182,7 +210,7 @@ def _limits(res: ContextResult, m: float, srows: Sequence[Mapping[str, Any]],
         parts.append(". More search will not help here")
         if math.isfinite(bound) and floor > ESTIMATOR_GAP * bound:
             parts.append(f": the objective, not the data, sets the floor ({fmt(floor / bound, 2)}"
-                         "× the bound), so a better estimator would")
+                         "× the bound), so a better estimator would" + _better(res))
         else:
             parts.append(": better records would (longer, other inputs or sensors)")
     else:

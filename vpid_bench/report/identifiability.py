@@ -30,8 +30,11 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from ..analysis.estimator_floors import FILE as FLOORS_FILE
 from ..analysis.optimum import find_optimum, load_optima, record_settings
 from ..records.io import stable_hash
+from .estimator_floors import read_estimator_floors
+from .estimator_floors import sentence as estimator_sentence
 from .safe import escape
 from .sections import Contribution, ReportContext, Section
 
@@ -42,15 +45,16 @@ UNDETERMINED_PERCENT = 10.0
 #: Larger files are not read (an identifiability file of 1000 parameters is ~100 kB).
 MAX_BYTES = 1_000_000
 FILE = "identifiability.json"
-#: The noise convention, in words (each problem gives σ per residual group through
-#: ``Problem.residual_sigma``; this is the equivalent additive noise convention).
+#: The noise convention, in words (each problem gives σ per residual group or per sample
+#: through ``Problem.residual_sigma``: the noise that was simulated).
 CONVENTION = (
     "Bounds: the Fisher information at the true parameters from a central-difference "
-    "Jacobian of the clean responses, under independent Gaussian noise of the equivalent "
-    "additive size σ_c = noise level × rms of the clean channel c (the problem's own "
-    "residual_sigma; for multiplicative noise this is the rms of its "
-    "per-sample standard deviations, for uniform noise it is divided by √3). `CRB %` is "
-    "the Cramér–Rao lower bound of a parameter's relative standard "
+    "Jacobian of the clean responses, under independent Gaussian noise of the size that was "
+    "simulated (the problem's own residual_sigma: per sample σ_k = noise level × |z_k| for "
+    "multiplicative noise, σ_c = noise level × rms of the clean channel c for additive noise, "
+    "divided by √3 for uniform noise). The bound belongs to the records, whatever objective "
+    "was optimised; a floor belongs to the objective (estimator) it was computed with. "
+    "`CRB %` is the Cramér–Rao lower bound of a parameter's relative standard "
     "deviation, 100·sqrt((F⁻¹)_jj)/|θ_j|; `CRB norm` the norm of those bounds (the rms "
     "norm of relative errors an efficient unbiased estimator would reach). Singular "
     "values: of the Jacobian whitened by σ and scaled by the true values.")
@@ -259,6 +263,8 @@ def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
             continue
         metric = d["rows"][0].get("metric_name")
         floors, errors = _floors(d, names, metric, optima)
+        per_estimator = next((data for job in d["jobs"] for data in
+                              [read_estimator_floors(job / FLOORS_FILE)[0]] if data), None)
         out.append({
             "label": _design_label(d["contexts"]), "contexts": sorted(d["contexts"]),
             "names": names, "true": params.get("true"), "crb": crb, "metric": metric,
@@ -266,6 +272,7 @@ def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
             "floor_errors": ([statistics.median(e[j] for e in errors.values())
                               for j in range(len(names))] if errors else None),
             "instances": len(floors) if floors else len(errors),
+            "estimators": per_estimator, "unit": str(d["rows"][0].get("metric_unit") or ""),
         })
     out.sort(key=lambda x: x["label"])
     labels = [x["label"] for x in out]
@@ -332,6 +339,9 @@ def _design_text(ctx: ReportContext, design: Mapping[str, Any]) -> str:
                if floor is not None else "; no instance optimum was found for a measured floor")
             + f". Condition number {ctx.fmt(cond, 3) if cond is not None else 'infinite'}; "
             f"singular values {', '.join(ctx.fmt(v, 3) for v in s)}. ")
+    if design.get("estimators"):
+        text += "Floors per estimator: " + estimator_sentence(
+            design["estimators"], design["unit"], ctx.fmt) + ". "
     if undetermined:
         text += (f"This design cannot determine {', '.join(undetermined)}: the bound exceeds "
                  f"{UNDETERMINED_PERCENT:g} %.")

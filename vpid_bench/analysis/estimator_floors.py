@@ -1,0 +1,64 @@
+"""Floors per estimator: where each objective's optimum of the same records lies.
+
+A problem that offers the choice of estimator declares a Config field ``objective`` taking the
+values of :data:`vpid_bench.estimators.OBJECTIVES`. For such a problem the job polishes, on its
+first :data:`INSTANCES` instances, the optimum of every objective from the truth
+(:func:`.optimum.polish`) and records the headline metric of each (e.g. a parameter error): "what Eq. 3
+allows", "what least squares allows", "what the likelihood allows", side by side with the
+Cramér–Rao bound of the same records. An objective the problem refuses (``ml`` without noise)
+is left out.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import statistics
+from typing import Any
+
+from ..errors import VpidBenchError
+from ..estimators import OBJECTIVES
+from ..problem import Problem
+
+#: The instances each objective's optimum is polished on (0 .. INSTANCES - 1, at most the
+#: job's runs): a few polishes per objective keep the job's analysis short.
+INSTANCES = 5
+FILE = "estimators.json"
+
+
+def offers_objectives(problem: Problem) -> bool:
+    """Whether the problem's config has an ``objective`` field with a built-in value."""
+    config = getattr(problem, "config", None)
+    return (dataclasses.is_dataclass(config) and not isinstance(config, type)
+            and getattr(config, "objective", None) in OBJECTIVES)
+
+
+def estimator_floors(problem: Problem, runs: int) -> dict[str, Any] | None:
+    """``{"metric", "instances", "chosen", "floors": {objective: {"median", "values"}}}`` for
+    a problem that offers the choice and knows its truth; ``None`` otherwise."""
+    from .optimum import polish
+
+    if not offers_objectives(problem) or problem.x_true is None:
+        return None
+    n = max(1, min(INSTANCES, runs))
+    metric: str | None = None
+    floors: dict[str, Any] = {}
+    for objective in OBJECTIVES:
+        try:
+            config = dataclasses.replace(problem.config, objective=objective)
+            base = problem if objective == problem.config.objective else type(problem)(config)
+        except (VpidBenchError, TypeError, ValueError):
+            continue  # the problem refuses this objective here (e.g. ml without noise)
+        values = []
+        for i in range(n):
+            inst = base.instance(i)
+            x, _ = polish(inst, inst.x_true)
+            metrics = inst.metrics(x)
+            metric = metric or next(iter(metrics), None)
+            if metric is None:
+                return None
+            values.append(float(metrics[metric]))
+        floors[objective] = {"median": statistics.median(values), "values": values}
+    if not floors or metric is None:
+        return None
+    return {"metric": metric, "instances": n, "chosen": problem.config.objective,
+            "floors": floors}

@@ -1,0 +1,95 @@
+"""The floors per estimator a job wrote (``estimators.json``, see
+:mod:`vpid_bench.analysis.estimator_floors`), read as untrusted input, and said in words."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from ..analysis.estimator_floors import FILE
+from ..estimators import DESCRIPTION, OBJECTIVES
+from .safe import escape
+
+#: Larger files are not read (three objectives of 1000 instances are ~60 kB).
+MAX_BYTES = 200_000
+
+
+def _number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) \
+        and v >= 0
+
+
+def read_estimator_floors(path: Path) -> tuple[dict[str, Any] | None, str]:
+    """A job's ``estimators.json``: ``(data, "")`` or ``(None, why)`` for a file that is
+    missing, too large, not JSON or has a field of the wrong type or value."""
+    try:
+        if path.is_symlink() or not path.is_file():
+            return None, "not a regular file"
+        if path.stat().st_size > MAX_BYTES:
+            return None, f"more than {MAX_BYTES} bytes"
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        return None, f"unreadable ({type(exc).__name__})"
+    if not isinstance(data, dict):
+        return None, "not a JSON object"
+    n = data.get("instances")
+    floors = data.get("floors")
+    checks = (
+        ("metric", isinstance(data.get("metric"), str) and 0 < len(data["metric"]) <= 64,
+         "a name"),
+        ("instances", isinstance(n, int) and not isinstance(n, bool) and 1 <= n <= 1000,
+         "an integer in [1, 1000]"),
+        ("chosen", data.get("chosen") in OBJECTIVES, "one of " + ", ".join(OBJECTIVES)),
+        ("floors", isinstance(floors, dict) and floors and set(floors) <= set(OBJECTIVES)
+         and all(isinstance(v, dict) and _number(v.get("median"))
+                 and isinstance(v.get("values"), list) and len(v["values"]) == n
+                 and all(_number(x) for x in v["values"]) for v in floors.values()),
+         "per objective a median and one value per instance, finite and >= 0"),
+    )
+    for key, ok, expected in checks:
+        if not ok:
+            return None, f"field {key}: expected {expected}"
+    return data, ""
+
+
+def by_context(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
+               ) -> dict[str, dict[str, Any]]:
+    """Per context, the first readable ``estimators.json`` of its jobs."""
+    out: dict[str, dict[str, Any]] = {}
+    by_id = {r["run_id"]: r for r in records}
+    tried: set[Path] = set()
+    for row in rows:
+        context, rec = row["context"], by_id[row["run_id"]]
+        if context in out:
+            continue
+        path = Path(str(rec.get("_job_dir", "."))) / FILE
+        if path in tried:
+            continue
+        tried.add(path)
+        data, _ = read_estimator_floors(path)
+        if data is not None:
+            out[context] = data
+    return out
+
+
+def sentence(data: Mapping[str, Any], unit: str, fmt: Any) -> str:
+    """``"on the first 5 instances, the optimum of Eq. 3 lies a median 27.1 % from the
+    truth, of least squares 31.4 %, of the likelihood 0.95 %"``."""
+    parts = []
+    for objective in OBJECTIVES:
+        floor = data["floors"].get(objective)
+        if floor is not None:
+            parts.append(f"{DESCRIPTION[objective]} (objective={objective}) "
+                         f"{fmt(floor['median'], 3)} {escape(unit)}".rstrip())
+    return (f"median {escape(data['metric'])} of each estimator's optimum on the first "
+            f"{data['instances']} instance(s): " + "; ".join(parts))
+
+
+def best_other(data: Mapping[str, Any]) -> tuple[str, float] | None:
+    """The objective other than the chosen one whose floor is lowest, with that floor."""
+    others = [(o, float(v["median"])) for o, v in data["floors"].items()
+              if o != data["chosen"]]
+    return min(others, key=lambda item: item[1]) if others else None
