@@ -3,8 +3,8 @@
 A problem that offers the choice of estimator declares a Config field ``objective`` taking the
 values of :data:`vpid_bench.estimators.OBJECTIVES`. For such a problem the job polishes, on its
 first :data:`INSTANCES` instances, the optimum of every objective from the truth
-(:func:`.optimum.polish`) and records the headline metric of each (e.g. a parameter error): "what Eq. 3
-allows", "what least squares allows", "what the likelihood allows", side by side with the
+(:func:`.optimum.polish`) and records the headline metric of each (e.g. a parameter error):
+"what Eq. 3 allows", "what least squares allows", "what the likelihood allows", beside the
 Cramér–Rao bound of the same records. An objective the problem refuses (``ml`` without noise)
 is left out.
 """

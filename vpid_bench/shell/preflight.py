@@ -406,7 +406,7 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
         folder = output_dir(full, cmd.multirun)
     hydra_args = [a for a in cmd.hydra_args if not a.startswith(key + "=")]
     hydra_args.append(f"{key}={_quote(str(folder))}")
-    job_dirs = (planned_job_dirs(cmd.overrides, full, folder)
+    job_dirs = (planned_job_dirs(points, full, folder)
                 if cmd.multirun and not custom_sweeper else [])
     return Plan(hydra_args, folder, cmd.multirun, jobs, points, job_dirs)
 
@@ -416,13 +416,14 @@ def _is_hydra_key(o: Any) -> bool:
     return key == "hydra" or key.startswith(("hydra.", "hydra/"))
 
 
-def planned_job_dirs(overrides: Sequence[str], full_cfg: Any, sweep_dir: Path) -> list[Path]:
-    """The job folders of a basic-sweeper sweep, named exactly as Hydra will name them
-    (its own sweep expansion and ``override_dirname``, then our
-    :func:`~vpid_bench.shell.callbacks.job_dir_name`). Empty when ``hydra.sweep.subdir`` is
+def planned_job_dirs(points: Sequence[Sequence[str]], full_cfg: Any, sweep_dir: Path
+                     ) -> list[Path]:
+    """The job folders of a basic-sweeper sweep, named exactly as Hydra will name them: each
+    point of :func:`expand_points` (a job's override strings, sweeps such as ``glob()``
+    already expanded) through Hydra's ``override_dirname`` and our
+    :func:`~vpid_bench.shell.callbacks.job_dir_name`. Empty when ``hydra.sweep.subdir`` is
     not the default, so the names cannot be known in advance."""
     from hydra._internal.config_loader_impl import get_overrides_dirname
-    from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
     from omegaconf import OmegaConf
 
     from .callbacks import JOB_DIR_RESOLVER, job_dir_name
@@ -432,14 +433,12 @@ def planned_job_dirs(overrides: Sequence[str], full_cfg: Any, sweep_dir: Path) -
         return []
     naming = full_cfg.hydra.job.config.override_dirname
     parser = _parser()
-    task = [o for o in parser.parse_overrides(list(overrides)) if not _is_hydra_key(o)]
     dirs = []
-    for batch in BasicSweeper.split_arguments(task, None):
-        for job in batch:
-            name = get_overrides_dirname(parser.parse_overrides(job),
-                                         list(naming.exclude_keys), str(naming.item_sep),
-                                         str(naming.kv_sep))
-            dirs.append(Path(sweep_dir) / job_dir_name(name))
+    for point in points:
+        task = [o for o in parser.parse_overrides(list(point)) if not _is_hydra_key(o)]
+        name = get_overrides_dirname(task, list(naming.exclude_keys), str(naming.item_sep),
+                                     str(naming.kv_sep))
+        dirs.append(Path(sweep_dir) / job_dir_name(name))
     return dirs
 
 
