@@ -1,0 +1,173 @@
+"""Profile-likelihood intervals: what one record determines, without the linearisation of the
+Cramér–Rao bound.
+
+The likelihood is that of the simulated noise (Gaussian, standard deviation ``σ`` per residual
+entry from :meth:`Problem.residual_sigma`, whatever objective the problem minimises): ``NLL(θ)
+= ½ Σ_k (r_k(θ) / σ_k)²``, with each ``σ_k`` floored at ``SIGMA_FLOOR`` times its group's rms
+(as the ``ml`` objective's weights: under multiplicative noise a sample at a round-off-sized
+value is otherwise weighted by ``1e14`` and the fit cannot move). For parameter ``j`` the
+profile ``PL_j(t)`` is the least NLL over the other parameters with ``θ_j = t`` (bounded least
+squares inside the box, warm started along the profile); the 95 % interval is where ``2
+(PL_j(t) − NLL(θ̂)) ≤ χ²(0.95, 1) = 3.84`` (``θ̂`` the maximum-likelihood estimate). A parameter is
+
+* **identifiable** when both ends of the interval are found inside the box;
+* **practically non-identifiable** when the profile stays under the threshold up to a box
+  edge (the interval is open there: the record does not bound it);
+* **structurally non-identifiable** when the record is blind to a combination of the
+  parameters (:func:`structural_symmetry`: the smallest singular value of the whitened
+  Jacobian in log-parameters at most ``1e-6`` of the largest) in which this parameter takes
+  part, and its profile is flat.
+
+For a model linear in ``θ`` the interval is ``θ̂_j ± 1.96 sqrt((F⁻¹)_jj)``, the Cramér–Rao
+interval (tested).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..estimators import SIGMA_FLOOR
+from ..problem import Problem
+
+#: χ²(0.95, 1): the profile threshold of a 95 % interval.
+CHI2_95 = 3.841458820694124
+#: A smallest/largest singular value ratio at or below this is a structural symmetry.
+STRUCTURAL_RATIO = 1e-6
+
+
+def structural_symmetry(problem: Problem, x: np.ndarray | None = None
+                        ) -> tuple[float, np.ndarray | None]:
+    """The smallest/largest singular value of the whitened Jacobian in log-parameters at
+    ``x`` (the truth by default), and the direction (unit vector in relative changes) of a
+    structural symmetry when the ratio is at most :data:`STRUCTURAL_RATIO`, else ``None``."""
+    J, _ = _whitened_jacobian(problem, problem.x_true if x is None else x)
+    _, s, vt = np.linalg.svd(J * np.asarray(x if x is not None else problem.x_true)[None],
+                             full_matrices=False)
+    ratio = float(s[-1] / s[0]) if s[0] > 0 else 0.0
+    return ratio, (vt[-1] if ratio <= STRUCTURAL_RATIO else None)
+
+
+def _whitened_jacobian(problem: Problem, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    from .identifiability import entry_sigma, jacobian
+
+    sigma = entry_sigma(np.asarray(problem.residual_sigma(), dtype=float),
+                        np.asarray(problem.residual_groups(), dtype=int))
+    if sigma is None:
+        raise ValueError("the problem states no noise sigma (residual_sigma)")
+    kept = sigma > 0
+    return jacobian(problem, np.asarray(x, float))[kept] / sigma[kept][:, None], kept
+
+
+class _Likelihood:
+    """``NLL`` and the whitened residuals of a problem, in coordinates scaled by the truth."""
+
+    def __init__(self, problem: Problem) -> None:
+        from .identifiability import entry_sigma
+
+        sigma = problem.residual_sigma()
+        if sigma is None or problem.x_true is None:
+            raise ValueError("profiles need the truth and the noise sigma (residual_sigma)")
+        per = entry_sigma(np.asarray(sigma, float),
+                          np.asarray(problem.residual_groups(), dtype=int))
+        if per is None:
+            raise ValueError("the problem's residual_sigma has neither a per-group nor a "
+                             "per-entry shape")
+        groups = np.asarray(problem.residual_groups(), dtype=int)
+        floor = np.array([np.sqrt(np.mean(per[groups == g] ** 2))
+                          for g in range(int(groups.max()) + 1)])[groups] * SIGMA_FLOOR
+        per = np.where(per > 0, np.maximum(per, floor), 0.0)
+        self.problem, self.kept, self.sigma = problem, per > 0, per[per > 0]
+        self.scale = np.where(np.abs(problem.x_true) > 0, np.abs(problem.x_true),
+                              problem.bounds.width)
+        b = problem.bounds
+        self.lo, self.hi = b.lower / self.scale, b.upper / self.scale
+
+    def residuals(self, z: np.ndarray) -> np.ndarray:
+        r = np.asarray(self.problem.residuals((z * self.scale)[None]), float)[0]
+        w = r[self.kept] / self.sigma
+        return np.where(np.isfinite(w), w, 1e6)
+
+    def nll(self, z: np.ndarray) -> float:
+        return 0.5 * float(np.sum(self.residuals(z) ** 2))
+
+    def fit(self, z0: np.ndarray, fixed: int | None = None, value: float = 0.0
+            ) -> tuple[np.ndarray, float]:
+        """The least NLL from ``z0``, with coordinate ``fixed`` held at ``value``."""
+        from scipy.optimize import least_squares
+
+        free = np.ones(z0.size, bool)
+        if fixed is not None:
+            free[fixed] = False
+
+        def full(zf: np.ndarray) -> np.ndarray:
+            z = z0.copy()
+            z[free] = zf
+            if fixed is not None:
+                z[fixed] = value
+            return z
+
+        lo, hi = self.lo[free], self.hi[free]
+        start = np.clip(z0[free], lo + 1e-12 * (hi - lo), hi - 1e-12 * (hi - lo))
+        sol = least_squares(lambda zf: self.residuals(full(zf)), start, bounds=(lo, hi),
+                            method="trf", xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=400)
+        z = full(sol.x)
+        return z, self.nll(z)
+
+
+def profile_intervals(problem: Problem, max_steps: int = 12) -> dict[str, Any]:
+    """95 % profile-likelihood intervals of every parameter of ``problem`` (one record: an
+    instance). Returns ``{"names", "estimate", "lower", "upper", "classification",
+    "symmetry_ratio"}`` with physical values; an open end is ``None``."""
+    from scipy.optimize import brentq
+
+    lik = _Likelihood(problem)
+    z_hat, nll_hat = lik.fit(np.asarray(problem.x_true, float) / lik.scale)
+    ratio, direction = structural_symmetry(problem)
+    from .identifiability import cramer_rao
+
+    crb = cramer_rao(problem)
+    rel_sd = (np.asarray(crb["crb_percent"]) / 100.0 if crb is not None
+              else np.full(z_hat.size, 0.01))
+    names = list(problem.bounds.names)
+    out: dict[str, Any] = {"names": names, "estimate": (z_hat * lik.scale).tolist(),
+                           "lower": [], "upper": [], "classification": [],
+                           "symmetry_ratio": ratio}
+    for j in range(z_hat.size):
+        ends = []
+        for sign, edge in ((-1, lik.lo[j]), (1, lik.hi[j])):
+            ends.append(_end(lik, z_hat, nll_hat, j, sign, edge, max(rel_sd[j], 1e-6),
+                             max_steps, brentq))
+        lower, upper = ends
+        out["lower"].append(None if lower is None else float(lower * lik.scale[j]))
+        out["upper"].append(None if upper is None else float(upper * lik.scale[j]))
+        if lower is not None and upper is not None:
+            kind = "identifiable"
+        elif direction is not None and abs(direction[j]) > 0.1:
+            kind = "structurally non-identifiable"
+        else:
+            kind = "practically non-identifiable"
+        out["classification"].append(kind)
+    return out
+
+
+def _end(lik: _Likelihood, z_hat: np.ndarray, nll_hat: float, j: int, sign: int,
+         edge: float, step: float, max_steps: int, brentq: Any) -> float | None:
+    """Where the profile of coordinate ``j`` crosses the threshold on side ``sign``, or
+    ``None`` when it reaches ``edge`` (or gives up after ``max_steps`` doublings) below it."""
+    z_prev, t_prev = z_hat.copy(), z_hat[j]
+    for k in range(max_steps):
+        t = z_hat[j] + sign * step * 2.0**k
+        at_edge = (t - edge) * sign >= 0
+        t = edge if at_edge else t
+        z, nll = lik.fit(z_prev, j, t)
+        if 2.0 * (nll - nll_hat) >= CHI2_95:
+            def excess(s: float, z_start: np.ndarray = z_prev) -> float:
+                return 2.0 * (lik.fit(z_start, j, s)[1] - nll_hat) - CHI2_95
+
+            return float(brentq(excess, t_prev, t, xtol=1e-6 * abs(z_hat[j]) + 1e-12))
+        if at_edge:
+            return None
+        z_prev, t_prev = z, t
+    return None
