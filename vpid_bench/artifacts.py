@@ -35,6 +35,8 @@ from typing import Any
 
 import numpy as np
 
+from .fileio import read_text_limited
+
 BEST_SIGNALS = "best_signals.csv"
 MAGIC = "# vpid-bench best signals 1"
 #: A best_signals.csv larger than this is refused by the reader (bytes).
@@ -162,7 +164,7 @@ def read_best_signals(path: Path, max_bytes: int = MAX_BYTES) -> BestSignals:
         size = path.stat().st_size
         if size > max_bytes:
             raise bad(f"{size} bytes, more than {max_bytes}")
-        text = path.read_text(encoding="utf-8")
+        text = read_text_limited(path, max_bytes)
     except (OSError, UnicodeDecodeError) as exc:
         raise bad(str(exc)) from exc
     lines = text.splitlines()

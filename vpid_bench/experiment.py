@@ -35,6 +35,7 @@ from . import records as rec
 from .analysis.job import analyse_job, job_score
 from .artifacts import best_of, write_best_signals
 from .build import ProblemCache, run_rng
+from .errors import PluginError
 from .job_runs import joins_lockstep, run_outcomes, warm_up
 from .machine import available_cores
 from .plugins import Registry
@@ -114,6 +115,18 @@ def _read_records(paths: list[Path]) -> list[dict[str, Any]]:
     return records
 
 
+def _check_artifacts(job_dir: Path, written: Any, problem_name: str) -> None:
+    """Refuse the job when the problem says it wrote an artifact outside its job folder (a
+    plugin's ``write_artifacts`` returning ``../../x`` once wrote there unnoticed)."""
+    root = job_dir.resolve()
+    for path in list(written or []):
+        target = (job_dir / Path(path)).resolve()
+        if target != root and root not in target.parents:
+            raise PluginError(f"problem {problem_name!r}: write_artifacts wrote {path} outside "
+                              f"its job folder {job_dir}; a problem writes only into the folder "
+                              "it is given")
+
+
 def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
             problems: ProblemCache | None = None, optima_dir: Path | None = None
             ) -> JobSummary:
@@ -129,7 +142,7 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
                                      ("optimizer", job.optimizer_name))}
     job_dir = Path(job_dir)
     job_dir.mkdir(parents=True, exist_ok=True)
-    problem.write_artifacts(job_dir)
+    _check_artifacts(job_dir, problem.write_artifacts(job_dir), job.problem_name)
     spec = job.spec
     summary = JobSummary(job_dir, job.problem_name, job.optimizer_name, spec.runs, 0, 0, [],
                          [], 0.0)

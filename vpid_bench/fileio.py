@@ -1,5 +1,9 @@
 """Writing files safely: atomically, and never through a planted symbolic link.
 
+Every file vpid-bench reads back from a results folder (records, job statuses, artifacts)
+goes through :func:`read_text_limited`: a FIFO, a device or a folder planted under a record's
+name is refused at once instead of blocking the reader, and so is a file over a size limit.
+
 Every file vpid-bench writes (records, job statuses, reports, a problem's artifacts) goes
 through :func:`write_text_atomic`: a crash leaves the old file or the new one, never a torn
 one, and a link at the target path is replaced rather than followed (``os.replace`` renames
@@ -9,8 +13,32 @@ over the link itself).
 from __future__ import annotations
 
 import os
+import stat
 import tempfile
 from pathlib import Path
+
+#: The largest results file read back (a run record with a long trace is a few MB).
+MAX_READ_BYTES = 64 * 1024 * 1024
+
+
+def read_text_limited(path: Path, max_bytes: int = MAX_READ_BYTES) -> str:
+    """The UTF-8 text of the regular file ``path`` (links followed). Raises ``OSError`` for
+    anything else (a FIFO or device: opened without blocking, then refused) and for a file
+    over ``max_bytes``; ``UnicodeDecodeError`` for bytes that are not UTF-8."""
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            raise OSError(f"{path}: not a regular file")
+        if info.st_size > max_bytes:
+            raise OSError(f"{path}: {info.st_size} bytes, more than {max_bytes}")
+        with os.fdopen(os.dup(fd), "rb") as fh:
+            data = fh.read(max_bytes + 1)
+    finally:
+        os.close(fd)
+    if len(data) > max_bytes:
+        raise OSError(f"{path}: more than {max_bytes} bytes")
+    return data.decode("utf-8")
 
 
 def write_text_atomic(path: Path, text: str) -> Path:

@@ -41,3 +41,17 @@ def test_a_glob_matching_nothing_is_refused_in_one_line(tmp_path):
     out = run_cli(["-m", "optimizer=glob(zz*)", *TINY, "hydra.sweep.dir=sweep"], tmp_path)
     assert out.returncode != 0 and "Traceback" not in out.stderr
     assert "optimizer" in out.stderr and "a pattern matching one of" in out.stderr
+
+
+def test_the_plan_renders_values_as_hydra_does(tmp_path):
+    """A float Hydra renders otherwise (0.000001 -> 1e-06) and a key given twice (the last
+    wins, in the first's place): the planned folders are the ones the jobs write, so no empty
+    folder is left and reported as a failed job."""
+    args = ["-m", "optimizer=random,de1", "runs=2", "runs=1", "run_timeout_s=0.000001",
+            "problem.iterations=1", "progress=false", "report=false", "hydra.sweep.dir=sweep"]
+    planned = planned_job_dirs([*args[:-1], f"hydra.sweep.dir={tmp_path / 'sweep'}"])
+    out = run_cli(args, tmp_path)
+    assert "Traceback" not in out.stderr and "job.json not written" not in out.stderr
+    made = sorted(p for p in (tmp_path / "sweep").iterdir() if p.name.startswith("optimizer="))
+    assert made == sorted(planned) and len(made) == 2
+    assert all("run_timeout_s=1e-06" in p.name and "runs=1" in p.name for p in made)

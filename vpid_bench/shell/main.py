@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from ..errors import VpidBenchError
+from ..fileio import read_text_limited
 
 DEBUG_ENV = "VPID_BENCH_DEBUG"
 log = logging.getLogger("vpid_bench")
@@ -233,7 +234,7 @@ def _failures(folder: Path | None, multirun: bool,
             print(line, file=sys.stderr)
         out.append(line)
     try:
-        report = json.loads((folder / REPORT_SUBDIR / REPORT_STATUS).read_text("utf-8"))
+        report = json.loads(read_text_limited(folder / REPORT_SUBDIR / REPORT_STATUS))
     except (OSError, ValueError):
         report = None
     if (isinstance(report, dict) and report.get("invocation") == invocation

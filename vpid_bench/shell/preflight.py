@@ -435,7 +435,14 @@ def planned_job_dirs(points: Sequence[Sequence[str]], full_cfg: Any, sweep_dir: 
     parser = _parser()
     dirs = []
     for point in points:
-        task = [o for o in parser.parse_overrides(list(point)) if not _is_hydra_key(o)]
+        lines: dict[str, str] = {}  # as Hydra's basic sweeper renders a job: value as a
+        for o in parser.parse_overrides(list(point)):  # string (0.000001 -> 1e-06), the
+            if not _is_hydra_key(o):  # last of a repeated key kept in the first's place
+                key = o.get_key_element()
+                value = (o.get_value_element_as_str() if not o.is_sweep_override()
+                         else o.input_line.split("=", 1)[1])
+                lines[key] = f"{key}={value}"
+        task = parser.parse_overrides(list(lines.values()))
         name = get_overrides_dirname(task, list(naming.exclude_keys), str(naming.item_sep),
                                      str(naming.kv_sep))
         dirs.append(Path(sweep_dir) / job_dir_name(name))
