@@ -370,6 +370,18 @@ def _resume_folder(cmd: CommandLine, full_cfg: Any, key: str) -> Path | None:
     return folder
 
 
+def _check_subdir(key: str, o: Any) -> None:
+    """A job folder stays inside its sweep: ``hydra.sweep.subdir`` may not be absolute nor
+    climb out with ``..`` (a job once ran outside and the sweep then counted 0 jobs)."""
+    values = ([str(v) for v in o.sweep_string_iterator()] if o.is_sweep_override()
+              else [str(o.value())])
+    for value in values:
+        parts = Path(value).parts
+        if not value.strip() or Path(value).is_absolute() or ".." in parts:
+            raise ConfigError(key, value, "a relative folder inside the sweep folder (no "
+                              "leading /, no '..')")
+
+
 def plan(cmd: CommandLine, registry: Registry) -> Plan:
     """Check the command line and fix the output folder (``--resume``: an earlier one).
     Raises :class:`ConfigError` (one line) for anything bad; writes nothing."""
@@ -381,6 +393,8 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
             raise ConfigError(o.key_or_group, value, "a config name, not an interpolation")
     for o in parsed:
         group = o.key_or_group
+        if group == "hydra.sweep.subdir":
+            _check_subdir(group, o)
         if "/" in group and not group.startswith("hydra/"):
             raise ConfigError(group, _raw_value(o), "config groups are problem, optimizer and "
                               "Hydra's hydra/<group> (launcher, sweeper, ...)")

@@ -89,9 +89,14 @@ class FolderLock:
     def acquire(self) -> None:
         import fcntl
 
-        self.folder.mkdir(parents=True, exist_ok=True)
         path = self.folder / LOCK_FILE
-        fd = os.open(path, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o644)
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o644)
+        except OSError as exc:  # a folder, a link or an unwritable file in the lock's place
+            raise ConfigError(self.key, str(self.folder), f"a folder whose lock file {path} "
+                              f"can be opened ({exc.strerror or exc}); remove what is in its "
+                              "place") from None
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
