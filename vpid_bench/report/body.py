@@ -79,10 +79,10 @@ judged against the lowest objective its own record allows: `rel_gap = (f_best - 
 
 def verdict_short(v: str) -> str:
     """The headline's compact form of a baseline verdict."""
-    for long, short in (("beats it (p_holm=", "yes, p="), ("does not clear it (p_holm=", "no, p="),
-                        ("WORSE than it (p_holm=", "WORSE, p=")):
+    for long, short in (("beats it (", "yes, "), ("does not clear it (", "no, "),
+                        ("WORSE than it (", "WORSE, ")):
         if v.startswith(long):
-            return short + v[len(long):].rstrip(")")
+            return short + v[len(long):].removesuffix(")").replace("p_holm", "p")
     return v
 
 

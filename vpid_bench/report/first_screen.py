@@ -29,6 +29,7 @@ from .optima import REACHED
 from .rankings import TIE_RTOL
 from .render import fmt, markdown, para, terminal
 from .safe import escape
+from .tables import pair_detail
 
 #: A leader whose median metric is within this factor of the floor has searched enough.
 AT_FLOOR = 1.1
@@ -51,6 +52,7 @@ class ContextResult:
     tested: bool
     estimator: str | None = None  # the objective the runs minimised (problem.objective)
     floors: dict[str, Any] | None = None  # the floors of each estimator (estimators.json)
+    pairs: list[dict[str, Any]] = dataclasses.field(default_factory=list)  # pairwise tests
 
     def value(self, x: float) -> str:
         """A metric value with its unit."""
@@ -120,9 +122,11 @@ def context_result(data: Any, context: str) -> ContextResult:
     floors = [q["floor_median"] for q in srows.values() if math.isfinite(q["floor_median"])]
     floor = floors[0] if floors else math.nan
     bound = data.bounds.get(context, math.nan)
+    pairs = ([] if data.tests is None or data.tests.pairs.empty else
+             data.tests.pairs[data.tests.pairs["context"] == context].to_dict("records"))
     result = ContextResult(context, metric, unit, headers, body, floor, bound, "",
                            mgroups is not None, data.estimator(context),
-                           data.estimator_floors.get(context))
+                           data.estimator_floors.get(context), pairs)
     result.verdict = _verdict(result, mrows, [srows[a] for a in sorted(
         srows, key=lambda a: srows[a]["rank"])], mgroups, sgroups,
         data.centred.get(context, False))
@@ -154,6 +158,7 @@ def _verdict(res: ContextResult, mrows: list[Mapping[str, Any]],
     if co:
         test += (f"; the tests do not separate it from {_names(co)} at {n.get(pick)} runs "
                  "each")
+    test += _effect(res, pick, [s["algorithm"] for s in mrows])
     use = [pick]
     m = {s["algorithm"]: s["median"] for s in mrows}.get(pick, math.nan)
     if res.metric == "f_best":  # no accuracy metric: the problem knows no truth
@@ -186,6 +191,20 @@ def _better(res: ContextResult) -> str:
     return (f" ({DESCRIPTION[objective]}, objective={objective}, has its optimum a median "
             f"{res.value(value)} from the truth on the first {res.floors['instances']} "
             "instance(s))")
+
+
+def _effect(res: ContextResult, pick: str, ranked: Sequence[str]) -> str:
+    """``"; against de6 p_holm=0.31, A12=0.45 [0.31, 0.60]"``: the effect size of the pick
+    against the next optimizer of the ranking by the metric (A12 below 0.5: the pick tends to
+    end lower), from the pairwise tests (none in a single job's report)."""
+    others = [a for a in ranked if a != pick]
+    if not others or not res.pairs:
+        return ""
+    other = others[0]
+    row = next((r for r in res.pairs if {r["a"], r["b"]} == {pick, other}), None)
+    if row is None or not math.isfinite(float(row.get("A12", math.nan))):
+        return ""
+    return f"; against {escape(other)}: {pair_detail(row, pick)}"
 
 
 def _limits(res: ContextResult, m: float, srows: Sequence[Mapping[str, Any]],

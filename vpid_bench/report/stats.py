@@ -216,6 +216,33 @@ def a12(x: np.ndarray, y: np.ndarray) -> float:
     return float(np.mean((x > y) + 0.5 * (x == y)))
 
 
+#: Bootstrap resamples of an A12 interval (seeded: the report is a pure function of the runs).
+N_BOOT = 1000
+
+
+def a12_interval(x: np.ndarray, y: np.ndarray, paired: bool, level: float = 0.95,
+                 seed: int = 0) -> tuple[float, float]:
+    """A percentile bootstrap interval of A12(x, y): the instances resampled jointly when the
+    samples pair by instance (``x[k]``, ``y[k]`` from instance ``k``), else each sample on
+    its own. ``(nan, nan)`` for an empty sample."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    if not (x.size and y.size):
+        return math.nan, math.nan
+    rng = np.random.default_rng(seed)
+    ix = rng.integers(0, x.size, (N_BOOT, x.size))
+    iy = ix if paired and x.size == y.size else rng.integers(0, y.size, (N_BOOT, y.size))
+    xs, ys = x[ix][:, :, None], y[iy][:, None, :]
+    boots = np.mean((xs > ys) + 0.5 * (xs == ys), axis=(1, 2))
+    tail = (1.0 - level) / 2.0
+    lo, hi = np.quantile(boots, [tail, 1.0 - tail])
+    return float(lo), float(hi)
+
+
+def p_floor(method: str) -> float:
+    """The smallest p a test's method can give (a permutation test's resolution), else 0."""
+    return 2.0 / (N_RESAMPLES + 1) if method.startswith("permutation") else 0.0
+
+
 #: The name of each pairwise test as the tables give it.
 TEST_PAIRED = "Wilcoxon signed-rank, paired by instance"
 TEST_UNPAIRED = "Mann–Whitney U"
@@ -227,9 +254,11 @@ def pairwise_by_context(df: Any, alpha: float = ALPHA, value: str = "metric") ->
     the instances both ran when the context's runs pair by instance
     (:func:`paired_by_instance`), else Mann–Whitney U. Columns: context, a, b, test,
     p_method, n_a, n_b, n_pairs, median_a, median_b, U (Mann–Whitney), W (Wilcoxon), p,
-    p_holm, A12 (= P(value_a > value_b) + ties/2; below 0.5 means a tends to be better),
-    effect, significant (p_holm < alpha), better (the algorithm the test finds lower when
-    significant, else empty)."""
+    p_holm, p_at_floor (the raw p is the permutation test's smallest: p_holm is then a bound),
+    A12 (= P(value_a > value_b) + ties/2; below 0.5 means a tends to be better), A12_lo and
+    A12_hi (its 95 % bootstrap interval, :func:`a12_interval`), effect, significant
+    (p_holm < alpha), better (the algorithm the test finds lower when significant, else
+    empty)."""
     import pandas as pd
 
     rows = []
@@ -245,8 +274,8 @@ def pairwise_by_context(df: Any, alpha: float = ALPHA, value: str = "metric") ->
                    "n_a": len(x), "n_b": len(y), "n_pairs": np.nan,
                    "median_a": float(np.median(x)) if len(x) else np.nan,
                    "median_b": float(np.median(y)) if len(y) else np.nan,
-                   "U": np.nan, "W": np.nan, "p": np.nan, "A12": np.nan, "effect": "",
-                   "_lower": ""}
+                   "U": np.nan, "W": np.nan, "p": np.nan, "A12": np.nan, "A12_lo": np.nan,
+                   "A12_hi": np.nan, "effect": "", "_lower": ""}
             if len(x) and len(y):
                 row["A12"] = a12(x, y)
                 row["effect"] = a12_magnitude(row["A12"])
@@ -255,23 +284,29 @@ def pairwise_by_context(df: Any, alpha: float = ALPHA, value: str = "metric") ->
                 row["n_pairs"] = len(common)
                 if len(common):
                     xa, yb = inst[a][common].to_numpy(), inst[b][common].to_numpy()
+                    row["A12_lo"], row["A12_hi"] = a12_interval(xa, yb, paired=True)
                     row["W"], row["p"], row["p_method"] = wilcoxon_paired(xa, yb)
                     d = xa - yb
                     r = stats_rank(np.abs(d[d != 0]))
                     plus, minus = r[d[d != 0] > 0].sum(), r[d[d != 0] < 0].sum()
                     row["_lower"] = a if plus < minus else b if minus < plus else ""
             elif len(x) and len(y):
+                row["A12_lo"], row["A12_hi"] = a12_interval(x, y, paired=False)
                 row["U"], row["p"], row["p_method"] = mann_whitney(x, y)
                 row["_lower"] = a if row["A12"] < 0.5 else b if row["A12"] > 0.5 else ""
             block.append(row)
         for row, p_adj in zip(block, holm([r["p"] for r in block]), strict=True):
             row["p_holm"] = p_adj
+            floor = p_floor(row["p_method"])
+            row["p_at_floor"] = bool(floor and np.isfinite(row["p"])
+                                     and row["p"] <= floor * (1 + 1e-9))
             row["significant"] = bool(np.isfinite(p_adj) and p_adj < alpha)
             row["better"] = row.pop("_lower") if row["significant"] else ""
             row.pop("_lower", None)
         rows.extend(block)
     cols = ["context", "a", "b", "test", "p_method", "n_a", "n_b", "n_pairs", "median_a",
-            "median_b", "U", "W", "p", "p_holm", "A12", "effect", "significant", "better"]
+            "median_b", "U", "W", "p", "p_holm", "p_at_floor", "A12", "A12_lo", "A12_hi",
+            "effect", "significant", "better"]
     return pd.DataFrame(rows, columns=cols)
 
 

@@ -135,11 +135,27 @@ def baseline_verdicts(summary: Sequence[Mapping[str, Any]], pairs: Any,
         if sel.empty or not np.isfinite(sel["p_holm"].iloc[0]):
             out.append("not tested")
             continue
-        p = sel["p_holm"].iloc[0]
+        detail = pair_detail(sel.iloc[0], r["algorithm"])
         if sel["better"].iloc[0] == r["algorithm"]:
-            out.append(f"beats it (p_holm={p:.2g})")
+            out.append(f"beats it ({detail})")
         elif sel["better"].iloc[0] == base:
-            out.append(f"WORSE than it (p_holm={p:.2g})")
+            out.append(f"WORSE than it ({detail})")
         else:
-            out.append(f"does not clear it (p_holm={p:.2g})")
+            out.append(f"does not clear it ({detail})")
     return out
+
+
+def pair_detail(pair: Mapping[str, Any], first: str) -> str:
+    """``p_holm=8.4e-08, A12=0.05 [0.01, 0.12]`` for one row of the pairwise tests, A12 seen
+    from ``first`` (below 0.5: ``first`` tends to end lower); ``p_holm≤...`` when the raw p is
+    the permutation test's smallest, so the value is a bound."""
+    p = float(pair["p_holm"])
+    text = f"p_holm≤{p:.2g}" if bool(pair.get("p_at_floor", False)) else f"p_holm={p:.2g}"
+    a, lo, hi = (float(pair.get(k, np.nan)) for k in ("A12", "A12_lo", "A12_hi"))
+    if pair["a"] != first:  # the row holds A12(a, b); seen from b it is 1 - A12
+        a, lo, hi = 1 - a, 1 - hi, 1 - lo
+    if np.isfinite(a):
+        text += f", A12={a:.2f}"
+        if np.isfinite(lo) and np.isfinite(hi):
+            text += f" [{lo:.2f}, {hi:.2f}]"
+    return text

@@ -1,0 +1,44 @@
+"""Effect sizes beside every verdict: A12 with a bootstrap interval, and a p-value at a
+permutation test's resolution printed as a bound."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vpid_bench.report.body import verdict_short
+from vpid_bench.report.stats import N_RESAMPLES, a12, a12_interval, p_floor
+from vpid_bench.report.tables import pair_detail
+
+
+def test_a12_interval_edges_and_coverage():
+    x = np.arange(10.0)
+    assert a12_interval(x, x + 100, paired=True) == (0.0, 0.0)  # x always lower
+    assert a12_interval(x, x, paired=True) == (0.5, 0.5)
+    # two samples of one distribution: the 95 % interval holds 0.5 in about 95 % of draws
+    rng = np.random.default_rng(5)
+    hits = 0
+    for _ in range(200):
+        a, b = rng.standard_normal(30), rng.standard_normal(30)
+        lo, hi = a12_interval(a, b, paired=False)
+        assert lo <= a12(a, b) <= hi
+        hits += lo <= 0.5 <= hi
+    assert 0.88 <= hits / 200 <= 0.99, hits
+
+
+def test_the_detail_reads_from_the_named_side_and_bounds_a_floor_p():
+    row = {"a": "de4", "b": "random", "p_holm": 3e-4, "p_at_floor": True, "A12": 0.1,
+           "A12_lo": 0.02, "A12_hi": 0.2}
+    assert pair_detail(row, "de4") == "p_holm≤0.0003, A12=0.10 [0.02, 0.20]"
+    assert pair_detail(row, "random") == "p_holm≤0.0003, A12=0.90 [0.80, 0.98]"
+    exact = {**row, "p_at_floor": False, "p_holm": 0.012}
+    assert pair_detail(exact, "de4").startswith("p_holm=0.012, ")
+    assert verdict_short(f"beats it ({pair_detail(row, 'de4')})") == \
+        "yes, p≤0.0003, A12=0.10 [0.02, 0.20]"
+    assert verdict_short("does not clear it (p_holm=1, A12=0.39 [0.24, 0.56])") == \
+        "no, p=1, A12=0.39 [0.24, 0.56]"
+
+
+def test_the_floor_is_the_permutation_resolution():
+    assert p_floor("permutation (9999 resamples)") == pytest.approx(2 / (N_RESAMPLES + 1))
+    assert p_floor("exact") == 0.0
