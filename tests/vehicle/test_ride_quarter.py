@@ -187,3 +187,20 @@ def test_bad_settings_are_refused_naming_the_key():
     with pytest.raises(ConfigError) as err:
         RideQuarterConfig(road="pothole")
     assert err.value.key == "problem.road" and "iso8608" in str(err.value)
+
+
+def test_the_instances_streams_are_not_the_optimizers():
+    """At equal seeds, instance i's streams (truth, road, noise) share no state with the
+    optimizer's stream of run i (SeedSequence(seed, spawn_key=(i,))): their first draws
+    differ, and instance i is reproduced from its documented root."""
+    from vpid_bench.build import run_rng
+    from vpid_vehicle.ride.problem import instance_streams
+
+    for i in range(3):
+        optimizer = run_rng(0, i).random(8)
+        for stream in instance_streams(0, i):
+            assert not np.allclose(np.random.default_rng(stream).random(8), optimizer)
+    p = RideQuarterProblem(RideQuarterConfig(), 2)
+    truth_rng = np.random.default_rng(instance_streams(0, 2)[0])
+    factors = truth_rng.uniform(0.7, 1.3, 4)
+    np.testing.assert_allclose(p.x_true, p.nominal * factors)

@@ -59,12 +59,18 @@ def test_every_member_builds_and_its_truth_fits_best(cls):
     """Each member is a problem with its defaults: its truth is inside the box and, but for
     the model-error member, scores better than the box centre; its name is its registry name.
     With model error (the linear model fitted to a Magic Formula record) the truth is not the
-    best linear fit: the box centre fits better there, which is what the member shows."""
+    best linear fit: the linear model's optimum near the truth lies over 20 % NoRE from it,
+    which is what the member shows."""
+    from vpid_bench.analysis.optimum import polish
+
     p = cls(cls.Config())
     assert p.name == cls.name and cls.suites
     x = p.x_true
     assert np.all((x > p.bounds.lower) & (x < p.bounds.upper))
     centre = (p.bounds.lower + p.bounds.upper) / 2
     f_true, f_centre = p.evaluate(np.stack([x, centre]))
-    model_error = getattr(p.config, "record_model", "linear") != "linear"
-    assert np.isfinite(f_true) and (f_true < f_centre) != model_error
+    assert np.isfinite(f_true)
+    if getattr(p.config, "record_model", "linear") != "linear":
+        assert p.metrics(polish(p, x)[0])["NoRE"] > 20
+    else:
+        assert f_true < f_centre

@@ -9,7 +9,8 @@ with the fitted model, on purpose.
 
 **Noise**, per channel: additive Gaussian, ``sigma_c = noise_level x rms(clean channel c)``.
 
-**Instances.** Run ``i`` fits instance ``i``: from ``SeedSequence(seed, spawn_key=(i,))`` it
+**Instances.** Run ``i`` fits instance ``i``: from ``SeedSequence([seed, INSTANCE_ROOT],
+spawn_key=(i,))`` (a root of its own: never the optimizer's ``SeedSequence(seed, (i,))``) it
 draws the true vehicle (each identified parameter ``x nominal x U(1 - spread, 1 + spread)``;
 ``truth=set`` uses the published set, the centre of the box), the random roads' phases and the
 noise. The box is fixed, ``[0.5, 1.5] x`` the published set.
@@ -42,6 +43,16 @@ from vpid_bench import (
 )
 
 from . import linear, roads
+
+
+#: Mixed into the instances' seed so the data's streams never equal an optimizer's
+#: (``SeedSequence(seed, spawn_key=(i,))``) at equal seeds.
+INSTANCE_ROOT = 0x5EED1
+
+
+def instance_streams(seed: int, index: int) -> list[np.random.SeedSequence]:
+    """The truth's, the road's and the noise's streams of instance ``index``."""
+    return np.random.SeedSequence([seed, INSTANCE_ROOT], spawn_key=(index,)).spawn(3)
 
 
 def _check(checks: list[tuple[str, bool, str]], config: Any) -> None:
@@ -199,7 +210,7 @@ class RideProblem(Problem):
         published = self.model.sets[config.parameter_set]
         self.nominal = np.array([published[k] for k in self.model.names])
         self.known = {k: v for k, v in published.items() if k not in self.model.names}
-        streams = np.random.SeedSequence(config.seed, spawn_key=(index,)).spawn(3)
+        streams = instance_streams(config.seed, index)
         truth_rng, road_rng, noise_rng = (np.random.default_rng(s) for s in streams)
         factors = truth_rng.uniform(1 - config.spread, 1 + config.spread, self.nominal.size)
         self._x_true = self.nominal * (factors if config.truth == "random" else 1.0)
