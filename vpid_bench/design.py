@@ -60,7 +60,12 @@ def build(registry: Any, name: str, settings: list[tuple[str, str]]) -> Any:
     except KeyError:
         raise ConfigError("problem", name,
                           "one of " + ", ".join(sorted(registry.problems))) from None
-    mapping = OmegaConf.to_container(OmegaConf.from_dotlist([f"{k}={v}" for k, v in settings]))
+    try:
+        mapping = OmegaConf.to_container(
+            OmegaConf.from_dotlist([f"{k}={v}" for k, v in settings]))
+    except Exception as exc:  # noqa: BLE001 - OmegaConf or YAML refuses the text: one line
+        raise ConfigError("settings", " ".join(f"{k}={v}" for k, v in settings),
+                          f"key=value pairs with YAML values ({type(exc).__name__})") from None
     return cls(build_dataclass(cls.Config, mapping, prefix="problem"))
 
 

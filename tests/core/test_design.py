@@ -65,6 +65,7 @@ def test_an_undetermined_parameter_is_named(capsys):
     (["vehicle", "--vary", "record.extra"], ["--vary", "key=value"]),
     (["vehicle", "objective=ml", "noise.level=0"], ["problem.objective"]),
     (["vehicle", "--floor", "-1"], ["--floor"]),
+    (["vehicle", "record.extra=\x07"], ["settings=", "YAML"]),  # found by the fuzz test
     (["vehicle", "--vary", "record.extra=" + ",".join(str(i / 1000) for i in range(201))],
      ["at most 200 designs"]),
 ])

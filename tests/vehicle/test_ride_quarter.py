@@ -193,8 +193,9 @@ def test_the_instances_streams_are_not_the_optimizers():
     """At equal seeds, instance i's streams (truth, road, noise) share no state with the
     optimizer's stream of run i (SeedSequence(seed, spawn_key=(i,))): their first draws
     differ, and instance i is reproduced from its documented root."""
-    from vpid_bench.build import run_rng
     from vpid_vehicle.ride.problem import instance_streams
+
+    from vpid_bench.build import run_rng
 
     for i in range(3):
         optimizer = run_rng(0, i).random(8)

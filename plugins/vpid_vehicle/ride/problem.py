@@ -44,7 +44,6 @@ from vpid_bench import (
 
 from . import linear, roads
 
-
 #: Mixed into the instances' seed so the data's streams never equal an optimizer's
 #: (``SeedSequence(seed, spawn_key=(i,))``) at equal seeds.
 INSTANCE_ROOT = 0x5EED1
