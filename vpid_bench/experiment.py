@@ -39,7 +39,7 @@ from .errors import PluginError
 from .job_runs import joins_lockstep, run_outcomes, warm_up
 from .machine import available_cores
 from .plugins import Registry
-from .runner import RunTimeoutError
+from .runner import RunTimeoutError, keep_cwd, time_limit
 from .spec import Job, parse_job
 
 log = logging.getLogger(__name__)
@@ -135,8 +135,10 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
     ``optima_dir`` (default ``job_dir/optima``)."""
     problem = (problems or ProblemCache(size=1)).get(job)
     problem.set_threads(job.spec.threads or available_cores())
-    # Build one optimizer up front: a fault in its constructor stops the job before any run.
-    job.optimizer_cls(job.params, problem.bounds, run_rng(job.spec.seed, 0))
+    # Build one optimizer up front: a fault in its constructor stops the job before any run;
+    # a constructor that never returns is bounded by the run's time limit.
+    with time_limit(job.spec.run_timeout_s), keep_cwd():
+        job.optimizer_cls(job.params, problem.bounds, run_rng(job.spec.seed, 0))
     provenance = {kind: (registry.provenance(kind, name) if registry is not None else {})
                   for kind, name in (("problem", job.problem_name),
                                      ("optimizer", job.optimizer_name))}

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import os
 import signal
 import threading
 import time
@@ -285,17 +286,17 @@ def run_many(problem: Problem, lanes: Sequence[Lane], timeout_s: float | None = 
     ``KeyboardInterrupt`` stops the whole group (every optimizer is closed first).
     """
     runs = [_start(lane, problem.bounds.dim) for lane in lanes]
-    try:
-        with _Alarm(timeout_s) as alarm:
+    with _Alarm(timeout_s) as alarm:
+        try:
             while True:
                 asked = [r for r in runs if r.outcome is None
                          and _ask(r, alarm, timeout_s, max_batches)]
                 if not asked:
                     break
                 _evaluate_and_tell(problem, asked, alarm, timeout_s)
-    finally:
-        for r in runs:
-            _close(r)
+        finally:
+            for r in runs:
+                _close(r, alarm, timeout_s)
     return [r.outcome for r in runs]
 
 
@@ -317,17 +318,43 @@ def _start(lane: Lane, dim: int) -> _Run:
     return r
 
 
-def _close(r: _Run) -> None:
+#: A run already at its time limit still gets this long (s) to close its optimizer.
+CLOSE_GRACE_S = 1.0
+
+
+def _close(r: _Run, alarm: _Alarm, timeout_s: float | None) -> None:
+    """The optimizer's ``close()``, as part of its run: its time counts, the run's limit
+    applies (a ``close`` that sleeps past it fails the run), a failure fails the run."""
     close = getattr(r.lane.optimizer, "close", None)
     if close is None:
         return
+    t0 = time.perf_counter()
     try:
-        close()
+        left = _remaining(r, timeout_s)
+        with keep_cwd(), alarm.limit(None if left is None else max(left, CLOSE_GRACE_S)):
+            close()
     except KeyboardInterrupt:
         raise
     except BaseException as exc:  # noqa: BLE001 - a failing close fails its run only
         if not isinstance(r.outcome, BaseException):
             r.outcome = exc
+    finally:
+        r.ledger.seconds += time.perf_counter() - t0
+    if (timeout_s is not None and r.spent_s > timeout_s
+            and not isinstance(r.outcome, BaseException)):
+        r.outcome = timeout_error(timeout_s)
+
+
+@contextlib.contextmanager
+def keep_cwd() -> Iterator[None]:
+    """Put the working folder back if a plugin's call changed it (``os.chdir`` in a plugin
+    once sent a relative sweep's records, job status and report into the plugin's folder)."""
+    before = os.getcwd()
+    try:
+        yield
+    finally:
+        if os.getcwd() != before:
+            os.chdir(before)
 
 
 def _remaining(r: _Run, timeout_s: float | None) -> float | None:
@@ -339,7 +366,7 @@ def _guarded(r: _Run, alarm: _Alarm, timeout_s: float | None, fn: Callable[[], N
     run (its outcome) and returns False."""
     t0 = time.perf_counter()
     try:
-        with alarm.limit(_remaining(r, timeout_s)):
+        with keep_cwd(), alarm.limit(_remaining(r, timeout_s)):
             fn()
     except KeyboardInterrupt:
         raise

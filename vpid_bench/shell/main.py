@@ -21,6 +21,7 @@ import json
 import logging
 import os
 import sys
+import time
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
@@ -245,6 +246,8 @@ def _failures(folder: Path | None, multirun: bool,
 
 def main(argv: Sequence[str] | None = None) -> None:
     """Console entry point ``vpid-bench``."""
+    import threading
+
     from . import preflight
     from .argv import parse_command_line
     from .callbacks import ensure_job_dir_resolver
@@ -252,6 +255,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     from .resume import FolderLock, new_invocation
     from .suites import expand_suites
 
+    threading.excepthook = _thread_exception
+    before = set(threading.enumerate())
+    console = argv is None  # the console command, not a call from another program
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         cmd = parse_command_line(argv)
@@ -289,8 +295,48 @@ def main(argv: Sequence[str] | None = None) -> None:
         sys.exit(130)
     finally:
         lock.release()
-    if _failures(plan.output_dir, plan.multirun, plan.job_dirs):
-        sys.exit(1)
+    _leave(1 if _failures(plan.output_dir, plan.multirun, plan.job_dirs) else 0, before,
+           watch=console)
+
+
+#: How long (s) the process may take to end after the command, before threads a plugin
+#: left running are abandoned.
+THREAD_GRACE_S = 10.0
+
+
+def _leave(code: int, before: set[Any], watch: bool) -> None:
+    """End the command with ``code``. A thread a plugin started during the command and left
+    running (not a daemon; threads alive before the command, ``before``, are not its) would
+    keep the process alive forever after the sweep, since Python waits for such threads at
+    exit. With ``watch`` (the console command, not a call from another program), a daemon
+    watchdog gives the normal shutdown :data:`THREAD_GRACE_S` (libraries stop their own
+    pools then) and, if the process is still alive, names the threads and ends it with
+    ``code`` (every record is written by then)."""
+    import threading
+
+    mine = [t for t in threading.enumerate() if t is not threading.main_thread()
+            and not t.daemon and t not in before]
+    if watch and mine:
+        def watchdog() -> None:
+            time.sleep(THREAD_GRACE_S)
+            names = ", ".join(t.name for t in mine if t.is_alive()) or "?"
+            print(f"warning: thread(s) {names} started by a plugin still run "
+                  f"{THREAD_GRACE_S:g} s after the end; exiting without them (every record "
+                  "is written)", file=sys.stderr)
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(code)
+
+        threading.Thread(target=watchdog, name="vpid-bench-exit-watchdog", daemon=True).start()
+    if code:
+        sys.exit(code)
+
+
+def _thread_exception(args: Any) -> None:
+    """One line for an exception in a plugin's own thread (not Python's traceback)."""
+    name = args.thread.name if args.thread is not None else "?"
+    print(f"warning: thread {name} raised {args.exc_type.__name__}: {args.exc_value}",
+          file=sys.stderr)
 
 
 def _run_hydra(args: list[str], task: Any) -> None:

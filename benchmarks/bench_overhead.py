@@ -1,0 +1,95 @@
+"""Per-evaluation overhead of every registered optimizer, against the kernel time of the same
+evaluations, measured side by side in one run (issue: studies at kernel speed).
+
+For each optimizer: one run on ``problem=vehicle`` (PS 20, the given budget) through the
+framework's run loop (:func:`vpid_bench.runner.run`), its wall time, and the batches it had
+evaluated (recorded as they pass), after a short warm-up run. Afterwards the same batches are
+evaluated again, the same way (values, or values and residuals for a least-squares method),
+with nothing else around them: the kernel's time. Prints per optimizer the wall time per
+evaluation (µs), the kernel's, their ratio (the overhead factor: 1 means the optimizer costs
+nothing beyond its evaluations) and the number of batches (sequential rounds of ask/tell).
+
+    MPLBACKEND=Agg .venv/bin/python benchmarks/bench_overhead.py [--budget 4200] [--skip nevergrad]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from vpid_bench.build import build_problem, optimizer_params, run_rng
+from vpid_bench.plugins import Registry
+from vpid_bench.runner import run
+
+
+class Recorder:
+    """Records the batches the run loop hands the problem (as values or with residuals)."""
+
+    def __init__(self, problem) -> None:
+        self.problem, self.batches = problem, []
+        for name in ("evaluate", "evaluate_instances", "evaluate_with_residuals"):
+            setattr(problem, name, self._wrap(name, getattr(problem, name)))
+        self._depth = 0
+
+    def _wrap(self, name, fn):
+        def wrapped(X, *args):
+            if self._depth == 0:
+                self.batches.append((name, np.array(X, copy=True), args))
+            self._depth += 1
+            try:
+                return fn(X, *args)
+            finally:
+                self._depth -= 1
+        return wrapped
+
+
+def measure(registry: Registry, name: str, budget: int) -> dict[str, float]:
+    """One run's wall time against the kernel time of its batches (after a short warm-up
+    run of the same optimizer, so compilation and first-call set-up are not counted)."""
+    warm = build_problem(registry, {"name": "vehicle", "ps": 20})
+    cls, params = optimizer_params(registry, {"name": name, "ps": 20, "budget": 200})
+    run(warm, cls(params, warm.bounds, run_rng(1, 0)), 200)
+    problem = build_problem(registry, {"name": "vehicle", "ps": 20})
+    clean = build_problem(registry, {"name": "vehicle", "ps": 20})
+    rec = Recorder(problem)
+    cls, params = optimizer_params(registry, {"name": name, "ps": 20, "budget": budget})
+    optimizer = cls(params, problem.bounds, run_rng(0, 0))
+    t0 = time.perf_counter()
+    result = run(problem, optimizer, budget)
+    wall = time.perf_counter() - t0
+    evaluations = result.evaluations
+    t0 = time.perf_counter()
+    for method, X, args in rec.batches:
+        getattr(clean, method)(X, *args)
+    kernel = time.perf_counter() - t0
+    return {"wall_us": 1e6 * wall / evaluations, "kernel_us": 1e6 * kernel / evaluations,
+            "ratio": wall / kernel if kernel > 0 else float("inf"),
+            "batches": len(rec.batches), "evaluations": evaluations}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--budget", type=int, default=4200)
+    ap.add_argument("--skip", nargs="*", default=[])
+    args = ap.parse_args()
+    registry = Registry()
+    print(f"command: benchmarks/bench_overhead.py --budget {args.budget}")
+    print("| optimizer | µs per evaluation | kernel µs per evaluation | overhead (×) | "
+          "batches | evaluations |")
+    print("| --- | --- | --- | --- | --- | --- |")
+    for name in sorted(registry.optimizers):
+        if name in args.skip:
+            continue
+        try:
+            m = measure(registry, name, args.budget)
+        except Exception as exc:  # noqa: BLE001 - a benchmark line per optimizer
+            print(f"| {name} | failed: {type(exc).__name__}: {exc} | | | | |")
+            continue
+        print(f"| {name} | {m['wall_us']:.1f} | {m['kernel_us']:.1f} | {m['ratio']:.1f} | "
+              f"{m['batches']} | {m['evaluations']} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,155 @@
+"""Optimizer plugins that misbehave outside ask/tell, installed from outside the repository as
+a third party's would be: a close() or a constructor that sleeps past run_timeout_s, an
+os.chdir() in ask, a non-daemon thread left running, an exception in the plugin's own thread.
+Each costs its own run or job at most; the sweep finishes, writes where it was told, and
+the command ends."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+BIN = Path(sys.executable).parent
+
+PYPROJECT = """\
+[build-system]
+requires = ["setuptools>=68"]
+build-backend = "setuptools.build_meta"
+
+[project]
+name = "naughty-optimizers"
+version = "0.1"
+
+[project.entry-points.vpid_bench]
+naughty = "naughty_optimizers"
+"""
+
+MODULE = '''\
+import os
+import threading
+import time
+
+import numpy as np
+
+from vpid_bench import Optimizer, OptimizerParams, hookimpl
+
+
+class Base(Optimizer):
+    Params = OptimizerParams
+
+    def ask(self):
+        return self.bounds.sample(self.rng, self.params.ps)
+
+    def tell(self, X, f):
+        pass
+
+
+class SlowClose(Base):
+    def close(self):
+        time.sleep(30)
+
+
+class SlowBuild(Base):
+    def __init__(self, *args, **kwargs):
+        time.sleep(30)
+        super().__init__(*args, **kwargs)
+
+
+class Wanderer(Base):
+    def ask(self):
+        os.makedirs(os.environ["NAUGHTY_ELSEWHERE"], exist_ok=True)
+        os.chdir(os.environ["NAUGHTY_ELSEWHERE"])
+        return super().ask()
+
+
+class Lingerer(Base):
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        threading.Thread(target=time.sleep, args=(3600,), name="lingerer").start()
+
+
+class Thrower(Base):
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+
+        def boom():
+            raise ValueError("from the plugin's own thread")
+
+        t = threading.Thread(target=boom, name="thrower", daemon=True)
+        t.start()
+        t.join()
+
+
+@hookimpl
+def vpid_bench_register_optimizers(register):
+    for cls in (SlowClose, SlowBuild, Wanderer, Lingerer, Thrower):
+        register(cls.__name__.lower(), cls)
+'''
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory) -> Path:
+    src = tmp_path_factory.mktemp("src")
+    (src / "pyproject.toml").write_text(PYPROJECT)
+    (src / "naughty_optimizers.py").write_text(textwrap.dedent(MODULE))
+    target = tmp_path_factory.mktemp("site")
+    subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps",
+                    "--no-build-isolation", "--target", str(target), str(src)],
+                   check=True, capture_output=True, text=True)
+    return target
+
+
+def _sweep(site: Path, cwd: Path, optimizer: str, *extra: str, timeout: float = 90):
+    env = {**os.environ, "PYTHONPATH": str(site), "MPLBACKEND": "Agg",
+           "NAUGHTY_ELSEWHERE": str(cwd / "elsewhere")}
+    env.pop("VPID_BENCH_DEBUG", None)
+    return subprocess.run([str(BIN / "vpid-bench"), "-m", f"optimizer={optimizer},random",
+                           "runs=2", "problem.iterations=2", "progress=false", "report=false",
+                           "hydra.sweep.dir=sweep", *extra], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=timeout)
+
+
+def _records(cwd: Path, optimizer: str) -> list[Path]:
+    return sorted((cwd / "sweep").glob(f"optimizer={optimizer},*/records/run-*.json"))
+
+
+@pytest.mark.parametrize("optimizer", ["slowclose", "slowbuild"])
+def test_sleeping_outside_ask_and_tell_is_bounded_by_the_run_limit(site, tmp_path, optimizer):
+    """A 30 s sleep in close() or the constructor, run_timeout_s=2: the command ends well
+    before the sleeps would add up, random's runs are recorded, the culprit's job fails."""
+    import time
+
+    t0 = time.monotonic()
+    out = _sweep(site, tmp_path, optimizer, "run_timeout_s=2")
+    assert time.monotonic() - t0 < 25  # one 30 s sleep alone would exceed it
+    assert out.returncode == 1, out.stderr[-2000:]
+    assert len(_records(tmp_path, "random")) == 2
+    assert "run_timeout_s=2" in out.stderr or "longer than" in out.stderr
+
+
+def test_a_plugin_that_changes_folder_does_not_move_the_sweep(site, tmp_path):
+    out = _sweep(site, tmp_path, "wanderer")
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert len(_records(tmp_path, "wanderer")) == 2 and len(_records(tmp_path, "random")) == 2
+    assert not list((tmp_path / "elsewhere").rglob("*.json"))
+
+
+def test_a_thread_left_running_does_not_keep_the_command_alive(site, tmp_path):
+    out = _sweep(site, tmp_path, "lingerer", timeout=90)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert "thread(s) lingerer" in out.stderr
+    assert len(_records(tmp_path, "lingerer")) == 2
+
+
+def test_an_exception_in_a_plugins_thread_is_one_line(site, tmp_path):
+    out = _sweep(site, tmp_path, "thrower")
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert "Traceback" not in out.stderr
+    lines = [ln for ln in out.stderr.splitlines() if "thread thrower raised ValueError" in ln]
+    # one line per construction (the job's up-front check, the warm-up, each run), no traceback
+    assert 1 <= len(lines) <= 4
