@@ -31,11 +31,12 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+from . import interrupts
 from . import records as rec
 from .analysis.job import analyse_job, job_score
 from .artifacts import best_of, write_best_signals
 from .build import ProblemCache, run_rng
-from .errors import PluginError
+from .errors import PluginError, VpidBenchError
 from .job_runs import joins_lockstep, run_outcomes, warm_up
 from .machine import available_cores
 from .plugins import Registry
@@ -115,6 +116,16 @@ def _read_records(paths: list[Path]) -> list[dict[str, Any]]:
     return records
 
 
+def _refuse_swapped(*folders: Path) -> None:
+    """A job folder or its ``records/`` replaced by a symbolic link while the job runs is
+    refused before the next record is written (records were once written through it, to
+    wherever it pointed)."""
+    for folder in folders:
+        if Path(folder).is_symlink():
+            raise VpidBenchError(f"{folder} became a symbolic link while the job ran; no record "
+                              "is written through it (remove the link and --resume)")
+
+
 def _check_artifacts(job_dir: Path, written: Any, problem_name: str) -> None:
     """Refuse the job when the problem says it wrote an artifact outside its job folder (a
     plugin's ``write_artifacts`` returning ``../../x`` once wrote there unnoticed)."""
@@ -137,8 +148,13 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
     problem.set_threads(job.spec.threads or available_cores())
     # Build one optimizer up front: a fault in its constructor stops the job before any run;
     # a constructor that never returns is bounded by the run's time limit.
-    with time_limit(job.spec.run_timeout_s), keep_cwd():
-        job.optimizer_cls(job.params, problem.bounds, run_rng(job.spec.seed, 0))
+    try:
+        with time_limit(job.spec.run_timeout_s), keep_cwd():
+            job.optimizer_cls(job.params, problem.bounds, run_rng(job.spec.seed, 0))
+    except KeyboardInterrupt:
+        if interrupts.from_user():
+            raise
+        raise interrupts.PluginInterruptError("its constructor") from None
     provenance = {kind: (registry.provenance(kind, name) if registry is not None else {})
                   for kind, name in (("problem", job.problem_name),
                                      ("optimizer", job.optimizer_name))}
@@ -192,6 +208,7 @@ def _run_missing(job: Job, problem: Any, job_dir: Path, key: Mapping[str, Any],
         for run in run_outcomes(job, problem, list(todo), lockstep):
             rid, path = todo[run.index]
             record = rec.make_record(job, run, rid, problem.instance(run.index), provenance)
+            _refuse_swapped(job_dir, path.parent)
             rec.write_record(path, record)
             summary.ran += 1
             if run.error is not None:

@@ -23,6 +23,7 @@ from collections.abc import Iterator, Sequence
 
 import numpy as np
 
+from . import interrupts
 from .bridge import LoopOptimizer
 from .build import run_rng
 from .problem import Problem
@@ -107,7 +108,9 @@ def _group(job: Job, problem: Problem, indices: list[int]) -> list[RunOutcome]:
             lanes.append(Lane(inst, optimizer, job.budget, instance=i,
                               elapsed_s=time.perf_counter() - t0))
         except KeyboardInterrupt:
-            raise
+            if interrupts.from_user():
+                raise
+            failed[i] = interrupts.PluginInterruptError("its constructor")
         except BaseException as exc:  # noqa: BLE001 - crash isolation: this run only
             failed[i] = exc
         built_s[i] = time.perf_counter() - t0

@@ -40,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from . import interrupts
 from .errors import OptimizerContractError
 from .optimizer import Optimizer, check_compatible
 from .problem import Problem
@@ -334,7 +335,10 @@ def _close(r: _Run, alarm: _Alarm, timeout_s: float | None) -> None:
         with keep_cwd(), alarm.limit(None if left is None else max(left, CLOSE_GRACE_S)):
             close()
     except KeyboardInterrupt:
-        raise
+        if interrupts.from_user():
+            raise
+        if not isinstance(r.outcome, BaseException):
+            r.outcome = interrupts.PluginInterruptError("close()")
     except BaseException as exc:  # noqa: BLE001 - a failing close fails its run only
         if not isinstance(r.outcome, BaseException):
             r.outcome = exc
@@ -369,7 +373,10 @@ def _guarded(r: _Run, alarm: _Alarm, timeout_s: float | None, fn: Callable[[], N
         with keep_cwd(), alarm.limit(_remaining(r, timeout_s)):
             fn()
     except KeyboardInterrupt:
-        raise
+        if interrupts.from_user():
+            raise
+        r.outcome = interrupts.PluginInterruptError("its run (ask, tell or an evaluation)")
+        return False
     except BaseException as exc:  # noqa: BLE001 - crash isolation: this run only
         r.outcome = exc
         return False
@@ -408,6 +415,15 @@ def _ask(r: _Run, alarm: _Alarm, timeout_s: float | None, max_batches: int) -> b
         r.finish()
         return False
     return True
+
+
+def _lane_by_lane(problem: Problem, runs: list[_Run], alarm: _Alarm,
+                  timeout_s: float | None) -> dict[int, np.ndarray]:
+    """A gathered evaluation that raised, repeated run by run to fail only the culprits."""
+    values: dict[int, np.ndarray] = {}
+    for r in runs:
+        values.update(_gathered_values(problem, [r], alarm, timeout_s))
+    return values
 
 
 def _evaluate_and_tell(problem: Problem, asked: list[_Run], alarm: _Alarm,
@@ -471,12 +487,11 @@ def _gathered_values(problem: Problem, runs: list[_Run], alarm: _Alarm,
         with alarm.limit(limit):
             f_all = _values(problem, problem.evaluate_instances(X, index), X.shape[0])
     except KeyboardInterrupt:
-        raise
+        if interrupts.from_user():
+            raise
+        return _lane_by_lane(problem, runs, alarm, timeout_s)
     except BaseException:  # noqa: BLE001 - find the runs whose rows raise, fail them alone
-        values: dict[int, np.ndarray] = {}
-        for r in runs:
-            values.update(_gathered_values(problem, [r], alarm, timeout_s))
-        return values
+        return _lane_by_lane(problem, runs, alarm, timeout_s)
     share = (time.perf_counter() - t0) / X.shape[0]
     values = {}
     start = 0

@@ -85,9 +85,28 @@ class Thrower(Base):
         t.join()
 
 
+class Interrupter(Base):
+    def tell(self, X, f):
+        raise KeyboardInterrupt
+
+
+class Swapper(Base):
+    def tell(self, X, f):
+        import glob
+        import shutil
+
+        for job in glob.glob("sweep/optimizer=swapper*"):
+            records = os.path.join(job, "records")
+            if not os.path.islink(records):
+                if os.path.exists(records):
+                    shutil.move(records, records + "-moved")
+                os.makedirs(os.environ["NAUGHTY_ELSEWHERE"], exist_ok=True)
+                os.symlink(os.environ["NAUGHTY_ELSEWHERE"], records)
+
+
 @hookimpl
 def vpid_bench_register_optimizers(register):
-    for cls in (SlowClose, SlowBuild, Wanderer, Lingerer, Thrower):
+    for cls in (SlowClose, SlowBuild, Wanderer, Lingerer, Thrower, Interrupter, Swapper):
         register(cls.__name__.lower(), cls)
 '''
 
@@ -153,3 +172,25 @@ def test_an_exception_in_a_plugins_thread_is_one_line(site, tmp_path):
     lines = [ln for ln in out.stderr.splitlines() if "thread thrower raised ValueError" in ln]
     # one line per construction (the job's up-front check, the warm-up, each run), no traceback
     assert 1 <= len(lines) <= 4
+
+
+def test_a_keyboardinterrupt_raised_by_a_plugin_fails_its_runs_not_the_sweep(site, tmp_path):
+    """Not the user's Ctrl-C (no SIGINT): the interrupter's runs fail with the reason, random
+    runs after it, exit 1 (not 130), and a resume does not stop again."""
+    import json
+
+    out = _sweep(site, tmp_path, "interrupter")
+    assert out.returncode == 1, out.stderr[-2000:]
+    assert "interrupted: every completed run is recorded" not in out.stderr
+    assert len(_records(tmp_path, "random")) == 2
+    failed = [json.loads(p.read_text()) for p in _records(tmp_path, "interrupter")]
+    assert len(failed) == 2 and all(r["status"] == "failed" for r in failed)
+    assert all("not the user's Ctrl-C" in r["error"]["message"] for r in failed)
+
+
+def test_records_are_not_written_through_a_folder_swapped_for_a_link(site, tmp_path):
+    out = _sweep(site, tmp_path, "swapper")
+    assert out.returncode == 1, out.stderr[-2000:]
+    assert "became a symbolic link" in out.stderr and "Traceback" not in out.stderr
+    assert not list((tmp_path / "elsewhere").glob("*.json"))
+    assert len(_records(tmp_path, "random")) == 2

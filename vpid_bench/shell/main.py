@@ -258,6 +258,10 @@ def main(argv: Sequence[str] | None = None) -> None:
     threading.excepthook = _thread_exception
     before = set(threading.enumerate())
     console = argv is None  # the console command, not a call from another program
+    if console:
+        from .. import interrupts
+
+        interrupts.install()
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         cmd = parse_command_line(argv)

@@ -1,0 +1,48 @@
+"""Telling the user's Ctrl-C from a ``KeyboardInterrupt`` that a plugin raises.
+
+Python turns SIGINT into ``KeyboardInterrupt``, and the run loop lets that stop the whole
+sweep (every finished run is kept; ``--resume`` continues). A plugin that raises
+``KeyboardInterrupt`` itself (in ``ask``, ``tell``, its constructor or ``close``) once stopped
+the sweep the same way, and every resume stopped again. The command installs a SIGINT handler
+that notes the signal before raising; a ``KeyboardInterrupt`` seen without that note came from
+code, and fails its run only. Where no handler is installed (a program calling the library, a
+launcher's worker process) every ``KeyboardInterrupt`` counts as the user's.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+from typing import Any
+
+
+class _Watch:
+    """Whether the command's handler is installed and whether it has seen SIGINT."""
+
+    installed = False
+    signalled = False
+
+
+def _handler(signum: int, frame: Any) -> None:
+    _Watch.signalled = True
+    raise KeyboardInterrupt
+
+
+def install() -> None:
+    """Install the noting SIGINT handler (main thread of the command's process only)."""
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, _handler)
+        _Watch.installed, _Watch.signalled = True, False
+
+
+def from_user() -> bool:
+    """Whether a ``KeyboardInterrupt`` being handled now is the user's (or cannot be told)."""
+    return not _Watch.installed or _Watch.signalled
+
+
+class PluginInterruptError(RuntimeError):
+    """A plugin raised ``KeyboardInterrupt`` without the user pressing Ctrl-C: its run fails."""
+
+    def __init__(self, where: str) -> None:
+        super().__init__(f"the plugin raised KeyboardInterrupt in {where} (not the user's "
+                         "Ctrl-C): this run fails, the sweep goes on")
