@@ -2,8 +2,12 @@
 
 * **Coordinates**: the search runs in the unit cube (:mod:`vpid_peers.unit_box`), so one
   step size ``sigma0`` fits every parameter; candidates go back to physical units on ``ask``.
-* **Population**: ``popsize = ps`` from the protocol (cma's own default would be
-  ``4 + 3 ln(dim)``, 10 for the vehicle's 9 parameters).
+* **Population** (``popsize``): ``library`` (the default since round three) is cma's own
+  ``4 + 3 ln(dim)``, 10 for the vehicle's 9 parameters; ``ps`` the protocol's population (the
+  default before, which handicapped CMA-ES: the committed study ran so); or a number.
+* **Restarts** (``restarts``): ``none``, or ``ipop``: when cma's termination criteria fire
+  before the budget is spent, a new search starts from a new random point with twice the
+  population (IPOP-CMA-ES, Auger and Hansen 2005), until the budget ends.
 * **Start**: the mean starts at a point drawn uniformly in the box by the run's generator, not
   the box's centre (on the vehicle problem the box is centred on the true parameters, so a
   centred start would begin at the answer). ``sigma0`` is a fraction of the box width.
@@ -25,7 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -43,13 +47,24 @@ class CMAESParams(OptimizerParams):
     """
 
     sigma0: float = 0.3
+    popsize: int | Literal["library", "ps"] = "library"
+    restarts: Literal["none", "ipop"] = "none"
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.sigma0) and 0.0 < self.sigma0 <= 1.0):
             raise ConfigError("optimizer.sigma0", self.sigma0, "a fraction of the box in (0, 1]")
-        if self.ps < 2:
+        if self.popsize == "ps" and self.ps < 2:
             raise ConfigError("problem.ps", self.ps, "at least 2 for cmaes (it recombines the "
                               "best half of each population)")
+        if isinstance(self.popsize, int) and not 2 <= self.popsize <= 100_000:
+            raise ConfigError("optimizer.popsize", self.popsize, "library, ps or an integer "
+                              "from 2 to 100000")
+
+    def population(self, dim: int) -> int:
+        """The first population size for a search in ``dim`` parameters."""
+        if self.popsize == "library":
+            return 4 + int(3 * math.log(dim))
+        return self.ps if self.popsize == "ps" else int(self.popsize)
 
 
 class CMAES(Optimizer):
@@ -61,9 +76,20 @@ class CMAES(Optimizer):
         super().__init__(params, bounds, rng)
         import cma  # the extra; imported here so that registering the plugin stays cheap
 
-        dim = bounds.dim
+        self._cma = cma
+        self._popsize = params.population(bounds.dim)
+        self._es = self._new_search()
+        self.schedule = self.budget  # evaluations: the run's budget
+        self._used = 0  # evaluations of the searches before the current one
+        self._pending: list[np.ndarray] | None = None
+        self._done = False
+        self.stop_reasons: dict[str, Any] = {}
+        self.searches = 1
+
+    def _new_search(self) -> Any:
+        """A cma search from a random start in the box with the current population."""
         options = {
-            "popsize": params.ps,
+            "popsize": self._popsize,
             "bounds": [0.0, 1.0],
             "BoundaryHandler": "BoundTransform",
             "randn": self._standard_normal,
@@ -72,12 +98,8 @@ class CMAES(Optimizer):
             "verb_log": 0,
             "verb_disp": 0,
         }
-        x0 = rng.random(dim)
-        self._es = cma.CMAEvolutionStrategy(x0, params.sigma0, options)
-        self.schedule = self.budget  # evaluations: the run's budget
-        self._pending: list[np.ndarray] | None = None
-        self._done = False
-        self.stop_reasons: dict[str, Any] = {}
+        x0 = self.rng.random(self.bounds.dim)
+        return self._cma.CMAEvolutionStrategy(x0, self.params.sigma0, options)
 
     def _standard_normal(self, *shape: int) -> np.ndarray:
         """cma's ``randn(lam, N)``: standard normal deviates from the run's generator."""
@@ -96,8 +118,16 @@ class CMAES(Optimizer):
         self._es.tell(self._pending, f.tolist())
         self._pending = None
         stop = dict(self._es.stop())
-        if self._es.countevals >= self.schedule:
+        used = self._used + self._es.countevals
+        if used >= self.schedule:
             stop["schedule"] = self.schedule
+        elif stop and self.params.restarts == "ipop":  # a new search, twice the population
+            self._used = used
+            self._popsize *= 2
+            self._es = self._new_search()
+            self.searches += 1
+            self.stop_reasons = {f"search {self.searches - 1}": stop}
+            return
         if stop:
             self.stop_reasons = stop
             self.done = True

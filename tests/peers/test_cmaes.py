@@ -115,7 +115,7 @@ def test_sigma0_is_a_fraction_of_the_box(registry):
     x0 = np.random.default_rng(6).random(3)
     assert np.all((x0 > 0.34) & (x0 < 0.66))
     problem = _sphere(registry, 3, 500, 1)
-    params = CMAESParams(ps=500, iterations=1, sigma0=0.02)
+    params = CMAESParams(ps=500, iterations=1, sigma0=0.02, popsize="ps")
     X = CMAES(params, problem.bounds, np.random.default_rng(6)).ask()
     np.testing.assert_allclose(X.mean(axis=0), problem.bounds.lower + x0 * problem.bounds.width,
                                atol=0.005 * 10.24)
@@ -128,7 +128,34 @@ def test_bad_values_name_the_key():
     with pytest.raises(ConfigError, match=r"optimizer\.sigma0=1\.5"):
         build_dataclass(CMAESParams, {"sigma0": 1.5}, prefix="optimizer")
     with pytest.raises(ConfigError, match=r"problem\.ps=1"):
-        build_dataclass(CMAESParams, {"ps": 1}, prefix="optimizer")
+        build_dataclass(CMAESParams, {"ps": 1, "popsize": "ps"}, prefix="optimizer")
+    for bad in ("big", 1, 10**6):
+        with pytest.raises(ConfigError, match=r"optimizer\.popsize"):
+            build_dataclass(CMAESParams, {"popsize": bad}, prefix="optimizer")
+    with pytest.raises(ConfigError, match=r"optimizer\.restarts"):
+        build_dataclass(CMAESParams, {"restarts": "bipop"}, prefix="optimizer")
+
+
+@pytest.mark.parametrize("popsize, expected", [("library", 4 + int(3 * np.log(9))),
+                                               ("ps", 20), (7, 7)])
+def test_population_is_the_librarys_by_default(popsize, expected):
+    """cma's own 4 + 3 ln(d) (10 for 9 parameters) unless ps or a number is asked for."""
+    bounds = Bounds(np.zeros(9), np.ones(9), tuple(f"x{i}" for i in range(9)))
+    params = build_dataclass(CMAESParams, {"ps": 20, "popsize": popsize}, prefix="optimizer")
+    assert CMAES(params, bounds, np.random.default_rng(0)).ask().shape == (expected, 9)
+
+
+def test_ipop_restarts_with_twice_the_population_until_the_budget(registry):
+    """On the 4-D sphere cma converges long before a budget of 5010 evaluations: without
+    restarts the run stops there; with ipop a new search with twice the population starts
+    each time, and the budget is used up."""
+    problem = _sphere(registry, 4, 10, 500)
+    plain, _ = _run(registry, "cmaes", problem, 0)
+    result, optimizer = _run(registry, "cmaes", problem, 0, restarts="ipop")
+    assert plain.evaluations < plain.budget // 2
+    assert optimizer.searches >= 3 and result.evaluations >= result.budget - 2 * 10 * 2**8
+    assert optimizer._popsize == (4 + int(3 * np.log(4))) * 2 ** (optimizer.searches - 1)
+    assert result.f_best <= plain.f_best
 
 
 def test_quiet_no_output_and_no_files(registry, tmp_path, monkeypatch, capfd):
