@@ -107,3 +107,38 @@ def test_with_the_declared_knowns_the_model_is_locally_identifiable(problem_cls,
     p = problem_cls(config)
     s = np.linalg.svd(_scaled_jacobian(p, p.x_true), compute_uv=False)
     assert s[-1] / s[0] > 1e-4, s
+
+
+def test_the_commonroad_bmw_modes_match_hand_computation():
+    """CommonRoad's BMW 320i set: the body modes near the front corner's bounce frequency,
+    sqrt(kf kt / (kf + kt) / m_corner) / 2 pi with m_corner = m a2 / (a1 + a2) / 2 (1.419 Hz),
+    within 2 %; the wheel hops at sqrt((kf + kt) / mf) / 2 pi (12.05 Hz) within 2 %."""
+    from vpid_vehicle.ride.full import FullCar, RideFullConfig, RideFullProblem
+
+    s = FullCar.sets["bmw320i"]
+    p = RideFullProblem(RideFullConfig(parameter_set="bmw320i"))
+    system = p.model.system(p.nominal[None], p.known, "body")
+    f = linear.undamped_frequencies_hz(system.M[0], system.K[0])
+    corner = s["m"] * s["a2"] / (s["a1"] + s["a2"]) / 2
+    bounce = np.sqrt(s["kf"] * s["kt"] / (s["kf"] + s["kt"]) / corner) / (2 * np.pi)
+    hop = np.sqrt((s["kf"] + s["kt"]) / s["mf"]) / (2 * np.pi)
+    assert f[0] == pytest.approx(bounce, rel=0.02)
+    assert np.all(np.abs(f[3:] / hop - 1) < 0.02)
+
+
+def test_a_symmetric_car_on_identical_tracks_cannot_show_its_roll_inertia():
+    """The BMW (centre of gravity on the centre line, no anti-roll bar) over a hump met by
+    both tracks alike never rolls: Ix is structurally non-identifiable (a singular value at
+    numerical zero, its direction on Ix); on an ISO road (independent tracks) every bound is
+    under 1 %."""
+    from vpid_vehicle.ride.full import RideFullConfig, RideFullProblem
+
+    from vpid_bench.analysis.identifiability import cramer_rao
+    from vpid_bench.analysis.profile import structural_symmetry
+
+    hump = RideFullProblem(RideFullConfig(parameter_set="bmw320i", road="hump"))
+    ratio, direction = structural_symmetry(hump)
+    assert ratio < 1e-6 and abs(direction[list(hump.bounds.names).index("Ix")]) > 0.99
+    road = RideFullProblem(RideFullConfig(parameter_set="bmw320i", road="iso8608",
+                                          speed_kmh=60.0))
+    assert max(cramer_rao(road)["crb_percent"]) < 1.0

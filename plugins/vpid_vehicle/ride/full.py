@@ -81,6 +81,15 @@ class FullCar(RideModel):
                             "kf": 10000.0, "kr": 13000.0, "cf": 5000.0, "cr": 5000.0,
                             "a1": 1.4, "a2": 1.47, "yL": 0.725, "yR": 0.725,
                             "kt": 200000.0, "kR": 10000.0},
+        # CommonRoad vehicle models 3.0.2, parameters_vehicle2.yaml (BMW 320i; DOT vehicle
+        # dynamics data; BSD-3): sprung mass, roll and pitch inertia, per-wheel suspension
+        # and tyre rates as given; the unsprung mass of an axle (m_uf, m_ur) split between its
+        # two wheels; the mean of the front and rear tracks (1.387, 1.364 m) for both axles;
+        # no anti-roll bar (the set's auxiliary torsion roll stiffness is another element)
+        "bmw320i": {"m": 965.7108, "Ix": 207.2652, "Iy": 1565.8179, "mf": 31.8961,
+                    "mr": 31.8961, "kf": 24453.1379, "kr": 19635.5047, "cf": 1786.2441,
+                    "cr": 1649.0833, "a1": 1.1562, "a2": 1.4227, "yL": 0.68771,
+                    "yR": 0.68771, "kt": 158294.1398, "kR": 0.0},
     }
     sensors = {
         "body": tuple((f"b{w}''", "m/s²") for w in WHEELS),
@@ -118,7 +127,7 @@ class RideFullConfig(RideConfig):
     """``parameter_set``: the published car (docs/suite.md); ``sensors``: the measured
     channels; the other keys: :class:`.problem.RideConfig`."""
 
-    parameter_set: Literal["jazar", "jazar_symmetric"] = "jazar"
+    parameter_set: Literal["jazar", "jazar_symmetric", "bmw320i"] = "jazar"
     sensors: Literal["body", "body_wheel", "body_rates"] = "body"
 
 
