@@ -208,3 +208,20 @@ def test_the_first_screen_bound_is_each_contexts_own_whatever_the_record_order(s
     for order in (records, records[::-1], records[1::2] + records[::2]):
         got = crb_norm_by_context(order, run_rows(order))
         assert got == pytest.approx(expected, rel=1e-12)
+
+
+def test_a_structural_symmetry_is_named_in_the_section(tmp_path, registry, full):
+    """The BMW on a hump both tracks meet alike cannot show its roll inertia: the section
+    says the record is blind to a parameter combination; the paper's design does not."""
+    from vpid_vehicle.ride.full import RideFullConfig
+
+    problem = hydra_node(RideFullConfig, "ride_full") | {
+        "iterations": 1, "parameter_set": "bmw320i", "road": "hump", "duration_s": 1.0}
+    cfg = {"problem": problem, "optimizer": {"name": "random"}, "seed": 0, "runs": 1,
+           "progress": False, "report": False}
+    run_from_config(cfg, tmp_path / "bmw", registry)
+    md = " ".join(build_report([tmp_path / "bmw"], tmp_path / "report", registry=registry,
+                               short=True).report_md.read_text().split())
+    assert "The record is blind to a combination of the parameters" in md
+    assert "Ix (" in md.split("## Identifiability")[1]
+    assert "blind to a combination" not in " ".join(full.report_md.read_text().split())

@@ -32,6 +32,7 @@ from typing import Any
 
 from ..analysis.estimator_floors import FILE as FLOORS_FILE
 from ..analysis.optimum import find_optimum, load_optima, record_settings
+from ..analysis.profile import STRUCTURAL_RATIO
 from ..records.io import stable_hash
 from .estimator_floors import read_estimator_floors
 from .estimator_floors import sentence as estimator_sentence
@@ -342,6 +343,11 @@ def _design_text(ctx: ReportContext, design: Mapping[str, Any]) -> str:
     if design.get("estimators"):
         text += "Floors per estimator: " + estimator_sentence(
             design["estimators"], design["unit"], ctx.fmt) + ". "
+    if cond is None or cond >= 1.0 / STRUCTURAL_RATIO:
+        text += ("The record is blind to a combination of the parameters (a structural "
+                 "symmetry: the smallest singular value is at most "
+                 f"{STRUCTURAL_RATIO:g} of the largest), so no record of this design can "
+                 "identify the parameters in it; `vpid-bench-design --profile` names them. ")
     if undetermined:
         text += (f"This design cannot determine {', '.join(undetermined)}: the bound exceeds "
                  f"{UNDETERMINED_PERCENT:g} %.")
