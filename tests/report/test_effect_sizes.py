@@ -42,3 +42,14 @@ def test_the_detail_reads_from_the_named_side_and_bounds_a_floor_p():
 def test_the_floor_is_the_permutation_resolution():
     assert p_floor("permutation (9999 resamples)") == pytest.approx(2 / (N_RESAMPLES + 1))
     assert p_floor("exact") == 0.0
+
+
+def test_methods_the_tests_do_not_separate_are_not_called_equivalent_beyond_the_margin():
+    from vpid_bench.report.first_screen import EQUIVALENCE_MARGIN, ContextResult, _not_equivalent
+
+    res = ContextResult("c", "NoRE", "%", [], [], 1.0, 1.0, "", True)
+    rows = [{"algorithm": "a", "median": 10.0}, {"algorithm": "b", "median": 10.5},
+            {"algorithm": "c", "median": 15.0}]
+    assert _not_equivalent(res, "a", ["b"], rows) == ""  # 5 %: within the margin
+    text = _not_equivalent(res, "a", ["b", "c"], rows)
+    assert "differ by up to 50 %" in text and f"{100 * EQUIVALENCE_MARGIN:g} % margin" in text
