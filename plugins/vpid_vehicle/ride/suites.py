@@ -4,7 +4,7 @@ suite it belongs to, so ``vpid-bench -m suite=smoke optimizer=...`` sweeps them.
 
 * ``smoke``: every family once, short records and a small protocol (``iterations=10``), for a
   first look in minutes;
-* ``vpid1``: the suite proper, 14 problems over the four families (quarter, half and full car,
+* ``vpid1``: the suite proper, 15 problems over the four families (quarter, half and full car,
   single-track lateral), dimensions 4 to 9, three road inputs and two manoeuvres, every sensor
   set, one problem with model error (the linear model fitted to a Magic Formula record) and
   one with several basins (the Magic Formula model).
@@ -67,6 +67,8 @@ MEMBERS: tuple[type, ...] = (
            speed_kmh=60.0, sensors="body_rates"),
     member(RideFullProblem, "vpid1_f_sym_iso_d", ("vpid1",), parameter_set="jazar_symmetric",
            road="iso8608", road_class="D", sensors="body_wheel"),
+    member(RideFullProblem, "vpid1_f_bmw_iso_c", ("vpid1",), parameter_set="bmw320i",
+           road="iso8608", speed_kmh=60.0),
     member(LateralProblem, "vpid1_l_civic_sine", ("vpid1",)),
     member(LateralProblem, "vpid1_l_smart_step", ("vpid1",), parameter_set="smart",
            manoeuvre="step", sensors="yaw"),
