@@ -71,8 +71,9 @@ def build(registry: Any, name: str, settings: list[tuple[str, str]]) -> Any:
 
 def measure(problem: Any, floor: int, profile: bool) -> dict[str, Any]:
     """The design's numbers (see the module)."""
+    from .analysis.estimator_floors import truth_optima_metric
     from .analysis.identifiability import cramer_rao
-    from .analysis.profile import STRUCTURAL_RATIO, profile_intervals, structural_symmetry
+    from .analysis.profile import STRUCTURAL_RATIO, profile_intervals
 
     crb = cramer_rao(problem)
     if crb is None:
@@ -88,21 +89,16 @@ def measure(problem: Any, floor: int, profile: bool) -> dict[str, Any]:
         "undetermined": [f"{n} ({100 * r:.3g} %)" for n, r in zip(crb["names"], rel,
                                                                    strict=True)
                          if 100 * r > UNDETERMINED_PERCENT],
-        "structural": structural_symmetry(problem)[0] <= STRUCTURAL_RATIO,
+        # the condition number is of the same whitened, scaled Jacobian: no second one
+        "structural": (crb["condition_number"] is None
+                       or crb["condition_number"] >= 1.0 / STRUCTURAL_RATIO),
         "floor": None, "profile": None,
     }
     if floor:
-        from .analysis.optimum import polish
-
-        values = []
-        for i in range(floor):
-            inst = problem.instance(i)
-            x, _ = polish(inst, inst.x_true)
-            metrics = inst.metrics(x)
-            values.append(float(next(iter(metrics.values()))))
-        out["floor"] = statistics.median(values)
+        measured = truth_optima_metric(problem, floor)
+        out["floor"] = statistics.median(measured[1]) if measured else None
     if profile:
-        out["profile"] = profile_intervals(problem)
+        out["profile"] = profile_intervals(problem, crb)
     return out
 
 

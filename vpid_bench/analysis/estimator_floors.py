@@ -32,11 +32,27 @@ def offers_objectives(problem: Problem) -> bool:
             and getattr(config, "objective", None) in OBJECTIVES)
 
 
+def truth_optima_metric(problem: Problem, n: int) -> tuple[str, list[float]] | None:
+    """The problem's headline metric (its first) of the optimum of each of instances
+    0 .. n-1, polished from the truth: the floor of its objective on those records. ``None``
+    when the problem reports no metric."""
+    from .optimum import polish
+
+    metric: str | None = None
+    values = []
+    for i in range(n):
+        inst = problem.instance(i)
+        metrics = inst.metrics(polish(inst, inst.x_true)[0])
+        metric = metric or next(iter(metrics), None)
+        if metric is None:
+            return None
+        values.append(float(metrics[metric]))
+    return (metric, values) if metric is not None else None
+
+
 def estimator_floors(problem: Problem, runs: int) -> dict[str, Any] | None:
     """``{"metric", "instances", "chosen", "floors": {objective: {"median", "values"}}}`` for
     a problem that offers the choice and knows its truth; ``None`` otherwise."""
-    from .optimum import polish
-
     if not offers_objectives(problem) or problem.x_true is None:
         return None
     n = max(1, min(INSTANCES, runs))
@@ -48,15 +64,10 @@ def estimator_floors(problem: Problem, runs: int) -> dict[str, Any] | None:
             base = problem if objective == problem.config.objective else type(problem)(config)
         except (VpidBenchError, TypeError, ValueError):
             continue  # the problem refuses this objective here (e.g. ml without noise)
-        values = []
-        for i in range(n):
-            inst = base.instance(i)
-            x, _ = polish(inst, inst.x_true)
-            metrics = inst.metrics(x)
-            metric = metric or next(iter(metrics), None)
-            if metric is None:
-                return None
-            values.append(float(metrics[metric]))
+        measured = truth_optima_metric(base, n)
+        if measured is None:
+            return None
+        metric, values = measured
         floors[objective] = {"median": statistics.median(values), "values": values}
     if not floors or metric is None:
         return None

@@ -116,18 +116,24 @@ class _Likelihood:
         return z, self.nll(z)
 
 
-def profile_intervals(problem: Problem, max_steps: int = 12) -> dict[str, Any]:
+def profile_intervals(problem: Problem, crb: dict[str, Any] | None = None,
+                      max_steps: int = 12) -> dict[str, Any]:
     """95 % profile-likelihood intervals of every parameter of ``problem`` (one record: an
-    instance). Returns ``{"names", "estimate", "lower", "upper", "classification",
-    "symmetry_ratio"}`` with physical values; an open end is ``None``."""
+    instance). ``crb``: its :func:`~.identifiability.cramer_rao` when already computed (the
+    first steps along each profile are its bounds; the symmetry test its condition number).
+    Returns ``{"names", "estimate", "lower", "upper", "classification", "symmetry_ratio"}``
+    with physical values; an open end is ``None``."""
     from scipy.optimize import brentq
+
+    from .identifiability import cramer_rao
 
     lik = _Likelihood(problem)
     z_hat, nll_hat = lik.fit(np.asarray(problem.x_true, float) / lik.scale)
-    ratio, direction = structural_symmetry(problem)
-    from .identifiability import cramer_rao
-
-    crb = cramer_rao(problem)
+    crb = crb if crb is not None else cramer_rao(problem)
+    cond = None if crb is None else crb["condition_number"]
+    ratio = 0.0 if cond is None or not np.isfinite(cond) else 1.0 / cond
+    # the direction needs the singular vectors: a second decomposition, only when symmetric
+    direction = structural_symmetry(problem)[1] if ratio <= STRUCTURAL_RATIO else None
     rel_sd = (np.asarray(crb["crb_percent"]) / 100.0 if crb is not None
               else np.full(z_hat.size, 0.01))
     names = list(problem.bounds.names)

@@ -11,6 +11,7 @@ from typing import Any
 
 from ..analysis.estimator_floors import FILE
 from ..estimators import DESCRIPTION, OBJECTIVES
+from .load import first_file_by_context
 from .safe import escape
 
 #: Larger files are not read (three objectives of 1000 instances are ~60 kB).
@@ -58,21 +59,8 @@ def read_estimator_floors(path: Path) -> tuple[dict[str, Any] | None, str]:
 def by_context(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
                ) -> dict[str, dict[str, Any]]:
     """Per context, the first readable ``estimators.json`` of its jobs."""
-    out: dict[str, dict[str, Any]] = {}
-    by_id = {r["run_id"]: r for r in records}
-    tried: set[Path] = set()
-    for row in rows:
-        context, rec = row["context"], by_id[row["run_id"]]
-        if context in out:
-            continue
-        path = Path(str(rec.get("_job_dir", "."))) / FILE
-        if path in tried:
-            continue
-        tried.add(path)
-        data, _ = read_estimator_floors(path)
-        if data is not None:
-            out[context] = data
-    return out
+    return first_file_by_context(records, rows, FILE,
+                                 lambda path, _rec: read_estimator_floors(path)[0])
 
 
 def sentence(data: Mapping[str, Any], unit: str, fmt: Any) -> str:

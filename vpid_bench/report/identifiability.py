@@ -36,6 +36,7 @@ from ..analysis.profile import STRUCTURAL_RATIO
 from ..records.io import stable_hash
 from .estimator_floors import read_estimator_floors
 from .estimator_floors import sentence as estimator_sentence
+from .load import first_file_by_context
 from .safe import escape
 from .sections import Contribution, ReportContext, Section
 
@@ -165,22 +166,12 @@ def crb_norm_by_context(records: Sequence[Mapping[str, Any]],
     """Per context, the norm of the Cramér–Rao bounds (percent) its jobs wrote (the first
     readable ``identifiability.json`` of the context's jobs); contexts without one are left
     out. For the report's first screen: what an efficient estimator could reach."""
-    out: dict[str, float] = {}
-    tried: set[Path] = set()
-    by_id = {r["run_id"]: r for r in records}  # rows are sorted, records are not
-    for row in rows:
-        context, rec = row["context"], by_id[row["run_id"]]
-        if context in out:
-            continue
-        path = Path(str(rec.get("_job_dir", "."))) / FILE
-        if path in tried:
-            continue
-        tried.add(path)
+    def read(path: Path, rec: Mapping[str, Any]) -> Any:
         names = list((rec.get("parameters") or {}).get("names") or [])
-        data, _ = read_identifiability(path, names) if path.exists() else (None, "")
-        if data is not None:
-            out[context] = float(data["crb_norm_percent"])
-    return out
+        return read_identifiability(path, names)[0] if path.exists() else None
+
+    found = first_file_by_context(records, rows, FILE, read)
+    return {c: float(d["crb_norm_percent"]) for c, d in found.items()}
 
 
 def _design_label(contexts: Sequence[str]) -> str:

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -478,4 +478,26 @@ def trace_sets(records: list[dict[str, Any]], rows: list[dict[str, Any]]
         out.setdefault(row["context"], {}).setdefault(row["algorithm"], []).append((
             np.asarray(ev, dtype=float),
             np.array([np.nan if b is None else b for b in best], dtype=float)))
+    return out
+
+
+def first_file_by_context(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]],
+                          name: str, read: Callable[[Path, Mapping[str, Any]], Any]
+                          ) -> dict[str, Any]:
+    """Per context, the first file ``name`` of its jobs that ``read(path, record)`` accepts
+    (returns other than ``None``): the files a job writes once for all its runs (bounds,
+    floors per estimator). Rows and records pair by run id (rows are sorted, records are
+    not); each job folder is tried once; contexts with no readable file are left out."""
+    out: dict[str, Any] = {}
+    by_id = {r["run_id"]: r for r in records}
+    tried: set[Path] = set()
+    for row in rows:
+        context, rec = row["context"], by_id[row["run_id"]]
+        path = Path(str(rec.get("_job_dir", "."))) / name
+        if context in out or path in tried:
+            continue
+        tried.add(path)
+        data = read(path, rec)
+        if data is not None:
+            out[context] = data
     return out
