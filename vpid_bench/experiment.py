@@ -22,12 +22,12 @@ run's record (status ``failed``) and the job goes on; only ``KeyboardInterrupt``
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import logging
+import multiprocessing
 import sys
 import time
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -38,10 +38,11 @@ from .artifacts import best_of, write_best_signals
 from .build import ProblemCache, run_rng
 from .errors import PluginError, VpidBenchError
 from .job_runs import joins_lockstep, run_outcomes, warm_up
-from .machine import available_cores
+from .machine import available_cores, one_blas_thread
 from .plugins import Registry
 from .runner import RunTimeoutError, keep_cwd, time_limit
 from .spec import Job, parse_job
+from .workers import Workers, can_send, outcomes_isolated
 
 log = logging.getLogger(__name__)
 
@@ -73,23 +74,6 @@ def _existing_ok(path: Path, rid: str) -> bool:
         log.warning("%s; running it again", exc)
         return False
     return record["run_id"] == rid and record["status"] == "ok"
-
-
-@contextlib.contextmanager
-def _one_blas_thread() -> Iterator[None]:
-    """numpy's and scipy's BLAS/OpenMP pools limited to one thread for the job, unless the
-    user set a thread count in the environment: a problem's own threads (``threads``) and the
-    launcher's workers share the cores, and oversubscribed BLAS threads slow them all down."""
-    import os
-
-    if any(os.environ.get(v) for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
-                                       "MKL_NUM_THREADS", "VPID_BENCH_BLAS_THREADS")):
-        yield
-        return
-    from threadpoolctl import threadpool_limits
-
-    with threadpool_limits(limits=1, user_api="blas"):
-        yield
 
 
 def _job_key(job: Job, registry: Registry | None, problem: Any) -> dict[str, Any]:
@@ -139,15 +123,52 @@ def _check_artifacts(job_dir: Path, written: Any, problem_name: str) -> None:
 
 
 def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
-            problems: ProblemCache | None = None, optima_dir: Path | None = None
-            ) -> JobSummary:
+            problems: ProblemCache | None = None, optima_dir: Path | None = None,
+            pool: Workers | None = None) -> JobSummary:
     """Run every run of ``job`` and write one record per run into ``job_dir/records``; then
     write what the records allow (:func:`~vpid_bench.analysis.job.analyse_job`) into
-    ``optima_dir`` (default ``job_dir/optima``)."""
+    ``optima_dir`` (default ``job_dir/optima``). ``pool``: the sweep's worker processes
+    (``isolation=auto`` uses them when given; ``process`` starts its own without)."""
     problem = (problems or ProblemCache(size=1)).get(job)
     problem.set_threads(job.spec.threads or available_cores())
-    # Build one optimizer up front: a fault in its constructor stops the job before any run;
-    # a constructor that never returns is bounded by the run's time limit.
+    pool, own_pool = _choose_workers(job, pool)
+    try:
+        return _run_job(job, Path(job_dir), registry, problem, optima_dir, pool)
+    finally:
+        if own_pool:
+            pool.close()
+
+
+def _choose_workers(job: Job, pool: Workers | None) -> tuple[Workers | None, bool]:
+    """The worker processes the job's runs go to (``None``: this process) and whether the
+    job started them itself (``isolation``, see :class:`~vpid_bench.spec.JobSpec`)."""
+    mode = job.spec.isolation
+    if mode == "none" or (mode == "auto" and pool is None):
+        return None, False
+    why = can_send(job)
+    if why is not None:
+        if mode == "process":
+            raise VpidBenchError(f"isolation=process: the job cannot be sent to a worker "
+                                 f"process ({why}); define plugin classes at module level, or "
+                                 "set isolation=none")
+        log.info("runs in this process: the job cannot be sent to a worker process (%s)", why)
+        return None, False
+    if pool is None:
+        method = multiprocessing.get_start_method(allow_none=True)
+        if method not in (None, "spawn", "fork", "forkserver"):
+            raise VpidBenchError(f"isolation=process cannot start worker processes from this "
+                                 f"process (start method {method!r}, e.g. a joblib launcher's "
+                                 "worker); use isolation=none or the basic launcher")
+        return Workers(job.spec.workers or available_cores()), True
+    return pool, False
+
+
+def _build_one_optimizer(job: Job, problem: Any, pool: Workers | None) -> None:
+    """Build one optimizer up front: a fault in its constructor stops the job before any
+    run; a constructor that never returns is bounded by the run's time limit."""
+    if pool is not None:
+        pool.probe(job)
+        return
     try:
         with time_limit(job.spec.run_timeout_s), keep_cwd():
             job.optimizer_cls(job.params, problem.bounds, run_rng(job.spec.seed, 0))
@@ -155,19 +176,23 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
         if interrupts.from_user():
             raise
         raise interrupts.PluginInterruptError("its constructor") from None
+
+
+def _run_job(job: Job, job_dir: Path, registry: Registry | None, problem: Any,
+             optima_dir: Path | None, pool: Workers | None) -> JobSummary:
+    _build_one_optimizer(job, problem, pool)
     provenance = {kind: (registry.provenance(kind, name) if registry is not None else {})
                   for kind, name in (("problem", job.problem_name),
                                      ("optimizer", job.optimizer_name))}
-    job_dir = Path(job_dir)
     job_dir.mkdir(parents=True, exist_ok=True)
     _check_artifacts(job_dir, problem.write_artifacts(job_dir), job.problem_name)
     spec = job.spec
     summary = JobSummary(job_dir, job.problem_name, job.optimizer_name, spec.runs, 0, 0, [],
                          [], 0.0)
     start = time.perf_counter()
-    with _one_blas_thread():
+    with one_blas_thread():
         _run_missing(job, problem, job_dir, _job_key(job, registry, problem), provenance,
-                     summary)
+                     summary, pool)
         records = _read_records(summary.record_paths)  # once, for all that follows
         gaps: dict[int, float] = {}
         try:
@@ -185,9 +210,10 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
 
 
 def _run_missing(job: Job, problem: Any, job_dir: Path, key: Mapping[str, Any],
-                 provenance: Mapping[str, Any], summary: JobSummary) -> None:
-    """Run the runs without a complete record (all of them without ``resume``) and write a
-    record for each as soon as it is over."""
+                 provenance: Mapping[str, Any], summary: JobSummary,
+                 pool: Workers | None) -> None:
+    """Run the runs without a complete record (all of them without ``resume``), here or in
+    ``pool``'s worker processes, and write a record for each as soon as it is over."""
     spec = job.spec
     bar = _progress_bar(spec.runs, f"{job.optimizer_name} on {job.problem_name}",
                         enabled=spec.progress)
@@ -203,9 +229,12 @@ def _run_missing(job: Job, problem: Any, job_dir: Path, key: Mapping[str, Any],
             else:
                 todo[i] = (rid, path)
         lockstep = len(todo) > 1 and joins_lockstep(job, problem)
-        if todo:
-            summary.warmup_s = warm_up(job, problem, lockstep)
-        for run in run_outcomes(job, problem, list(todo), lockstep):
+        if pool is not None:  # each worker warms up once per job
+            outcomes = outcomes_isolated(pool, job, list(todo), lockstep)
+        else:
+            summary.warmup_s = warm_up(job, problem, lockstep) if todo else 0.0
+            outcomes = run_outcomes(job, problem, list(todo), lockstep)
+        for run in outcomes:
             rid, path = todo[run.index]
             record = rec.make_record(job, run, rid, problem.instance(run.index), provenance)
             _refuse_swapped(job_dir, path.parent)
@@ -221,13 +250,13 @@ def _run_missing(job: Job, problem: Any, job_dir: Path, key: Mapping[str, Any],
 
 
 def run_from_config(cfg: Any, job_dir: str | Path, registry: Registry | None = None,
-                    problems: ProblemCache | None = None, optima_dir: Path | None = None
-                    ) -> JobSummary:
+                    problems: ProblemCache | None = None, optima_dir: Path | None = None,
+                    pool: Workers | None = None) -> JobSummary:
     """Parse and check the composed config ``cfg`` (:func:`vpid_bench.spec.parse_job`), then
     run the job into ``job_dir``. Raises :class:`~vpid_bench.api.ConfigError` (before any
     run) for a bad value."""
     registry = registry if registry is not None else Registry()
-    return run_job(parse_job(cfg, registry), job_dir, registry, problems, optima_dir)
+    return run_job(parse_job(cfg, registry), job_dir, registry, problems, optima_dir, pool)
 
 
 def _postfix(record: Mapping[str, Any]) -> str:

@@ -35,6 +35,14 @@ def install() -> None:
         _Watch.installed, _Watch.signalled = True, False
 
 
+def plugin_only() -> None:
+    """In a worker process (:mod:`vpid_bench.workers`): SIGINT is ignored, the user's Ctrl-C
+    is the supervisor's to handle, so every ``KeyboardInterrupt`` seen here is a plugin's."""
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _Watch.installed, _Watch.signalled = True, False
+
+
 def from_user() -> bool:
     """Whether a ``KeyboardInterrupt`` being handled now is the user's (or cannot be told)."""
     return not _Watch.installed or _Watch.signalled

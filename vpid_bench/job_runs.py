@@ -86,7 +86,8 @@ def run_outcomes(job: Job, problem: Problem, indices: Sequence[int], lockstep: b
         yield from _group(job, problem, group)
 
 
-def _now() -> str:
+def now_utc() -> str:
+    """The time now, UTC, ISO 8601 (when a run started)."""
     return _dt.datetime.now(_dt.timezone.utc).isoformat()
 
 
@@ -94,7 +95,7 @@ def _group(job: Job, problem: Problem, indices: list[int]) -> list[RunOutcome]:
     """Build an optimizer per run (a constructor that raises or passes the time limit fails its
     run alone), then run the group through the one run loop."""
     timeout = job.spec.run_timeout_s
-    started = _now()
+    started = now_utc()
     lanes: list[Lane] = []
     failed: dict[int, BaseException] = {}
     built_s: dict[int, float] = {}

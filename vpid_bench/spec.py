@@ -40,6 +40,10 @@ MAX_ITERATIONS = 1_000_000
 MAX_BUDGET = 10**9
 
 
+#: Values of the ``isolation`` key (see :class:`JobSpec`).
+ISOLATION = ("auto", "process", "none")
+
+
 @dataclasses.dataclass(frozen=True)
 class JobSpec:
     """The top-level keys of a job (``vpid-bench seed=3 runs=10 ...``).
@@ -50,7 +54,12 @@ class JobSpec:
     ``progress``: a progress bar on stderr. ``report``: write a report at the end of a job or
     a sweep. ``threads``: threads a problem may use to evaluate a batch (null: every core);
     results never depend on it. ``run_timeout_s``: wall-time limit of one run in seconds (null:
-    none); a run past it is recorded as failed.
+    none); a run past it is recorded as failed. ``isolation``: where the optimizer's code and
+    the evaluations run: ``process`` in supervised worker processes (a crash, ``os._exit`` or
+    a run blocked in C costs that run only; :mod:`vpid_bench.workers`), ``none`` in this
+    process, ``auto`` (default) ``process`` under the ``vpid-bench`` command and ``none`` for a
+    program calling the library. ``workers``: worker processes running a job's runs at once
+    (null: every core; with a process launcher on one machine set 1). Neither changes a result.
     """
 
     seed: int = 0
@@ -61,6 +70,8 @@ class JobSpec:
     report: bool = True
     threads: int | None = None
     run_timeout_s: float | None = None
+    isolation: str = "auto"
+    workers: int | None = None
 
     def __post_init__(self) -> None:
         _check_int("seed", self.seed, 0, 2**63 - 1)
@@ -72,12 +83,16 @@ class JobSpec:
         if self.run_timeout_s is not None and not 0 < self.run_timeout_s < float("inf"):
             raise ConfigError("run_timeout_s", self.run_timeout_s,
                               "a positive number of seconds or null")
+        if self.isolation not in ISOLATION:
+            raise ConfigError("isolation", self.isolation, " | ".join(ISOLATION))
+        if self.workers is not None:
+            _check_int("workers", self.workers, 1, 1024, nullable=True)
 
 
 #: The top-level keys, in the order they are documented.
 TOP_LEVEL_KEYS = tuple(f.name for f in dataclasses.fields(JobSpec))
 #: Keys that never change a result (they may differ between a sweep and its resume).
-OPERATIONAL_KEYS = ("resume", "progress", "report", "threads")
+OPERATIONAL_KEYS = ("resume", "progress", "report", "threads", "isolation", "workers")
 
 
 def _check_int(key: str, value: int, low: int, high: int, nullable: bool = False) -> None:

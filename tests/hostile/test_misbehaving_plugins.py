@@ -104,9 +104,39 @@ class Swapper(Base):
                 os.symlink(os.environ["NAUGHTY_ELSEWHERE"], records)
 
 
+class Exiter(Base):
+    def ask(self):
+        os._exit(3)
+
+
+class Aborter(Base):
+    def ask(self):
+        import resource
+
+        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))  # no core file in the test folder
+        os.abort()
+
+
+class Crasher(Base):
+    def ask(self):
+        import ctypes
+
+        ctypes.string_at(0)  # reads address 0: SIGSEGV
+
+
+class Deaf(Base):
+    def ask(self):
+        import signal
+
+        signal.signal(signal.SIGALRM, signal.SIG_IGN)  # defeats the in-process limit
+        time.sleep(30)
+        return super().ask()
+
+
 @hookimpl
 def vpid_bench_register_optimizers(register):
-    for cls in (SlowClose, SlowBuild, Wanderer, Lingerer, Thrower, Interrupter, Swapper):
+    for cls in (SlowClose, SlowBuild, Wanderer, Lingerer, Thrower, Interrupter, Swapper, Exiter,
+                Aborter, Crasher, Deaf):
         register(cls.__name__.lower(), cls)
 '''
 
@@ -158,10 +188,13 @@ def test_a_plugin_that_changes_folder_does_not_move_the_sweep(site, tmp_path):
     assert not list((tmp_path / "elsewhere").rglob("*.json"))
 
 
-def test_a_thread_left_running_does_not_keep_the_command_alive(site, tmp_path):
-    out = _sweep(site, tmp_path, "lingerer", timeout=90)
+@pytest.mark.parametrize("isolation", ["process", "none"])
+def test_a_thread_left_running_does_not_keep_the_command_alive(site, tmp_path, isolation):
+    """In a worker process the thread ends with its worker; in the command's own process
+    (isolation=none) the exit watchdog names it and ends the command."""
+    out = _sweep(site, tmp_path, "lingerer", f"isolation={isolation}", timeout=90)
     assert out.returncode == 0, out.stderr[-2000:]
-    assert "thread(s) lingerer" in out.stderr
+    assert ("thread(s) lingerer" in out.stderr) == (isolation == "none")
     assert len(_records(tmp_path, "lingerer")) == 2
 
 
@@ -170,8 +203,9 @@ def test_an_exception_in_a_plugins_thread_is_one_line(site, tmp_path):
     assert out.returncode == 0, out.stderr[-2000:]
     assert "Traceback" not in out.stderr
     lines = [ln for ln in out.stderr.splitlines() if "thread thrower raised ValueError" in ln]
-    # one line per construction (the job's up-front check, the warm-up, each run), no traceback
-    assert 1 <= len(lines) <= 4
+    # one line per construction (the job's up-front check, a warm-up in each of the two worker
+    # processes, each run), no traceback
+    assert 1 <= len(lines) <= 5
 
 
 def test_a_keyboardinterrupt_raised_by_a_plugin_fails_its_runs_not_the_sweep(site, tmp_path):
@@ -194,3 +228,40 @@ def test_records_are_not_written_through_a_folder_swapped_for_a_link(site, tmp_p
     assert "became a symbolic link" in out.stderr and "Traceback" not in out.stderr
     assert not list((tmp_path / "elsewhere").glob("*.json"))
     assert len(_records(tmp_path, "random")) == 2
+
+
+@pytest.mark.parametrize(("optimizer", "ended"), [("exiter", "exit code 3"),
+                                                  ("aborter", "signal SIGABRT"),
+                                                  ("crasher", "signal SIGSEGV")])
+def test_a_plugin_that_ends_its_process_costs_its_runs_only(site, tmp_path, optimizer, ended):
+    """os._exit, os.abort, a segfault in ask(): in a worker process (isolation=process, the
+    command's default) each ends its worker, not the sweep: its runs are recorded as failed
+    with how the process ended, random runs after it, and a resume does not crash again."""
+    import json
+
+    out = _sweep(site, tmp_path, optimizer)
+    assert out.returncode == 1, out.stderr[-2000:]
+    assert len(_records(tmp_path, "random")) == 2
+    failed = [json.loads(p.read_text()) for p in _records(tmp_path, optimizer)]
+    assert len(failed) == 2 and all(r["status"] == "failed" for r in failed)
+    assert all(ended in r["error"]["message"] for r in failed), failed[0]["error"]
+    again = _sweep(site, tmp_path, optimizer, "--resume")
+    assert again.returncode == 1 and "sweep:" in again.stderr, again.stderr[-2000:]
+
+
+def test_a_run_deaf_to_the_alarm_is_killed_with_its_worker(site, tmp_path):
+    """SIGALRM ignored, then a 30 s sleep: the in-process limit cannot stop it; the
+    supervisor kills the worker GRACE_S after run_timeout_s and records a timeout."""
+    import json
+    import time
+
+    from vpid_bench.workers import GRACE_S
+
+    t0 = time.monotonic()
+    out = _sweep(site, tmp_path, "deaf", "run_timeout_s=1", timeout=120)
+    assert time.monotonic() - t0 < 2 * (30 + 5)  # two unkilled sleeps would take 60 s
+    assert out.returncode == 1, out.stderr[-2000:]
+    assert len(_records(tmp_path, "random")) == 2
+    failed = [json.loads(p.read_text()) for p in _records(tmp_path, "deaf")]
+    assert [r["error"]["type"] for r in failed] == ["WorkerKilledError"] * 2
+    assert f"within {GRACE_S:.0f} s more" in failed[0]["error"]["message"]

@@ -63,10 +63,12 @@ def result_section(result: RunResult, problem: Problem) -> dict[str, Any]:
 
 def error_section(error: BaseException) -> dict[str, str]:
     """Type, message and traceback of the exception that failed a run."""
+    # an exception carried from a worker process keeps its own type name and traceback
     return {
-        "type": type(error).__name__,
+        "type": getattr(error, "remote_type", type(error).__name__),
         "message": str(error),
-        "traceback": "".join(traceback.format_exception(error)),
+        "traceback": (getattr(error, "remote_traceback", None)
+                      or "".join(traceback.format_exception(error))),
     }
 
 

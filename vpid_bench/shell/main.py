@@ -41,10 +41,11 @@ def debug_enabled() -> bool:
 
 def one_line(exc: BaseException) -> str:
     """An exception as one line: our own errors as they are, others with their type."""
-    text = " ".join(str(exc).split()) or type(exc).__name__
-    if isinstance(exc, (VpidBenchError, ValueError)):
+    name = getattr(exc, "remote_type", type(exc).__name__)  # carried from a worker process
+    text = " ".join(str(exc).split()) or name
+    if isinstance(exc, (VpidBenchError, ValueError)) or getattr(exc, "plain", False):
         return text
-    return f"{type(exc).__name__}: {text}"
+    return f"{name}: {text}"
 
 
 def _refuse(exc: BaseException) -> NoReturn:
@@ -56,7 +57,8 @@ def _refuse(exc: BaseException) -> NoReturn:
 
 class JobTask:
     """Hydra's task function: runs one job, writes its ``job.json``, never raises (one failed
-    job must not stop the sweep). The registry and the problem cache are rebuilt in a launcher's
+    job must not stop the sweep). The registry, the problem cache and the worker processes
+    (:mod:`vpid_bench.workers`, shared by the sweep's jobs) are rebuilt in a launcher's
     worker process (they are not pickled)."""
 
     __module__ = __name__
@@ -64,9 +66,15 @@ class JobTask:
     def __init__(self, registry: Any = None) -> None:
         self._registry = registry
         self._problems: Any = None
+        self._pool: Any = None
 
     def __getstate__(self) -> dict[str, Any]:
-        return {"_registry": None, "_problems": None}
+        return {"_registry": None, "_problems": None, "_pool": None}
+
+    def close(self) -> None:
+        """Stop the sweep's worker processes."""
+        if self._pool is not None:
+            self._pool.close()
 
     def __call__(self, cfg: Any) -> float | None:
         from hydra.core.hydra_config import HydraConfig
@@ -86,17 +94,22 @@ class JobTask:
         """Run the job; its search score is what an optimizing sweeper (Optuna) minimises."""
         from ..build import ProblemCache
         from ..experiment import run_from_config
+        from ..machine import available_cores
+        from ..workers import Workers
 
         try:
             if self._registry is None:
                 self._registry = _load_registry()
             if self._problems is None:
                 self._problems = ProblemCache()
+            if self._pool is None and _basic_launcher(hydra_cfg):
+                self._pool = Workers(available_cores())
             if hydra_cfg.output_subdir is None:
                 _save_job_config(cfg, job_dir)
             # The jobs of a sweep share one folder of instance optima (each polished once).
             optima = Path(str(hydra_cfg.sweep.dir)) / "optima" if multirun else None
-            summary = run_from_config(cfg, job_dir, self._registry, self._problems, optima)
+            summary = run_from_config(cfg, job_dir, self._registry, self._problems, optima,
+                                      self._pool)
         except KeyboardInterrupt:
             _write_status(job_dir, "interrupted", "interrupted by the user")
             raise
@@ -115,6 +128,15 @@ class JobTask:
 
 
 JOB_LOG = "vpid_bench.log"
+
+
+def _basic_launcher(hydra_cfg: Any) -> bool:
+    """Whether jobs run one at a time in the command's process (Hydra's basic launcher): the
+    sweep's worker processes then serve every job (``isolation=auto``). Other launchers run
+    jobs in their own processes (joblib's loky workers cannot start ``spawn`` children), so
+    there ``auto`` runs each job in the launcher's process."""
+    target = str((hydra_cfg.launcher or {}).get("_target_", ""))
+    return target.endswith("BasicLauncher")
 
 
 def _write_status(job_dir: Path, status: str, detail: Any) -> None:
@@ -298,6 +320,7 @@ def main(argv: Sequence[str] | None = None) -> None:
               "--resume to continue (only missing runs are run)", file=sys.stderr)
         sys.exit(130)
     finally:
+        task.close()
         lock.release()
     _leave(1 if _failures(plan.output_dir, plan.multirun, plan.job_dirs) else 0, before,
            watch=console)

@@ -1,0 +1,57 @@
+"""A sweep in this process against the same sweep in supervised worker processes.
+
+Runs one ``vpid-bench -m`` sweep three ways, report off, side by side in one invocation:
+``isolation=none threads=1`` (every run in the command's process on one core: the path before
+worker processes), ``workers=1 threads=1`` (one worker process: what isolation costs), and the
+default (``isolation=auto``: a worker per core). Prints wall times, evaluations per second, the
+speed-ups over the first, and whether the records are the same (fingerprints without timing).
+Quick version: ``python benchmarks/bench_workers.py --optimizers de1,lsq --iterations 50``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import tempfile
+from pathlib import Path
+
+from _shared import CLI, run_timed
+from bench_threads_sweep import fingerprints
+
+WAYS = (("in-process, 1 core", ["isolation=none", "threads=1"], "none"),
+        ("1 worker process", ["workers=1", "threads=1"], "one"),
+        ("default (a worker per core)", [], "default"))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--optimizers", default="de1,de4,ga,random,cmaes,lsq")
+    parser.add_argument("--iterations", type=int, default=200)
+    parser.add_argument("--runs", type=int, default=30)
+    args = parser.parse_args()
+    base = ["-m", "problem=vehicle", f"optimizer={args.optimizers}",
+            f"problem.iterations={args.iterations}", f"runs={args.runs}", "progress=false",
+            "report=false"]
+    root = Path(tempfile.mkdtemp(prefix="vpid-workers-"))
+    print("command: vpid-bench " + " ".join(base) + " [isolation=none threads=1 | workers=1]")
+    walls = {}
+    for name, extra, folder in WAYS:
+        walls[name] = run_timed([*CLI, *base, *extra, f"hydra.sweep.dir={root / folder}"],
+                                root)[0]
+    prints = {folder: fingerprints(root / folder) for _, _, folder in WAYS}
+    evaluations = prints["none"][1]
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    print(f"cores: {cores}, evaluations: {evaluations}")
+    first = walls[WAYS[0][0]]
+    for name, wall in walls.items():
+        print(f"  {name:28s}: {wall:8.2f} s wall, {evaluations / wall:12,.0f} evaluations/s, "
+              f"{first / wall:.2f}x")
+    same = all(p[0] == prints["none"][0] for p in prints.values())
+    print(f"  records identical (without timing): {same} ({len(prints['none'][0])} records)")
+    print(json.dumps({"walls": walls, "evaluations": evaluations}))
+    print(f"outputs: {root}")
+
+
+if __name__ == "__main__":
+    main()

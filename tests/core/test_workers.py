@@ -1,0 +1,76 @@
+"""Supervised worker processes (vpid_bench.workers, ``isolation=process``): records equal to the
+in-process path, and a run that ends or blocks its process costs that run only."""
+
+from __future__ import annotations
+
+import pytest
+
+from vpid_bench import records as rec
+from vpid_bench.experiment import run_job
+from vpid_bench.spec import parse_job
+from vpid_bench.workers import RemoteError, Workers, describe_exit, portable
+
+FAST_VEHICLE = ["problem=vehicle", "problem.iterations=3", "progress=false", "report=false"]
+
+
+@pytest.fixture(scope="module")
+def pool():
+    workers = Workers(2)
+    yield workers
+    workers.close()
+
+
+def _prints(summary):
+    return [rec.fingerprint(rec.read_record(p)) for p in summary.record_paths]
+
+
+@pytest.mark.parametrize("optimizer", ["de1", "lsq"])
+def test_records_in_workers_are_bit_identical_to_in_process(registry, compose_config, tmp_path,
+                                                            pool, optimizer):
+    # de1 goes in lockstep groups (split over two workers), lsq one run at a time
+    base = [*FAST_VEHICLE, f"optimizer={optimizer}", "runs=5"]
+    here = run_job(parse_job(compose_config([*base, "isolation=none"]), registry),
+                   tmp_path / "here", registry, pool=pool)
+    there = run_job(parse_job(compose_config([*base, "isolation=auto"]), registry),
+                    tmp_path / "there", registry, pool=pool)
+    assert here.ran == there.ran == 5 and not here.failed and not there.failed
+    assert _prints(here) == _prints(there)
+
+
+def test_isolation_process_starts_its_own_workers(registry, compose_config, tmp_path):
+    job = parse_job(compose_config([*FAST_VEHICLE, "optimizer=random", "runs=2",
+                                    "isolation=process", "workers=1"]), registry)
+    summary = run_job(job, tmp_path, registry)
+    assert summary.ran == 2 and not summary.failed
+
+
+def test_a_bad_isolation_value_names_the_key_and_the_choices(registry, compose_config):
+    from vpid_bench.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=r"isolation='thread'.*auto \| process \| none"):
+        parse_job(compose_config([*FAST_VEHICLE, "isolation=thread"]), registry)
+
+
+def test_a_remote_error_keeps_type_message_and_traceback():
+    import pickle
+
+    class OddError(Exception):
+        def __init__(self, a, b):  # does not unpickle with one argument
+            super().__init__(f"{a}/{b}")
+
+    try:
+        raise OddError(1, 2)
+    except OddError as exc:
+        carried = pickle.loads(pickle.dumps(portable(exc)))
+    assert isinstance(carried, RemoteError)
+    assert (carried.remote_type, str(carried)) == ("OddError", "1/2")
+    assert "raise OddError(1, 2)" in carried.remote_traceback
+    section = rec.error_section(carried) if hasattr(rec, "error_section") else None
+    if section is not None:
+        assert section["type"] == "OddError" and "raise OddError" in section["traceback"]
+
+
+def test_exit_descriptions():
+    assert describe_exit(3) == "exit code 3"
+    assert describe_exit(-11) == "signal SIGSEGV"
+    assert describe_exit(-6) == "signal SIGABRT"
