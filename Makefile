@@ -42,6 +42,7 @@ test-scaleout: $(SCALEOUT_VENV)/.installed
 bench-scale: install
 	$(BIN)/python benchmarks/bench_chain.py
 	$(BIN)/python benchmarks/bench_threads_sweep.py
+	$(BIN)/python benchmarks/bench_workers.py
 	$(BIN)/python benchmarks/bench_large_study.py
 
 bench: install

@@ -1,4 +1,6 @@
-"""A sweep where the runs dominate, with ``threads=1`` and with the default (every core).
+"""A sweep where the runs dominate, with ``threads=1`` and with the default (every core), both
+in the command's process (``isolation=none``: what the kernel's threads alone give; worker
+processes, one per core, are measured by ``bench_workers.py``).
 
 Runs the paper experiment with ``problem.iterations=500`` (ten times the paper's budget)
 through the CLI twice, report off, side by side in one invocation, and prints the speed-up of
@@ -44,7 +46,7 @@ def main() -> None:
     args = parser.parse_args()
     base = ["-m", "problem=vehicle", f"optimizer={args.optimizers}", f"problem.ps={args.ps}",
             f"problem.iterations={args.iterations}", f"runs={args.runs}", "progress=false",
-            "report=false"]
+            "report=false", "isolation=none"]  # threads alone; worker processes: bench_workers
     root = Path(tempfile.mkdtemp(prefix="vpid-threads-"))
     print("command: vpid-bench " + " ".join(base) + " [threads=1]")
     walls = {}

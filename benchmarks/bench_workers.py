@@ -1,11 +1,15 @@
 """A sweep in this process against the same sweep in supervised worker processes.
 
-Runs one ``vpid-bench -m`` sweep three ways, report off, side by side in one invocation:
-``isolation=none threads=1`` (every run in the command's process on one core: the path before
-worker processes), ``workers=1 threads=1`` (one worker process: what isolation costs), and the
-default (``isolation=auto``: a worker per core). Prints wall times, evaluations per second, the
-speed-ups over the first, and whether the records are the same (fingerprints without timing).
-Quick version: ``python benchmarks/bench_workers.py --optimizers de1,lsq --iterations 50``.
+Runs one ``vpid-bench -m`` sweep four ways, report off, side by side in one invocation:
+``isolation=none threads=1`` (every run in the command's process on one core),
+``workers=1 threads=1`` (one worker process: what isolation costs), ``isolation=none`` (in the
+command's process, the kernel's threads on every core: the default before worker processes),
+and the default (``isolation=auto``: a worker process per core). Prints wall times,
+evaluations per second, the speed-ups over the first, and whether the records are the same
+(fingerprints without timing).
+Quick version: ``python benchmarks/bench_workers.py --optimizers de1,lsq --iterations 50``;
+the paper experiment: ``--optimizers de1,de2,de3,de4,de5,de6,de7,de8,ga --ps 20,30
+--iterations 50``.
 """
 
 from __future__ import annotations
@@ -21,16 +25,18 @@ from bench_threads_sweep import fingerprints
 
 WAYS = (("in-process, 1 core", ["isolation=none", "threads=1"], "none"),
         ("1 worker process", ["workers=1", "threads=1"], "one"),
+        ("in-process, kernel threads", ["isolation=none"], "threads"),
         ("default (a worker per core)", [], "default"))
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--optimizers", default="de1,de4,ga,random,cmaes,lsq")
+    parser.add_argument("--ps", default="20")
     parser.add_argument("--iterations", type=int, default=200)
     parser.add_argument("--runs", type=int, default=30)
     args = parser.parse_args()
-    base = ["-m", "problem=vehicle", f"optimizer={args.optimizers}",
+    base = ["-m", "problem=vehicle", f"optimizer={args.optimizers}", f"problem.ps={args.ps}",
             f"problem.iterations={args.iterations}", f"runs={args.runs}", "progress=false",
             "report=false"]
     root = Path(tempfile.mkdtemp(prefix="vpid-workers-"))

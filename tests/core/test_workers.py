@@ -74,3 +74,23 @@ def test_exit_descriptions():
     assert describe_exit(3) == "exit code 3"
     assert describe_exit(-11) == "signal SIGSEGV"
     assert describe_exit(-6) == "signal SIGABRT"
+
+
+def test_a_bad_workers_value_names_the_key(registry, compose_config):
+    from vpid_bench.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=r"workers=0"):
+        parse_job(compose_config([*FAST_VEHICLE, "workers=0"]), registry)
+
+
+def test_lockstep_tasks_are_balanced_over_the_workers():
+    from vpid_bench.workers import LOCKSTEP_CHUNK, _chunk
+
+    for runs in range(1, 101):
+        for workers in (1, 2, 3):
+            size = _chunk(runs, workers)
+            tasks = -(-runs // size)
+            assert 1 <= size <= LOCKSTEP_CHUNK
+            # never fewer tasks than workers could take, when there are runs enough
+            assert tasks >= min(workers, runs)
+    assert _chunk(30, 2) == 8 and _chunk(30, 1) == 10

@@ -53,3 +53,16 @@ def test_methods_the_tests_do_not_separate_are_not_called_equivalent_beyond_the_
     assert _not_equivalent(res, "a", ["b"], rows) == ""  # 5 %: within the margin
     text = _not_equivalent(res, "a", ["b", "c"], rows)
     assert "differ by up to 50 %" in text and f"{100 * EQUIVALENCE_MARGIN:g} % margin" in text
+
+
+def test_mann_whitney_with_one_run_and_ties_gives_a_p_not_an_error():
+    """scipy's permutation test needs two observations per sample; one run per job with a
+    tie (two optimizers stopped at the same value) once raised ValueError in the report."""
+    import numpy as np
+
+    from vpid_bench.report.stats import mann_whitney
+
+    assert mann_whitney(np.array([1.0]), np.array([1.0])) == (0.5, 1.0, "normal approximation")
+    u, p, how = mann_whitney(np.array([1.0]), np.array([1.0, 2.0, 2.0, 3.0]))
+    assert 0 < p < 1 and how == "normal approximation"
+    assert mann_whitney(np.array([1.0]), np.array([2.0]))[1:] == (1.0, "exact")

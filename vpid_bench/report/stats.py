@@ -200,14 +200,16 @@ def mann_whitney(x: np.ndarray, y: np.ndarray) -> tuple[float, float, str]:
     ties = np.unique(np.concatenate([x, y])).size < len(x) + len(y)
     if not ties and max(len(x), len(y)) <= 30:
         method, how = "exact", "exact"
-    elif ties and len(x) + len(y) <= 40:
+    elif ties and len(x) + len(y) <= 40 and min(len(x), len(y)) >= 2:  # scipy needs 2 each
         method, how = _permutation(), f"permutation ({N_RESAMPLES} resamples)"
     else:
         method, how = "asymptotic", "normal approximation"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = stats.mannwhitneyu(x, y, alternative="two-sided", method=method)
-    return float(res.statistic), float(res.pvalue), how
+    p = float(res.pvalue)
+    # every value tied: no variance, no evidence of a difference
+    return float(res.statistic), (1.0 if math.isnan(p) else p), how
 
 
 def a12(x: np.ndarray, y: np.ndarray) -> float:

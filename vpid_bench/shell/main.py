@@ -104,6 +104,7 @@ class JobTask:
                 self._problems = ProblemCache()
             if self._pool is None and _basic_launcher(hydra_cfg):
                 self._pool = Workers(available_cores())
+                self._pool.prestart()  # their imports overlap this job's set-up
             if hydra_cfg.output_subdir is None:
                 _save_job_config(cfg, job_dir)
             # The jobs of a sweep share one folder of instance optima (each polished once).
