@@ -326,9 +326,8 @@ class Workers:
         """The outcome of each run in ``indices``, in the order they end, from up to
         ``workers`` processes at once."""
         size = max(1, workers)
-        chunk = _chunk(len(indices), size) if lockstep else 1
-        pending: deque[list[int]] = deque(
-            list(indices[k:k + chunk]) for k in range(0, len(indices), chunk))
+        pending: deque[list[int]] = deque(_tasks(list(indices), size) if lockstep
+                                          else [[i] for i in indices])
         busy: dict[Connection, _Busy] = {}
         try:
             while pending or busy:
@@ -415,12 +414,14 @@ def _lost(job: Job, b: _Busy, cause: BaseException, pending: deque[list[int]]
         yield RunOutcome(i, cause, b.started, 0.0)
 
 
-def _chunk(runs: int, workers: int) -> int:
-    """Runs per lockstep task: at most :data:`LOCKSTEP_CHUNK`, in a number of tasks that is a
-    multiple of ``workers`` (so the workers finish together: 30 runs on 2 workers go as 4
-    tasks of 8, 8, 8, 6 rather than 10, 10, 10)."""
-    tasks = workers * -(-runs // (workers * LOCKSTEP_CHUNK))
-    return max(1, -(-runs // tasks))
+def _tasks(indices: list[int], workers: int) -> list[list[int]]:
+    """A lockstep job's runs cut into tasks of at most :data:`LOCKSTEP_CHUNK` runs, as many
+    tasks as a multiple of ``workers`` (so the workers finish together: 30 runs on 2 workers go
+    as 8, 7, 7, 8 rather than 10, 10, 10), sizes differing by one at most."""
+    n = len(indices)
+    tasks = min(n, workers * -(-n // (workers * LOCKSTEP_CHUNK)))
+    bounds = [round(k * n / tasks) for k in range(tasks + 1)] if tasks else [0]
+    return [indices[a:b] for a, b in zip(bounds, bounds[1:]) if b > a]
 
 
 def _allowance(job: Job, runs: int) -> float | None:

@@ -84,13 +84,14 @@ def test_a_bad_workers_value_names_the_key(registry, compose_config):
 
 
 def test_lockstep_tasks_are_balanced_over_the_workers():
-    from vpid_bench.workers import LOCKSTEP_CHUNK, _chunk
+    from vpid_bench.workers import LOCKSTEP_CHUNK, _tasks
 
     for runs in range(1, 101):
         for workers in (1, 2, 3):
-            size = _chunk(runs, workers)
-            tasks = -(-runs // size)
-            assert 1 <= size <= LOCKSTEP_CHUNK
-            # never fewer tasks than workers could take, when there are runs enough
-            assert tasks >= min(workers, runs)
-    assert _chunk(30, 2) == 8 and _chunk(30, 1) == 10
+            tasks = _tasks(list(range(runs)), workers)
+            sizes = [len(t) for t in tasks]
+            assert [i for t in tasks for i in t] == list(range(runs))  # every run, in order
+            assert max(sizes) <= LOCKSTEP_CHUNK and max(sizes) - min(sizes) <= 1
+            assert len(tasks) >= min(workers, runs)  # no worker idle while runs wait
+    assert sorted(len(t) for t in _tasks(list(range(30)), 2)) == [7, 7, 8, 8]
+    assert [len(t) for t in _tasks(list(range(30)), 1)] == [10, 10, 10]
