@@ -103,7 +103,8 @@ class JobTask:
             if self._problems is None:
                 self._problems = ProblemCache()
             if self._pool is None and _basic_launcher(hydra_cfg):
-                self._pool = Workers(available_cores())
+                workers = cfg.get("workers")  # checked by the pre-flight: null or >= 1
+                self._pool = Workers(workers if isinstance(workers, int) else available_cores())
                 self._pool.prestart()  # their imports overlap this job's set-up
             if hydra_cfg.output_subdir is None:
                 _save_job_config(cfg, job_dir)
