@@ -178,12 +178,17 @@ def check_proposal(X: object, optimizer: Optimizer, dim: int) -> np.ndarray:
 
 
 def _values(problem: Problem, f: Any, n: int) -> np.ndarray:
-    """``f`` checked to shape ``(n,)``, NaN mapped to ``inf``."""
+    """``f`` checked to shape ``(n,)``, NaN mapped to ``inf`` (a failed evaluation); ``-inf``
+    refused (it would be ranked best of every run: a broken problem, not a result)."""
     f = np.asarray(f, dtype=float).reshape(-1)
     if f.shape != (n,):
         raise ValueError(
             f"problem {problem.name!r}: evaluate() returned {f.shape}, expected ({n},)"
         )
+    if np.any(f == -np.inf):
+        raise ValueError(f"problem {problem.name!r}: evaluate() returned -inf (row "
+                         f"{int(np.argmax(f == -np.inf))}); a value is finite, +inf or NaN "
+                         "(both count as a failed evaluation)")
     return np.where(np.isnan(f), np.inf, f)
 
 

@@ -38,6 +38,9 @@ MAX_RUNS = 10_000
 MAX_PS = 10_000
 MAX_ITERATIONS = 1_000_000
 MAX_BUDGET = 10**9
+#: Longest run time limit (s), a week: larger ones overflow the OS timers (1e10 once failed
+#: every run with "timestamp too large").
+MAX_RUN_TIMEOUT_S = 7 * 24 * 3600.0
 
 
 #: Values of the ``isolation`` key (see :class:`JobSpec`).
@@ -80,9 +83,10 @@ class JobSpec:
             _check_int("budget", self.budget, 1, MAX_BUDGET, nullable=True)
         if self.threads is not None:
             _check_int("threads", self.threads, 1, 1024, nullable=True)
-        if self.run_timeout_s is not None and not 0 < self.run_timeout_s < float("inf"):
+        if self.run_timeout_s is not None and not 0 < self.run_timeout_s <= MAX_RUN_TIMEOUT_S:
             raise ConfigError("run_timeout_s", self.run_timeout_s,
-                              "a positive number of seconds or null")
+                              f"a positive number of seconds up to {MAX_RUN_TIMEOUT_S:g} "
+                              "(a week) or null")
         if self.isolation not in ISOLATION:
             raise ConfigError("isolation", self.isolation, " | ".join(ISOLATION))
         if self.workers is not None:

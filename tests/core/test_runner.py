@@ -124,6 +124,21 @@ def test_nan_objective_becomes_inf_and_never_best():
     assert result.f_best == pytest.approx(0.75)
 
 
+def test_minus_inf_from_a_problem_fails_the_run_instead_of_being_best():
+    """A problem returning -inf once gave runs recorded ok with f_best = -inf, ranked best."""
+
+    class MinusInf(CountingSphere):
+        def evaluate(self, X: np.ndarray) -> np.ndarray:
+            f = super().evaluate(X)
+            f[-1] = -np.inf
+            return f
+
+    b = Bounds(-np.ones(3), np.ones(3), ("a", "b", "c"))
+    opt = Scripted([np.array([[0.0, 0.0, 0.0], [0.5, 0.5, 0.5]])], b)
+    with pytest.raises(ValueError, match=r"returned -inf \(row 1\)"):
+        run(MinusInf(), opt, budget=10)
+
+
 @pytest.mark.parametrize(
     "proposal, fragment",
     [

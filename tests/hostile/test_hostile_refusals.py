@@ -61,6 +61,11 @@ REFUSED = [
     ("9", ["hydra/launcher=${oc.decode:'1'}"],
      "error: hydra/launcher=\"${oc.decode:'1'}\" is not allowed: a config name"),
     ("10", ["optimizer=de1,de4"], "error: optimizer='de1,de4' is not allowed: one value here"),
+    ("24", ["run_timeout_s=1e10"], "error: run_timeout_s=10000000000.0 is not allowed: a "
+     "positive number of seconds up to 604800"),
+    ("24", ["isolation=threads"], "error: isolation='threads' is not allowed: auto | process "
+     "| none"),
+    ("24", ["workers=0"], "error: workers=0 is not allowed: an integer from 1 to 1024"),
     ("10", ["~problem"], "error: ~problem='' is not allowed: a problem for every job"),
     ("10", ["~optimizer.elite_count"],
      "error: optimizer.elite_count='~' is not allowed: a key that exists"),
