@@ -196,17 +196,30 @@ def _run_job(job: Job, job_dir: Path, registry: Registry | None, problem: Any,
         records = _read_records(summary.record_paths)  # once, for all that follows
         gaps: dict[int, float] = {}
         try:
-            gaps = analyse_job(job, problem, job_dir, Path(optima_dir or job_dir / "optima"),
-                               records)
+            with time_limit(analysis_limit_s(job)):
+                gaps = analyse_job(job, problem, job_dir,
+                                   Path(optima_dir or job_dir / "optima"), records)
         except Exception as exc:  # noqa: BLE001 - the runs are recorded; say what failed
+            text = " ".join(str(exc).split())[:300]
             log.warning("the optimum / identifiability analysis failed: %s: %s",
-                        type(exc).__name__, exc)
+                        type(exc).__name__, text)
+            print(f"warning: {job.optimizer_name} on {job.problem_name}: the optimum / "
+                  f"identifiability analysis failed ({type(exc).__name__}: {text}); the runs "
+                  "are recorded, their gaps to the optimum are not", file=sys.stderr, flush=True)
         summary.score = job_score(gaps, records)
         summary.wall_time_s = time.perf_counter() - start
     best = best_of(records)
     if best is not None:  # the best run's own instance: its record is the one it fitted
         write_best_signals(job_dir, problem.instance(int(best[1]["run_index"])), *best)
     return summary
+
+
+def analysis_limit_s(job: Job) -> float | None:
+    """Wall-time limit (s) of the job's analysis after its runs (the optimum polish, bounds,
+    floors): what all its runs together were allowed, ``run_timeout_s x runs`` (``None``
+    without ``run_timeout_s``). A slow problem once made the analysis run for ever."""
+    limit = job.spec.run_timeout_s
+    return None if limit is None else limit * max(1, job.spec.runs)
 
 
 def _run_missing(job: Job, problem: Any, job_dir: Path, key: Mapping[str, Any],

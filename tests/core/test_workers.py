@@ -95,3 +95,27 @@ def test_lockstep_tasks_are_balanced_over_the_workers():
             assert len(tasks) >= min(workers, runs)  # no worker idle while runs wait
     assert sorted(len(t) for t in _tasks(list(range(30)), 2)) == [7, 7, 8, 8]
     assert [len(t) for t in _tasks(list(range(30)), 1)] == [10, 10, 10]
+
+
+def test_the_analysis_after_the_runs_is_bounded_and_its_failure_said(registry, compose_config,
+                                                                       tmp_path, monkeypatch,
+                                                                       capsys):
+    """An analysis (optimum polish) that never ends once kept the job for ever: it is bounded
+    by run_timeout_s x runs and its failure is one warning line on the terminal."""
+    import time
+
+    from vpid_bench import experiment
+
+    def endless(*args, **kwargs):
+        time.sleep(60)
+
+    monkeypatch.setattr(experiment, "analyse_job", endless)
+    job = parse_job(compose_config(["problem=functions", "optimizer=random", "runs=2",
+                                    "problem.iterations=2", "progress=false", "report=false",
+                                    "run_timeout_s=1", "isolation=none"]), registry)
+    assert experiment.analysis_limit_s(job) == 2
+    t0 = time.monotonic()
+    summary = run_job(job, tmp_path, registry)
+    assert time.monotonic() - t0 < 10 and summary.ran == 2 and not summary.failed
+    warning = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("warning:")]
+    assert len(warning) == 1 and "analysis failed (RunTimeoutError" in warning[0]
