@@ -12,6 +12,7 @@ over the link itself).
 
 from __future__ import annotations
 
+import json
 import os
 import stat
 import tempfile
@@ -19,6 +20,16 @@ from pathlib import Path
 
 #: The largest results file read back (a run record with a long trace is a few MB).
 MAX_READ_BYTES = 64 * 1024 * 1024
+
+
+def loads_json(text: str) -> object:
+    """``json.loads`` for untrusted text: JSON nested past Python's recursion limit (a planted
+    ``[[[[...]]]]``) is a ``json.JSONDecodeError`` like any other bad JSON, not a
+    ``RecursionError`` that escapes every reader's ``except ValueError``."""
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise json.JSONDecodeError("nested too deeply", text[:80], 0) from None
 
 
 def read_text_limited(path: Path, max_bytes: int = MAX_READ_BYTES) -> str:

@@ -126,24 +126,24 @@ class _Plugin:
         register("minus_inf", _MinusInf)
 
 
-def test_17_minus_inf_is_stored_and_reported_as_minus_inf(tmp_path, registry_of):
+def test_17_minus_inf_from_a_problem_fails_its_run_and_the_report_says_so(tmp_path,
+                                                                           registry_of):
+    """A problem's -inf was once stored and ranked best; it is a broken problem (issue 24):
+    each run fails with the reason, and the report is still written."""
     import vpid_baselines.plugin as baselines
 
     from vpid_bench.report.build import build_report
-    from vpid_bench.report.load import load_records, run_rows
 
     registry = registry_of(("baselines", baselines), ("minus", _Plugin()))
     summary = run_from_config(
         {"problem": {"name": "minus_inf", "ps": 20, "iterations": 5},
          "optimizer": {"name": "random"}, "runs": 2, "progress": False},
         tmp_path / "sweep" / "job", registry)
+    assert summary.failed == [0, 1]
     raw = json.loads(summary.record_paths[0].read_text())
-    assert raw["result"]["f_best"] == "-inf"  # strict JSON, the sign kept
-    assert rec.read_record(summary.record_paths[0])["result"]["f_best"] == -math.inf
-    rows = run_rows(load_records([tmp_path / "sweep"]).records)
-    assert [r["f_best"] for r in rows] == [-math.inf, -math.inf]
+    assert raw["status"] == "failed" and "returned -inf" in raw["error"]["message"]
     report = build_report([tmp_path / "sweep"], tmp_path / "out", short=True)
-    assert "-inf" in report.report_md.read_text()
+    assert report.report_md.is_file()
 
 
 def test_17_old_records_with_null_still_read_as_inf():
@@ -154,3 +154,20 @@ def test_17_old_records_with_null_still_read_as_inf():
     assert decode_numbers({"result": {"f_best": "nan", "x_best": ["inf", 1.0],
                                           "metrics": {"m": "-inf"}}})["result"]["metrics"] == {
         "m": -math.inf}
+
+
+def test_json_nested_past_the_recursion_limit_is_a_corrupt_record(tmp_path):
+    """A record (or optima, status) file holding [[[[...]]]] once gave a RecursionError
+    traceback: every reader goes through fileio.loads_json, which makes it bad JSON."""
+    import json as _json
+
+    from vpid_bench.fileio import loads_json
+    from vpid_bench.records import CorruptRecordError, read_record
+
+    deep = "[" * 100_000 + "]" * 100_000
+    with pytest.raises(_json.JSONDecodeError, match="nested too deeply"):
+        loads_json(deep)
+    path = tmp_path / "run-000-deadbeef.json"
+    path.write_text('{"schema": 2, "deep": ' + deep + "}")
+    with pytest.raises(CorruptRecordError, match="nested too deeply"):
+        read_record(path)

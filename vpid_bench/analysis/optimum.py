@@ -21,7 +21,6 @@ best of any run analysed with it.
 from __future__ import annotations
 
 import contextlib
-import json
 import math
 import os
 from collections.abc import Iterable, Iterator, Mapping
@@ -30,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from ..fileio import loads_json
 from ..problem import PROTOCOL_KEYS, Problem
 from ..records.io import stable_hash, write_json_atomic
 
@@ -149,7 +149,7 @@ def read_optimum(path: Path) -> dict[str, Any] | None:
         path = Path(path)
         if path.is_symlink() or path.stat().st_size > MAX_BYTES:
             return None
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = loads_json(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, ValueError):
         return None
     if not isinstance(data, dict) or data.get("schema") != SCHEMA:

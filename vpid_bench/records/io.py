@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ..fileio import read_text_limited, write_text_atomic
+from ..fileio import loads_json, read_text_limited, write_text_atomic
 
 SCHEMA = "vpid-bench/run-record/2"
 #: Schemas of earlier vpid-bench versions: recognised, so a reader can say so in one line.
@@ -175,7 +175,7 @@ def read_record(path: Path) -> dict[str, Any]:
     """Load and check one record; :class:`CorruptRecordError` names the file and the fault."""
     path = Path(path)
     try:
-        record = json.loads(read_text_limited(path))
+        record = loads_json(read_text_limited(path))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise CorruptRecordError(f"{path}: not a readable JSON run record ({exc})") from exc
     schema = record.get("schema") if isinstance(record, dict) else None

@@ -14,7 +14,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from ..fileio import read_text_limited
+from ..fileio import loads_json, read_text_limited
 from .io import _jsonable, write_record
 
 JOB_STATUS_FILE = "job.json"
@@ -41,7 +41,7 @@ def read_job_status(job_dir: Path) -> dict[str, Any] | None:
     """The job status in ``job_dir``, or None when there is none (or it is unreadable)."""
     path = Path(job_dir) / JOB_STATUS_FILE
     try:
-        status = json.loads(read_text_limited(path))
+        status = loads_json(read_text_limited(path))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError):
         return None
     return status if isinstance(status, dict) else None

@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -11,6 +10,7 @@ from typing import Any
 
 from ..analysis.estimator_floors import FILE
 from ..estimators import DESCRIPTION, OBJECTIVES
+from ..fileio import loads_json
 from .load import first_file_by_context
 from .safe import escape
 
@@ -31,7 +31,7 @@ def read_estimator_floors(path: Path) -> tuple[dict[str, Any] | None, str]:
             return None, "not a regular file"
         if path.stat().st_size > MAX_BYTES:
             return None, f"more than {MAX_BYTES} bytes"
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = loads_json(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, ValueError) as exc:
         return None, f"unreadable ({type(exc).__name__})"
     if not isinstance(data, dict):

@@ -23,7 +23,6 @@ objective at the truth and of the record optimum ``f*`` (:func:`reference_levels
 
 from __future__ import annotations
 
-import json
 import math
 import statistics
 from collections.abc import Iterable, Mapping, Sequence
@@ -33,6 +32,7 @@ from typing import Any
 from ..analysis.estimator_floors import FILE as FLOORS_FILE
 from ..analysis.optimum import find_optimum, load_optima, record_settings
 from ..analysis.profile import STRUCTURAL_RATIO
+from ..fileio import loads_json
 from ..records.io import stable_hash
 from .estimator_floors import read_estimator_floors
 from .estimator_floors import sentence as estimator_sentence
@@ -77,7 +77,7 @@ def read_identifiability(path: Path, names: Sequence[str]) -> tuple[dict[str, An
         size = path.stat().st_size
         if size > MAX_BYTES:
             return None, f"{size} bytes, more than {MAX_BYTES}"
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = loads_json(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, ValueError) as exc:
         return None, f"unreadable ({type(exc).__name__})"
     if not isinstance(data, dict):

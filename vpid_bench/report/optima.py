@@ -34,6 +34,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from ..fileio import loads_json
 from ..problem import PROTOCOL_KEYS
 
 #: The schema string of an optimum file (written by vpid_bench.analysis.optimum).
@@ -102,7 +103,7 @@ def read_optimum_file(path: Path) -> tuple[Optimum | None, str | None]:
             return None, "not a regular file"
         if path.stat().st_size > MAX_BYTES:
             return None, f"larger than {MAX_BYTES} bytes"
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = loads_json(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
         return None, f"unreadable: {type(exc).__name__}"
     bad = check_optimum(data)

@@ -17,7 +17,6 @@ why); 2 refused before anything ran; 130 interrupted (every completed run is kep
 
 from __future__ import annotations
 
-import json
 import logging
 import os
 import sys
@@ -28,7 +27,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from ..errors import VpidBenchError
-from ..fileio import read_text_limited
+from ..fileio import loads_json, read_text_limited
 
 DEBUG_ENV = "VPID_BENCH_DEBUG"
 log = logging.getLogger("vpid_bench")
@@ -259,7 +258,7 @@ def _failures(folder: Path | None, multirun: bool,
             print(line, file=sys.stderr)
         out.append(line)
     try:
-        report = json.loads(read_text_limited(folder / REPORT_SUBDIR / REPORT_STATUS))
+        report = loads_json(read_text_limited(folder / REPORT_SUBDIR / REPORT_STATUS))
     except (OSError, ValueError):
         report = None
     if (isinstance(report, dict) and report.get("invocation") == invocation
