@@ -28,7 +28,7 @@ def sweep(tmp_path_factory, compose_config, registry) -> Path:
 
 
 BAD_FIELDS = [
-    ("run_index", "three", "run_index: expected an integer"),
+    ("run_index", "three", "run_index: expected an integer from 0 to 2**63 - 1"),
     ("problem", ["x"], "problem: expected a mapping"),
     ("result.f_best", "small", "result.f_best: expected a number"),
     ("result.x_best", {"a": 1}, "result.x_best: expected a list of numbers"),
@@ -171,3 +171,12 @@ def test_json_nested_past_the_recursion_limit_is_a_corrupt_record(tmp_path):
     path.write_text('{"schema": 2, "deep": ' + deep + "}")
     with pytest.raises(CorruptRecordError, match="nested too deeply"):
         read_record(path)
+
+
+@pytest.mark.parametrize("value", [10**400, -1, 2**63, True, "3"])
+def test_a_run_index_out_of_range_is_a_wrongly_typed_record(value):
+    """run_index = 10**400 once overflowed the report's float conversion (a traceback)."""
+    from vpid_bench.report.load import check_record
+
+    record = {"run_id": "r", "run_index": value, "status": "ok"}
+    assert check_record(record).startswith("run_index: expected an integer from 0")

@@ -101,7 +101,10 @@ def _is_num(v: Any, nullable: bool = True) -> bool:
 
 
 def _is_int(v: Any, nullable: bool = True) -> bool:
-    return (v is None and nullable) or (isinstance(v, int) and not isinstance(v, bool))
+    """An integer of 64 bits (a record's ``run_index`` of 10**400 once overflowed the
+    report's float conversion), or ``None`` when ``nullable``."""
+    return (v is None and nullable) or (isinstance(v, int) and not isinstance(v, bool)
+                                        and -2**63 <= v < 2**63)
 
 
 def _num_list(v: Any, n: int | None = None) -> bool:
@@ -118,7 +121,8 @@ def check_record(record: Mapping[str, Any]) -> str | None:
     get = record.get
     checks: list[tuple[str, Any, str]] = [
         ("run_id", lambda: isinstance(get("run_id"), str) and get("run_id"), "a text"),
-        ("run_index", lambda: _is_int(get("run_index"), False), "an integer"),
+        ("run_index", lambda: _is_int(get("run_index"), False) and get("run_index") >= 0,
+         "an integer from 0 to 2**63 - 1"),
         ("status", lambda: get("status") in ("ok", "failed"), "'ok' or 'failed'"),
         ("problem", lambda: isinstance(get("problem"), Mapping), "a mapping"),
         ("problem.name", lambda: isinstance(get("problem").get("name"), str), "a text"),
