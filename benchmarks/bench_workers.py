@@ -8,6 +8,9 @@ and the default (``isolation=auto``: a worker process per core). Prints wall tim
 evaluations per second, the speed-ups over the first, and whether the records are the same
 (fingerprints without timing).
 Quick version: ``python benchmarks/bench_workers.py --optimizers de1,lsq --iterations 50``;
+the 10x study of docs/study.md on one core and by default: ``--optimizers
+de1,de4,de6,jade,shade,lshade,ga,scipy_de,cmaes,lsq,de_lsq,random --problems
+vehicle,vehicle_long_record --iterations 509 --ways none,default``;
 the paper experiment: ``--optimizers de1,de2,de3,de4,de5,de6,de7,de8,ga --ps 20,30
 --iterations 50``.
 """
@@ -35,17 +38,24 @@ def main() -> None:
     parser.add_argument("--ps", default="20")
     parser.add_argument("--iterations", type=int, default=200)
     parser.add_argument("--runs", type=int, default=30)
+    parser.add_argument("--problems", default="vehicle")
+    parser.add_argument("--ways", default="none,one,threads,default",
+                        help="which of: none (in-process, 1 core), one (1 worker), threads "
+                             "(in-process, kernel threads), default; 'none' always runs")
     args = parser.parse_args()
-    base = ["-m", "problem=vehicle", f"optimizer={args.optimizers}", f"problem.ps={args.ps}",
+    chosen = {"none", *args.ways.split(",")}
+    ways = [w for w in WAYS if w[2] in chosen]
+    base = ["-m", f"problem={args.problems}", f"optimizer={args.optimizers}",
+            f"problem.ps={args.ps}",
             f"problem.iterations={args.iterations}", f"runs={args.runs}", "progress=false",
             "report=false"]
     root = Path(tempfile.mkdtemp(prefix="vpid-workers-"))
     print("command: vpid-bench " + " ".join(base) + " [isolation=none threads=1 | workers=1]")
     walls = {}
-    for name, extra, folder in WAYS:
+    for name, extra, folder in ways:
         walls[name] = run_timed([*CLI, *base, *extra, f"hydra.sweep.dir={root / folder}"],
                                 root)[0]
-    prints = {folder: fingerprints(root / folder) for _, _, folder in WAYS}
+    prints = {folder: fingerprints(root / folder) for _, _, folder in ways}
     evaluations = prints["none"][1]
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     print(f"cores: {cores}, evaluations: {evaluations}")

@@ -159,7 +159,9 @@ def _serve(conn: Connection) -> None:
         kind, job, payload = msg
         try:
             if kind == "probe":
-                send(("probed", _probe(job, state["problems"].get(job))))
+                problem = state["problems"].get(job)
+                send(("phase", "built"))  # the constructor's own limit starts now
+                send(("probed", _probe(job, problem)))
             else:
                 _run_task(job, payload, state, send)
         except BaseException as exc:  # noqa: BLE001 - the supervisor records it; keep serving
@@ -291,9 +293,7 @@ class Workers:
     def probe(self, job: Job) -> None:
         """Build one optimizer of ``job`` in a worker; raise what its constructor raised."""
         worker = self._take()
-        limit = _allowance(job, 1)
-        reply = self._ask(worker, ("probe", job, None), None if limit is None else
-                          limit + START_S)
+        reply = self._ask(worker, ("probe", job, None), _allowance(job, 1))
         if isinstance(reply, BaseException):
             raise reply
         kind, value = reply
@@ -302,15 +302,17 @@ class Workers:
         self._idle.append(worker)
 
     def _ask(self, worker: _Worker, msg: Any, limit: float | None) -> Any:
-        """Send one message and wait for the worker's first non-log answer."""
+        """Send one message and wait for the worker's answer: :data:`START_S` to build the
+        problem, then ``limit`` seconds (``None``: no limit)."""
         worker.conn.send(msg)
-        deadline = None if limit is None else time.monotonic() + limit
+        deadline = None if limit is None else time.monotonic() + START_S
         while True:
             left = None if deadline is None else max(0.0, deadline - time.monotonic())
             if not wait([worker.conn], timeout=left):
                 self._discard(worker)
-                return PluginError(f"optimizer constructor did not return within {limit:.0f} s;"
-                                   " its worker process was killed")
+                return PluginError(f"the optimizer's constructor did not return within "
+                                   f"{limit:.0f} s (run_timeout_s + {GRACE_S:.0f} s; blocked "
+                                   "in C or ignoring SIGALRM): its worker process was killed")
             try:
                 reply = worker.conn.recv()
             except (EOFError, OSError):
@@ -318,7 +320,9 @@ class Workers:
                 self._discard(worker)
                 return PluginError("the optimizer's constructor ended its worker process "
                                    f"({describe_exit(code)})")
-            if not _aside(reply):
+            if reply[0] == "phase":
+                deadline = None if limit is None else time.monotonic() + limit
+            elif not _aside(reply):
                 return reply
 
     def outcomes(self, job: Job, indices: Sequence[int], lockstep: bool, workers: int,

@@ -133,10 +133,19 @@ class Deaf(Base):
         return super().ask()
 
 
+class DeafBuild(Base):
+    def __init__(self, *args, **kwargs):
+        import signal
+
+        signal.signal(signal.SIGALRM, signal.SIG_IGN)
+        time.sleep(30)
+        super().__init__(*args, **kwargs)
+
+
 @hookimpl
 def vpid_bench_register_optimizers(register):
     for cls in (SlowClose, SlowBuild, Wanderer, Lingerer, Thrower, Interrupter, Swapper, Exiter,
-                Aborter, Crasher, Deaf):
+                Aborter, Crasher, Deaf, DeafBuild):
         register(cls.__name__.lower(), cls)
 '''
 
@@ -265,3 +274,16 @@ def test_a_run_deaf_to_the_alarm_is_killed_with_its_worker(site, tmp_path):
     failed = [json.loads(p.read_text()) for p in _records(tmp_path, "deaf")]
     assert [r["error"]["type"] for r in failed] == ["WorkerKilledError"] * 2
     assert f"within {GRACE_S:.0f} s more" in failed[0]["error"]["message"]
+
+
+def test_a_constructor_deaf_to_the_alarm_fails_its_job_at_the_limit(site, tmp_path):
+    """A constructor that ignores SIGALRM and sleeps 30 s: the job's up-front build, in a
+    worker, is killed GRACE_S after run_timeout_s; the job fails in one line, random runs."""
+    import time
+
+    t0 = time.monotonic()
+    out = _sweep(site, tmp_path, "deafbuild", "run_timeout_s=1", timeout=120)
+    assert time.monotonic() - t0 < 30  # the sleep alone would take 30 s
+    assert out.returncode == 1, out.stderr[-2000:]
+    assert len(_records(tmp_path, "random")) == 2
+    assert "constructor did not return within 11 s" in out.stderr
