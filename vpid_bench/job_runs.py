@@ -19,7 +19,9 @@ import dataclasses
 import datetime as _dt
 import logging
 import time
+import warnings
 from collections.abc import Iterator, Sequence
+from pathlib import Path
 
 import numpy as np
 
@@ -83,7 +85,24 @@ def run_outcomes(job: Job, problem: Problem, indices: Sequence[int], lockstep: b
     a time (each yielded as soon as it is over)."""
     groups = [list(indices)] if lockstep else [[i] for i in indices]
     for group in groups:
-        yield from _group(job, problem, group)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("default")  # each place once
+            outcomes = _group(job, problem, group)
+        _say_warnings(job, group, caught)
+        yield from outcomes
+
+
+def _say_warnings(job: Job, group: Sequence[int], caught: Sequence[warnings.WarningMessage]
+                  ) -> None:
+    """One log line for the warnings plugin code raised in a group of runs (numpy's overflow
+    warnings once came raw, dozens of lines between the progress lines)."""
+    if not caught:
+        return
+    first = caught[0]
+    runs = f"run {group[0]}" if len(group) == 1 else f"runs {group[0]}-{group[-1]}"
+    log.warning("%s on %s, %s: %d warning(s) from plugin code (first: %s: %s, %s:%d); the "
+                "runs are recorded", job.optimizer_name, job.problem_name, runs, len(caught),
+                first.category.__name__, first.message, Path(first.filename).name, first.lineno)
 
 
 def now_utc() -> str:

@@ -1,0 +1,52 @@
+"""Warnings raised by plugin code during a job's runs (numpy's overflow warnings from a problem
+whose residuals overflow) are one log line per group of runs, not raw lines on the terminal."""
+
+from __future__ import annotations
+
+import logging
+import warnings
+
+import numpy as np
+
+from vpid_bench.api import Bounds, Optimizer, OptimizerParams, Problem, ProblemConfig
+from vpid_bench.build import ProblemCache
+from vpid_bench.job_runs import run_outcomes
+from vpid_bench.spec import Job, JobSpec
+
+
+class Overflowing(Problem):
+    rows_independent = True
+
+    @property
+    def bounds(self) -> Bounds:
+        return Bounds(-np.ones(2), np.ones(2), ("a", "b"))
+
+    def evaluate(self, X: np.ndarray) -> np.ndarray:
+        big = np.full(X.shape[0], 1e300)
+        return np.sum(X**2, axis=1) + np.minimum(big * big, 1.0)  # overflow: a warning
+
+
+class Random(Optimizer):
+    def ask(self) -> np.ndarray:
+        return self.bounds.sample(self.rng, self.params.ps)
+
+    def tell(self, X: np.ndarray, f: np.ndarray) -> None:
+        pass
+
+
+def test_warnings_from_plugin_code_are_one_line_per_group(caplog):
+    job = Job(JobSpec(runs=3, progress=False, report=False), "overflowing", Overflowing,
+              ProblemConfig(ps=4, iterations=5), "random", Random,
+              OptimizerParams(ps=4, iterations=5, budget=24), 24)
+    problem = ProblemCache().get(job)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a warning that escaped would fail the runs
+        with caplog.at_level(logging.WARNING, logger="vpid_bench.job_runs"):
+            outcomes = list(run_outcomes(job, problem, [0, 1, 2], lockstep=True))
+    assert all(o.error is None for o in outcomes)
+    lines = [r.getMessage() for r in caplog.records
+             if "warning(s) from plugin code" in r.getMessage()]
+    assert len(lines) == 1
+    assert "random on overflowing, runs 0-2" in lines[0]
+    assert "RuntimeWarning: overflow encountered" in lines[0]
+    assert "test_plugin_warnings.py" in lines[0]
