@@ -248,3 +248,18 @@ def test_real_sweep_ends_with_a_report(tmp_path):
     assert out.returncode == 0, out.stderr[-2000:]
     assert (sweep / "report" / "report.md").is_file()
     assert "random" in out.stdout and "baseline" in out.stdout
+
+
+def test_ctrl_c_during_the_report_is_one_line_and_status_130(tmp_path, monkeypatch, capsys):
+    """SIGINT during vpid-bench-report once printed a traceback."""
+    from vpid_bench.report import build
+    from vpid_bench.report.cli import main
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(build, "build_report", interrupted)
+    (tmp_path / "sweep").mkdir()
+    assert main([str(tmp_path / "sweep"), "-o", str(tmp_path / "out")]) == 130
+    err = capsys.readouterr().err
+    assert err.strip() == "interrupted: the report is not complete; run the same command again"

@@ -35,7 +35,17 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Console entry point ``vpid-bench-report``; returns (and exits with) the status."""
+    """Console entry point ``vpid-bench-report``; returns (and exits with) the status. Ctrl-C
+    is one line and status 130 (a report half written is left as it is; run it again)."""
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        print("interrupted: the report is not complete; run the same command again",
+              file=sys.stderr)
+        return _exit(130, argv)
+
+
+def _main(argv: Sequence[str] | None) -> int:
     args = _parser().parse_args(argv)
     missing = [str(p) for p in args.paths if not p.exists()]
     if missing:
