@@ -214,6 +214,35 @@ def _run_job(job: Job, job_dir: Path, registry: Registry | None, problem: Any,
     return summary
 
 
+#: Where records made under another run id (another plugin version, data file or setting)
+#: are moved, inside ``records/``: kept for the curious, never read as records.
+SUPERSEDED_DIR = "superseded"
+
+
+def set_aside_superseded(job_dir: Path, key: Mapping[str, Any]) -> int:
+    """Move every record of ``job_dir`` whose run id is not the one this job gives its run
+    index (made from superseded data: after ``problem.reference.file`` changed, the old
+    records once stayed beside the new ones and the report counted both) into
+    ``records/superseded/``. Returns how many; says so in one line."""
+    import re
+
+    folder = job_dir / rec.RECORDS_DIR
+    moved = []
+    for path in sorted(folder.glob("run-*.json")) if folder.is_dir() else []:
+        match = re.fullmatch(r"run-(\d+)-(\w+)\.json", path.name)
+        if match and match.group(2) != rec.run_id(key, int(match.group(1))):
+            moved.append(path)
+    if moved:
+        target = folder / SUPERSEDED_DIR
+        _refuse_swapped(target)
+        target.mkdir(exist_ok=True)
+        for path in moved:
+            path.replace(target / path.name)
+        print(f"warning: {len(moved)} record(s) in {folder} were made from other data, plugins "
+              f"or settings; set aside in {target} (never counted)", file=sys.stderr, flush=True)
+    return len(moved)
+
+
 def analysis_limit_s(job: Job) -> float | None:
     """Wall-time limit (s) of the job's analysis after its runs (the optimum polish, bounds,
     floors): what all its runs together were allowed, ``run_timeout_s x runs`` (``None``
@@ -241,6 +270,7 @@ def _run_missing(job: Job, problem: Any, job_dir: Path, key: Mapping[str, Any],
                 bar.update(1)
             else:
                 todo[i] = (rid, path)
+        set_aside_superseded(job_dir, key)
         lockstep = len(todo) > 1 and joins_lockstep(job, problem)
         if pool is not None:  # each worker warms up once per job
             outcomes = outcomes_isolated(pool, job, list(todo), lockstep)

@@ -141,6 +141,13 @@ def test_4_editing_the_reference_file_runs_the_job_again(tmp_path, registry):
     again = run_cli(job, tmp_path)
     assert again.returncode == 0, again.stderr
     assert "1 run(s) done, 0 already recorded" in again.stderr
+    # the record made from the old file is set aside, never counted again (issue 24)
+    assert "1 record(s) in" in again.stderr and "set aside" in again.stderr
+    assert len(list((tmp_path / "job" / "records").glob("run-*.json"))) == 1
+    assert len(list((tmp_path / "job" / "records" / "superseded").glob("run-*.json"))) == 1
+    report = run_cli([str(tmp_path / "job"), "-o", str(tmp_path / "out")], tmp_path,
+                     report=True)
+    assert "(1 run records)" in report.stdout, report.stdout + report.stderr
 
 
 def test_5_a_planted_link_is_replaced_never_followed(tmp_path, registry):
