@@ -59,6 +59,24 @@ def _parser(argv: Sequence[str]) -> _Parser:
     return p
 
 
+def _check_config_dir(config_dir: str | None, name: str | None, path: str | None) -> None:
+    """``-cd DIR`` adds DIR to Hydra's search path *after* the shipped configs, so a
+    ``config.yaml`` there (the name asked for when ``-cn`` is not given) is silently shadowed
+    by the shipped one: once the user's ``runs: 3`` gave 30 runs. Refused in one line."""
+    import os
+
+    if config_dir is None or path is not None:
+        return
+    if not os.path.isdir(config_dir):
+        raise ConfigError("--config-dir", config_dir, "an existing folder")
+    wanted = f"{name or 'config'}.yaml"
+    if wanted == "config.yaml" and os.path.isfile(os.path.join(config_dir, wanted)):
+        raise ConfigError("--config-dir", config_dir,
+                          "a folder whose config.yaml the shipped config.yaml would shadow "
+                          "(Hydra looks there last): rename yours and pass -cn <its name>, "
+                          "or use -cp <folder>")
+
+
 def parse_command_line(argv: Sequence[str]) -> CommandLine:
     """Read ``argv`` (without the program name). Raises :class:`ConfigError` for a command
     line Hydra would refuse, and for flag combinations Hydra cannot honour."""
@@ -95,6 +113,7 @@ def parse_command_line(argv: Sequence[str]) -> CommandLine:
                               "completion; query= is what the installed completion runs")
     if resume is not None and (info or args.version):
         raise ConfigError(RESUME_FLAG, resume or True, "a command that runs jobs")
+    _check_config_dir(args.config_dir, args.config_name, args.config_path)
     return CommandLine(
         overrides=list(args.overrides or []),
         multirun=bool(args.multirun),
