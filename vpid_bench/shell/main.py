@@ -268,7 +268,18 @@ def _failures(folder: Path | None, multirun: bool,
 
 
 def main(argv: Sequence[str] | None = None) -> None:
-    """Console entry point ``vpid-bench``."""
+    """Console entry point ``vpid-bench``. Ctrl-C at any moment after the package's own
+    import (about 0.1 s) is one line and status 130: while the heavy imports and the
+    pre-flight run it once printed a 35-54-line traceback."""
+    try:
+        _main(argv)
+    except KeyboardInterrupt:
+        print("interrupted: no job was started or every completed run is recorded; run the "
+              "same command with --resume to continue", file=sys.stderr)
+        sys.exit(130)
+
+
+def _main(argv: Sequence[str] | None) -> None:
     import threading
 
     from . import preflight
