@@ -281,6 +281,9 @@ def _run_missing(job: Job, problem: Any, job_dir: Path, key: Mapping[str, Any],
             rid, path = todo[run.index]
             record = rec.make_record(job, run, rid, problem.instance(run.index), provenance)
             _refuse_swapped(job_dir, path.parent)
+            if not job_dir.is_dir():  # moved away: writing would re-create it, half empty
+                raise VpidBenchError(f"{job_dir} was moved, renamed or removed while the job "
+                                     "ran; no record is written there")
             rec.write_record(path, record)
             summary.ran += 1
             if run.error is not None:

@@ -142,10 +142,16 @@ class DeafBuild(Base):
         super().__init__(*args, **kwargs)
 
 
+class Renamer(Base):
+    def tell(self, X, f):
+        if os.path.isdir("sweep") and not os.path.exists("sweep-moved"):
+            os.rename("sweep", "sweep-moved")
+
+
 @hookimpl
 def vpid_bench_register_optimizers(register):
     for cls in (SlowClose, SlowBuild, Wanderer, Lingerer, Thrower, Interrupter, Swapper, Exiter,
-                Aborter, Crasher, Deaf, DeafBuild):
+                Aborter, Crasher, Deaf, DeafBuild, Renamer):
         register(cls.__name__.lower(), cls)
 '''
 
@@ -287,3 +293,13 @@ def test_a_constructor_deaf_to_the_alarm_fails_its_job_at_the_limit(site, tmp_pa
     assert out.returncode == 1, out.stderr[-2000:]
     assert len(_records(tmp_path, "random")) == 2
     assert "constructor did not return within 11 s" in out.stderr
+
+
+def test_a_sweep_folder_renamed_mid_sweep_is_said_not_split(site, tmp_path):
+    """The sweep folder renamed while the sweep runs: the next job is not run into a
+    re-created, unlocked folder of the old name; it fails in one line naming what happened."""
+    out = _sweep(site, tmp_path, "renamer")
+    assert out.returncode == 1, out.stderr[-2000:]
+    assert "Traceback" not in out.stderr
+    assert "was moved, renamed or removed while the command ran" in out.stderr
+    assert not list((tmp_path / "sweep").rglob("run-*.json"))  # nothing re-created there

@@ -66,9 +66,11 @@ class JobTask:
         self._registry = registry
         self._problems: Any = None
         self._pool: Any = None
+        #: The output folder's lock (:class:`~.resume.FolderLock`), in the command's process.
+        self.lock: Any = None
 
     def __getstate__(self) -> dict[str, Any]:
-        return {"_registry": None, "_problems": None, "_pool": None}
+        return {"_registry": None, "_problems": None, "_pool": None, "lock": None}
 
     def close(self) -> None:
         """Stop the sweep's worker processes."""
@@ -97,6 +99,11 @@ class JobTask:
         from ..workers import Workers
 
         try:
+            if self.lock is not None and not self.lock.still_here():
+                raise VpidBenchError(f"the output folder {self.lock.folder} was moved, renamed "
+                                     "or removed while the command ran (its lock file is gone):"
+                                     " this job is not run; finish the sweep where it now is "
+                                     "with --resume=<its path>")
             if self._registry is None:
                 self._registry = _load_registry()
             if self._problems is None:
@@ -322,6 +329,7 @@ def _main(argv: Sequence[str] | None) -> None:
         lock = FolderLock(plan.output_dir, key)
         preflight.check_writable(plan.output_dir, key)
         lock.acquire()
+        task.lock = lock
         preflight.create_job_dirs(plan)
     except VpidBenchError as exc:
         _refuse(exc)

@@ -106,6 +106,19 @@ class FolderLock:
                               ) from None
         self._fd = fd
 
+    def still_here(self) -> bool:
+        """Whether the locked folder is still where it was (a sweep folder renamed or removed
+        mid-sweep was once re-created, unlocked, by the next job, splitting the sweep in
+        two without a word): the lock file at the folder's path is the one we hold."""
+        if self._fd is None:
+            return True
+        try:
+            held = os.fstat(self._fd)
+            there = os.stat(self.folder / LOCK_FILE, follow_symlinks=False)
+        except OSError:
+            return False
+        return (held.st_dev, held.st_ino) == (there.st_dev, there.st_ino)
+
     def release(self) -> None:
         if self._fd is not None:
             with contextlib.suppress(OSError):
