@@ -173,3 +173,32 @@ def test_5_a_planted_link_is_replaced_never_followed(tmp_path, registry):
     os.symlink(targets["job.json"], record_link)
     rec.write_record(record_link, {"schema": rec.SCHEMA})
     assert targets["job.json"].read_text() == "precious\n" and not record_link.is_symlink()
+
+
+def test_a_broken_optimum_lock_is_a_terminal_warning(tmp_path, registry, compose_config,
+                                                      capsys):
+    """An optimum lock replaced by a folder or a dangling link: the analysis failed with a
+    warning only in the job's log; now one warning: line on the terminal, runs recorded."""
+    import os
+
+    from vpid_bench.experiment import run_job
+    from vpid_bench.spec import parse_job
+
+    job = parse_job(compose_config(["problem=vehicle", "optimizer=random", "runs=2",
+                                    "problem.iterations=2", "progress=false", "report=false",
+                                    "resume=false"]), registry)
+    run_job(job, tmp_path / "job", registry)
+    locks = sorted((tmp_path / "job" / "optima").glob("*.lock"))
+    assert locks
+    for i, lock in enumerate(locks):
+        lock.unlink()
+        if i % 2:
+            lock.mkdir()
+        else:
+            os.symlink(tmp_path / "nowhere", lock)
+    capsys.readouterr()
+    again = run_job(job, tmp_path / "job", registry)
+    assert again.ran == 2 and not again.failed
+    err = capsys.readouterr().err
+    warning = [ln for ln in err.splitlines() if ln.startswith("warning:")]
+    assert len(warning) == 1 and "analysis failed" in warning[0], err
