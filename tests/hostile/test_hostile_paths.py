@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 from pathlib import Path
 
 import pytest
@@ -202,3 +203,22 @@ def test_a_broken_optimum_lock_is_a_terminal_warning(tmp_path, registry, compose
     err = capsys.readouterr().err
     warning = [ln for ln in err.splitlines() if ln.startswith("warning:")]
     assert len(warning) == 1 and "analysis failed" in warning[0], err
+
+
+def test_links_planted_at_hydra_files_are_not_written_through_on_resume(tmp_path):
+    """On resume a symlinked job .hydra/ or sweep multirun.yaml was written through."""
+    outside = tmp_path / "outside"
+    (outside / "hydra").mkdir(parents=True)
+    (outside / "multirun.yaml").write_text("mine\n")
+    sweep = ["-m", *TINY, "hydra.sweep.dir=sweep"]
+    assert run_cli(sweep, tmp_path).returncode == 0
+    (job,) = [p for p in (tmp_path / "sweep").iterdir() if (p / ".hydra").is_dir()]
+    shutil.rmtree(job / ".hydra")
+    (job / ".hydra").symlink_to(outside / "hydra", target_is_directory=True)
+    (tmp_path / "sweep" / "multirun.yaml").unlink()
+    (tmp_path / "sweep" / "multirun.yaml").symlink_to(outside / "multirun.yaml")
+    again = run_cli([*sweep, "resume=false"], tmp_path)
+    assert again.returncode == 0, again.stderr
+    assert list((outside / "hydra").iterdir()) == []
+    assert (outside / "multirun.yaml").read_text() == "mine\n"
+    assert (job / ".hydra" / "config.yaml").is_file() and not (job / ".hydra").is_symlink()

@@ -184,6 +184,8 @@ def _save_job_config(cfg: Any, job_dir: Path) -> None:
 
     full = HydraConfig.instance().cfg
     folder = job_dir / ".hydra"
+    if folder.is_symlink():  # planted: never written through (issue 24); a folder of our own
+        folder.unlink()
     write_text_atomic(folder / "config.yaml", OmegaConf.to_yaml(cfg))
     write_text_atomic(folder / "hydra.yaml", OmegaConf.to_yaml(full))
     write_text_atomic(folder / "overrides.yaml",

@@ -467,7 +467,12 @@ def create_job_dirs(plan: Plan) -> None:
     """Create every planned job folder before the first job starts, so no job's set-up
     (Hydra creates the folder before our task runs) can fail on it mid-sweep. A folder that
     cannot be created (a file in its place, a full disk) refuses the command; one that exists
-    but cannot be written is left to its job, which fails alone and is reported."""
+    but cannot be written is left to its job, which fails alone and is reported. A symbolic
+    link planted at the sweep's ``multirun.yaml`` (Hydra writes it, following links) is
+    removed first, so nothing is written through it."""
+    planted = plan.output_dir / "multirun.yaml"
+    if plan.multirun and planted.is_symlink():
+        planted.unlink()
     for job_dir in plan.job_dirs:
         try:
             job_dir.mkdir(parents=True, exist_ok=True)
