@@ -222,3 +222,14 @@ def test_links_planted_at_hydra_files_are_not_written_through_on_resume(tmp_path
     assert list((outside / "hydra").iterdir()) == []
     assert (outside / "multirun.yaml").read_text() == "mine\n"
     assert (job / ".hydra" / "config.yaml").is_file() and not (job / ".hydra").is_symlink()
+
+
+def test_a_report_that_could_not_be_written_makes_the_command_exit_1(tmp_path):
+    """The report's folder cannot be made (a file in its place, as a full disk would): the
+    report and its status file are both missing; the command once exited 0 all the same."""
+    (tmp_path / "sweep").mkdir()
+    (tmp_path / "sweep" / "report").write_text("in the way\n")
+    done = run_cli(["-m", *[a for a in TINY if a != "report=false"], "hydra.sweep.dir=sweep"],
+                   tmp_path)
+    assert done.returncode == 1, done.stderr
+    assert "report: not written" in done.stderr and "Traceback" not in done.stderr

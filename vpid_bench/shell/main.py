@@ -236,7 +236,7 @@ def print_versions(registry: Any) -> None:
 
 
 def _failures(folder: Path | None, multirun: bool,
-              planned: Sequence[Path] = ()) -> list[str]:
+              planned: Sequence[Path] = (), report_expected: bool = False) -> list[str]:
     """What went wrong, read from the disk: job statuses of this invocation and the report's
     status; a planned job folder without a status of this invocation counts as failed (its
     folder could not be written). Prints the sweep summary."""
@@ -270,9 +270,11 @@ def _failures(folder: Path | None, multirun: bool,
         report = loads_json(read_text_limited(folder / REPORT_SUBDIR / REPORT_STATUS))
     except (OSError, ValueError):
         report = None
-    if (isinstance(report, dict) and report.get("invocation") == invocation
-            and report.get("status") in ("failed", "problems")):
+    mine = isinstance(report, dict) and report.get("invocation") == invocation
+    if mine and report.get("status") in ("failed", "problems"):
         out.append(f"report: {report.get('status')}")
+    elif report_expected and not mine:  # e.g. a full disk: neither report nor status written
+        out.append("report: not written (its status file is missing; the line above says why)")
     return out
 
 
@@ -344,8 +346,9 @@ def _main(argv: Sequence[str] | None) -> None:
     finally:
         task.close()
         lock.release()
-    _leave(1 if _failures(plan.output_dir, plan.multirun, plan.job_dirs) else 0, before,
-           watch=console)
+    _leave(1 if _failures(plan.output_dir, plan.multirun, plan.job_dirs,
+                          report_expected=bool(plan.jobs) and plan.jobs[0].spec.report)
+           else 0, before, watch=console)
 
 
 #: How long (s) the process may take to end after the command, before threads a plugin
