@@ -219,3 +219,8 @@ def test_a_config_dir_whose_config_yaml_would_be_shadowed_is_refused(in_tmp, cap
                                  "hydra.run.dir=out"], capsys)
     assert code == 0, err
     assert len(list((in_tmp / "out" / "records").glob("run-*.json"))) == 3
+    # a custom config the checks refuse: its error line, and exit 1 (it exited 0)
+    (folder / "bad.yaml").write_text(text.replace("runs: 3", "runs: abc"))
+    code, err = main_in_process(["-cd", str(folder), "-cn", "bad", "hydra.run.dir=out2"],
+                                capsys)
+    assert code == 1 and "error: runs='abc' is not allowed: an integer" in err

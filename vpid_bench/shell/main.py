@@ -20,6 +20,7 @@ from __future__ import annotations
 import logging
 import os
 import sys
+import threading
 import time
 import warnings
 from collections.abc import Sequence
@@ -68,6 +69,9 @@ class JobTask:
         self._pool: Any = None
         #: The output folder's lock (:class:`~.resume.FolderLock`), in the command's process.
         self.lock: Any = None
+        #: Jobs of this process that failed or had failed runs (the exit status of a command
+        #: without a pre-flight plan: a custom config).
+        self.not_ok = 0
 
     def __getstate__(self) -> dict[str, Any]:
         return {"_registry": None, "_problems": None, "_pool": None, "lock": None}
@@ -127,7 +131,9 @@ class JobTask:
             message = f"error: {one_line(exc)}"
             print(message + (f" [{job_dir}]" if multirun else ""), file=sys.stderr, flush=True)
             _write_status(job_dir, "error", one_line(exc))
+            self.not_ok += 1
             return None
+        self.not_ok += bool(summary.failed)
         _write_status(job_dir, "failed_runs" if summary.failed else "ok", summary)
         print(f"{summary.optimizer} on {summary.problem}: {summary.ran} run(s) done, "
               f"{summary.skipped} already recorded, {len(summary.failed)} failed, "
@@ -291,8 +297,6 @@ def main(argv: Sequence[str] | None = None) -> None:
 
 
 def _main(argv: Sequence[str] | None) -> None:
-    import threading
-
     from . import preflight
     from .argv import parse_command_line
     from .callbacks import ensure_job_dir_resolver
@@ -322,8 +326,8 @@ def _main(argv: Sequence[str] | None) -> None:
     ensure_job_dir_resolver()
     task = JobTask(registry)
     if cmd.custom_config or cmd.info in ("--help", "--hydra-help", "--shell-completion"):
-        _run_hydra(cmd.hydra_args, task)  # nothing runs: Hydra prints what was asked
-        return
+        _run_hydra(cmd.hydra_args, task)  # a custom config's jobs, or Hydra's information
+        sys.exit(1 if task.not_ok else 0)
     try:
         plan = preflight.plan(cmd, registry)
         if cmd.info is not None:  # --cfg, --info: checked, now shown by Hydra
