@@ -119,3 +119,15 @@ def test_the_analysis_after_the_runs_is_bounded_and_its_failure_said(registry, c
     assert time.monotonic() - t0 < 10 and summary.ran == 2 and not summary.failed
     warning = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("warning:")]
     assert len(warning) == 1 and "analysis failed (RunTimeoutError" in warning[0]
+
+
+def test_the_job_task_sent_to_a_launchers_worker_has_every_attribute():
+    """The task Hydra's joblib launcher pickles to its workers once lost an attribute
+    (AttributeError in every job there): its state is the fresh task's, minus what cannot go."""
+    import pickle
+
+    from vpid_bench.shell.main import JobTask
+
+    fresh = JobTask()
+    sent = pickle.loads(pickle.dumps(fresh))
+    assert set(vars(sent)) == set(vars(fresh))

@@ -74,7 +74,7 @@ class JobTask:
         self.not_ok = 0
 
     def __getstate__(self) -> dict[str, Any]:
-        return {"_registry": None, "_problems": None, "_pool": None, "lock": None}
+        return {"_registry": None, "_problems": None, "_pool": None, "lock": None, "not_ok": 0}
 
     def close(self) -> None:
         """Stop the sweep's worker processes."""
