@@ -224,13 +224,11 @@ def set_aside_superseded(job_dir: Path, key: Mapping[str, Any]) -> int:
     index (made from superseded data: after ``problem.reference.file`` changed, the old
     records once stayed beside the new ones and the report counted both) into
     ``records/superseded/``. Returns how many; says so in one line."""
-    import re
-
     folder = job_dir / rec.RECORDS_DIR
     moved = []
     for path in sorted(folder.glob("run-*.json")) if folder.is_dir() else []:
-        match = re.fullmatch(r"run-(\d+)-(\w+)\.json", path.name)
-        if match and match.group(2) != rec.run_id(key, int(match.group(1))):
+        named = rec.parse_record_name(path.name)
+        if named is not None and named[1] != rec.run_id(key, named[0]):
             moved.append(path)
     if moved:
         target = folder / SUPERSEDED_DIR

@@ -54,3 +54,10 @@ class PluginInterruptError(RuntimeError):
     def __init__(self, where: str) -> None:
         super().__init__(f"the plugin raised KeyboardInterrupt in {where} (not the user's "
                          "Ctrl-C): this run fails, the sweep goes on")
+
+
+def thread_exception_line(args: Any) -> str:
+    """The one line said for an exception in a plugin's own thread (``threading.excepthook``'s
+    ``args``), in the command's process and in a worker process alike."""
+    name = args.thread.name if args.thread is not None else "?"
+    return f"warning: thread {name} raised {args.exc_type.__name__}: {args.exc_value}"

@@ -173,10 +173,8 @@ def _thread_exception(send: Any) -> Any:
     """The worker's ``threading.excepthook``: one line on the command's stderr for an
     exception in a plugin's own thread (as in the command's own process), no traceback."""
     def hook(args: Any) -> None:
-        name = args.thread.name if args.thread is not None else "?"
         with contextlib.suppress(Exception):
-            send(("say", f"warning: thread {name} raised {args.exc_type.__name__}: "
-                         f"{args.exc_value}"))
+            send(("say", interrupts.thread_exception_line(args)))
     return hook
 
 

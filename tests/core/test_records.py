@@ -154,3 +154,10 @@ def test_records_hold_strict_json_with_the_sign_of_infinities(tmp_path, value, e
     text = path.read_text()
     assert json.loads(text) == {"v": expected}
     assert "Infinity" not in text and "NaN" not in text
+
+
+def test_a_record_name_parses_back_to_its_index_and_id(tmp_path):
+    from vpid_bench.records import parse_record_name, record_path
+
+    assert parse_record_name(record_path(tmp_path, 7, "ab12cd").name) == (7, "ab12cd")
+    assert parse_record_name("run-7.json") is None and parse_record_name("x.json") is None

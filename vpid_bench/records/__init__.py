@@ -25,6 +25,7 @@ from .io import (
     fingerprint,
     iter_record_files,
     job_key,
+    parse_record_name,
     read_record,
     record_path,
     run_id,
@@ -39,7 +40,8 @@ __all__ = [
     "OLD_SCHEMAS", "RECORDS_DIR", "REQUIRED_KEYS", "SCHEMA", "CorruptRecordError",
     "OldRecordError", "_jsonable", "_umask", "canonical_json", "distribution_provenance",
     "fingerprint", "iter_record_files", "job_key", "make_record", "package_versions",
-    "read_record", "record_path", "run_id", "stable_hash", "write_json_atomic", "write_record",
+    "parse_record_name", "read_record", "record_path", "run_id", "stable_hash",
+    "write_json_atomic", "write_record",
     "write_text_atomic",
     "JOB_STATUS_FILE", "read_job_status", "write_job_status",
 ]

@@ -142,6 +142,15 @@ def record_path(job_dir: Path, run_index: int, rid: str) -> Path:
     return Path(job_dir) / RECORDS_DIR / f"run-{run_index:03d}-{rid}.json"
 
 
+def parse_record_name(name: str) -> tuple[int, str] | None:
+    """``(run_index, run_id)`` of a file named as :func:`record_path` names records, or
+    ``None`` for any other name."""
+    import re
+
+    match = re.fullmatch(r"run-(\d+)-(\w+)\.json", name)
+    return None if match is None else (int(match.group(1)), match.group(2))
+
+
 def write_json_atomic(path: Path, obj: Any) -> Path:
     """``obj`` as strict, indented JSON (sorted keys), written with :func:`write_text_atomic`."""
     text = json.dumps(_jsonable(obj), indent=1, sort_keys=True, allow_nan=False) + "\n"

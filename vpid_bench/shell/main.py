@@ -390,9 +390,9 @@ def _leave(code: int, before: set[Any], watch: bool) -> None:
 
 def _thread_exception(args: Any) -> None:
     """One line for an exception in a plugin's own thread (not Python's traceback)."""
-    name = args.thread.name if args.thread is not None else "?"
-    print(f"warning: thread {name} raised {args.exc_type.__name__}: {args.exc_value}",
-          file=sys.stderr)
+    from ..interrupts import thread_exception_line
+
+    print(thread_exception_line(args), file=sys.stderr)
 
 
 def _run_hydra(args: list[str], task: Any) -> None:
