@@ -3,6 +3,8 @@ in one line; every member builds, knows its truth and fits its own record."""
 
 from __future__ import annotations
 
+import pickle
+
 import numpy as np
 import pytest
 from vpid_vehicle.ride.suites import MEMBERS
@@ -74,3 +76,12 @@ def test_every_member_builds_and_its_truth_fits_best(cls):
         assert p.metrics(polish(p, x)[0])["NoRE"] > 20
     else:
         assert f_true < f_centre
+
+
+@pytest.mark.parametrize("cls", MEMBERS, ids=lambda c: c.name)
+def test_every_member_and_its_config_pickle_by_name(cls):
+    """A member travels to a worker process by name (classes made with type() claimed the
+    module ``abc``, so every suite job ran in the command's own process, unsupervised)."""
+    assert pickle.loads(pickle.dumps(cls)) is cls
+    config = cls.Config()
+    assert pickle.loads(pickle.dumps(config)) == config

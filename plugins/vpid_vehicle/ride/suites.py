@@ -40,8 +40,16 @@ def member(base: type, name: str, suites: tuple[str, ...], **defaults: Any) -> t
     config.__doc__ = (f"Suite member {name}: {base.name} with "
                       + ", ".join(f"{k}={v}" for k, v in defaults.items())
                       + f". Other keys: {base.name}'s.")
-    return type(name, (base,), {"Config": config, "name": name, "suites": suites,
-                                "__doc__": config.__doc__})
+    cls = type(name, (base,), {"Config": config, "name": name, "suites": suites,
+                               "__doc__": config.__doc__, "__module__": __name__})
+    # Importable by name from this module, so pickle can send a member (and a config of
+    # one) to a worker process; classes made by type() otherwise claim a module they are
+    # not in, and the job falls back to running in the command's own process.
+    config.__module__ = __name__
+    config.__qualname__ = config.__name__
+    globals()[name] = cls
+    globals()[config.__name__] = config
+    return cls
 
 
 SMOKE = dict(iterations=10, duration_s=2.0)
