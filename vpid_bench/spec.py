@@ -55,7 +55,9 @@ class JobSpec:
     ``runs``: independent runs per job. ``budget``: evaluations per run (null: the protocol's
     ``ps * (iterations + 1)``). ``resume``: skip runs whose complete record already exists.
     ``progress``: a progress bar on stderr. ``report``: write a report at the end of a job or
-    a sweep. ``threads``: threads a problem may use to evaluate a batch (null: every core);
+    a sweep. ``archive``: rank the archived built-in optimizers of a suite beside this
+    job's or sweep's runs on the suite's problems, without running them (docs/protocol.md).
+    ``threads``: threads a problem may use to evaluate a batch (null: every core);
     results never depend on it. ``run_timeout_s``: wall-time limit of one run in seconds (null:
     none); a run past it is recorded as failed. ``isolation``: where the optimizer's code and
     the evaluations run: ``process`` in supervised worker processes (a crash, ``os._exit`` or
@@ -71,6 +73,7 @@ class JobSpec:
     resume: bool = True
     progress: bool = True
     report: bool = True
+    archive: bool = True
     threads: int | None = None
     run_timeout_s: float | None = None
     isolation: str = "auto"
@@ -96,7 +99,8 @@ class JobSpec:
 #: The top-level keys, in the order they are documented.
 TOP_LEVEL_KEYS = tuple(f.name for f in dataclasses.fields(JobSpec))
 #: Keys that never change a result (they may differ between a sweep and its resume).
-OPERATIONAL_KEYS = ("resume", "progress", "report", "threads", "isolation", "workers")
+OPERATIONAL_KEYS = ("resume", "progress", "report", "archive", "threads", "isolation",
+                    "workers")
 
 
 def _check_int(key: str, value: int, low: int, high: int, nullable: bool = False) -> None:

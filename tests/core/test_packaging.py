@@ -27,7 +27,7 @@ def _package_name(folder: Path, package_dir: dict[str, str]) -> str:
 def test_every_package_folder_is_declared():
     packages, package_dir = _declared()
     found = {_package_name(init.parent, package_dir)
-             for base in ("vpid_bench", "plugins", "conf")
+             for base in ("vpid_bench", "plugins", "conf", "archive")
              for init in (ROOT / base).rglob("__init__.py") if "__pycache__" not in init.parts}
     # Folders of YAML presets under conf/ ship as data packages too.
     found |= {_package_name(y.parent, package_dir) for y in (ROOT / "conf").rglob("*.yaml")}

@@ -187,6 +187,13 @@ def read_record(path: Path) -> dict[str, Any]:
         record = loads_json(read_text_limited(path))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise CorruptRecordError(f"{path}: not a readable JSON run record ({exc})") from exc
+    return parse_record(record, str(path))
+
+
+def parse_record(record: Any, where: str) -> dict[str, Any]:
+    """Check one parsed record (from a file, or a line of an archive named by ``where``):
+    :class:`CorruptRecordError` names ``where`` and the fault."""
+    path = where
     schema = record.get("schema") if isinstance(record, dict) else None
     if schema in OLD_SCHEMAS:
         raise OldRecordError(

@@ -62,6 +62,8 @@ class Report:
     loaded: LoadedRecords
     section_errors: list[str] = dataclasses.field(default_factory=list)
     optima_errors: list[str] = dataclasses.field(default_factory=list)
+    #: one line per problem whose archived runs stand in the report, or were refused
+    archive_notes: list[str] = dataclasses.field(default_factory=list)
 
     @property
     def failures(self) -> list[str]:
@@ -105,14 +107,17 @@ def build_report(
     alpha: float = ALPHA,
     baseline: str = tables.BASELINE,
     registry: Any = None,
+    archive: bool | Path = False,
 ) -> Report:
     """Read the records below ``paths`` and write the report into ``out_dir``.
 
     ``short``: a single job's report (no tests, no figures, no pandas). ``registry``
-    (default: the installed plugins) provides the problems' report sections. Raises
+    (default: the installed plugins) provides the problems' report sections. ``archive``:
+    rank the archived built-in optimizers beside these runs (:mod:`.archive`; ``True`` for
+    the archives shipped with the package, or a folder of archives). Raises
     :class:`NoRecordsError` when no readable record exists.
     """
-    data = compute(paths, short, alpha, baseline)
+    data = compute(paths, short, alpha, baseline, archive)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     names = _Names(out_dir)
@@ -136,7 +141,7 @@ def build_report(
     written.append(md)
     return Report(out_dir, md, first_screen.terminal_text(results), len(data.loaded.records),
                   data.problems, written, {k: v for k, v in figs.items() if isinstance(v, str)},
-                  data.loaded, section_errors, data.optima_errors)
+                  data.loaded, section_errors, data.optima_errors, data.archive_notes)
 
 
 def _table(names: _Names, stem: str, headers: Sequence[str],
@@ -207,6 +212,11 @@ def _markdown(data: ReportData, results: list[Any], sections: list[tuple[str, Se
              para(f"{n} run(s) on {what} ({n_ok} ok, {n - n_ok} failed). Which optimizer, how "
                   "far from the truth, and why: below, per context. How to read it, the "
                   "tests and the sources follow."), ""]
+    if data.archive_notes:
+        lines += [para("Archived runs, made earlier by the code named beside them and "
+                       "ranked here with this report's own runs (`archive=false` leaves "
+                       "them out):"), ""]
+        lines += [f"- {escape(n)}" for n in data.archive_notes] + [""]
     lines += first_screen.markdown_lines(results)
     if data.short and len(data.paths) == 1:
         lines += [para("A single job's report: statistics, no tests, no figures. The full "

@@ -29,6 +29,11 @@ def _parser() -> argparse.ArgumentParser:
                    help="skip the significance tests and critical-difference diagrams")
     p.add_argument("--alpha", type=float, default=0.05,
                    help="significance level after Holm correction (default 0.05)")
+    p.add_argument("--no-archive", action="store_true",
+                   help="leave out the archived runs of the built-in optimizers (by default "
+                   "they are ranked beside runs on a suite's problems)")
+    p.add_argument("--archive-dir", type=Path, default=None, metavar="DIR",
+                   help="read archives from DIR instead of those shipped with vpid-bench")
     p.add_argument("--baseline", default="random",
                    help="optimizer name of the baseline to clear (default: random)")
     return p
@@ -63,7 +68,8 @@ def _main(argv: Sequence[str] | None) -> int:
 
     try:
         report = build_report(args.paths, args.out, short=args.short, alpha=args.alpha,
-                              baseline=args.baseline)
+                              baseline=args.baseline,
+                              archive=False if args.no_archive else (args.archive_dir or True))
     except NoRecordsError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return _exit(2, argv)
@@ -71,6 +77,8 @@ def _main(argv: Sequence[str] | None) -> int:
         print(f"error: the report could not be written into {args.out} "
               f"({exc.strerror or type(exc).__name__})", file=sys.stderr)
         return _exit(1, argv)
+    for note in report.archive_notes:
+        print(note, file=sys.stderr)
     print(report.headline)
     print(f"\nreport: {report.report_md} ({report.n_records} run records)")
     for line in report.failures:

@@ -52,6 +52,8 @@ class ReportData:
     tests: Tests | None = None
     #: per context: the floors of each estimator its job wrote (``estimators.json``)
     estimator_floors: dict[str, dict[str, Any]] = dataclasses.field(default_factory=dict)
+    #: one line per problem whose archived runs stand beside these (or were refused)
+    archive_notes: list[str] = dataclasses.field(default_factory=list)
 
     @property
     def contexts(self) -> list[str]:
@@ -102,10 +104,12 @@ class ReportData:
         return rankings.test_name(pairs, context)
 
 
-def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: str
-            ) -> ReportData:
+def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: str,
+            archive: bool | Path = False) -> ReportData:
     """Load the records below ``paths`` and compute everything the report shows. Raises
-    :class:`~.load.NoRecordsError` when no readable record exists."""
+    :class:`~.load.NoRecordsError` when no readable record exists. ``archive``: add the
+    archived runs of the built-in optimizers on the same problems (``True``: the archives
+    shipped with the package; a folder: the archives below it; see :mod:`.archive`)."""
     paths = [Path(p) for p in paths]
     loaded = load_records(paths)
     if not loaded.records:
@@ -116,8 +120,10 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
                      f"{' '.join(reason(first, why).split())})")
         raise NoRecordsError(
             f"no run records (records/run-*.json) below {', '.join(map(str, paths))}{extra}")
+    extra_optima, notes = _add_archive(loaded, archive) if archive else ([], [])
     rows = run_rows(loaded.records)
     optima = load_optima(paths, loaded.records)
+    optima.optima += extra_optima
     optima_errors = [f"bad optimum file {p}: {why}" for p, why in optima.skipped]
     optima_errors += add_optimum_columns(rows, loaded.records, optima)
     summary = tables.summarize(rows)
@@ -137,7 +143,19 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
     return ReportData(paths, short, alpha, baseline, loaded, rows, summary, search, hits,
                       optima_errors, crb_norm_by_context(loaded.records, rows),
                       rankings.box_centred(loaded.records, rows), verdicts, tests,
-                      estimator_floors.by_context(loaded.records, rows))
+                      estimator_floors.by_context(loaded.records, rows), notes)
+
+
+def _add_archive(loaded: LoadedRecords, archive: bool | Path) -> tuple[list[Any], list[str]]:
+    """Add the archived runs that stand beside ``loaded`` to it (in place); return their
+    instance optima and the archive's one-line notes."""
+    from .archive import load_all, merge
+
+    archives, bad = load_all(None if archive is True else Path(archive),
+                             {r["problem"]["name"] for r in loaded.records})
+    merged = merge(loaded.records, archives)
+    loaded.records.extend(merged.records)
+    return merged.optima, bad + merged.refused + merged.used
 
 
 def _tests(rows: list[dict[str, Any]], search: list[dict[str, Any]], alpha: float) -> Tests:

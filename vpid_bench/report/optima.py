@@ -106,6 +106,12 @@ def read_optimum_file(path: Path) -> tuple[Optimum | None, str | None]:
         data = loads_json(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
         return None, f"unreadable: {type(exc).__name__}"
+    return optimum_from_data(data, path)
+
+
+def optimum_from_data(data: Any, path: Path) -> tuple[Optimum | None, str | None]:
+    """``(optimum, None)`` for parsed optimum data that passes :func:`check_optimum` (from a
+    file, or a line of the archive named by ``path``), ``(None, why)`` otherwise."""
     bad = check_optimum(data)
     if bad:
         return None, f"field {bad}"

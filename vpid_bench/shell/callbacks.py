@@ -86,14 +86,14 @@ class SweepStatus(_ResolverCallback):
               file=sys.stderr, flush=True)
 
 
-def _enabled(config: Any) -> bool:
+def _enabled(config: Any, key: str = "report") -> bool:
     try:
-        return bool(config.get("report", True))
+        return bool(config.get(key, True))
     except Exception:  # an odd config must not stop the command here
         return True
 
 
-def write_report(folder: Path, short: bool) -> bool:
+def write_report(folder: Path, short: bool, archive: bool = True) -> bool:
     """Build the report of ``folder`` into ``folder/report``, print the headline and where it
     is, and write the outcome into ``folder/report/status.json``. Never raises."""
     from ..report.build import NoRecordsError, build_report
@@ -102,7 +102,7 @@ def write_report(folder: Path, short: bool) -> bool:
     status: dict[str, Any] = {"status": "ok", "problems": [],
                               "invocation": os.environ.get(INVOCATION_ENV)}
     try:
-        report = build_report([folder], out, short=short)
+        report = build_report([folder], out, short=short, archive=archive)
     except NoRecordsError:  # every job failed: its own error line said why
         print(f"report: none, no run was recorded in {folder}", file=sys.stderr, flush=True)
         status["status"] = "no_records"
@@ -112,6 +112,8 @@ def write_report(folder: Path, short: bool) -> bool:
         print(message, file=sys.stderr, flush=True)
         status.update(status="failed", problems=[message])
     else:
+        for note in report.archive_notes:
+            print(note, file=sys.stderr, flush=True)
         print(f"\n{report.headline}\n\nreport: {report.report_md}", flush=True)
         if short:
             print(f"report with figures and statistics: vpid-bench-report {folder} -o "
@@ -134,8 +136,10 @@ class ReportCallback(_ResolverCallback):
 
     def on_multirun_end(self, config: Any, **kwargs: Any) -> None:
         if _enabled(config):
-            write_report(Path(str(config.hydra.sweep.dir)), short=False)
+            write_report(Path(str(config.hydra.sweep.dir)), short=False,
+                         archive=_enabled(config, "archive"))
 
     def on_run_end(self, config: Any, **kwargs: Any) -> None:
         if _enabled(config):
-            write_report(Path(str(config.hydra.runtime.output_dir)), short=True)
+            write_report(Path(str(config.hydra.runtime.output_dir)), short=True,
+                         archive=_enabled(config, "archive"))

@@ -1,0 +1,200 @@
+"""The archive: archived runs of built-in optimizers ranked beside a sweep's own runs, never
+mixed in from another version of a problem, and read as untrusted input.
+
+A small archive is made here from a real sweep (``random`` and ``centre`` on ``smoke_quarter``);
+the archive shipped with the package is checked against the code in
+``test_the_shipped_archive_*``.
+"""
+
+from __future__ import annotations
+
+import gzip
+import hashlib
+import json
+import shutil
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "sweeps"))
+from sweep_helpers import run_cli  # noqa: E402
+
+from vpid_bench.report import archive as arch  # noqa: E402
+from vpid_bench.report.build import build_report  # noqa: E402
+
+SWEEP = ["report=false", "archive=false", "isolation=none", "problem=smoke_quarter"]
+
+
+@pytest.fixture(scope="module")
+def made(tmp_path_factory) -> dict[str, Path]:
+    """An archive of random and centre (3 runs) and a sweep of de1 (2 runs) on smoke_quarter."""
+    root = tmp_path_factory.mktemp("archive")
+    base = root / "base"
+    done = run_cli(["-m", "optimizer=random,centre", "runs=3", *SWEEP,
+                    f"hydra.sweep.dir={base}"], cwd=root)
+    assert done.returncode == 0, done.stderr[-2000:]
+    arch.pack(base, "smoke", root / "archives" / "smoke", command="test", commit="abc123",
+              made_at="2026-01-01T00:00:00+00:00")
+    mine = root / "mine"
+    done = run_cli(["-m", "optimizer=de1,random", "runs=2", *SWEEP,
+                    f"hydra.sweep.dir={mine}"], cwd=root)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return {"root": root, "archives": root / "archives", "mine": mine, "base": base}
+
+
+def _report(made, tmp_path, archives, paths=None):
+    return build_report(paths or [made["mine"]], tmp_path / "report", short=True,
+                        archive=archives)
+
+
+def _rows(report_dir: Path) -> list[dict[str, str]]:
+    import csv
+
+    with open(report_dir / "runs.csv", encoding="utf-8") as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_archived_runs_stand_beside_mine_on_shared_instances(made, tmp_path):
+    report = _report(made, tmp_path, made["archives"])
+    rows = _rows(tmp_path / "report")
+    by_alg: dict[str, list[dict[str, str]]] = {}
+    for r in rows:
+        by_alg.setdefault(r["algorithm"], []).append(r)
+    assert set(by_alg) == {"de1", "random", "centre"}
+    # centre comes from the archive, only on the two instances this sweep ran (of three)
+    assert sorted(r["instance"] for r in by_alg["centre"]) == \
+        sorted(r["instance"] for r in by_alg["de1"])
+    assert all("records.jsonl.gz" in r["file"] for r in by_alg["centre"])
+    # the sweep's own random is kept: the archived random is not mixed in
+    assert all("records.jsonl.gz" not in r["file"] for r in by_alg["random"])
+    assert len(by_alg["random"]) == 2
+    # the archived runs are judged against their instances' optima (shipped in the archive)
+    assert all(float(r["rel_gap"]) >= 0 for r in by_alg["centre"])
+    assert len(report.archive_notes) == 1
+    assert "centre from the archive of suite smoke" in report.archive_notes[0]
+    assert "commit abc123" in report.archive_notes[0]
+    assert "from the archive" in report.report_md.read_text(encoding="utf-8")
+
+
+def test_archive_false_leaves_the_archive_out(made, tmp_path):
+    report = _report(made, tmp_path, False)
+    assert {r["algorithm"] for r in _rows(tmp_path / "report")} == {"de1", "random"}
+    assert report.archive_notes == []
+
+
+def _rewrite(folder: Path, edit) -> None:
+    """Apply ``edit`` to every archived record and re-hash the manifest (a consistent
+    archive of another version of the problem)."""
+    path = folder / arch.RECORDS
+    lines = gzip.decompress(path.read_bytes()).decode().splitlines()
+    recs = [json.loads(line) for line in lines]
+    for r in recs:
+        edit(r)
+    with gzip.GzipFile(path, "wb", mtime=0) as fh:
+        fh.write("".join(json.dumps(r) + "\n" for r in recs).encode())
+    manifest = json.loads((folder / arch.MANIFEST).read_text())
+    manifest["files"][arch.RECORDS]["sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()
+    (folder / arch.MANIFEST).write_text(json.dumps(manifest))
+
+
+def _copy(made, tmp_path) -> Path:
+    out = tmp_path / "archives"
+    shutil.copytree(made["archives"], out)
+    return out
+
+
+def test_a_foreign_version_of_the_problem_is_refused_in_one_line(made, tmp_path):
+    archives = _copy(made, tmp_path)
+
+    def nudge(r):
+        r["parameters"]["true"][0] *= 1 + 1e-6
+    _rewrite(archives / "smoke", nudge)
+    report = _report(made, tmp_path, archives)
+    assert {r["algorithm"] for r in _rows(tmp_path / "report")} == {"de1", "random"}
+    (line,) = report.archive_notes
+    assert "smoke_quarter not used" in line and "true parameters differ" in line
+    assert "never mixed in" in line and "\n" not in line
+
+
+def test_another_plugin_version_is_refused(made, tmp_path):
+    archives = _copy(made, tmp_path)
+
+    def bump(r):
+        r["problem"]["plugin"]["version"] = "9.9"
+    _rewrite(archives / "smoke", bump)
+    report = _report(made, tmp_path, archives)
+    (line,) = report.archive_notes
+    assert "plugin version differs" in line
+
+
+def test_other_settings_are_not_compared(made, tmp_path):
+    other = tmp_path / "other"
+    done = run_cli(["optimizer=de1", "runs=2", *SWEEP, "problem.noise_level=0.1",
+                    f"hydra.run.dir={other}"], cwd=tmp_path)
+    assert done.returncode == 0, done.stderr[-2000:]
+    report = _report(made, tmp_path, made["archives"], [other])
+    assert {r["algorithm"] for r in _rows(tmp_path / "report")} == {"de1"}
+    (line,) = report.archive_notes
+    assert "no archived runs of smoke_quarter with these settings" in line
+
+
+def test_a_changed_records_file_is_refused(made, tmp_path):
+    archives = _copy(made, tmp_path)
+    path = archives / "smoke" / arch.RECORDS
+    data = bytearray(path.read_bytes())
+    data[-9] ^= 0xFF
+    path.write_bytes(bytes(data))
+    report = _report(made, tmp_path, archives)
+    assert {r["algorithm"] for r in _rows(tmp_path / "report")} == {"de1", "random"}
+    (line,) = report.archive_notes
+    assert "does not match the SHA-256" in line
+
+
+@pytest.mark.parametrize("damage, fragment", [
+    (lambda f: (f / arch.MANIFEST).write_text("{not json"), "not readable JSON"),
+    (lambda f: (f / arch.MANIFEST).write_text('{"schema": "x"}'), "not a vpid-bench archive"),
+    (lambda f: (f / arch.MANIFEST).write_text("[" * 100000), "not readable JSON"),
+    (lambda f: (f / arch.OPTIMA).unlink(), "missing or not a regular file"),
+    (lambda f: ((f / arch.RECORDS).unlink(), (f / arch.RECORDS).symlink_to(f / arch.OPTIMA)),
+     "missing or not a regular file"),
+])
+def test_a_damaged_archive_is_named_and_skipped(made, tmp_path, damage, fragment):
+    archives = _copy(made, tmp_path)
+    damage(archives / "smoke")
+    report = _report(made, tmp_path, archives)
+    assert {r["algorithm"] for r in _rows(tmp_path / "report")} == {"de1", "random"}
+    assert any(fragment in n for n in report.archive_notes), report.archive_notes
+
+
+def test_a_records_file_that_inflates_past_the_limit_is_refused(made, tmp_path, monkeypatch):
+    monkeypatch.setattr(arch, "MAX_RECORDS_BYTES", 1000)
+    report = _report(made, tmp_path, made["archives"])
+    assert any("holds more than 1000 bytes" in n for n in report.archive_notes)
+
+
+def test_bad_lines_are_skipped_and_counted(made, tmp_path):
+    archives = _copy(made, tmp_path)
+    folder = archives / "smoke"
+    path = folder / arch.RECORDS
+    text = gzip.decompress(path.read_bytes()).decode()
+    first = json.loads(text.splitlines()[0])
+    first["run_index"] = -1
+    text += "not json\n" + json.dumps(first) + "\n"
+    path.write_bytes(gzip.compress(text.encode(), mtime=0))
+    manifest = json.loads((folder / arch.MANIFEST).read_text())
+    manifest["files"][arch.RECORDS]["sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()
+    (folder / arch.MANIFEST).write_text(json.dumps(manifest))
+    report = _report(made, tmp_path, archives)
+    (line,) = report.archive_notes
+    assert "centre from the archive" in line and "2 bad archive line(s) skipped" in line
+
+
+def test_packing_the_same_sweep_twice_gives_the_same_bytes(made, tmp_path):
+    a = arch.pack(made["base"], "smoke", tmp_path / "a", command="test", commit="abc123",
+                  made_at="2026-01-01T00:00:00+00:00")
+    assert a == json.loads((made["archives"] / "smoke" / arch.MANIFEST).read_text())
+    rows = (tmp_path / "a" / arch.SUMMARY).read_text().splitlines()
+    assert rows[0].startswith("problem,optimizer,runs,ok,metric")
+    assert len(rows) == 1 + 2  # random and centre on smoke_quarter
+

@@ -1,0 +1,439 @@
+"""The archive: results of the built-in optimizers on a named suite, read beside a sweep's own
+runs so a newcomer compares a new optimizer without re-running anyone.
+
+An archive is a folder ``<root>/<suite>/`` (shipped in the package as ``vpid_bench.archive``)::
+
+    manifest.json       what made it (suite, command, vpid-bench version and commit, date),
+                        every problem with its plugin version and config, and the SHA-256
+                        and size of each file below
+    records.jsonl.gz    one run record per line (the records' own schema, plugin
+                        dependency lists left out)
+    optima.jsonl        one instance optimum per line (the optimum files' own schema)
+    summary.csv         per problem and optimizer: runs, median metric, median relative gap
+    ioh.zip             the runs in IOHprofiler's format
+
+:func:`merge` adds to a report's records the archived runs of every problem the report's runs
+are on, for the optimizers the report's runs do not include, on the instances they share.
+Nothing archived is mixed in unless it was made by the same version of the problem: the same
+plugin distribution and version, the same config and budget, and, per shared instance, the
+same true parameters and objective at the truth. A problem whose archive fails that check is
+refused with one line and left out.
+
+Everything in an archive is untrusted input: files are read through size limits, the
+records file must match the manifest's SHA-256, and every record and optimum line passes the
+same checks as a file in a results folder.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import gzip
+import hashlib
+import io
+import json
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from ..errors import VpidBenchError
+from ..fileio import loads_json, read_text_limited
+from ..records import CorruptRecordError, canonical_json, parse_record
+from .load import check_record
+from .optima import Optimum, optimum_from_data
+
+SCHEMA = "vpid-bench/archive/1"
+MANIFEST = "manifest.json"
+RECORDS = "records.jsonl.gz"
+OPTIMA = "optima.jsonl"
+SUMMARY = "summary.csv"
+IOH = "ioh.zip"
+#: Largest manifest and optima file read (bytes).
+MAX_TEXT_BYTES = 4 * 1024 * 1024
+#: Largest compressed records file read, and the most its lines may hold uncompressed (bytes).
+MAX_GZ_BYTES = 64 * 1024 * 1024
+MAX_RECORDS_BYTES = 512 * 1024 * 1024
+#: Relative tolerance of the per-instance check (true parameters, objective at the truth).
+SAME_RTOL = 1e-9
+#: Record keys left out of an archive (each run's copy of its plugins' dependency list).
+DROPPED = ("requires",)
+
+
+class ArchiveError(VpidBenchError):
+    """An archive folder that cannot be used (named, with why, in one line)."""
+
+
+def default_root() -> Path:
+    """The archives shipped with the package (``archive/`` in the source tree)."""
+    from importlib.resources import files
+
+    return Path(str(files("vpid_bench.archive")))
+
+
+@dataclasses.dataclass
+class Archive:
+    """One checked archive: its manifest, records and optima."""
+
+    folder: Path
+    suite: str
+    manifest: Mapping[str, Any]
+    records: list[dict[str, Any]]
+    optima: list[Optimum]
+    skipped: int
+
+    @property
+    def problems(self) -> set[str]:
+        return {r["problem"]["name"] for r in self.records}
+
+    @property
+    def made_by(self) -> str:
+        """``vpid-bench <version>, commit <sha>`` as the manifest states it (plain text)."""
+        m = self.manifest
+        version = _plain(m.get("vpid_bench_version"))
+        commit = _plain(m.get("commit"))
+        return f"vpid-bench {version}" + (f", commit {commit[:12]}" if commit else "")
+
+
+def _plain(value: Any, limit: int = 80) -> str:
+    """A short printable text from an untrusted value (``""`` for anything else)."""
+    return value if isinstance(value, str) and len(value) <= limit and value.isprintable() \
+        else ""
+
+
+def _sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def _read_bytes(path: Path, limit: int) -> bytes:
+    if path.is_symlink() or not path.is_file():
+        raise ArchiveError(f"archive {path.parent}: {path.name} is missing or not a regular file")
+    if path.stat().st_size > limit:
+        raise ArchiveError(f"archive {path.parent}: {path.name} is larger than {limit} bytes")
+    return path.read_bytes()
+
+
+def _manifest(folder: Path) -> dict[str, Any]:
+    try:
+        data = loads_json(read_text_limited(folder / MANIFEST, MAX_TEXT_BYTES))
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise ArchiveError(f"archive {folder}: {MANIFEST} is not readable JSON "
+                           f"({type(exc).__name__})") from None
+    if not isinstance(data, dict) or data.get("schema") != SCHEMA:
+        raise ArchiveError(f"archive {folder}: {MANIFEST} is not a vpid-bench archive "
+                           f"(schema != {SCHEMA!r})")
+    if not _plain(data.get("suite")) or not isinstance(data.get("files"), dict):
+        raise ArchiveError(f"archive {folder}: {MANIFEST} lacks its suite or file list")
+    return data
+
+
+def _checked_file(folder: Path, manifest: Mapping[str, Any], name: str, limit: int) -> bytes:
+    """The bytes of ``name``, which the manifest must list with the same SHA-256."""
+    entry = manifest["files"].get(name)
+    want = entry.get("sha256") if isinstance(entry, Mapping) else None
+    data = _read_bytes(folder / name, limit)
+    if not isinstance(want, str) or _sha256(data) != want:
+        raise ArchiveError(f"archive {folder}: {name} does not match the SHA-256 in its "
+                           f"{MANIFEST} (changed or damaged)")
+    return data
+
+
+def _gunzip(data: bytes, folder: Path) -> bytes:
+    try:
+        with gzip.GzipFile(fileobj=io.BytesIO(data)) as fh:
+            out = fh.read(MAX_RECORDS_BYTES + 1)
+    except (OSError, EOFError) as exc:
+        raise ArchiveError(f"archive {folder}: {RECORDS} is not gzip data "
+                           f"({type(exc).__name__})") from None
+    if len(out) > MAX_RECORDS_BYTES:
+        raise ArchiveError(f"archive {folder}: {RECORDS} holds more than "
+                           f"{MAX_RECORDS_BYTES} bytes")
+    return out
+
+
+def _lines(data: bytes) -> Iterable[tuple[int, Any]]:
+    for n, line in enumerate(data.decode("utf-8", errors="replace").splitlines(), 1):
+        if line.strip():
+            try:
+                yield n, loads_json(line)
+            except ValueError:
+                yield n, None
+
+
+def read_archive(folder: Path) -> Archive:
+    """Read and check the archive in ``folder``; :class:`ArchiveError` says why it cannot be
+    used. Bad record or optimum lines are skipped and counted."""
+    folder = Path(folder)
+    manifest = _manifest(folder)
+    records, skipped = [], 0
+    for n, obj in _lines(_gunzip(_checked_file(folder, manifest, RECORDS, MAX_GZ_BYTES),
+                                 folder)):
+        try:
+            rec = parse_record(obj, f"{folder / RECORDS}:{n}")
+        except CorruptRecordError:
+            skipped += 1
+            continue
+        if check_record(rec) is not None:
+            skipped += 1
+            continue
+        rec["_file"] = f"{folder / RECORDS}:{n}"
+        rec["_job_dir"] = str(folder)
+        rec["_archive"] = manifest["suite"]
+        records.append(rec)
+    optima = []
+    for n, obj in _lines(_checked_file(folder, manifest, OPTIMA, MAX_TEXT_BYTES)):
+        opt, _ = optimum_from_data(obj, Path(f"{folder / OPTIMA}:{n}"))
+        if opt is None:
+            skipped += 1
+        else:
+            optima.append(opt)
+    return Archive(folder, manifest["suite"], manifest, records, optima, skipped)
+
+
+def find_archives(root: Path | None = None) -> list[Path]:
+    """The archive folders below ``root`` (default :func:`default_root`): every subfolder
+    with a ``manifest.json``."""
+    root = default_root() if root is None else Path(root)
+    if not root.is_dir():
+        return []
+    return sorted(p.parent for p in root.glob(f"*/{MANIFEST}") if not p.parent.is_symlink())
+
+
+@dataclasses.dataclass
+class Merged:
+    """What :func:`merge` adds to a report, and its one-line notes."""
+
+    records: list[dict[str, Any]] = dataclasses.field(default_factory=list)
+    optima: list[Optimum] = dataclasses.field(default_factory=list)
+    used: list[str] = dataclasses.field(default_factory=list)
+    refused: list[str] = dataclasses.field(default_factory=list)
+
+
+def _setting(rec: Mapping[str, Any]) -> str:
+    """A record's problem, plugin, config and budget: what must match to compare runs."""
+    problem = rec.get("problem") or {}
+    plugin = problem.get("plugin") if isinstance(problem.get("plugin"), Mapping) else {}
+    return canonical_json({"name": problem.get("name"), "config": problem.get("config"),
+                           "budget": rec.get("budget"),
+                           "plugin": [plugin.get("distribution"), plugin.get("version")]})
+
+
+def _instance(rec: Mapping[str, Any]) -> str | None:
+    inst = rec.get("instance")
+    iid = inst.get("id") if isinstance(inst, Mapping) else None
+    return iid if isinstance(iid, str) else None
+
+
+def _close(a: Any, b: Any) -> bool:
+    """Two untrusted numbers (or lists of numbers) equal within :data:`SAME_RTOL`."""
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(_close(x, y) for x, y in zip(a, b, strict=True))
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)):
+        a, b = float(a), float(b)
+        return a == b or (math.isfinite(a) and math.isfinite(b)
+                          and abs(a - b) <= SAME_RTOL * max(abs(a), abs(b)))
+    return a is None and b is None
+
+
+def _same_instance(mine: Mapping[str, Any], theirs: Mapping[str, Any]) -> str | None:
+    """Why two records of one instance id do not hold the same data (``None``: they do)."""
+    if not _close((mine.get("parameters") or {}).get("true"),
+                  (theirs.get("parameters") or {}).get("true")):
+        return "its true parameters differ"
+    info_a = (mine.get("problem") or {}).get("info") or {}
+    info_b = (theirs.get("problem") or {}).get("info") or {}
+    if not _close(info_a.get("f_at_true"), info_b.get("f_at_true")):
+        return "its objective at the truth differs"
+    return None
+
+
+def _refusal(arch: Archive, problem: str, why: str) -> str:
+    return (f"archive {arch.suite}: {problem} not used: {why}; the archive was made by "
+            f"{arch.made_by} with another version of the problem, and is never mixed in "
+            "(re-run the built-ins, docs/protocol.md, or set archive=false)")
+
+
+def _check_problem(arch: Archive, problem: str, mine: Sequence[Mapping[str, Any]]
+                   ) -> tuple[list[dict[str, Any]], str | None]:
+    """The archived records that may stand beside ``mine`` (the report's records of
+    ``problem``), or a refusal line."""
+    theirs = [r for r in arch.records if r["problem"]["name"] == problem]
+    settings = {_setting(r) for r in mine}
+    match = [r for r in theirs if _setting(r) in settings]
+    if not match:
+        mine_plugin = ((mine[0].get("problem") or {}).get("plugin") or {})
+        their_plugin = ((theirs[0].get("problem") or {}).get("plugin") or {})
+        if [mine_plugin.get(k) for k in ("distribution", "version")] != \
+                [their_plugin.get(k) for k in ("distribution", "version")]:
+            return [], _refusal(arch, problem, "its plugin version differs")
+        return [], (f"archive {arch.suite}: no archived runs of {problem} with these settings "
+                    "(the archive holds its defaults at the default budget)")
+    by_instance = {(_setting(r), _instance(r)): r for r in mine if _instance(r)}
+    for r in match:
+        other = by_instance.get((_setting(r), _instance(r)))
+        why = None if other is None else _same_instance(other, r)
+        if why:
+            return [], _refusal(arch, problem, f"instance {_plain(_instance(r))}: {why}")
+    names = {r["optimizer"]["name"] for r in mine}
+    wanted = {key for key in by_instance}
+    return [r for r in match if r["optimizer"]["name"] not in names
+            and (_setting(r), _instance(r)) in wanted], None
+
+
+def merge(records: Sequence[Mapping[str, Any]], archives: Iterable[Archive]) -> Merged:
+    """The archived runs that stand beside ``records`` (see the module docstring)."""
+    out = Merged()
+    by_problem: dict[str, list[Mapping[str, Any]]] = {}
+    for r in records:
+        if "_archive" not in r:
+            by_problem.setdefault(r["problem"]["name"], []).append(r)
+    for arch in archives:
+        for problem in sorted(set(by_problem) & arch.problems):
+            added, refusal = _check_problem(arch, problem, by_problem[problem])
+            if refusal:
+                out.refused.append(refusal)
+                continue
+            if not added:
+                continue
+            out.records += added
+            out.optima += [o for o in arch.optima if o.problem == problem]
+            optimizers = sorted({r["optimizer"]["name"] for r in added})
+            out.used.append(f"{problem}: {', '.join(optimizers)} from the archive of suite "
+                            f"{arch.suite} ({arch.made_by}; {len(added)} runs on this "
+                            "report's instances, not run again"
+                            + (f"; {arch.skipped} bad archive line(s) skipped" if arch.skipped
+                               else "") + ")")
+    return out
+
+
+def load_all(root: Path | None = None, problems: Iterable[str] | None = None
+             ) -> tuple[list[Archive], list[str]]:
+    """Every readable archive below ``root`` whose manifest lists one of ``problems`` (all
+    when ``None``), and one line per such archive that cannot be used."""
+    found, bad = [], []
+    wanted = None if problems is None else set(problems)
+    for folder in find_archives(root):
+        try:
+            if wanted is not None and not wanted & set(_manifest(folder).get("problems") or ()):
+                continue
+            found.append(read_archive(folder))
+        except ArchiveError as exc:
+            bad.append(str(exc))
+    return found, bad
+
+
+# --- making an archive ------------------------------------------------------------------
+
+
+def _strip(record: Mapping[str, Any]) -> dict[str, Any]:
+    """A record as archived: without the loader's ``_`` keys and the dependency lists."""
+    def clean(obj: Any) -> Any:
+        if isinstance(obj, Mapping):
+            return {k: clean(v) for k, v in obj.items()
+                    if k not in DROPPED and not str(k).startswith("_")}
+        if isinstance(obj, list):
+            return [clean(v) for v in obj]
+        return obj
+    return clean(record)
+
+
+def pack(sweep_dir: Path, suite: str, out: Path, *, command: str, commit: str | None,
+         made_at: str) -> dict[str, Any]:
+    """Write the archive of the sweep in ``sweep_dir`` into ``out`` (see the module docstring)
+    and return its manifest. The records and the instance optima are the sweep's own."""
+    from ..records import _jsonable
+    from .compute import compute
+
+    data = compute([sweep_dir], True, 0.05, "random", archive=False)
+    out.mkdir(parents=True, exist_ok=True)
+    records = sorted(data.loaded.records, key=lambda r: (
+        r["problem"]["name"], r["optimizer"]["name"], r["run_index"]))
+    lines = "".join(json.dumps(_jsonable(_strip(r)), sort_keys=True, allow_nan=False) + "\n"
+                    for r in records)
+    with gzip.GzipFile(out / RECORDS, "wb", mtime=0) as fh:
+        fh.write(lines.encode())
+    from .optima import load_optima
+
+    optima = load_optima([sweep_dir], data.loaded.records).optima
+    (out / OPTIMA).write_text("".join(
+        json.dumps(loads_json(o.path.read_text(encoding="utf-8")), sort_keys=True) + "\n"
+        for o in sorted(optima, key=lambda o: (o.problem, str(o.instance), o.f_opt))),
+        encoding="utf-8")
+    _write_summary(out / SUMMARY, data.rows)
+    _write_ioh(out / IOH, data)
+    problems = {}
+    for r in records:
+        p = r["problem"]
+        problems.setdefault(p["name"], {"config": p.get("config"), "budget": r.get("budget"),
+                                        "plugin": {k: (p.get("plugin") or {}).get(k)
+                                                   for k in ("distribution", "version")}})
+    from .. import __version__
+
+    manifest = {
+        "schema": SCHEMA, "suite": suite, "made_at": made_at, "command": command,
+        "vpid_bench_version": __version__, "commit": commit,
+        "optimizers": sorted({r["optimizer"]["name"] for r in records}),
+        "runs": len(records), "problems": problems,
+        "files": {name: {"sha256": _sha256((out / name).read_bytes()),
+                         "bytes": (out / name).stat().st_size}
+                  for name in (RECORDS, OPTIMA, SUMMARY, IOH)},
+    }
+    (out / MANIFEST).write_text(json.dumps(manifest, indent=1, sort_keys=True) + "\n",
+                                encoding="utf-8")
+    return manifest
+
+
+SUMMARY_HEADERS = ["problem", "optimizer", "runs", "ok", "metric", "median_metric",
+                   "median_rel_gap", "reached", "median_evaluations", "median_run_time_s"]
+
+
+def _median(values: Sequence[float]) -> float:
+    vals = sorted(v for v in values if isinstance(v, (int, float)) and not math.isnan(v))
+    if not vals:
+        return math.nan
+    mid = len(vals) // 2
+    return vals[mid] if len(vals) % 2 else 0.5 * (vals[mid - 1] + vals[mid])
+
+
+def summary_rows(rows: Sequence[Mapping[str, Any]]) -> list[list[Any]]:
+    """Per problem and optimizer: runs, ok runs, the headline metric's name and median, the
+    median relative gap to the instance optimum, runs that reached it, median evaluations
+    and run time."""
+    from .optima import REACHED
+
+    groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
+    for r in rows:
+        groups.setdefault((r["problem"], r["algorithm"]), []).append(r)
+    out = []
+    for (problem, algorithm), g in sorted(groups.items()):
+        ok = [r for r in g if r["status"] == "ok"]
+        gaps = [float(r.get("rel_gap", math.nan)) for r in ok]
+        out.append([problem, algorithm, len(g), len(ok), g[0]["metric_name"],
+                    _median([r["metric"] for r in ok]), _median(gaps),
+                    sum(1 for v in gaps if v <= REACHED),
+                    _median([r["evaluations"] for r in ok]),
+                    _median([r["run_time_s"] for r in ok])])
+    return out
+
+
+def _write_summary(path: Path, rows: Sequence[Mapping[str, Any]]) -> None:
+    from .render import write_csv
+
+    write_csv(path, SUMMARY_HEADERS, summary_rows(rows))
+
+
+def _write_ioh(path: Path, data: Any) -> None:
+    """The runs in IOHprofiler's format, zipped with fixed dates (a rebuild of the same
+    records gives the same bytes)."""
+    import tempfile
+    import zipfile
+
+    from .ioh_export import export_ioh
+
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        files = export_ioh(root / "ioh", data.loaded.records, data.rows, root)
+        with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as zf:
+            for f in sorted(files):
+                info = zipfile.ZipInfo(str(f.relative_to(root)), date_time=(2026, 1, 1, 0, 0, 0))
+                info.compress_type = zipfile.ZIP_DEFLATED
+                zf.writestr(info, f.read_bytes())
