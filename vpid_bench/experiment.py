@@ -42,6 +42,7 @@ from .machine import available_cores, one_blas_thread
 from .plugins import Registry
 from .runner import RunTimeoutError, keep_cwd, time_limit
 from .spec import Job, parse_job
+from .targets import with_stops
 from .workers import Workers, can_send, outcomes_isolated
 
 log = logging.getLogger(__name__)
@@ -82,10 +83,13 @@ def _job_key(job: Job, registry: Registry | None, problem: Any) -> dict[str, Any
         for kind, name in (("problem", job.problem_name), ("optimizer", job.optimizer_name)):
             source = registry.provenance(kind, name)
             plugins[kind] = [source.get("distribution"), source.get("version")]
+    more: dict[str, Any] = {}
+    if job.stop_at:  # only then: the run ids of every job without a target stay as they were
+        more["target"] = [job.spec.target, sorted(job.stop_at.items())]
     return rec.job_key(
         {**job.problem_settings(), "name": job.problem_name},
         {**job.optimizer_settings(), "name": job.optimizer_name},
-        job.spec.seed, job.budget, plugins=plugins, data=problem.content_digest(),
+        job.spec.seed, job.budget, plugins=plugins, data=problem.content_digest(), **more,
     )
 
 
@@ -131,6 +135,7 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
     (``isolation=auto`` uses them when given; ``process`` starts its own without)."""
     problem = (problems or ProblemCache(size=1)).get(job)
     problem.set_threads(job.spec.threads or available_cores())
+    job = with_stops(job, problem)
     pool, own_pool = _choose_workers(job, pool)
     try:
         return _run_job(job, Path(job_dir), registry, problem, optima_dir, pool)

@@ -18,6 +18,7 @@ from __future__ import annotations
 import dataclasses
 import datetime as _dt
 import logging
+import math
 import time
 import warnings
 from collections.abc import Iterator, Sequence
@@ -126,7 +127,8 @@ def _group(job: Job, problem: Problem, indices: list[int]) -> list[RunOutcome]:
                 optimizer = job.optimizer_cls(job.params, inst.bounds, run_rng(job.spec.seed, i))
             optimizer.name = job.optimizer_name
             lanes.append(Lane(inst, optimizer, job.budget, instance=i,
-                              elapsed_s=time.perf_counter() - t0))
+                              elapsed_s=time.perf_counter() - t0,
+                              stop_at=job.stop_at.get(i, -math.inf)))
         except KeyboardInterrupt:
             if interrupts.from_user():
                 raise

@@ -58,7 +58,7 @@ class RunResult:
     trace_evaluations: list[int]
     trace_best: list[float]
     wall_time_s: float
-    stopped_by: str  # "budget", "optimizer" or "max_batches"
+    stopped_by: str  # "budget", "target", "optimizer" or "max_batches"
 
 
 class RunTimeoutError(Exception):
@@ -83,11 +83,18 @@ class Ledger:
     trace_f: list[float] = dataclasses.field(default_factory=list)
     stopped_by: str = "budget"
     seconds: float = 0.0  # the run's own time: its ask/tell and its share of evaluations
+    #: the run ends once its best value is at most this (stop at the final target)
+    stop_at: float = -np.inf
 
     @property
     def spent(self) -> bool:
-        """True once the whole budget has been evaluated."""
-        return self.used >= self.budget
+        """True once the whole budget has been evaluated, or the final target reached."""
+        return self.used >= self.budget or self.reached
+
+    @property
+    def reached(self) -> bool:
+        """True once the best value is at most :attr:`stop_at`."""
+        return self.best_f <= self.stop_at
 
     def admit(self, X: np.ndarray) -> tuple[np.ndarray, bool]:
         """The rows of ``X`` the budget allows, and whether ``X`` was cut (the run then ends)."""
@@ -105,6 +112,8 @@ class Ledger:
             self.best_x = X[i].copy()
         self.trace_n.append(self.used)
         self.trace_f.append(self.best_f)
+        if self.reached:
+            self.stopped_by = "target"
 
     def result(self) -> RunResult:
         """The run so far, as a :class:`RunResult`."""
@@ -123,6 +132,8 @@ class Lane:
     ``instance`` its index for the group problem's
     :meth:`~vpid_bench.api.Problem.evaluate_instances`. ``elapsed_s``: seconds the run has
     spent before the loop (building its optimizer), counted against its time limit.
+    ``stop_at``: the run ends (``stopped_by="target"``) after the batch whose best value is
+    at most this: the final target, when the instance's optimum is known in advance.
     """
 
     problem: Problem
@@ -130,6 +141,7 @@ class Lane:
     budget: int
     instance: int = 0
     elapsed_s: float = 0.0
+    stop_at: float = -np.inf
 
 
 @dataclasses.dataclass
@@ -308,7 +320,7 @@ def run_many(problem: Problem, lanes: Sequence[Lane], timeout_s: float | None = 
 
 def _start(lane: Lane, dim: int) -> _Run:
     """A lane ready for the loop, or already failed (no budget, residuals the problem lacks)."""
-    r = _Run(lane, Ledger(lane.budget, dim))
+    r = _Run(lane, Ledger(lane.budget, dim, stop_at=lane.stop_at))
     if lane.budget < 1:
         r.outcome = ValueError(f"budget must be at least 1, got {lane.budget}")
         return r
@@ -455,7 +467,7 @@ def _evaluate_and_tell(problem: Problem, asked: list[_Run], alarm: _Alarm,
         r.ledger.book(r.X, f)
         if not _within(r, timeout_s):
             continue
-        if r.cut:
+        if r.cut or r.ledger.reached:
             r.finish()
             continue
         _tell(r, alarm, timeout_s, f, R)

@@ -63,7 +63,10 @@ class JobSpec:
     the evaluations run: ``process`` in supervised worker processes (a crash, ``os._exit`` or
     a run blocked in C costs that run only; :mod:`vpid_bench.workers`), ``none`` in this
     process, ``auto`` (default) ``process`` under the ``vpid-bench`` command and ``none`` for a
-    program calling the library. ``workers``: worker processes running a job's runs at once
+    program calling the library. ``target``: stop at the final target, as COCO does: a run
+    ends once its relative gap to its instance's optimum, certified in advance (shipped in the
+    archive of the problem's suite), is at most this (e.g. ``1e-8``; null: every run uses its
+    budget). ``workers``: worker processes running a job's runs at once
     (null: every core; with a process launcher on one machine set 1). Neither changes a result.
     """
 
@@ -78,6 +81,7 @@ class JobSpec:
     run_timeout_s: float | None = None
     isolation: str = "auto"
     workers: int | None = None
+    target: float | None = None
 
     def __post_init__(self) -> None:
         _check_int("seed", self.seed, 0, 2**63 - 1)
@@ -94,6 +98,9 @@ class JobSpec:
             raise ConfigError("isolation", self.isolation, " | ".join(ISOLATION))
         if self.workers is not None:
             _check_int("workers", self.workers, 1, 1024, nullable=True)
+        if self.target is not None and not 0.0 <= self.target <= 1.0:
+            raise ConfigError("target", self.target, "a relative gap from 0 to 1 (e.g. 1e-8) "
+                              "or null")
 
 
 #: The top-level keys, in the order they are documented.
@@ -129,6 +136,9 @@ class Job:
     optimizer_cls: type[Optimizer]
     params: OptimizerParams
     budget: int
+    #: per run index, the objective value at which the run stops (``target``; empty: none),
+    #: filled in by :func:`vpid_bench.targets.with_stops` once the problem is built
+    stop_at: Mapping[int, float] = dataclasses.field(default_factory=dict)
 
     def problem_settings(self) -> dict[str, Any]:
         """The problem's settings as plain data (the protocol included)."""

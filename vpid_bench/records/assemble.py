@@ -101,6 +101,8 @@ def make_record(job: Job, run: RunOutcome, rid: str, instance: Problem,
         "timing": {"started_at": run.started_at, "wall_time_s": run.seconds,
                    "host": socket.gethostname()},
     }
+    if run.index in job.stop_at:  # stop at the final target (vpid_bench.targets)
+        record["target"] = {"gap": job.spec.target, "f_stop": job.stop_at[run.index]}
     if result is not None:
         record["result"] = result_section(result, instance)
         record["trace"] = {"evaluations": result.trace_evaluations, "best": result.trace_best}

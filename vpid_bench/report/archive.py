@@ -63,11 +63,19 @@ class ArchiveError(VpidBenchError):
     """An archive folder that cannot be used (named, with why, in one line)."""
 
 
+#: An environment variable naming a folder of archives to read instead of the shipped ones
+#: (a lab's own archive, or a test's).
+ARCHIVE_DIR_ENV = "VPID_BENCH_ARCHIVE_DIR"
+
+
 def default_root() -> Path:
-    """The archives shipped with the package (``archive/`` in the source tree)."""
+    """The archives shipped with the package (``archive/`` in the source tree), or the folder
+    ``$VPID_BENCH_ARCHIVE_DIR`` names."""
+    import os
     from importlib.resources import files
 
-    return Path(str(files("vpid_bench.archive")))
+    chosen = os.environ.get(ARCHIVE_DIR_ENV)
+    return Path(chosen) if chosen else Path(str(files("vpid_bench.archive")))
 
 
 @dataclasses.dataclass
