@@ -154,6 +154,10 @@ class Problem(abc.ABC):
     #: registered problem whose class lists ``<name>`` here (with each one's defaults).
     suites: ClassVar[tuple[str, ...]] = ()
 
+    #: The model family, for the report's aggregation over a suite (one ECDF and score per
+    #: family, e.g. ``"quarter car"``); ``""``: the problem's own name stands for it.
+    family: ClassVar[str] = ""
+
     def evaluate_instances(self, X: np.ndarray, instance: np.ndarray) -> np.ndarray:
         """Objective values of the rows of ``X`` (shape ``(n, dim)``), row ``j`` against
         instance ``instance[j]`` (int array ``(n,)``), shape ``(n,)``: the gathered call of runs

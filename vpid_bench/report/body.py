@@ -278,3 +278,42 @@ def files_md(short: bool) -> list[str]:
             para("`runs.csv`: every run, one row each (`pandas.read_csv('runs.csv')`). "
                  "`tables/`: each table as CSV (full precision) and LaTeX (booktabs)."
                  + ("" if short else " `figures/`: the PNG figures above.")), ""]
+
+
+def suite_md(rows: Sequence[Sequence[Any]], notes: Sequence[str], fig: Path | str,
+             out_dir: Path) -> list[str]:
+    """"Across the suite": the score of every optimizer over all problems, the best per
+    family and per dimension, and the aggregated ECDF figure (see
+    :mod:`.suite_scores`)."""
+    everything = [r for r in rows if r[0] == "all"]
+    if not everything:
+        return []
+    lines = ["## Across the suite", "",
+             para(f"Each optimizer's score over the {everything[0][3]} problems: the mean "
+                  "over problems of its fixed-target AUC (relative gaps 1 … 1e-6 to each "
+                  "instance's optimum, over log evaluations; 1 = every target at the first "
+                  "evaluation), with a 95 % bootstrap interval over runs, and the share of "
+                  "(run, target) pairs solved by the end. Each problem weighs the same. "
+                  "`tables/suite_scores.csv` has the groups per family and dimension."), "",
+             "| rank | optimizer | score (AUC) | 95 % interval | solved | runs |",
+             "| ---: | --- | ---: | --- | ---: | ---: |"]
+    for k, r in enumerate(everything, 1):
+        lines.append(f"| {k} | {escape(r[2])} | {r[5]:.3f} | [{r[6]:.3f}, {r[7]:.3f}] | "
+                     f"{100 * r[8]:.0f} % | {r[4]} |")
+    lines.append("")
+    best = []
+    for kind in ("family", "dimension"):
+        for name in dict.fromkeys(r[1] for r in rows if r[0] == kind):
+            top = next(r for r in rows if r[0] == kind and r[1] == name)
+            best.append(f"{escape(name)}: {escape(top[2])} ({top[5]:.3f} "
+                        f"[{top[6]:.3f}, {top[7]:.3f}])")
+    if best:
+        lines += [para("Best score per group: " + "; ".join(best) + "."), ""]
+    if notes:
+        lines += [para("Not scored: " + "; ".join(escape(n) for n in notes) + "."), ""]
+    if isinstance(fig, Path):
+        rel = fig.relative_to(out_dir).as_posix()
+        lines += [f"![Runtime ECDFs aggregated over the suite]({rel})", ""]
+    else:
+        lines += [para(f"The aggregated ECDF figure was not drawn ({escape(fig)})."), ""]
+    return lines

@@ -123,12 +123,19 @@ def build_report(
     names = _Names(out_dir)
     written = _write_tables(data, names)
     figs: dict[str, Path | str] = {}
+    suite: list[str] = []
     if not short:
         from .core_figures import draw_all
         from .ioh_export import export_ioh
 
+        if registry is None:
+            from ..plugins import Registry
+
+            registry = Registry()
         figs = draw_all(data, names.file)
         written += export_ioh(out_dir / "ioh", data.loaded.records, data.rows, out_dir)
+        suite, more = _suite_scores(data, registry, names)
+        written += more
     sections, extra, section_errors = plugin_sections(registry, data, out_dir, names.claim)
     written += _write_headline(data, extra, names)
     written += [v for v in figs.values() if isinstance(v, Path)]
@@ -137,7 +144,7 @@ def build_report(
     results = first_screen.results(data)
     md = names.claim(out_dir / "report.md")
     md.write_text("\n".join(_markdown(data, results, sections, section_errors, extra, figs,
-                                      out_dir)), encoding="utf-8")
+                                      out_dir, suite)), encoding="utf-8")
     written.append(md)
     return Report(out_dir, md, first_screen.terminal_text(results), len(data.loaded.records),
                   data.problems, written, {k: v for k, v in figs.items() if isinstance(v, str)},
@@ -201,9 +208,27 @@ def _write_headline(data: ReportData, extra: list[HeadlineColumn], names: _Names
                      [[s.get(k) for k in stat_keys] for s in data.summary]))
 
 
+def _suite_scores(data: ReportData, registry: Any, names: _Names
+                  ) -> tuple[list[str], list[Path]]:
+    """The section across the suite (Markdown lines; none for fewer than two problems with
+    known optima), its table and its figure (:mod:`.suite_scores`)."""
+    from . import suite_scores as ss
+
+    facts = ss.context_facts(data.loaded.records, data.rows, ss.family_lookup(registry))
+    if len({h.context for h in data.hits}) < 2:
+        return [], []
+    rows, notes = ss.score_rows(data.hits, facts)
+    written = _table(names, "suite_scores", ss.HEADERS, rows)
+    fig = ss.figure(data.hits, facts, names.file("figures", "suite_ecdf", ".png"))
+    if isinstance(fig, Path):
+        written.append(fig)
+    return body.suite_md(rows, notes, fig, names.root), written
+
+
 def _markdown(data: ReportData, results: list[Any], sections: list[tuple[str, Section]],
               section_errors: list[str], extra: list[HeadlineColumn],
-              figs: dict[str, Path | str], out_dir: Path) -> list[str]:
+              figs: dict[str, Path | str], out_dir: Path, suite: Sequence[str] = ()
+              ) -> list[str]:
     """``report.md``: the first screen, then detail, then method and sources."""
     n = len(data.loaded.records)
     n_ok = sum(r["status"] == "ok" for r in data.loaded.records)
@@ -218,6 +243,7 @@ def _markdown(data: ReportData, results: list[Any], sections: list[tuple[str, Se
                        "them out):"), ""]
         lines += [f"- {escape(n)}" for n in data.archive_notes] + [""]
     lines += first_screen.markdown_lines(results)
+    lines += list(suite)
     if data.short and len(data.paths) == 1:
         lines += [para("A single job's report: statistics, no tests, no figures. The full "
                        "report with figures:"), "",

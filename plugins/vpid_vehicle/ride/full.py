@@ -136,4 +136,5 @@ class RideFullProblem(RideProblem):
 
     Config = RideFullConfig
     name = "ride_full"
+    family = "full car"
     model = FullCar()

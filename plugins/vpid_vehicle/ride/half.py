@@ -94,4 +94,5 @@ class RideHalfProblem(RideProblem):
 
     Config = RideHalfConfig
     name = "ride_half"
+    family = "half car"
     model = HalfCar()

@@ -140,6 +140,7 @@ class LateralProblem(RideProblem):
 
     Config = LateralConfig
     name = "lateral"
+    family = "single-track lateral"
     model = SingleTrack()
 
     def __init__(self, config: LateralConfig, index: int = 0) -> None:

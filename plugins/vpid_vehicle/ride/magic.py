@@ -111,6 +111,7 @@ class LateralMFProblem(RideProblem):
 
     Config = LateralMFConfig
     name = "lateral_mf"
+    family = "single-track lateral, Magic Formula"
     model = MagicSingleTrack()
 
     def __init__(self, config: LateralMFConfig, index: int = 0) -> None:

@@ -83,4 +83,5 @@ class RideQuarterProblem(RideProblem):
 
     Config = RideQuarterConfig
     name = "ride_quarter"
+    family = "quarter car"
     model = QuarterCar()

@@ -1,0 +1,179 @@
+"""Across the suite: runtime ECDFs aggregated over every problem and target, and a score per
+optimizer with a bootstrap confidence interval (COCO's empirical runtime distributions).
+
+The budget axis is evaluations divided by the problem's dimension ``D`` (evaluations/D), so
+problems of 4 and 9 parameters share one axis. Each context (a problem at one setting) weighs
+the same: the aggregated ECDF at ``x`` evaluations/D is the mean over contexts of the share of
+that context's (run, target) pairs hit within ``x * D`` evaluations. Groups: all contexts, per
+model family (the problem class's ``family``; the problem's name where it declares none) and
+per dimension.
+
+The score of an optimizer in a group is the mean over its contexts of the context's AUC (the
+area under its ECDF over log evaluations, :func:`.anytime.auc`, each context over its own
+budget); its 95 % interval resamples the runs of every context with replacement (percentile
+bootstrap, 2,000 draws, seed 0). ``solved`` is the share of (run, target) pairs hit by the end.
+Only optimizers that ran every context of a group are scored in it (a missing problem would
+flatter or punish them); the others are named.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .anytime import RunHits, auc, context_budget, ecdf
+
+#: Bootstrap draws of the score interval, and the interval's level.
+N_BOOT = 2000
+LEVEL = 0.95
+HEADERS = ["group_kind", "group", "algorithm", "contexts", "runs", "score_auc", "score_lo",
+           "score_hi", "solved"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Group:
+    """A set of contexts scored together: its kind (``all``, ``family``, ``dimension``)."""
+
+    kind: str
+    name: str
+    contexts: tuple[str, ...]
+
+
+def context_facts(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]],
+                  family_of: Callable[[str], str]) -> dict[str, tuple[str, int]]:
+    """Per context: (family, dimension), from its first record (``family_of(problem)``)."""
+    by_id = {r["run_id"]: r for r in records}
+    out: dict[str, tuple[str, int]] = {}
+    for row in rows:
+        if row["context"] in out:
+            continue
+        rec = by_id.get(row["run_id"]) or {}
+        dim = len(((rec.get("parameters") or {}).get("names")) or [])
+        out[row["context"]] = (family_of(row["problem"]) or row["problem"], dim)
+    return out
+
+
+def groups(facts: Mapping[str, tuple[str, int]]) -> list[Group]:
+    """All contexts, then one group per family and per dimension that holds two or more
+    contexts or differs from the whole."""
+    ctx = tuple(sorted(facts))
+    out = [Group("all", "all problems", ctx)]
+    for kind, key in (("family", 0), ("dimension", 1)):
+        values = sorted({facts[c][key] for c in ctx}, key=str)
+        if len(values) < 2:
+            continue
+        for v in values:
+            out.append(Group(kind, f"D={v}" if kind == "dimension" else str(v),
+                             tuple(c for c in ctx if facts[c][key] == v)))
+    return out
+
+
+def _by(runs: Sequence[RunHits]) -> dict[str, dict[str, list[RunHits]]]:
+    out: dict[str, dict[str, list[RunHits]]] = {}
+    for r in runs:
+        out.setdefault(r.algorithm, {}).setdefault(r.context, []).append(r)
+    return out
+
+
+def _run_auc(r: RunHits, budget: float) -> float:
+    return auc([r], budget)
+
+
+def score(per_context: Mapping[str, list[RunHits]], budgets: Mapping[str, float],
+          rng: np.random.Generator) -> tuple[float, float, float, float]:
+    """(score, low, high, solved) of one optimizer over its contexts (see the module)."""
+    values = [np.array([_run_auc(r, budgets[c]) for r in g]) for c, g in per_context.items()]
+    mean = float(np.mean([v.mean() for v in values]))
+    boot = np.zeros(N_BOOT)
+    for v in values:
+        boot += v[rng.integers(0, v.size, (N_BOOT, v.size))].mean(axis=1)
+    boot /= len(values)
+    lo, hi = np.quantile(boot, [(1 - LEVEL) / 2, (1 + LEVEL) / 2])
+    solved = float(np.mean([np.isfinite(np.asarray([r.hits for r in g], float)).mean()
+                            for g in per_context.values()]))
+    return mean, float(lo), float(hi), solved
+
+
+def score_rows(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]]
+               ) -> tuple[list[list[Any]], list[str]]:
+    """The rows of ``tables/suite_scores.csv`` (best first within each group) and one line
+    per optimizer left out of a group for not having run all of it."""
+    by_alg = _by(runs)
+    budgets = {c: context_budget(runs, c) for c in {r.context for r in runs}}
+    rows, notes = [], []
+    for g in groups({c: f for c, f in facts.items() if c in budgets}):
+        scored = []
+        for alg, per in sorted(by_alg.items()):
+            missing = [c for c in g.contexts if c not in per]
+            if missing:
+                if g.kind == "all":
+                    notes.append(f"{alg} is not scored across the suite: it has no runs "
+                                 f"with known optima on {', '.join(missing[:3])}"
+                                 + (" ..." if len(missing) > 3 else ""))
+                continue
+            rng = np.random.default_rng(0)
+            s, lo, hi, solved = score({c: per[c] for c in g.contexts}, budgets, rng)
+            n = sum(len(per[c]) for c in g.contexts)
+            scored.append([g.kind, g.name, alg, len(g.contexts), n, s, lo, hi, solved])
+        rows += sorted(scored, key=lambda r: (-r[5], r[2]))
+    return rows, notes
+
+
+def aggregated_ecdf(per_context: Mapping[str, list[RunHits]], dims: Mapping[str, int],
+                    grid: np.ndarray) -> np.ndarray:
+    """The mean over contexts of each context's ECDF at ``grid`` evaluations/D."""
+    return np.mean([ecdf(g, grid * max(dims[c], 1)) for c, g in per_context.items()], axis=0)
+
+
+def figure(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]], path: Path
+           ) -> Path | str:
+    """Aggregated ECDFs: one panel for all problems, one per family (up to five)."""
+    budgets = {c: context_budget(runs, c) for c in {r.context for r in runs}}
+    gs = [g for g in groups({c: f for c, f in facts.items() if c in budgets})
+          if g.kind in ("all", "family")][:6]
+    if len(gs[0].contexts) < 2:
+        return "needs runs with known optima on two or more problems"
+    from .figures import _plt, save
+
+    plt = _plt()
+    dims = {c: facts[c][1] for c in budgets}
+    top = max(budgets[c] / max(dims[c], 1) for c in budgets)
+    grid = np.geomspace(min(1.0 / max(dims.values()), 0.1), max(top, 1.0), 300)
+    cols = min(len(gs), 3)
+    nrows = math.ceil(len(gs) / cols)
+    fig, axes = plt.subplots(nrows, cols, figsize=(5.2 * cols, 3.8 * nrows), squeeze=False)
+    by_alg = _by(runs)
+    styles = ("-", "--", ":", "-.")
+    for ax, g in zip(axes.ravel(), gs):
+        for k, (alg, per) in enumerate(sorted(by_alg.items())):
+            if all(c in per for c in g.contexts):
+                ax.step(grid, aggregated_ecdf({c: per[c] for c in g.contexts}, dims, grid),
+                        where="post", linestyle=styles[(k // 10) % len(styles)], label=alg)
+        ax.set_xscale("log")
+        ax.set_ylim(-0.02, 1.02)
+        ax.set_title(f"{g.name} ({len(g.contexts)} problem(s))", fontsize=9)
+        ax.set_xlabel("evaluations / D (log scale)")
+        ax.set_ylabel("share of (run, target) pairs")
+        ax.grid(True, which="major", alpha=0.3)
+    for ax in axes.ravel()[len(gs):]:
+        ax.set_visible(False)
+    axes.ravel()[0].legend(fontsize=7, loc="upper left", ncol=2)
+    fig.suptitle("Runtime ECDFs aggregated over problems and targets (rel_gap 1 … 1e-6), "
+                 "each problem weighing the same", fontsize=10)
+    fig.tight_layout()
+    return save(fig, path)
+
+
+def family_lookup(registry: Any) -> Callable[[str], str]:
+    """``problem name -> family`` from the registry's problem classes (``""`` when unknown)."""
+    problems = getattr(registry, "problems", {}) or {}
+
+    def family(name: str) -> str:
+        value = getattr(problems.get(name), "family", "")
+        return value if isinstance(value, str) and len(value) <= 60 else ""
+    return family
