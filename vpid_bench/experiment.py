@@ -135,7 +135,7 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
     (``isolation=auto`` uses them when given; ``process`` starts its own without)."""
     problem = (problems or ProblemCache(size=1)).get(job)
     problem.set_threads(job.spec.threads or available_cores())
-    job = with_stops(job, problem)
+    job = with_stops(job.sized(problem.bounds.dim), problem)
     pool, own_pool = _choose_workers(job, pool)
     try:
         return _run_job(job, Path(job_dir), registry, problem, optima_dir, pool)

@@ -53,7 +53,10 @@ class JobSpec:
 
     ``seed``: the optimizer's randomness; run ``i`` uses ``SeedSequence(seed, spawn_key=(i,))``.
     ``runs``: independent runs per job. ``budget``: evaluations per run (null: the protocol's
-    ``ps * (iterations + 1)``). ``resume``: skip runs whose complete record already exists.
+    ``ps * (iterations + 1)``). ``budget_per_dim``: evaluations per run as a multiple of the
+    problem's dimension ``D`` (the budget ladder: ``-m budget_per_dim=10,100,1000``; one
+    suite sweep then gives each problem the same budget per parameter). ``resume``: skip runs
+    whose complete record already exists.
     ``progress``: a progress bar on stderr. ``report``: write a report at the end of a job or
     a sweep. ``archive``: rank the archived built-in optimizers of a suite beside this
     job's or sweep's runs on the suite's problems, without running them (docs/protocol.md).
@@ -73,6 +76,7 @@ class JobSpec:
     seed: int = 0
     runs: int = 30
     budget: int | None = None
+    budget_per_dim: int | None = None
     resume: bool = True
     progress: bool = True
     report: bool = True
@@ -88,6 +92,11 @@ class JobSpec:
         _check_int("runs", self.runs, 1, MAX_RUNS)
         if self.budget is not None:
             _check_int("budget", self.budget, 1, MAX_BUDGET, nullable=True)
+        if self.budget_per_dim is not None:
+            _check_int("budget_per_dim", self.budget_per_dim, 1, MAX_BUDGET, nullable=True)
+            if self.budget is not None:
+                raise ConfigError("budget_per_dim", self.budget_per_dim,
+                                  "either budget= or budget_per_dim=, not both")
         if self.threads is not None:
             _check_int("threads", self.threads, 1, 1024, nullable=True)
         if self.run_timeout_s is not None and not 0 < self.run_timeout_s <= MAX_RUN_TIMEOUT_S:
@@ -139,6 +148,19 @@ class Job:
     #: per run index, the objective value at which the run stops (``target``; empty: none),
     #: filled in by :func:`vpid_bench.targets.with_stops` once the problem is built
     stop_at: Mapping[int, float] = dataclasses.field(default_factory=dict)
+
+    def sized(self, dim: int) -> Job:
+        """This job with ``budget_per_dim x dim`` evaluations per run when ``budget_per_dim``
+        is set (the dimension is known once the problem is built), else itself."""
+        per = self.spec.budget_per_dim
+        if per is None:
+            return self
+        budget = per * dim
+        if budget > MAX_BUDGET:
+            raise ConfigError("budget_per_dim", per, f"at most {MAX_BUDGET // max(dim, 1)} "
+                              f"for a problem of {dim} parameters ({MAX_BUDGET} evaluations)")
+        return dataclasses.replace(self, budget=budget,
+                                   params=dataclasses.replace(self.params, budget=budget))
 
     def problem_settings(self) -> dict[str, Any]:
         """The problem's settings as plain data (the protocol included)."""

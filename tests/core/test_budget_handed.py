@@ -48,3 +48,31 @@ def test_run_rng_is_the_documented_stream():
     a = run_rng(3, 2).random(4)
     b = np.random.default_rng(np.random.SeedSequence(3, spawn_key=(2,))).random(4)
     assert np.array_equal(a, b)
+
+
+@pytest.mark.parametrize("optimizer", ["de4", "lshade", "cmaes"])
+def test_budget_per_dim_sizes_the_budget_by_the_problems_dimension(compose_config, registry,
+                                                                   optimizer):
+    job = _job(compose_config, registry, f"optimizer={optimizer}", "budget_per_dim=17")
+    problem = registry.problem("functions")(job.problem_config)
+    sized = job.sized(problem.bounds.dim)
+    assert sized.budget == 17 * 3 == sized.params.budget
+    opt = sized.optimizer_cls(sized.params, problem.bounds, np.random.default_rng(0))
+    assert opt.budget == 51
+    assert run(problem, opt, budget=sized.budget).evaluations <= 51
+    assert job.sized(3) == sized and _job(compose_config, registry).sized(3).budget == 20 * 51
+
+
+@pytest.mark.parametrize("overrides, line", [
+    (["budget=50", "budget_per_dim=10"], "either budget= or budget_per_dim=, not both"),
+    (["budget_per_dim=0"], "budget_per_dim=0 is not allowed"),
+])
+def test_bad_budget_per_dim_is_refused(compose_config, registry, overrides, line):
+    with pytest.raises(ConfigError, match=line):
+        _job(compose_config, registry, *overrides)
+
+
+def test_a_budget_per_dim_beyond_the_largest_budget_is_refused(compose_config, registry):
+    job = _job(compose_config, registry, "budget_per_dim=400000000")
+    with pytest.raises(ConfigError, match="at most 333333333 for a problem of 3 parameters"):
+        job.sized(3)

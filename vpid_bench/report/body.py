@@ -317,3 +317,27 @@ def suite_md(rows: Sequence[Sequence[Any]], notes: Sequence[str], fig: Path | st
     else:
         lines += [para(f"The aggregated ECDF figure was not drawn ({escape(fig)})."), ""]
     return lines
+
+
+def ladder_md(rows: Sequence[Sequence[Any]]) -> list[str]:
+    """The budget ladder (:func:`.suite_scores.ladder_rows`): the share of (run, target)
+    pairs solved at 10, 100, 1,000 and 10,000 evaluations per dimension, read off the same
+    runs; rungs no run reached are left out."""
+    from .suite_scores import LADDER
+
+    keep = [k for k, _ in enumerate(LADDER) if any(math.isfinite(r[2 + k]) for r in rows)]
+    if not rows or not keep:
+        return []
+    last = keep[-1]
+    order = sorted(rows, key=lambda r: (-r[2 + last], r[1]))
+    lines = ["### The budget ladder", "",
+             para("Fixed budgets read off the same runs: the share of (run, target) pairs "
+                  "solved within each budget, in evaluations per parameter (D), each problem "
+                  "weighing the same. Rungs beyond some problem's budget are not shown: those "
+                  "runs did not go that far (`budget=`). `tables/budget_ladder.csv`."), "",
+             "| optimizer | " + " | ".join(f"{LADDER[k]:,}·D" for k in keep) + " |",
+             "| --- | " + " | ".join("---:" for _ in keep) + " |"]
+    for r in order:
+        lines.append(f"| {escape(r[1])} | "
+                     + " | ".join(f"{100 * r[2 + k]:.0f} %" for k in keep) + " |")
+    return lines + [""]

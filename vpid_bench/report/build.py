@@ -218,11 +218,13 @@ def _suite_scores(data: ReportData, registry: Any, names: _Names
     if len({h.context for h in data.hits}) < 2:
         return [], []
     rows, notes = ss.score_rows(data.hits, facts)
-    written = _table(names, "suite_scores", ss.HEADERS, rows)
+    ladder = ss.ladder_rows(data.hits, facts)
+    written = (_table(names, "suite_scores", ss.HEADERS, rows)
+               + _table(names, "budget_ladder", ss.LADDER_HEADERS, ladder))
     fig = ss.figure(data.hits, facts, names.file("figures", "suite_ecdf", ".png"))
     if isinstance(fig, Path):
         written.append(fig)
-    return body.suite_md(rows, notes, fig, names.root), written
+    return body.suite_md(rows, notes, fig, names.root) + body.ladder_md(ladder), written
 
 
 def _markdown(data: ReportData, results: list[Any], sections: list[tuple[str, Section]],

@@ -177,3 +177,29 @@ def family_lookup(registry: Any) -> Callable[[str], str]:
         value = getattr(problems.get(name), "family", "")
         return value if isinstance(value, str) and len(value) <= 60 else ""
     return family
+
+
+#: The budget ladder: evaluations per dimension at which fixed-budget results are read off
+#: the runs' traces (log-spaced, as COCO's budgets of 10·D, 100·D, ...).
+LADDER: tuple[int, ...] = (10, 100, 1000, 10000)
+LADDER_HEADERS = ["group", "algorithm", *[f"solved_at_{k}D" for k in LADDER]]
+
+
+def ladder_rows(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]]
+                ) -> list[list[Any]]:
+    """Fixed-budget results read off the same runs: per optimizer that ran every context, the
+    aggregated ECDF (share of (run, target) pairs hit, each problem weighing the same) at each
+    rung of :data:`LADDER`; ``nan`` at a rung beyond some context's budget (not run that
+    long)."""
+    budgets = {c: context_budget(runs, c) for c in {r.context for r in runs}}
+    dims = {c: max(facts[c][1], 1) for c in budgets}
+    out = []
+    for alg, per in sorted(_by(runs).items()):
+        if set(per) != set(budgets):
+            continue
+        grid = np.asarray(LADDER, float)
+        values = aggregated_ecdf(per, dims, grid)
+        beyond = [any(k * dims[c] > budgets[c] for c in budgets) for k in LADDER]
+        out.append(["all problems", alg, *[math.nan if b else float(v)
+                                           for v, b in zip(values, beyond, strict=True)]])
+    return out
