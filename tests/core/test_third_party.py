@@ -117,6 +117,36 @@ def test_quarter_car_runs_with_installed_optimizers_and_a_report(site, tmp_path)
     assert (tmp_path / "sweep" / "report" / "report.md").is_file()
 
 
+def test_on_the_smoke_suite_it_is_ranked_among_the_archived_builtins(site, tmp_path):
+    """The archive's promise: a newcomer's optimizer, installed from outside the repository
+    and run alone on ``suite=smoke``, is ranked beside every built-in optimizer from the
+    archive shipped with vpid-bench, and nothing but its own jobs runs."""
+    from vpid_bench.report.archive import default_root, read_archive
+
+    shipped = read_archive(default_root() / "smoke")
+    builtins = set(shipped.manifest["optimizers"])
+    proc = _run(site, ["-m", "suite=smoke", "optimizer=one_plus_one", "runs=3",
+                       "progress=false", f"hydra.sweep.dir={tmp_path}/sweep"], tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    sweep = tmp_path / "sweep"
+    assert {r["optimizer"]["name"] for r in _records(sweep)} == {"one_plus_one"}
+    members = sorted(shipped.problems)
+    assert len([j for j in sweep.iterdir() if (j / "job.json").is_file()]) == len(members)
+    for member in members:
+        assert f"{member}: " in proc.stderr and "from the archive of suite smoke" in proc.stderr
+    import csv
+
+    with open(sweep / "report" / "runs.csv", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    for member in members:
+        ranked = {r["algorithm"] for r in rows if r["problem"] == member}
+        assert ranked == builtins | {"one_plus_one"}, member
+        instances = {r["instance"] for r in rows if r["problem"] == member}
+        assert len(instances) == 3  # the archived runs on this sweep's instances only
+    headline = (sweep / "report" / "tables" / "headline.csv").read_text(encoding="utf-8")
+    assert headline.count("one_plus_one") == len(members)
+
+
 @pytest.mark.parametrize("override, line", [
     ("problem.noise=0.05,-1", "error: problem.noise=-1.0 is not allowed: a level in [0, 1]"),
     ("optimizer.sigma0=0.2,2", "error: optimizer.sigma0=2.0 is not allowed: a fraction in (0, 1]"),

@@ -198,3 +198,45 @@ def test_packing_the_same_sweep_twice_gives_the_same_bytes(made, tmp_path):
     assert rows[0].startswith("problem,optimizer,runs,ok,metric")
     assert len(rows) == 1 + 2  # random and centre on smoke_quarter
 
+
+
+# --- the archive shipped with the package ---------------------------------------------------
+
+@pytest.fixture(scope="module")
+def shipped():
+    return arch.read_archive(arch.default_root() / "smoke")
+
+
+def test_the_shipped_archive_holds_every_builtin_on_every_smoke_member(shipped, registry):
+    builtins = {n for n in registry.optimizers
+                if registry.provenance("optimizer", n).get("distribution") == "vpid-bench"}
+    assert set(shipped.manifest["optimizers"]) == builtins
+    assert shipped.problems == set(registry.suites()["smoke"])
+    assert shipped.skipped == 0
+    assert all(r["status"] == "ok" for r in shipped.records)
+    runs = {(r["problem"]["name"], r["optimizer"]["name"]) for r in shipped.records}
+    assert len(runs) == len(builtins) * len(shipped.problems)
+    # every instance of every member has its optimum in the archive
+    instances = {(r["problem"]["name"], r["instance"]["id"]) for r in shipped.records}
+    assert instances <= {(o.problem, o.instance) for o in shipped.optima}
+
+
+def test_the_shipped_archive_was_made_by_this_code(shipped, registry):
+    """Each member's instances, built by the installed code, hold the archived data (true
+    parameters and objective at the truth, to 1e-9): a change to a problem that moves its
+    data fails here, and the archive must be rebuilt (benchmarks/build_archive.py)."""
+    from vpid_bench.params import build_dataclass
+
+    seen = set()
+    for rec in shipped.records:
+        name, index = rec["problem"]["name"], rec["instance"]["index"]
+        if (name, index) in seen or index > 1:
+            continue
+        seen.add((name, index))
+        cls = registry.problem(name)
+        problem = cls(build_dataclass(cls.Config, rec["problem"]["config"])).instance(index)
+        assert problem.instance_id() == rec["instance"]["id"]
+        assert arch._same_instance(
+            {"parameters": {"true": problem.x_true.tolist()},
+             "problem": {"info": problem.describe()}}, rec) is None, (name, index)
+    assert len(seen) == 2 * len(shipped.problems)
