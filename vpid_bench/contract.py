@@ -13,7 +13,7 @@ line naming what is missing.
 capability     members                                                                anchor
 =============  =====================================================================  =========
 core           Config, bounds, evaluate; optional: x_true, metrics, describe, name,    (always)
-               rows_independent, suites
+               rows_independent, suites, family
 residuals      residuals, residual_groups, evaluate_with_residuals, residual_sigma    residuals
 instances      instance, instance_id, evaluate_instances                              instance
 signals        signals, signal_units                                                  signals
@@ -50,7 +50,7 @@ class Capability:
 
 CAPABILITIES: tuple[Capability, ...] = (
     Capability("core", ("Config", "name", "bounds", "evaluate", "x_true", "metrics",
-                        "describe", "rows_independent", "suites"), None,
+                        "describe", "rows_independent", "suites", "family"), None,
                what="the box, the objective, and optionally the truth and accuracy metrics"),
     Capability("residuals", ("residuals", "residual_groups", "evaluate_with_residuals",
                              "residual_sigma"), "residuals",

@@ -190,6 +190,21 @@ def test_bad_lines_are_skipped_and_counted(made, tmp_path):
     assert "centre from the archive" in line and "2 bad archive line(s) skipped" in line
 
 
+def test_a_report_of_the_archive_alone_needs_no_run(made, tmp_path):
+    report = build_report([made["archives"] / "smoke"], tmp_path / "report", short=True)
+    rows = _rows(tmp_path / "report")
+    assert {r["algorithm"] for r in rows} == {"random", "centre"} and len(rows) == 6
+    assert all(float(r["rel_gap"]) >= 0 for r in rows)  # the archive's optima judge them
+    assert report.failures == []
+
+
+def test_a_damaged_archive_given_as_a_path_is_named(made, tmp_path):
+    archives = _copy(made, tmp_path)
+    (archives / "smoke" / arch.MANIFEST).write_text("{}")
+    report = build_report([archives / "smoke", made["mine"]], tmp_path / "report", short=True)
+    assert any("not a vpid-bench archive" in f for f in report.failures)
+
+
 def test_packing_the_same_sweep_twice_gives_the_same_bytes(made, tmp_path):
     a = arch.pack(made["base"], "smoke", tmp_path / "a", command="test", commit="abc123",
                   made_at="2026-01-01T00:00:00+00:00")

@@ -197,6 +197,12 @@ def read_archive(folder: Path) -> Archive:
     return Archive(folder, manifest["suite"], manifest, records, optima, skipped)
 
 
+def is_archive(path: Path) -> bool:
+    """Whether ``path`` is an archive folder (it holds a ``manifest.json``)."""
+    path = Path(path)
+    return path.is_dir() and (path / MANIFEST).is_file()
+
+
 def find_archives(root: Path | None = None) -> list[Path]:
     """The archive folders below ``root`` (default :func:`default_root`): every subfolder
     with a ``manifest.json``."""

@@ -111,7 +111,7 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
     archived runs of the built-in optimizers on the same problems (``True``: the archives
     shipped with the package; a folder: the archives below it; see :mod:`.archive`)."""
     paths = [Path(p) for p in paths]
-    loaded = load_records(paths)
+    loaded, given_optima = _load(paths)
     if not loaded.records:
         extra = ""
         if loaded.skipped:  # say why, from the first one: e.g. records of an older version
@@ -123,7 +123,7 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
     extra_optima, notes = _add_archive(loaded, archive) if archive else ([], [])
     rows = run_rows(loaded.records)
     optima = load_optima(paths, loaded.records)
-    optima.optima += extra_optima
+    optima.optima += given_optima + extra_optima
     optima_errors = [f"bad optimum file {p}: {why}" for p, why in optima.skipped]
     optima_errors += add_optimum_columns(rows, loaded.records, optima)
     summary = tables.summarize(rows)
@@ -144,6 +144,27 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
                       optima_errors, crb_norm_by_context(loaded.records, rows),
                       rankings.box_centred(loaded.records, rows), verdicts, tests,
                       estimator_floors.by_context(loaded.records, rows), notes)
+
+
+def _load(paths: Sequence[Path]) -> tuple[LoadedRecords, list[Any]]:
+    """The records below ``paths``; an archive folder among them (``archive/smoke``) gives
+    its archived runs and instance optima, so a report of the archive alone needs no run."""
+    from .archive import ArchiveError, is_archive, read_archive
+
+    folders = [p for p in paths if is_archive(p)]
+    rest = [p for p in paths if p not in folders]
+    loaded = load_records(rest) if rest else LoadedRecords([], [], [], 0, {})
+    optima: list[Any] = []
+    for folder in folders:
+        try:
+            archive = read_archive(folder)
+        except ArchiveError as exc:
+            loaded.skipped.append((folder, str(exc)))
+            continue
+        seen = {r["run_id"] for r in loaded.records}
+        loaded.records.extend(r for r in archive.records if r["run_id"] not in seen)
+        optima += archive.optima
+    return loaded, optima
 
 
 def _add_archive(loaded: LoadedRecords, archive: bool | Path) -> tuple[list[Any], list[str]]:
