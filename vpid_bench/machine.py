@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
+import platform
 from collections.abc import Iterator
+from typing import Any
 
 
 def available_cores() -> int:
@@ -29,3 +32,33 @@ def one_blas_thread() -> Iterator[None]:
 
     with threadpool_limits(limits=1, user_api="blas"):
         yield
+
+
+@functools.lru_cache(maxsize=1)
+def machine_facts() -> dict[str, Any]:
+    """What a run's timings depend on, for its record: the CPU model, the cores this process
+    may use and the machine has, and each BLAS/OpenMP library numpy and scipy loaded (its
+    implementation, version, architecture and threads), as threadpoolctl reports them.
+    Computed once per process."""
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    blas = []
+    try:
+        import scipy.linalg  # noqa: F401 - load scipy's BLAS too, as a run would
+        from threadpoolctl import threadpool_info
+
+        for lib in threadpool_info():
+            blas.append({k: lib.get(src) for k, src in (
+                ("api", "internal_api"), ("version", "version"),
+                ("architecture", "architecture"), ("threads", "num_threads"))})
+    except Exception:  # noqa: BLE001 - facts for the record, never a reason to fail a run
+        blas = []
+    return {"cpu": cpu, "cores": os.cpu_count(), "cores_available": available_cores(),
+            "blas": blas}

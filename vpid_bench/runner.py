@@ -59,6 +59,8 @@ class RunResult:
     trace_best: list[float]
     wall_time_s: float
     stopped_by: str  # "budget", "target", "optimizer" or "max_batches"
+    #: the run's own time (s) when each batch's values were booked, aligned with trace_*
+    trace_seconds: list[float] = dataclasses.field(default_factory=list)
 
 
 class RunTimeoutError(Exception):
@@ -81,6 +83,7 @@ class Ledger:
     best_x: np.ndarray | None = None
     trace_n: list[int] = dataclasses.field(default_factory=list)
     trace_f: list[float] = dataclasses.field(default_factory=list)
+    trace_s: list[float] = dataclasses.field(default_factory=list)
     stopped_by: str = "budget"
     seconds: float = 0.0  # the run's own time: its ask/tell and its share of evaluations
     #: the run ends once its best value is at most this (stop at the final target)
@@ -112,6 +115,7 @@ class Ledger:
             self.best_x = X[i].copy()
         self.trace_n.append(self.used)
         self.trace_f.append(self.best_f)
+        self.trace_s.append(self.seconds)
         if self.reached:
             self.stopped_by = "target"
 
@@ -121,7 +125,8 @@ class Ledger:
         return RunResult(x_best=x, f_best=self.best_f, evaluations=self.used,
                          budget=self.budget, batches=self.batches,
                          trace_evaluations=self.trace_n, trace_best=self.trace_f,
-                         wall_time_s=self.seconds, stopped_by=self.stopped_by)
+                         wall_time_s=self.seconds, stopped_by=self.stopped_by,
+                         trace_seconds=self.trace_s)
 
 
 @dataclasses.dataclass

@@ -209,7 +209,7 @@ def test_paired_report_ranks_twice_with_groups_and_explains_the_disagreement(tmp
     sq = (root / "report" / "tables" / "search_quality.csv").read_text().splitlines()
     assert sq[1].split(",")[3] == "good" and sq[1].split(",")[5] == str(N_INST)
     ert = (root / "report" / "tables" / "ert.csv").read_text().splitlines()
-    assert f"vehicle ps=20,random,1e-06,{N_INST},0,inf" in ert
+    assert f"vehicle ps=20,random,1e-06,{N_INST},0,inf,inf,inf" in ert
     assert (root / "report" / "figures" / "ecdf_vehicle_ps=20.png").stat().st_size > 5000
     assert not rep.failures
 

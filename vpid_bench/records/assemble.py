@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..bounds import relative_errors_percent
+from ..machine import machine_facts
 from ..problem import Problem
 from ..runner import RunResult
 from .io import SCHEMA
@@ -99,7 +100,7 @@ def make_record(job: Job, run: RunOutcome, rid: str, instance: Problem,
         "trace": None,
         "versions": dict(package_versions()),
         "timing": {"started_at": run.started_at, "wall_time_s": run.seconds,
-                   "host": socket.gethostname()},
+                   "host": socket.gethostname(), "machine": machine_facts()},
     }
     if run.index in job.stop_at:  # stop at the final target (vpid_bench.targets)
         record["target"] = {"gap": job.spec.target, "f_stop": job.stop_at[run.index]}
@@ -107,4 +108,7 @@ def make_record(job: Job, run: RunOutcome, rid: str, instance: Problem,
         record["result"] = result_section(result, instance)
         record["trace"] = {"evaluations": result.trace_evaluations, "best": result.trace_best}
         record["timing"]["run_time_s"] = result.wall_time_s
+        # the run's own time at each trace point: wall time to a target (not in the trace,
+        # which is deterministic; timing is not)
+        record["timing"]["trace_s"] = result.trace_seconds
     return record

@@ -43,6 +43,13 @@ class RunHits:
     budget: float
     used: float
     hits: tuple[float, ...]
+    #: per target, the sequential batches (rounds of ask/tell) and the run's own seconds
+    #: until the hit (``nan``: never, or no per-batch times in the record); and what the
+    #: whole run used of each
+    hit_batches: tuple[float, ...] = ()
+    hit_seconds: tuple[float, ...] = ()
+    used_batches: float = math.nan
+    used_seconds: float = math.nan
 
 
 def hit_times(evaluations: Sequence[float], gaps: Sequence[float],
@@ -75,9 +82,26 @@ def run_hits(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, A
         used = float(row["evaluations"]) if math.isfinite(float(row["evaluations"])) \
             else float(ev[-1])
         budget = float(row["budget"]) if row.get("budget") else used
+        secs = (by_id[row["run_id"]].get("timing") or {}).get("trace_s") or []
+        secs = secs if isinstance(secs, list) and len(secs) == len(ev) else [math.nan] * len(ev)
+        secs = [float(v) if isinstance(v, (int, float)) else math.nan for v in secs]
+        index = list(range(1, len(ev) + 1))
         out.append(RunHits(row["context"], row["algorithm"], max(budget, used), used,
-                           hit_times(ev, gaps, targets)))
+                           hit_times(ev, gaps, targets), hit_times(index, gaps, targets),
+                           _at_hits(secs, gaps, targets), float(len(ev)),
+                           float(row.get("run_time_s", math.nan))))
     return out
+
+
+def _at_hits(values: Sequence[float], gaps: Sequence[float], targets: Sequence[float]
+             ) -> tuple[float, ...]:
+    """``values`` (one per trace point) at each target's first hit; ``nan`` where never."""
+    g = np.asarray(gaps, float)
+    out = []
+    for t in targets:
+        idx = np.flatnonzero(np.isfinite(g) & (g <= t))
+        out.append(float(values[idx[0]]) if idx.size else math.nan)
+    return tuple(out)
 
 
 def ecdf(runs: Sequence[RunHits], grid: Sequence[float]) -> np.ndarray:
@@ -90,10 +114,21 @@ def ecdf(runs: Sequence[RunHits], grid: Sequence[float]) -> np.ndarray:
     return (hit[None, :] <= grid[:, None]).mean(axis=1)
 
 
-def ert(runs: Sequence[RunHits], target_index: int) -> float:
-    """Expected running time of one target (see the module); ``inf`` when no run hit it."""
-    hits = np.asarray([r.hits[target_index] for r in runs], float)
-    used = np.asarray([r.used for r in runs], float)
+def ert(runs: Sequence[RunHits], target_index: int, cost: str = "evaluations") -> float:
+    """Expected running time of one target (see the module); ``inf`` when no run hit it.
+    ``cost``: counted in ``evaluations``, ``batches`` (sequential rounds of ask/tell: what
+    parallel hardware cannot shorten) or ``seconds`` (the runs' own time; ``nan`` when a
+    record has no per-batch times)."""
+    pick = {"evaluations": (lambda r: r.hits, lambda r: r.used),
+            "batches": (lambda r: r.hit_batches, lambda r: r.used_batches),
+            "seconds": (lambda r: r.hit_seconds, lambda r: r.used_seconds)}[cost]
+    hits = np.asarray([pick[0](r)[target_index] if pick[0](r) else math.nan for r in runs],
+                      float)
+    if cost != "evaluations":
+        ok = np.isfinite(np.asarray([r.hits[target_index] for r in runs], float))
+        if np.any(ok & ~np.isfinite(hits)):
+            return math.nan  # hit, but the record does not say when in this cost
+    used = np.asarray([pick[1](r) for r in runs], float)
     n_hit = int(np.isfinite(hits).sum())
     if n_hit == 0:
         return math.inf
@@ -137,11 +172,13 @@ def ert_rows(runs: Sequence[RunHits], targets: Sequence[float] = TARGETS) -> lis
     for (context, algorithm), g in sorted(_groups(runs).items()):
         for i, t in enumerate(targets):
             n_hit = sum(math.isfinite(r.hits[i]) for r in g)
-            rows.append([context, algorithm, t, len(g), n_hit, ert(g, i)])
+            rows.append([context, algorithm, t, len(g), n_hit, ert(g, i),
+                         ert(g, i, "batches"), ert(g, i, "seconds")])
     return rows
 
 
-ERT_HEADERS = ["context", "algorithm", "target_rel_gap", "runs", "hits", "ert"]
+ERT_HEADERS = ["context", "algorithm", "target_rel_gap", "runs", "hits", "ert",
+               "ert_batches", "ert_seconds"]
 
 
 def ecdf_figure(runs: Sequence[RunHits], context: str, path: Path) -> Path | str:
