@@ -141,18 +141,18 @@ def expand_points(parsed: list[Any], multirun: bool, registry: Registry,
                   custom_sweeper: bool) -> list[list[str]]:
     """The override strings of every job, in the order Hydra's basic sweeper runs them."""
 
-    axes: list[list[str]] = []
-    for o in parsed:
-        axis = _axis(o, multirun, registry, custom_sweeper)
-        if axis is not None:
-            axes.append(axis)
-    for o, axis in zip(parsed, axes, strict=False):
+    # each override with its own axis (an optimizing sweeper's interval() has none: zipping
+    # the overrides with the shorter list of axes once checked the wrong values)
+    pairs = [(o, a) for o in parsed
+             if (a := _axis(o, multirun, registry, custom_sweeper)) is not None]
+    axes = [a for _, a in pairs]
+    for o, axis in pairs:
         if o.key_or_group in GROUPS and not o.is_delete():
             for text in axis:
                 _check_choice(o.key_or_group, text.split("=", 1)[1], registry)
     count = math.prod(len(a) for a in axes)
     if count == 0:
-        empty = next(o for o, a in zip(parsed, axes, strict=False) if not a)
+        empty = next(o for o, a in pairs if not a)
         raise ConfigError(empty.key_or_group, _raw_value(empty),
                           "a sweep with at least one value (this one is empty: no job would run)")
     if count > MAX_JOBS:
@@ -410,6 +410,8 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
         raise
     except Exception as exc:  # noqa: BLE001 - anything else Hydra raises: one line too
         raise _hydra_error(exc) from None
+    if custom_sweeper:
+        refuse_test_instances(jobs)
     key = "hydra.sweep.dir" if cmd.multirun else "hydra.run.dir"
     folder = _resume_folder(cmd, full, key) if cmd.resume is not None else None
     if folder is not None:
@@ -423,6 +425,29 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
     job_dirs = (planned_job_dirs(points, full, folder)
                 if cmd.multirun and not custom_sweeper else [])
     return Plan(hydra_args, folder, cmd.multirun, jobs, points, job_dirs)
+
+
+def refuse_test_instances(jobs: Sequence[Job]) -> None:
+    """Tuning sees held-out instances only (docs/protocol.md): an optimizing sweeper (Optuna)
+    tunes, so a job of it whose problem draws its instances at the default seed (every
+    config key named ``seed`` at its default: the test set a comparison reports on) is
+    refused, naming the key to change. A problem without a seed key has no instance set to
+    hold out and is let through."""
+    from ..params import to_plain
+    from ..report.load import flatten
+
+    for job in jobs:
+        seeds = {k: v for k, v in flatten(job.problem_settings()).items()
+                 if k == "seed" or k.endswith(".seed")}
+        if not seeds:
+            continue
+        defaults = flatten(to_plain(job.problem_cls.Config()))
+        if all(defaults.get(k) == v for k, v in seeds.items()):
+            key, value = next(iter(seeds.items()))
+            raise ConfigError(f"problem.{key}", value,
+                              "held-out instances when tuning: the default seed's instances "
+                              "are the test set a comparison reports on; tune on another, "
+                              f"e.g. problem.{key}={value + 1} (docs/protocol.md)")
 
 
 def _is_hydra_key(o: Any) -> bool:
