@@ -7,7 +7,12 @@
   default before, which handicapped CMA-ES: the committed study ran so); or a number.
 * **Restarts** (``restarts``): ``none``, or ``ipop``: when cma's termination criteria fire
   before the budget is spent, a new search starts from a new random point with twice the
-  population (IPOP-CMA-ES, Auger and Hansen 2005), until the budget ends.
+  population (IPOP-CMA-ES, Auger and Hansen 2005), until the budget ends; or ``bipop``
+  (BIPOP-CMA-ES, Hansen 2009): restarts alternate between that large-population regime and a
+  small one, whichever has used fewer evaluations so far; a small search has the population
+  ``floor(l0 (l_large / (2 l0)) ** (u ** 2))`` and the step ``sigma0 * 10 ** (-2 v)`` with
+  ``u``, ``v`` uniform in [0, 1) from the run's generator (``l0``: the first population,
+  ``l_large``: the large regime's current one).
 * **Start**: the mean starts at a point drawn uniformly in the box by the run's generator, not
   the box's centre (on the vehicle problem the box is centred on the true parameters, so a
   centred start would begin at the answer). ``sigma0`` is a fraction of the box width.
@@ -48,7 +53,7 @@ class CMAESParams(OptimizerParams):
 
     sigma0: float = 0.3
     popsize: int | Literal["library", "ps"] = "library"
-    restarts: Literal["none", "ipop"] = "none"
+    restarts: Literal["none", "ipop", "bipop"] = "none"
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.sigma0) and 0.0 < self.sigma0 <= 1.0):
@@ -78,6 +83,11 @@ class CMAES(Optimizer):
 
         self._cma = cma
         self._popsize = params.population(bounds.dim)
+        self._first_popsize = self._popsize
+        self._large_popsize = self._popsize  # BIPOP: the large regime's current population
+        self._sigma = params.sigma0
+        self._spent = {"large": 0, "small": 0}  # BIPOP: evaluations used by each regime
+        self._regime = "large"
         self._es = self._new_search()
         self.schedule = self.budget  # evaluations: the run's budget
         self._used = 0  # evaluations of the searches before the current one
@@ -99,7 +109,24 @@ class CMAES(Optimizer):
             "verb_disp": 0,
         }
         x0 = self.rng.random(self.bounds.dim)
-        return self._cma.CMAEvolutionStrategy(x0, self.params.sigma0, options)
+        return self._cma.CMAEvolutionStrategy(x0, self._sigma, options)
+
+    def _next_search(self) -> None:
+        """The population and step of the next search (IPOP: twice the population; BIPOP:
+        the regime that has used fewer evaluations, see the module)."""
+        if self.params.restarts == "ipop":
+            self._popsize *= 2
+            return
+        if self._spent["small"] < self._spent["large"]:
+            self._regime = "small"
+            u, v = self.rng.random(2)
+            ratio = self._large_popsize / (2 * self._first_popsize)
+            self._popsize = max(2, int(self._first_popsize * max(ratio, 1.0) ** (u * u)))
+            self._sigma = self.params.sigma0 * 10.0 ** (-2.0 * v)
+        else:
+            self._regime = "large"
+            self._large_popsize *= 2
+            self._popsize, self._sigma = self._large_popsize, self.params.sigma0
 
     def _standard_normal(self, *shape: int) -> np.ndarray:
         """cma's ``randn(lam, N)``: standard normal deviates from the run's generator."""
@@ -121,9 +148,10 @@ class CMAES(Optimizer):
         used = self._used + self._es.countevals
         if used >= self.schedule:
             stop["schedule"] = self.schedule
-        elif stop and self.params.restarts == "ipop":  # a new search, twice the population
+        elif stop and self.params.restarts in ("ipop", "bipop"):  # a new search
+            self._spent[self._regime] += self._es.countevals
             self._used = used
-            self._popsize *= 2
+            self._next_search()
             self._es = self._new_search()
             self.searches += 1
             self.stop_reasons = {f"search {self.searches - 1}": stop}

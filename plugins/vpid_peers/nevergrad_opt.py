@@ -3,9 +3,11 @@
 * **Method**: a name of ``nevergrad.optimizers.registry`` (542 names in nevergrad 1.0.12).
   An unknown name is refused in one line (:class:`ConfigError`, key ``optimizer.method``)
   that lists the closest registered names.
-* **Batches**: the nevergrad optimizer is built with ``num_workers = ps`` and
-  the run's ``budget`` (the evaluations the run loop allows, ``self.budget``); each
-  ``ask`` asks nevergrad for ``ps`` candidates, each ``tell`` tells all of them.
+* **Batches** (``batch``): the nevergrad optimizer is built with the run's ``budget`` (the
+  evaluations the run loop allows, ``self.budget``) and ``num_workers`` = 1, nevergrad's
+  default (``library``: one candidate per ask and tell), or ``ps`` (``batch=ps``: each ``ask``
+  asks nevergrad for ``ps`` candidates, each ``tell`` tells all of them; the default before
+  round three).
   The optimizer is ``done`` once it has told that budget.
 * **Coordinates**: an ``ng.p.Array`` bounded to the unit cube (nevergrad's own bound handling),
   mapped to physical units on ``ask`` (:mod:`vpid_peers.unit_box`). Its initial value, around
@@ -24,7 +26,7 @@ from __future__ import annotations
 
 import difflib
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -77,13 +79,22 @@ class NevergradParams(OptimizerParams):
     (case matters: ``NGOpt``, ``TwoPointsDE``, ``CMA``, ``PSO``, ``DE``, ``OnePlusOne``, ...)."""
 
     method: str = DEFAULT_METHOD
+    #: candidates per batch (nevergrad's ``num_workers``): ``library`` is nevergrad's default,
+    #: 1 (one candidate asked, evaluated and told at a time); ``ps`` the protocol's
+    #: population (the default before round three)
+    batch: Literal["library", "ps"] = "library"
 
     def __post_init__(self) -> None:
         check_method(self.method)
 
+    @property
+    def workers(self) -> int:
+        """nevergrad's ``num_workers``: the candidates of one batch."""
+        return 1 if self.batch == "library" else self.ps
+
 
 class NevergradOptimizer(Optimizer):
-    """A nevergrad optimizer asked for ``ps`` candidates per batch."""
+    """A nevergrad optimizer asked for ``params.workers`` candidates per batch."""
 
     Params = NevergradParams
 
@@ -103,13 +114,13 @@ class NevergradOptimizer(Optimizer):
         parametrization.random_state = np.random.RandomState(self._seed)
         cls = ng.optimizers.registry[self.params.method]
         return cls(parametrization=parametrization, budget=self.budget,
-                   num_workers=self.params.ps)
+                   num_workers=self.params.workers)
 
     def ask(self) -> np.ndarray:
         if self._ng is None:
             self._ng = self._build()
         if self._pending is None:
-            self._pending = [self._ng.ask() for _ in range(self.params.ps)]
+            self._pending = [self._ng.ask() for _ in range(self.params.workers)]
         U = np.array([candidate.value for candidate in self._pending], dtype=float)
         return to_physical(U, self.bounds)
 

@@ -1,12 +1,14 @@
 """``optimizer=scipy_de``: ``scipy.optimize.differential_evolution``, through the bridge.
 
-Vectorised (one call per generation of ``ps`` rows) with deferred updating, so each
-generation is one batch, as for DE1-DE8. scipy's ``popsize`` is a multiplier of the
-dimension; to get exactly ``ps`` members the initial population is passed as ``init``: ``ps``
-rows uniform in the box drawn from the run's generator (scipy then takes the population size
-from that array). ``maxiter`` is ``iterations``, so the run uses ``ps * (iterations + 1)``
-evaluations like DE1-DE8; the convergence test is off by default (``tol = 0``) and there is
-no polishing. scipy draws its own random numbers from the run's generator too.
+Vectorised (one call per generation) with deferred updating, so each generation is one
+batch, as for DE1-DE8. The population (``popsize``) is scipy's own by default (``library``:
+scipy's ``popsize=15``, a multiplier of the dimension, so 15 D members from scipy's Latin
+hypercube; the run's budget ends the run); ``ps`` gives the protocol's population (the default
+before round three: the committed study of the paper's problem ran so), passed as ``init``:
+``ps`` rows uniform in the box drawn from the run's generator, with ``maxiter = iterations``
+so the run uses ``ps * (iterations + 1)`` evaluations like DE1-DE8. The convergence test is
+off by default (``tol = 0``) and there is no polishing. scipy draws its own random numbers
+from the run's generator.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ class ScipyDEParams(OptimizerParams):
     constant. ``CR``: scipy's ``recombination`` (default 0.7). ``tol``: scipy's relative
     convergence tolerance (0: run every generation, the same budget as DE1-DE8)."""
 
+    popsize: Literal["library", "ps"] = "library"
     strategy: Strategy = "best1bin"
     F: float = 0.5
     F_max: float | None = 1.0
@@ -49,7 +52,7 @@ class ScipyDEParams(OptimizerParams):
             raise ConfigError("optimizer.CR", self.CR, "a number in [0, 1]")
         if not self.tol >= 0.0:
             raise ConfigError("optimizer.tol", self.tol, "a number >= 0")
-        if self.ps < 5:
+        if self.popsize == "ps" and self.ps < 5:
             raise ConfigError("problem.ps", self.ps, "at least 5 (scipy's smallest population)")
 
 
@@ -62,7 +65,12 @@ class ScipyDE(LoopOptimizer):
         from scipy.optimize import differential_evolution
 
         p, b = self.params, self.bounds
-        init = np.clip(b.sample(self.rng, p.ps), b.lower, b.upper)
+        if p.popsize == "ps":
+            init: Any = np.clip(b.sample(self.rng, p.ps), b.lower, b.upper)
+            maxiter, popsize = p.iterations, 15  # scipy sizes the population from init
+        else:  # scipy's defaults; the budget (the bridge) ends the run
+            init, popsize = "latinhypercube", 15
+            maxiter = 10**9  # never the end: the run loop's budget is
 
         def batch(xt: np.ndarray) -> np.ndarray:
             # scipy passes (dim, S); its unit-cube scaling may round one ulp out of the box
@@ -72,7 +80,8 @@ class ScipyDE(LoopOptimizer):
             batch,
             list(zip(b.lower, b.upper)),
             strategy=p.strategy,
-            maxiter=p.iterations,
+            maxiter=maxiter,
+            popsize=popsize,
             init=init,
             mutation=p.F if p.F_max is None else (p.F, p.F_max),
             recombination=p.CR,

@@ -133,7 +133,7 @@ def test_bad_values_name_the_key():
         with pytest.raises(ConfigError, match=r"optimizer\.popsize"):
             build_dataclass(CMAESParams, {"popsize": bad}, prefix="optimizer")
     with pytest.raises(ConfigError, match=r"optimizer\.restarts"):
-        build_dataclass(CMAESParams, {"restarts": "bipop"}, prefix="optimizer")
+        build_dataclass(CMAESParams, {"restarts": "popi"}, prefix="optimizer")
 
 
 @pytest.mark.parametrize("popsize, expected", [("library", 4 + int(3 * np.log(9))),
@@ -165,3 +165,29 @@ def test_quiet_no_output_and_no_files(registry, tmp_path, monkeypatch, capfd):
     out, err = capfd.readouterr()
     assert out == "" and err == ""
     assert list(tmp_path.iterdir()) == []  # cma's default would write outcmaes/*.dat
+
+
+def test_bipop_alternates_a_large_and_a_small_regime(registry):
+    """BIPOP (Hansen 2009): after the first search, each restart goes to the regime that has
+    used fewer evaluations; large searches double the population, small ones draw a
+    population between the first and half the large one, and a smaller step."""
+    problem = _sphere(registry, 3, 10, 1)
+    params = CMAESParams(ps=10, iterations=1, budget=10**7, sigma0=0.3, restarts="bipop")
+    opt = CMAES(params, problem.bounds, np.random.default_rng(3))
+    first = opt._popsize
+    seen = []
+    for _ in range(40):  # end each search at once: every tell is a restart
+        X = opt.ask()
+        opt._es.stop = lambda: {"test": 1}  # noqa: B023 - the current search's stop
+        opt.tell(X, problem.evaluate(X))
+        seen.append((opt._regime, opt._popsize, opt._sigma))
+    regimes = [r for r, _, _ in seen]
+    assert "small" in regimes and "large" in regimes
+    large = [n for r, n, _ in seen if r == "large"]
+    assert large == [first * 2 ** k for k in range(1, len(large) + 1)]
+    for k, (regime, n, sigma) in enumerate(seen):
+        if regime == "small":
+            big = max([first, *[m for r, m, _ in seen[:k] if r == "large"]])
+            assert first <= n <= max(first, big // 2) and 0.003 <= sigma <= 0.3
+    # the budgets of both regimes stay within one search of each other
+    assert abs(opt._spent["small"] - opt._spent["large"]) <= max(large)

@@ -66,11 +66,20 @@ def test_unknown_method_is_one_line_listing_close_names():
 
 
 def test_batches_of_ps_and_the_protocol_schedule(registry):
-    """Every batch is ps rows; a run budget above ps x (iterations + 1) is not used."""
+    """With batch=ps every batch is ps rows; a run budget above ps x (iterations + 1) is not
+    used."""
     problem = _problem(registry, ps=7, iterations=4)
-    result, _ = _run(registry, "nevergrad", problem, seed=0, budget=1000)
+    result, _ = _run(registry, "nevergrad", problem, seed=0, budget=1000, batch="ps")
     assert np.diff([0, *result.trace_evaluations]).tolist() == [7] * 5
     assert result.evaluations == 35 and result.stopped_by == "optimizer"
+
+
+def test_nevergrads_default_asks_one_candidate_at_a_time(registry):
+    """batch=library (the default): num_workers 1, so every batch is one row."""
+    problem = _problem(registry, ps=7, iterations=4)
+    result, _ = _run(registry, "nevergrad", problem, seed=0)
+    assert np.diff([0, *result.trace_evaluations]).tolist() == [1] * 35
+    assert result.evaluations == 35
 
 
 @pytest.fixture(scope="module")

@@ -29,7 +29,8 @@ def _best(registry, name, seed, function="sphere", dim=5, ps=PS, iterations=ITER
 @pytest.mark.parametrize("name", ["scipy_de", "lsq", "de_lsq"])
 def test_beats_random_search_on_the_sphere(registry, name):
     seeds = range(6)
-    mine = [_best(registry, name, s).f_best for s in seeds]
+    keys = {"popsize": "ps"} if name == "scipy_de" else {}
+    mine = [_best(registry, name, s, **keys).f_best for s in seeds]
     rand = [_best(registry, "random", s).f_best for s in seeds]
     assert np.median(mine) < 0.5 * np.median(rand)
     assert mannwhitneyu(mine, rand, alternative="less").pvalue < 0.01
@@ -47,7 +48,7 @@ def test_scipy_de_rand1bin_and_de1_are_indistinguishable(registry):
     so it has the power to see a difference."""
     keys = {"function": "rastrigin", "ps": 20, "iterations": 30}
     scipy_de = [_best(registry, "scipy_de", s, strategy="rand1bin", F=0.6, F_max=None,
-                      CR=0.9, **keys).f_best for s in range(20)]
+                      CR=0.9, popsize="ps", **keys).f_best for s in range(20)]
     de1 = [_best(registry, "de1", s, **keys).f_best for s in range(20)]
     rand = [_best(registry, "random", s, **keys).f_best for s in range(20)]
     assert mannwhitneyu(scipy_de, de1).pvalue > 0.05
@@ -56,12 +57,24 @@ def test_scipy_de_rand1bin_and_de1_are_indistinguishable(registry):
 
 
 def test_scipy_de_uses_the_protocol_budget_one_generation_per_batch(registry):
-    result = _best(registry, "scipy_de", 0, budget=10 * BUDGET)
+    result = _best(registry, "scipy_de", 0, budget=10 * BUDGET, popsize="ps")
     assert result.stopped_by == "optimizer" and result.evaluations == BUDGET
     assert np.diff([0, *result.trace_evaluations]).tolist() == [PS] * (ITERATIONS + 1)
-    cut = _best(registry, "scipy_de", 0, budget=BUDGET - 3)  # ends inside scipy's loop
+    cut = _best(registry, "scipy_de", 0, budget=BUDGET - 3, popsize="ps")  # inside scipy
     assert cut.evaluations == BUDGET - 3 and cut.stopped_by == "budget"
     assert loop_threads() == []
+
+
+def test_scipy_de_at_its_library_population_runs_to_the_budget(registry):
+    """popsize=library (the default): scipy's 15 D members per generation (75 in 5-D); the
+    run's budget, not the protocol's generations, ends it."""
+    result = _best(registry, "scipy_de", 0, budget=1000)
+    steps = np.diff([0, *result.trace_evaluations]).tolist()
+    assert steps[:-1] == [75] * (len(steps) - 1) and result.evaluations == 1000
+    assert result.stopped_by == "budget"
+    rand = [_best(registry, "random", s, budget=1000).f_best for s in range(6)]
+    mine = [_best(registry, "scipy_de", s, budget=1000).f_best for s in range(6)]
+    assert mannwhitneyu(mine, rand, alternative="less").pvalue < 0.01
 
 
 def test_de_lsq_runs_de4_for_its_fraction_then_least_squares(registry):
