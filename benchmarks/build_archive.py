@@ -47,7 +47,14 @@ def commit() -> str | None:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--suite", default="smoke")
+    ap.add_argument("--suite", default="smoke",
+                    help="the suite swept (or, with --problems, the archive's name)")
+    ap.add_argument("--problems", default=None,
+                    help="problems to sweep instead of a suite (comma-separated)")
+    ap.add_argument("--optimizers", default=None,
+                    help="optimizers to run (default: every built-in one)")
+    ap.add_argument("--optima-only", action="store_true",
+                    help="ship the instance optima alone (what target= stops at), no runs")
     ap.add_argument("--runs", type=int, default=10)
     ap.add_argument("--sweep", type=Path, default=None,
                     help="sweep folder (default: outputs/archive-<suite>)")
@@ -56,7 +63,8 @@ def main() -> int:
     args = ap.parse_args()
     sweep = args.sweep or ROOT / "outputs" / f"archive-{args.suite}"
     out = args.out or ROOT / "archive" / args.suite
-    argv = ["-m", f"suite={args.suite}", "optimizer=" + ",".join(builtin_optimizers()),
+    which = f"problem={args.problems}" if args.problems else f"suite={args.suite}"
+    argv = ["-m", which, "optimizer=" + (args.optimizers or ",".join(builtin_optimizers())),
             f"runs={args.runs}", "archive=false", "report=false", f"hydra.sweep.dir={sweep}"]
     command = "vpid-bench " + " ".join(shlex.quote(a) for a in argv)
     made_by = commit()  # before the sweep: the code that runs it
@@ -68,7 +76,8 @@ def main() -> int:
               + "; ".join(loaded.failures[:5]), file=sys.stderr)
         return 1
     made_at = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-    manifest = pack(sweep, args.suite, out, command=command, commit=made_by, made_at=made_at)
+    manifest = pack(sweep, args.suite, out, command=command, commit=made_by, made_at=made_at,
+                    optima_only=args.optima_only)
     total = sum(f["bytes"] for f in manifest["files"].values())
     for name, f in manifest["files"].items():
         print(f"{out / name}: {f['bytes']:,} bytes, sha256 {f['sha256'][:16]}...")

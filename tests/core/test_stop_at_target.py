@@ -140,3 +140,21 @@ def test_the_ledger_stops_after_the_batch_that_reaches_the_value():
     (whole,) = run_many(problem, [Lane(problem, Down(OptimizerParams(), problem.bounds,
                                                      np.random.default_rng(0)), 12)])
     assert whole.stopped_by == "budget" and whole.evaluations == 12 and whole.f_best == 4.0
+
+
+def test_an_archive_of_optima_alone_certifies_without_adding_runs(archives, tmp_path):
+    """An optima-only archive (what the paper's problem ships): target= stops at its optima,
+    and a report beside it gains no archived runs."""
+    from vpid_bench.report.build import build_report
+
+    only = tmp_path / "only"
+    manifest = arch.pack(archives.parent / "base", "paper", only / "paper", command="test",
+                         commit=None, made_at="2026-01-01T00:00:00+00:00", optima_only=True)
+    assert manifest["runs"] == 0 and manifest["optima_only"] is True
+    read = arch.read_archive(only / "paper")
+    assert read.records == [] and len(read.optima) >= 3
+    done, out = _job(tmp_path, only, "runs=3", "target=0.5")
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert {r["result"]["stopped_by"] for r in _records(out).values()} == {"target"}
+    report = build_report([out], tmp_path / "report", short=True, archive=only)
+    assert report.archive_notes == [] and report.n_records == 3

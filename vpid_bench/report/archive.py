@@ -351,16 +351,19 @@ def _strip(record: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def pack(sweep_dir: Path, suite: str, out: Path, *, command: str, commit: str | None,
-         made_at: str) -> dict[str, Any]:
+         made_at: str, optima_only: bool = False) -> dict[str, Any]:
     """Write the archive of the sweep in ``sweep_dir`` into ``out`` (see the module docstring)
-    and return its manifest. The records and the instance optima are the sweep's own."""
+    and return its manifest. The records and the instance optima are the sweep's own.
+    ``optima_only``: ship the instance optima alone (no runs to rank beside a report's, the
+    optima that ``target=`` stops at)."""
     from ..records import _jsonable
     from .compute import compute
 
     data = compute([sweep_dir], True, 0.05, "random", archive=False)
     out.mkdir(parents=True, exist_ok=True)
-    records = sorted(data.loaded.records, key=lambda r: (
+    found = sorted(data.loaded.records, key=lambda r: (
         r["problem"]["name"], r["optimizer"]["name"], r["run_index"]))
+    records = [] if optima_only else found
     lines = "".join(json.dumps(_jsonable(_strip(r)), sort_keys=True, allow_nan=False) + "\n"
                     for r in records)
     with gzip.GzipFile(out / RECORDS, "wb", mtime=0) as fh:
@@ -372,10 +375,10 @@ def pack(sweep_dir: Path, suite: str, out: Path, *, command: str, commit: str | 
         json.dumps(loads_json(o.path.read_text(encoding="utf-8")), sort_keys=True) + "\n"
         for o in sorted(optima, key=lambda o: (o.problem, str(o.instance), o.f_opt))),
         encoding="utf-8")
-    _write_summary(out / SUMMARY, data.rows)
-    _write_ioh(out / IOH, data)
+    _write_summary(out / SUMMARY, [] if optima_only else data.rows)
+    _write_ioh(out / IOH, data, optima_only)
     problems = {}
-    for r in records:
+    for r in found:
         p = r["problem"]
         problems.setdefault(p["name"], {"config": p.get("config"), "budget": r.get("budget"),
                                         "plugin": {k: (p.get("plugin") or {}).get(k)
@@ -386,7 +389,7 @@ def pack(sweep_dir: Path, suite: str, out: Path, *, command: str, commit: str | 
         "schema": SCHEMA, "suite": suite, "made_at": made_at, "command": command,
         "vpid_bench_version": __version__, "commit": commit,
         "optimizers": sorted({r["optimizer"]["name"] for r in records}),
-        "runs": len(records), "problems": problems,
+        "runs": len(records), "problems": problems, "optima_only": optima_only,
         "files": {name: {"sha256": _sha256((out / name).read_bytes()),
                          "bytes": (out / name).stat().st_size}
                   for name in (RECORDS, OPTIMA, SUMMARY, IOH)},
@@ -435,7 +438,7 @@ def _write_summary(path: Path, rows: Sequence[Mapping[str, Any]]) -> None:
     write_csv(path, SUMMARY_HEADERS, summary_rows(rows))
 
 
-def _write_ioh(path: Path, data: Any) -> None:
+def _write_ioh(path: Path, data: Any, empty: bool = False) -> None:
     """The runs in IOHprofiler's format, zipped with fixed dates (a rebuild of the same
     records gives the same bytes)."""
     import tempfile
@@ -445,7 +448,7 @@ def _write_ioh(path: Path, data: Any) -> None:
 
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
-        files = export_ioh(root / "ioh", data.loaded.records, data.rows, root)
+        files = [] if empty else export_ioh(root / "ioh", data.loaded.records, data.rows, root)
         with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as zf:
             for f in sorted(files):
                 info = zipfile.ZipInfo(str(f.relative_to(root)), date_time=(2026, 1, 1, 0, 0, 0))
