@@ -24,7 +24,7 @@ KEYS = ["runs", "seed", "budget", "resume", "progress", "report", "threads", "ru
         "optimizer.bounds", "optimizer.R_max", "hydra.sweep.dir", "hydra.run.dir",
         "hydra/launcher", "hydra/sweeper", "hydra.launcher.n_jobs", "hydra.sweep.subdir",
         "foo", "problem.name", "problem.nosuch.x", "optimizer.ps", "hydra.job.chdir",
-        "isolation", "workers"]
+        "isolation", "workers", "archive", "target", "budget_per_dim", "suite"]
 VALUES = ["", "0", "1", "-1", "2.0", "2.5", "1e3", "1e308", "-1e308", "inf", "-inf", "nan",
           "abc", "'x y'", '"q"', "a,b", "1,2", "0,1,-3", "range(0,3)", "range(0,1,0)",
           "range(5,1)", "range(0,1000000)", "interval(0,1)", "choice(1,2)", "glob(*)",
@@ -32,7 +32,7 @@ VALUES = ["", "0", "1", "-1", "2.0", "2.5", "1e3", "1e308", "-1e308", "inf", "-i
           "null", "true", "random", "de1", "de6", "ga", "functions", "vehicle", "../x",
           "/dev/null", "/etc/passwd", "'clip',reflect", "sphere", "basic", "joblib", "nosuch",
           "1e-11", "100000", "\\", "%", "'", "ü", "a=b", "=", ",", "process", "none", "auto",
-          "thread", "1025", "1e10"]
+          "thread", "1025", "1e10", "1e-8", "smoke", "smoke_quarter", "0.5"]
 PREFIX = st.sampled_from(["", "", "", "+", "++", "~"])
 override = st.one_of(
     st.builds(lambda p, k, v: f"{p}{k}={v}", PREFIX, st.sampled_from(KEYS),
