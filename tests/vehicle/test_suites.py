@@ -85,3 +85,23 @@ def test_every_member_and_its_config_pickle_by_name(cls):
     assert pickle.loads(pickle.dumps(cls)) is cls
     config = cls.Config()
     assert pickle.loads(pickle.dumps(config)) == config
+
+
+def test_the_instances_have_a_seed_root_of_their_own():
+    """Data and algorithm randomness are not coupled (docs/protocol.md, seeds): at equal
+    seeds, no stream of instance i is the optimizer's stream of run i, and an instance does
+    not depend on the optimizer's seed at all."""
+    from vpid_vehicle.ride.problem import instance_streams
+
+    from vpid_bench.build import run_rng
+
+    for i in range(5):
+        algo = run_rng(0, i).random(4)
+        for stream in instance_streams(0, i):
+            assert not np.allclose(np.random.default_rng(stream).random(4), algo)
+    cls = MEMBERS[0]
+    a = cls(cls.Config(seed=0)).instance(2)
+    b = cls(cls.Config(seed=0)).instance(2)
+    c = cls(cls.Config(seed=1)).instance(2)
+    np.testing.assert_array_equal(a.x_true, b.x_true)
+    assert not np.allclose(a.x_true, c.x_true)  # the problem's seed, not the job's, sets it
