@@ -39,6 +39,10 @@ override = st.one_of(
               st.one_of(st.sampled_from(VALUES), st.text(max_size=8))),
     st.builds(lambda p, k: f"{p}{k}", PREFIX, st.sampled_from(KEYS)),
     st.text(max_size=16),
+    # Hydra's config flags, alone (the next element is their value) or with a folder
+    st.sampled_from(["-cd", "--config-dir", "-cn", "--config-name", "-cp", "--config-path"]),
+    st.builds(lambda f, v: f"{f}={v}", st.sampled_from(["--config-dir", "--config-name"]),
+              st.sampled_from(["/dev/null", "../x", ".", "/etc", "nosuch", "", "config"])),
 )
 #: A tiny job, so an accepted point is cheap to plan.
 BASE = ["problem=functions", "optimizer=random", "runs=1", "problem.iterations=2",
