@@ -15,6 +15,7 @@ import shutil
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "sweeps"))
@@ -255,3 +256,26 @@ def test_the_shipped_archive_was_made_by_this_code(shipped, registry):
             {"parameters": {"true": problem.x_true.tolist()},
              "problem": {"info": problem.describe()}}, rec) is None, (name, index)
     assert len(seen) == 2 * len(shipped.problems)
+
+
+def test_the_shipped_paper_optima_belong_to_this_codes_records(registry):
+    """archive/paper certifies the optima that target= stops at on both designs of the
+    paper's problem: 30 instances each, and the installed code's objective at each archived
+    optimum (first two instances per design) is the archived value, to 1e-9."""
+    from vpid_bench.params import build_dataclass
+
+    paper = arch.read_archive(arch.default_root() / "paper")
+    assert paper.records == [] and paper.manifest["optima_only"] is True
+    by_design: dict[str, list] = {}
+    for o in paper.optima:
+        by_design.setdefault(json.dumps(o.settings, sort_keys=True), []).append(o)
+    assert len(by_design) == 2 and all(len(v) == 30 for v in by_design.values())
+    cls = registry.problem("vehicle")
+    for optima in by_design.values():
+        config = build_dataclass(cls.Config, optima[0].settings)
+        problem = cls(config)
+        for i in range(2):
+            inst = problem.instance(i)
+            (o,) = [o for o in optima if o.instance == inst.instance_id()]
+            f = float(inst.evaluate(np.array([o.x_opt]))[0])
+            assert f == pytest.approx(o.f_opt, rel=1e-9)
