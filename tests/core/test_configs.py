@@ -18,19 +18,33 @@ def _yaml_presets(group: str) -> list[str]:
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".yaml"))
 
 
+def _check_job(cfg, registry):
+    assert "ps" not in cfg.optimizer and "iterations" not in cfg.optimizer
+    job = parse_job(cfg, registry)  # every plugin's own checks run here
+    assert job.params.ps == cfg.problem.ps  # the protocol, copied from the problem
+    assert job.params.iterations == cfg.problem.iterations
+    assert job.budget == cfg.problem.ps * (cfg.problem.iterations + 1)
+    return job
+
+
 def test_every_problem_and_optimizer_composes_and_builds(registry, compose_config):
+    """Every problem composes, parses and builds (with ``random``); every optimizer composes
+    and parses with one problem of each distinct protocol (``ps``, ``iterations``), the
+    values its own checks read. (The whole cross product took 80 s, mostly Hydra's compose.)"""
     problems = sorted(registry.problems) + _yaml_presets("problem")
     optimizers = sorted(registry.optimizers) + _yaml_presets("optimizer")
     assert "functions" in problems and "random" in optimizers
+    protocols: dict[tuple[int, int], str] = {}
     for problem in problems:
+        cfg = compose_config([f"problem={problem}", "optimizer=random"])
+        job = _check_job(cfg, registry)
+        assert job.problem_cls(job.problem_config).bounds.dim >= 1
+        protocols.setdefault((cfg.problem.ps, cfg.problem.iterations), problem)
+    assert len(protocols) >= 2  # the paper's protocol and the smoke members' shorter one
+    for problem in protocols.values():
         for optimizer in optimizers:
-            cfg = compose_config([f"problem={problem}", f"optimizer={optimizer}"])
-            assert "ps" not in cfg.optimizer and "iterations" not in cfg.optimizer
-            job = parse_job(cfg, registry)  # every plugin's own checks run here
-            assert job.params.ps == cfg.problem.ps  # the protocol, copied from the problem
-            assert job.params.iterations == cfg.problem.iterations
-            assert job.budget == cfg.problem.ps * (cfg.problem.iterations + 1)
-            assert job.problem_cls(job.problem_config).bounds.dim >= 1
+            _check_job(compose_config([f"problem={problem}", f"optimizer={optimizer}"]),
+                       registry)
 
 
 def test_protocol_defaults_are_the_papers(compose_config):
