@@ -199,6 +199,36 @@ def test_a_report_of_the_archive_alone_needs_no_run(made, tmp_path):
     assert report.failures == []
 
 
+def test_the_per_job_files_travel_so_an_archive_alone_has_its_bounds(made, tmp_path):
+    folder = made["archives"] / "smoke"
+    manifest = json.loads((folder / arch.MANIFEST).read_text())
+    assert {f"jobs/smoke_quarter/{f}" for f in arch.JOB_FILES} <= set(manifest["files"])
+    from vpid_bench.report.compute import compute
+
+    data = compute([folder], True, 0.05, "random")
+    assert data.bounds and all(v > 0 for v in data.bounds.values())  # the CRB norm
+    assert data.estimator_floors  # the floors per estimator
+
+
+@pytest.mark.parametrize("damage, fragment", [
+    (lambda f: (f / "jobs" / "smoke_quarter" / "estimators.json").write_text("{}"),
+     "does not match the SHA-256"),
+    (lambda f: _add_listed(f, "jobs/../../escape/estimators.json"), "an unexpected file"),
+    (lambda f: _add_listed(f, "jobs/smoke_quarter/evil.py"), "an unexpected file"),
+])
+def test_per_job_files_are_checked_like_the_rest(made, tmp_path, damage, fragment):
+    archives = _copy(made, tmp_path)
+    damage(archives / "smoke")
+    with pytest.raises(arch.ArchiveError, match=fragment):
+        arch.read_archive(archives / "smoke")
+
+
+def _add_listed(folder: Path, name: str) -> None:
+    manifest = json.loads((folder / arch.MANIFEST).read_text())
+    manifest["files"][name] = {"sha256": "0" * 64, "bytes": 1}
+    (folder / arch.MANIFEST).write_text(json.dumps(manifest))
+
+
 def test_a_damaged_archive_given_as_a_path_is_named(made, tmp_path):
     archives = _copy(made, tmp_path)
     (archives / "smoke" / arch.MANIFEST).write_text("{}")

@@ -36,9 +36,11 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from ..analysis.estimator_floors import FILE as ESTIMATORS_FILE
 from ..errors import VpidBenchError
 from ..fileio import loads_json, read_text_limited
 from ..records import CorruptRecordError, canonical_json, parse_record
+from .identifiability import FILE as IDENTIFIABILITY_FILE
 from .load import check_record
 from .optima import Optimum, optimum_from_data
 
@@ -48,6 +50,10 @@ RECORDS = "records.jsonl.gz"
 OPTIMA = "optima.jsonl"
 SUMMARY = "summary.csv"
 IOH = "ioh.zip"
+#: Per problem, the files a job writes once for all its runs (the report's bounds and floors
+#: per estimator), shipped as ``jobs/<problem>/<name>``.
+JOB_FILES = (IDENTIFIABILITY_FILE, ESTIMATORS_FILE)
+JOBS = "jobs"
 #: Largest manifest and optima file read (bytes).
 MAX_TEXT_BYTES = 4 * 1024 * 1024
 #: Largest compressed records file read, and the most its lines may hold uncompressed (bytes).
@@ -167,11 +173,35 @@ def _lines(data: bytes) -> Iterable[tuple[int, Any]]:
                 yield n, None
 
 
+def _job_folder(folder: Path, manifest: Mapping[str, Any], problem: str) -> Path:
+    """Where the report finds a problem's per-job files: ``jobs/<problem>`` when the manifest
+    lists files there (each checked against its SHA-256 by :func:`read_archive`), else the
+    archive folder (no such files). A name that is not an identifier never becomes a path."""
+    if problem.isidentifier() and any(
+            str(name).startswith(f"{JOBS}/{problem}/") for name in manifest["files"]):
+        return folder / JOBS / problem
+    return folder
+
+
+def _check_job_files(folder: Path, manifest: Mapping[str, Any]) -> None:
+    """Every ``jobs/<problem>/<file>`` the manifest lists: a known file name under an
+    identifier, matching its SHA-256 (a changed one refuses the archive)."""
+    for name in manifest["files"]:
+        parts = str(name).split("/")
+        if parts[0] != JOBS:
+            continue
+        if len(parts) != 3 or not parts[1].isidentifier() or parts[2] not in JOB_FILES:
+            raise ArchiveError(f"archive {folder}: {MANIFEST} lists an unexpected file "
+                               f"{_plain(str(name)) or '(unprintable)'}")
+        _checked_file(folder, manifest, str(name), MAX_TEXT_BYTES)
+
+
 def read_archive(folder: Path) -> Archive:
     """Read and check the archive in ``folder``; :class:`ArchiveError` says why it cannot be
     used. Bad record or optimum lines are skipped and counted."""
     folder = Path(folder)
     manifest = _manifest(folder)
+    _check_job_files(folder, manifest)
     records, skipped = [], 0
     for n, obj in _lines(_gunzip(_checked_file(folder, manifest, RECORDS, MAX_GZ_BYTES),
                                  folder)):
@@ -184,7 +214,7 @@ def read_archive(folder: Path) -> Archive:
             skipped += 1
             continue
         rec["_file"] = f"{folder / RECORDS}:{n}"
-        rec["_job_dir"] = str(folder)
+        rec["_job_dir"] = str(_job_folder(folder, manifest, rec["problem"]["name"]))
         rec["_archive"] = manifest["suite"]
         records.append(rec)
     optima = []
@@ -375,6 +405,7 @@ def pack(sweep_dir: Path, suite: str, out: Path, *, command: str, commit: str | 
         json.dumps(loads_json(o.path.read_text(encoding="utf-8")), sort_keys=True) + "\n"
         for o in sorted(optima, key=lambda o: (o.problem, str(o.instance), o.f_opt))),
         encoding="utf-8")
+    job_files = [] if optima_only else _copy_job_files(found, out)
     _write_summary(out / SUMMARY, [] if optima_only else data.rows)
     _write_ioh(out / IOH, data, optima_only)
     problems = {}
@@ -392,11 +423,34 @@ def pack(sweep_dir: Path, suite: str, out: Path, *, command: str, commit: str | 
         "runs": len(records), "problems": problems, "optima_only": optima_only,
         "files": {name: {"sha256": _sha256((out / name).read_bytes()),
                          "bytes": (out / name).stat().st_size}
-                  for name in (RECORDS, OPTIMA, SUMMARY, IOH)},
+                  for name in (RECORDS, OPTIMA, SUMMARY, IOH, *job_files)},
     }
     (out / MANIFEST).write_text(json.dumps(manifest, indent=1, sort_keys=True) + "\n",
                                 encoding="utf-8")
     return manifest
+
+
+def _copy_job_files(records: Sequence[Mapping[str, Any]], out: Path) -> list[str]:
+    """Per problem, the per-job files of its first job that has them, copied into
+    ``jobs/<problem>/``; returns their names relative to ``out``."""
+    import shutil
+
+    names: list[str] = []
+    done: set[str] = set()
+    for r in records:
+        problem = r["problem"]["name"]
+        job = Path(str(r.get("_job_dir", "")))
+        if problem in done or not problem.isidentifier():
+            continue
+        present = [f for f in JOB_FILES if (job / f).is_file() and not (job / f).is_symlink()]
+        if not present:
+            continue
+        done.add(problem)
+        (out / JOBS / problem).mkdir(parents=True, exist_ok=True)
+        for f in present:
+            shutil.copyfile(job / f, out / JOBS / problem / f)
+            names.append(f"{JOBS}/{problem}/{f}")
+    return names
 
 
 SUMMARY_HEADERS = ["problem", "optimizer", "runs", "ok", "metric", "median_metric",
