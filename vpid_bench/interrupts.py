@@ -28,11 +28,29 @@ def _handler(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt
 
 
-def install() -> None:
-    """Install the noting SIGINT handler (main thread of the command's process only)."""
+def _note(signum: int, frame: Any) -> None:
+    _Watch.signalled = True
+
+
+def defer() -> None:
+    """While the command starts (heavy imports, the plugins' own imports): a SIGINT is only
+    noted, and :func:`install` raises it once the start-up is over. Raised at once, the
+    ``KeyboardInterrupt`` could land inside a library's bare ``except:`` around an import,
+    which swallowed it: the command then ran its whole sweep and exited 0."""
     if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGINT, _handler)
+        signal.signal(signal.SIGINT, _note)
         _Watch.installed, _Watch.signalled = True, False
+
+
+def install() -> None:
+    """Install the noting SIGINT handler (main thread of the command's process only); a
+    SIGINT noted since :func:`defer` is raised now, as ``KeyboardInterrupt``."""
+    if threading.current_thread() is threading.main_thread():
+        pending = _Watch.signalled
+        signal.signal(signal.SIGINT, _handler)
+        _Watch.installed, _Watch.signalled = True, pending
+        if pending:
+            raise KeyboardInterrupt
 
 
 def plugin_only() -> None:

@@ -27,3 +27,68 @@ def test_an_early_ctrl_c_is_one_line_and_130(tmp_path, delay):
     assert proc.returncode == 130, err[-2000:]
     assert "Traceback" not in err, err[-3000:]
     assert err.strip().splitlines()[-1].startswith("interrupted:")
+
+
+SWALLOWER = '''\
+"""A plugin whose import is slow and wraps it in a bare except, as some libraries do."""
+import time
+
+import pluggy
+
+try:
+    time.sleep(4)
+except:  # noqa: E722 - on purpose: it swallowed the user's Ctrl-C
+    pass
+
+hookimpl = pluggy.HookimplMarker("vpid_bench")
+
+
+@hookimpl
+def vpid_bench_register_optimizers(register):
+    pass
+'''
+
+PYPROJECT = """\
+[build-system]
+requires = ["setuptools>=68"]
+build-backend = "setuptools.build_meta"
+
+[project]
+name = "swallowing-plugin"
+version = "0.1"
+
+[project.entry-points.vpid_bench]
+swallower = "swallowing_plugin"
+"""
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory) -> Path:
+    src = tmp_path_factory.mktemp("src")
+    (src / "pyproject.toml").write_text(PYPROJECT)
+    (src / "swallowing_plugin.py").write_text(SWALLOWER)
+    target = tmp_path_factory.mktemp("site")
+    subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps",
+                    "--no-build-isolation", "--target", str(target), str(src)],
+                   check=True, capture_output=True, text=True)
+    return target
+
+
+def test_a_ctrl_c_during_a_plugins_import_is_not_swallowed(site, tmp_path):
+    """A Ctrl-C while a plugin imports (inside its bare ``except:``) stops the command with
+    one line and 130; it once went into the plugin's except, and the sweep ran on to exit 0."""
+    import os
+
+    env = {**os.environ, "PYTHONPATH": str(site), "MPLBACKEND": "Agg"}
+    env.pop("VPID_BENCH_DEBUG", None)
+    proc = subprocess.Popen(
+        [str(BIN / "vpid-bench"), "-m", "optimizer=random", "problem=functions", "runs=2",
+         "progress=false", "report=false", "hydra.sweep.dir=sweep"],
+        cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(2.5)  # inside the plugin's 4 s import
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err[-2000:]
+    assert "Traceback" not in err
+    assert err.strip().splitlines()[-1].startswith("interrupted:")
+    assert not (tmp_path / "sweep").exists()

@@ -288,6 +288,10 @@ def main(argv: Sequence[str] | None = None) -> None:
     """Console entry point ``vpid-bench``. Ctrl-C at any moment after the package's own
     import (about 0.1 s) is one line and status 130: while the heavy imports and the
     pre-flight run it once printed a 35-54-line traceback."""
+    if argv is None:  # the console command: a Ctrl-C while it starts is noted, not lost
+        from .. import interrupts
+
+        interrupts.defer()
     try:
         _main(argv)
     except KeyboardInterrupt:
@@ -307,17 +311,17 @@ def _main(argv: Sequence[str] | None) -> None:
     threading.excepthook = _thread_exception
     before = set(threading.enumerate())
     console = argv is None  # the console command, not a call from another program
-    if console:
-        from .. import interrupts
-
-        interrupts.install()
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         cmd = parse_command_line(argv)
-        registry = _load_registry()
+        registry = _load_registry()  # the plugins' imports: still deferred (see main)
         cmd = expand_suites(cmd, registry)
     except VpidBenchError as exc:
         _refuse(exc)
+    if console:
+        from .. import interrupts
+
+        interrupts.install()  # raises a Ctrl-C noted during the start-up
     if cmd.version:
         print_versions(registry)
         return
