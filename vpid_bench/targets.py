@@ -36,16 +36,11 @@ def certified_optima(job: Job, problem: Problem, root: Path | None = None) -> di
     ``root`` (default: those shipped with the package), matched as the report matches an
     optimum file (problem, instance id, data settings, dimension); runs without one are
     left out."""
-    from .report.archive import find_archives, read_archive
+    from .report.archive import load_all
     from .report.optima import OptimaIndex, match_optimum
 
-    optima = []
-    for folder in find_archives(root):
-        try:
-            archive = read_archive(folder)
-        except Exception:  # noqa: BLE001 - an unusable archive certifies nothing
-            continue
-        optima += [o for o in archive.optima if o.problem == job.problem_name]
+    archives, _ = load_all(root, {job.problem_name})  # an unusable archive certifies nothing
+    optima = [o for a in archives for o in a.optima if o.problem == job.problem_name]
     index = OptimaIndex(optima, [])
     names = [""] * problem.bounds.dim
     found = {}
