@@ -311,13 +311,10 @@ class Workers:
                 return PluginError(f"the optimizer's constructor did not return within "
                                    f"{limit:.0f} s (run_timeout_s + {GRACE_S:.0f} s; blocked "
                                    "in C or ignoring SIGALRM): its worker process was killed")
-            try:
-                reply = worker.conn.recv()
-            except (EOFError, OSError):
-                code = _exit_code(worker)
-                self._discard(worker)
-                return PluginError("the optimizer's constructor ended its worker process "
-                                   f"({describe_exit(code)})")
+            reply, ended = self._receive(worker)
+            if ended is not None:
+                return PluginError(f"the optimizer's constructor ended its worker process "
+                                   f"({ended})")
             if reply[0] == "phase":
                 deadline = None if limit is None else time.monotonic() + limit
             elif not _aside(reply):
@@ -353,20 +350,28 @@ class Workers:
         deadline = None if limit is None else time.monotonic() + limit
         busy[worker.conn] = _Busy(worker, list(runs), deadline, now_utc())
 
+    def _receive(self, worker: _Worker) -> tuple[Any, str | None]:
+        """The worker's next message, or ``(None, how it ended)`` when its process is gone
+        (it is then discarded): the one place both the constructor probe and the runs learn
+        that a worker died."""
+        try:
+            return worker.conn.recv(), None
+        except (EOFError, OSError):
+            ended = describe_exit(_exit_code(worker))
+            self._discard(worker)
+            return None, ended
+
     def _collect(self, job: Job, busy: dict[Connection, _Busy],
                  pending: deque[list[int]]) -> Iterator[RunOutcome]:
         deadlines = [b.deadline for b in busy.values() if b.deadline is not None]
         left = max(0.0, min(deadlines) - time.monotonic()) if deadlines else None
         for conn in wait(list(busy), timeout=left):
             b = busy[conn]
-            try:
-                msg = conn.recv()
-            except (EOFError, OSError):
+            msg, ended = self._receive(b.worker)
+            if ended is not None:
                 del busy[conn]
-                ended = describe_exit(_exit_code(b.worker))
-                cause = WorkerDiedError(f"its worker process ended ({ended})")
-                self._discard(b.worker)
-                yield from _lost(job, b, cause, pending)
+                yield from _lost(job, b, WorkerDiedError(f"its worker process ended ({ended})"),
+                                 pending)
                 continue
             yield from self._handle(job, conn, msg, busy)
         now = time.monotonic()
