@@ -332,6 +332,8 @@ def merge(records: Sequence[Mapping[str, Any]], archives: Iterable[Archive]) -> 
             by_problem.setdefault(r["problem"]["name"], []).append(r)
     for arch in archives:
         for problem in sorted(set(by_problem) & arch.problems):
+            if not problem.isidentifier():  # a registered name is one; never print another
+                continue
             added, refusal = _check_problem(arch, problem, by_problem[problem])
             if refusal:
                 out.refused.append(refusal)
