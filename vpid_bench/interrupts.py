@@ -38,8 +38,15 @@ def defer() -> None:
     ``KeyboardInterrupt`` could land inside a library's bare ``except:`` around an import,
     which swallowed it: the command then ran its whole sweep and exited 0."""
     if threading.current_thread() is threading.main_thread():
+        already = signal.getsignal(signal.SIGINT) is _note  # a note taken so far stays
         signal.signal(signal.SIGINT, _note)
-        _Watch.installed, _Watch.signalled = True, False
+        _Watch.installed, _Watch.signalled = True, _Watch.signalled and already
+
+
+def note() -> None:
+    """Record a SIGINT that arrived before :func:`defer` (the console command's first
+    module notes it while the package imports)."""
+    _Watch.signalled = True
 
 
 def install() -> None:

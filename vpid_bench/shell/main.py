@@ -285,9 +285,9 @@ def _failures(folder: Path | None, multirun: bool,
 
 
 def main(argv: Sequence[str] | None = None) -> None:
-    """Console entry point ``vpid-bench``. Ctrl-C at any moment after the package's own
-    import (about 0.1 s) is one line and status 130: while the heavy imports and the
-    pre-flight run it once printed a 35-54-line traceback."""
+    """The command ``vpid-bench`` (entered through ``vpid_bench_command.main``, which notes
+    a Ctrl-C while this package imports). Ctrl-C at any moment is one line and status 130:
+    while the heavy imports and the pre-flight run it once printed a 35-54-line traceback."""
     if argv is None:  # the console command: a Ctrl-C while it starts is noted, not lost
         from .. import interrupts
 
