@@ -55,7 +55,8 @@ class RunHits:
 def hit_times(evaluations: Sequence[float], gaps: Sequence[float],
               targets: Sequence[float] = TARGETS) -> tuple[float, ...]:
     """The first evaluation count at which ``gaps`` (relative gaps of the best-so-far after
-    each batch, in order) is at most each target; ``nan`` where never."""
+    each batch, in order) is at most each target; ``nan`` where never. Any cost aligned with
+    the trace works in place of ``evaluations`` (batch numbers, the run's seconds)."""
     ev = np.asarray(evaluations, float)
     g = np.asarray(gaps, float)
     out = []
@@ -88,20 +89,10 @@ def run_hits(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, A
         index = list(range(1, len(ev) + 1))
         out.append(RunHits(row["context"], row["algorithm"], max(budget, used), used,
                            hit_times(ev, gaps, targets), hit_times(index, gaps, targets),
-                           _at_hits(secs, gaps, targets), float(len(ev)),
+                           hit_times(secs, gaps, targets), float(len(ev)),
                            float(row.get("run_time_s", math.nan))))
     return out
 
-
-def _at_hits(values: Sequence[float], gaps: Sequence[float], targets: Sequence[float]
-             ) -> tuple[float, ...]:
-    """``values`` (one per trace point) at each target's first hit; ``nan`` where never."""
-    g = np.asarray(gaps, float)
-    out = []
-    for t in targets:
-        idx = np.flatnonzero(np.isfinite(g) & (g <= t))
-        out.append(float(values[idx[0]]) if idx.size else math.nan)
-    return tuple(out)
 
 
 def ecdf(runs: Sequence[RunHits], grid: Sequence[float]) -> np.ndarray:

@@ -32,6 +32,7 @@ import hashlib
 import io
 import json
 import math
+import statistics
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -460,11 +461,9 @@ SUMMARY_HEADERS = ["problem", "optimizer", "runs", "ok", "metric", "median_metri
 
 
 def _median(values: Sequence[float]) -> float:
-    vals = sorted(v for v in values if isinstance(v, (int, float)) and not math.isnan(v))
-    if not vals:
-        return math.nan
-    mid = len(vals) // 2
-    return vals[mid] if len(vals) % 2 else 0.5 * (vals[mid - 1] + vals[mid])
+    """The median of the numbers that are not NaN (NaN when none)."""
+    vals = [float(v) for v in values if isinstance(v, (int, float)) and not math.isnan(v)]
+    return statistics.median(vals) if vals else math.nan
 
 
 def summary_rows(rows: Sequence[Mapping[str, Any]]) -> list[list[Any]]:
