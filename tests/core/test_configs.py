@@ -104,15 +104,11 @@ def test_a_yaml_preset_extends_a_registered_problem(compose_config, registry):
 
 
 def test_the_folder_name_leaves_out_exactly_the_operational_keys():
-    """conf/config.yaml's exclude_keys (what a job folder's name leaves out) and
+    """The spec node's exclude_keys (what a job folder's name leaves out) and
     spec.OPERATIONAL_KEYS (what may differ between a sweep and its resume) are one list
     written twice; a key added to one only (as archive nearly was) fails here."""
-    from pathlib import Path
-
-    from omegaconf import OmegaConf
-
+    from vpid_bench.shell.config_store import spec_node
     from vpid_bench.spec import OPERATIONAL_KEYS
 
-    conf = OmegaConf.load(Path(__file__).parents[2] / "conf" / "config.yaml")
-    excluded = conf.hydra.job.config.override_dirname.exclude_keys
+    excluded = spec_node()["hydra"]["job"]["config"]["override_dirname"]["exclude_keys"]
     assert sorted(excluded) == sorted(OPERATIONAL_KEYS)

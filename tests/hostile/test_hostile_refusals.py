@@ -198,29 +198,3 @@ def test_quoted_sweep_values_are_accepted():
     planned = plan_of(["-m", "optimizer=de1", "optimizer.bounds='clip',reflect", *FUNCTIONS])
     assert [j.params.bounds for j in planned.jobs] == ["clip", "reflect"]
     assert len({d.name for d in planned.job_dirs}) == 2
-
-
-def test_a_config_dir_whose_config_yaml_would_be_shadowed_is_refused(in_tmp, capsys):
-    """-cd DIR with the user's own config.yaml was silently ignored (the shipped config.yaml
-    comes first in Hydra's search path): runs: 3 gave 30 runs. Now one line, exit 2; the same
-    file under another name with -cn is honoured."""
-    folder = in_tmp / "mine"
-    folder.mkdir()
-    text = ("defaults:\n  - vpid_bench_spec\n  - problem: functions\n  - optimizer: random\n"
-            "  - _self_\nruns: 3\nprogress: false\nreport: false\n")
-    (folder / "config.yaml").write_text(text)
-    code, err = main_in_process(["-cd", str(folder), "problem.iterations=2"], capsys)
-    assert code == 2 and err.startswith(f"error: --config-dir='{folder}' is not allowed: a "
-                                        "folder whose config.yaml the shipped config.yaml")
-    code, err = main_in_process(["-cd", str(in_tmp / "nosuch")], capsys)
-    assert code == 2 and "an existing folder" in err
-    (folder / "config.yaml").rename(folder / "mine.yaml")
-    code, err = main_in_process(["-cd", str(folder), "-cn", "mine", "problem.iterations=2",
-                                 "hydra.run.dir=out"], capsys)
-    assert code == 0, err
-    assert len(list((in_tmp / "out" / "records").glob("run-*.json"))) == 3
-    # a custom config the checks refuse: its error line, and exit 1 (it exited 0)
-    (folder / "bad.yaml").write_text(text.replace("runs: 3", "runs: abc"))
-    code, err = main_in_process(["-cd", str(folder), "-cn", "bad", "hydra.run.dir=out2"],
-                                capsys)
-    assert code == 1 and "error: runs='abc' is not allowed: an integer" in err

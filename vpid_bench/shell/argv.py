@@ -10,11 +10,43 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 from collections.abc import Sequence
 
 from ..errors import ConfigError
 
 RESUME_FLAG = "--resume"
+
+
+#: The shipped configs' place in Hydra's search path.
+SHIPPED_CONFIGS = "pkg://vpid_bench.conf"
+
+
+@dataclasses.dataclass(frozen=True)
+class ConfigSource:
+    """Where the primary config comes from, resolved from ``-cp``/``-cn``/``-cd``: ``path``
+    the folder (absolute) or package (``pkg://``) that holds it (None: the shipped
+    :data:`SHIPPED_CONFIGS`), ``name`` its name (None: ``config``), and ``search`` one more
+    entry of Hydra's search path after it (a ``-cd`` folder, or the shipped configs when
+    the primary config is the user's). The pre-flight and Hydra's run are both set up from
+    it, so they compose the same config."""
+
+    path: str | None = None
+    name: str | None = None
+    search: str | None = None
+
+    def search_override(self) -> list[str]:
+        """The override that puts :attr:`search` in Hydra's search path (public API:
+        ``hydra.searchpath``), or nothing."""
+        if self.search is None:
+            return []
+        quoted = self.search.replace("\\", "\\\\").replace('"', '\\"')
+        return [f'hydra.searchpath=["{quoted}"]']
+
+    def hydra_flags(self) -> list[str]:
+        """Hydra's flags for this source (folders absolute)."""
+        return ([f"--config-path={self.path}"] * (self.path is not None)
+                + [f"--config-name={self.name}"] * (self.name is not None))
 
 
 @dataclasses.dataclass
@@ -25,9 +57,14 @@ class CommandLine:
     multirun: bool
     resume: str | None  # None: no --resume; "": find the folder; else the folder given
     version: bool
-    custom_config: bool  # --config-name/--config-path/--config-dir: a config we do not ship
     info: str | None  # the information-only flag used (--help, --cfg, ...), else None
-    hydra_args: list[str]  # the command line for Hydra (ours removed)
+    hydra_args: list[str]  # the command line for Hydra (ours removed, folders made absolute)
+    config: ConfigSource = dataclasses.field(default_factory=ConfigSource)
+
+    @property
+    def custom_config(self) -> bool:
+        """A config we do not ship (--config-name, --config-path or --config-dir)."""
+        return self.config != ConfigSource()
 
 
 class _Parser(argparse.ArgumentParser):
@@ -59,22 +96,48 @@ def _parser(argv: Sequence[str]) -> _Parser:
     return p
 
 
-def _check_config_dir(config_dir: str | None, name: str | None, path: str | None) -> None:
-    """``-cd DIR`` adds DIR to Hydra's search path *after* the shipped configs, so a
-    ``config.yaml`` there (the name asked for when ``-cn`` is not given) is silently shadowed
-    by the shipped one: once the user's ``runs: 3`` gave 30 runs. Refused in one line."""
-    import os
+def _config_source(args: argparse.Namespace, overrides: Sequence[str]) -> ConfigSource:
+    """The config source of ``-cp``/``-cn``/``-cd``; folders must exist and are read from
+    the current folder (Hydra reads a relative ``-cp`` from the folder of the Python file that
+    declares the app, inside the installed package: meaningless to a user).
 
-    if config_dir is None or path is not None:
-        return
-    if not os.path.isdir(config_dir):
-        raise ConfigError("--config-dir", config_dir, "an existing folder")
-    wanted = f"{name or 'config'}.yaml"
-    if wanted == "config.yaml" and os.path.isfile(os.path.join(config_dir, wanted)):
-        raise ConfigError("--config-dir", config_dir,
-                          "a folder whose config.yaml the shipped config.yaml would shadow "
-                          "(Hydra looks there last): rename yours and pass -cn <its name>, "
-                          "or use -cp <folder>")
+    ``-cd DIR`` comes *before* the shipped configs: a ``DIR/<name>.yaml`` (``config.yaml``
+    without ``-cn``) is the primary config, the shipped configs searched after DIR. Hydra's
+    own ``-cd`` searches DIR last, so the shipped ``config.yaml`` silently won over the
+    user's (once ``runs: 3`` gave 30 runs). Without such a file, DIR adds choices (e.g.
+    ``DIR/optimizer/mine.yaml``) to the shipped config."""
+    def folder(flag: str, value: str | None) -> str | None:
+        if value is None or value.startswith("pkg://"):
+            return value
+        if not os.path.isdir(value):
+            raise ConfigError(flag, value, "an existing folder")
+        return os.path.abspath(value)
+
+    path = folder("--config-path", args.config_path)
+    config_dir = folder("--config-dir", args.config_dir)
+    name = args.config_name
+    if config_dir is None:
+        return ConfigSource(path, name)
+    if any(o.lstrip("+~").startswith("hydra.searchpath=") for o in overrides):
+        raise ConfigError("hydra.searchpath", "", "not with -cd (vpid-bench sets it from -cd); "
+                          "list your folders in your config's hydra.searchpath instead")
+    if path is None and os.path.isfile(os.path.join(config_dir, f"{name or 'config'}.yaml")):
+        return ConfigSource(config_dir, name, SHIPPED_CONFIGS)
+    return ConfigSource(path, name, "file://" + config_dir)
+
+
+def _without_config_flags(hydra_args: Sequence[str]) -> list[str]:
+    """The command line without ``-cp``/``-cn``/``-cd`` and their values."""
+    flags = ("--config-path", "-cp", "--config-name", "-cn", "--config-dir", "-cd")
+    out, skip = [], False
+    for arg in hydra_args:
+        if skip:
+            skip = False
+        elif arg in flags:
+            skip = True
+        elif not arg.startswith(tuple(f + "=" for f in flags)):
+            out.append(arg)
+    return out
 
 
 def parse_command_line(argv: Sequence[str]) -> CommandLine:
@@ -105,21 +168,21 @@ def parse_command_line(argv: Sequence[str]) -> CommandLine:
     if args.run and args.multirun:
         raise ConfigError("--run", True, "either --run or --multirun, not both")
     if args.shell_completion:
-        import os
-
         query = [o for o in args.overrides or [] if o.startswith("query=")]
         if query and "COMP_LINE" not in os.environ:
             raise ConfigError("-sc", query[0], "install=bash (or zsh, fish) to install "
                               "completion; query= is what the installed completion runs")
     if resume is not None and (info or args.version):
         raise ConfigError(RESUME_FLAG, resume or True, "a command that runs jobs")
-    _check_config_dir(args.config_dir, args.config_name, args.config_path)
+    source = _config_source(args, args.overrides or [])
+    hydra_args = [*source.hydra_flags(), *_without_config_flags(hydra_args),
+                  *source.search_override()]
     return CommandLine(
         overrides=list(args.overrides or []),
         multirun=bool(args.multirun),
         resume=resume,
         version=bool(args.version),
-        custom_config=bool(args.config_name or args.config_path or args.config_dir),
         info=info,
         hydra_args=hydra_args,
+        config=source,
     )

@@ -2,13 +2,20 @@
 
 Called once at start-up (never at import). The job spec's defaults become the primary
 config's top-level keys (``conf/config.yaml`` lists ``vpid_bench_spec`` in its defaults), so
-the keys are declared once, in :class:`vpid_bench.spec.JobSpec`. Each optimizer becomes a choice
-of the ``optimizer`` group and each problem of the ``problem`` group, so ``optimizer=<name>``
-works for a third-party optimizer that ships no YAML. An optimizer's node leaves out the
-protocol keys (``ps``, ``iterations``): the job copies them from the problem.
+the keys are declared once, in :class:`vpid_bench.spec.JobSpec`. The same node carries
+Hydra's settings for vpid-bench (``hydra_settings.yaml`` beside this module: the report
+callback, the job folders' names, the logging), so a user's own config (``-cp``/``-cd``/
+``-cn``) that lists ``vpid_bench_spec`` first behaves like the shipped one. Each optimizer
+becomes a choice of the ``optimizer`` group and each problem of the ``problem`` group, so
+``optimizer=<name>`` works for a third-party optimizer that ships no YAML. An optimizer's
+node leaves out the protocol keys (``ps``, ``iterations``): the job copies them from the
+problem.
 """
 
 from __future__ import annotations
+
+import importlib.resources
+from typing import Any
 
 from ..params import dataclass_defaults, hydra_node
 from ..plugins import Registry
@@ -16,6 +23,8 @@ from ..problem import FILLED_PARAMS
 from ..spec import JobSpec
 
 SPEC_NODE = "vpid_bench_spec"
+#: Hydra's settings (a YAML file of this package), merged into the spec node.
+HYDRA_SETTINGS = "hydra_settings.yaml"
 #: Hydra's default job logging without its file handler: Hydra configures logging before our
 #: task runs, so a job folder it cannot write would stop the whole sweep; the task opens the
 #: job's log file itself (``vpid_bench.log``, see :mod:`.main`), inside its error handling.
@@ -37,7 +46,7 @@ def register_configs(registry: Registry) -> None:
     cs = ConfigStore.instance()
     cs.store(group="hydra/job_logging", name="vpid_bench", node=JOB_LOGGING,
              provider="vpid-bench")
-    cs.store(name=SPEC_NODE, node=dataclass_defaults(JobSpec), provider="vpid-bench")
+    cs.store(name=SPEC_NODE, node=spec_node(), provider="vpid-bench")
     for name, cls in sorted(registry.optimizers.items()):
         cs.store(group="optimizer", name=name,
                  node=hydra_node(cls.Params, name, exclude=FILLED_PARAMS),
@@ -45,3 +54,14 @@ def register_configs(registry: Registry) -> None:
     for name, cls in sorted(registry.problems.items()):
         cs.store(group="problem", name=name, node=hydra_node(cls.Config, name),
                  provider=registry.owner("problem", name))
+
+
+def spec_node() -> dict[str, Any]:
+    """The ``vpid_bench_spec`` node: every top-level key at its default, Hydra's settings for
+    vpid-bench and the job logging without a file handler (see :data:`JOB_LOGGING`)."""
+    from omegaconf import OmegaConf
+
+    text = importlib.resources.files(__package__).joinpath(HYDRA_SETTINGS).read_text()
+    hydra = OmegaConf.to_container(OmegaConf.create(text), resolve=False)["hydra"]
+    return {"defaults": [{"override hydra/job_logging": "vpid_bench"}, "_self_"],
+            **dataclass_defaults(JobSpec), "hydra": hydra}

@@ -329,8 +329,8 @@ def _main(argv: Sequence[str] | None) -> None:
     register_configs(registry)
     ensure_job_dir_resolver()
     task = JobTask(registry)
-    if cmd.custom_config or cmd.info in ("--help", "--hydra-help", "--shell-completion"):
-        _run_hydra(cmd.hydra_args, task)  # a custom config's jobs, or Hydra's information
+    if cmd.info in ("--help", "--hydra-help", "--shell-completion"):
+        _run_hydra(cmd.hydra_args, task)  # Hydra's information
         sys.exit(1 if task.not_ok else 0)
     try:
         plan = preflight.plan(cmd, registry)

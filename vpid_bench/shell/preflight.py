@@ -32,9 +32,11 @@ from ..errors import ConfigError, VpidBenchError
 from ..plugins import Registry
 from ..problem import FILLED_PARAMS
 from ..spec import TOP_LEVEL_KEYS, Job, parse_job
-from .argv import CommandLine
+from .argv import CommandLine, ConfigSource
 
 GROUPS = ("problem", "optimizer")
+#: The shipped config (no -cp, -cn, -cd).
+SHIPPED = ConfigSource()
 #: The most jobs one command may start (a typo in a range() should not plan a million).
 MAX_JOBS = 10_000
 
@@ -79,11 +81,14 @@ def _raw_value(override: Any) -> str:
     return str(override.input_line).split("=", 1)[-1]
 
 
-def _group_names(group: str, registry: Registry) -> list[str]:
+def _group_names(group: str, registry: Registry, folders: Sequence[str] = ()) -> list[str]:
+    """The choices of ``group``: registered plugins, shipped YAML presets and the YAML files
+    of a user's config folders (``<folder>/<group>/<name>.yaml``)."""
     from .presets import yaml_presets
 
     table = registry.problems if group == "problem" else registry.optimizers
-    return sorted({*table, *yaml_presets(group)})
+    own = {f.stem for folder in folders for f in Path(folder, group).glob("*.yaml")}
+    return sorted({*table, *yaml_presets(group), *own})
 
 
 def _sweep_size(override: Any) -> int | None:
@@ -102,8 +107,8 @@ def _sweep_size(override: Any) -> int | None:
     return None
 
 
-def _axis(o: Any, multirun: bool, registry: Registry, custom_sweeper: bool
-          ) -> list[str] | None:
+def _axis(o: Any, multirun: bool, registry: Registry, custom_sweeper: bool,
+          folders: Sequence[str] = ()) -> list[str] | None:
     """The override strings one override contributes to the sweep (``None``: none, an
     optimizing sweeper chooses its values)."""
     from hydra.core.override_parser.types import Glob
@@ -121,10 +126,11 @@ def _axis(o: Any, multirun: bool, registry: Registry, custom_sweeper: bool
         if o.key_or_group not in GROUPS:
             raise ConfigError(o.key_or_group, _raw_value(o), "glob() chooses among "
                               "problem or optimizer names")
-        names = value.filter(_group_names(o.key_or_group, registry))
+        choices = _group_names(o.key_or_group, registry, folders)
+        names = value.filter(choices)
         if not names:
             raise ConfigError(o.key_or_group, _raw_value(o), "a pattern matching one of "
-                              + ", ".join(_group_names(o.key_or_group, registry)))
+                              + ", ".join(choices))
         return [f"{key}={n}" for n in names]
     size = _sweep_size(o)
     if size is None:
@@ -138,18 +144,19 @@ def _axis(o: Any, multirun: bool, registry: Registry, custom_sweeper: bool
 
 
 def expand_points(parsed: list[Any], multirun: bool, registry: Registry,
-                  custom_sweeper: bool) -> list[list[str]]:
-    """The override strings of every job, in the order Hydra's basic sweeper runs them."""
+                  custom_sweeper: bool, folders: Sequence[str] = ()) -> list[list[str]]:
+    """The override strings of every job, in the order Hydra's basic sweeper runs them
+    (``folders``: a user's config folders, whose ``<group>/*.yaml`` are choices too)."""
 
     # each override with its own axis (an optimizing sweeper's interval() has none: zipping
     # the overrides with the shorter list of axes once checked the wrong values)
     pairs = [(o, a) for o in parsed
-             if (a := _axis(o, multirun, registry, custom_sweeper)) is not None]
+             if (a := _axis(o, multirun, registry, custom_sweeper, folders)) is not None]
     axes = [a for _, a in pairs]
     for o, axis in pairs:
         if o.key_or_group in GROUPS and not o.is_delete():
             for text in axis:
-                _check_choice(o.key_or_group, text.split("=", 1)[1], registry)
+                _check_choice(o.key_or_group, text.split("=", 1)[1], registry, folders)
     count = math.prod(len(a) for a in axes)
     if count == 0:
         empty = next(o for o, a in pairs if not a)
@@ -160,10 +167,11 @@ def expand_points(parsed: list[Any], multirun: bool, registry: Registry,
     return [list(p) for p in itertools.product(*axes)]
 
 
-def _check_choice(group: str, name: str, registry: Registry) -> None:
+def _check_choice(group: str, name: str, registry: Registry, folders: Sequence[str] = ()
+                  ) -> None:
     """A problem or optimizer name must be registered (or a YAML preset); the error lists
     the known names and the plugins that failed to load."""
-    names = _group_names(group, registry)
+    names = _group_names(group, registry, folders)
     if name.strip("'\"") in names:
         return
     allowed = "one of " + ", ".join(names) if names else "none is registered"
@@ -235,6 +243,22 @@ def _unknown_key(cfg: Any, key: str, value: Any) -> ConfigError:
     return ConfigError(key, value, "a key of the config")
 
 
+def _yaml_error(exc: BaseException) -> ConfigError | None:
+    """A config file that is not YAML, as one line naming the file and the place (None:
+    ``exc`` is not such an error)."""
+    import yaml
+
+    cause: BaseException | None = exc
+    while cause is not None and not isinstance(cause, yaml.MarkedYAMLError):
+        cause = cause.__cause__ or cause.__context__
+    if cause is None:
+        return None
+    mark = cause.problem_mark or cause.context_mark
+    where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+    return ConfigError("config file", getattr(mark, "name", "?"),
+                       f"YAML ({cause.problem or cause.context}{where})")
+
+
 def _hydra_error(exc: BaseException) -> ConfigError:
     """A Hydra or OmegaConf composition error as one ConfigError line (the innermost cause
     that names a key is used)."""
@@ -244,8 +268,14 @@ def _hydra_error(exc: BaseException) -> ConfigError:
         missing = str(getattr(exc, "missing_cfg_file", "") or "")
         group, _, name = missing.rpartition("/")
         options = sorted(getattr(exc, "options", None) or [])
+        if "Cannot find primary config" in str(exc):
+            return ConfigError("--config-name", missing, "the name of a .yaml file (without "
+                               ".yaml) in the -cp or -cd folder")
         if group and options:
             return ConfigError(group, name, "one of " + ", ".join(options))
+    yaml_error = _yaml_error(exc)
+    if yaml_error is not None:
+        return yaml_error
     cause: BaseException | None = exc
     while cause is not None:
         key = getattr(cause, "full_key", None)
@@ -261,21 +291,48 @@ def _hydra_error(exc: BaseException) -> ConfigError:
     return ConfigError("override", "", text)
 
 
-def _compose(overrides: list[str], hydra: bool) -> Any:
+def _compose(overrides: list[str], hydra: bool, source: ConfigSource = SHIPPED) -> Any:
     from hydra import compose
     from hydra.errors import HydraException
     from omegaconf.errors import OmegaConfBaseException
 
+    overrides = [*overrides, *source.search_override()]  # as on Hydra's command line
     try:
-        return compose(config_name="config", overrides=overrides, return_hydra_config=hydra)
+        return compose(config_name=source.name or "config", overrides=overrides,
+                       return_hydra_config=hydra)
     except (HydraException, OmegaConfBaseException) as exc:
         raise _hydra_error(exc) from None
 
 
-def check_points(points: list[list[str]], registry: Registry) -> tuple[list[Job], Any]:
-    """Compose and parse every point; returns the jobs and the first point's full config
-    (with its ``hydra`` node, for the output folder)."""
-    from hydra import initialize_config_module
+def _initialize(source: ConfigSource) -> Any:
+    """Hydra's compose API set up as ``hydra.main`` sets itself up for this command: the
+    shipped ``pkg://vpid_bench.conf`` or the folder (or package) of the user's config."""
+    from hydra import initialize_config_dir, initialize_config_module
+
+    if source.path is None:
+        return initialize_config_module(version_base="1.3", config_module="vpid_bench.conf")
+    if source.path.startswith("pkg://"):
+        return initialize_config_module(version_base="1.3",
+                                        config_module=source.path[len("pkg://"):])
+    return initialize_config_dir(version_base="1.3", config_dir=source.path)
+
+
+def _check_has_spec(full: Any, source: ConfigSource) -> None:
+    """A user's config must list ``vpid_bench_spec`` in its defaults: it brings every
+    top-level key's default, the report and the job folders' names."""
+    if source == SHIPPED or all(k in full for k in TOP_LEVEL_KEYS):
+        return
+    raise ConfigError("--config-name", source.name or "config",
+                      "a config whose defaults list starts with vpid_bench_spec (e.g. "
+                      "defaults: [vpid_bench_spec, {problem: functions}, {optimizer: random}, "
+                      "_self_]; docs/sweeps.md)")
+
+
+def check_points(points: list[list[str]], registry: Registry,
+                 source: ConfigSource = SHIPPED) -> tuple[list[Job], Any]:
+    """Compose and parse every point (from the config ``source``: the shipped one by
+    default); returns the jobs and the first point's full config (with its ``hydra`` node,
+    for the output folder)."""
     from omegaconf import OmegaConf, open_dict
     from omegaconf.errors import OmegaConfBaseException
 
@@ -283,12 +340,13 @@ def check_points(points: list[list[str]], registry: Registry) -> tuple[list[Job]
     base: dict[tuple[str, ...], Any] = {}
     first_full = None
     jobs = []
-    with initialize_config_module(version_base="1.3", config_module="vpid_bench.conf"):
+    with _initialize(source):
         for point in points:
             parsed = parser.parse_overrides(point)
             structural = tuple(o.input_line for o in parsed if _is_structural(o))
             if structural not in base:
-                full = _compose(list(structural), hydra=True)
+                full = _compose(list(structural), hydra=True, source=source)
+                _check_has_spec(full, source)
                 if first_full is None:
                     first_full = full
                 task = OmegaConf.masked_copy(full, [k for k in full if k != "hydra"])
@@ -403,9 +461,11 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
                               f"with {group}=<name>")
     custom_sweeper = any(o.key_or_group == "hydra/sweeper" and o.value() != "basic"
                          for o in parsed)
-    points = expand_points(parsed, cmd.multirun, registry, custom_sweeper)
+    folders = [f.removeprefix("file://") for f in (cmd.config.path, cmd.config.search)
+               if f is not None and not f.startswith("pkg://")]
+    points = expand_points(parsed, cmd.multirun, registry, custom_sweeper, folders)
     try:
-        jobs, full = check_points(points, registry)
+        jobs, full = check_points(points, registry, cmd.config)
     except VpidBenchError:
         raise
     except Exception as exc:  # noqa: BLE001 - anything else Hydra raises: one line too
@@ -420,11 +480,29 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
         print(f"resume: continuing {folder}", file=sys.stderr)
     else:
         folder = output_dir(full, cmd.multirun)
-    hydra_args = [a for a in cmd.hydra_args if not a.startswith(key + "=")]
+    hydra_args = [a for a in _globs_listed(cmd.hydra_args, parsed, registry, folders)
+                  if not a.startswith(key + "=")]
     hydra_args.append(f"{key}={_quote(str(folder))}")
     job_dirs = (planned_job_dirs(points, full, folder)
                 if cmd.multirun and not custom_sweeper else [])
     return Plan(hydra_args, folder, cmd.multirun, jobs, points, job_dirs)
+
+
+def _globs_listed(hydra_args: Sequence[str], parsed: Sequence[Any], registry: Registry,
+                  folders: Sequence[str]) -> list[str]:
+    """The command line with each ``glob()`` over problem or optimizer names replaced by the
+    names it matched here. Hydra's sweeper lists a group's choices before it reads
+    ``hydra.searchpath`` (how a ``-cd`` folder is passed), so it would miss that folder's
+    choices and run fewer jobs than were planned and checked."""
+    from hydra.core.override_parser.types import Glob
+
+    listed = {}
+    for o in parsed:
+        if o.key_or_group in GROUPS and isinstance(o.value(), Glob):
+            names = o.value().filter(_group_names(o.key_or_group, registry, folders))
+            listed[o.input_line] = f"{o.get_key_element()}=" + ",".join(
+                n if n.isidentifier() else _quote(n) for n in names)
+    return [listed.get(a, a) for a in hydra_args]
 
 
 def refuse_test_instances(jobs: Sequence[Job]) -> None:
