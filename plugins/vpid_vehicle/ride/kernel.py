@@ -10,6 +10,14 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from .blocks import load_block
+
+#: Candidates per block of :func:`run_table_loops` (as in :mod:`.unrolled`).
+LANES = 4
+#: The compiled Newmark path: no GIL, cached, and numpy's floating-point semantics (a
+#: singular matrix gives inf/NaN, never an exception).
+_OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
+
 
 @numba.njit(cache=True)
 def run(A, U, V, Ox, Ou, u, y):  # pragma: no cover - compiled
@@ -92,3 +100,176 @@ def mf_single_track(P, Iz, delta, dt, m, lf, lr, vx, E, y):  # pragma: no cover 
             k4v, k4r, _ = _rates(vy + dt * k3v, r + dt * k3r, d1, P, i, m, Iz[i], lf, lr, vx, E)
             vy += dt / 6.0 * (k1v + 2 * k2v + 2 * k3v + k4v)
             r += dt / 6.0 * (k1r + 2 * k2r + 2 * k3r + k4r)
+
+
+@numba.njit(**_OPTS)
+def _inverse(S, out, work):  # pragma: no cover - compiled
+    """``out`` = the inverse of the square ``S`` by Gauss-Jordan with partial pivoting
+    (``work``: scratch of S's shape). A singular ``S`` gives inf/NaN, never an exception."""
+    d = S.shape[0]
+    work[:, :] = S
+    out[:, :] = 0.0
+    for i in range(d):
+        out[i, i] = 1.0
+    for col in range(d):
+        piv = col
+        for row in range(col + 1, d):
+            if abs(work[row, col]) > abs(work[piv, col]):
+                piv = row
+        if piv != col:
+            for m in range(d):
+                work[col, m], work[piv, m] = work[piv, m], work[col, m]
+                out[col, m], out[piv, m] = out[piv, m], out[col, m]
+        inv = 1.0 / work[col, col]
+        for m in range(d):
+            work[col, m] *= inv
+            out[col, m] *= inv
+        for row in range(d):
+            if row != col:
+                f = work[row, col]
+                if f != 0.0:
+                    for m in range(d):
+                        work[row, m] -= f * work[col, m]
+                        out[row, m] -= f * out[col, m]
+
+
+@numba.njit(**_OPTS)
+def newmark_table(M, C, K, F, Pa, Pv, Pq, Pu, dt, gamma, beta, u0, T, w0):  # pragma: no cover
+    """The shifted recurrence of Newmark-beta (see :func:`.linear.newmark`) per candidate:
+    with ``w_k = x_k - V u_k``, ``w_{k+1} = A w_k + (A V + U) u_k`` and
+    ``y_k = Ox w_k + (Ox V + Ou) u_k``. Writes ``T[c]`` (rows: ``s = 2d`` state rows then
+    ``p`` outputs; terms: ``s`` state coefficients then ``r`` input coefficients) and
+    ``w0[c] = -V u_0`` (the system starts at rest). Arrays as in :class:`.linear.LinearSystem`
+    with a leading axis of ``n`` or 1 (shared by every candidate)."""
+    n, d = T.shape[0], M.shape[1]
+    r, p, s = F.shape[2], Pa.shape[1], 2 * M.shape[1]
+    Minv, Sinv, work = np.empty((d, d)), np.empty((d, d)), np.empty((d, d))
+    G = np.empty((d, s))  # a = G x + H u
+    H = np.empty((d, r))
+    Smat = np.empty((d, d))
+    SKC = np.empty((d, s))  # Sinv [K C]
+    SF = np.empty((d, r))  # Sinv F
+    P = np.empty((s, s + r))  # predictor [P Q]: x_p = P x + Q u
+    Z = np.empty((d, s + r))  # Sinv [K C] [P Q]
+    V = np.empty((s, r))
+    h2, c1, c2 = beta * dt * dt, (0.5 - beta) * dt * dt, (1.0 - gamma) * dt
+    for c in range(n):
+        cm, cc, ck, cf = c % M.shape[0], c % C.shape[0], c % K.shape[0], c % F.shape[0]
+        ca, cv, cq, cu = c % Pa.shape[0], c % Pv.shape[0], c % Pq.shape[0], c % Pu.shape[0]
+        _inverse(M[cm], Minv, work)
+        for i in range(d):
+            for j in range(d):
+                Smat[i, j] = M[cm, i, j] + gamma * dt * C[cc, i, j] + h2 * K[ck, i, j]
+        _inverse(Smat, Sinv, work)
+        for i in range(d):
+            for j in range(d):
+                gk, gc, sk, sc = 0.0, 0.0, 0.0, 0.0
+                for m in range(d):
+                    gk += Minv[i, m] * K[ck, m, j]
+                    gc += Minv[i, m] * C[cc, m, j]
+                    sk += Sinv[i, m] * K[ck, m, j]
+                    sc += Sinv[i, m] * C[cc, m, j]
+                G[i, j], G[i, d + j] = -gk, -gc
+                SKC[i, j], SKC[i, d + j] = sk, sc
+            for j in range(r):
+                h, sf = 0.0, 0.0
+                for m in range(d):
+                    h += Minv[i, m] * F[cf, m, j]
+                    sf += Sinv[i, m] * F[cf, m, j]
+                H[i, j], SF[i, j] = h, sf
+        # predictor: [q + dt v + c1 a; v + c2 a] with a = G x + H u
+        for i in range(d):
+            for j in range(s):
+                P[i, j] = c1 * G[i, j] + (1.0 if j == i else 0.0) + (dt if j == d + i else 0.0)
+                P[d + i, j] = c2 * G[i, j] + (1.0 if j == d + i else 0.0)
+            for j in range(r):
+                P[i, s + j], P[d + i, s + j] = c1 * H[i, j], c2 * H[i, j]
+        # corrector: x = x_p - D Sinv [K C] x_p + D Sinv F u', D = [beta dt^2 I; gamma dt I]
+        for i in range(d):
+            for j in range(s + r):
+                t = 0.0
+                for m in range(s):
+                    t += SKC[i, m] * P[m, j]
+                Z[i, j] = t
+        for i in range(s):
+            scale = h2 if i < d else gamma * dt
+            for j in range(s + r):  # [A U]
+                T[c, i, j] = P[i, j] - scale * Z[i % d, j]
+            for j in range(r):
+                V[i, j] = scale * SF[i % d, j]
+        # outputs y = Pa a + Pv v + Pq q + Pu u = Ox x + Ou u
+        for j in range(p):
+            for m in range(s):
+                t = Pq[cq, j, m] if m < d else Pv[cv, j, m - d]
+                for i in range(d):
+                    t += Pa[ca, j, i] * G[i, m]
+                T[c, s + j, m] = t
+            for i in range(r):
+                t = Pu[cu, j, i]
+                for m in range(d):
+                    t += Pa[ca, j, m] * H[m, i]
+                T[c, s + j, s + i] = t  # Ou, shifted below
+        # the shift: input terms A V + U (state rows), Ox V + Ou (outputs)
+        for row in range(s + p):
+            for i in range(r):
+                t = 0.0
+                for m in range(s):
+                    t += T[c, row, m] * V[m, i]
+                T[c, row, s + i] += t
+        for m in range(s):
+            t = 0.0
+            for i in range(r):
+                t += V[m, i] * u0[i]
+            w0[c, m] = -t
+
+
+@numba.njit(**_OPTS)
+def _step_loops(blk, W, s, p, st):  # pragma: no cover - compiled
+    """One step of every lane of a block, as loops (see :func:`run_table_loops`). The next
+    state is built in the scratch slots after the outputs, then copied."""
+    scratch = st + (s + p) * LANES
+    for lane in range(LANES):
+        for row in range(s + p):
+            o = row * W + lane
+            t = 0.0
+            for m in range(s):
+                t += blk[o + m * LANES] * blk[st + m * LANES + lane]
+            if row < s:
+                blk[scratch + row * LANES + lane] = t
+            else:
+                blk[st + row * LANES + lane] = t
+        for a in range(s):
+            blk[st + a * LANES + lane] = blk[scratch + a * LANES + lane]
+
+
+@numba.njit(**_OPTS)
+def run_table_loops(T, w0, u, y):  # pragma: no cover - compiled
+    """The outputs ``y[j, k, c]`` of the recurrence tabled by :func:`newmark_table` (``T``
+    ``(n, s + p, s + r)``, ``w0`` ``(n, s)``) driven by ``u`` ``(N, r)``: the time loops of
+    :mod:`.unrolled` for any sizes, as loops. Slower (the compiler cannot keep a state of
+    run-time size in registers) and each dot product summed in order, not pairwise; the
+    block layout is the same."""
+    n, R, S = T.shape
+    s = w0.shape[1]
+    p, r = R - s, S - s
+    W = S * LANES
+    st = R * W
+    blk = np.zeros(st + (R + s) * LANES)  # table, state and output slots, scratch
+    for j0 in range(0, n, LANES):
+        load_block(T, w0, j0, blk, LANES, st)
+        for k in range(u.shape[0]):
+            _step_loops(blk, W, s, p, st)
+            nonzero = False
+            for i in range(r):
+                nonzero = nonzero or u[k, i] != 0.0
+            if nonzero:  # input terms after the state terms (a skipped term would add 0)
+                for row in range(R):
+                    for lane in range(LANES):
+                        o = row * W + s * LANES + lane
+                        t = blk[st + row * LANES + lane]
+                        for i in range(r):
+                            t += blk[o + i * LANES] * u[k, i]
+                        blk[st + row * LANES + lane] = t
+            for j in range(p):
+                for lane in range(min(LANES, n - j0)):
+                    y[j, k, j0 + lane] = blk[st + (s + j) * LANES + lane]

@@ -14,7 +14,12 @@ Two discretisations of the same system, both a linear recurrence
 * :func:`exact_foh` (the record): the exact solution for an input that is linear between
   samples (first-order hold), from one matrix exponential per candidate.
 
-One compiled kernel (:func:`simulate`) iterates either. Units are SI throughout.
+One compiled kernel (:func:`simulate`) iterates either. The fitted model's path,
+:func:`newmark_outputs`, is compiled end to end instead (the Newmark table per candidate, then
+a time loop written out for the system's sizes, :mod:`.unrolled`): the same outputs to
+rounding, at the speed of the paper's hand-written kernel (``benchmarks/bench_ride_core.py``).
+:func:`newmark` stays as the plain statement of the scheme the tests hold it to. Units are SI
+throughout.
 """
 
 from __future__ import annotations
@@ -118,6 +123,37 @@ def simulate(step: tuple[np.ndarray, ...], u: np.ndarray) -> np.ndarray:
     u = np.ascontiguousarray(u, dtype=float)
     y = np.empty((Ox.shape[0], u.shape[0], A.shape[2]))
     _kernel()(A, U, V, Ox, Ou, u, y)
+    return y.transpose(2, 1, 0)
+
+
+def _leading(a: np.ndarray | None, shape: tuple[int, ...]) -> np.ndarray:
+    """``a`` as float64 with a leading batch axis (``(1, ...)`` when shared by every
+    candidate; None: zeros of ``shape``), what the compiled table takes."""
+    if a is None:
+        return np.zeros((1, *shape))
+    a = np.asarray(a, dtype=float)
+    return a if a.ndim == len(shape) + 1 else a[None]
+
+
+def newmark_outputs(system: LinearSystem, dt: float, u: np.ndarray, gamma: float = 0.5,
+                    beta: float = 0.25) -> np.ndarray:
+    """The outputs ``(n, N, p)`` of Newmark-beta at ``dt`` s driven by ``u`` ``(N, r)`` from
+    rest: ``simulate(newmark(system, dt, gamma, beta), u)`` to rounding, compiled end to end
+    (see the module docstring)."""
+    from . import kernel
+    from .unrolled import RUNS
+
+    n, d = system.M.shape[0], system.dof
+    r, p = system.F.shape[-1], system.Pq.shape[-2]
+    u = np.ascontiguousarray(u, dtype=float)
+    T, w0 = np.empty((n, 2 * d + p, 2 * d + r)), np.empty((n, 2 * d))
+    kernel.newmark_table(
+        _leading(system.M, (d, d)), _leading(system.C, (d, d)), _leading(system.K, (d, d)),
+        _leading(system.F, (d, r)), _leading(system.Pa, (p, d)), _leading(system.Pv, (p, d)),
+        _leading(system.Pq, (p, d)), _leading(system.Pu, (p, r)),
+        float(dt), float(gamma), float(beta), u[0], T, w0)
+    y = np.empty((p, u.shape[0], n))
+    RUNS.get((2 * d, p, r), kernel.run_table_loops)(T, w0, u, y)
     return y.transpose(2, 1, 0)
 
 

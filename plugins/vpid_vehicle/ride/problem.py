@@ -163,10 +163,11 @@ class RideModel:
                  dt: float, solver: str) -> np.ndarray:
         """The ``sensors`` channels ``(n, N, p)`` of the rows ``X`` driven by ``u`` sampled
         every ``dt``, from rest; ``solver`` is ``exact`` (the record's) or ``newmark`` (the
-        fitted model's). Default: the linear core."""
+        fitted model's). Default: the linear core (Newmark compiled end to end)."""
         system = self.system(X, known, sensors)
-        step = linear.exact_foh(system, dt) if solver == "exact" else linear.newmark(system, dt)
-        return linear.simulate(step, u)
+        if solver == "exact":
+            return linear.simulate(linear.exact_foh(system, dt), u)
+        return linear.newmark_outputs(system, dt, u)
 
 
 def track_profile(cfg: RideConfig, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:

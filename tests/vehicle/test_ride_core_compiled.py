@@ -1,0 +1,101 @@
+"""The shared core's compiled Newmark path (``linear.newmark_outputs``: the table per
+candidate, then a time loop written out for the sizes, ``ride/unrolled.py``) against the plain
+statement of the scheme (``linear.simulate(linear.newmark(...))``), on every built-in linear
+model and sensor set, and the generated module against its generator."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from vpid_vehicle.ride import codegen, kernel, linear
+from vpid_vehicle.ride.full import FullCar
+from vpid_vehicle.ride.half import HalfCar
+from vpid_vehicle.ride.lateral import SingleTrack
+from vpid_vehicle.ride.quarter import QuarterCar, quarter_system
+from vpid_vehicle.ride.unrolled import RUNS
+
+#: Largest difference allowed, relative to the largest output of the channel: the two paths
+#: sum the same terms in another order (and the compiled one shifts the state by V u).
+RTOL = 1e-10
+
+
+def _systems():
+    """(label, system, inputs) for every built-in linear model and sensor set."""
+    rng = np.random.default_rng(3)
+    out = []
+    for model in (QuarterCar(), HalfCar(), FullCar(), SingleTrack()):
+        for set_name, known in model.sets.items():
+            names = list(model.names)
+            nominal = np.array([known[k] for k in names])
+            X = nominal * rng.uniform(0.7, 1.3, (6, nominal.size))
+            for sensors in model.sensors:
+                system = (quarter_system(X, known["kt"], known.get("ct", 0.0), sensors)
+                          if isinstance(model, QuarterCar) else
+                          model.system(X, known, sensors))
+                r = system.F.shape[-1]
+                u = np.zeros((600, r))
+                u[50:250] = rng.normal(0.0, 0.01, (200, r))  # zero stretches too
+                out.append((f"{type(model).__name__}-{set_name}-{sensors}", system, u))
+            break  # one published set per model: the sizes do not depend on it
+    return out
+
+
+SYSTEMS = _systems()
+
+
+@pytest.mark.parametrize(("label", "system", "u"), SYSTEMS, ids=[s[0] for s in SYSTEMS])
+def test_compiled_newmark_equals_the_plain_scheme(label, system, u):
+    plain = linear.simulate(linear.newmark(system, 1e-3), u)
+    fast = linear.newmark_outputs(system, 1e-3, u)
+    scale = np.max(np.abs(plain), axis=(0, 1))
+    assert np.all(scale > 0)
+    assert np.max(np.abs(fast - plain) / scale) < RTOL
+    sizes = (2 * system.dof, system.Pq.shape[-2], system.F.shape[-1])
+    assert sizes in RUNS, f"{label}: sizes {sizes} not written out (codegen.SIZES)"
+
+
+def test_the_loops_equal_the_written_out_steps():
+    """Sizes outside codegen.SIZES run the loops: same results to rounding."""
+    _, system, u = SYSTEMS[len(SYSTEMS) // 2]
+    n, d = system.M.shape[0], system.dof
+    r, p = system.F.shape[-1], system.Pq.shape[-2]
+    T, w0 = np.empty((n, 2 * d + p, 2 * d + r)), np.empty((n, 2 * d))
+    kernel.newmark_table(*(linear._leading(a, shape) for a, shape in (
+        (system.M, (d, d)), (system.C, (d, d)), (system.K, (d, d)), (system.F, (d, r)),
+        (system.Pa, (p, d)), (system.Pv, (p, d)), (system.Pq, (p, d)), (system.Pu, (p, r)))),
+        1e-3, 0.5, 0.25, u[0], T, w0)
+    y_loops, y_fast = np.empty((p, len(u), n)), np.empty((p, len(u), n))
+    kernel.run_table_loops(T, w0, u, y_loops)
+    RUNS[(2 * d, p, r)](T, w0, u, y_fast)
+    assert np.max(np.abs(y_loops - y_fast)) < RTOL * np.max(np.abs(y_fast))
+
+
+def test_a_candidates_outputs_do_not_depend_on_its_batch():
+    """Each lane's arithmetic is the same whatever block it lands in: a candidate alone and
+    in a batch of 7 (two blocks, one partly empty) give bit-identical outputs."""
+    _, system, u = next(s for s in SYSTEMS if s[0].startswith("HalfCar"))
+    batch = linear.newmark_outputs(system, 1e-3, u)
+    for i in (0, 3, 5):
+        one = linear.LinearSystem(*(a[i:i + 1] if a is not None and a.ndim == 3 else a
+                                    for a in (system.M, system.C, system.K, system.F,
+                                              system.Pa, system.Pq, system.Pu, system.Pv)))
+        assert np.array_equal(linear.newmark_outputs(one, 1e-3, u)[0], batch[i])
+
+
+def test_a_singular_mass_matrix_gives_non_finite_outputs_not_an_error():
+    _, system, u = SYSTEMS[0]
+    M = system.M.copy()
+    M[0] = 0.0
+    bad = linear.LinearSystem(M, system.C, system.K, system.F, system.Pa, system.Pq,
+                              system.Pu, system.Pv)
+    y = linear.newmark_outputs(bad, 1e-3, u)
+    assert not np.all(np.isfinite(y[0])) and np.all(np.isfinite(y[1:]))
+
+
+def test_the_generated_module_is_what_the_generator_writes():
+    """plugins/vpid_vehicle/ride/unrolled.py is generated: regenerate it with
+    ``python -m vpid_vehicle.ride.codegen > plugins/vpid_vehicle/ride/unrolled.py``."""
+    committed = Path(codegen.__file__).with_name("unrolled.py").read_text()
+    assert committed == codegen.module_source()
