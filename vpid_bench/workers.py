@@ -133,11 +133,36 @@ class _PipeLog(logging.Handler):
             self._send(("log", record.levelno, record.name, record.getMessage()))
 
 
+@contextlib.contextmanager
+def _sigint_held() -> Iterator[None]:
+    """A Ctrl-C inside the block is noted and delivered (to the handler in place before) when
+    the block ends. SIGINT is also blocked for this thread, so a process started inside
+    inherits it blocked (released by :func:`_serve`). Main thread only (elsewhere a no-op:
+    Python runs signal handlers on the main thread)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    noted: list[int] = []
+    before = signal.signal(signal.SIGINT, lambda signum, frame: noted.append(signum))
+    mask = (signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+            if hasattr(signal, "pthread_sigmask") else None)
+    try:
+        yield
+    finally:
+        if mask is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        signal.signal(signal.SIGINT, before)
+        if noted:
+            signal.raise_signal(signal.SIGINT)
+
+
 def _serve(conn: Connection) -> None:
     """The worker's loop: one task at a time until told to stop or the pipe closes."""
     from .build import ProblemCache
 
     interrupts.plugin_only()  # the user's Ctrl-C is the supervisor's to handle
+    if hasattr(signal, "pthread_sigmask"):  # held by the supervisor while it started us
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     lock = threading.Lock()
 
     def send(msg: Any) -> None:
@@ -245,12 +270,19 @@ class Workers:
     # --- workers
 
     def _start(self) -> _Worker:
-        ours, theirs = self._ctx.Pipe(duplex=True)
-        process = self._ctx.Process(target=_serve, args=(theirs,), name="vpid-bench-worker")
-        process.start()
-        theirs.close()
-        worker = _Worker(process, ours)
-        self._all.append(worker)
+        """A new worker, started with SIGINT held back: a Ctrl-C in the middle of
+        ``start()`` once cut the start-up data the child reads from its pipe, and the child
+        printed Python's traceback of the truncated pickle (the Ctrl-C, still pending, is
+        raised as soon as the worker is started and tracked). The child inherits the held
+        SIGINT and releases it once it ignores SIGINT (:func:`_serve`)."""
+        with _sigint_held():
+            ours, theirs = self._ctx.Pipe(duplex=True)
+            process = self._ctx.Process(target=_serve, args=(theirs,),
+                                        name="vpid-bench-worker")
+            process.start()
+            theirs.close()
+            worker = _Worker(process, ours)
+            self._all.append(worker)
         return worker
 
     def prestart(self) -> None:

@@ -131,3 +131,21 @@ def test_the_job_task_sent_to_a_launchers_worker_has_every_attribute():
     fresh = JobTask()
     sent = pickle.loads(pickle.dumps(fresh))
     assert set(vars(sent)) == set(vars(fresh))
+
+
+def test_a_ctrl_c_while_a_worker_starts_waits_until_it_is_started():
+    """A Ctrl-C in the middle of ``Process.start()`` once cut the start-up data the child
+    reads, and the child printed Python's traceback: SIGINT is held while a worker starts and
+    raised once it is started."""
+    import os
+    import signal
+    import time
+
+    from vpid_bench.workers import _sigint_held
+
+    reached = False
+    with pytest.raises(KeyboardInterrupt), _sigint_held():
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.05)  # a delivered SIGINT would raise here
+        reached = True
+    assert reached
