@@ -109,7 +109,7 @@ class Ledger:
         The first batch always sets a best vector (even when every value is ``inf``)."""
         self.used += X.shape[0]
         self.batches += 1
-        i = int(np.argmin(f))
+        i = int(f.argmin())
         if f[i] < self.best_f or self.batches == 1:
             self.best_f = float(f[i])
             self.best_x = X[i].copy()
@@ -503,11 +503,11 @@ def _evaluate_and_tell(problem: Problem, asked: list[_Run], alarm: _Alarm,
 
 def _tell(r: _Run, alarm: _Alarm, timeout_s: float | None, f: np.ndarray,
           R: np.ndarray | None) -> None:
-    opt, X = r.lane.optimizer, r.X
+    opt, X = r.lane.optimizer, r.X  # f is the loop's own copy (_values): booked already
     if R is None:
-        _guarded(r, alarm, timeout_s, lambda: opt.tell(X, f.copy()))
+        _guarded(r, alarm, timeout_s, lambda: opt.tell(X, f))
     else:
-        _guarded(r, alarm, timeout_s, lambda: opt.tell(X, f.copy(), residuals=R))
+        _guarded(r, alarm, timeout_s, lambda: opt.tell(X, f, residuals=R))
 
 
 def _gathered_values(problem: Problem, runs: list[_Run], alarm: _Alarm,
