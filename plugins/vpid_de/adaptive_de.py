@@ -84,6 +84,9 @@ class AdaptiveDE(GenerationalOptimizer):
     label: ClassVar[str] = "adaptive_de"
     #: replace a member by an equally good trial (SHADE, L-SHADE) or only a better one (JADE)
     ties: ClassVar[bool] = False
+    #: "numba": the trials in one compiled loop (vpid_de.fused); "numpy": the reference
+    #: kernels. The same vectors either way (tested).
+    engine: ClassVar[str] = "numba"
 
     def __init__(self, params: AdaptiveDEParams, bounds: Bounds, rng: np.random.Generator) -> None:
         super().__init__(params, bounds, rng)
@@ -143,13 +146,31 @@ class AdaptiveDE(GenerationalOptimizer):
         r1 = draw_indices(rng, N, 1)[:, 0]
         XA = np.vstack([X, self.archive.rows]) if len(self.archive) else X
         r2 = partner_indices(rng, r1, len(XA))
-        V = current_to_pbest1(X, pbest, r1, XA, r2, F[:, None])
-        U = binomial_crossover(X, V, CR[:, None], rng)
-        u = rng.random(U.shape) if self.params.bounds == "reinit" else None
-        U = self._repair(U, X, self.bounds.lower, self.bounds.upper, u)
+        if self.engine == "numba":  # the same draws, then one compiled loop (vpid_de.fused)
+            U = self._fused_trials(X, pbest, r1, XA, r2, F, CR)
+        else:
+            V = current_to_pbest1(X, pbest, r1, XA, r2, F[:, None])
+            U = binomial_crossover(X, V, CR[:, None], rng)
+            u = rng.random(U.shape) if self.params.bounds == "reinit" else None
+            U = self._repair(U, X, self.bounds.lower, self.bounds.upper, u)
         n = self.trial_count()
         self._CR, self._F = CR[:n], F[:n]
         return U[:n]
+
+    def _fused_trials(self, X: np.ndarray, pbest: np.ndarray, r1: np.ndarray, XA: np.ndarray,
+                      r2: np.ndarray, F: np.ndarray, CR: np.ndarray) -> np.ndarray:
+        """The trials of :meth:`next_generation` by :func:`vpid_de.fused.pbest_trials`, with
+        the crossover's and the bounds rule's uniforms drawn as the numpy path draws them."""
+        from .fused import BOUNDS_IDS, pbest_trials
+
+        N, dim = X.shape
+        u = self.rng.random((N, dim + 1))
+        reinit = self.params.bounds == "reinit"
+        u_reinit = self.rng.random((N, dim)) if reinit else np.empty((0, 0))
+        return pbest_trials(X, pbest, r1, XA, r2, np.ascontiguousarray(F, dtype=float),
+                            np.ascontiguousarray(CR, dtype=float), u,
+                            BOUNDS_IDS[self.params.bounds], self.bounds.lower,
+                            self.bounds.upper, u_reinit)
 
     def advance(self, U: np.ndarray, fU: np.ndarray) -> None:
         n = len(U)
@@ -256,7 +277,7 @@ class SHADE(AdaptiveDE):
     def pbest_counts(self, n: int) -> np.ndarray:
         p_min = 2.0 / n
         p = self.rng.uniform(p_min, max(p_min, self.params.p_max), size=n)
-        return np.clip(np.floor(p * n + 0.5).astype(np.intp), 1, n)
+        return np.minimum(np.maximum(np.floor(p * n + 0.5).astype(np.intp), 1), n)
 
     def adapt(self, S_CR: np.ndarray, S_F: np.ndarray, delta: np.ndarray) -> None:
         self.memory.update(S_CR, S_F, delta)

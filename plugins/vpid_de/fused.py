@@ -86,3 +86,41 @@ def generation(X, fitness, u, n_random, mutation, F, K, CR, bounds_rule, lower, 
                     v = min(max(0.5 * (x + lo) if v < lo else 0.5 * (x + hi), lo), hi)
             out[i, j] = v
     return out
+
+
+@njit(cache=True)
+def pbest_trials(X, pbest, r1, XA, r2, F, CR, u, bounds_rule, lower, upper, u_reinit
+                 ):  # pragma: no cover - compiled
+    """The trial vectors of JADE, SHADE and L-SHADE (:meth:`vpid_de.adaptive_de.AdaptiveDE.
+    next_generation`) from their drawn indices, factors and uniforms, in one loop: the mutant
+    of current-to-pbest/1 (``x_i + F_i (x_pbest - x_i) + F_i (x_r1 - xa_r2)``), Eq. 8
+    crossover with ``CR_i`` (``u``: ``(N, dim + 1)``, the ``rand_j`` then ``rnbr``), the
+    bounds rule (``u_reinit``: ``(N, dim)``, used by ``reinit`` only). The same arithmetic as
+    the numpy reference, so the same vectors bit for bit (tested)."""
+    ps, dim = X.shape
+    out = np.empty_like(X)
+    for i in range(ps):
+        jr = min(int(u[i, dim] * dim), dim - 1)
+        f = F[i]
+        for j in range(dim):
+            x = X[i, j]
+            if not (u[i, j] <= CR[i] or j == jr):
+                out[i, j] = x
+                continue
+            v = x + f * (X[pbest[i], j] - x) + f * (X[r1[i], j] - XA[r2[i], j])
+            lo, hi = lower[j], upper[j]
+            if v < lo or v > hi:
+                if bounds_rule == 0:
+                    v = min(lo + u_reinit[i, j] * (hi - lo), hi)
+                elif bounds_rule == 1:
+                    v = min(max(v, lo), hi)
+                elif bounds_rule == 2:
+                    width = hi - lo
+                    y = (v - lo) % (2.0 * width)
+                    if y > width:
+                        y = 2.0 * width - y
+                    v = min(max(lo + y, lo), hi)
+                else:
+                    v = min(max(0.5 * (x + lo) if v < lo else 0.5 * (x + hi), lo), hi)
+            out[i, j] = v
+    return out
