@@ -182,13 +182,37 @@ def _wilcoxon_cached(xb: bytes, yb: bytes) -> tuple[float, float, str]:
     elif d.size <= 13:
         method, how = "auto", "exact (all permutations)"
     elif d.size <= 50:
-        method, how = _permutation(), f"permutation ({N_RESAMPLES} resamples)"
+        return (*_wilcoxon_permutation(d), f"permutation ({N_RESAMPLES} resamples)")
     else:
         method, how = "asymptotic", "normal approximation"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = stats.wilcoxon(x, y, method=method)
     return float(res.statistic), float(res.pvalue), how
+
+
+def _wilcoxon_permutation(d: np.ndarray) -> tuple[float, float]:
+    """``scipy.stats.wilcoxon(x, y, method=_permutation())`` for the differences ``d``, the
+    same statistic and p-value (tested), about 50 times faster: scipy's permutation test
+    calls its statistic once per resample (it is not marked vectorised, 10,000 Python calls:
+    1.4 s per test, most of a study's report), whereas the signed-rank sum under sign flips
+    is one array expression, the ranks of ``|d|`` being the same for every flip. Zero
+    differences are left out of the ranks (scipy's default ``zero_method='wilcox'``)."""
+    from scipy import stats
+
+    nonzero = d != 0
+    ranks = np.zeros_like(d)
+    ranks[nonzero] = stats.rankdata(np.abs(d[nonzero]), method="average")
+
+    def r_plus(flipped: np.ndarray, axis: int = -1) -> np.ndarray:
+        return np.sum((flipped > 0) * ranks, axis=axis)
+
+    method = _permutation()
+    res = stats.permutation_test((d,), r_plus, permutation_type="samples", vectorized=True,
+                                 n_resamples=method.n_resamples, rng=method.rng,
+                                 alternative="two-sided")
+    statistic = min(np.sum((d > 0) * ranks), np.sum((d < 0) * ranks))
+    return float(statistic), float(res.pvalue)
 
 
 def mann_whitney(x: np.ndarray, y: np.ndarray) -> tuple[float, float, str]:
