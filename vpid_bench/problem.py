@@ -12,6 +12,10 @@ import numpy as np
 
 from .bounds import Bounds
 
+#: Instances :meth:`Problem.evaluate_instances` keeps built (more than a job runs at once in
+#: lockstep; past it the kept ones are dropped and built again).
+KEPT_INSTANCES = 256
+
 
 @dataclasses.dataclass(frozen=True)
 class ProblemConfig:
@@ -164,7 +168,10 @@ class Problem(abc.ABC):
         in lockstep. Must equal ``self.instance(instance[j]).evaluate(X[j:j+1])`` for each row.
 
         The default groups the rows by instance (instances that are the same object, e.g. the
-        problem itself, form one group) and calls each group's ``evaluate`` once. A problem
+        problem itself, form one group) and calls each group's ``evaluate`` once. Each
+        instance is built once and kept (up to :data:`KEPT_INSTANCES`): this call comes once
+        per step of the run loop, and a problem whose ``instance`` makes a record (the suite's
+        ride problems solve it exactly) once spent most of a sweep rebuilding it. A problem
         whose instances share an expensive part overrides it to evaluate every row in one go.
         """
         X = np.atleast_2d(np.asarray(X, dtype=float))
@@ -172,9 +179,14 @@ class Problem(abc.ABC):
         if instance.shape != (X.shape[0],):
             raise ValueError(f"evaluate_instances: {instance.shape[0]} instance indices for "
                              f"{X.shape[0]} rows")
+        kept = self.__dict__.setdefault("_vpid_bench_instances", {})
         groups: dict[int, tuple[Problem, list[int]]] = {}
         for i in np.unique(instance):
-            inst = self.instance(int(i))
+            if int(i) not in kept:
+                if len(kept) >= KEPT_INSTANCES:
+                    kept.clear()
+                kept[int(i)] = self.instance(int(i))
+            inst = kept[int(i)]
             groups.setdefault(id(inst), (inst, []))[1].append(int(i))
         if len(groups) == 1:
             inst = next(iter(groups.values()))[0]
