@@ -49,6 +49,16 @@ def note() -> None:
     _Watch.signalled = True
 
 
+def raise_if_swallowed() -> None:
+    """Raise ``KeyboardInterrupt`` if the command's handler saw a Ctrl-C that never reached
+    the command: a ``KeyboardInterrupt`` raised inside a C callback is dropped by ctypes
+    ("Exception ignored on calling ctypes callback function", e.g. while numba loads
+    compiled code), and the sweep once ran to its end and exited 0. Called between jobs and
+    at the end of the sweep; only where the command's own handler is installed."""
+    if _Watch.signalled and signal.getsignal(signal.SIGINT) is _handler:
+        raise KeyboardInterrupt
+
+
 def install() -> None:
     """Install the noting SIGINT handler (main thread of the command's process only); a
     SIGINT noted since :func:`defer` is raised now, as ``KeyboardInterrupt``."""

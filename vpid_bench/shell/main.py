@@ -84,6 +84,9 @@ class JobTask:
     def __call__(self, cfg: Any) -> float | None:
         from hydra.core.hydra_config import HydraConfig
 
+        from ..interrupts import raise_if_swallowed
+
+        raise_if_swallowed()  # a Ctrl-C a C callback dropped during the previous job
         hydra_cfg = HydraConfig.get()
         job_dir = Path(hydra_cfg.runtime.output_dir)
         multirun = hydra_cfg.mode.name == "MULTIRUN"
@@ -401,8 +404,11 @@ def _thread_exception(args: Any) -> None:
 
 def _run_hydra(args: list[str], task: Any) -> None:
     """Hydra's run; its own refusals (it prints them and exits 1) become one line, exit 2."""
+    from ..interrupts import raise_if_swallowed
+
     try:
         _hydra_entry(args, task)
+        raise_if_swallowed()  # a Ctrl-C a C callback dropped during the last job
     except SystemExit as exc:
         if exc.code not in (0, None):
             sys.exit(2)
