@@ -24,6 +24,27 @@ BOUNDS_IDS = {"reinit": 0, "clip": 1, "reflect": 2, "midpoint": 3}
 
 
 @njit(cache=True)
+def repaired(v, x, lo, hi, u, bounds_rule):  # pragma: no cover - compiled
+    """A mutant coordinate ``v`` brought inside ``[lo, hi]`` by the bounds rule (ids of
+    :data:`BOUNDS_IDS`; ``x``: the parent's coordinate, ``u``: the reinit uniform), as the
+    numpy rules of :mod:`vpid_de.kernels` compute it; ``v`` itself when inside. The one
+    compiled home of the rules, shared by DE1-DE8 and the adaptive DEs."""
+    if not (v < lo or v > hi):  # inside (a NaN passes through, as before)
+        return v
+    if bounds_rule == 0:
+        return min(lo + u * (hi - lo), hi)
+    if bounds_rule == 1:
+        return min(max(v, lo), hi)
+    if bounds_rule == 2:
+        width = hi - lo
+        y = (v - lo) % (2.0 * width)
+        if y > width:
+            y = 2.0 * width - y
+        return min(max(lo + y, lo), hi)
+    return min(max(0.5 * (x + lo) if v < lo else 0.5 * (x + hi), lo), hi)
+
+
+@njit(cache=True)
 def generation(X, fitness, u, n_random, mutation, F, K, CR, bounds_rule, lower, upper):
     """Trial vectors of one generation, shape of ``X`` ``(ps, dim)``.
 
@@ -70,20 +91,7 @@ def generation(X, fitness, u, n_random, mutation, F, K, CR, bounds_rule, lower, 
                      + f * (X[r[3], j] - X[r[4], j]))
             else:
                 v = x + K * (X[r[0], j] - x) + f * (X[r[1], j] - X[r[2], j])
-            lo, hi = lower[j], upper[j]
-            if v < lo or v > hi:
-                if bounds_rule == 0:
-                    v = min(lo + u[i, c + dim + 1 + j] * (hi - lo), hi)
-                elif bounds_rule == 1:
-                    v = min(max(v, lo), hi)
-                elif bounds_rule == 2:
-                    width = hi - lo
-                    y = (v - lo) % (2.0 * width)
-                    if y > width:
-                        y = 2.0 * width - y
-                    v = min(max(lo + y, lo), hi)
-                else:
-                    v = min(max(0.5 * (x + lo) if v < lo else 0.5 * (x + hi), lo), hi)
+            v = repaired(v, x, lower[j], upper[j], u[i, c + dim + 1 + j], bounds_rule)
             out[i, j] = v
     return out
 
@@ -108,19 +116,7 @@ def pbest_trials(X, pbest, r1, XA, r2, F, CR, u, bounds_rule, lower, upper, u_re
                 out[i, j] = x
                 continue
             v = x + f * (X[pbest[i], j] - x) + f * (X[r1[i], j] - XA[r2[i], j])
-            lo, hi = lower[j], upper[j]
-            if v < lo or v > hi:
-                if bounds_rule == 0:
-                    v = min(lo + u_reinit[i, j] * (hi - lo), hi)
-                elif bounds_rule == 1:
-                    v = min(max(v, lo), hi)
-                elif bounds_rule == 2:
-                    width = hi - lo
-                    y = (v - lo) % (2.0 * width)
-                    if y > width:
-                        y = 2.0 * width - y
-                    v = min(max(lo + y, lo), hi)
-                else:
-                    v = min(max(0.5 * (x + lo) if v < lo else 0.5 * (x + hi), lo), hi)
+            ur = u_reinit[i, j] if bounds_rule == 0 else 0.0
+            v = repaired(v, x, lower[j], upper[j], ur, bounds_rule)
             out[i, j] = v
     return out
