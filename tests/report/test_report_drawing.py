@@ -204,3 +204,15 @@ def test_cd_bars_are_the_maximal_groups_scikit_posthocs_draws(seed):
     bars = cd_bars(names, p, 0.05)
     assert {frozenset(b) for b in bars} == expected
     assert all(b == sorted(b, key=names.index) for b in bars)  # best first within a bar
+
+
+@pytest.mark.parametrize("n", [1, 10, 12, 25])
+def test_every_curve_gets_a_colour_of_its_own(n):
+    """The 10× study draws 12 optimizers: the colours stay distinct past the 10 of the
+    colour cycle (the cycle's own colours up to 10, as before)."""
+    import matplotlib.colors as mcolors
+
+    got = [mcolors.to_hex(c) for c in figures.colours(n)]
+    assert len(got) == n and len(set(got)) == n
+    if n <= 10:
+        assert got == [mcolors.to_hex(f"C{i}") for i in range(n)]

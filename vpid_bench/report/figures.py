@@ -61,11 +61,16 @@ _save = save  # the name the report used before
 
 
 def colours(n: int) -> list[Any]:
-    """``n`` colours of matplotlib's current colour cycle (repeated when ``n`` exceeds it),
-    the palette seaborn's ``color_palette(n_colors=n)`` gives by default."""
+    """``n`` distinct colours: matplotlib's current colour cycle when it has enough, else
+    ``n`` evenly spaced hues (seaborn's ``husl``), as seaborn colours a ``hue`` with more
+    levels than the cycle; a repeated colour would make two optimizers one curve."""
     plt = _plt()
     cycle = plt.rcParams["axes.prop_cycle"].by_key().get("color") or ["C0"]
-    return [cycle[i % len(cycle)] for i in range(n)]
+    if n <= len(cycle):
+        return list(cycle[:n])
+    import seaborn as sns
+
+    return list(sns.color_palette("husl", n))
 
 
 def metric_label(metric_name: str) -> str:
