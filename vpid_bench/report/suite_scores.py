@@ -80,6 +80,11 @@ def _by(runs: Sequence[RunHits]) -> dict[str, dict[str, list[RunHits]]]:
     return out
 
 
+def _budgets(runs: Sequence[RunHits]) -> dict[str, float]:
+    """Each context's budget (evaluations), the one every fixed-budget reading is up to."""
+    return {c: context_budget(runs, c) for c in {r.context for r in runs}}
+
+
 def _run_auc(r: RunHits, budget: float) -> float:
     return auc([r], budget)
 
@@ -104,7 +109,7 @@ def score_rows(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]]
     """The rows of ``tables/suite_scores.csv`` (best first within each group) and one line
     per optimizer left out of a group for not having run all of it."""
     by_alg = _by(runs)
-    budgets = {c: context_budget(runs, c) for c in {r.context for r in runs}}
+    budgets = _budgets(runs)
     rows, notes = [], []
     for g in groups({c: f for c, f in facts.items() if c in budgets}):
         scored = []
@@ -133,7 +138,7 @@ def aggregated_ecdf(per_context: Mapping[str, list[RunHits]], dims: Mapping[str,
 def figure(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]], path: Path
            ) -> Path | str:
     """Aggregated ECDFs: one panel for all problems, one per family (up to five)."""
-    budgets = {c: context_budget(runs, c) for c in {r.context for r in runs}}
+    budgets = _budgets(runs)
     gs = [g for g in groups({c: f for c, f in facts.items() if c in budgets})
           if g.kind in ("all", "family")][:6]
     if len(gs[0].contexts) < 2:
@@ -191,7 +196,7 @@ def ladder_rows(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]]
     aggregated ECDF (share of (run, target) pairs hit, each problem weighing the same) at each
     rung of :data:`LADDER`; ``nan`` at a rung beyond some context's budget (not run that
     long)."""
-    budgets = {c: context_budget(runs, c) for c in {r.context for r in runs}}
+    budgets = _budgets(runs)
     dims = {c: max(facts[c][1], 1) for c in budgets}
     out = []
     for alg, per in sorted(_by(runs).items()):
