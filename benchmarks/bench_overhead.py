@@ -1,7 +1,8 @@
 """Per-evaluation overhead of every registered optimizer, against the kernel time of the same
 evaluations, measured side by side in one run (issue: studies at kernel speed).
 
-For each optimizer: one run on ``problem=vehicle`` (PS 20, the given budget) through the
+For each optimizer: one run on ``problem=vehicle`` (PS 20, the given budget; ``--problem``
+another, e.g. a suite member at its defaults) through the
 framework's run loop (:func:`vpid_bench.runner.run`), its wall time, and the batches it had
 evaluated (recorded as they pass), after a short warm-up run. Afterwards the same batches are
 evaluated again, the same way (values, or values and residuals for a least-squares method),
@@ -14,7 +15,7 @@ re-evaluation) and the median of each column printed: a single run of 51 batches
 10-20 % on a shared machine.
 
     MPLBACKEND=Agg .venv/bin/python benchmarks/bench_overhead.py [--budget 4200] [--repeat 5] \
-        [--skip nevergrad]
+        [--skip nevergrad] [--only random lsq] [--problem smoke_quarter]
 """
 
 from __future__ import annotations
@@ -51,14 +52,16 @@ class Recorder:
         return wrapped
 
 
-def measure(registry: Registry, name: str, budget: int) -> dict[str, float]:
+def measure(registry: Registry, name: str, budget: int, problem_name: str = "vehicle"
+            ) -> dict[str, float]:
     """One run's wall time against the kernel time of its batches (after a short warm-up
     run of the same optimizer, so compilation and first-call set-up are not counted)."""
-    warm = build_problem(registry, {"name": "vehicle", "ps": 20})
+    spec = {"name": problem_name, "ps": 20}
+    warm = build_problem(registry, spec)
     cls, params = optimizer_params(registry, {"name": name, "ps": 20, "budget": 200})
     run(warm, cls(params, warm.bounds, run_rng(1, 0)), 200)
-    problem = build_problem(registry, {"name": "vehicle", "ps": 20})
-    clean = build_problem(registry, {"name": "vehicle", "ps": 20})
+    problem = build_problem(registry, spec)
+    clean = build_problem(registry, spec)
     rec = Recorder(problem)
     cls, params = optimizer_params(registry, {"name": name, "ps": 20, "budget": budget})
     optimizer = cls(params, problem.bounds, run_rng(0, 0))
@@ -101,19 +104,23 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--budget", type=int, default=4200)
     ap.add_argument("--skip", nargs="*", default=[])
+    ap.add_argument("--only", nargs="*", default=None, help="these optimizers only")
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--problem", default="vehicle",
+                    help="a problem at its defaults, e.g. a suite member (smoke_quarter)")
     args = ap.parse_args()
     registry = Registry()
     print(f"command: benchmarks/bench_overhead.py --budget {args.budget} --repeat {args.repeat} "
-          "(medians)")
+          f"--problem {args.problem} (medians)")
     print("| optimizer | µs per evaluation | kernel µs per evaluation | overhead (×) | "
           "ask + tell µs per evaluation | run loop µs per evaluation | batches | evaluations |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     for name in sorted(registry.optimizers):
-        if name in args.skip:
+        if name in args.skip or (args.only is not None and name not in args.only):
             continue
         try:
-            runs = [measure(registry, name, args.budget) for _ in range(args.repeat)]
+            runs = [measure(registry, name, args.budget, args.problem)
+                    for _ in range(args.repeat)]
             m = {key: statistics.median(r[key] for r in runs) for key in runs[0]}
         except Exception as exc:  # noqa: BLE001 - a benchmark line per optimizer
             print(f"| {name} | failed: {type(exc).__name__}: {exc} | | | | | | |")
