@@ -48,6 +48,7 @@ bench-scale: install
 bench: install
 	$(BIN)/python benchmarks/bench_vehicle.py
 	$(BIN)/python benchmarks/bench_optimizers.py
+	$(BIN)/python benchmarks/bench_magic.py
 	$(BIN)/python benchmarks/bench_overhead.py --skip nevergrad
 	$(BIN)/python benchmarks/paper_experiment.py
 	$(BIN)/python benchmarks/bench_report.py

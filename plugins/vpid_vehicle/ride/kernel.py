@@ -10,6 +10,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from . import vecmath
 from .blocks import load_block
 
 #: Candidates per block of :func:`run_table_loops` (as in :mod:`.unrolled`).
@@ -61,46 +62,58 @@ def run(A, U, V, Ox, Ou, u, y):  # pragma: no cover - compiled
 
 
 
-@numba.njit(cache=True)
+@numba.njit(inline="always", error_model="numpy")
 def _mf(alpha, B, C, D, E):  # pragma: no cover - compiled
     """Magic Formula lateral force (N) at slip angle ``alpha`` (rad)."""
     x = B * alpha
-    return D * np.sin(C * np.arctan(x - E * (x - np.arctan(x))))
+    return D * vecmath.sin(C * vecmath.atan(x - E * (x - vecmath.atan(x))))
 
 
-@numba.njit(cache=True)
+@numba.njit(inline="always", error_model="numpy")
 def _rates(vy, r, delta, P, i, m, Iz, lf, lr, vx, E):  # pragma: no cover - compiled
     af = delta - (vy + lf * r) / vx
     ar = -(vy - lr * r) / vx
-    fy_f = _mf(af, P[i, 0], P[i, 1], P[i, 2], E)
-    fy_r = _mf(ar, P[i, 3], P[i, 4], P[i, 5], E)
+    fy_f = _mf(af, P[0, i], P[1, i], P[2, i], E)
+    fy_r = _mf(ar, P[3, i], P[4, i], P[5, i], E)
     return (fy_f + fy_r) / m - vx * r, (lf * fy_f - lr * fy_r) / Iz, (fy_f + fy_r) / m
 
 
-@numba.njit(cache=True)
+@numba.njit(**_OPTS)
 def mf_single_track(P, Iz, delta, dt, m, lf, lr, vx, E, y):  # pragma: no cover - compiled
     """The single-track model with a Magic Formula tyre per axle, classical RK4 at ``dt``
-    with the steer linear between samples; ``P`` rows ``[Bf, Cf, Df, Br, Cr, Dr]``, ``Iz``
-    per row. Writes ``y[i, k] = [r, ay, beta]``."""
-    n, N = P.shape[0], delta.shape[0]
-    for i in range(n):
-        vy, r = 0.0, 0.0
-        for k in range(N):
-            # The sample's lateral acceleration and RK4's first stage are one evaluation of
-            # the tyres (4 of the step's 10 arc tangents otherwise computed twice).
-            k1v, k1r, ay = _rates(vy, r, delta[k], P, i, m, Iz[i], lf, lr, vx, E)
-            y[i, k, 0], y[i, k, 1], y[i, k, 2] = r, ay, vy / vx
-            if k + 1 == N:
-                break
-            d0, d1 = delta[k], delta[k + 1]
-            dm = 0.5 * (d0 + d1)
-            k2v, k2r, _ = _rates(vy + 0.5 * dt * k1v, r + 0.5 * dt * k1r, dm, P, i, m, Iz[i],
-                                 lf, lr, vx, E)
-            k3v, k3r, _ = _rates(vy + 0.5 * dt * k2v, r + 0.5 * dt * k2r, dm, P, i, m, Iz[i],
-                                 lf, lr, vx, E)
-            k4v, k4r, _ = _rates(vy + dt * k3v, r + dt * k3r, d1, P, i, m, Iz[i], lf, lr, vx, E)
-            vy += dt / 6.0 * (k1v + 2 * k2v + 2 * k3v + k4v)
-            r += dt / 6.0 * (k1r + 2 * k2r + 2 * k3r + k4r)
+    with the steer linear between samples; ``P`` is ``(6, n)``, its rows ``[Bf, Cf, Df, Br,
+    Cr, Dr]`` of the ``n`` candidates, ``Iz`` ``(n,)``. Writes ``y[k, :, i] = [r, ay, beta]``.
+
+    The candidates are the inner loop (a whole RK4 step of each), so the compiler runs 4 of
+    them at once; each candidate's arithmetic is the same whatever the batch."""
+    n, N = P.shape[1], delta.shape[0]
+    vy, r = np.zeros(n), np.zeros(n)
+    kv, kr = np.empty((4, n)), np.empty((4, n))
+    h = 0.5 * dt
+    for k in range(N):
+        d0 = delta[k]
+        last = k + 1 == N
+        d1 = d0 if last else delta[k + 1]
+        dm = 0.5 * (d0 + d1)
+        # One loop per RK4 stage, each over the candidates (a small body the compiler keeps
+        # in registers, 4 candidates at a time). The sample's lateral acceleration and the
+        # first stage are one evaluation of the tyres.
+        for i in range(n):
+            kv[0, i], kr[0, i], ay = _rates(vy[i], r[i], d0, P, i, m, Iz[i], lf, lr, vx, E)
+            y[k, 0, i], y[k, 1, i], y[k, 2, i] = r[i], ay, vy[i] / vx
+        if last:
+            break
+        for i in range(n):
+            kv[1, i], kr[1, i], _ = _rates(vy[i] + h * kv[0, i], r[i] + h * kr[0, i], dm, P,
+                                           i, m, Iz[i], lf, lr, vx, E)
+        for i in range(n):
+            kv[2, i], kr[2, i], _ = _rates(vy[i] + h * kv[1, i], r[i] + h * kr[1, i], dm, P,
+                                           i, m, Iz[i], lf, lr, vx, E)
+        for i in range(n):
+            kv[3, i], kr[3, i], _ = _rates(vy[i] + dt * kv[2, i], r[i] + dt * kr[2, i], d1,
+                                           P, i, m, Iz[i], lf, lr, vx, E)
+            vy[i] += dt / 6.0 * (kv[0, i] + 2 * kv[1, i] + 2 * kv[2, i] + kv[3, i])
+            r[i] += dt / 6.0 * (kr[0, i] + 2 * kr[1, i] + 2 * kr[2, i] + kr[3, i])
 
 
 @numba.njit(**_OPTS)

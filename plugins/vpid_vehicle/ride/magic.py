@@ -4,7 +4,8 @@ off against each other and against the yaw inertia).
 
 Each axle's lateral force is ``Fy = D sin(C atan(B a - E (B a - atan(B a))))`` at its slip
 angle ``a`` (rad); the equations of motion are those of :mod:`.lateral` with these forces.
-Integrated by the classical Runge-Kutta method (RK4); the record by RK4 at
+Integrated by the classical Runge-Kutta method (RK4, :func:`.kernel.mf_single_track`, with
+the arc tangent and sine of :mod:`.vecmath`); the record by RK4 at
 ``dt / record_substeps``, the fitted model at ``dt`` (a finer step, not the same solver run:
 no inverse crime; ``record=newmark`` here means the fitted model's step, on purpose).
 
@@ -74,13 +75,14 @@ class MagicSingleTrack(RideModel):
                  dt: float, solver: str) -> np.ndarray:
         from .kernel import mf_single_track
 
-        X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
-        y = np.empty((X.shape[0], u.shape[0], 3))
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        y = np.empty((u.shape[0], 3, X.shape[0]))
         lf = known["lf"]
-        mf_single_track(X[:, :6].copy(), X[:, 6].copy(), np.ascontiguousarray(u[:, 0]), dt,
-                        known["m"], lf, known["L"] - lf, self.vx, known["E"], y)
-        keep = {"r": 0, "ay": 1, "beta": 2}
-        return y[:, :, [keep[c] for c, _ in self.sensors[sensors]]]
+        mf_single_track(np.ascontiguousarray(X[:, :6].T), np.ascontiguousarray(X[:, 6]),
+                        np.ascontiguousarray(u[:, 0], dtype=float), dt, known["m"], lf,
+                        known["L"] - lf, self.vx, known["E"], y)
+        keep = [{"r": 0, "ay": 1, "beta": 2}[c] for c, _ in self.sensors[sensors]]
+        return y[:, keep].transpose(2, 0, 1)
 
 
 @dataclasses.dataclass(frozen=True)
