@@ -76,13 +76,18 @@ class MagicSingleTrack(RideModel):
         from .kernel import mf_single_track
 
         X = np.atleast_2d(np.asarray(X, dtype=float))
+        n = X.shape[0]
+        # The kernel runs 4 candidates at a time and the rest one by one, each with the same
+        # arithmetic; a rest of 2 or 3 is cheaper as one more block of 4 (the last row again).
+        if n % 4 >= 2:
+            X = np.concatenate([X, np.repeat(X[-1:], 4 - n % 4, axis=0)])
         y = np.empty((u.shape[0], 3, X.shape[0]))
         lf = known["lf"]
         mf_single_track(np.ascontiguousarray(X[:, :6].T), np.ascontiguousarray(X[:, 6]),
                         np.ascontiguousarray(u[:, 0], dtype=float), dt, known["m"], lf,
                         known["L"] - lf, self.vx, known["E"], y)
         keep = [{"r": 0, "ay": 1, "beta": 2}[c] for c, _ in self.sensors[sensors]]
-        return y[:, keep].transpose(2, 0, 1)
+        return y[:, keep, :n].transpose(2, 0, 1)
 
 
 @dataclasses.dataclass(frozen=True)
