@@ -26,6 +26,26 @@ def test_a12_interval_edges_and_coverage():
     assert 0.88 <= hits / 200 <= 0.99, hits
 
 
+@pytest.mark.parametrize("paired", [True, False])
+def test_a12_interval_is_the_percentile_bootstrap_of_resampled_pairs(paired):
+    """The interval equals, bit for bit, the percentile bootstrap written out: every
+    resample's A12 as the mean pair score over its resampled pairs (the same draws), with
+    ties and samples of unequal size."""
+    from vpid_bench.report.stats import N_BOOT
+
+    rng = np.random.default_rng(9)
+    for n, m in [(30, 30), (7, 12), (1, 5), (28, 14)]:
+        x, y = rng.integers(0, 5, n).astype(float), rng.normal(2.0, 1.5, m).round(0)
+        draws = np.random.default_rng(3)
+        ix = draws.integers(0, n, (N_BOOT, n))
+        iy = ix if paired and n == m else draws.integers(0, m, (N_BOOT, m))
+        xs, ys = x[ix][:, :, None], y[iy][:, None, :]
+        boots = np.mean((xs > ys) + 0.5 * (xs == ys), axis=(1, 2))
+        tail = (1.0 - 0.95) / 2.0
+        want = tuple(float(v) for v in np.quantile(boots, [tail, 1.0 - tail]))
+        assert a12_interval(x, y, paired=paired, seed=3) == want
+
+
 def test_the_detail_reads_from_the_named_side_and_bounds_a_floor_p():
     row = {"a": "de4", "b": "random", "p_holm": 3e-4, "p_at_floor": True, "A12": 0.1,
            "A12_lo": 0.02, "A12_hi": 0.2}
