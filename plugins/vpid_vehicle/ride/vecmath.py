@@ -16,6 +16,10 @@ Accuracy (``tests/vehicle/test_vecmath.py``, against the C library over millions
 ``atan`` within 1 unit in the last place everywhere; ``sin`` within 2 units for
 ``|x| < 2**30`` (the reduction by pi/4 in three parts is exact there; the Magic Formula's
 arguments stay below pi). Signed zeros, infinities and NaN behave as in the C library.
+
+Inlined into :mod:`.kernel`, whose compiled code numba caches keyed on ``kernel.py`` alone:
+after editing this file, touch ``kernel.py`` (or clear its ``__pycache__``) so the kernel
+is compiled again.
 """
 
 from __future__ import annotations
