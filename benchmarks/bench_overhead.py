@@ -26,6 +26,7 @@ import time
 
 import numpy as np
 
+from vpid_bench import ConfigError
 from vpid_bench.build import build_problem, optimizer_params, run_rng
 from vpid_bench.plugins import Registry
 from vpid_bench.runner import run
@@ -110,6 +111,14 @@ def main() -> None:
                     help="a problem at its defaults, e.g. a suite member (smoke_quarter)")
     args = ap.parse_args()
     registry = Registry()
+    try:  # a mistyped problem: one line before any measurement, not a failed row each
+        build_problem(registry, {"name": args.problem, "ps": 20})
+    except ConfigError as exc:
+        ap.exit(2, f"error: {exc}\n")
+    unknown = sorted(set(args.only or ()) - set(registry.optimizers))
+    if unknown:
+        ap.exit(2, f"error: --only {', '.join(unknown)}: not an optimizer; one of "
+                   f"{', '.join(sorted(registry.optimizers))}\n")
     print(f"command: benchmarks/bench_overhead.py --budget {args.budget} --repeat {args.repeat} "
           f"--problem {args.problem} (medians)")
     print("| optimizer | µs per evaluation | kernel µs per evaluation | overhead (×) | "
