@@ -20,8 +20,8 @@ import sys
 from pathlib import Path
 
 from vpid_bench.plugins import Registry
-from vpid_bench.report.archive import pack
 from vpid_bench.report.load import load_records
+from vpid_bench.report.pack import pack
 
 ROOT = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent

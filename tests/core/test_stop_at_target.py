@@ -17,6 +17,7 @@ from sweep_helpers import run_cli  # noqa: E402
 
 from vpid_bench.report import archive as arch  # noqa: E402
 from vpid_bench.report.anytime import hit_times  # noqa: E402
+from vpid_bench.report.pack import pack  # noqa: E402
 from vpid_bench.runner import Lane, run_many  # noqa: E402
 from vpid_bench.targets import stop_value  # noqa: E402
 
@@ -31,7 +32,7 @@ def archives(tmp_path_factory) -> Path:
     done = run_cli(["-m", *KEYS, "runs=3", "archive=false", f"hydra.sweep.dir={root / 'base'}"],
                    cwd=root)
     assert done.returncode == 0, done.stderr[-2000:]
-    arch.pack(root / "base", "smoke", root / "archives" / "smoke", command="test",
+    pack(root / "base", "smoke", root / "archives" / "smoke", command="test",
               commit=None, made_at="2026-01-01T00:00:00+00:00")
     return root / "archives"
 
@@ -148,7 +149,7 @@ def test_an_archive_of_optima_alone_certifies_without_adding_runs(archives, tmp_
     from vpid_bench.report.build import build_report
 
     only = tmp_path / "only"
-    manifest = arch.pack(archives.parent / "base", "paper", only / "paper", command="test",
+    manifest = pack(archives.parent / "base", "paper", only / "paper", command="test",
                          commit=None, made_at="2026-01-01T00:00:00+00:00", optima_only=True)
     assert manifest["runs"] == 0 and manifest["optima_only"] is True
     read = arch.read_archive(only / "paper")

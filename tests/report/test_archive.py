@@ -23,6 +23,7 @@ from sweep_helpers import run_cli  # noqa: E402
 
 from vpid_bench.report import archive as arch  # noqa: E402
 from vpid_bench.report.build import build_report  # noqa: E402
+from vpid_bench.report.pack import pack  # noqa: E402
 
 SWEEP = ["report=false", "archive=false", "isolation=none", "problem=smoke_quarter"]
 
@@ -35,7 +36,7 @@ def made(tmp_path_factory) -> dict[str, Path]:
     done = run_cli(["-m", "optimizer=random,centre", "runs=3", *SWEEP,
                     f"hydra.sweep.dir={base}"], cwd=root)
     assert done.returncode == 0, done.stderr[-2000:]
-    arch.pack(base, "smoke", root / "archives" / "smoke", command="test", commit="abc123",
+    pack(base, "smoke", root / "archives" / "smoke", command="test", commit="abc123",
               made_at="2026-01-01T00:00:00+00:00")
     mine = root / "mine"
     done = run_cli(["-m", "optimizer=de1,random", "runs=2", *SWEEP,
@@ -237,7 +238,7 @@ def test_a_damaged_archive_given_as_a_path_is_named(made, tmp_path):
 
 
 def test_packing_the_same_sweep_twice_gives_the_same_bytes(made, tmp_path):
-    a = arch.pack(made["base"], "smoke", tmp_path / "a", command="test", commit="abc123",
+    a = pack(made["base"], "smoke", tmp_path / "a", command="test", commit="abc123",
                   made_at="2026-01-01T00:00:00+00:00")
     assert a == json.loads((made["archives"] / "smoke" / arch.MANIFEST).read_text())
     rows = (tmp_path / "a" / arch.SUMMARY).read_text().splitlines()
