@@ -14,6 +14,8 @@ import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
+from .safe import clean
+
 
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
@@ -71,18 +73,19 @@ def _main(argv: Sequence[str] | None) -> int:
                               baseline=args.baseline,
                               archive=False if args.no_archive else (args.archive_dir or True))
     except NoRecordsError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {clean(exc)}", file=sys.stderr)
         return _exit(2, argv)
     except OSError as exc:  # the folder checked above became unwritable, or a full disk
-        print(f"error: the report could not be written into {args.out} "
+        print(f"error: the report could not be written into {clean(args.out)} "
               f"({exc.strerror or type(exc).__name__})", file=sys.stderr)
         return _exit(1, argv)
+    # every line below may quote records, archives or paths: cleaned (report.safe)
     for note in report.archive_notes:
-        print(note, file=sys.stderr)
-    print(report.headline)
-    print(f"\nreport: {report.report_md} ({report.n_records} run records)")
+        print(clean(note), file=sys.stderr)
+    print(clean(report.headline, keep_newlines=True))
+    print(f"\nreport: {clean(report.report_md)} ({report.n_records} run records)")
     for line in report.failures:
-        print(f"warning: {line}", file=sys.stderr)
+        print(f"warning: {clean(line)}", file=sys.stderr)
     return _exit(1 if report.failures else 0, argv)
 
 

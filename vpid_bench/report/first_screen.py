@@ -28,7 +28,7 @@ from .body import verdict_short
 from .optima import REACHED
 from .rankings import TIE_RTOL
 from .render import fmt, markdown, para, terminal
-from .safe import escape
+from .safe import clean, escape
 from .tables import pair_detail
 
 #: A leader whose median metric is within this factor of the floor has searched enough.
@@ -281,6 +281,6 @@ def terminal_text(items: Sequence[ContextResult]) -> str:
     """The same first screen for the terminal: a table and a verdict per context."""
     blocks = []
     for r in items:
-        blocks.append(f"{r.context}\n" + terminal(r.headers, r.rows) + "\n"
-                      + " ".join(r.verdict.split()))
+        blocks.append(f"{clean(r.context)}\n" + terminal(r.headers, r.rows) + "\n"
+                      + clean(" ".join(r.verdict.split())))
     return "\n\n".join(blocks)

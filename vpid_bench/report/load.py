@@ -30,6 +30,7 @@ from ..errors import VpidBenchError
 from ..problem import FILLED_PARAMS
 from ..records import CorruptRecordError, iter_record_files, read_job_status, read_record
 from ..records.io import decode_number
+from .safe import clean
 
 #: Problem-config keys that never define a context of their own (ps is taken from the optimizer).
 PROBLEM_KEYS_IGNORED = ("ps",)
@@ -321,12 +322,13 @@ def run_labels(records: list[dict[str, Any]]) -> list[RunLabel]:
         ps = oflat.get("ps", pflat.get("ps"))
         pvary = {k: pflat.get(k) for k in problem_keys[pname]}
         ovary = {k: oflat.get(k) for k in optimizer_keys[oname]}
-        context = f"{pname} ps={_fmt(ps)}" + "".join(
+        # labels every renderer shows (tables, figures, the terminal): one printable line
+        context = clean(f"{pname} ps={_fmt(ps)}" + "".join(
             f" {k}={_fmt(v)}" for k, v in pvary.items()
-        )
-        algorithm = oname + (
+        ))
+        algorithm = clean(oname + (
             "[" + ",".join(f"{k}={_fmt(v)}" for k, v in ovary.items()) + "]" if ovary else ""
-        )
+        ))
         out.append(RunLabel(context, algorithm, ps, pvary, ovary))
     return out
 
@@ -410,12 +412,13 @@ def run_rows(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
         name = chosen[lab.context]
         row: dict[str, Any] = {
             "context": lab.context,
-            "problem": r["problem"]["name"],
+            "problem": clean(r["problem"]["name"]),
             "ps": lab.ps,
             "algorithm": lab.algorithm,
-            "optimizer": r["optimizer"]["name"],
-            **{f"problem.{k}": _fmt(v) for k, v in lab.problem_vary.items() if k != "budget"},
-            **{f"optimizer.{k}": _fmt(v) for k, v in lab.optimizer_vary.items()},
+            "optimizer": clean(r["optimizer"]["name"]),
+            **{clean(f"problem.{k}"): clean(_fmt(v)) for k, v in lab.problem_vary.items()
+               if k != "budget"},
+            **{clean(f"optimizer.{k}"): clean(_fmt(v)) for k, v in lab.optimizer_vary.items()},
             "seed": (r.get("seeds") or {}).get("seed"),
             "run_index": r.get("run_index"),
             "status": r["status"],
@@ -439,7 +442,7 @@ def run_rows(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
         eps = eps if eps is not None and len(eps) == n else [None] * n
         true = params.get("true")
         true = true if true is not None and len(true) == n else [None] * n
-        for pname, xi, ei, ti in zip(names, x, eps, true, strict=True):
+        for pname, xi, ei, ti in zip([clean(n) for n in names], x, eps, true, strict=True):
             row[f"x.{pname}"] = _num(xi, math.nan) if ok else math.nan
             row[f"eps.{pname}"] = _num(ei, math.nan) if ok else math.nan
             row[f"true.{pname}"] = _num(ti, math.nan)

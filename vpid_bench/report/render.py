@@ -4,8 +4,9 @@
 Numbers are formatted per column (:func:`format_column`), so a column never mixes ``14517``
 with ``1.513e+04``: a column of integers is printed as integers, a column whose values span
 a moderate range in fixed point with the same number of decimals, any other in scientific
-notation with four significant figures. Text cells of Markdown tables are escaped
-(:func:`.safe.escape`): they may come from records.
+notation with four significant figures. Text cells may come from records: those of Markdown
+tables are escaped (:func:`.safe.escape`), those of terminal tables cleaned
+(:func:`.safe.clean`: no escape sequence, no line break that would forge a row).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .safe import escape
+from .safe import clean, escape
 
 #: The widest line a person reads in ``report.md`` (characters).
 MAX_WIDTH = 120
@@ -155,8 +156,10 @@ def markdown(headers: Sequence[str], rows: Sequence[Sequence[Any]], *, keep: int
 
 
 def terminal(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4) -> str:
-    """A plain-text table for the terminal: columns separated by two spaces."""
-    text = cells(headers, rows, digits)
+    """A plain-text table for the terminal: columns separated by two spaces, every cell and
+    header one line of printable text (:func:`.safe.clean`)."""
+    headers = [clean(h) for h in headers]
+    text = [[clean(c) for c in r] for r in cells(headers, rows, digits)]
     numeric = _numeric_columns(rows, len(headers))
     widths = [max([len(h), *(len(r[j]) for r in text)]) for j, h in enumerate(headers)]
 
@@ -169,10 +172,12 @@ def terminal(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int 
 
 
 def latex(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4) -> str:
-    """A LaTeX table body with booktabs rules (needs ``\\usepackage{booktabs}``)."""
+    """A LaTeX table body with booktabs rules (needs ``\\usepackage{booktabs}``); text
+    cells cleaned (:func:`.safe.clean`), as on the terminal."""
     from tabulate import tabulate
 
-    return tabulate(cells(headers, rows, digits), headers=list(headers),
+    return tabulate([[clean(c) for c in r] for r in cells(headers, rows, digits)],
+                    headers=[clean(h) for h in headers],
                     tablefmt="latex_booktabs", disable_numparse=True)
 
 

@@ -1,16 +1,21 @@
 """Untrusted text made safe: file names (:func:`slug`), paths kept inside the report folder
-(:func:`inside`), and record text going into Markdown (:func:`escape`).
+(:func:`inside`), and record text going to a reader: the terminal (:func:`clean`), Markdown
+(:func:`escape`) and HTML (:func:`escape_html`).
 
-Records and result folders may come from anyone: a problem name, an optimizer parameter or a
-context label can hold ``../``, ``/``, ``|``, HTML or a thousand characters. Every file name
-the report builds from record content goes through :func:`slug`, every path it writes is
-checked by :func:`inside`, and every piece of record text placed in ``report.md`` goes
-through :func:`escape`.
+Records, archives and result folders may come from anyone: a problem name, an optimizer
+parameter or a context label can hold ``../``, ``/``, ``|``, HTML, a thousand characters, a
+terminal escape sequence (``ESC ] 0 ;`` sets the window title) or a newline that forges a
+table row. Every file name the report builds from record content goes through :func:`slug`,
+every path it writes is checked by :func:`inside`, and every piece of record text shown to a
+person goes through one of the three text functions, each of which first makes the text one
+line of printable characters (:func:`clean`). This module is the one home of those rules:
+every renderer (terminal, Markdown, HTML) uses it.
 """
 
 from __future__ import annotations
 
 import hashlib
+import html
 import re
 from pathlib import Path
 
@@ -46,11 +51,40 @@ def inside(root: Path, path: Path) -> Path:
     return path
 
 
+def _visible(char: str) -> str:
+    """A character that is not printable as its Python escape (``\\x1b``, ``\\n``,
+    ``\\u202e``): visible, and inert on any terminal."""
+    return repr(char)[1:-1]
+
+
+def clean(text: object, keep_newlines: bool = False) -> str:
+    """``text`` as printable characters only: every control character (C0 and C1, so every
+    terminal escape sequence, and line breaks), every format character (bidirectional
+    overrides) and every separator other than the space is written as its escape (ESC as
+    ``\\x1b``), so it cannot act on a terminal nor start a line of its own.
+    ``keep_newlines``: a block of several lines (a terminal table) keeps its ``\\n``, each
+    line cleaned. Idempotent: cleaning clean text changes nothing."""
+    s = str(text)
+    if keep_newlines:
+        return "\n".join(clean(line) for line in s.split("\n"))
+    if s.isprintable():  # the usual case, in one pass
+        return s
+    return "".join(c if c.isprintable() else _visible(c) for c in s)
+
+
 _MD_ESCAPES = {"|": "\\|", "&": "&amp;", "<": "&lt;", ">": "&gt;", "`": "'",
                "\n": " ", "\r": " ", "\t": " "}
 
 
 def escape(text: object) -> str:
     """Record text for a Markdown line or table cell: ``|`` escaped, HTML (``& < >``) as
-    entities, backticks as quotes, line breaks as spaces."""
-    return "".join(_MD_ESCAPES.get(c, c) for c in str(text))
+    entities, backticks as quotes, line breaks as spaces, any other control or format
+    character made visible (:func:`clean`)."""
+    return clean("".join(_MD_ESCAPES.get(c, c) for c in str(text)))
+
+
+def escape_html(text: object) -> str:
+    """Record text for HTML (element text or a quoted attribute value): ``& < > " '`` as
+    entities, line breaks and every other control or format character made visible
+    (:func:`clean`)."""
+    return html.escape(clean(text), quote=True)

@@ -97,6 +97,7 @@ def write_report(folder: Path, short: bool, archive: bool = True) -> bool:
     """Build the report of ``folder`` into ``folder/report``, print the headline and where it
     is, and write the outcome into ``folder/report/status.json``. Never raises."""
     from ..report.build import NoRecordsError, build_report
+    from ..report.safe import clean  # every line may quote records or archives
 
     out = folder / REPORT_SUBDIR
     status: dict[str, Any] = {"status": "ok", "problems": [],
@@ -108,20 +109,21 @@ def write_report(folder: Path, short: bool, archive: bool = True) -> bool:
         status["status"] = "no_records"
     except Exception as exc:  # noqa: BLE001 - the report must not crash a sweep
         log.debug("report failed", exc_info=True)
-        message = f"report: not written for {folder} ({type(exc).__name__}: {exc})"
+        message = clean(f"report: not written for {folder} ({type(exc).__name__}: {exc})")
         print(message, file=sys.stderr, flush=True)
         status.update(status="failed", problems=[message])
     else:
         for note in report.archive_notes:
-            print(note, file=sys.stderr, flush=True)
-        print(f"\n{report.headline}\n\nreport: {report.report_md}", flush=True)
+            print(clean(note), file=sys.stderr, flush=True)
+        print(f"\n{clean(report.headline, keep_newlines=True)}\n\nreport: "
+              f"{clean(report.report_md)}", flush=True)
         if short:
             print(f"report with figures and statistics: vpid-bench-report {folder} -o "
                   f"{folder / 'report-full'}", flush=True)
         bad = list(report.failures)
         if bad:
             print(f"report: {len(bad)} problem(s) found, listed in the report: "
-                  + "; ".join(bad[:3]) + (" ..." if len(bad) > 3 else ""),
+                  + "; ".join(clean(b) for b in bad[:3]) + (" ..." if len(bad) > 3 else ""),
                   file=sys.stderr, flush=True)
             status.update(status="problems", problems=bad)
     try:

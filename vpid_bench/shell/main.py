@@ -40,12 +40,15 @@ def debug_enabled() -> bool:
 
 
 def one_line(exc: BaseException) -> str:
-    """An exception as one line: our own errors as they are, others with their type."""
+    """An exception as one line: our own errors as they are, others with their type; any
+    control character its text quotes (from a record, a path, a plugin) made visible."""
+    from ..report.safe import clean
+
     name = getattr(exc, "remote_type", type(exc).__name__)  # carried from a worker process
     text = " ".join(str(exc).split()) or name
     if isinstance(exc, (VpidBenchError, ValueError)) or getattr(exc, "plain", False):
-        return text
-    return f"{name}: {text}"
+        return clean(text)
+    return clean(f"{name}: {text}")
 
 
 def _refuse(exc: BaseException) -> NoReturn:
