@@ -90,11 +90,11 @@ def test_9_report_command_terminal_markdown_and_latex_are_sanitised(hostile_swee
 
 def test_9_names_from_an_archive_are_sanitised(hostile_sweep, tmp_path):
     """The archive's notes (optimizer names of archived runs) are printed cleaned."""
-    from vpid_bench.report import archive as arch
+    from vpid_bench.report.pack import pack
 
     base = tmp_path / "base"
     shutil.copytree(hostile_sweep, base)
-    arch.pack(base, "smoke", tmp_path / "archives" / "smoke", command="test", commit="abc",
+    pack(base, "smoke", tmp_path / "archives" / "smoke", command="test", commit="abc",
               made_at="2026-01-01T00:00:00+00:00")
     mine = tmp_path / "mine"
     shutil.copytree(hostile_sweep / "random", mine / "random")
