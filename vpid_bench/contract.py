@@ -13,12 +13,19 @@ line naming what is missing.
 capability     members                                                                anchor
 =============  =====================================================================  =========
 core           Config, bounds, evaluate; optional: x_true, metrics, describe, name,    (always)
-               rows_independent, suites, family
+               rows_independent, suites, family, comparisons
 residuals      residuals, residual_groups, evaluate_with_residuals, residual_sigma    residuals
 instances      instance, instance_id, evaluate_instances                              instance
 signals        signals, signal_units                                                  signals
 plumbing       write_artifacts, content_digest, set_threads                           (none)
 =============  =====================================================================  =========
+
+A problem **without a truth** is the core with ``x_true`` left ``None`` (a measured record):
+``metrics`` then gives held-out errors (the headline first, lower is better) and
+``comparisons`` named rows that are not truths (a published estimate, a naive predictor);
+with the residuals capability the framework adds each run's 95 % intervals and the profile
+likelihood (:mod:`vpid_bench.analysis.estimates`). Nothing is measured against nominal
+values.
 
 A capability is offered when its *anchor* is overridden; overriding any other member of it
 without the anchor is refused, and so is ``instance`` without ``instance_id``. A member that
@@ -50,8 +57,9 @@ class Capability:
 
 CAPABILITIES: tuple[Capability, ...] = (
     Capability("core", ("Config", "name", "bounds", "evaluate", "x_true", "metrics",
-                        "describe", "rows_independent", "suites", "family"), None,
-               what="the box, the objective, and optionally the truth and accuracy metrics"),
+                        "describe", "rows_independent", "suites", "family", "comparisons"),
+               None, what="the box, the objective, and optionally the truth, accuracy "
+                          "metrics and fixed comparison rows"),
     Capability("residuals", ("residuals", "residual_groups", "evaluate_with_residuals",
                              "residual_sigma"), "residuals",
                what="residual vectors, for least-squares optimizers and the identifiability "

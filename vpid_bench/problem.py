@@ -65,7 +65,13 @@ class Problem(abc.ABC):
     @property
     def x_true(self) -> np.ndarray | None:
         """The true parameter vector when it is known (the records then hold each parameter's
-        relative error), else ``None``."""
+        relative error), else ``None``: a problem **without a truth** (a measured record).
+        Then no error against any nominal value is computed anywhere; a problem with
+        residuals gets each run's identified values with 95 % intervals (``result.intervals``
+        of its record, from the Jacobian with σ estimated from the residuals per group) and
+        profile-likelihood intervals at the record's optimum (:mod:`vpid_bench.analysis
+        .estimates`), and the report ranks by :meth:`metrics` (held-out errors) or the
+        objective and says the problem has no truth."""
         return None
 
     @abc.abstractmethod
@@ -96,7 +102,22 @@ class Problem(abc.ABC):
         """Named accuracy metrics of an identified vector ``x`` (lower is better), e.g. an
         error norm against the known truth. Stored in each run record as ``result.metrics``
         (a non-finite value as ``null``); the report ranks by the first metric where every
-        run of a context has it, else by the objective. Default: none."""
+        run of a context has it, else by the objective. Default: none.
+
+        Without a truth these are what can be measured instead: errors on held-out data (a
+        validation record: the simulation error as RMS, the fit in percent with the sign
+        turned so that lower is better), the headline first."""
+        return {}
+
+    def comparisons(self) -> dict[str, dict[str, Any]]:
+        """Named fixed comparison rows that are not runs and not truths, e.g.
+        ``{"published estimate": {"x": [...], "note": "IDIM-LS, Janot et al."},
+        "naive predictor": {"metrics": {"val_rms": 0.31}, "note": "each state held"}}``.
+        A row with ``x`` (physical units) gets its objective and :meth:`metrics` computed by
+        the framework (``metrics`` given in the row override them); a row without ``x``
+        shows the metrics it gives. The report prints them beside the ranking, so a result
+        can be judged against a published estimate or a predictor it must beat. Default:
+        none."""
         return {}
 
     # -- residual-aware evaluation (least-squares optimizers) ---------------------------------

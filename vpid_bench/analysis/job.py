@@ -17,26 +17,40 @@ from ..spec import Job
 
 def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
                 records: list[dict[str, Any]]) -> dict[int, float]:
-    """For a problem with residuals and a known truth: the Cramér–Rao bounds of its design
-    (``job_dir/identifiability.json``), the floors of each estimator where the problem offers
-    the choice (``job_dir/estimators.json``, :mod:`.estimator_floors`) and each instance's
-    optimum (``optima_dir/<key>.json``,
-    shared by the jobs of a sweep; see :mod:`.optimum`). Returns each run's relative gap
-    ``(f_best - f*) / f*`` to its instance's optimum (the absolute gap where ``f* <= 0``)."""
+    """For a problem with residuals: each instance's optimum (``optima_dir/<key>.json``,
+    shared by the jobs of a sweep; see :mod:`.optimum`), and with a known truth the
+    Cramér–Rao bounds of its design (``job_dir/identifiability.json``) and the floors of
+    each estimator where the problem offers the choice (``job_dir/estimators.json``,
+    :mod:`.estimator_floors`); without a truth, the profile-likelihood intervals at the
+    optimum where they run in reasonable time (``job_dir/profile.json``, :mod:`.estimates`).
+    Any problem's fixed comparison rows go to ``job_dir/comparisons.json``. Returns each
+    run's relative gap ``(f_best - f*) / f*`` to its instance's optimum (the absolute gap
+    where ``f* <= 0``)."""
+    from .estimates import write_comparisons
+
+    write_comparisons(problem, job_dir)  # first: cheap, and wanted whatever follows
+    if not offers_residuals(type(problem)):
+        return {}
+    return _residual_analysis(job, problem, job_dir, optima_dir, records)
+
+
+def _residual_analysis(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
+                       records: list[dict[str, Any]]) -> dict[int, float]:
+    """:func:`analyse_job` for a problem with residuals."""
+    from .estimates import write_profile
     from .estimator_floors import FILE as FLOORS_FILE
     from .estimator_floors import estimator_floors
     from .identifiability import cramer_rao
     from .optimum import update_instance_optimum
 
-    if problem.x_true is None or not offers_residuals(type(problem)):
-        return {}
+    truth = problem.x_true is not None
     target = job_dir / "identifiability.json"
-    if not target.is_file():
+    if truth and not target.is_file():
         crb = cramer_rao(problem)
         if crb is not None:
             write_json_atomic(target, crb)
     floors_file = job_dir / FLOORS_FILE
-    if not floors_file.is_file():
+    if truth and not floors_file.is_file():
         floors = estimator_floors(problem, job.spec.runs)
         if floors is not None:
             write_json_atomic(floors_file, floors)
@@ -48,11 +62,19 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
         entry[1].extend(bests.get(i, []))
         entry[2].append(i)
     gaps: dict[int, float] = {}
+    optima = []
     for inst, runs, indices in by_instance.values():
-        f_opt = update_instance_optimum(inst, job.problem_settings(), optima_dir, runs)["f_opt"]
+        if not truth and not runs:
+            continue  # nothing to start a polish from
+        optimum = update_instance_optimum(inst, job.problem_settings(), optima_dir, runs)
+        optima.append((inst, optimum))
+        f_opt = optimum["f_opt"]
         for i in indices:
             for _, f in bests.get(i, []):
                 gaps[i] = (f - f_opt) / f_opt if f_opt > 0 else f - f_opt
+    if not truth and optima:
+        inst, optimum = min(optima, key=lambda o: o[1]["f_opt"])
+        write_profile(inst, optimum, job_dir)
     return gaps
 
 

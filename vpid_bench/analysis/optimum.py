@@ -221,13 +221,19 @@ def find_optimum(record: Mapping[str, Any], optima: Mapping[str, Mapping[str, An
 def update_instance_optimum(problem: Problem, settings: Mapping[str, Any], folder: Path,
                             run_bests: Iterable[tuple[np.ndarray, float]]) -> dict[str, Any]:
     """Polish ``problem``'s instance from its truth (once) and from every run best near or
-    below the known optimum; write and return the lowest as ``folder/<key>.json``."""
-    x_true = problem.x_true
-    if x_true is None:
-        raise ValueError("the optimum polish needs the true parameters")
+    below the known optimum; write and return the lowest as ``folder/<key>.json``. Without a
+    truth (a measured record) the first polish starts from the lowest run best instead."""
+    run_bests = list(run_bests)
+    x_start = problem.x_true
+    if x_start is None:
+        finite = [(x, f) for x, f in run_bests
+                  if math.isfinite(f) and np.all(np.isfinite(np.asarray(x, dtype=float)))]
+        if not finite:
+            raise ValueError("the optimum polish needs the true parameters or a run's best")
+        x_start = np.asarray(min(finite, key=lambda b: b[1])[0], dtype=float)
     path = Path(folder) / f"{instance_key(problem, settings)}.json"
     with _locked(path):  # launcher workers share the folder: read, polish, write as one step
-        return _update(problem, settings, path, x_true, run_bests)
+        return _update(problem, settings, path, x_start, run_bests)
 
 
 @contextlib.contextmanager
@@ -248,11 +254,11 @@ def _locked(path: Path) -> Iterator[None]:
         os.close(fd)
 
 
-def _update(problem: Problem, settings: Mapping[str, Any], path: Path, x_true: np.ndarray,
+def _update(problem: Problem, settings: Mapping[str, Any], path: Path, x_start: np.ndarray,
             run_bests: Iterable[tuple[np.ndarray, float]]) -> dict[str, Any]:
     known = read_optimum(path)
     if known is None or len(known["x_opt"]) != problem.bounds.dim:
-        x_opt, f_opt = polish(problem, x_true)
+        x_opt, f_opt = polish(problem, x_start)
         known = {"starts": 1}
     else:
         x_opt, f_opt = np.asarray(known["x_opt"], dtype=float), float(known["f_opt"])
@@ -275,7 +281,8 @@ def _update(problem: Problem, settings: Mapping[str, Any], path: Path, x_true: n
         "settings": dict(settings),  # lets a report match the file to its runs' records
         "data": problem.content_digest(),
         "x_opt": [float(v) for v in x_opt], "f_opt": float(f_opt),
-        "f_true": _f_of(problem, x_true), "starts": starts,
+        "f_true": None if problem.x_true is None else _f_of(problem, problem.x_true),
+        "starts": starts,
         "metrics": ({str(k): float(v) for k, v in (metrics(x_opt) or {}).items()}
                     if metrics is not None else {}),
     }

@@ -35,40 +35,61 @@ from ..problem import Problem
 CHI2_95 = 3.841458820694124
 #: A smallest/largest singular value ratio at or below this is a structural symmetry.
 STRUCTURAL_RATIO = 1e-6
+#: Constrained fits a profile takes per interval end, for the estimate of its cost (a few
+#: doublings out from the estimate, then the root search).
+FITS_PER_END = 10
 
 
-def structural_symmetry(problem: Problem, x: np.ndarray | None = None
-                        ) -> tuple[float, np.ndarray | None]:
+class ProfileTooSlowError(RuntimeError):
+    """The profile would take longer than the time it was given (its estimate, in s)."""
+
+    def __init__(self, estimate_s: float, limit_s: float) -> None:
+        super().__init__(f"the profile would take about {estimate_s:.0f} s (limit {limit_s:g} "
+                         "s)")
+        self.estimate_s, self.limit_s = estimate_s, limit_s
+
+
+def structural_symmetry(problem: Problem, x: np.ndarray | None = None,
+                        sigma: np.ndarray | None = None) -> tuple[float, np.ndarray | None]:
     """The smallest/largest singular value of the whitened Jacobian in log-parameters at
     ``x`` (the truth by default), and the direction (unit vector in relative changes) of a
-    structural symmetry when the ratio is at most :data:`STRUCTURAL_RATIO`, else ``None``."""
-    J, _ = _whitened_jacobian(problem, problem.x_true if x is None else x)
-    _, s, vt = np.linalg.svd(J * np.asarray(x if x is not None else problem.x_true)[None],
-                             full_matrices=False)
+    structural symmetry when the ratio is at most :data:`STRUCTURAL_RATIO`, else ``None``.
+    ``sigma``: the noise per group or entry (default the problem's ``residual_sigma``)."""
+    x = np.asarray(problem.x_true if x is None else x, dtype=float)
+    J, _ = _whitened_jacobian(problem, x, sigma)
+    _, s, vt = np.linalg.svd(J * x[None], full_matrices=False)
     ratio = float(s[-1] / s[0]) if s[0] > 0 else 0.0
     return ratio, (vt[-1] if ratio <= STRUCTURAL_RATIO else None)
 
 
-def _whitened_jacobian(problem: Problem, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _whitened_jacobian(problem: Problem, x: np.ndarray, sigma: np.ndarray | None = None
+                       ) -> tuple[np.ndarray, np.ndarray]:
     from .identifiability import entry_sigma, jacobian
 
-    sigma = entry_sigma(np.asarray(problem.residual_sigma(), dtype=float),
+    given = problem.residual_sigma() if sigma is None else sigma
+    if given is None:
+        raise ValueError("the problem states no noise sigma (residual_sigma)")
+    sigma = entry_sigma(np.asarray(given, dtype=float),
                         np.asarray(problem.residual_groups(), dtype=int))
     if sigma is None:
-        raise ValueError("the problem states no noise sigma (residual_sigma)")
+        raise ValueError("the noise sigma has neither a per-group nor a per-entry shape")
     kept = sigma > 0
     return jacobian(problem, np.asarray(x, float))[kept] / sigma[kept][:, None], kept
 
 
 class _Likelihood:
-    """``NLL`` and the whitened residuals of a problem, in coordinates scaled by the truth."""
+    """``NLL`` and the whitened residuals of a problem, in coordinates scaled by ``centre``
+    (the truth by default, else a start such as an identified vector)."""
 
-    def __init__(self, problem: Problem) -> None:
+    def __init__(self, problem: Problem, centre: np.ndarray | None = None,
+                 sigma: np.ndarray | None = None) -> None:
         from .identifiability import entry_sigma
 
-        sigma = problem.residual_sigma()
-        if sigma is None or problem.x_true is None:
-            raise ValueError("profiles need the truth and the noise sigma (residual_sigma)")
+        sigma = problem.residual_sigma() if sigma is None else sigma
+        centre = problem.x_true if centre is None else np.asarray(centre, dtype=float)
+        if sigma is None or centre is None:
+            raise ValueError("profiles need a start (the truth or an estimate) and the noise "
+                             "sigma (residual_sigma, or estimated from the residuals)")
         per = entry_sigma(np.asarray(sigma, float),
                           np.asarray(problem.residual_groups(), dtype=int))
         if per is None:
@@ -79,10 +100,12 @@ class _Likelihood:
                           for g in range(int(groups.max()) + 1)])[groups] * SIGMA_FLOOR
         per = np.where(per > 0, np.maximum(per, floor), 0.0)
         self.problem, self.kept, self.sigma = problem, per > 0, per[per > 0]
-        self.scale = np.where(np.abs(problem.x_true) > 0, np.abs(problem.x_true),
-                              problem.bounds.width)
+        self.centre = centre
+        self.scale = np.where(np.abs(centre) > 0, np.abs(centre), problem.bounds.width)
         b = problem.bounds
         self.lo, self.hi = b.lower / self.scale, b.upper / self.scale
+        self.deadline: float | None = None  # perf_counter time past which a fit gives up
+        self.limit_s = 0.0
 
     def residuals(self, z: np.ndarray) -> np.ndarray:
         r = np.asarray(self.problem.residuals((z * self.scale)[None]), float)[0]
@@ -95,7 +118,13 @@ class _Likelihood:
     def fit(self, z0: np.ndarray, fixed: int | None = None, value: float = 0.0
             ) -> tuple[np.ndarray, float]:
         """The least NLL from ``z0``, with coordinate ``fixed`` held at ``value``."""
+        import time
+
         from scipy.optimize import least_squares
+
+        if self.deadline is not None and time.perf_counter() > self.deadline:
+            raise ProfileTooSlowError(time.perf_counter() - self.deadline + self.limit_s * 2,
+                                 self.limit_s)
 
         free = np.ones(z0.size, bool)
         if fixed is not None:
@@ -117,25 +146,46 @@ class _Likelihood:
 
 
 def profile_intervals(problem: Problem, crb: dict[str, Any] | None = None,
-                      max_steps: int = 12) -> dict[str, Any]:
+                      max_steps: int = 12, start: np.ndarray | None = None,
+                      sigma: np.ndarray | None = None,
+                      rel_sd: np.ndarray | None = None,
+                      limit_s: float | None = None) -> dict[str, Any]:
     """95 % profile-likelihood intervals of every parameter of ``problem`` (one record: an
     instance). ``crb``: its :func:`~.identifiability.cramer_rao` when already computed (the
     first steps along each profile are its bounds; the symmetry test its condition number).
-    Returns ``{"names", "estimate", "lower", "upper", "classification", "symmetry_ratio"}``
-    with physical values; an open end is ``None``."""
+    Without a truth: ``start`` (an identified vector, physical units) is where the fit of
+    ``θ̂`` starts, ``sigma`` the noise per residual group estimated from the residuals
+    (:func:`.intervals.group_sigma`) and ``rel_sd`` the relative standard errors that set
+    the first steps. ``limit_s``: raise :class:`ProfileTooSlowError` when the first fit says the
+    profile would take longer (``2 d FITS_PER_END`` fits as long as it), or when it has run
+    twice that long. Returns ``{"names", "estimate", "lower", "upper", "classification",
+    "symmetry_ratio"}`` with physical values; an open end is ``None``."""
+    import time
+
     from scipy.optimize import brentq
 
     from .identifiability import cramer_rao
 
-    lik = _Likelihood(problem)
-    z_hat, nll_hat = lik.fit(np.asarray(problem.x_true, float) / lik.scale)
-    crb = crb if crb is not None else cramer_rao(problem)
-    cond = None if crb is None else crb["condition_number"]
-    ratio = 0.0 if cond is None or not np.isfinite(cond) else 1.0 / cond
-    # the direction needs the singular vectors: a second decomposition, only when symmetric
-    direction = structural_symmetry(problem)[1] if ratio <= STRUCTURAL_RATIO else None
-    rel_sd = (np.asarray(crb["crb_percent"]) / 100.0 if crb is not None
-              else np.full(z_hat.size, 0.01))
+    lik = _Likelihood(problem, start, sigma)
+    began = time.perf_counter()
+    z_hat, nll_hat = lik.fit(np.asarray(lik.centre, float) / lik.scale)
+    if limit_s is not None:
+        estimate = (time.perf_counter() - began) * 2 * z_hat.size * FITS_PER_END
+        if estimate > limit_s:
+            raise ProfileTooSlowError(estimate, limit_s)
+        lik.deadline, lik.limit_s = began + 2 * limit_s, limit_s
+    if start is None:
+        crb = crb if crb is not None else cramer_rao(problem)
+        cond = None if crb is None else crb["condition_number"]
+        ratio = 0.0 if cond is None or not np.isfinite(cond) else 1.0 / cond
+        # the direction needs the singular vectors: a second decomposition, when symmetric
+        direction = structural_symmetry(problem)[1] if ratio <= STRUCTURAL_RATIO else None
+        rel_sd = (np.asarray(crb["crb_percent"]) / 100.0 if crb is not None
+                  else np.full(z_hat.size, 0.01))
+    else:
+        ratio, direction = structural_symmetry(problem, z_hat * lik.scale, sigma)
+        rel_sd = np.full(z_hat.size, 0.01) if rel_sd is None else np.asarray(rel_sd, float)
+        rel_sd = np.where(np.isfinite(rel_sd) & (rel_sd > 0), rel_sd, 0.01)
     names = list(problem.bounds.names)
     out: dict[str, Any] = {"names": names, "estimate": (z_hat * lik.scale).tolist(),
                            "lower": [], "upper": [], "classification": [],

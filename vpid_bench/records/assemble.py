@@ -10,7 +10,9 @@ the job's ``seed`` under ``seeds`` and the run's ``budget`` at the top. Fields::
     seeds       seed, spawn_key           budget
     instance    index (= run index), id (the instance's data; null: all instances identical)
     parameters  names, units, lower, upper, true (null when unknown)
-    result      x_best, f_best, evaluations, batches, stopped_by, metrics, rel_error_percent
+    result      x_best, f_best, evaluations, batches, stopped_by, metrics, rel_error_percent,
+                intervals (no truth and residuals: 95 % intervals of x_best, see
+                :mod:`vpid_bench.analysis.intervals`; absent otherwise)
     trace       evaluations, best         (best-so-far after every evaluated batch)
     versions    python and the numerical stack
     timing      started_at, wall_time_s, run_time_s, host   (the only non-deterministic part)
@@ -27,7 +29,7 @@ import numpy as np
 
 from ..bounds import relative_errors_percent
 from ..machine import machine_facts
-from ..problem import Problem
+from ..problem import Problem, offers_residuals
 from ..runner import RunResult
 from .io import SCHEMA
 from .provenance import package_versions
@@ -57,8 +59,17 @@ def result_section(result: RunResult, problem: Problem) -> dict[str, Any]:
         "rel_error_percent": None,
     }
     x_true = problem.x_true
-    if x_true is not None and np.all(np.isfinite(result.x_best)):
+    finite = bool(np.all(np.isfinite(result.x_best)))
+    if x_true is not None and finite:
         section["rel_error_percent"] = relative_errors_percent(result.x_best, x_true)
+    elif x_true is None and finite and offers_residuals(problem):
+        from ..analysis.intervals import jacobian_intervals
+
+        try:
+            section["intervals"] = jacobian_intervals(problem,
+                                                      np.asarray(result.x_best, float))
+        except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+            section["intervals"] = None  # a simulation failing near x_best: no interval
     return section
 
 

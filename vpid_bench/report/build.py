@@ -237,8 +237,11 @@ def _markdown(data: ReportData, results: list[Any], sections: list[tuple[str, Se
     what = ", ".join(escape(p) for p in data.problems)
     lines = ["# vpid-bench report" + (" (single job)" if data.short else ""), "",
              para(f"{n} run(s) on {what} ({n_ok} ok, {n - n_ok} failed). Which optimizer, how "
-                  "far from the truth, and why: below, per context. How to read it, the "
-                  "tests and the sources follow."), ""]
+                  "far from the truth" + (" (or, where there is none, how well it fits and "
+                                          "predicts the record)" if any(
+                                              data.no_truth.values()) else "")
+                  + ", and why: below, per context. How to read it, the tests and the "
+                  "sources follow."), ""]
     if data.archive_notes:
         lines += [para("Archived runs, made earlier by the code named beside them and "
                        "ranked here with this report's own runs (`archive=false` leaves "

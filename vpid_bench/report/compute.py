@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from . import anytime, estimator_floors, rankings, tables
+from . import anytime, estimates, estimator_floors, rankings, tables
 from .identifiability import crb_norm_by_context
 from .load import LoadedRecords, NoRecordsError, load_records, reason, run_rows
 from .optima import add_optimum_columns, load_optima
@@ -54,6 +54,12 @@ class ReportData:
     estimator_floors: dict[str, dict[str, Any]] = dataclasses.field(default_factory=dict)
     #: one line per problem whose archived runs stand beside these (or were refused)
     archive_notes: list[str] = dataclasses.field(default_factory=list)
+    #: per context: True when its problem has no truth (:mod:`.estimates`)
+    no_truth: dict[str, bool] = dataclasses.field(default_factory=dict)
+    #: per context without a truth: the identified values with their intervals
+    identified: dict[str, Any] = dataclasses.field(default_factory=dict)
+    #: per context: the problem's fixed comparison rows (never truths)
+    comparisons: dict[str, list[dict[str, Any]]] = dataclasses.field(default_factory=dict)
 
     @property
     def contexts(self) -> list[str]:
@@ -140,10 +146,13 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
                                         baseline)
     for s, v in zip(summary, verdicts, strict=True):
         s[f"vs_{baseline}"] = v
+    truthless = estimates.no_truth(loaded.records, rows)
     return ReportData(paths, short, alpha, baseline, loaded, rows, summary, search, hits,
                       optima_errors, crb_norm_by_context(loaded.records, rows),
                       rankings.box_centred(loaded.records, rows), verdicts, tests,
-                      estimator_floors.by_context(loaded.records, rows), notes)
+                      estimator_floors.by_context(loaded.records, rows), notes, truthless,
+                      estimates.identified_by_context(loaded.records, rows, truthless),
+                      estimates.comparisons_by_context(loaded.records, rows))
 
 
 def _load(paths: Sequence[Path]) -> tuple[LoadedRecords, list[Any]]:

@@ -56,6 +56,9 @@ class ContextResult:
     estimator: str | None = None  # the objective the runs minimised (problem.objective)
     floors: dict[str, Any] | None = None  # the floors of each estimator (estimators.json)
     pairs: list[dict[str, Any]] = dataclasses.field(default_factory=list)  # pairwise tests
+    truth: bool = True  # False: the problem has no truth (a measured record)
+    identified: Any = None  # without a truth: .estimates.Identified, the values and intervals
+    comparisons: list[dict[str, Any]] = dataclasses.field(default_factory=list)
 
     def value(self, x: float) -> str:
         """A metric value with its unit."""
@@ -129,7 +132,9 @@ def context_result(data: Any, context: str) -> ContextResult:
              data.tests.pairs[data.tests.pairs["context"] == context].to_dict("records"))
     result = ContextResult(context, metric, unit, headers, body, floor, bound, "",
                            mgroups is not None, data.estimator(context),
-                           data.estimator_floors.get(context), pairs)
+                           data.estimator_floors.get(context), pairs,
+                           not data.no_truth.get(context, False),
+                           data.identified.get(context), data.comparisons.get(context, []))
     result.verdict = _verdict(result, mrows, [srows[a] for a in sorted(
         srows, key=lambda a: srows[a]["rank"])], mgroups, sgroups,
         data.centred.get(context, False))
@@ -166,6 +171,8 @@ def _verdict(res: ContextResult, mrows: list[Mapping[str, Any]],
     m = {s["algorithm"]: s["median"] for s in mrows}.get(pick, math.nan)
     if res.metric == "f_best":  # no accuracy metric: the problem knows no truth
         ends = f"It ends at a median objective value of {fmt(m, 4)}"
+    elif not res.truth:
+        ends = f"It ends at a median {escape(res.metric)} of {res.value(m)} (held out)"
     else:
         ends = f"It ends a median {res.value(m)} {escape(res.metric)} from the truth"
     text = f"Verdict for {escape(res.context)}: use {escape(pick)} ({why}{test}). {ends}"
@@ -232,6 +239,8 @@ def _limits(res: ContextResult, m: float, srows: Sequence[Mapping[str, Any]],
     """What limits the leaders: search, the estimator (objective) or the data."""
     floor, bound = res.floor, res.bound
     parts = []
+    if not res.truth:
+        return _limits_without_truth(res, m, srows, use)
     if math.isfinite(floor):
         parts.append(f"; the records allow {res.value(floor)} under {_estimator(res)} "
                      "(floor: its own optimum's error, median over the instances)")
@@ -258,6 +267,61 @@ def _limits(res: ContextResult, m: float, srows: Sequence[Mapping[str, Any]],
     return "".join(parts)
 
 
+def _limits_without_truth(res: ContextResult, m: float, srows: Sequence[Mapping[str, Any]],
+                          use: Sequence[str]) -> str:
+    """Without a truth: whether the leaders reach the record's optimum of the objective, and
+    what that optimum scores by the headline metric (held out) where there is one."""
+    reached = [q for q in srows if q["algorithm"] in use]
+    if not reached:
+        return ""
+    at_opt = any(q["reached"] >= q["n"] / 2 or q["rel_gap_median"] <= REACHED
+                 for q in reached)
+    text = ("; it reaches the record's optimum of the objective, so more search will not "
+            "change the answer" if at_opt else
+            f"; it stops a median relative gap of {fmt(reached[0]['rel_gap_median'], 3)} "
+            "above the record's optimum of the objective: more search would still move it")
+    if res.metric != "f_best" and math.isfinite(res.floor):
+        text += (f" (the optimum scores {res.value(res.floor)} {escape(res.metric)}"
+                 + (": a better objective value does not always predict better"
+                    if res.floor > m and not tied(res.floor, m) else "") + ")")
+    return text
+
+
+def _no_truth_lines(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
+    """The paragraphs and tables a context without a truth adds below its ranking:
+    ``(text, headers, rows)`` (empty headers: text only)."""
+    from .estimates import NO_TRUTH
+
+    out: list[tuple[str, list[str], list[list[Any]]]] = []
+    ranked = ("the objective" if r.metric == "f_best" else
+              f"{escape(r.metric)} (held out) and, in the search columns, by the objective")
+    out.append((f"{NO_TRUTH}; ranked by {ranked}.", [], []))
+    ident = r.identified
+    if ident is not None:
+        sigma = ", ".join(fmt(s, 3) for s in ident.sigma)
+        text = (f"Identified values: the best run ({escape(ident.run)}, objective "
+                f"{fmt(ident.f, 4)}), with 95 % intervals from the Jacobian of its residuals "
+                f"under Gaussian noise of σ estimated from them per residual group ({sigma}, "
+                "in the residuals' units); model error counts as noise there. ")
+        text += ("The profile likelihood drops the linearisation: its interval is around the "
+                 "likelihood's own estimate (Gaussian noise, σ per group as above), which "
+                 "differs from the best run where the objective is not that likelihood."
+                 if ident.profile is not None
+                 else escape(ident.profile_note) + ".")
+        headers, rows = ident.rows()
+        out.append((text, headers, rows))
+    if r.comparisons:
+        names: list[str] = []
+        for c in r.comparisons:
+            names += [k for k in c["metrics"] if k not in names]
+        headers = ["comparison (not a run, not a truth)", "objective", *names, "note"]
+        rows = [[escape(c["name"]), c["f"], *[c["metrics"].get(k) for k in names],
+                 escape(c["note"])] for c in r.comparisons]
+        out.append(("Fixed rows the problem gives for comparison (a published estimate, a "
+                    "predictor a model must beat): never a truth.", headers, rows))
+    return out
+
+
 def results(data: Any) -> list[ContextResult]:
     """The first screen of every context, in report order."""
     return [context_result(data, c) for c in data.contexts]
@@ -268,12 +332,16 @@ def markdown_lines(items: Sequence[ContextResult]) -> list[str]:
     lines = ["## Results", ""]
     for r in items:
         unit = f" ({escape(r.unit)})" if r.unit else ""
-        levels = [f"{what} {r.value(v)}" for what, v in (("floor", r.floor), ("bound", r.bound))
+        floor = "floor" if r.truth else "the objective's optimum scores"
+        levels = [f"{what} {r.value(v)}" for what, v in ((floor, r.floor), ("bound", r.bound))
                   if math.isfinite(v)]
         lines += [f"### {escape(r.context)}", "",
                   para(f"Ranked by {escape(r.metric)}{unit}, lower is better"
                        + (f" ({', '.join(levels)})." if levels else ".")), "",
-                  markdown(r.headers, r.rows, keep=5), "", para(r.verdict), ""]
+                  markdown(r.headers, r.rows, keep=5), ""]
+        for text, headers, rows in ([] if r.truth else _no_truth_lines(r)):
+            lines += [para(text), ""] + ([markdown(headers, rows), ""] if headers else [])
+        lines += [para(r.verdict), ""]
     return lines
 
 
@@ -281,6 +349,10 @@ def terminal_text(items: Sequence[ContextResult]) -> str:
     """The same first screen for the terminal: a table and a verdict per context."""
     blocks = []
     for r in items:
-        blocks.append(f"{clean(r.context)}\n" + terminal(r.headers, r.rows) + "\n"
+        extra = ""
+        for text, headers, rows in ([] if r.truth else _no_truth_lines(r)):
+            extra += clean(" ".join(text.split())) + "\n" + (
+                terminal(headers, rows) + "\n" if headers else "")
+        blocks.append(f"{clean(r.context)}\n" + terminal(r.headers, r.rows) + "\n" + extra
                       + clean(" ".join(r.verdict.split())))
     return "\n\n".join(blocks)

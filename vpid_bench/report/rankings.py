@@ -195,18 +195,22 @@ def search_lines(context: str, search: Sequence[Mapping[str, Any]],
     if not rows:
         return []
     h, body = search_table(rows, groups)
+    how = (f"`group`: optimizers sharing a letter are not separated by the Holm-corrected "
+           f"pairwise tests ({escape(test)}) on max(rel_gap, {REACHED:g})" if test else
+           "`group`: not tested in a single job's report")
     floor = rows[0].get("floor_name") or "rel_error"
     floor = metric_name if metric_name.lower() == floor else floor
     floor_text = (f"the {escape(floor)} of the instance's optimum x*" if floor != "rel_error" else
                   "the norm of x*'s relative errors against the true values, %")
-    how = (f"`group`: optimizers sharing a letter are not separated by the Holm-corrected "
-           f"pairwise tests ({escape(test)}) on max(rel_gap, {REACHED:g})" if test else
-           "`group`: not tested in a single job's report")
+    middle = (f"; the median floor ({floor_text}: what the record allows), the median "
+              "distance to x* (percent of the true values)")
+    if not any(math.isfinite(s["floor_median"]) or math.isfinite(s["to_opt_median"])
+               for s in rows):  # no truth and no metric: the floor columns stay empty
+        h, body = h[:6] + h[8:], [b[:6] + b[8:] for b in body]
+        middle = ""
     return [para(f"By search quality: the share of runs reaching their instance's optimum "
-                 f"(rel_gap <= {REACHED:g}), then the median rel_gap; the median floor "
-                 f"({floor_text}: what the record allows), the median distance to x* "
-                 f"(percent of the true values) and the anytime AUC (area under the "
-                 f"fixed-target ECDF, 0 to 1). {how}."), "",
+                 f"(rel_gap <= {REACHED:g}), then the median rel_gap{middle} and the anytime "
+                 f"AUC (area under the fixed-target ECDF, 0 to 1). {how}."), "",
             markdown(h, body, keep=6), ""]
 
 

@@ -1,0 +1,101 @@
+"""What a job leaves about the answer itself where no truth is known, and the problem's fixed
+comparison rows.
+
+* ``profile.json`` (a problem with residuals and no truth): the 95 % profile-likelihood
+  intervals (:func:`.profile.profile_intervals`) started at the instance's optimum, under
+  Gaussian noise whose σ per residual group is estimated from the residuals there
+  (:func:`.intervals.group_sigma`), when the first fit says they take at most
+  :data:`PROFILE_LIMIT_S`; otherwise the file says why they were skipped. Each run's own
+  Jacobian intervals are in its record (``result.intervals``).
+* ``comparisons.json`` (a problem whose :meth:`~vpid_bench.api.Problem.comparisons` gives
+  rows): each named row (a published estimate, a naive predictor...) with its objective and
+  metrics computed here where it gives a vector. These rows are never truths: the report
+  prints them beside the ranking, not as a reference for errors.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..problem import Problem
+from ..records.io import write_json_atomic
+
+PROFILE_FILE = "profile.json"
+COMPARISONS_FILE = "comparisons.json"
+PROFILE_SCHEMA = "vpid-bench/profile/1"
+COMPARISONS_SCHEMA = "vpid-bench/comparisons/1"
+#: Longest a profile may take (s), judged from its first fit before it starts (a job's
+#: analysis should not outlast its runs by much; docs/report.md).
+PROFILE_LIMIT_S = 120.0
+#: Most comparison rows a problem may give (the report prints each).
+MAX_COMPARISONS = 20
+
+
+def write_profile(problem: Problem, optimum: dict[str, Any], job_dir: Path,
+                  limit_s: float = PROFILE_LIMIT_S) -> Path:
+    """``job_dir/profile.json`` for ``problem`` (an instance without a truth) at
+    ``optimum`` (:func:`.optimum.update_instance_optimum`'s result)."""
+    from .intervals import group_sigma, jacobian_intervals
+    from .profile import ProfileTooSlowError, profile_intervals
+
+    x = np.asarray(optimum["x_opt"], dtype=float)
+    out: dict[str, Any] = {"schema": PROFILE_SCHEMA, "instance": problem.instance_id(),
+                           "start": x.tolist(), "f_start": float(optimum["f_opt"]),
+                           "names": list(problem.bounds.names), "limit_s": limit_s}
+    began = time.perf_counter()
+    try:
+        groups = np.asarray(problem.residual_groups(), dtype=int)
+        r = np.asarray(problem.residuals(x[None]), dtype=float)[0]
+        sigma = group_sigma(r, groups, x.size)
+        jac = jacobian_intervals(problem, x)
+        rel = (None if jac is None else
+               np.array([math.inf if s is None else s for s in jac["se"]]) / np.abs(x))
+        prof = profile_intervals(problem, start=x, sigma=sigma, rel_sd=rel, limit_s=limit_s)
+        out.update(status="ok", sigma=sigma.tolist(), **prof)
+    except ProfileTooSlowError as exc:
+        out.update(status="skipped", reason=str(exc))
+    except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:
+        out.update(status="failed", reason=" ".join(f"{type(exc).__name__}: {exc}".split())[:200])
+    out["seconds"] = time.perf_counter() - began
+    return write_json_atomic(Path(job_dir) / PROFILE_FILE, out)
+
+
+def comparison_rows(problem: Problem) -> list[dict[str, Any]]:
+    """The problem's fixed comparison rows as JSON-able rows: ``name``, ``x`` (physical
+    units, or ``None``), ``f`` (the objective at ``x``), ``metrics`` (the problem's metrics
+    of ``x``, updated by the ones the row gives), ``note``. A row whose ``x`` has the wrong
+    length is refused with :class:`ValueError` naming it."""
+    given = problem.comparisons() or {}
+    if len(given) > MAX_COMPARISONS:
+        raise ValueError(f"problem {problem.name!r}: comparisons() gave {len(given)} rows, "
+                         f"at most {MAX_COMPARISONS}")
+    rows = []
+    for name, row in given.items():
+        x = row.get("x")
+        f, metrics = None, {}
+        if x is not None:
+            x = np.asarray(x, dtype=float).reshape(-1)
+            if x.size != problem.bounds.dim:
+                raise ValueError(f"problem {problem.name!r}: comparison {name!r} has {x.size} "
+                                 f"values, the problem {problem.bounds.dim} parameters")
+            f = float(np.asarray(problem.evaluate(x[None]), dtype=float)[0])
+            metrics = {str(k): float(v) for k, v in (problem.metrics(x) or {}).items()}
+        metrics.update({str(k): float(v) for k, v in (row.get("metrics") or {}).items()})
+        rows.append({"name": str(name), "x": None if x is None else x.tolist(), "f": f,
+                     "metrics": metrics, "note": str(row.get("note", ""))})
+    return rows
+
+
+def write_comparisons(problem: Problem, job_dir: Path) -> Path | None:
+    """``job_dir/comparisons.json`` when the problem gives comparison rows, else nothing."""
+    rows = comparison_rows(problem)
+    if not rows:
+        return None
+    return write_json_atomic(Path(job_dir) / COMPARISONS_FILE,
+                             {"schema": COMPARISONS_SCHEMA, "problem": problem.name,
+                              "rows": rows})

@@ -1,0 +1,100 @@
+"""Intervals of identified parameters on a record without a truth (a measured record).
+
+Where no truth is known, accuracy cannot be measured; what the record says about the answer
+can. For an identified vector ``x̂`` (physical units) of a problem with residuals
+``r(θ)`` (:meth:`Problem.residuals`, in the objective's units) grouped by channel
+(:meth:`Problem.residual_groups`):
+
+* the noise's standard deviation of each group ``g`` is estimated from the residuals at
+  ``x̂``: ``σ̂_g² = RSS_g / (m_g − d m_g / m)`` (``m_g`` entries of ``m`` in the group, ``d``
+  parameters: the degrees of freedom shared out between the groups by size; for one group
+  this is the textbook ``RSS / (m − d)``). Whatever misfit the model leaves (model error) is
+  counted as noise here, so an interval widens with it;
+* the covariance of ``x̂`` is ``(Jᵀ W J)⁻¹`` with ``J`` the central-difference Jacobian of the
+  residuals at ``x̂`` and ``W = diag(1 / σ̂_g²)``: the Gauss–Newton (Wald) approximation;
+* the 95 % interval of parameter ``j`` is ``x̂_j ± 1.96 sqrt(cov_jj)`` (asymptotic: with the
+  thousands of samples of a record the Student ``t`` quantile differs by under 0.1 %). It is
+  not clipped to the search box; a parameter the record cannot determine (a vanishing
+  singular value of the whitened Jacobian in which it takes part) gets an unbounded one.
+
+For a model linear in ``θ`` with one group this is the ordinary least-squares confidence
+interval (tested against the closed form). The profile likelihood
+(:func:`.profile.profile_intervals` with ``sigma`` from here) drops the linearisation.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ..problem import Problem
+
+#: The two-sided 95 % normal quantile (scipy.stats.norm.ppf(0.975)).
+Z95 = 1.959963984540054
+#: A singular value of the whitened Jacobian (in relative parameter changes) below this
+#: fraction of the largest is a direction the record does not determine.
+UNDETERMINED_RATIO = 1e-9
+
+
+def group_sigma(residuals: np.ndarray, groups: np.ndarray, dim: int) -> np.ndarray:
+    """``σ̂_g`` of each residual group from residuals at an estimate (see the module),
+    ``(groups,)``; ``RSS_g / m_g`` where the degrees of freedom would leave none."""
+    r = np.asarray(residuals, dtype=float).reshape(-1)
+    groups = np.asarray(groups, dtype=int).reshape(-1)
+    m = r.size
+    out = np.empty(int(groups.max()) + 1 if groups.size else 0)
+    for g in range(out.size):
+        rg = r[groups == g]
+        dof = rg.size - dim * rg.size / m
+        out[g] = math.sqrt(float(rg @ rg) / (dof if dof > 0 else max(rg.size, 1)))
+    return out
+
+
+def jacobian_intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None:
+    """95 % intervals of the parameters at ``x`` (see the module), or ``None`` when a
+    residual at ``x`` is not finite or every residual is zero. Keys: ``method``
+    (``"jacobian"``), ``level`` (0.95), ``lower``, ``upper``, ``se`` (standard errors,
+    physical units; ``None``: an undetermined parameter, unbounded), ``sigma`` (``σ̂`` per residual
+    group, in the residuals' units), ``dof`` (``m − d``)."""
+    from .identifiability import jacobian
+
+    x = np.asarray(x, dtype=float).reshape(-1)
+    groups = np.asarray(problem.residual_groups(), dtype=int).reshape(-1)
+    r = np.asarray(problem.residuals(x[None]), dtype=float)[0]
+    if r.shape != groups.shape or not np.all(np.isfinite(r)):
+        return None
+    sigma = group_sigma(r, groups, x.size)
+    if not np.any(sigma > 0):
+        return None
+    per = sigma[groups]
+    kept = per > 0
+    J = jacobian(problem, x)
+    if not np.all(np.isfinite(J)):
+        return None
+    Jw = J[kept] / per[kept][:, None]
+    scale = np.where(x != 0, np.abs(x), 1.0)
+    u, s, vt = np.linalg.svd(Jw * scale[None], full_matrices=False)
+    se = np.full(x.size, math.inf)
+    if s.size and s[0] > 0:
+        good = s > UNDETERMINED_RATIO * s[0]
+        # covariance in relative coordinates from the determined directions only
+        cov_rel = (vt[good].T / s[good] ** 2) @ vt[good]
+        se_rel = np.sqrt(np.maximum(np.diag(cov_rel), 0.0))
+        blind = np.any(np.abs(vt[~good]) > 1e-3, axis=0) if np.any(~good) else \
+            np.zeros(x.size, bool)
+        se = np.where(blind, math.inf, se_rel * scale)
+    return {
+        "method": "jacobian",
+        "level": 0.95,
+        "lower": _finite_or_none(x - Z95 * se),
+        "upper": _finite_or_none(x + Z95 * se),
+        "se": _finite_or_none(se),
+        "sigma": sigma.tolist(),
+        "dof": int(r.size - x.size),
+    }
+
+
+def _finite_or_none(a: np.ndarray) -> list[float | None]:
+    return [float(v) if math.isfinite(v) else None for v in a]

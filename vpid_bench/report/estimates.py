@@ -1,0 +1,224 @@
+"""The report's view of a problem without a truth: which contexts have none, the identified
+values with their 95 % intervals, and the problem's fixed comparison rows.
+
+It reads only what the jobs wrote: each run's ``result.intervals`` (the Jacobian intervals of
+its best vector, :mod:`vpid_bench.analysis.intervals`), each job's ``profile.json`` and
+``comparisons.json`` (:mod:`vpid_bench.analysis.estimates`). Everything from a results folder
+is untrusted: a field of the wrong type, length or size is left out, never shown.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from ..analysis.estimates import (
+    COMPARISONS_FILE,
+    COMPARISONS_SCHEMA,
+    MAX_COMPARISONS,
+    PROFILE_FILE,
+    PROFILE_SCHEMA,
+)
+from ..fileio import loads_json
+from .load import first_file_by_context
+
+#: Larger files are not read (a profile of 1000 parameters is about 100 kB).
+MAX_BYTES = 1_000_000
+#: The words every no-truth context starts with (the first screen and the body).
+NO_TRUTH = ("No truth: the parameters that made this record are not known (a measured "
+            "record), so no error against any nominal value is computed")
+
+
+@dataclasses.dataclass
+class Identified:
+    """The identified values of one context: the best run's vector with its intervals."""
+
+    run: str  # e.g. "lsq, run 3"
+    f: float
+    names: list[str]
+    units: list[str]
+    x: list[float]
+    lower: list[float | None]  # Jacobian interval (None: unbounded)
+    upper: list[float | None]
+    sigma: list[float]  # σ estimated per residual group
+    profile: dict[str, Any] | None = None  # profile.json (status ok), or None
+    profile_note: str = ""  # why there is no profile, when there is none
+
+    def rows(self) -> tuple[list[str], list[list[Any]]]:
+        """A table: parameter, unit, value, its Jacobian interval, the half-width in % of
+        the value, and the profile interval where one was computed."""
+        headers = ["parameter", "unit", "value", "95 % interval (Jacobian)", "± %"]
+        prof = self.profile
+        if prof is not None:
+            headers += ["likelihood's estimate", "95 % interval (profile)"]
+        out = []
+        for j, name in enumerate(self.names):
+            lo, hi, x = self.lower[j], self.upper[j], self.x[j]
+            half = (100.0 * (hi - x) / abs(x) if hi is not None and x else math.nan)
+            row: list[Any] = [name, self.units[j] if j < len(self.units) else "", x,
+                              _interval(lo, hi), half]
+            if prof is not None:
+                est = prof.get("estimate")
+                row += [est[j] if _ends(est, len(self.names)) else None,
+                        _interval(prof["lower"][j], prof["upper"][j])]
+            out.append(row)
+        return headers, out
+
+
+def _interval(lo: float | None, hi: float | None) -> str:
+    from .render import fmt
+
+    return f"[{'open' if lo is None else fmt(lo)}, {'open' if hi is None else fmt(hi)}]"
+
+
+def _num(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _ends(v: Any, d: int) -> bool:
+    return isinstance(v, list) and len(v) == d and all(x is None or _num(x) for x in v)
+
+
+def no_truth(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
+             ) -> dict[str, bool]:
+    """Per context, whether its problem has no truth: every record of it has
+    ``parameters.true`` null."""
+    by_id = {r["run_id"]: r for r in records}
+    out: dict[str, bool] = {}
+    for row in rows:
+        rec = by_id.get(row["run_id"]) or {}
+        none = (rec.get("parameters") or {}).get("true") is None
+        out[row["context"]] = out.get(row["context"], True) and none
+    return out
+
+
+def check_intervals(value: Any, d: int) -> dict[str, Any] | None:
+    """A record's ``result.intervals``, or ``None`` when missing or malformed."""
+    if not isinstance(value, Mapping):
+        return None
+    if not (_ends(value.get("lower"), d) and _ends(value.get("upper"), d)):
+        return None
+    sigma = value.get("sigma")
+    if not (isinstance(sigma, list) and 0 < len(sigma) <= 1000 and all(_num(s) for s in sigma)):
+        return None
+    return dict(value)
+
+
+def read_profile(path: Path, d: int) -> dict[str, Any] | None:
+    """A job's ``profile.json`` (any status), checked; ``None`` when missing or malformed."""
+    data = _read(path)
+    if not isinstance(data, dict) or data.get("schema") != PROFILE_SCHEMA:
+        return None
+    if not _num(data.get("f_start")) or data.get("status") not in ("ok", "skipped", "failed"):
+        return None
+    if data["status"] == "ok" and not (_ends(data.get("lower"), d)
+                                       and _ends(data.get("upper"), d)):
+        return None
+    reason = data.get("reason", "")
+    data["reason"] = reason[:200] if isinstance(reason, str) else ""
+    return data
+
+
+def _read(path: Path) -> Any:
+    try:
+        if path.is_symlink() or not path.is_file() or path.stat().st_size > MAX_BYTES:
+            return None
+        return loads_json(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError):
+        return None
+
+
+def read_comparisons(path: Path, record: Mapping[str, Any]) -> list[dict[str, Any]] | None:
+    """A job's ``comparisons.json`` rows, checked; ``None`` when missing or malformed."""
+    data = _read(path)
+    if not isinstance(data, dict) or data.get("schema") != COMPARISONS_SCHEMA:
+        return None
+    rows = data.get("rows")
+    if not isinstance(rows, list) or not 0 < len(rows) <= MAX_COMPARISONS:
+        return None
+    out = []
+    for row in rows:
+        if not isinstance(row, dict) or not isinstance(row.get("name"), str):
+            return None
+        metrics = row.get("metrics") or {}
+        if not (isinstance(metrics, dict) and all(isinstance(k, str) and _num(v)
+                                                  for k, v in metrics.items())):
+            return None
+        f = row.get("f")
+        note = row.get("note")
+        out.append({"name": row["name"][:80], "f": f if _num(f) else math.nan,
+                    "metrics": metrics, "note": note[:200] if isinstance(note, str) else ""})
+    return out
+
+
+def comparisons_by_context(records: Sequence[Mapping[str, Any]],
+                           rows: Sequence[Mapping[str, Any]]) -> dict[str, list[dict[str, Any]]]:
+    """Per context, the comparison rows of its first job that wrote readable ones."""
+    return first_file_by_context(records, rows, COMPARISONS_FILE, read_comparisons)
+
+
+def identified_by_context(records: Sequence[Mapping[str, Any]],
+                          rows: Sequence[Mapping[str, Any]],
+                          contexts: Mapping[str, bool]) -> dict[str, Identified]:
+    """Per context without a truth: the best ok run (lowest headline metric, then objective)
+    with readable intervals, and the profile of the context's job that started it at the
+    lowest objective."""
+    by_id = {r["run_id"]: r for r in records}
+    out: dict[str, Identified] = {}
+    for context in (c for c, none in contexts.items() if none):
+        mine = [r for r in rows if r["context"] == context and r["status"] == "ok"]
+        mine.sort(key=lambda r: (_key(r.get("metric")), _key(r.get("f_best"))))
+        for row in mine:
+            rec = by_id[row["run_id"]]
+            found = _identified(row, rec)
+            if found is not None:
+                found.profile, found.profile_note = _best_profile(
+                    [by_id[r["run_id"]] for r in mine], len(found.names))
+                out[context] = found
+                break
+    return out
+
+
+def _key(v: Any) -> float:
+    return float(v) if _num(v) else math.inf
+
+
+def _identified(row: Mapping[str, Any], rec: Mapping[str, Any]) -> Identified | None:
+    params = rec.get("parameters") or {}
+    names = list(params.get("names") or [])
+    res = rec.get("result") or {}
+    x = res.get("x_best")
+    d = len(names)
+    if not (d and isinstance(x, list) and len(x) == d and all(_num(v) for v in x)):
+        return None
+    iv = check_intervals(res.get("intervals"), d)
+    if iv is None:
+        return None
+    return Identified(f"{row['algorithm']}, run {row['run_index']}", _key(res.get("f_best")),
+                      names, list(params.get("units") or []), [float(v) for v in x],
+                      iv["lower"], iv["upper"], [float(s) for s in iv["sigma"]])
+
+
+def _best_profile(records: Sequence[Mapping[str, Any]], d: int
+                  ) -> tuple[dict[str, Any] | None, str]:
+    """The readable ``profile.json`` with the lowest start among the records' job folders
+    (status ok), or ``None`` and why not (the reason of one that was skipped)."""
+    seen: set[str] = set()
+    found: list[dict[str, Any]] = []
+    for rec in records:
+        folder = str(rec.get("_job_dir", "."))
+        if folder in seen:
+            continue
+        seen.add(folder)
+        data = read_profile(Path(folder) / PROFILE_FILE, d)
+        if data is not None:
+            found.append(data)
+    ok = [p for p in found if p["status"] == "ok"]
+    if ok:
+        return min(ok, key=lambda p: p["f_start"]), ""
+    if found:
+        return None, f"profile likelihood {found[0]['status']}: {found[0]['reason']}"
+    return None, "no profile likelihood was computed"
