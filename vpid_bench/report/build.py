@@ -35,10 +35,11 @@ from typing import Any
 from . import anytime, body, first_screen, render, tables
 from .compute import ReportData, compute
 from .load import LoadedRecords, NoRecordsError
+from .model import ReportModel, SuiteScores
 from .plugin_sections import plugin_sections
 from .render import para
 from .safe import escape, inside, slug
-from .sections import HeadlineColumn, Section
+from .sections import HeadlineColumn
 
 __all__ = ["NoRecordsError", "Report", "build_report", "full_report_command"]
 
@@ -64,6 +65,8 @@ class Report:
     optima_errors: list[str] = dataclasses.field(default_factory=list)
     #: one line per problem whose archived runs stand in the report, or were refused
     archive_notes: list[str] = dataclasses.field(default_factory=list)
+    #: the HTML site's first page (``index.html``), beside report.md
+    index_html: Path | None = None
 
     @property
     def failures(self) -> list[str]:
@@ -122,8 +125,7 @@ def build_report(
     out_dir.mkdir(parents=True, exist_ok=True)
     names = _Names(out_dir)
     written = _write_tables(data, names)
-    figs: dict[str, Path | str] = {}
-    suite: list[str] = []
+    model = ReportModel(data, first_screen.results(data), out_dir)
     if not short:
         from .core_figures import draw_all
         from .ioh_export import export_ioh
@@ -132,23 +134,40 @@ def build_report(
             from ..plugins import Registry
 
             registry = Registry()
-        figs = draw_all(data, names.file)
+        model.figs = draw_all(data, names.file)
         written += export_ioh(out_dir / "ioh", data.loaded.records, data.rows, out_dir)
-        suite, more = _suite_scores(data, registry, names)
+        model.suite, more = _suite_scores(data, registry, names)
         written += more
-    sections, extra, section_errors = plugin_sections(registry, data, out_dir, names.claim)
-    written += _write_headline(data, extra, names)
-    written += [v for v in figs.values() if isinstance(v, Path)]
-    for _, sec in sections:
-        written += list(sec.files)
-    results = first_screen.results(data)
+    model.sections, model.extra, model.section_errors = plugin_sections(
+        registry, data, out_dir, names.claim)
+    written += _write_headline(data, model.extra, names)
+    written += [v for v in model.figs.values() if isinstance(v, Path)]
+    for placed in model.sections:
+        written += list(placed.section.files)
     md = names.claim(out_dir / "report.md")
-    md.write_text("\n".join(_markdown(data, results, sections, section_errors, extra, figs,
-                                      out_dir, suite)), encoding="utf-8")
+    md.write_text("\n".join(_markdown(model)), encoding="utf-8")
     written.append(md)
-    return Report(out_dir, md, first_screen.terminal_text(results), len(data.loaded.records),
-                  data.problems, written, {k: v for k, v in figs.items() if isinstance(v, str)},
-                  data.loaded, section_errors, data.optima_errors, data.archive_notes)
+    site = _write_site(model, names)
+    written += site
+    return Report(out_dir, md, first_screen.terminal_text(model.results),
+                  len(data.loaded.records), data.problems, written,
+                  {k: v for k, v in model.figs.items() if isinstance(v, str)}, data.loaded,
+                  model.section_errors, data.optima_errors, data.archive_notes,
+                  site[0] if site else None)
+
+
+def _write_site(model: ReportModel, names: _Names) -> list[Path]:
+    """The HTML site beside report.md (:mod:`.site`), ``index.html`` first; its interactive
+    figures need only numpy, so a single job's report has them too."""
+    from .site import write_site
+    from .site_pages import interactive_figures
+
+    try:
+        model.interactive = interactive_figures(model.data)
+    except Exception as exc:  # noqa: BLE001 - a figure's fault costs the figures only
+        log.debug("interactive figures failed", exc_info=True)
+        model.section_errors.append(f"interactive figures: {type(exc).__name__}: {exc}")
+    return write_site(model, names.claim)
 
 
 def _table(names: _Names, stem: str, headers: Sequence[str],
@@ -209,14 +228,14 @@ def _write_headline(data: ReportData, extra: list[HeadlineColumn], names: _Names
 
 
 def _suite_scores(data: ReportData, registry: Any, names: _Names
-                  ) -> tuple[list[str], list[Path]]:
-    """The section across the suite (Markdown lines; none for fewer than two problems with
-    known optima), its table and its figure (:mod:`.suite_scores`)."""
+                  ) -> tuple[SuiteScores | None, list[Path]]:
+    """The scores across the suite (none for fewer than two contexts with known optima),
+    their tables and figure (:mod:`.suite_scores`)."""
     from . import suite_scores as ss
 
     facts = ss.context_facts(data.loaded.records, data.rows, ss.family_lookup(registry))
     if len({h.context for h in data.hits}) < 2:
-        return [], []
+        return None, []
     rows, notes = ss.score_rows(data.hits, facts)
     ladder = ss.ladder_rows(data.hits, facts)
     written = (_table(names, "suite_scores", ss.HEADERS, rows)
@@ -224,14 +243,12 @@ def _suite_scores(data: ReportData, registry: Any, names: _Names
     fig = ss.figure(data.hits, facts, names.file("figures", "suite_ecdf", ".png"))
     if isinstance(fig, Path):
         written.append(fig)
-    return body.suite_md(rows, notes, fig, names.root) + body.ladder_md(ladder), written
+    return SuiteScores(rows, notes, ladder, fig), written
 
 
-def _markdown(data: ReportData, results: list[Any], sections: list[tuple[str, Section]],
-              section_errors: list[str], extra: list[HeadlineColumn],
-              figs: dict[str, Path | str], out_dir: Path, suite: Sequence[str] = ()
-              ) -> list[str]:
+def _markdown(model: ReportModel) -> list[str]:
     """``report.md``: the first screen, then detail, then method and sources."""
+    data, out_dir = model.data, model.out_dir
     n = len(data.loaded.records)
     n_ok = sum(r["status"] == "ok" for r in data.loaded.records)
     what = ", ".join(escape(p) for p in data.problems)
@@ -241,28 +258,31 @@ def _markdown(data: ReportData, results: list[Any], sections: list[tuple[str, Se
                                           "predicts the record)" if any(
                                               data.no_truth.values()) else "")
                   + ", and why: below, per context. How to read it, the tests and the "
-                  "sources follow."), ""]
+                  "sources follow. The same report as browsable pages: `index.html`."), ""]
     if data.archive_notes:
         lines += [para("Archived runs, made earlier by the code named beside them and "
                        "ranked here with this report's own runs (`archive=false` leaves "
                        "them out):"), ""]
         lines += [f"- {escape(n)}" for n in data.archive_notes] + [""]
-    lines += first_screen.markdown_lines(results)
-    lines += list(suite)
+    lines += first_screen.markdown_lines(model.results)
+    if model.suite is not None:
+        s = model.suite
+        lines += body.suite_md(s.rows, s.notes, s.figure, out_dir) + body.ladder_md(s.ladder)
     if data.short and len(data.paths) == 1:
         lines += [para("A single job's report: statistics, no tests, no figures. The full "
                        "report with figures:"), "",
                   f"    {escape(full_report_command(data.paths[0]))}", ""]
-    lines += body.headline_md(data, extra)
-    for _, sec in sections:
-        lines += body.section_md(sec, out_dir)
-    if section_errors:
-        lines += [para("Not built: " + "; ".join(escape(e) for e in section_errors) + "."), ""]
+    lines += body.headline_md(data, model.extra)
+    for placed in model.sections:
+        lines += body.section_md(placed.section, out_dir)
+    if model.section_errors:
+        lines += [para("Not built: " + "; ".join(escape(e) for e in model.section_errors)
+                       + "."), ""]
     lines += body.stats_md(data.summary)
     if data.tests is not None:
         t = data.tests
         lines += body.tests_md(t.kw, t.pairs, t.fr, data.alpha, t.by_inst)
-        lines += body.figures_md(figs, out_dir)
+        lines += body.figures_md(model.figs, out_dir)
     lines += ["## How to read this report", "",
               body.HOW_TO_READ.format(alpha=data.alpha, baseline=escape(data.baseline)), ""]
     lines += ["## Sources", ""] + body.sources_lines(data.paths, data.loaded, data.rows) + [""]

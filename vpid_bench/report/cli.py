@@ -20,8 +20,8 @@ from .safe import clean
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="vpid-bench-report",
-        description="Build a vpid-bench report (Markdown, CSV, LaTeX, PNG figures) from the "
-        "run records below one or more sweep or job folders, merged.",
+        description="Build a vpid-bench report (Markdown, HTML pages, CSV, LaTeX, PNG figures) "
+        "from the run records below one or more sweep or job folders, merged.",
     )
     p.add_argument("paths", nargs="+", type=Path, metavar="DIR",
                    help="sweep folders, job folders or record files (any number)")
@@ -84,6 +84,8 @@ def _main(argv: Sequence[str] | None) -> int:
         print(clean(note), file=sys.stderr)
     print(clean(report.headline, keep_newlines=True))
     print(f"\nreport: {clean(report.report_md)} ({report.n_records} run records)")
+    if report.index_html is not None:
+        print(f"html: {clean(report.index_html)} (open it in a browser; it works offline)")
     for line in report.failures:
         print(f"warning: {clean(line)}", file=sys.stderr)
     return _exit(1 if report.failures else 0, argv)

@@ -11,6 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from .model import PlacedSection
 from .safe import UnsafePathError, inside
 from .sections import Contribution, HeadlineColumn, ReportContext, Section
 
@@ -18,10 +19,11 @@ log = logging.getLogger(__name__)
 
 
 def plugin_sections(registry: Any, data: Any, out_dir: Path, claim: Callable[[Path], Path]
-                    ) -> tuple[list[tuple[str, Section]], list[HeadlineColumn], list[str]]:
+                    ) -> tuple[list[PlacedSection], list[HeadlineColumn], list[str]]:
     """Per problem of ``data`` (a :class:`~.compute.ReportData`): the core's sections
     (identifiability, measured-vs-fitted signals), then the plugins'. Returns the sections
-    with their plugin's name, the headline columns they add, and one line per failure."""
+    (each with its problem and plugin), the headline columns they add, and one line per
+    failure."""
     from . import identifiability, signals
 
     if registry is None:
@@ -29,7 +31,7 @@ def plugin_sections(registry: Any, data: Any, out_dir: Path, claim: Callable[[Pa
 
         registry = Registry()
     by_id = {r["run_id"]: r for r in data.loaded.records}
-    sections: list[tuple[str, Section]] = []
+    sections: list[PlacedSection] = []
     columns: list[HeadlineColumn] = []
     errors: list[str] = []
     for problem in data.problems:
@@ -45,7 +47,7 @@ def plugin_sections(registry: Any, data: Any, out_dir: Path, claim: Callable[[Pa
                 if contrib is None:
                     continue
                 new, bad = _checked(contrib, plugin, out_dir)
-                sections += new
+                sections += [PlacedSection(plugin, problem, sec) for _, sec in new]
                 errors += bad
                 columns += [c for c in contrib.headline if isinstance(c, HeadlineColumn)]
             except Exception as exc:  # a plugin's fault costs its section, not the report

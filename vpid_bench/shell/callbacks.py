@@ -117,6 +117,8 @@ def write_report(folder: Path, short: bool, archive: bool = True) -> bool:
             print(clean(note), file=sys.stderr, flush=True)
         print(f"\n{clean(report.headline, keep_newlines=True)}\n\nreport: "
               f"{clean(report.report_md)}", flush=True)
+        if report.index_html is not None:
+            print(f"html: {clean(report.index_html)}", flush=True)
         if short:
             print(f"report with figures and statistics: vpid-bench-report {folder} -o "
                   f"{folder / 'report-full'}", flush=True)

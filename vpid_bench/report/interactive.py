@@ -1,0 +1,134 @@
+"""The report's interactive figures as data: the fixed-target ECDF and the convergence of each
+context, one series per optimizer, ready to draw as SVG (:mod:`.svg`) or to test.
+
+Numpy only, no drawing library: a :class:`Figure` holds what is drawn (each optimizer's step
+curve, the convergence's interquartile band, reference lines) in data units, with the axis
+labels, units and scales, and a sentence that describes it (the alt text). The HTML pages
+draw them inline, and a reader switches optimizers on and off.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from .anytime import RunHits, auc, context_budget, ecdf
+
+#: At most this many points per curve (steps thinned as :func:`.figures.thin_steps` does).
+MAX_POINTS = 160
+#: ECDF evaluation grid: this many log-spaced evaluation counts from 1 to the budget.
+ECDF_GRID = 240
+
+
+@dataclasses.dataclass(frozen=True)
+class Series:
+    """One optimizer's curve: a step function through (x, y) (each y holds until the next
+    x); ``lo``/``hi``: a band around it (the interquartile range), or empty."""
+
+    name: str
+    x: tuple[float, ...]
+    y: tuple[float, ...]
+    lo: tuple[float, ...] = ()
+    hi: tuple[float, ...] = ()
+    label: str = ""  # the legend's text (defaults to the name)
+
+
+@dataclasses.dataclass(frozen=True)
+class Figure:
+    """An interactive figure: its series, axes (label with unit, log or linear) and alt
+    text. ``lines``: horizontal reference lines (label, y)."""
+
+    key: str
+    title: str
+    alt: str
+    x_label: str
+    y_label: str
+    x_log: bool
+    y_log: bool
+    series: tuple[Series, ...]
+    lines: tuple[tuple[str, float], ...] = ()
+    y_range: tuple[float, float] | None = None
+
+
+def _tuple(a: Any) -> tuple[float, ...]:
+    return tuple(float(v) for v in np.asarray(a, float))
+
+
+def ecdf_figure(hits: Sequence[RunHits], context: str) -> Figure | None:
+    """The fixed-target ECDF of ``context`` (targets rel_gap 1 ... 1e-6; see :mod:`.anytime`),
+    one series per optimizer with its AUC in the legend; ``None`` when no run of the context
+    knows its instance's optimum."""
+    from .figures import thin_steps
+
+    sel = [h for h in hits if h.context == context]
+    if not sel:
+        return None
+    budget = context_budget(hits, context)
+    grid = np.unique(np.round(np.geomspace(1.0, max(budget, 2.0), ECDF_GRID)))
+    groups: dict[str, list[RunHits]] = {}
+    for h in sel:
+        groups.setdefault(h.algorithm, []).append(h)
+    series = []
+    for name in sorted(groups):
+        g = groups[name]
+        x, y = thin_steps(grid, ecdf(g, grid), max_points=MAX_POINTS)
+        series.append(Series(name, _tuple(x), _tuple(y),
+                             label=f"{name} (AUC {auc(g, budget):.2f}, {len(g)} runs)"))
+    alt = (f"Fixed-target ECDF of {context}: for each of {len(series)} optimizers, the share "
+           "of (run, target) pairs reached (targets: relative gap to each instance's optimum "
+           f"1, 0.1, ..., 1e-6) against objective evaluations, 1 to {budget:,.0f}, log scale.")
+    return Figure(f"ecdf:{context}", f"Fixed-target ECDF, {context}", alt,
+                  "objective evaluations (log scale)", "share of (run, target) pairs reached",
+                  True, False, tuple(series), y_range=(0.0, 1.0))
+
+
+def convergence_figure(panel: Mapping[str, Any]) -> Figure:
+    """One context's convergence (a panel of :func:`.figures.convergence_panels`): the median
+    best objective so far per optimizer with its interquartile band, and the objective at the
+    truth and at the record optimum where known."""
+    from .figures import thin_steps
+
+    context = str(panel["context"])
+    series = []
+    values = [np.asarray(panel["values"], float)]
+    for c in panel["curves"]:
+        x, m, lo, hi = thin_steps(c["x"], c["median"], c["q25"], c["q75"],
+                                  max_points=MAX_POINTS)
+        series.append(Series(str(c["algorithm"]), _tuple(x), _tuple(m), _tuple(lo), _tuple(hi)))
+    lines = []
+    for label, key in (("f at the true parameters (median over instances)", "f_true"),
+                       ("record optimum f* (median over instances)", "f_opt")):
+        v = panel.get(key)
+        if v is not None and math.isfinite(v):
+            lines.append((label, float(v)))
+            values.append(np.array([v]))
+    every = np.concatenate(values)
+    finite = every[np.isfinite(every)]
+    y_log = bool(finite.size and np.all(finite > 0))
+    runs = ", ".join(map(str, panel.get("runs", [])))
+    alt = (f"Convergence on {context}: the median over the runs (runs per optimizer: {runs}) "
+           f"of the best objective value found so far, against objective evaluations, for "
+           f"{len(series)} optimizers, with the interquartile range as a band"
+           + (" and dashed reference lines" if lines else "") + ".")
+    return Figure(f"convergence:{context}", f"Convergence, {context}", alt,
+                  "objective evaluations used",
+                  "best objective value so far" + (" (log scale)" if y_log else ""),
+                  False, y_log, tuple(series), tuple(lines))
+
+
+def convergence_figures(records: Sequence[Mapping[str, Any]],
+                        rows: Sequence[Mapping[str, Any]]) -> dict[str, Figure]:
+    """Per context, its convergence figure (contexts without a finite trace left out)."""
+    from .figures import convergence_panels
+    from .identifiability import reference_levels
+    from .load import trace_sets
+
+    traces = trace_sets(list(records), list(rows))
+    if not traces:
+        return {}
+    panels = convergence_panels(traces, *reference_levels(records, rows))
+    return {str(p["context"]): convergence_figure(p) for p in panels}

@@ -1,0 +1,67 @@
+"""The report as one model: everything its renderers show, computed once.
+
+:func:`.build.build_report` fills a :class:`ReportModel` in stages (the computation of
+:mod:`.compute`, the first screen, the sections of :mod:`.plugin_sections`, the figures, the
+suite scores), then hands the same model to each renderer: the terminal's first screen and
+``report.md`` (:mod:`.first_screen`, :mod:`.body`) and the HTML site (:mod:`.site`). A
+renderer only formats what the model holds.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from .sections import HeadlineColumn, Section
+
+
+@dataclasses.dataclass(frozen=True)
+class PlacedSection:
+    """A report section with the problem it is about and the plugin that made it (the core's
+    are ``vpid-bench``)."""
+
+    plugin: str
+    problem: str
+    section: Section
+
+
+@dataclasses.dataclass
+class SuiteScores:
+    """The scores across the suite (:mod:`.suite_scores`): rows with
+    :data:`~.suite_scores.HEADERS`, notes on optimizers left out, the budget ladder and its
+    figure (a PNG path, or why it was not drawn)."""
+
+    rows: list[list[Any]]
+    notes: list[str]
+    ladder: list[list[Any]]
+    figure: Path | str | None
+
+
+@dataclasses.dataclass
+class ReportModel:
+    """What the report says, for every renderer."""
+
+    data: Any  # a compute.ReportData
+    results: list[Any]  # first_screen.ContextResult per context
+    out_dir: Path
+    sections: list[PlacedSection] = dataclasses.field(default_factory=list)
+    section_errors: list[str] = dataclasses.field(default_factory=list)
+    extra: list[HeadlineColumn] = dataclasses.field(default_factory=list)
+    #: the core figures: title -> PNG path, or why it was not drawn
+    figs: dict[str, Path | str] = dataclasses.field(default_factory=dict)
+    suite: SuiteScores | None = None
+    #: the interactive figures per context (:mod:`.interactive`): ``ecdf`` and ``convergence``
+    interactive: dict[str, dict[str, Any]] = dataclasses.field(default_factory=dict)
+
+    def problem_of(self) -> dict[str, str]:
+        """Each context's problem."""
+        return {r["context"]: r["problem"] for r in self.data.rows}
+
+    def contexts_of(self, problem: str) -> list[str]:
+        of = self.problem_of()
+        return [c for c in self.data.contexts if of.get(c) == problem]
+
+    def sections_of(self, problem: str) -> Sequence[PlacedSection]:
+        return [s for s in self.sections if s.problem == problem]

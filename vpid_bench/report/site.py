@@ -1,0 +1,207 @@
+"""The report as a static HTML site, beside ``report.md``: ``index.html`` (the verdict per
+problem and the suite scores first), one page per problem, one per optimizer across the
+problems, and the protocol with the data's provenance.
+
+It renders the same :class:`~.model.ReportModel` as the Markdown and the terminal: nothing
+here computes a result. Pages come from Jinja2 templates in auto-escaping, strict mode (a
+name from a record or an archive is always escaped; an undefined template value is an
+error, not an empty string); every link is made by one naming function (:class:`Pages`) and
+checked to exist once the pages are written. The site works from ``file://`` and loads
+nothing from the network: one small style sheet and one small script (table sorting, the
+figures' optimizer toggles) are written beside the pages, the figures are the report's PNG
+files and inline SVG (:mod:`.svg`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime as _dt
+import functools
+import math
+import re
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from importlib.resources import files
+from pathlib import Path
+from typing import Any
+
+from . import render
+from .safe import slug
+
+#: The site's own files, copied from the package beside the pages.
+ASSETS = ("report.css", "report.js")
+ASSET_DIR = "assets"
+#: Columns whose cells link to an optimizer's page, and to a problem's page.
+OPTIMIZER_COLUMNS = ("optimizer", "algorithm")
+PROBLEM_COLUMNS = ("problem",)
+
+
+@dataclasses.dataclass(frozen=True)
+class Cell:
+    """A table cell: its text, the raw value it sorts by (``None``: by text), a link."""
+
+    text: str
+    sort: str | None = None
+    href: str | None = None
+    numeric: bool = False
+
+
+@dataclasses.dataclass(frozen=True)
+class Table:
+    headers: tuple[str, ...]
+    rows: tuple[tuple[Cell, ...], ...]
+    caption: str = ""
+
+
+class Pages:
+    """The one naming function of the site: the file of each page, unique per name."""
+
+    def __init__(self, problems: Iterable[str], optimizers: Iterable[str]) -> None:
+        used = {"index.html", "protocol.html"}
+        self._names: dict[tuple[str, str], str] = {}
+        for kind, names in (("problem", problems), ("optimizer", optimizers)):
+            for name in sorted(set(names)):
+                base, n = f"{kind}-{slug(name)}", 1
+                file = f"{base}.html"
+                while file in used:
+                    n += 1
+                    file = f"{base}-{n}.html"
+                used.add(file)
+                self._names[(kind, name)] = file
+
+    def problem(self, name: str) -> str | None:
+        return self._names.get(("problem", name))
+
+    def optimizer(self, name: str) -> str | None:
+        return self._names.get(("optimizer", name))
+
+    def all(self) -> dict[tuple[str, str], str]:
+        return dict(self._names)
+
+
+def _sort_value(v: Any) -> str | None:
+    """The raw value a numeric cell sorts by (``""`` for a missing number), or ``None``."""
+    if isinstance(v, bool) or v is None or isinstance(v, str):
+        return "" if v is None else None
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        return None
+    return repr(x) if math.isfinite(x) or math.isinf(x) else ""
+
+
+def table(headers: Sequence[str], rows: Sequence[Sequence[Any]],
+          links: Mapping[str, Callable[[str], str | None]] | None = None,
+          caption: str = "", digits: int = 4) -> Table:
+    """A sortable table: numbers formatted per column as in report.md (:func:`.render.cells`),
+    sorting on their raw values; cells of the ``links`` columns link to a page."""
+    text = render.cells(headers, rows, digits) if rows else []
+    links = links or {}
+    out = []
+    for raw, shown in zip(rows, text, strict=True):
+        cells = []
+        for h, v, t in zip(headers, raw, shown, strict=True):
+            key = _sort_value(v)
+            link = links.get(h)
+            cells.append(Cell(t, key, link(str(v)) if link and isinstance(v, str) else None,
+                              key is not None))
+        out.append(tuple(cells))
+    return Table(tuple(headers), tuple(out), caption)
+
+
+@functools.lru_cache(maxsize=1)
+def _markdown_parser() -> Any:
+    from markdown_it import MarkdownIt
+
+    # raw HTML in a section's text is shown as text, never inserted
+    return MarkdownIt("commonmark", {"html": False}).enable("table")
+
+
+def markdown_html(text: str) -> Any:
+    """Markdown (a section's text, a verdict) as HTML, raw HTML in it escaped."""
+    from markupsafe import Markup
+
+    return Markup(_markdown_parser().render(text or ""))  # noqa: S704 - escaped by the parser
+
+
+@functools.lru_cache(maxsize=1)
+def environment() -> Any:
+    """The Jinja2 environment: templates from the package, auto-escaping, strict undefined."""
+    from jinja2 import Environment, PackageLoader, StrictUndefined
+
+    env = Environment(loader=PackageLoader("vpid_bench.report", "templates"),
+                      autoescape=True, undefined=StrictUndefined, trim_blocks=True,
+                      lstrip_blocks=True, keep_trailing_newline=True)
+    env.filters["md"] = markdown_html
+    env.filters["fmt"] = render.fmt
+    return env
+
+
+def render_page(template: str, **context: Any) -> str:
+    """One page as text (a pure function of its arguments)."""
+    return environment().get_template(template).render(**context)
+
+
+def _rel(path: Path, root: Path) -> str:
+    return Path(path).resolve().relative_to(root.resolve()).as_posix()
+
+
+def provenance(loaded: Any) -> dict[str, Any]:
+    """Which vpid-bench versions and machines made the records (from the records), and which
+    built the site."""
+    from .. import __version__
+
+    versions, machines = set(), set()
+    for r in loaded.records:
+        v = (r.get("versions") or {}).get("vpid-bench")
+        if isinstance(v, str):
+            versions.add(v[:40])
+        m = ((r.get("timing") or {}).get("machine") or {})
+        if isinstance(m, Mapping) and isinstance(m.get("cpu"), str):
+            machines.add(f"{m['cpu'][:80]}, {m.get('cores')} cores")
+    return {"built_by": f"vpid-bench {__version__}",
+            "built_at": f"{_dt.datetime.now(_dt.timezone.utc):%Y-%m-%d %H:%M UTC}",
+            "versions": sorted(versions), "machines": sorted(machines)}
+
+
+def _figure_scope(title: str, names: Iterable[str]) -> bool:
+    """Whether a core figure's title (``"<what>, <problem or context>"``) names one of
+    ``names``."""
+    return any(title.endswith(f", {n}") for n in names)
+
+
+def _written_tables(out_dir: Path) -> list[str]:
+    folder = out_dir / "tables"
+    return sorted(p.name for p in folder.glob("*.csv")) if folder.is_dir() else []
+
+
+def check_links(out_dir: Path, pages: Iterable[Path]) -> list[str]:
+    """Every relative ``href``/``src`` of the pages that names no file (empty: all resolve)."""
+    bad = []
+    for page in pages:
+        text = page.read_text(encoding="utf-8")
+        for target in re.findall(r'(?:href|src)="([^"#]+)', text):
+            if "://" in target or target.startswith(("mailto:", "data:")):
+                bad.append(f"{page.name}: {target} (not a local file)")
+            elif not (page.parent / target).exists():
+                bad.append(f"{page.name}: {target}")
+    return bad
+
+
+def write_site(model: Any, claim: Callable[[Path], Path]) -> list[Path]:
+    """Write the site of ``model`` (a :class:`~.model.ReportModel`) into its report folder;
+    return the files written, ``index.html`` first. ``claim`` reserves each file name."""
+    from .site_pages import build_pages
+
+    out_dir = model.out_dir
+    written = []
+    for name, text in build_pages(model).items():
+        path = claim(out_dir / name)
+        path.write_text(text, encoding="utf-8")
+        written.append(path)
+    (out_dir / ASSET_DIR).mkdir(exist_ok=True)
+    for asset in ASSETS:
+        path = claim(out_dir / ASSET_DIR / asset)
+        path.write_bytes(files("vpid_bench.report").joinpath("templates", asset).read_bytes())
+        written.append(path)
+    return written
+

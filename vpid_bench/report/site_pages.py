@@ -1,0 +1,199 @@
+"""The pages of the HTML site (:mod:`.site`), each a pure function from the report's model to
+the template's values: the index, one page per problem, one per optimizer, the protocol."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from . import body, svg
+from .safe import escape, slug
+from .site import Pages, _figure_scope, _rel, _written_tables, provenance, render_page, table
+
+#: The search-quality columns of a problem page: (header, key of a search row).
+SEARCH_COLUMNS = (("rank", "rank"), ("group", "group"), ("optimizer", "algorithm"),
+                  ("n", "n"), ("reached x*", "reached"), ("share reached", "share"),
+                  ("median rel_gap", "rel_gap_median"), ("floor", "floor_median"),
+                  ("median distance to x* (%)", "to_opt_median"), ("AUC", "auc"))
+#: Core figures shown on the index (across problems) rather than on a problem's page.
+INDEX_FIGURES = ("Convergence", "Critical-difference diagram across blocks")
+
+
+def build_pages(model: Any) -> dict[str, str]:
+    """Every page of the site: file name -> HTML text, ``index.html`` first."""
+    data = model.data
+    optimizers = sorted({r["algorithm"] for r in data.rows})
+    pages = Pages(data.problems, optimizers)
+    common = {
+        "prov": provenance(data.loaded), "n_records": len(data.loaded.records),
+        "problems": [(p, pages.problem(p)) for p in data.problems],
+        "optimizers": [(o, pages.optimizer(o)) for o in optimizers],
+    }
+    colour_of = dict(zip(optimizers, svg.colours(len(optimizers)), strict=True))
+    out = {"index.html": render_page("index.html.j2", page="index", title="Overview",
+                                     **common, **_index(model, pages))}
+    for p in data.problems:
+        out[pages.problem(p)] = render_page("problem.html.j2", page="problem",
+                                            title=f"Problem {p}", name=p, **common,
+                                            **_problem(model, pages, p, colour_of))
+    for o in optimizers:
+        out[pages.optimizer(o)] = render_page("optimizer.html.j2", page="optimizer",
+                                              title=f"Optimizer {o}", name=o, **common,
+                                              **_optimizer(model, pages, o))
+    out["protocol.html"] = render_page("protocol.html.j2", page="protocol",
+                                       title="Protocol and data", **common,
+                                       **_protocol(model))
+    return out
+
+
+def _links(pages: Pages) -> dict[str, Any]:
+    return {"optimizer": pages.optimizer, "algorithm": pages.optimizer,
+            "problem": pages.problem}
+
+
+def _index(model: Any, pages: Pages) -> dict[str, Any]:
+    data = model.data
+    of = model.problem_of()
+    verdicts = []
+    for p in data.problems:
+        items = [{"verdict": r.verdict, "context": r.context, "anchor": _anchor(r.context),
+                  "n": len(r.rows)} for r in model.results if of.get(r.context) == p]
+        verdicts.append({"name": p, "href": pages.problem(p), "contexts": items})
+    n_ok = sum(r["status"] == "ok" for r in data.loaded.records)
+    short_note = ("A single job's report: statistics, no tests, no figures; "
+                  "vpid-bench-report builds the full one." if data.short else "")
+    figures = [(_rel(v, model.out_dir), k) for k, v in model.figs.items()
+               if k in INDEX_FIGURES and isinstance(v, Path)]
+    return {"verdicts": verdicts, "n_ok": n_ok, "short": data.short, "figures": figures,
+            "archive_notes": data.archive_notes, "suite": _suite(model, pages),
+            "short_note": short_note}
+
+
+def _suite(model: Any, pages: Pages) -> dict[str, Any] | None:
+    from .suite_scores import HEADERS, LADDER_HEADERS
+
+    s = model.suite
+    if s is None or not s.rows:
+        return None
+    fig = s.figure if isinstance(s.figure, Path) else None
+    return {"table": table(HEADERS, s.rows, _links(pages)), "notes": s.notes,
+            "ladder": table(LADDER_HEADERS, s.ladder, _links(pages)) if s.ladder else None,
+            "figure": _rel(fig, model.out_dir) if fig else None}
+
+
+def _anchor(context: str) -> str:
+    """The id of a context's section on its problem's page."""
+    return "c-" + slug(context)
+
+
+def _levels(r: Any) -> str:
+    parts = [f"{what} {r.value(v)}" for what, v in (("floor", r.floor), ("bound", r.bound))
+             if math.isfinite(v)]
+    return ", ".join(parts)
+
+
+def _context_block(model: Any, pages: Pages, r: Any, colour_of: Mapping[str, str],
+                   counter: list[int]) -> dict[str, Any]:
+    data = model.data
+    unit = f" ({r.unit})" if r.unit else ""
+    srows = data.search_rows(r.context)
+    search = table([h + (unit if k == "floor_median" else "") for h, k in SEARCH_COLUMNS],
+                   [[s.get(k) for _, k in SEARCH_COLUMNS] for s in srows],
+                   _links(pages)) if srows else None
+    stats_rows = [s for s in data.summary if s["context"] == r.context]
+    stats = table([h + (unit if h in ("median", "q1", "q3", "mean", "sd", "best", "worst")
+                        else "") for h, _ in body.STATS_MD],
+                  [[s.get(k) for _, k in body.STATS_MD] for s in stats_rows], _links(pages),
+                  caption=f"Per-run {r.metric}{unit}, objective f, evaluations and seconds "
+                  "per run (a shared machine: indicative only)")
+    figures = []
+    for key in ("ecdf", "convergence"):
+        fig = model.interactive.get(r.context, {}).get(key)
+        if fig is not None:
+            counter[0] += 1
+            figures.append((key, {"figure": fig, "layout": svg.layout(fig, dict(colour_of)),
+                                  "id": f"fig{counter[0]}"}))
+    return {"context": r.context, "anchor": _anchor(r.context), "verdict": r.verdict,
+            "metric": r.metric, "unit": r.unit, "levels": _levels(r),
+            "table": table(r.headers, r.rows, _links(pages)), "search": search,
+            "stats": stats, "figures": figures}
+
+
+def _problem(model: Any, pages: Pages, problem: str, colour_of: Mapping[str, str]
+             ) -> dict[str, Any]:
+    contexts = model.contexts_of(problem)
+    counter = [0]
+    blocks = [_context_block(model, pages, r, colour_of, counter)
+              for r in model.results if r.context in contexts]
+    names = [problem, *contexts]
+    pngs = [(_rel(v, model.out_dir), k) for k, v in model.figs.items()
+            if isinstance(v, Path) and k not in INDEX_FIGURES and _figure_scope(k, names)]
+    not_drawn = [f"{k} ({v})" for k, v in model.figs.items()
+                 if isinstance(v, str) and _figure_scope(k, names)]
+    sections = []
+    for placed in model.sections_of(problem):
+        sec = placed.section
+        rel = [_rel(f, model.out_dir) for f in sec.files]
+        sections.append({"title": sec.title, "text": sec.text,
+                         "images": [(f, f"{sec.title}: {Path(f).stem}") for f in rel
+                                    if f.endswith(".png")],
+                         "links": [f for f in rel if not f.endswith(".png")]})
+    return {"contexts": blocks, "pngs": pngs, "sections": sections, "not_drawn": not_drawn}
+
+
+OPTIMIZER_HEADERS = ["problem", "context", "rank", "group", "n", "failed", "metric", "unit",
+                     "median", "q1", "q3", "search rank", "reached x*", "median rel_gap",
+                     "AUC"]
+
+
+def _optimizer(model: Any, pages: Pages, name: str) -> dict[str, Any]:
+    data = model.data
+    of = model.problem_of()
+    search = {(s["context"], s["algorithm"]): s for s in data.search}
+    rows = []
+    for s in data.summary:
+        if s["algorithm"] != name:
+            continue
+        q = search.get((s["context"], name), {})
+        rows.append([of.get(s["context"], ""), s["context"], s.get("rank"), s.get("group", ""),
+                     s.get("n_runs"), s.get("n_failed"), s.get("metric_name"),
+                     data.unit(s["context"]), s.get("median"), s.get("q1"), s.get("q3"),
+                     q.get("rank"), f"{q['reached']}/{q['n']}" if q else "",
+                     q.get("rel_gap_median"), q.get("auc")])
+    suite = None
+    if model.suite is not None and model.suite.rows:
+        from .suite_scores import HEADERS
+
+        mine = [r for r in model.suite.rows if r[2] == name]
+        suite = table(HEADERS, mine, _links(pages)) if mine else None
+    return {"table": table(OPTIMIZER_HEADERS, rows, _links(pages)), "suite": suite}
+
+
+def _protocol(model: Any) -> dict[str, Any]:
+    data = model.data
+    tests = ""
+    if data.tests is not None:
+        t = data.tests
+        tests = "\n".join(body.tests_md(t.kw, t.pairs, t.fr, data.alpha, t.by_inst)[2:])
+    return {"how_to_read": body.HOW_TO_READ.format(alpha=data.alpha,
+                                                   baseline=escape(data.baseline)),
+            "tests": tests,
+            "sources": "\n".join(body.sources_lines(data.paths, data.loaded, data.rows)),
+            "archive_notes": data.archive_notes,
+            "failures": [*model.section_errors, *data.optima_errors],
+            "tables": _written_tables(model.out_dir),
+            "ioh": (model.out_dir / "ioh").is_dir()}
+
+
+def interactive_figures(data: Any) -> dict[str, dict[str, Any]]:
+    """Per context, its ECDF and convergence figures (:mod:`.interactive`)."""
+    from .interactive import convergence_figures, ecdf_figure
+
+    conv = convergence_figures(data.loaded.records, data.rows)
+    out: dict[str, dict[str, Any]] = {}
+    for c in data.contexts:
+        out[c] = {"ecdf": ecdf_figure(data.hits, c), "convergence": conv.get(c)}
+    return out
+

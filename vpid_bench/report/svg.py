@@ -1,0 +1,178 @@
+"""An :class:`~.interactive.Figure` laid out for an inline SVG: pixel coordinates of each
+series' step path, its band, the axes' ticks, and one colour per optimizer.
+
+Only geometry and numbers are computed here; the SVG elements are written by the page
+templates (auto-escaped: an optimizer's name never reaches the page raw). Why plain SVG
+rather than a plotting library's HTML export: it needs no script from outside (plotly embeds
+about 3.5 MB of JavaScript per page, bokeh about 1 MB), opens from ``file://``, and a figure of
+20 optimizers weighs tens of kilobytes.
+"""
+
+from __future__ import annotations
+
+import colorsys
+import dataclasses
+import math
+from collections.abc import Sequence
+
+from .interactive import Figure
+
+WIDTH, HEIGHT = 720, 380
+LEFT, RIGHT, TOP, BOTTOM = 70, 16, 14, 46
+#: Matplotlib's default colour cycle (tab10); more optimizers get evenly spaced hues.
+PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
+           "#7f7f7f", "#bcbd22", "#17becf")
+
+
+def colours(n: int) -> list[str]:
+    """``n`` distinct colours: the palette when it has enough, else ``n`` evenly spaced hues
+    (as the PNG figures do), so no two optimizers share one."""
+    if n <= len(PALETTE):
+        return list(PALETTE[:n])
+    out = []
+    for i in range(n):
+        r, g, b = colorsys.hls_to_rgb(i / n, 0.45, 0.65)
+        out.append(f"#{round(r * 255):02x}{round(g * 255):02x}{round(b * 255):02x}")
+    return out
+
+
+@dataclasses.dataclass(frozen=True)
+class Tick:
+    pos: float
+    label: str
+
+
+@dataclasses.dataclass(frozen=True)
+class DrawnSeries:
+    name: str
+    label: str
+    colour: str
+    path: str
+    band: str
+
+
+@dataclasses.dataclass(frozen=True)
+class Layout:
+    """What the template draws: the plot area, ticks, series paths and reference lines."""
+
+    width: int
+    height: int
+    left: int
+    top: int
+    right: int
+    bottom: int
+    x_ticks: tuple[Tick, ...]
+    y_ticks: tuple[Tick, ...]
+    series: tuple[DrawnSeries, ...]
+    lines: tuple[tuple[str, float], ...]
+
+
+class _Axis:
+    """A data-to-pixel map along one axis (log or linear), over a finite range."""
+
+    def __init__(self, lo: float, hi: float, log: bool, p0: float, p1: float) -> None:
+        if log:
+            lo, hi = math.log10(lo), math.log10(hi)
+        if not hi > lo:
+            lo, hi = lo - 0.5, hi + 0.5
+        self.lo, self.hi, self.log, self.p0, self.p1 = lo, hi, log, p0, p1
+
+    def __call__(self, v: float) -> float:
+        if self.log:
+            v = math.log10(v) if v > 0 else self.lo
+        return self.p0 + (v - self.lo) / (self.hi - self.lo) * (self.p1 - self.p0)
+
+    def ticks(self) -> list[Tick]:
+        if self.log:
+            first, last = math.ceil(self.lo - 1e-9), math.floor(self.hi + 1e-9)
+            step = max(1, math.ceil((last - first + 1) / 8))
+            marks = [1.0, 2.0, 5.0] if self.hi - self.lo < 2 else [1.0]  # few decades
+            values = [m * 10.0 ** k for k in range(first - 1, last + 1, step) for m in marks]
+            return [Tick(round(self(v), 1), _fmt(v)) for v in values
+                    if self.lo - 1e-9 <= math.log10(v) <= self.hi + 1e-9]
+        span = self.hi - self.lo
+        raw = span / 5
+        mag = 10 ** math.floor(math.log10(raw))
+        step = next(m * mag for m in (1, 2, 2.5, 5, 10) if m * mag >= raw)
+        k = math.ceil(self.lo / step - 1e-9)
+        out = []
+        while k * step <= self.hi + 1e-9 * span:
+            out.append(Tick(round(self(k * step), 1), _fmt(k * step)))
+            k += 1
+        return out
+
+
+def _fmt(v: float) -> str:
+    if v == 0:
+        return "0"
+    if abs(v) >= 1e5 or abs(v) < 1e-3:
+        return f"{v:.0e}".replace("e+0", "e").replace("e-0", "e-").replace("e+", "e")
+    return f"{v:g}"
+
+
+def _finite(values: Sequence[float], log: bool) -> list[float]:
+    return [v for v in values if math.isfinite(v) and (v > 0 or not log)]
+
+
+def _step_path(xs: Sequence[float], ys: Sequence[float], fx: _Axis, fy: _Axis,
+               x_end: float | None = None) -> str:
+    """An SVG path of a step curve (each y holds until the next x; NaN: a gap)."""
+    parts: list[str] = []
+    pen = False
+    for i, (x, y) in enumerate(zip(xs, ys, strict=True)):
+        if not (math.isfinite(x) and math.isfinite(y)) or (fy.log and y <= 0):
+            pen = False
+            continue
+        px, py = fx(x), fy(y)
+        nxt = xs[i + 1] if i + 1 < len(xs) else x_end
+        parts.append(f"V{py:.1f}" if pen else f"M{px:.1f} {py:.1f}")
+        pen = True
+        if nxt is not None and math.isfinite(nxt):
+            parts.append(f"H{fx(nxt):.1f}")
+    return "".join(parts)
+
+
+def _band_path(xs: Sequence[float], lo: Sequence[float], hi: Sequence[float], fx: _Axis,
+               fy: _Axis) -> str:
+    """A closed SVG path between two step curves (the interquartile band)."""
+    pts = [(x, a, b) for x, a, b in zip(xs, lo, hi, strict=True)
+           if math.isfinite(a) and math.isfinite(b) and (not fy.log or (a > 0 and b > 0))]
+    if len(pts) < 2:
+        return ""
+    upper, lower = [], []
+    for i, (x, a, b) in enumerate(pts):
+        x2 = pts[i + 1][0] if i + 1 < len(pts) else x
+        upper += [(fx(x), fy(b)), (fx(x2), fy(b))]
+        lower += [(fx(x), fy(a)), (fx(x2), fy(a))]
+    ring = upper + lower[::-1]
+    return "M" + "L".join(f"{x:.1f} {y:.1f}" for x, y in ring) + "Z"
+
+
+def layout(fig: Figure, colour_of: dict[str, str] | None = None) -> Layout:
+    """Pixel geometry of ``fig``; ``colour_of`` keeps one colour per optimizer across the
+    report's figures (default: by order in this figure)."""
+    xs = [v for s in fig.series for v in s.x]
+    ys = [v for s in fig.series for v in (*s.y, *s.lo, *s.hi)] + [v for _, v in fig.lines]
+    fxv, fyv = _finite(xs, fig.x_log), _finite(ys, fig.y_log)
+    x0, x1 = (min(fxv), max(fxv)) if fxv else (1.0, 10.0)
+    if fig.y_range is not None:
+        y0, y1 = fig.y_range
+    else:
+        y0, y1 = (min(fyv), max(fyv)) if fyv else (1.0, 10.0)
+        if fig.y_log:
+            y0, y1 = y0 / 1.2, y1 * 1.2
+        else:
+            pad = 0.04 * (y1 - y0 or 1.0)
+            y0, y1 = y0 - pad, y1 + pad
+    fx = _Axis(x0, x1, fig.x_log, LEFT, WIDTH - RIGHT)
+    fy = _Axis(y0, y1, fig.y_log, HEIGHT - BOTTOM, TOP)
+    default = dict(zip([s.name for s in fig.series], colours(len(fig.series)), strict=True))
+    colour_of = colour_of or default
+    drawn = tuple(DrawnSeries(s.name, s.label or s.name, colour_of.get(s.name, default[s.name]),
+                              _step_path(s.x, s.y, fx, fy, x1),
+                              _band_path(s.x, s.lo, s.hi, fx, fy) if s.lo else "")
+                  for s in fig.series)
+    lines = tuple((label, round(fy(v), 1)) for label, v in fig.lines
+                  if math.isfinite(v) and (v > 0 or not fig.y_log))
+    return Layout(WIDTH, HEIGHT, LEFT, TOP, WIDTH - RIGHT, HEIGHT - BOTTOM,
+                  tuple(fx.ticks()), tuple(fy.ticks()), drawn, lines)
