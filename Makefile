@@ -6,7 +6,7 @@ VENV ?= .venv
 BIN := $(VENV)/bin
 export MPLBACKEND := Agg
 
-.PHONY: install demo test bench bench-scale test-scaleout clean
+.PHONY: install browser demo test bench bench-scale test-scaleout clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -21,7 +21,22 @@ install: $(VENV)/.installed
 demo: install
 	$(BIN)/vpid-bench -m optimizer=de1,de4,ga,random problem.ps=20,30 hydra.sweep.dir=outputs/demo
 
-test: install
+# Headless Chromium and its driver from Debian's packages, for the HTML report's browser
+# tests (tests/report/test_html_browser.py): as root with apt-get (as CI runs), quick when
+# already there; anywhere else it says so and the browser tests are skipped with the reason.
+BROWSER_PKGS := chromium chromium-driver
+APT_INSTALL := DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends
+browser:
+	@if [ -x /usr/bin/chromium ] && [ -x /usr/bin/chromedriver ]; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	  echo "make browser: installing $(BROWSER_PKGS) from Debian's packages"; \
+	  $(APT_INSTALL) $(BROWSER_PKGS) >/dev/null 2>&1 || { apt-get update -qq >/dev/null && \
+	  $(APT_INSTALL) $(BROWSER_PKGS) >/dev/null; } || \
+	  echo "make browser: could not install $(BROWSER_PKGS); the browser tests are skipped"; \
+	else echo "make browser: not root or no apt-get; install $(BROWSER_PKGS) to run the" \
+	  "browser tests (skipped without them)"; fi
+
+test: install browser
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest
 

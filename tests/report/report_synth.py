@@ -80,3 +80,26 @@ def objective_job(root: Path, optimizer: str, ps: int, values: list[float],
                    x=np.array([v, -v]), f=v, names=["x1", "x2"], true=None, seed=seed)
             for i, v in enumerate(values)]
     return write_job(root / f"optimizer={optimizer},ps={ps},seed={seed}", recs)
+
+
+#: An optimizer name a record may hold: HTML and a script.
+EVIL = 'de<img src=x onerror="alert(1)">&<script>alert(2)</script>'
+
+
+def html_sweep(root: Path, short: bool = False, evil: str = EVIL) -> Path:
+    """Two problems, three optimizers (one with a hostile name), 4 runs each; returns the
+    report folder."""
+    rng = np.random.default_rng(1)
+    for problem in ("vehicle", "vehicle_b"):
+        for algo, spread in (("de4", 0.01), ("random", 0.3), (evil, 0.05)):
+            recs = [record(problem=problem, optimizer=algo, ps=20, run_index=i,
+                           x=OV * (1 + spread * rng.standard_normal(9)), f=spread * (1 + i),
+                           names=PAPER_NAMES, true=OV, units=["kg"] * 9,
+                           info={"f_at_true": 0.004, "metric_units": {"NoRE": "%"}})
+                    for i in range(4)]
+            write_job(root / f"{problem}-{abs(hash(algo)) % 997}", recs)
+    out = root / "report"
+    from vpid_bench.report.build import build_report
+
+    build_report([root], out, short=short, archive=False)
+    return out

@@ -33,8 +33,12 @@ def test_report_callback_writes_its_outcome_and_honours_report_false(tmp_path, m
     cb = ReportCallback()
     cb.on_multirun_end(OmegaConf.create({"report": False, "hydra": {"sweep": {"dir": str(sweep)}}}))
     assert not (sweep / "report").exists()
+    capsys.readouterr()
     cb.on_multirun_end(OmegaConf.create({"report": True, "hydra": {"sweep": {"dir": str(sweep)}}}))
     assert (sweep / "report" / "report.md").is_file()
+    # the HTML site beside it, its path printed
+    assert (sweep / "report" / "index.html").is_file()
+    assert f"html: {sweep / 'report' / 'index.html'}" in capsys.readouterr().out
     assert _status(sweep) == {"status": "ok", "problems": [], "invocation": "inv-1"}
     # No record at all (every job failed, each said why): one quiet line, no failure.
     capsys.readouterr()

@@ -1,0 +1,168 @@
+"""The HTML report in a real browser: Debian's Chromium, headless, driven by Selenium through
+the system's chromedriver (``make browser`` installs both; ``make test`` and CI run it first).
+Every page type loads without a console error, every link and image resolves, a table sorts,
+a figure's optimizer toggles, the screenshots are not blank, and nothing is requested from
+the network. One browser session serves the whole module."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from urllib.parse import unquote, urlparse
+
+import numpy as np
+import pytest
+from report_synth import EVIL, html_sweep
+
+CHROMIUM = os.environ.get("VPID_BENCH_CHROMIUM", "/usr/bin/chromium")
+DRIVER = os.environ.get("VPID_BENCH_CHROMEDRIVER", "/usr/bin/chromedriver")
+
+
+def _why_not() -> str | None:
+    if not (Path(CHROMIUM).is_file() and Path(DRIVER).is_file()):
+        return (f"no {CHROMIUM} and {DRIVER}: run `make browser` as root (it installs "
+                "Debian's chromium and chromium-driver); nothing else is downloaded")
+    try:
+        import selenium  # noqa: F401
+    except ImportError:
+        return "selenium is not installed (make install installs the test extras)"
+    return None
+
+
+pytestmark = pytest.mark.skipif(_why_not() is not None, reason=_why_not() or "")
+
+
+@pytest.fixture(scope="module")
+def browser():
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    options = webdriver.ChromeOptions()
+    options.binary_location = CHROMIUM
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1280,900",
+                "--disable-dev-shm-usage"):
+        options.add_argument(arg)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL", "performance": "ALL"})
+    driver = webdriver.Chrome(service=Service(DRIVER), options=options)
+    driver.set_page_load_timeout(30)
+    yield driver
+    driver.quit()
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory) -> Path:
+    return html_sweep(tmp_path_factory.mktemp("browser"))
+
+
+def _open(browser, page: Path) -> list[dict]:
+    """Load ``page``; return its console messages (the log is emptied)."""
+    browser.get(page.resolve().as_uri())
+    browser.execute_script("return document.readyState")
+    return browser.get_log("browser")
+
+
+def _requests(browser) -> list[str]:
+    """Every URL the browser requested since the last call (Chrome's performance log)."""
+    out = []
+    for entry in browser.get_log("performance"):
+        msg = json.loads(entry["message"])["message"]
+        if msg["method"] == "Network.requestWillBeSent":
+            out.append(msg["params"]["request"]["url"])
+    return out
+
+
+def _not_blank(png: bytes) -> float:
+    """The standard deviation of a screenshot's grey levels (0 for a blank page)."""
+    import io
+
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(io.BytesIO(png), format="png")
+    return float(np.asarray(img)[..., :3].mean(axis=2).std())
+
+
+def _page_types(site: Path) -> list[Path]:
+    return [site / "index.html", site / "problem-vehicle.html", site / "optimizer-de4.html",
+            site / "protocol.html"]
+
+
+def test_every_page_type_loads_clean_offline_and_not_blank(browser, site, tmp_path):
+    _requests(browser)
+    for page in _page_types(site):
+        console = _open(browser, page)
+        assert [m for m in console if m["level"] in ("SEVERE", "WARNING")] == [], page.name
+        assert browser.title.endswith("vpid-bench report")
+        broken = browser.execute_script(
+            "return Array.from(document.images).filter(i => !i.complete || !i.naturalWidth)"
+            ".map(i => i.src)")
+        assert broken == [], page.name
+        shot = browser.get_screenshot_as_png()
+        (tmp_path / f"{page.stem}.png").write_bytes(shot)
+        assert _not_blank(shot) > 0.02, page.name
+    requested = _requests(browser)
+    assert requested and all(u.startswith("file://") for u in requested), requested
+
+
+def test_every_link_resolves(browser, site):
+    """Every link of every page: a local file that exists, and an anchor that is on it."""
+    pages = sorted(site.glob("*.html"))
+    assert len(pages) == 2 + 2 + 3  # index, protocol, two problems, three optimizers
+    for page in pages:
+        _open(browser, page)
+        links = browser.execute_script(
+            "return Array.from(document.querySelectorAll('a[href]')).map(a => a.href)")
+        for url in links:
+            parts = urlparse(url)
+            assert parts.scheme == "file", (page.name, url)
+            target = Path(unquote(parts.path))
+            assert target.exists(), (page.name, url)
+            if parts.fragment and target.suffix == ".html":
+                assert f'id="{parts.fragment}"' in target.read_text(encoding="utf-8"), url
+
+
+def test_a_table_sorts_both_ways(browser, site):
+    from selenium.webdriver.common.by import By
+
+    _open(browser, site / "problem-vehicle.html")
+    table = browser.find_elements(By.CSS_SELECTOR, "table.sortable")[0]
+    headers = [th.text for th in table.find_elements(By.CSS_SELECTOR, "thead th")]
+    col = next(i for i, h in enumerate(headers) if h.startswith("median NoRE"))
+
+    def column() -> list[float]:
+        return [float(td.get_attribute("data-sort")) for td in table.find_elements(
+            By.CSS_SELECTOR, f"tbody tr td:nth-child({col + 1})")]
+
+    button = table.find_elements(By.CSS_SELECTOR, "thead th button")[col]
+    button.click()
+    up = column()
+    assert up == sorted(up) and len(up) == 3
+    button.click()
+    assert column() == sorted(up, reverse=True) != up
+
+
+def test_a_figure_toggles_an_optimizer(browser, site):
+    from selenium.webdriver.common.by import By
+
+    _open(browser, site / "problem-vehicle.html")
+    fig = browser.find_elements(By.CSS_SELECTOR, "figure.interactive")[0]
+    toggle = fig.find_elements(By.CSS_SELECTOR, "button.toggle")[0]
+    curve = fig.find_element(By.CSS_SELECTOR, 'g.series[data-series="0"]')
+    assert curve.is_displayed()
+    toggle.click()
+    assert not curve.is_displayed() and toggle.get_attribute("aria-pressed") == "false"
+    toggle.click()
+    assert curve.is_displayed() and toggle.get_attribute("aria-pressed") == "true"
+
+
+def test_a_hostile_name_is_shown_as_text(browser, site):
+    """The optimizer named with HTML and a script: its page shows the name as text, and no
+    script of it ran (an alert would stop the driver)."""
+    from selenium.webdriver.common.by import By
+
+    page = next(site.glob("optimizer-de_img*.html"))
+    console = _open(browser, page)
+    assert console == []
+    assert browser.find_element(By.TAG_NAME, "h1").text == f"Optimizer {EVIL}"
+    assert browser.find_elements(By.CSS_SELECTOR, "main img") == []
+

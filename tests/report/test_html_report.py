@@ -1,0 +1,136 @@
+"""The HTML site beside report.md, checked without a browser: every page type written, every
+link resolving to a file, nothing from the network, record text escaped, the interactive
+figures' data and geometry (the browser tests are in test_html_browser.py)."""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+import pytest
+from report_synth import html_sweep
+
+from vpid_bench.report import site, svg
+from vpid_bench.report.anytime import RunHits, ecdf
+from vpid_bench.report.interactive import Figure, Series, ecdf_figure
+
+
+@pytest.fixture(scope="module")
+def report_dir(tmp_path_factory) -> Path:
+    return html_sweep(tmp_path_factory.mktemp("html"))
+
+
+def _pages(folder: Path) -> list[Path]:
+    return sorted(folder.glob("*.html"))
+
+
+def test_every_page_type_is_written_with_its_links_resolving(report_dir):
+    names = {p.name for p in _pages(report_dir)}
+    assert {"index.html", "protocol.html", "problem-vehicle.html",
+            "problem-vehicle_b.html", "optimizer-de4.html", "optimizer-random.html"} <= names
+    assert len([n for n in names if n.startswith("optimizer-")]) == 3
+    assert site.check_links(report_dir, _pages(report_dir)) == []
+    index = (report_dir / "index.html").read_text(encoding="utf-8")
+    for target in ("problem-vehicle.html", "problem-vehicle_b.html", "optimizer-de4.html",
+                   "optimizer-random.html", "protocol.html", "runs.csv", "report.md"):
+        assert f'href="{target}"' in index
+
+
+def test_a_broken_link_is_found(report_dir, tmp_path):
+    """The control of the link check: a page naming a missing file, and one on the web."""
+    page = tmp_path / "x.html"
+    page.write_text('<a href="nope.html">a</a><img src="https://example.org/a.png">',
+                    encoding="utf-8")
+    assert site.check_links(tmp_path, [page]) == [
+        "x.html: nope.html", "x.html: https://example.org/a.png (not a local file)"]
+
+
+def test_nothing_is_loaded_from_the_network(report_dir):
+    for page in _pages(report_dir):
+        text = page.read_text(encoding="utf-8")
+        assert not re.search(r'(?:src|href)="(?:https?:)?//', text), page.name
+        assert re.findall(r"<script[^>]*>", text) == ['<script src="assets/report.js">'], page
+        assert "@import" not in text and "url(" not in text
+
+
+def test_record_names_are_escaped_on_every_page(report_dir):
+    for page in _pages(report_dir):
+        text = page.read_text(encoding="utf-8")
+        assert "<script>alert" not in text and "<img src=x" not in text, page.name
+    page = next(p for p in _pages(report_dir) if p.name.startswith("optimizer-de_img"))
+    text = page.read_text(encoding="utf-8")
+    assert "de&lt;img src=x onerror=&#34;alert(1)&#34;&gt;&amp;&lt;script&gt;" in text
+
+
+def test_tables_sort_on_raw_values_and_units_are_shown(report_dir):
+    text = (report_dir / "problem-vehicle.html").read_text(encoding="utf-8")
+    assert "median NoRE (%)" in text  # the metric's unit in its header
+    assert 'class="sortable"' in text
+    # a numeric cell carries its full-precision value to sort by
+    assert re.search(r'data-sort="\d+\.\d{6,}', text)
+
+
+def test_every_figure_has_alt_text(report_dir):
+    for page in _pages(report_dir):
+        text = page.read_text(encoding="utf-8")
+        for img in re.findall(r"<img [^>]*>", text):
+            assert re.search(r'alt="[^"]{10,}"', img), (page.name, img)
+        for fig in re.findall(r"<svg [^>]*>", text):
+            assert "role=\"img\"" in fig and "aria-labelledby" in fig
+
+
+def test_a_convergence_figure_per_context_with_a_toggle_per_optimizer(report_dir):
+    text = (report_dir / "problem-vehicle.html").read_text(encoding="utf-8")
+    assert text.count('class="interactive"') == 1  # no optimum known: no ECDF
+    assert text.count('class="toggle"') == 3 and text.count('class="series"') == 3
+
+
+def test_a_single_jobs_report_has_its_site_too(tmp_path):
+    out = html_sweep(tmp_path, short=True, evil="ga")
+    assert site.check_links(out, _pages(out)) == []
+    assert "single job" in (out / "index.html").read_text(encoding="utf-8")
+
+
+def test_the_templates_are_strict():
+    """An undefined value is an error, never an empty string; and values are escaped."""
+    from jinja2 import UndefinedError
+
+    env = site.environment()
+    with pytest.raises(UndefinedError):
+        env.from_string("{{ nothing.here }}").render()
+    assert env.from_string("{{ x }}").render(x="<b>") == "&lt;b&gt;"
+
+
+def test_markdown_from_a_section_cannot_insert_html():
+    html = str(site.markdown_html("a <script>alert(1)</script> [x](javascript:alert(1))"))
+    assert "<script>" not in html and 'href="javascript' not in html
+    assert "&lt;script&gt;" in html
+
+
+def test_the_ecdf_figure_holds_the_ecdf_it_shows():
+    """Against :func:`.anytime.ecdf` at the figure's own points (an independent count)."""
+    hits = [RunHits("c", "a", 100.0, 100.0, (5.0, 40.0) + (math.nan,) * 5),
+            RunHits("c", "a", 100.0, 100.0, (2.0,) + (math.nan,) * 6),
+            RunHits("c", "b", 100.0, 100.0, (math.nan,) * 7)]
+    fig = ecdf_figure(hits, "c")
+    a = next(s for s in fig.series if s.name == "a")
+    assert a.y[-1] == pytest.approx(3 / 14)  # three of 2 x 7 (run, target) pairs
+    for x, y in zip(a.x, a.y, strict=True):
+        assert y == pytest.approx(float(ecdf([h for h in hits if h.algorithm == "a"], [x])[0]))
+    assert next(s for s in fig.series if s.name == "b").y[-1] == 0.0
+    assert ecdf_figure(hits, "other") is None
+
+
+def test_svg_geometry_of_a_log_axis():
+    """x = 1, 10, 100 on a log axis fall at the left edge, the middle and the right edge."""
+    fig = Figure("k", "t", "alt", "x", "y", True, False,
+                 (Series("a", (1.0, 10.0, 100.0), (0.0, 0.5, 1.0)),), y_range=(0.0, 1.0))
+    lay = svg.layout(fig)
+    mid = (svg.LEFT + svg.WIDTH - svg.RIGHT) / 2
+    bottom, top = svg.HEIGHT - svg.BOTTOM, svg.TOP
+    assert lay.series[0].path == (f"M{svg.LEFT:.1f} {bottom:.1f}H{mid:.1f}"
+                                  f"V{(bottom + top) / 2:.1f}H{svg.WIDTH - svg.RIGHT:.1f}"
+                                  f"V{top:.1f}H{svg.WIDTH - svg.RIGHT:.1f}")
+    assert [t.label for t in lay.x_ticks] == ["1", "10", "100"]
+    assert len(set(svg.colours(25))) == 25 and svg.colours(3) == list(svg.PALETTE[:3])
