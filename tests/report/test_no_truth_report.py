@@ -126,6 +126,14 @@ def test_the_first_screen_says_there_is_no_truth_and_shows_the_intervals(sweep):
     assert "NoRE" not in text and "from the truth" not in results
 
 
+def test_the_html_page_shows_the_intervals_too(sweep):
+    """The same blocks on the problem's HTML page (one model, every renderer)."""
+    text = (sweep / "report" / "problem-decay.html").read_text()
+    assert "No truth" in text and "95 % interval (Jacobian)" in text
+    assert "95 % interval (profile)" in text and "published estimate" in text
+    assert "NoRE" not in text
+
+
 def test_runs_table_has_no_relative_errors(sweep):
     import pandas as pd
 

@@ -159,8 +159,7 @@ def build_report(
 def _write_site(model: ReportModel, names: _Names) -> list[Path]:
     """The HTML site beside report.md (:mod:`.site`), ``index.html`` first; its interactive
     figures need only numpy, so a single job's report has them too."""
-    from .site import write_site
-    from .site_pages import interactive_figures
+    from .site_pages import interactive_figures, write_site
 
     try:
         model.interactive = interactive_figures(model.data)

@@ -339,10 +339,17 @@ def markdown_lines(items: Sequence[ContextResult]) -> list[str]:
                   para(f"Ranked by {escape(r.metric)}{unit}, lower is better"
                        + (f" ({', '.join(levels)})." if levels else ".")), "",
                   markdown(r.headers, r.rows, keep=5), ""]
-        for text, headers, rows in ([] if r.truth else _no_truth_lines(r)):
+        for text, headers, rows in extra_blocks(r):
             lines += [para(text), ""] + ([markdown(headers, rows), ""] if headers else [])
         lines += [para(r.verdict), ""]
     return lines
+
+
+def extra_blocks(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
+    """What every renderer shows below a context's ranking: for a context without a truth,
+    the identified values with their intervals and the problem's comparison rows, as
+    ``(Markdown text, headers, rows)`` (empty headers: text only); nothing otherwise."""
+    return [] if r.truth else _no_truth_lines(r)
 
 
 def terminal_text(items: Sequence[ContextResult]) -> str:
@@ -350,7 +357,7 @@ def terminal_text(items: Sequence[ContextResult]) -> str:
     blocks = []
     for r in items:
         extra = ""
-        for text, headers, rows in ([] if r.truth else _no_truth_lines(r)):
+        for text, headers, rows in extra_blocks(r):
             extra += clean(" ".join(text.split())) + "\n" + (
                 terminal(headers, rows) + "\n" if headers else "")
         blocks.append(f"{clean(r.context)}\n" + terminal(r.headers, r.rows) + "\n" + extra

@@ -20,7 +20,6 @@ import functools
 import math
 import re
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
@@ -141,7 +140,7 @@ def render_page(template: str, **context: Any) -> str:
     return environment().get_template(template).render(**context)
 
 
-def _rel(path: Path, root: Path) -> str:
+def relative(path: Path, root: Path) -> str:
     return Path(path).resolve().relative_to(root.resolve()).as_posix()
 
 
@@ -163,13 +162,13 @@ def provenance(loaded: Any) -> dict[str, Any]:
             "versions": sorted(versions), "machines": sorted(machines)}
 
 
-def _figure_scope(title: str, names: Iterable[str]) -> bool:
+def figure_scope(title: str, names: Iterable[str]) -> bool:
     """Whether a core figure's title (``"<what>, <problem or context>"``) names one of
     ``names``."""
     return any(title.endswith(f", {n}") for n in names)
 
 
-def _written_tables(out_dir: Path) -> list[str]:
+def written_tables(out_dir: Path) -> list[str]:
     folder = out_dir / "tables"
     return sorted(p.name for p in folder.glob("*.csv")) if folder.is_dir() else []
 
@@ -185,23 +184,3 @@ def check_links(out_dir: Path, pages: Iterable[Path]) -> list[str]:
             elif not (page.parent / target).exists():
                 bad.append(f"{page.name}: {target}")
     return bad
-
-
-def write_site(model: Any, claim: Callable[[Path], Path]) -> list[Path]:
-    """Write the site of ``model`` (a :class:`~.model.ReportModel`) into its report folder;
-    return the files written, ``index.html`` first. ``claim`` reserves each file name."""
-    from .site_pages import build_pages
-
-    out_dir = model.out_dir
-    written = []
-    for name, text in build_pages(model).items():
-        path = claim(out_dir / name)
-        path.write_text(text, encoding="utf-8")
-        written.append(path)
-    (out_dir / ASSET_DIR).mkdir(exist_ok=True)
-    for asset in ASSETS:
-        path = claim(out_dir / ASSET_DIR / asset)
-        path.write_bytes(files("vpid_bench.report").joinpath("templates", asset).read_bytes())
-        written.append(path)
-    return written
-

@@ -4,13 +4,24 @@ the template's values: the index, one page per problem, one per optimizer, the p
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
 from . import body, svg
 from .safe import escape, slug
-from .site import Pages, _figure_scope, _rel, _written_tables, provenance, render_page, table
+from .site import (
+    ASSET_DIR,
+    ASSETS,
+    Pages,
+    figure_scope,
+    provenance,
+    relative,
+    render_page,
+    table,
+    written_tables,
+)
 
 #: The search-quality columns of a problem page: (header, key of a search row).
 SEARCH_COLUMNS = (("rank", "rank"), ("group", "group"), ("optimizer", "algorithm"),
@@ -64,7 +75,7 @@ def _index(model: Any, pages: Pages) -> dict[str, Any]:
     n_ok = sum(r["status"] == "ok" for r in data.loaded.records)
     short_note = ("A single job's report: statistics, no tests, no figures; "
                   "vpid-bench-report builds the full one." if data.short else "")
-    figures = [(_rel(v, model.out_dir), k) for k, v in model.figs.items()
+    figures = [(relative(v, model.out_dir), k) for k, v in model.figs.items()
                if k in INDEX_FIGURES and isinstance(v, Path)]
     return {"verdicts": verdicts, "n_ok": n_ok, "short": data.short, "figures": figures,
             "archive_notes": data.archive_notes, "suite": _suite(model, pages),
@@ -80,7 +91,7 @@ def _suite(model: Any, pages: Pages) -> dict[str, Any] | None:
     fig = s.figure if isinstance(s.figure, Path) else None
     return {"table": table(HEADERS, s.rows, _links(pages)), "notes": s.notes,
             "ladder": table(LADDER_HEADERS, s.ladder, _links(pages)) if s.ladder else None,
-            "figure": _rel(fig, model.out_dir) if fig else None}
+            "figure": relative(fig, model.out_dir) if fig else None}
 
 
 def _anchor(context: str) -> str:
@@ -115,7 +126,12 @@ def _context_block(model: Any, pages: Pages, r: Any, colour_of: Mapping[str, str
             counter[0] += 1
             figures.append((key, {"figure": fig, "layout": svg.layout(fig, dict(colour_of)),
                                   "id": f"fig{counter[0]}"}))
+    from .first_screen import extra_blocks
+
+    extra = [{"text": text, "table": table(h, rows, _links(pages)) if h else None}
+             for text, h, rows in extra_blocks(r)]
     return {"context": r.context, "anchor": _anchor(r.context), "verdict": r.verdict,
+            "extra": extra,
             "metric": r.metric, "unit": r.unit, "levels": _levels(r),
             "table": table(r.headers, r.rows, _links(pages)), "search": search,
             "stats": stats, "figures": figures}
@@ -128,14 +144,14 @@ def _problem(model: Any, pages: Pages, problem: str, colour_of: Mapping[str, str
     blocks = [_context_block(model, pages, r, colour_of, counter)
               for r in model.results if r.context in contexts]
     names = [problem, *contexts]
-    pngs = [(_rel(v, model.out_dir), k) for k, v in model.figs.items()
-            if isinstance(v, Path) and k not in INDEX_FIGURES and _figure_scope(k, names)]
+    pngs = [(relative(v, model.out_dir), k) for k, v in model.figs.items()
+            if isinstance(v, Path) and k not in INDEX_FIGURES and figure_scope(k, names)]
     not_drawn = [f"{k} ({v})" for k, v in model.figs.items()
-                 if isinstance(v, str) and _figure_scope(k, names)]
+                 if isinstance(v, str) and figure_scope(k, names)]
     sections = []
     for placed in model.sections_of(problem):
         sec = placed.section
-        rel = [_rel(f, model.out_dir) for f in sec.files]
+        rel = [relative(f, model.out_dir) for f in sec.files]
         sections.append({"title": sec.title, "text": sec.text,
                          "images": [(f, f"{sec.title}: {Path(f).stem}") for f in rel
                                     if f.endswith(".png")],
@@ -183,7 +199,7 @@ def _protocol(model: Any) -> dict[str, Any]:
             "sources": "\n".join(body.sources_lines(data.paths, data.loaded, data.rows)),
             "archive_notes": data.archive_notes,
             "failures": [*model.section_errors, *data.optima_errors],
-            "tables": _written_tables(model.out_dir),
+            "tables": written_tables(model.out_dir),
             "ioh": (model.out_dir / "ioh").is_dir()}
 
 
@@ -196,4 +212,21 @@ def interactive_figures(data: Any) -> dict[str, dict[str, Any]]:
     for c in data.contexts:
         out[c] = {"ecdf": ecdf_figure(data.hits, c), "convergence": conv.get(c)}
     return out
+
+
+def write_site(model: Any, claim: Callable[[Path], Path]) -> list[Path]:
+    """Write the site of ``model`` (a :class:`~.model.ReportModel`) into its report folder;
+    return the files written, ``index.html`` first. ``claim`` reserves each file name."""
+    out_dir = model.out_dir
+    written = []
+    for name, text in build_pages(model).items():
+        path = claim(out_dir / name)
+        path.write_text(text, encoding="utf-8")
+        written.append(path)
+    (out_dir / ASSET_DIR).mkdir(exist_ok=True)
+    for asset in ASSETS:
+        path = claim(out_dir / ASSET_DIR / asset)
+        path.write_bytes(files("vpid_bench.report").joinpath("templates", asset).read_bytes())
+        written.append(path)
+    return written
 
