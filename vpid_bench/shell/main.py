@@ -75,9 +75,13 @@ class JobTask:
         #: Jobs of this process that failed or had failed runs (the exit status of a command
         #: without a pre-flight plan: a custom config).
         self.not_ok = 0
+        #: The sweep's progress line (:class:`~.progress.SweepProgress`), in the command's
+        #: process for a ``-m`` sweep with a known plan; ``None`` elsewhere.
+        self.progress: Any = None
 
     def __getstate__(self) -> dict[str, Any]:
-        return {"_registry": None, "_problems": None, "_pool": None, "lock": None, "not_ok": 0}
+        return {"_registry": None, "_problems": None, "_pool": None, "lock": None, "not_ok": 0,
+                "progress": None}
 
     def close(self) -> None:
         """Stop the sweep's worker processes."""
@@ -138,12 +142,17 @@ class JobTask:
             print(message + (f" [{job_dir}]" if multirun else ""), file=sys.stderr, flush=True)
             _write_status(job_dir, "error", one_line(exc))
             self.not_ok += 1
+            if self.progress is not None:
+                runs = cfg.get("runs") if hasattr(cfg, "get") else None
+                self.progress.job_done(0, 0, runs if isinstance(runs, int) else 0)
             return None
         self.not_ok += bool(summary.failed)
         _write_status(job_dir, "failed_runs" if summary.failed else "ok", summary)
         print(f"{summary.optimizer} on {summary.problem}: {summary.ran} run(s) done, "
               f"{summary.skipped} already recorded, {len(summary.failed)} failed, "
               f"{summary.wall_time_s:.1f} s -> {job_dir}", file=sys.stderr, flush=True)
+        if self.progress is not None:
+            self.progress.job_done(summary.ran, summary.skipped)
         return summary.score
 
 
@@ -347,7 +356,7 @@ def _main(argv: Sequence[str] | None) -> None:
         lock = FolderLock(plan.output_dir, key)
         preflight.check_writable(plan.output_dir, key)
         lock.acquire()
-        task.lock = lock
+        task.lock, task.progress = lock, _sweep_progress(plan)
         preflight.create_job_dirs(plan)
     except VpidBenchError as exc:
         _refuse(exc)
@@ -363,6 +372,16 @@ def _main(argv: Sequence[str] | None) -> None:
     _leave(1 if _failures(plan.output_dir, plan.multirun, plan.job_dirs,
                           report_expected=bool(plan.jobs) and plan.jobs[0].spec.report)
            else 0, before, watch=console)
+
+
+def _sweep_progress(plan: Any) -> Any:
+    """The progress line of a ``-m`` sweep whose jobs the plan knows (not an optimizing
+    sweeper's), unless ``progress=false``; else ``None``."""
+    from .progress import SweepProgress
+
+    if not plan.multirun or not plan.jobs or not all(j.spec.progress for j in plan.jobs):
+        return None
+    return SweepProgress(len(plan.jobs), sum(j.spec.runs for j in plan.jobs))
 
 
 #: How long (s) the process may take to end after the command, before threads a plugin

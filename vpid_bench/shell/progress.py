@@ -1,0 +1,65 @@
+"""The progress of a whole ``-m`` sweep: after each job, one line with the jobs and runs done
+of the sweep's total, the time spent and an estimate of the time left, beside each job's own
+progress bar. Shown where the jobs run in the command's process (Hydra's basic launcher, the
+default); other launchers run jobs elsewhere and show only the jobs' own lines."""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from collections.abc import Callable
+from typing import TextIO
+
+
+def duration(seconds: float) -> str:
+    """``"45 s"``, ``"3 min 05 s"``, ``"1 h 02 min"``."""
+    s = max(0, round(seconds))
+    if s < 60:
+        return f"{s} s"
+    if s < 3600:
+        return f"{s // 60} min {s % 60:02d} s"
+    return f"{s // 3600} h {s % 3600 // 60:02d} min"
+
+
+class SweepProgress:
+    """Counts a sweep's jobs and runs as they end. ``jobs`` and ``runs``: the sweep's totals
+    (from the pre-flight's plan). The estimate of the time left is the time per run this
+    command ran so far (runs found already recorded by a resume cost nothing and are not
+    counted) times the runs still to do."""
+
+    def __init__(self, jobs: int, runs: int, clock: Callable[[], float] = time.monotonic,
+                 stream: TextIO | None = None) -> None:
+        self.jobs, self.runs = jobs, runs
+        self.clock = clock
+        self.stream = stream
+        self.start = clock()
+        self.jobs_done = 0
+        self.runs_done = 0  # runs accounted for: run now, found recorded, or of a failed job
+        self.runs_run = 0  # runs this command ran (what the estimate is made from)
+
+    def job_done(self, ran: int, skipped: int, not_run: int = 0) -> str:
+        """Count one job (``ran`` runs run now, ``skipped`` found recorded, ``not_run`` never
+        run because the job failed) and return the line (also printed on the stream)."""
+        self.jobs_done += 1
+        self.runs_done += ran + skipped + not_run
+        self.runs_run += ran
+        line = self.line()
+        print(line, file=self.stream or sys.stderr, flush=True)
+        return line
+
+    def left_s(self) -> float:
+        """Estimated seconds left (NaN before any run was run, 0 at the end)."""
+        remaining = max(0, self.runs - self.runs_done)
+        if remaining == 0:
+            return 0.0
+        if self.runs_run == 0:
+            return math.nan
+        return (self.clock() - self.start) / self.runs_run * remaining
+
+    def line(self) -> str:
+        left = self.left_s()
+        eta = ("done" if left == 0 else "time left unknown yet" if math.isnan(left)
+               else f"about {duration(left)} left")
+        return (f"sweep: {self.jobs_done}/{self.jobs} jobs, {self.runs_done}/{self.runs} runs "
+                f"done, {duration(self.clock() - self.start)} elapsed, {eta}")
