@@ -3,9 +3,9 @@ series' step path, its band, the axes' ticks, and one colour per optimizer.
 
 Only geometry and numbers are computed here; the SVG elements are written by the page
 templates (auto-escaped: an optimizer's name never reaches the page raw). Why plain SVG
-rather than a plotting library's HTML export: it needs no script from outside (plotly embeds
-about 3.5 MB of JavaScript per page, bokeh about 1 MB), opens from ``file://``, and a figure of
-20 optimizers weighs tens of kilobytes.
+rather than a plotting library's HTML export: it needs no script from outside (a library's
+self-contained export embeds its whole JavaScript library, megabytes for plotly, in each page),
+opens from ``file://``, and a figure of 20 optimizers weighs tens of kilobytes.
 """
 
 from __future__ import annotations
