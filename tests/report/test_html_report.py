@@ -134,3 +134,25 @@ def test_svg_geometry_of_a_log_axis():
                                   f"V{top:.1f}H{svg.WIDTH - svg.RIGHT:.1f}")
     assert [t.label for t in lay.x_ticks] == ["1", "10", "100"]
     assert len(set(svg.colours(25))) == 25 and svg.colours(3) == list(svg.PALETTE[:3])
+
+
+def test_one_outline_orders_report_md_and_places_every_part_on_a_page(report_dir):
+    """The registry of sections (report/outline.py): report.md is its parts in order, and
+    each part the site shows from Markdown is on its page."""
+    from vpid_bench.report import outline
+
+    assert len({p.key for p in outline.PARTS}) == len(outline.PARTS)
+    assert {p.page for p in outline.PARTS} <= set(outline.PAGES)
+    assert {p.drawn for p in outline.PARTS} == {"page", "markdown"}
+    md = (report_dir / "report.md").read_text(encoding="utf-8")
+    heads = [md.index(h) for h in ("## Results", "## Rankings in detail",
+                                   "## The mean identified vector", "## Per-run statistics",
+                                   "## Statistical tests",
+                                   "## How to read this report", "## Sources", "## Files")]
+    assert heads == sorted(heads)
+    protocol = (report_dir / "protocol.html").read_text(encoding="utf-8")
+    for title in ("Statistical tests", "How to read this report", "Sources"):
+        assert f"<h2>{title}</h2>" in protocol
+    problem = (report_dir / "problem-vehicle.html").read_text(encoding="utf-8")
+    assert "<h2>The mean identified vector" in problem  # the vehicle plugin's section
+    assert "mean identified vector" not in protocol

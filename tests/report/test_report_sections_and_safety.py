@@ -84,6 +84,12 @@ def test_a_plugin_contributes_sections_through_the_hook(tmp_path, toy_registry, 
     assert "## Outside" in md  # the section stays, its outside file is dropped
     head = (tmp_path / "out" / "tables" / "headline.csv").read_text()
     assert "toy col" in head.splitlines()[0] and head.splitlines()[1].endswith(",-5.0")
+    # the same section on the problem's HTML page: its title, table, figure and files
+    page = (tmp_path / "out" / "problem-toy.html").read_text()
+    assert "<h2>Toy section</h2>" in page and "<h2>Outside</h2>" in page
+    assert "<td>a</td>" in page  # a cell of the section's Markdown table
+    assert 'href="tables/toy_escape_attempt.csv"' in page
+    assert ('src="figures/toy_figure.png"' in page) is (not short)
 
 
 def test_the_registry_collects_sections_in_plugin_order(toy_registry):

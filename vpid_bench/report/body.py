@@ -218,9 +218,9 @@ def section_md(section: Section, out_dir: Path) -> list[str]:
     for f in section.files:
         rel = Path(f).resolve().relative_to(out_dir.resolve()).as_posix()
         if rel.endswith(".png"):
-            lines += [f"![{escape(Path(rel).stem)}]({rel})", ""]
+            lines += [f"![{escape(section.title)}: {escape(Path(rel).stem)}]({rel})", ""]
         else:
-            links.append(f"`{rel}`")
+            links.append(f"[{rel}]({rel})")
     if links:
         lines += [para("Files: " + ", ".join(links) + "."), ""]
     return lines

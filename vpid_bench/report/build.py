@@ -27,18 +27,17 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import shlex
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
-from . import anytime, body, first_screen, render, tables
+from . import anytime, body, first_screen, outline, render, tables
 from .compute import ReportData, compute
 from .load import LoadedRecords, NoRecordsError
 from .model import ReportModel, SuiteScores
+from .outline import full_report_command
 from .plugin_sections import plugin_sections
-from .render import para
-from .safe import escape, inside, slug
+from .safe import inside, slug
 from .sections import HeadlineColumn
 
 __all__ = ["NoRecordsError", "Report", "build_report", "full_report_command"]
@@ -73,12 +72,6 @@ class Report:
         """One line per failed job, failed run, unreadable record, failed plugin section,
         bad optimum file or run below its instance's optimum."""
         return self.loaded.failures + self.section_errors + self.optima_errors
-
-
-def full_report_command(job_dir: str | Path) -> str:
-    """The command that builds the full report (figures included) of ``job_dir`` in place."""
-    job = Path(job_dir)
-    return f"vpid-bench-report {shlex.quote(str(job))} -o {shlex.quote(str(job / 'report'))}"
 
 
 class _Names:
@@ -145,7 +138,7 @@ def build_report(
     for placed in model.sections:
         written += list(placed.section.files)
     md = names.claim(out_dir / "report.md")
-    md.write_text("\n".join(_markdown(model)), encoding="utf-8")
+    md.write_text("\n".join(outline.markdown(model)), encoding="utf-8")
     written.append(md)
     site = _write_site(model, names)
     written += site
@@ -243,47 +236,3 @@ def _suite_scores(data: ReportData, registry: Any, names: _Names
     if isinstance(fig, Path):
         written.append(fig)
     return SuiteScores(rows, notes, ladder, fig), written
-
-
-def _markdown(model: ReportModel) -> list[str]:
-    """``report.md``: the first screen, then detail, then method and sources."""
-    data, out_dir = model.data, model.out_dir
-    n = len(data.loaded.records)
-    n_ok = sum(r["status"] == "ok" for r in data.loaded.records)
-    what = ", ".join(escape(p) for p in data.problems)
-    lines = ["# vpid-bench report" + (" (single job)" if data.short else ""), "",
-             para(f"{n} run(s) on {what} ({n_ok} ok, {n - n_ok} failed). Which optimizer, how "
-                  "far from the truth" + (" (or, where there is none, how well it fits and "
-                                          "predicts the record)" if any(
-                                              data.no_truth.values()) else "")
-                  + ", and why: below, per context. How to read it, the tests and the "
-                  "sources follow. The same report as browsable pages: `index.html`."), ""]
-    if data.archive_notes:
-        lines += [para("Archived runs, made earlier by the code named beside them and "
-                       "ranked here with this report's own runs (`archive=false` leaves "
-                       "them out):"), ""]
-        lines += [f"- {escape(n)}" for n in data.archive_notes] + [""]
-    lines += first_screen.markdown_lines(model.results)
-    if model.suite is not None:
-        s = model.suite
-        lines += body.suite_md(s.rows, s.notes, s.figure, out_dir) + body.ladder_md(s.ladder)
-    if data.short and len(data.paths) == 1:
-        lines += [para("A single job's report: statistics, no tests, no figures. The full "
-                       "report with figures:"), "",
-                  f"    {escape(full_report_command(data.paths[0]))}", ""]
-    lines += body.headline_md(data, model.extra)
-    for placed in model.sections:
-        lines += body.section_md(placed.section, out_dir)
-    if model.section_errors:
-        lines += [para("Not built: " + "; ".join(escape(e) for e in model.section_errors)
-                       + "."), ""]
-    lines += body.stats_md(data.summary)
-    if data.tests is not None:
-        t = data.tests
-        lines += body.tests_md(t.kw, t.pairs, t.fr, data.alpha, t.by_inst)
-        lines += body.figures_md(model.figs, out_dir)
-    lines += ["## How to read this report", "",
-              body.HOW_TO_READ.format(alpha=data.alpha, baseline=escape(data.baseline)), ""]
-    lines += ["## Sources", ""] + body.sources_lines(data.paths, data.loaded, data.rows) + [""]
-    lines += body.files_md(data.short)
-    return lines

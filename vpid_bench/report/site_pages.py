@@ -9,8 +9,8 @@ from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
-from . import body, svg
-from .safe import escape, slug
+from . import body, outline, svg
+from .safe import slug
 from .site import (
     ASSET_DIR,
     ASSETS,
@@ -148,15 +148,8 @@ def _problem(model: Any, pages: Pages, problem: str, colour_of: Mapping[str, str
             if isinstance(v, Path) and k not in INDEX_FIGURES and figure_scope(k, names)]
     not_drawn = [f"{k} ({v})" for k, v in model.figs.items()
                  if isinstance(v, str) and figure_scope(k, names)]
-    sections = []
-    for placed in model.sections_of(problem):
-        sec = placed.section
-        rel = [relative(f, model.out_dir) for f in sec.files]
-        sections.append({"title": sec.title, "text": sec.text,
-                         "images": [(f, f"{sec.title}: {Path(f).stem}") for f in rel
-                                    if f.endswith(".png")],
-                         "links": [f for f in rel if not f.endswith(".png")]})
-    return {"contexts": blocks, "pngs": pngs, "sections": sections, "not_drawn": not_drawn}
+    return {"contexts": blocks, "pngs": pngs, "not_drawn": not_drawn,
+            "parts": outline.shown_as_markdown(model, "problem", problem)}
 
 
 OPTIMIZER_HEADERS = ["problem", "context", "rank", "group", "n", "failed", "metric", "unit",
@@ -189,14 +182,7 @@ def _optimizer(model: Any, pages: Pages, name: str) -> dict[str, Any]:
 
 def _protocol(model: Any) -> dict[str, Any]:
     data = model.data
-    tests = ""
-    if data.tests is not None:
-        t = data.tests
-        tests = "\n".join(body.tests_md(t.kw, t.pairs, t.fr, data.alpha, t.by_inst)[2:])
-    return {"how_to_read": body.HOW_TO_READ.format(alpha=data.alpha,
-                                                   baseline=escape(data.baseline)),
-            "tests": tests,
-            "sources": "\n".join(body.sources_lines(data.paths, data.loaded, data.rows)),
+    return {"parts": outline.shown_as_markdown(model, "protocol"),
             "archive_notes": data.archive_notes,
             "failures": [*model.section_errors, *data.optima_errors],
             "tables": written_tables(model.out_dir),

@@ -1,0 +1,178 @@
+"""The report's sections, registered once, in order: what ``report.md`` holds and where the
+HTML site shows the same thing.
+
+Each :class:`Part` makes its Markdown from the :class:`~.model.ReportModel` (all of it, or
+one problem's share) and names the site's page that shows it: ``index``, ``problem`` (each
+problem's page shows that problem's share) or ``protocol``. ``drawn="page"`` means the page's
+template draws the part itself from the same model (sortable tables, interactive figures:
+the verdicts, rankings, figures); ``drawn="markdown"`` means the site shows the part's own
+Markdown, converted to HTML. A problem's report sections (the core's identifiability and
+signals, and every plugin's, :mod:`.plugin_sections`) are one part: a plugin's section is in
+``report.md`` and on its problem's page by the same function.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import shlex
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from . import body, first_screen
+from .render import para
+from .safe import escape
+
+#: Where the site shows a part.
+PAGES = ("index", "problem", "protocol")
+
+
+@dataclasses.dataclass(frozen=True)
+class Part:
+    """One section of the report. ``markdown(model, problem)``: its Markdown lines, for
+    ``problem`` only (the problem's page) or, with ``None``, for the whole report."""
+
+    key: str
+    page: str
+    drawn: str  # "page": drawn by the page's template; "markdown": its Markdown converted
+    markdown: Callable[[Any, str | None], list[str]]
+
+
+def full_report_command(job_dir: str | Path) -> str:
+    """The command that builds the full report (figures included) of ``job_dir`` in place."""
+    job = Path(job_dir)
+    return f"vpid-bench-report {shlex.quote(str(job))} -o {shlex.quote(str(job / 'report'))}"
+
+
+def _intro(model: Any, _: str | None) -> list[str]:
+    data = model.data
+    n = len(data.loaded.records)
+    n_ok = sum(r["status"] == "ok" for r in data.loaded.records)
+    what = ", ".join(escape(p) for p in data.problems)
+    no_truth = any(getattr(data, "no_truth", {}).values())
+    lines = ["# vpid-bench report" + (" (single job)" if data.short else ""), "",
+             para(f"{n} run(s) on {what} ({n_ok} ok, {n - n_ok} failed). Which optimizer, how "
+                  "far from the truth" + (" (or, where there is none, how well it fits and "
+                                          "predicts the record)" if no_truth else "")
+                  + ", and why: below, per context. How to read it, the tests and the "
+                  "sources follow. The same report as browsable pages: `index.html`."), ""]
+    if data.archive_notes:
+        lines += [para("Archived runs, made earlier by the code named beside them and "
+                       "ranked here with this report's own runs (`archive=false` leaves "
+                       "them out):"), ""]
+        lines += [f"- {escape(n)}" for n in data.archive_notes] + [""]
+    return lines
+
+
+def _results(model: Any, problem: str | None) -> list[str]:
+    return first_screen.markdown_lines(_of(model, problem, model.results))
+
+
+def _suite(model: Any, _: str | None) -> list[str]:
+    s = model.suite
+    if s is None:
+        return []
+    return body.suite_md(s.rows, s.notes, s.figure, model.out_dir) + body.ladder_md(s.ladder)
+
+
+def _single_job(model: Any, _: str | None) -> list[str]:
+    data = model.data
+    if not (data.short and len(data.paths) == 1):
+        return []
+    return [para("A single job's report: statistics, no tests, no figures. The full report "
+                 "with figures:"), "", f"    {escape(full_report_command(data.paths[0]))}", ""]
+
+
+def _rankings(model: Any, _: str | None) -> list[str]:
+    return body.headline_md(model.data, model.extra)
+
+
+def _sections(model: Any, problem: str | None) -> list[str]:
+    """Every problem's report sections (the core's and the plugins'), then what failed."""
+    lines: list[str] = []
+    for placed in model.sections:
+        if problem is None or placed.problem == problem:
+            lines += body.section_md(placed.section, model.out_dir)
+    if model.section_errors and problem is None:
+        lines += [para("Not built: " + "; ".join(escape(e) for e in model.section_errors)
+                       + "."), ""]
+    return lines
+
+
+def _stats(model: Any, problem: str | None) -> list[str]:
+    summary = model.data.summary
+    if problem is not None:
+        contexts = set(model.contexts_of(problem))
+        summary = [s for s in summary if s["context"] in contexts]
+    return body.stats_md(summary) if summary else []
+
+
+def _tests(model: Any, _: str | None) -> list[str]:
+    t = model.data.tests
+    if t is None:
+        return []
+    return body.tests_md(t.kw, t.pairs, t.fr, model.data.alpha, t.by_inst)
+
+
+def _figures(model: Any, _: str | None) -> list[str]:
+    return body.figures_md(model.figs, model.out_dir) if model.data.tests is not None else []
+
+
+def _how_to_read(model: Any, _: str | None) -> list[str]:
+    data = model.data
+    return ["## How to read this report", "",
+            body.HOW_TO_READ.format(alpha=data.alpha, baseline=escape(data.baseline)), ""]
+
+
+def _sources(model: Any, _: str | None) -> list[str]:
+    data = model.data
+    return (["## Sources", ""] + body.sources_lines(data.paths, data.loaded, data.rows)
+            + [""])
+
+
+def _files(model: Any, _: str | None) -> list[str]:
+    return body.files_md(model.data.short)
+
+
+def _of(model: Any, problem: str | None, results: list[Any]) -> list[Any]:
+    if problem is None:
+        return results
+    contexts = set(model.contexts_of(problem))
+    return [r for r in results if r.context in contexts]
+
+
+#: The report's sections in the order of report.md: the verdict first, the method after.
+PARTS: tuple[Part, ...] = (
+    Part("intro", "index", "page", _intro),
+    Part("results", "index", "page", _results),
+    Part("suite", "index", "page", _suite),
+    Part("single_job", "index", "page", _single_job),
+    Part("rankings", "problem", "page", _rankings),
+    Part("sections", "problem", "markdown", _sections),
+    Part("stats", "problem", "page", _stats),
+    Part("tests", "protocol", "markdown", _tests),
+    Part("figures", "problem", "page", _figures),
+    Part("how_to_read", "protocol", "markdown", _how_to_read),
+    Part("sources", "protocol", "markdown", _sources),
+    Part("files", "protocol", "page", _files),
+)
+
+
+def markdown(model: Any) -> list[str]:
+    """``report.md``: every part's Markdown, in order."""
+    lines: list[str] = []
+    for part in PARTS:
+        lines += part.markdown(model, None)
+    return lines
+
+
+def shown_as_markdown(model: Any, page: str, problem: str | None = None) -> list[tuple[str, str]]:
+    """The parts a site page shows from their Markdown: (key, Markdown text), in order;
+    ``problem``: that problem's share (the problem pages)."""
+    out = []
+    for part in PARTS:
+        if part.page == page and part.drawn == "markdown":
+            text = "\n".join(part.markdown(model, problem)).strip()
+            if text:
+                out.append((part.key, text))
+    return out
