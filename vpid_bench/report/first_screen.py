@@ -256,14 +256,18 @@ def _limits(res: ContextResult, m: float, srows: Sequence[Mapping[str, Any]],
                      "of the optimum" + (" in a box centred on the truth" if centred else ""))
     elif at_opt or m <= AT_FLOOR * floor:
         parts.append(". More search will not help here")
-        if math.isfinite(bound) and floor > ESTIMATOR_GAP * bound:
+        if math.isfinite(bound) and bound > 0 and floor > ESTIMATOR_GAP * bound:
             parts.append(f": the objective, not the data, sets the floor ({fmt(floor / bound, 2)}"
                          "× the bound), so a better estimator would" + _better(res))
         else:
             parts.append(": better records would (longer, other inputs or sensors)")
-    else:
+    elif floor > 0:
         parts.append(f". A larger budget or a better optimizer would still gain: the leaders "
                      f"end {fmt(m / floor, 2)}× above the floor")
+    else:  # a floor of exactly 0 (noise-free records: the optimum is the truth), no ratio
+        parts.append(". A larger budget or a better optimizer would still gain: the records "
+                     "allow the truth itself, and the leaders end "
+                     f"{res.value(m)} from it")
     return "".join(parts)
 
 
