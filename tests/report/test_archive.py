@@ -149,7 +149,8 @@ def test_a_changed_records_file_is_refused(made, tmp_path):
     path.write_bytes(bytes(data))
     report = _report(made, tmp_path, archives)
     assert {r["algorithm"] for r in _rows(tmp_path / "report")} == {"de1", "random"}
-    (line,) = report.archive_notes
+    assert report.archive_notes == []  # an unusable archive is a failure of the report:
+    (line,) = report.failures  # named once (a warning line, exit 1)
     assert "does not match the SHA-256" in line
 
 
@@ -166,13 +167,14 @@ def test_a_damaged_archive_is_named_and_skipped(made, tmp_path, damage, fragment
     damage(archives / "smoke")
     report = _report(made, tmp_path, archives)
     assert {r["algorithm"] for r in _rows(tmp_path / "report")} == {"de1", "random"}
-    assert any(fragment in n for n in report.archive_notes), report.archive_notes
+    (line,) = report.failures
+    assert fragment in line and line.startswith("archive "), line
 
 
 def test_a_records_file_that_inflates_past_the_limit_is_refused(made, tmp_path, monkeypatch):
     monkeypatch.setattr(arch, "MAX_RECORDS_BYTES", 1000)
     report = _report(made, tmp_path, made["archives"])
-    assert any("holds more than 1000 bytes" in n for n in report.archive_notes)
+    assert any("holds more than 1000 bytes" in n for n in report.failures)
 
 
 def test_bad_lines_are_skipped_and_counted(made, tmp_path):

@@ -31,7 +31,8 @@ import gzip
 import hashlib
 import io
 import math
-from collections.abc import Iterable, Mapping, Sequence
+import zlib
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -41,7 +42,8 @@ from ..fileio import loads_json, read_text_limited
 from ..records import CorruptRecordError, canonical_json, parse_record
 from .identifiability import FILE as IDENTIFIABILITY_FILE
 from .load import check_record
-from .optima import Optimum, optimum_from_data
+from .optima import Optimum, _data_settings, optimum_from_data
+from .plausible import first_reasons, implausible
 
 SCHEMA = "vpid-bench/archive/1"
 MANIFEST = "manifest.json"
@@ -55,9 +57,20 @@ JOB_FILES = (IDENTIFIABILITY_FILE, ESTIMATORS_FILE)
 JOBS = "jobs"
 #: Largest manifest and optima file read (bytes).
 MAX_TEXT_BYTES = 4 * 1024 * 1024
-#: Largest compressed records file read, and the most its lines may hold uncompressed (bytes).
+#: Largest compressed records file read, and the most its lines may hold uncompressed (bytes):
+#: ten times the shipped smoke archive's 12 MB; read as a stream, line by line, so a gzip bomb
+#: (500 KB that expand to 500 MB) stops at the first limit it meets, in memory and in time.
 MAX_GZ_BYTES = 64 * 1024 * 1024
-MAX_RECORDS_BYTES = 512 * 1024 * 1024
+MAX_RECORDS_BYTES = 128 * 1024 * 1024
+#: The most lines a records or optima file may hold, blank ones included (the smoke archive
+#: holds 2,850), and the longest line (bytes; a record with a long trace is a few hundred KB).
+MAX_LINES = 200_000
+MAX_LINE_BYTES = 16 * 1024 * 1024
+#: An archive with more bad lines than this is refused as a whole (it is not an archive with
+#: a few damaged lines, and checking each costs time).
+MAX_BAD_LINES = 1_000
+#: The most files a manifest may list.
+MAX_FILES = 1_000
 #: Relative tolerance of the per-instance check (true parameters, objective at the truth).
 SAME_RTOL = 1e-9
 #: Record keys left out of an archive (each run's copy of its plugins' dependency list).
@@ -92,7 +105,13 @@ class Archive:
     manifest: Mapping[str, Any]
     records: list[dict[str, Any]]
     optima: list[Optimum]
-    skipped: int
+    #: One line per skipped record or optimum line: ``"<file>:<line>: <why>"``.
+    bad: list[str] = dataclasses.field(default_factory=list)
+
+    @property
+    def skipped(self) -> int:
+        """How many record or optimum lines were skipped (:attr:`bad` says why)."""
+        return len(self.bad)
 
     @property
     def problems(self) -> set[str]:
@@ -136,6 +155,8 @@ def _manifest(folder: Path) -> dict[str, Any]:
                            f"(schema != {SCHEMA!r})")
     if not _plain(data.get("suite")) or not isinstance(data.get("files"), dict):
         raise ArchiveError(f"archive {folder}: {MANIFEST} lacks its suite or file list")
+    if len(data["files"]) > MAX_FILES:
+        raise ArchiveError(f"archive {folder}: {MANIFEST} lists more than {MAX_FILES} files")
     return data
 
 
@@ -150,24 +171,39 @@ def _checked_file(folder: Path, manifest: Mapping[str, Any], name: str, limit: i
     return data
 
 
-def _gunzip(data: bytes, folder: Path) -> bytes:
+def _gz_lines(data: bytes, folder: Path) -> Iterator[bytes]:
+    """The lines of the gzip data ``data``, decompressed one at a time: lines of at most
+    :data:`MAX_LINE_BYTES` (a longer one comes in pieces, which :func:`_lines` refuses),
+    :data:`MAX_RECORDS_BYTES` in all (:class:`ArchiveError` past it; the whole file is never
+    in memory)."""
+    total = 0
     try:
         with gzip.GzipFile(fileobj=io.BytesIO(data)) as fh:
-            out = fh.read(MAX_RECORDS_BYTES + 1)
-    except (OSError, EOFError) as exc:
+            while line := fh.readline(MAX_LINE_BYTES + 1):
+                total += len(line)
+                if total > MAX_RECORDS_BYTES:
+                    raise ArchiveError(f"archive {folder}: {RECORDS} holds more than "
+                                       f"{MAX_RECORDS_BYTES} bytes")
+                yield line
+    except (OSError, EOFError, zlib.error) as exc:
         raise ArchiveError(f"archive {folder}: {RECORDS} is not gzip data "
                            f"({type(exc).__name__})") from None
-    if len(out) > MAX_RECORDS_BYTES:
-        raise ArchiveError(f"archive {folder}: {RECORDS} holds more than "
-                           f"{MAX_RECORDS_BYTES} bytes")
-    return out
 
 
-def _lines(data: bytes) -> Iterable[tuple[int, Any]]:
-    for n, line in enumerate(data.decode("utf-8", errors="replace").splitlines(), 1):
-        if line.strip():
+def _lines(lines: Iterable[bytes], where: Path) -> Iterator[tuple[int, Any]]:
+    """``(line number, parsed JSON or None)`` of each non-blank line, within
+    :data:`MAX_LINES` and :data:`MAX_LINE_BYTES` (``where``: the file, for the error)."""
+    for n, line in enumerate(lines, 1):
+        if n > MAX_LINES:
+            raise ArchiveError(f"archive {where.parent}: {where.name} holds more than "
+                               f"{MAX_LINES} lines")
+        if len(line) > MAX_LINE_BYTES:
+            raise ArchiveError(f"archive {where.parent}: {where.name} line {n} is longer "
+                               f"than {MAX_LINE_BYTES} bytes")
+        text = line.decode("utf-8", errors="replace")
+        if text.strip():
             try:
-                yield n, loads_json(line)
+                yield n, loads_json(text)
             except ValueError:
                 yield n, None
 
@@ -195,35 +231,98 @@ def _check_job_files(folder: Path, manifest: Mapping[str, Any]) -> None:
         _checked_file(folder, manifest, str(name), MAX_TEXT_BYTES)
 
 
-def read_archive(folder: Path) -> Archive:
-    """Read and check the archive in ``folder``; :class:`ArchiveError` says why it cannot be
-    used. Bad record or optimum lines are skipped and counted."""
-    folder = Path(folder)
-    manifest = _manifest(folder)
-    _check_job_files(folder, manifest)
-    records, skipped = [], 0
-    for n, obj in _lines(_gunzip(_checked_file(folder, manifest, RECORDS, MAX_GZ_BYTES),
-                                 folder)):
+class _Bad:
+    """The skipped lines of one archive, refused as a whole past :data:`MAX_BAD_LINES`."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder, self.lines = folder, []
+
+    def add(self, name: str, n: int, why: str) -> None:
+        self.lines.append(f"{name}:{n}: {why}")
+        if len(self.lines) > MAX_BAD_LINES:
+            raise ArchiveError(f"archive {self.folder}: more than {MAX_BAD_LINES} bad lines "
+                               f"(the first: {self.lines[0]})")
+
+
+def _read_optima(folder: Path, manifest: Mapping[str, Any], bad: _Bad) -> list[Optimum]:
+    """The optimum lines; one instance (problem, instance, settings) given twice refuses
+    the archive: which of two optima counts is not the archive's to leave open."""
+    optima, seen = [], {}
+    data = _checked_file(folder, manifest, OPTIMA, MAX_TEXT_BYTES)
+    for n, obj in _lines(data.splitlines(keepends=True), folder / OPTIMA):
+        opt, why = optimum_from_data(obj, Path(f"{folder / OPTIMA}:{n}"))
+        if opt is None:
+            bad.add(OPTIMA, n, why or "not an optimum")
+            continue
+        key = canonical_json([opt.problem, opt.instance, opt.settings])
+        if key in seen:
+            raise ArchiveError(f"archive {folder}: {OPTIMA} line {n} gives the optimum of the "
+                               f"instance of line {seen[key]} again (an instance has one)")
+        seen[key] = n
+        optima.append(opt)
+    return optima
+
+
+def _run_identity(rec: Mapping[str, Any]) -> str:
+    """What makes a run the run it is (its setting, optimizer, seed and index), whatever
+    run id its line claims."""
+    optimizer = rec.get("optimizer") or {}
+    return canonical_json([_setting(rec), optimizer.get("name"), optimizer.get("params"),
+                           (rec.get("seeds") or {}).get("seed"), rec.get("run_index")])
+
+
+def _optimum_key(problem: str, instance: Any, settings: Any, dim: int) -> str:
+    """The instance an optimum or a record belongs to (protocol keys left out)."""
+    return canonical_json([problem, instance, _data_settings(settings), dim])
+
+
+def _read_records(folder: Path, manifest: Mapping[str, Any], optima: Sequence[Optimum],
+                  bad: _Bad) -> list[dict[str, Any]]:
+    """The record lines that pass every check a record file passes and hold values a run
+    gives (:func:`.plausible.implausible`); a run given twice refuses the archive."""
+    f_opt = {_optimum_key(o.problem, o.instance, o.settings, len(o.x_opt)): o.f_opt
+             for o in optima if o.settings is not None}
+    records: list[dict[str, Any]] = []
+    seen: dict[str, int] = {}
+    data = _checked_file(folder, manifest, RECORDS, MAX_GZ_BYTES)
+    for n, obj in _lines(_gz_lines(data, folder), folder / RECORDS):
         try:
-            rec = parse_record(obj, f"{folder / RECORDS}:{n}")
-        except CorruptRecordError:
-            skipped += 1
+            rec = parse_record(obj, "")
+        except CorruptRecordError as exc:
+            bad.add(RECORDS, n, str(exc).removeprefix(": "))
             continue
-        if check_record(rec) is not None:
-            skipped += 1
+        why = check_record(rec)
+        why = f"field {why}" if why else implausible(rec, f_opt.get(_optimum_key(
+            rec["problem"]["name"], _instance(rec), rec["problem"].get("config") or {},
+            len(rec["parameters"].get("names") or []))))
+        if why:
+            bad.add(RECORDS, n, why)
             continue
+        for key in (f"run id {rec['run_id']}", _run_identity(rec)):
+            if key in seen:
+                raise ArchiveError(
+                    f"archive {folder}: {RECORDS} line {n} repeats the run of line "
+                    f"{seen[key]} (an archive holds each run once: a repeated run would count "
+                    "as more runs than were made)")
+            seen[key] = n
         rec["_file"] = f"{folder / RECORDS}:{n}"
         rec["_job_dir"] = str(_job_folder(folder, manifest, rec["problem"]["name"]))
         rec["_archive"] = manifest["suite"]
         records.append(rec)
-    optima = []
-    for n, obj in _lines(_checked_file(folder, manifest, OPTIMA, MAX_TEXT_BYTES)):
-        opt, _ = optimum_from_data(obj, Path(f"{folder / OPTIMA}:{n}"))
-        if opt is None:
-            skipped += 1
-        else:
-            optima.append(opt)
-    return Archive(folder, manifest["suite"], manifest, records, optima, skipped)
+    return records
+
+
+def read_archive(folder: Path) -> Archive:
+    """Read and check the archive in ``folder``; :class:`ArchiveError` says why it cannot be
+    used (a changed file, a limit crossed, a run or an optimum given twice, too many bad
+    lines). Bad record or optimum lines are skipped and named (:attr:`Archive.bad`)."""
+    folder = Path(folder)
+    manifest = _manifest(folder)
+    _check_job_files(folder, manifest)
+    bad = _Bad(folder)
+    optima = _read_optima(folder, manifest, bad)
+    records = _read_records(folder, manifest, optima, bad)
+    return Archive(folder, manifest["suite"], manifest, records, optima, bad.lines)
 
 
 def is_archive(path: Path) -> bool:
@@ -345,8 +444,8 @@ def merge(records: Sequence[Mapping[str, Any]], archives: Iterable[Archive]) -> 
             out.used.append(f"{problem}: {', '.join(optimizers)} from the archive of suite "
                             f"{arch.suite} ({arch.made_by}; {len(added)} runs on this "
                             "report's instances, not run again"
-                            + (f"; {arch.skipped} bad archive line(s) skipped" if arch.skipped
-                               else "") + ")")
+                            + (f"; {arch.skipped} bad archive line(s) skipped: "
+                               + first_reasons(arch.bad) if arch.bad else "") + ")")
     return out
 
 

@@ -173,6 +173,9 @@ def _load(paths: Sequence[Path]) -> tuple[LoadedRecords, list[Any]]:
         seen = {r["run_id"] for r in loaded.records}
         loaded.records.extend(r for r in archive.records if r["run_id"] not in seen)
         optima += archive.optima
+        for line in archive.bad:  # each skipped line named: "records.jsonl.gz:12: why"
+            where, _, why = line.partition(": ")
+            loaded.skipped.append((folder / where, why))
     return loaded, optima
 
 
@@ -185,7 +188,11 @@ def _add_archive(loaded: LoadedRecords, archive: bool | Path) -> tuple[list[Any]
                              {r["problem"]["name"] for r in loaded.records})
     merged = merge(loaded.records, archives)
     loaded.records.extend(merged.records)
-    return merged.optima, bad + merged.refused + merged.used
+    # an archive that cannot be used at all (damaged, a limit crossed) is a failure of the
+    # report, named once; a problem's archive refused for another version is a note
+    loaded.skipped += [(Path(line.split(": ", 1)[0].removeprefix("archive ")), line)
+                       for line in bad]
+    return merged.optima, merged.refused + merged.used
 
 
 def _tests(rows: list[dict[str, Any]], search: list[dict[str, Any]], alpha: float) -> Tests:

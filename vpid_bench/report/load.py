@@ -71,7 +71,8 @@ class LoadedRecords:
     def failures(self) -> list[str]:
         """One line per failed job, failed run or unreadable record file (each names it)."""
         out = [f"job {d}: {why}" for d, why in self.failed_jobs]
-        out += [f"unreadable record {p}: {reason(p, why)}" for p, why in self.skipped]
+        out += [why if why.startswith(f"archive {p}:") else  # an archive that names itself
+                f"unreadable record {p}: {reason(p, why)}" for p, why in self.skipped]
         failed_runs = [r for r in self.records if r["status"] != "ok"]
         if failed_runs and not self.failed_jobs:
             out.append(f"{len(failed_runs)} failed run(s) in the records")
