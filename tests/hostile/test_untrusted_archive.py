@@ -212,3 +212,25 @@ def test_8_a_value_no_run_gives_is_skipped_and_named(field, value, words, made, 
     assert words in note
     given = build_report([folder], tmp_path / "given", short=True)  # the archive alone
     assert sum(words in f for f in given.failures) == len(forged)
+
+
+def test_7_packing_jobs_with_optima_of_their_own_keeps_the_lowest_per_instance(made, tmp_path):
+    """Jobs run apart (each polishing into its own optima folder) give several optima of one
+    instance; the archive made of them holds one, the lowest, and reads back."""
+    from vpid_bench.report.optima import load_optima
+
+    base = tmp_path / "base"
+    shutil.copytree(made["root"] / "base", base)
+    shutil.copytree(base / "optima", base / "random" / "optima")
+    own = base / "random" / "optima"
+    for path in own.glob("*.json"):  # the same instances, a worse optimum each
+        data = json.loads(path.read_text())
+        data["f_opt"] *= 1.5
+        path.write_text(json.dumps(data))
+    found = load_optima([base, base / "random"], []).optima
+    pack(base, "smoke", tmp_path / "a" / "smoke", command="t", commit="c",
+         made_at="2026-01-01T00:00:00+00:00")
+    archive = arch.read_archive(tmp_path / "a" / "smoke")
+    assert len(found) == 2 * len(archive.optima)
+    best = {arch.optimum_instance(o): o.f_opt for o in sorted(found, key=lambda o: -o.f_opt)}
+    assert {arch.optimum_instance(o): o.f_opt for o in archive.optima} == best

@@ -254,13 +254,19 @@ def _read_optima(folder: Path, manifest: Mapping[str, Any], bad: _Bad) -> list[O
         if opt is None:
             bad.add(OPTIMA, n, why or "not an optimum")
             continue
-        key = canonical_json([opt.problem, opt.instance, opt.settings])
+        key = optimum_instance(opt)
         if key in seen:
             raise ArchiveError(f"archive {folder}: {OPTIMA} line {n} gives the optimum of the "
                                f"instance of line {seen[key]} again (an instance has one)")
         seen[key] = n
         optima.append(opt)
     return optima
+
+
+def optimum_instance(opt: Optimum) -> str:
+    """The instance an optimum is of (problem, instance id, settings), canonical: an archive
+    holds one optimum per instance (:func:`.pack.pack` keeps the lowest it finds)."""
+    return canonical_json([opt.problem, opt.instance, opt.settings])
 
 
 def _run_identity(rec: Mapping[str, Any]) -> str:

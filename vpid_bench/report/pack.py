@@ -19,7 +19,18 @@ from pathlib import Path
 from typing import Any
 
 from ..fileio import loads_json
-from .archive import DROPPED, IOH, JOB_FILES, JOBS, MANIFEST, OPTIMA, RECORDS, SCHEMA, SUMMARY
+from .archive import (
+    DROPPED,
+    IOH,
+    JOB_FILES,
+    JOBS,
+    MANIFEST,
+    OPTIMA,
+    RECORDS,
+    SCHEMA,
+    SUMMARY,
+    optimum_instance,
+)
 
 
 def _sha256(data: bytes) -> str:
@@ -59,10 +70,12 @@ def pack(sweep_dir: Path, suite: str, out: Path, *, command: str, commit: str | 
     from .optima import load_optima
 
     optima = load_optima([sweep_dir], data.loaded.records).optima
+    lowest: dict[str, Any] = {}  # one per instance (jobs with folders of their own: several)
+    for o in sorted(optima, key=lambda o: (o.problem, str(o.instance), o.f_opt)):
+        lowest.setdefault(optimum_instance(o), o)
     (out / OPTIMA).write_text("".join(
         json.dumps(loads_json(o.path.read_text(encoding="utf-8")), sort_keys=True) + "\n"
-        for o in sorted(optima, key=lambda o: (o.problem, str(o.instance), o.f_opt))),
-        encoding="utf-8")
+        for o in lowest.values()), encoding="utf-8")
     job_files = [] if optima_only else _copy_job_files(found, out)
     _write_summary(out / SUMMARY, [] if optima_only else data.rows)
     _write_ioh(out / IOH, data, optima_only)
