@@ -14,7 +14,8 @@ capability     members                                                          
 =============  =====================================================================  =========
 core           Config, bounds, evaluate; optional: x_true, metrics, describe, name,    (always)
                rows_independent, suites, family, comparisons
-residuals      residuals, residual_groups, evaluate_with_residuals, residual_sigma    residuals
+residuals      residuals, residual_groups, evaluate_with_residuals, fisher_residuals,
+               fisher_groups, residual_sigma                                          residuals
 instances      instance, instance_id, evaluate_instances                              instance
 signals        signals, signal_units                                                  signals
 plumbing       write_artifacts, content_digest, set_threads                           (none)
@@ -61,7 +62,8 @@ CAPABILITIES: tuple[Capability, ...] = (
                None, what="the box, the objective, and optionally the truth, accuracy "
                           "metrics and fixed comparison rows"),
     Capability("residuals", ("residuals", "residual_groups", "evaluate_with_residuals",
-                             "residual_sigma"), "residuals",
+                             "fisher_residuals", "fisher_groups", "residual_sigma"),
+               "residuals",
                what="residual vectors, for least-squares optimizers and the identifiability "
                     "analysis"),
     Capability("instances", ("instance", "instance_id", "evaluate_instances"), "instance",

@@ -153,11 +153,28 @@ class Problem(abc.ABC):
         """
         return np.asarray(self.evaluate(X), dtype=float), np.asarray(self.residuals(X), float)
 
+    def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
+        """Measured minus computed with weights that depend neither on the parameters nor
+        on the objective, shape ``(n, m)``, in the units of :meth:`residual_sigma`: what the
+        Fisher information (:mod:`vpid_bench.analysis.identifiability`) and the profile
+        likelihood differentiate (the bound belongs to the data). It differs from
+        :meth:`residuals` where an objective rescales its residuals by a function of the
+        parameters (``ml_profiled``, :mod:`vpid_bench.estimators`). Default:
+        :meth:`residuals`."""
+        return self.residuals(X)
+
+    def fisher_groups(self) -> np.ndarray:
+        """The group (measured channel) of each entry of :meth:`fisher_residuals`, ``(m,)``
+        ints: a ``σ`` given per group is per these groups, and the bounds' rounding rule and
+        σ-floor sensitivity work per group. Default: :meth:`residual_groups`."""
+        return self.residual_groups()
+
     def residual_sigma(self) -> np.ndarray | None:
-        """The standard deviation of the measurement noise in each residual group (units of
-        the residuals), shape ``(groups,)``, or of each residual entry, shape ``(m,)`` (noise
-        whose sigma varies along the record), for the Fisher information; ``None`` when it is
-        not known (a measured record). It is the noise that was simulated, whatever the
+        """The standard deviation of the measurement noise in each group of
+        :meth:`fisher_groups` (units of :meth:`fisher_residuals`), shape ``(groups,)``, or of
+        each entry, shape ``(m,)``
+        (noise whose sigma varies along the record), for the Fisher information; ``None`` when
+        it is not known (a measured record). It is the noise that was simulated, whatever the
         objective: the bound belongs to the data, not to the estimator."""
         return None
 

@@ -136,8 +136,10 @@ class VehicleConfig(ProblemConfig):
     (fast compiled kernel) or ``exact`` (matrix exponential, for validation); ``sampling`` is
     how the step input enters Newmark: ``point`` (y at t_k) or ``average`` (each step gets
     the exact mean of y over the step; see :mod:`vpid_vehicle.road`). ``objective`` is the
-    estimator: ``eq3`` (the paper's), ``ols`` or ``ml`` (:mod:`vpid_bench.estimators`; ``ml``
-    weighs by the stated noise model, ``noise.model`` and ``noise.level``).
+    estimator: ``eq3`` (the paper's), ``ols``, ``ml`` or ``ml_profiled``
+    (:mod:`vpid_bench.estimators`; ``ml`` weighs by the stated noise model, ``noise.model``
+    and ``noise.level``, and is refused for a measured ``reference.file``, whose noise is not
+    known: ``ml_profiled`` estimates each channel's sigma from the residuals).
     """
 
     vehicle: VehicleParams = field(default_factory=VehicleParams)
@@ -189,7 +191,9 @@ def validate(config: VehicleConfig) -> None:
     if T < config.dt:
         raise ConfigError("problem.dt", config.dt, f"a step no longer than the window T = {T:g} s")
     _validate_noise_and_reference(config)
-    estimators.check_objective(config.objective, config.noise.level)
+    # a measured record states no noise level (noise.level is what synthetic records add)
+    estimators.check_objective(config.objective, config.noise.level
+                               if config.reference.file is None else None)
     check_size(config, T)
     if config.reference.file is not None:
         check_reference_file(config, T)

@@ -126,15 +126,14 @@ class VehicleProblem(Problem):
         return f"noise.seed={self.config.noise.seed}/{self._index}"
 
     def residual_sigma(self) -> np.ndarray | None:
-        """The simulated noise's standard deviation of each residual entry ``(2 N,)``, in
-        the residuals' units: ``level |z_k|`` per sample (multiplicative), ``level × rms(z_c)``
-        (additive), ``level |z_k| / √3`` (uniform), times the objective's weights. ``None``
-        for a measured record or noise level 0."""
+        """The simulated noise's standard deviation of each entry of
+        :meth:`fisher_residuals` ``(2 N,)``, m/s^2: ``level |z_k|`` per sample
+        (multiplicative), ``level × rms(z_c)`` (additive), ``level |z_k| / √3`` (uniform).
+        ``None`` for a measured record or noise level 0."""
         nz = self.config.noise
         if self.reference_clean is None or nz.level <= 0:
             return None
-        sigma = estimators.noise_sigma(self.reference_clean, nz.level, nz.model)
-        return (sigma * self._weighting()).reshape(-1)
+        return estimators.noise_sigma(self.reference_clean, nz.level, nz.model).reshape(-1)
 
     def _weighting(self) -> np.ndarray:
         """What a raw residual is multiplied by, ``(2, N)`` (:func:`estimators.weights`):
@@ -213,13 +212,29 @@ class VehicleProblem(Problem):
         except (ValueError, FloatingPointError, ZeroDivisionError, np.linalg.LinAlgError):
             return super().evaluate_instances(X, instance)
 
+    def _weighted(self, X: np.ndarray) -> np.ndarray:
+        """Measured minus computed times the objective's fixed weights, ``(n, 2, N)``."""
+        return (self.reference[None] - self.responses(X)) * self._weighting()[None]
+
     def residuals(self, X: np.ndarray) -> np.ndarray:
-        """Measured minus computed, z1'' samples then z2'' samples, ``(n, 2 N)``, times the
-        objective's weights (Eq. 3: none, m/s^2; ``ols``: over the record's norm; ``ml``: over
-        each sample's plug-in sigma); rows of non-physical candidates are inf."""
-        R = (self.reference[None] - self.responses(X)) * self._weighting()[None]
+        """What a least-squares optimizer minimises, z1'' entries then z2'' entries,
+        ``(n, 2 N)`` (:func:`estimators.residuals_and_value`): measured minus computed times
+        the objective's weights (Eq. 3: none, m/s^2; ``ols``: over the record's norm; ``ml``:
+        over each sample's plug-in sigma; ``ml_profiled``: rescaled per channel); rows of
+        non-physical candidates are inf."""
+        return self.evaluate_with_residuals(X)[1]
+
+    def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
+        """Measured minus computed in m/s^2, z1'' entries then z2'' entries, ``(n, 2 N)``,
+        whatever the objective (what the Cramér–Rao bound differentiates; inf rows where a
+        candidate is non-physical)."""
+        R = self.reference[None] - self.responses(X)
         R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
         return R.reshape(R.shape[0], -1)
+
+    def fisher_groups(self) -> np.ndarray:
+        """0 for the z1'' entries of :meth:`fisher_residuals`, 1 for the z2'' entries."""
+        return np.repeat(np.arange(2), self.t.size)
 
     def metrics(self, x: np.ndarray) -> dict[str, float]:
         """``{"NoRE": ...}``: the paper's norm of relative errors of ``x`` (percent); none
@@ -237,17 +252,13 @@ class VehicleProblem(Problem):
         return estimators.groups(self.config.objective, 2, self.t.size)
 
     def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Eq. (3) and the residuals of the rows of ``X`` from one simulation: ``f`` (n,) is
-        the sum of the two channel norms of ``R`` (n, 2 N) over the reference's; inf (both)
-        where a candidate is non-physical or its simulation fails."""
-        R = self.residuals(X)
-        N = self.t.size
-        if self.config.objective != "eq3":
-            return estimators.value(self.config.objective, R.reshape(R.shape[0], 2, N)), R
-        den = float(np.linalg.norm(self.reference, axis=1).sum())
-        with np.errstate(invalid="ignore", over="ignore"):
-            f = (np.linalg.norm(R[:, :N], axis=1) + np.linalg.norm(R[:, N:], axis=1)) / den
-        f[~np.isfinite(f)] = np.inf
+        """The objective and the residuals of the rows of ``X`` from one simulation: ``f``
+        (n,) (Eq. 3: the sum of the two channel norms of ``R`` (n, 2 N) over the reference's)
+        and ``R`` (:meth:`residuals`); inf (both) where a candidate is non-physical or its
+        simulation fails."""
+        f, R = estimators.residuals_and_value(self.config.objective, self._weighted(X))
+        if self.config.objective == "eq3":
+            f = f / float(np.linalg.norm(self.reference, axis=1).sum())
         return f, R
 
     def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:

@@ -20,12 +20,12 @@ from vpid_bench.report.estimator_floors import read_estimator_floors
 
 
 def test_each_objectives_optimum_on_the_first_instances():
-    """Three floors on min(INSTANCES, runs) instances, each the metric of the polished
+    """Four floors on min(INSTANCES, runs) instances, each the metric of the polished
     optimum of that objective from the truth (checked against a direct polish)."""
     p = VehicleProblem(VehicleConfig())
     out = estimator_floors(p, runs=3)
     assert out["metric"] == "NoRE" and out["instances"] == 3 and out["chosen"] == "eq3"
-    assert set(out["floors"]) == {"eq3", "ols", "ml"}
+    assert set(out["floors"]) == {"eq3", "ols", "ml", "ml_profiled"}
     ml = VehicleProblem(VehicleConfig(objective="ml")).instance(2)
     expected = ml.metrics(polish(ml, ml.x_true)[0])["NoRE"]
     assert out["floors"]["ml"]["values"][2] == pytest.approx(expected, rel=1e-9)
@@ -36,7 +36,7 @@ def test_each_objectives_optimum_on_the_first_instances():
 def test_an_objective_the_problem_refuses_is_left_out_and_a_problem_without_choice_has_none():
     quiet = RideQuarterProblem(RideQuarterConfig(noise_level=0.0))
     out = estimator_floors(quiet, runs=2)
-    assert set(out["floors"]) == {"eq3", "ols"}  # ml needs a noise level
+    assert set(out["floors"]) == {"eq3", "ols", "ml_profiled"}  # ml needs a noise level
 
     class NoChoice:
         config = None
@@ -84,7 +84,7 @@ def test_unreadable_files_are_refused(tmp_path):
 def test_the_report_names_each_floors_estimator_and_points_to_a_better_one(tmp_path, registry):
     """A job of lsq on the paper's problem under Eq. 3: its first screen says the records
     allow the floor under Eq. 3 and that the likelihood's optimum lies far closer; the
-    identifiability section lists the floors of the three estimators."""
+    identifiability section lists the floors of the four estimators."""
     problem = hydra_node(VehicleConfig, "vehicle")
     cfg = {"problem": problem, "optimizer": {"name": "lsq"}, "seed": 0, "runs": 3,
            "progress": False, "report": False}

@@ -21,9 +21,10 @@ tracks of an ISO road are independent realisations of the class.
 
 **Objective** (``objective``, :mod:`vpid_bench.estimators`): by default ``f = sum_c
 ||measured_c - computed_c|| / ||measured_c||`` (the paper's Eq. 3, one norm per channel; the
-residuals are those differences over ``||measured_c||``, one group per channel); ``ols`` and
-``ml`` (weighted by ``sigma_c`` estimated from the record) are sums of squares. Metric: NoRE
-(%) against the instance's truth.
+residuals are those differences over ``||measured_c||``, one group per channel); ``ols``,
+``ml`` (weighted by ``sigma_c`` estimated from the record) and ``ml_profiled`` (each channel's
+sigma unknown, profiled out) are sums of squares. Metric: NoRE (%) against the instance's
+truth.
 """
 
 from __future__ import annotations
@@ -70,7 +71,7 @@ class SuiteConfig(ProblemConfig):
     published set, the box centre). ``spread``: the random truth's half-width as a fraction of
     the set. ``record``: ``exact`` or ``newmark`` (inverse crime). ``record_substeps``: the
     exact record's steps per sample. ``objective``: the estimator, ``eq3`` (the paper's
-    Eq. 3), ``ols`` or ``ml`` (:mod:`vpid_bench.estimators`)."""
+    Eq. 3), ``ols``, ``ml`` or ``ml_profiled`` (:mod:`vpid_bench.estimators`)."""
 
     duration_s: float = 3.0
     dt: float = 0.001
@@ -229,7 +230,8 @@ class RideProblem(Problem):
         plug_in = (estimators.plug_in_sigma(self.measured, config.noise_level, "additive")
                    if config.objective == "ml" else None)
         #: What a raw residual is multiplied by, ``(p, N)``: ``1 / ||measured_c||`` (Eq. 3),
-        #: ``1 / ||measured||`` (ols), ``1 / sigma`` plugged in from the record (ml).
+        #: ``1 / ||measured||`` (ols), ``1 / sigma`` plugged in from the record (ml),
+        #: ``1 / rms(measured_c)`` (ml_profiled).
         self.weights = estimators.weights(config.objective, self.measured,
                                           1.0 / self.scale[:, None], plug_in)
 
@@ -266,28 +268,40 @@ class RideProblem(Problem):
                                               self.config.dt, "newmark").transpose(0, 2, 1)
         return out
 
+    def _weighted(self, X: np.ndarray) -> np.ndarray:
+        """``measured - computed`` times the objective's fixed weights, ``(n, p, N)``."""
+        return (self.measured[None] - self.responses(X)) * self.weights[None]
+
     def residuals(self, X: np.ndarray) -> np.ndarray:
-        """``measured_c - computed_c`` times the objective's weights (Eq. 3: over
-        ``||measured_c||``), channels one after another, ``(n, p N)``; inf rows where a
-        simulation fails."""
-        R = (self.measured[None] - self.responses(X)) * self.weights[None]
+        """What a least-squares optimizer minimises, channels one after another, ``(n, p N)``
+        (:func:`estimators.residuals_and_value`: ``measured_c - computed_c`` times the
+        objective's weights, Eq. 3: over ``||measured_c||``; ``ml_profiled`` rescaled per
+        channel); inf rows where a simulation fails."""
+        return self.evaluate_with_residuals(X)[1]
+
+    def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
+        """``(measured_c - computed_c) / ||measured_c||``, channels one after another,
+        ``(n, p N)``, whatever the objective (what the Cramér–Rao bound differentiates)."""
+        R = (self.measured[None] - self.responses(X)) / self.scale[None, :, None]
         R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
         return R.reshape(R.shape[0], -1)
+
+    def fisher_groups(self) -> np.ndarray:
+        """The channel of each entry of :meth:`fisher_residuals`."""
+        return np.repeat(np.arange(self.measured.shape[0]), self.t.size)
 
     def residual_groups(self) -> np.ndarray:
         """The channels for Eq. 3 (one norm each), one group for the sums of squares."""
         return estimators.groups(self.config.objective, self.measured.shape[0], self.t.size)
 
     def residual_sigma(self) -> np.ndarray | None:
-        """The simulated noise's sigma of each residual entry, in the residuals' units."""
+        """The simulated noise's sigma of each channel of :meth:`fisher_residuals`, ``(p,)``."""
         if self.config.noise_level <= 0:
             return None
-        return (self.sigma[:, None] * self.weights).reshape(-1)
+        return self.sigma / self.scale
 
     def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        R = self.residuals(X)
-        f = estimators.value(self.config.objective, R.reshape(R.shape[0], -1, self.t.size))
-        return f, R
+        return estimators.residuals_and_value(self.config.objective, self._weighted(X))
 
     def evaluate(self, X: np.ndarray) -> np.ndarray:
         return self.evaluate_with_residuals(X)[0]
