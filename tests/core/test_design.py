@@ -32,15 +32,16 @@ def test_designs_are_every_combination_ranked_by_the_bound(capsys):
 
 def test_the_numbers_are_the_bound_and_its_optimality_criteria(capsys):
     """A-opt is the sum of the squared relative bounds; D-opt the d-th root of the Fisher
-    determinant in relative parameters (the product of the squared scaled singular values)."""
+    determinant in relative parameters (the product of the squared scaled singular values).
+    The table prints 3 significant digits: agreement within 5e-3 relative."""
     assert main(["vehicle", "record.extra=0.5"]) == 0
     row = _table(capsys.readouterr().out)[0]
     crb = cramer_rao(VehicleProblem(VehicleConfig(record=RecordConfig(extra=0.5))))
     rel = np.asarray(crb["crb_percent"]) / 100
     s = np.asarray(crb["singular_values"])
-    assert float(row[1]) == pytest.approx(crb["crb_norm_percent"], rel=2e-3)
-    assert float(row[5]) == pytest.approx(np.sum(rel**2), rel=2e-3)
-    assert float(row[4]) == pytest.approx(np.prod(s**2) ** (1 / s.size), rel=2e-3)
+    assert float(row[1]) == pytest.approx(crb["crb_norm_percent"], rel=5e-3)
+    assert float(row[5]) == pytest.approx(np.sum(rel**2), rel=5e-3)
+    assert float(row[4]) == pytest.approx(np.prod(s**2) ** (1 / s.size), rel=5e-3)
     assert row[6] == "none" and row[7] == "no"
 
 

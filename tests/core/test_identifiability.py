@@ -96,3 +96,62 @@ def test_no_bound_without_truth_or_noise():
     assert cramer_rao(p) is None
     q = _model((0.0,))
     assert cramer_rao(q) is None
+
+
+class PerEntryModel(LinearModel):
+    """The linear model with a sigma per entry (noise whose size varies along the record)."""
+
+    def __init__(self, sigma_entries: np.ndarray) -> None:
+        rng = np.random.default_rng(4)
+        m, d = 80, 3
+        A = rng.standard_normal((m, d))
+        super().__init__(A, np.array([1.5, -2.0, 0.7]), np.arange(m) * 2 // m,
+                         np.ones(2), rng)
+        self.entry_sigma = np.asarray(sigma_entries, float)
+
+    def residual_sigma(self) -> np.ndarray:
+        return self.entry_sigma.copy()
+
+
+def _bound(A: np.ndarray, sigma: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    W = A / sigma[:, None]
+    return 100 * np.sqrt(np.diag(np.linalg.inv(W.T @ W))) / np.abs(theta)
+
+
+def test_rounding_level_entries_are_left_out():
+    """An entry whose sigma is at most 1e-12 of its group's largest (here 1e-16 of it: the
+    noise of a value that is zero in exact arithmetic) is left out, like an entry with sigma
+    0; kept, it would dominate the information (the trace of the Fisher information grows by
+    more than 1e20: the check has teeth)."""
+    sigma = np.linspace(0.5, 2.0, 80)
+    sigma[5], sigma[60] = 1e-16, 0.0
+    p = PerEntryModel(sigma)
+    out = cramer_rao(p)
+    keep = np.ones(80, bool)
+    keep[[5, 60]] = False
+    np.testing.assert_allclose(out["crb_percent"], _bound(p.A[keep], sigma[keep], p.theta),
+                               rtol=1e-6)
+    assert out["excluded_entries"] == 2
+    without = np.sum((p.A[keep] / sigma[keep][:, None]) ** 2)
+    keep[5] = True
+    assert np.sum((p.A[keep] / sigma[keep][:, None]) ** 2) > 1e20 * without
+
+
+def test_the_bounds_sensitivity_to_a_sigma_floor():
+    """Where sigma varies along a group, the bound again with each sigma floored at 0, 1e-3
+    and 1e-2 of its group's rms sigma (computed here directly); the floor raises it. Absent
+    where sigma is one per group (it cannot change the bound)."""
+    sigma = np.tile(np.geomspace(1e-5, 1.0, 40), 2)
+    p = PerEntryModel(sigma)
+    out = cramer_rao(p)
+    groups = p.groups
+    rms = np.array([np.sqrt(np.mean(sigma[groups == g] ** 2)) for g in (0, 1)])[groups]
+    found = out["sigma_floor_sensitivity"]
+    assert [s["fraction"] for s in found] == [0.0, 1e-3, 1e-2]
+    for s in found:
+        expected = _bound(p.A, np.maximum(sigma, s["fraction"] * rms), p.theta)
+        np.testing.assert_allclose(s["crb_percent"], expected, rtol=1e-6)
+        assert s["crb_norm_percent"] == pytest.approx(np.linalg.norm(expected), rel=1e-6)
+    norms = [s["crb_norm_percent"] for s in found]
+    assert norms[0] == pytest.approx(out["crb_norm_percent"]) and norms[0] < norms[1] < norms[2]
+    assert "sigma_floor_sensitivity" not in cramer_rao(_model((0.1, 2.5)))

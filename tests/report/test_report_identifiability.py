@@ -69,6 +69,15 @@ def test_the_section_per_design(sweep, full):
     words = " ".join(md.split())
     assert "## Identifiability" in md
     assert "σ_k = noise level × |z_k| for multiplicative noise" in words
+    # the rounding rule and the bound's sensitivity to a sigma floor (multiplicative noise)
+    assert "2 sample(s) with no or rounding-level noise" in words
+    crb = json.loads((sweep / "short4" / "identifiability.json").read_text())
+    floors = crb["sigma_floor_sensitivity"]
+    assert ("the CRB norm is " + ", ".join(
+        f"{e['crb_norm_percent']:.3g} % at {e['fraction']:g}" for e in floors)) in words
+    instances = _csv(tmp / "tables" / "identifiability_instances.csv")
+    assert len(instances) == 2 * RUNS  # per design, one row per instance
+    assert {r["instance"] for r in instances} == {e["instance"] for e in crb["instances"]}
     rows = _csv(tmp / "tables" / "identifiability.csv")
     designs = {r["design"]: r for r in _csv(tmp / "tables" /
                                              "identifiability_designs.csv")}
@@ -147,6 +156,10 @@ def test_the_convergence_levels_are_medians_over_instances(sweep, registry):
     "NAN",
     "CRB_NAN",
     "BIG",
+    "INSTANCE_RUNS",
+    "INSTANCE_BOUNDS",
+    "FLOOR_NAN",
+    "EXCLUDED",
 ])
 def test_bad_identifiability_files_are_skipped_with_one_line(sweep, tmp_path, registry, bad):
     copy = tmp_path / "copy"
@@ -159,6 +172,16 @@ def test_bad_identifiability_files_are_skipped_with_one_line(sweep, tmp_path, re
         text = json.dumps({**good, "crb_percent": good["crb_percent"][:-1] + ["x"]})
     elif bad == "BIG":
         text = json.dumps({**good, "pad": "x" * 1_100_000})
+    elif bad == "INSTANCE_RUNS":
+        text = json.dumps({**good, "instances": [{**good["instances"][0], "runs": [-1]}]})
+    elif bad == "INSTANCE_BOUNDS":
+        text = json.dumps({**good, "instances": [{**good["instances"][0], "crb_percent": [1]}]})
+    elif bad == "FLOOR_NAN":
+        floors = good["sigma_floor_sensitivity"]
+        text = json.dumps({**good, "sigma_floor_sensitivity": [
+            {**floors[0], "crb_norm_percent": float("nan")}]})
+    elif bad == "EXCLUDED":
+        text = json.dumps({**good, "excluded_entries": 1.5})
     else:
         text = bad
     path.write_text(text)

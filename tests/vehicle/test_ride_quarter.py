@@ -145,9 +145,10 @@ def test_noise_is_additive_with_the_stated_sigma_per_channel():
     rms = np.sqrt(np.mean(p.clean**2, axis=1))
     resid = p.measured - p.clean
     assert np.std(resid, axis=1) == pytest.approx(0.05 * rms, rel=0.05)
-    # in the residuals' units (over ||measured_c|| for Eq. 3), per entry
-    expected = np.repeat(p.sigma / p.scale, p.t.size)
-    np.testing.assert_allclose(p.residual_sigma(), expected, rtol=1e-12)
+    # in the units of the Fisher residuals (over ||measured_c||), per channel
+    np.testing.assert_allclose(p.residual_sigma(), p.sigma / p.scale, rtol=1e-12)
+    assert np.array_equal(p.fisher_groups(), np.repeat(np.arange(p.measured.shape[0]),
+                                                       p.t.size))
 
 
 def test_the_record_is_not_made_by_the_fitted_model():

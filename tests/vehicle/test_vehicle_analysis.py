@@ -11,7 +11,7 @@ import pytest
 from vpid_vehicle.config import VehicleConfig
 from vpid_vehicle.problem import VehicleProblem
 
-from vpid_bench.analysis.identifiability import cramer_rao, jacobian
+from vpid_bench.analysis.identifiability import cramer_rao, jacobian, per_instance
 from vpid_bench.analysis.optimum import (
     find_optimum,
     instance_key,
@@ -128,7 +128,14 @@ def test_the_job_writes_the_designs_bounds(sweep):
     written = json.loads((root / "de4" / "identifiability.json").read_text())
     problem = VehicleProblem(build_dataclass(VehicleConfig, {}, prefix="problem"))
     expected = cramer_rao(problem)
-    assert set(written) == set(expected)
+    assert set(written) == set(expected) | {"instances"}
+    # one bound per instance the runs fitted (the paper's: one truth and clean record, so
+    # the same bound for each noise record)
+    assert [e["instance"] for e in written["instances"]] == [
+        problem.instance(i).instance_id() for i in range(3)]
+    assert [e["runs"] for e in written["instances"]] == [[0], [1], [2]]
+    for e in written["instances"]:
+        np.testing.assert_allclose(e["crb_percent"], expected["crb_percent"], rtol=1e-9)
     for key in ("crb_percent", "singular_values", "sigma"):
         np.testing.assert_allclose(written[key], expected[key], rtol=1e-12)
     assert written["crb_norm_percent"] == pytest.approx(expected["crb_norm_percent"], rel=1e-12)
@@ -156,3 +163,39 @@ def test_the_long_record_pins_the_rear_axle_down():
         assert long["crb_percent"][j] < 0.7 * short["crb_percent"][j]
     assert long["crb_norm_percent"] < short["crb_norm_percent"]
     assert long["condition_number"] < short["condition_number"]
+
+
+def test_the_papers_bounds_leave_the_rounding_level_sample_out():
+    """The paper's problem: z1'' at t = 0 is exactly 0 and z2'' is -1.4e-17 m/s² (rounding
+    of a zero): both are left out, and the bounds are m 0.234, k2 0.623, c2 0.442 % (within
+    1 %; with the z2'' sample kept they were 0.233, 0.567 and 0.406: the check has teeth).
+    Their sensitivity to a sigma floor at 1e-3 and 1e-2 of each channel's rms sigma: a norm
+    of 0.908 and 1.32 % against 0.883 % (within 1 %)."""
+    crb = cramer_rao(VehicleProblem(build_dataclass(VehicleConfig, {}, prefix="problem")))
+    assert crb["excluded_entries"] == 2
+    by_name = dict(zip(crb["names"], crb["crb_percent"], strict=True))
+    for name, expected in (("m", 0.234), ("k2", 0.623), ("c2", 0.442)):
+        assert by_name[name] == pytest.approx(expected, rel=0.01), name
+    norms = [s["crb_norm_percent"] for s in crb["sigma_floor_sensitivity"]]
+    np.testing.assert_allclose(norms, [0.883, 0.908, 1.32], rtol=0.01)
+
+
+def test_each_instance_has_its_own_bound():
+    """Ride instances differ in truth and record: each entry is that instance's own bound
+    (checked against cramer_rao of the instance), and the bounds differ; runs that fit one
+    record (noise.per_run=false) share one entry."""
+    from vpid_vehicle.ride.quarter import RideQuarterConfig, RideQuarterProblem
+
+    p = RideQuarterProblem(RideQuarterConfig(duration_s=1.0))
+    found = per_instance(p, 3)
+    assert [e["runs"] for e in found] == [[0], [1], [2]]
+    for i, e in enumerate(found):
+        assert e["instance"] == p.instance(i).instance_id()
+        np.testing.assert_allclose(e["crb_percent"], cramer_rao(p.instance(i))["crb_percent"],
+                                   rtol=1e-9)
+    assert len({round(e["crb_norm_percent"], 6) for e in found}) == 3
+    one = VehicleProblem(build_dataclass(VehicleConfig, {"noise": {"per_run": False}},
+                                         prefix="problem"))
+    shared = per_instance(one, 4)
+    assert len(shared) == 1 and shared[0]["runs"] == [0, 1, 2, 3]
+    assert shared[0]["instance"] is None

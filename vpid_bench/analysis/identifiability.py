@@ -1,15 +1,27 @@
 """Identifiability: what a record design can determine, as Cramér–Rao bounds.
 
 For residuals ``r(θ) = y - g(θ)`` with independent Gaussian noise of standard deviation ``σ_c``
-in residual group (channel) ``c`` (or ``σ_k`` per entry, e.g. multiplicative noise; entries
-with ``σ_k = 0`` carry no noise and no information and are left out), the Fisher information at
-the truth is ``F = Jᵀ diag(1/σ²) J`` with ``J = ∂g/∂θ``, and any unbiased estimator has
-covariance at least ``F⁻¹``. The bound is reported per parameter as a relative standard
-deviation in percent, ``100 sqrt((F⁻¹)_jj) / |θ_j|``, and as the norm of those (comparable to a
-norm of relative errors). ``J`` is a central-difference Jacobian of the residuals at the truth
-(the reference cancels: it is the Jacobian of the clean responses). The singular values of
+in residual group (channel) ``c`` (or ``σ_k`` per entry, e.g. multiplicative noise), the Fisher
+information at the truth is ``F = Jᵀ diag(1/σ²) J`` with ``J = ∂g/∂θ``, and any unbiased
+estimator has covariance at least ``F⁻¹``. The bound is reported per parameter as a relative
+standard deviation in percent, ``100 sqrt((F⁻¹)_jj) / |θ_j|``, and as the norm of those
+(comparable to a norm of relative errors). ``J`` is a central-difference Jacobian of the
+problem's :meth:`~vpid_bench.problem.Problem.fisher_residuals` at the truth (weights fixed, so
+the reference cancels: it is the Jacobian of the clean responses). The singular values of
 ``J`` scaled by the true values and by ``σ`` show how many parameter combinations the record
 pins down.
+
+**Rounding-level samples are left out.** An entry whose ``σ`` is at most :data:`ROUNDING`
+(1e-12) times the largest ``σ`` of its residual group is the noise of a value that is zero in
+exact arithmetic (a body acceleration at t = 0 computed as −1.4e-17 m/s², a ``σ`` of 7e-19
+under multiplicative noise) and is left out, with the entries where ``σ = 0``: with it the one
+sample adds spurious information (docs/estimators.md gives an example).
+
+**Sensitivity to a σ floor.** Where ``σ`` varies along a group (multiplicative noise), the
+bound rests on the few samples near the signal's zero crossings, where the noise is nearly
+nil. :data:`FLOOR_FRACTIONS` gives the bound again with every ``σ_k`` floored at that
+fraction of its group's rms ``σ`` (0, 1e-3 and 1e-2): how much of the bound a small additive
+noise, present in any real sensor, would take away.
 
 The noise convention is the problem's (:meth:`Problem.residual_sigma`), e.g. the
 equivalent additive noise ``σ_c = level * rms(clean channel c)``.
@@ -25,18 +37,22 @@ from ..problem import Problem
 
 #: Relative step of the central differences.
 STEP = 1e-6
+#: An entry whose sigma is at most this fraction of its group's largest is rounding noise.
+ROUNDING = 1e-12
+#: The sigma floors of the sensitivity figures, as fractions of each group's rms sigma.
+FLOOR_FRACTIONS = (0.0, 1e-3, 1e-2)
 
 
 def jacobian(problem: Problem, x: np.ndarray, step: float = STEP) -> np.ndarray:
-    """Central-difference Jacobian of the residuals at ``x``, shape ``(m, d)``; all ``2 d``
-    points evaluated in one batch."""
+    """Central-difference Jacobian of the problem's ``fisher_residuals`` at ``x``, shape
+    ``(m, d)``; all ``2 d`` points evaluated in one batch."""
     x = np.asarray(x, dtype=float)
     d = x.size
     h = step * np.where(x != 0, np.abs(x), 1.0)
     P = np.repeat(x[None], 2 * d, axis=0)
     P[np.arange(d), np.arange(d)] += h
     P[d + np.arange(d), np.arange(d)] -= h
-    R = problem.residuals(P)
+    R = problem.fisher_residuals(P)
     return ((R[:d] - R[d:]) / (2 * h[:, None])).T
 
 
@@ -65,34 +81,96 @@ def _group_sigma(given: np.ndarray, per_entry: np.ndarray, groups: np.ndarray) -
     return [float(np.sqrt(np.mean(per_entry[groups == g] ** 2))) for g in range(ngroups)]
 
 
-def cramer_rao(problem: Problem) -> dict[str, Any] | None:
-    """Bounds at the truth (see the module), or ``None`` when the problem lacks the truth,
-    residuals or a noise level. Keys: ``names``, ``crb_percent`` (per parameter),
-    ``crb_norm_percent``, ``singular_values`` (of the scaled Jacobian, descending),
-    ``condition_number``, ``sigma`` (per group; the rms over the group's entries when given
-    per entry)."""
-    x_true, sigma = problem.x_true, problem.residual_sigma()
-    if x_true is None or sigma is None:
-        return None
-    groups = np.asarray(problem.residual_groups(), dtype=int)
-    per_entry = entry_sigma(np.asarray(sigma, dtype=float), groups)
-    if per_entry is None:
-        return None
-    J = jacobian(problem, x_true)
-    kept = per_entry > 0  # noise-free samples (a multiplicative model at zero) carry none
-    Jw = J[kept] / per_entry[kept][:, None]  # whitened
+def informative(sigma: np.ndarray, groups: np.ndarray) -> np.ndarray:
+    """The entries that carry information, ``(m,)`` bool: ``σ_k`` above :data:`ROUNDING`
+    times the largest ``σ`` of its group (the others are noise-free or rounding noise)."""
+    top = np.zeros(int(groups.max()) + 1)
+    np.maximum.at(top, groups, sigma)
+    return sigma > ROUNDING * top[groups]
+
+
+def floored(sigma: np.ndarray, groups: np.ndarray, fraction: float) -> np.ndarray:
+    """``σ_k`` floored at ``fraction`` times the rms ``σ`` of its group."""
+    ngroups = int(groups.max()) + 1
+    rms = np.sqrt(np.bincount(groups, sigma**2, ngroups) / np.bincount(groups, None, ngroups))
+    return np.maximum(sigma, fraction * rms[groups])
+
+
+def _bounds(J: np.ndarray, sigma: np.ndarray, x_true: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """The bounds (percent) and the whitened Jacobian of the rows of ``J`` with ``σ``."""
+    Jw = J / sigma[:, None]
     fisher = Jw.T @ Jw
     try:
         cov = np.linalg.inv(fisher)
     except np.linalg.LinAlgError:
         cov = np.linalg.pinv(fisher)
-    crb = 100.0 * np.sqrt(np.maximum(np.diag(cov), 0.0)) / np.abs(x_true)
+    return 100.0 * np.sqrt(np.maximum(np.diag(cov), 0.0)) / np.abs(x_true), Jw
+
+
+def cramer_rao(problem: Problem) -> dict[str, Any] | None:
+    """Bounds at the truth (see the module), or ``None`` when the problem lacks the truth,
+    residuals or a noise level. Keys: ``names``, ``crb_percent`` (per parameter),
+    ``crb_norm_percent``, ``singular_values`` (of the scaled Jacobian, descending),
+    ``condition_number``, ``sigma`` (per group; the rms over the group's entries when given
+    per entry), ``excluded_entries`` (entries left out: no or rounding-level noise) and, where
+    ``σ`` varies within a group, ``sigma_floor_sensitivity``: one ``{"fraction",
+    "crb_percent", "crb_norm_percent"}`` per fraction of :data:`FLOOR_FRACTIONS`."""
+    x_true, sigma = problem.x_true, problem.residual_sigma()
+    if x_true is None or sigma is None:
+        return None
+    groups = np.asarray(problem.fisher_groups(), dtype=int)
+    per_entry = entry_sigma(np.asarray(sigma, dtype=float), groups)
+    if per_entry is None:
+        return None
+    J = jacobian(problem, x_true)
+    kept = informative(per_entry, groups)
+    crb, Jw = _bounds(J[kept], per_entry[kept], x_true)
     s = np.linalg.svd(Jw * x_true[None], compute_uv=False)
-    return {
+    out: dict[str, Any] = {
         "names": list(problem.bounds.names),
         "crb_percent": crb.tolist(),
         "crb_norm_percent": float(np.linalg.norm(crb)),
         "singular_values": s.tolist(),
         "condition_number": float(s[0] / s[-1]) if s[-1] > 0 else float("inf"),
         "sigma": _group_sigma(np.asarray(sigma, dtype=float).reshape(-1), per_entry, groups),
+        "excluded_entries": int(np.sum(~kept)),
     }
+    varies = any(np.ptp(per_entry[kept & (groups == g)]) > 0 for g in np.unique(groups[kept]))
+    if varies:
+        out["sigma_floor_sensitivity"] = []
+        for fraction in FLOOR_FRACTIONS:
+            b = _bounds(J[kept], floored(per_entry, groups, fraction)[kept], x_true)[0]
+            out["sigma_floor_sensitivity"].append({
+                "fraction": fraction, "crb_percent": b.tolist(),
+                "crb_norm_percent": float(np.linalg.norm(b))})
+    return out
+
+
+def per_instance(problem: Problem, runs: int) -> list[dict[str, Any]]:
+    """The bounds of each instance that runs ``0 .. runs-1`` fit (each its own truth and
+    record; runs that fit the same instance share an entry): ``{"instance"`` (its
+    ``instance_id``, ``None`` when every run fits the same data), ``"runs"`` (the run
+    indices), ``"crb_percent"``, ``"crb_norm_percent"`` and, where ``σ`` varies along a
+    channel, ``"sigma_floor_norms"`` (the bound's norm with ``σ`` floored at each of
+    :data:`FLOOR_FRACTIONS`)``}``; an instance without a bound is left out."""
+    out: list[dict[str, Any]] = []
+    by_id: dict[str | None, dict[str, Any]] = {}
+    for i in range(runs):
+        inst = problem.instance(i)
+        key = inst.instance_id()
+        if key in by_id:
+            by_id[key]["runs"].append(i)
+            continue
+        crb = cramer_rao(inst)
+        if crb is None:
+            continue
+        entry: dict[str, Any] = {"instance": key, "runs": [i],
+                                 "crb_percent": crb["crb_percent"],
+                                 "crb_norm_percent": crb["crb_norm_percent"]}
+        if "sigma_floor_sensitivity" in crb:
+            entry["sigma_floor_norms"] = [s["crb_norm_percent"]
+                                          for s in crb["sigma_floor_sensitivity"]]
+        by_id[key] = entry
+        out.append(entry)
+    return out

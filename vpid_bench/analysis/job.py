@@ -19,8 +19,9 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
                 records: list[dict[str, Any]]) -> dict[int, float]:
     """For a problem with residuals: each instance's optimum (``optima_dir/<key>.json``,
     shared by the jobs of a sweep; see :mod:`.optimum`), and with a known truth the
-    Cramér–Rao bounds of its design (``job_dir/identifiability.json``) and the floors of
-    each estimator where the problem offers the choice (``job_dir/estimators.json``,
+    Cramér–Rao bounds of its design (``job_dir/identifiability.json``: instance 0's, and
+    under ``instances`` each instance's, :func:`.identifiability.per_instance`) and the
+    floors of each estimator where the problem offers the choice (``job_dir/estimators.json``,
     :mod:`.estimator_floors`); without a truth, the profile-likelihood intervals at the
     optimum where they run in reasonable time (``job_dir/profile.json``, :mod:`.estimates`).
     Any problem's fixed comparison rows go to ``job_dir/comparisons.json``. Returns each
@@ -40,7 +41,7 @@ def _residual_analysis(job: Job, problem: Problem, job_dir: Path, optima_dir: Pa
     from .estimates import write_profile
     from .estimator_floors import FILE as FLOORS_FILE
     from .estimator_floors import estimator_floors
-    from .identifiability import cramer_rao
+    from .identifiability import cramer_rao, per_instance
     from .optimum import update_instance_optimum
 
     truth = problem.x_true is not None
@@ -48,6 +49,7 @@ def _residual_analysis(job: Job, problem: Problem, job_dir: Path, optima_dir: Pa
     if truth and not target.is_file():
         crb = cramer_rao(problem)
         if crb is not None:
+            crb["instances"] = per_instance(problem, job.spec.runs)
             write_json_atomic(target, crb)
     floors_file = job_dir / FLOORS_FILE
     if truth and not floors_file.is_file():

@@ -64,16 +64,16 @@ def structural_symmetry(problem: Problem, x: np.ndarray | None = None,
 
 def _whitened_jacobian(problem: Problem, x: np.ndarray, sigma: np.ndarray | None = None
                        ) -> tuple[np.ndarray, np.ndarray]:
-    from .identifiability import entry_sigma, jacobian
+    from .identifiability import entry_sigma, informative, jacobian
 
     given = problem.residual_sigma() if sigma is None else sigma
     if given is None:
         raise ValueError("the problem states no noise sigma (residual_sigma)")
-    sigma = entry_sigma(np.asarray(given, dtype=float),
-                        np.asarray(problem.residual_groups(), dtype=int))
+    groups = np.asarray(problem.fisher_groups(), dtype=int)
+    sigma = entry_sigma(np.asarray(given, dtype=float), groups)
     if sigma is None:
         raise ValueError("the noise sigma has neither a per-group nor a per-entry shape")
-    kept = sigma > 0
+    kept = informative(sigma, groups)
     return jacobian(problem, np.asarray(x, float))[kept] / sigma[kept][:, None], kept
 
 
@@ -83,7 +83,7 @@ class _Likelihood:
 
     def __init__(self, problem: Problem, centre: np.ndarray | None = None,
                  sigma: np.ndarray | None = None) -> None:
-        from .identifiability import entry_sigma
+        from .identifiability import entry_sigma, informative
 
         sigma = problem.residual_sigma() if sigma is None else sigma
         centre = problem.x_true if centre is None else np.asarray(centre, dtype=float)
@@ -91,15 +91,16 @@ class _Likelihood:
             raise ValueError("profiles need a start (the truth or an estimate) and the noise "
                              "sigma (residual_sigma, or estimated from the residuals)")
         per = entry_sigma(np.asarray(sigma, float),
-                          np.asarray(problem.residual_groups(), dtype=int))
+                          np.asarray(problem.fisher_groups(), dtype=int))
         if per is None:
             raise ValueError("the problem's residual_sigma has neither a per-group nor a "
                              "per-entry shape")
-        groups = np.asarray(problem.residual_groups(), dtype=int)
+        groups = np.asarray(problem.fisher_groups(), dtype=int)
         floor = np.array([np.sqrt(np.mean(per[groups == g] ** 2))
                           for g in range(int(groups.max()) + 1)])[groups] * SIGMA_FLOOR
-        per = np.where(per > 0, np.maximum(per, floor), 0.0)
-        self.problem, self.kept, self.sigma = problem, per > 0, per[per > 0]
+        kept = informative(per, groups)
+        per = np.maximum(per, floor)
+        self.problem, self.kept, self.sigma = problem, kept, per[kept]
         self.centre = centre
         self.scale = np.where(np.abs(centre) > 0, np.abs(centre), problem.bounds.width)
         b = problem.bounds
@@ -108,7 +109,7 @@ class _Likelihood:
         self.limit_s = 0.0
 
     def residuals(self, z: np.ndarray) -> np.ndarray:
-        r = np.asarray(self.problem.residuals((z * self.scale)[None]), float)[0]
+        r = np.asarray(self.problem.fisher_residuals((z * self.scale)[None]), float)[0]
         w = r[self.kept] / self.sigma
         return np.where(np.isfinite(w), w, 1e6)
 

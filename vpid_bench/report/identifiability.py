@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from ..analysis.estimator_floors import FILE as FLOORS_FILE
+from ..analysis.identifiability import ROUNDING
 from ..analysis.optimum import find_optimum, load_optima, record_settings
 from ..analysis.profile import STRUCTURAL_RATIO
 from ..fileio import loads_json
@@ -47,6 +48,8 @@ UNDETERMINED_PERCENT = 10.0
 #: Larger files are not read (an identifiability file of 1000 parameters is ~100 kB).
 MAX_BYTES = 1_000_000
 FILE = "identifiability.json"
+#: Instances (and runs of one instance) an identifiability file may list.
+MAX_INSTANCES = 100_000
 #: The noise convention, in words (each problem gives σ per residual group or per sample
 #: through ``Problem.residual_sigma``: the noise that was simulated).
 CONVENTION = (
@@ -59,7 +62,9 @@ CONVENTION = (
     "`CRB %` is the Cramér–Rao lower bound of a parameter's relative standard "
     "deviation, 100·sqrt((F⁻¹)_jj)/|θ_j|; `CRB norm` the norm of those bounds (the rms "
     "norm of relative errors an efficient unbiased estimator would reach). Singular "
-    "values: of the Jacobian whitened by σ and scaled by the true values.")
+    "values: of the Jacobian whitened by σ and scaled by the true values. Samples whose σ "
+    f"is at most {ROUNDING:g} of their channel's largest (a value that is zero in exact "
+    "arithmetic, computed to rounding) carry no information and are left out.")
 
 
 def _finite(v: Any) -> bool:
@@ -100,10 +105,55 @@ def read_identifiability(path: Path, names: Sequence[str]) -> tuple[dict[str, An
         ("sigma", isinstance(data.get("sigma"), list) and 1 <= len(data["sigma"]) <= 10_000
          and all(_finite(v) and v > 0 for v in data["sigma"]), "a list of numbers > 0"),
     )
-    for key, ok, expected in checks:
+    for key, ok, expected in (*checks, *_optional_checks(data, d)):
         if not ok:
             return None, f"field {key}: expected {expected}"
     return data, ""
+
+
+def _bounds_ok(v: Any, d: int) -> bool:
+    return (isinstance(v, list) and len(v) == d and all(_finite(b) and b >= 0 for b in v))
+
+
+def _floor_entry_ok(e: Any, d: int) -> bool:
+    return (isinstance(e, dict) and _finite(e.get("fraction")) and e["fraction"] >= 0
+            and _finite(e.get("crb_norm_percent")) and e["crb_norm_percent"] >= 0
+            and _bounds_ok(e.get("crb_percent"), d))
+
+
+def _instance_entry_ok(e: Any, d: int) -> bool:
+    norms = e.get("sigma_floor_norms") if isinstance(e, dict) else None
+    return (isinstance(e, dict) and (e.get("instance") is None
+                                     or isinstance(e["instance"], str))
+            and isinstance(e.get("runs"), list) and 1 <= len(e["runs"]) <= MAX_INSTANCES
+            and all(isinstance(i, int) and not isinstance(i, bool) and i >= 0
+                    for i in e["runs"])
+            and _bounds_ok(e.get("crb_percent"), d)
+            and _finite(e.get("crb_norm_percent")) and e["crb_norm_percent"] >= 0
+            and (norms is None or (isinstance(norms, list) and len(norms) <= 10
+                                   and all(_finite(v) and v >= 0 for v in norms))))
+
+
+def _optional_checks(data: Mapping[str, Any], d: int) -> list[tuple[str, bool, str]]:
+    """Checks of the fields written since round four (absent in older files)."""
+    checks = []
+    if "excluded_entries" in data:
+        v = data["excluded_entries"]
+        checks.append(("excluded_entries", isinstance(v, int) and not isinstance(v, bool)
+                       and v >= 0, "an integer >= 0"))
+    if "sigma_floor_sensitivity" in data:
+        v = data["sigma_floor_sensitivity"]
+        checks.append(("sigma_floor_sensitivity", isinstance(v, list) and 1 <= len(v) <= 10
+                       and all(_floor_entry_ok(e, d) for e in v),
+                       f"a list of 1 to 10 {{fraction, crb_percent ({d} numbers), "
+                       "crb_norm_percent}"))
+    if "instances" in data:
+        v = data["instances"]
+        checks.append(("instances", isinstance(v, list) and len(v) <= MAX_INSTANCES
+                       and all(_instance_entry_ok(e, d) for e in v),
+                       f"a list of at most {MAX_INSTANCES} {{instance, runs, crb_percent "
+                       f"({d} numbers), crb_norm_percent[, sigma_floor_norms]}}"))
+    return checks
 
 
 def _optima_folders(records: Iterable[Mapping[str, Any]]) -> list[Path]:
@@ -344,7 +394,36 @@ def _design_text(ctx: ReportContext, design: Mapping[str, Any]) -> str:
                  f"{UNDETERMINED_PERCENT:g} %.")
     else:
         text += f"Every parameter's bound is within {UNDETERMINED_PERCENT:g} %."
-    return ctx.para(text)
+    return ctx.para(text + _sensitivity_text(ctx, crb) + _instances_text(ctx, crb))
+
+
+def _sensitivity_text(ctx: ReportContext, crb: Mapping[str, Any]) -> str:
+    """The rounding-level samples left out and the bound under a σ floor (multiplicative
+    noise), or ``""``."""
+    text = ""
+    if crb.get("excluded_entries"):
+        text += (f" {crb['excluded_entries']} sample(s) with no or rounding-level noise (σ at "
+                 f"most {ROUNDING:g} of its channel's largest) are left out of the bound.")
+    floors = crb.get("sigma_floor_sensitivity")
+    if floors:
+        parts = [f"{ctx.fmt(e['crb_norm_percent'], 3)} % at {e['fraction']:g}" for e in floors]
+        text += (" The noise's σ varies along the record, so the bound rests on the samples "
+                 "where it is smallest (near the signal's zero crossings): with every σ "
+                 "floored at a fraction of its channel's rms σ, the CRB norm is "
+                 + ", ".join(parts) + " (a small additive noise in a real sensor would take "
+                 "that much away).")
+    return text
+
+
+def _instances_text(ctx: ReportContext, crb: Mapping[str, Any]) -> str:
+    """The spread of the per-instance bounds where instances differ, or ``""``."""
+    norms = [e["crb_norm_percent"] for e in crb.get("instances") or []]
+    if len(norms) < 2 or max(norms) <= min(norms) * (1 + 1e-6):
+        return ""
+    return (f" Each instance has its own truth and record, so its own bound: CRB norm median "
+            f"{ctx.fmt(statistics.median(norms), 3)} % over {len(norms)} instances (from "
+            f"{ctx.fmt(min(norms), 3)} to {ctx.fmt(max(norms), 3)} %); the numbers above are "
+            "instance 0's.")
 
 
 def section(ctx: ReportContext) -> Contribution | None:
@@ -376,6 +455,13 @@ def section(ctx: ReportContext) -> Contribution | None:
           d["floor"], d["instances"], d["crb"].get("condition_number"),
           " ".join(repr(float(v)) for v in d["crb"]["singular_values"]),
           " ".join(repr(float(v)) for v in d["crb"]["sigma"])] for d in designs])
+    files += ctx.write_table(
+        "identifiability_instances",
+        ["design", "instance", "runs", "crb_norm_percent", "sigma_floor_norms"],
+        [[d["label"], e["instance"], " ".join(str(i) for i in e["runs"]),
+          e["crb_norm_percent"], " ".join(repr(float(v)) for v in e.get("sigma_floor_norms")
+                                          or [])]
+         for d in designs for e in d["crb"].get("instances") or []])
     parts = [ctx.para(
         f"What each record design allows, beside what the records gave. {CONVENTION} "
         f"A parameter whose bound exceeds {UNDETERMINED_PERCENT:g} % is one this design "
