@@ -6,9 +6,13 @@ scipy's ``popsize=15``, a multiplier of the dimension, so 15 D members from scip
 hypercube; the run's budget ends the run); ``ps`` gives the protocol's population (the default
 before round three: the committed study of the paper's problem ran so), passed as ``init``:
 ``ps`` rows uniform in the box drawn from the run's generator, with ``maxiter = iterations``
-so the run uses ``ps * (iterations + 1)`` evaluations like DE1-DE8. The convergence test is
-off by default (``tol = 0``) and there is no polishing. scipy draws its own random numbers
-from the run's generator.
+so the run uses ``ps * (iterations + 1)`` evaluations like DE1-DE8. scipy draws its own random
+numbers from the run's generator.
+
+Settings that differ from scipy's defaults (docs/peers.md says why): ``vectorized=True`` (one
+batch per generation), hence ``updating="deferred"`` (scipy overrides it so itself when
+vectorised); ``tol=0`` (the run's budget ends the run, not scipy's convergence test);
+``polish=False`` (no L-BFGS-B descent after the last generation).
 """
 
 from __future__ import annotations
