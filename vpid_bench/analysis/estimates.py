@@ -49,8 +49,8 @@ def write_profile(problem: Problem, optimum: dict[str, Any], job_dir: Path,
                            "names": list(problem.bounds.names), "limit_s": limit_s}
     began = time.perf_counter()
     try:
-        groups = np.asarray(problem.residual_groups(), dtype=int)
-        r = np.asarray(problem.residuals(x[None]), dtype=float)[0]
+        groups = np.asarray(problem.fisher_groups(), dtype=int)
+        r = np.asarray(problem.fisher_residuals(x[None]), dtype=float)[0]
         sigma = group_sigma(r, groups, x.size)
         jac = jacobian_intervals(problem, x)
         rel = (None if jac is None else

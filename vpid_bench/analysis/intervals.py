@@ -2,8 +2,8 @@
 
 Where no truth is known, accuracy cannot be measured; what the record says about the answer
 can. For an identified vector ``x̂`` (physical units) of a problem with residuals
-``r(θ)`` (:meth:`Problem.residuals`, in the objective's units) grouped by channel
-(:meth:`Problem.residual_groups`):
+``r(θ)`` (:meth:`Problem.fisher_residuals`: weights that depend neither on ``θ`` nor on the
+objective; by default the residuals) grouped by channel (:meth:`Problem.fisher_groups`):
 
 * the noise's standard deviation of each group ``g`` is estimated from the residuals at
   ``x̂``: ``σ̂_g² = RSS_g / (m_g − d m_g / m)`` (``m_g`` entries of ``m`` in the group, ``d``
@@ -61,8 +61,8 @@ def jacobian_intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None
     from .identifiability import jacobian
 
     x = np.asarray(x, dtype=float).reshape(-1)
-    groups = np.asarray(problem.residual_groups(), dtype=int).reshape(-1)
-    r = np.asarray(problem.residuals(x[None]), dtype=float)[0]
+    groups = np.asarray(problem.fisher_groups(), dtype=int).reshape(-1)
+    r = np.asarray(problem.fisher_residuals(x[None]), dtype=float)[0]
     if r.shape != groups.shape or not np.all(np.isfinite(r)):
         return None
     sigma = group_sigma(r, groups, x.size)
