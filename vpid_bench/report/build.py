@@ -1,4 +1,5 @@
-"""Build a report from run records: tables, tests, figures, plugin sections, ``report.md``.
+"""Build a report from run records: tables, tests, figures, plugin sections, ``report.md`` and
+the HTML site.
 
 :func:`build_report` reads the records below any number of job or sweep folders (merged),
 and writes into ``out_dir``::
@@ -10,11 +11,14 @@ and writes into ``out_dir``::
     figures/*.png           convergence, per-run metric, error heatmap, ECDFs, CD diagrams,
                             and the sections' figures
     ioh/                    the runs in IOHprofiler's format
+    index.html, *.html      the same report as browsable pages (:mod:`.site_pages`)
 
-It runs in stages that pass data, never text: :func:`.compute.compute` (everything the report
-says), the tables, the figures (:mod:`.core_figures`), the sections
-(:mod:`.plugin_sections`), then Markdown (:mod:`.first_screen`, :mod:`.body`) and the terminal
-text (:mod:`.first_screen`) from the same data. ``short=True`` is a single job's report: the
+It runs in stages that pass data, never text. Computation: :func:`.compute.compute` (the
+rankings, tests, floors), then :func:`_assemble` fills one :class:`~.model.ReportModel` (the
+first screen, the figures of :mod:`.core_figures`, the sections of :mod:`.plugin_sections`,
+the suite scores, the interactive figures). Rendering, which only formats that model:
+``report.md`` (:mod:`.outline`, the registry of sections), the HTML site and the terminal
+text (:mod:`.first_screen`). ``short=True`` is a single job's report: the
 same first screen, statistics and plugin sections, without significance tests and figures,
 and without importing pandas, matplotlib or scipy.stats.
 
@@ -117,9 +121,25 @@ def build_report(
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     names = _Names(out_dir)
+    model, written = _assemble(data, names, registry)
+    md, site = _render(model, names)
+    written += [md, *site]
+    return Report(out_dir, md, first_screen.terminal_text(model.results),
+                  len(data.loaded.records), data.problems, written,
+                  {k: v for k, v in model.figs.items() if isinstance(v, str)}, data.loaded,
+                  model.section_errors, data.optima_errors, data.archive_notes,
+                  site[0] if site else None)
+
+
+def _assemble(data: ReportData, names: _Names, registry: Any
+              ) -> tuple[ReportModel, list[Path]]:
+    """Everything the report says, as one :class:`~.model.ReportModel`: the first screen,
+    the figures and IOHprofiler export, the suite scores, the problems' sections and the
+    interactive figures; with the data files written on the way (tables, PNGs)."""
+    out_dir = names.root
     written = _write_tables(data, names)
     model = ReportModel(data, first_screen.results(data), out_dir)
-    if not short:
+    if not data.short:
         from .core_figures import draw_all
         from .ioh_export import export_ioh
 
@@ -137,29 +157,31 @@ def build_report(
     written += [v for v in model.figs.values() if isinstance(v, Path)]
     for placed in model.sections:
         written += list(placed.section.files)
-    md = names.claim(out_dir / "report.md")
-    md.write_text("\n".join(outline.markdown(model)), encoding="utf-8")
-    written.append(md)
-    site = _write_site(model, names)
-    written += site
-    return Report(out_dir, md, first_screen.terminal_text(model.results),
-                  len(data.loaded.records), data.problems, written,
-                  {k: v for k, v in model.figs.items() if isinstance(v, str)}, data.loaded,
-                  model.section_errors, data.optima_errors, data.archive_notes,
-                  site[0] if site else None)
+    _add_interactive(model)
+    return model, written
 
 
-def _write_site(model: ReportModel, names: _Names) -> list[Path]:
-    """The HTML site beside report.md (:mod:`.site`), ``index.html`` first; its interactive
-    figures need only numpy, so a single job's report has them too."""
-    from .site_pages import interactive_figures, write_site
+def _add_interactive(model: ReportModel) -> None:
+    """The interactive figures of each context (numpy only: a single job's report has them
+    too); a failure costs them only, and is said."""
+    from .site_pages import interactive_figures
 
     try:
         model.interactive = interactive_figures(model.data)
     except Exception as exc:  # noqa: BLE001 - a figure's fault costs the figures only
         log.debug("interactive figures failed", exc_info=True)
         model.section_errors.append(f"interactive figures: {type(exc).__name__}: {exc}")
-    return write_site(model, names.claim)
+
+
+def _render(model: ReportModel, names: _Names) -> tuple[Path, list[Path]]:
+    """The renderers, which only format the model: ``report.md`` (:mod:`.outline`) and the
+    HTML site (:mod:`.site_pages`, ``index.html`` first). The terminal's text is made from
+    the same model by :func:`.first_screen.terminal_text`."""
+    from .site_pages import write_site
+
+    md = names.claim(names.root / "report.md")
+    md.write_text("\n".join(outline.markdown(model)), encoding="utf-8")
+    return md, write_site(model, names.claim)
 
 
 def _table(names: _Names, stem: str, headers: Sequence[str],
