@@ -166,3 +166,38 @@ def test_a_hostile_name_is_shown_as_text(browser, site):
     assert browser.find_element(By.TAG_NAME, "h1").text == f"Optimizer {EVIL}"
     assert browser.find_elements(By.CSS_SELECTOR, "main img") == []
 
+
+
+@pytest.mark.slow
+def test_the_archive_report_is_browsable(browser, tmp_path):
+    """``vpid-bench-report archive/smoke -o DIR`` (about 1.5 min): an index that names every
+    archived problem and optimizer, each with its page, every page clean in the browser,
+    every link and image resolving, only local files requested."""
+    import gzip
+
+    from vpid_bench.report.cli import main as report_main
+
+    archive = Path(__file__).parents[2] / "archive" / "smoke"
+    out = tmp_path / "smoke"
+    assert report_main([str(archive), "-o", str(out)]) == 0
+    with gzip.open(archive / "records.jsonl.gz", "rt") as fh:
+        records = [json.loads(line) for line in fh]
+    problems = {r["problem"]["name"] for r in records}
+    optimizers = {r["optimizer"]["name"] for r in records}
+    index = (out / "index.html").read_text(encoding="utf-8")
+    for name in problems | optimizers:
+        assert f">{name}</a>" in index, name
+    _requests(browser)
+    for page in sorted(out.glob("*.html")):
+        console = _open(browser, page)
+        assert [m for m in console if m["level"] in ("SEVERE", "WARNING")] == [], page.name
+        broken = browser.execute_script(
+            "return Array.from(document.images).filter(i => !i.naturalWidth).length")
+        assert broken == 0, page.name
+        for url in browser.execute_script(
+                "return Array.from(document.querySelectorAll('a[href]')).map(a => a.href)"):
+            assert Path(unquote(urlparse(url).path)).exists(), (page.name, url)
+        assert _not_blank(browser.get_screenshot_as_png()) > 0.02, page.name
+    assert all(u.startswith("file://") for u in _requests(browser))
+    assert len(list(out.glob("problem-*.html"))) == len(problems)
+    assert len(list(out.glob("optimizer-*.html"))) == len(optimizers)
