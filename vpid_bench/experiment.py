@@ -66,15 +66,45 @@ class JobSummary:
     score: float | None = None
 
 
+#: Where a record file that is not a valid record of its run (unreadable, or a field of the
+#: wrong type: edited by hand) is moved, inside ``records/``, before its run is run again.
+BAD_DIR = "bad"
+
+
 def _existing_ok(path: Path, rid: str) -> bool:
+    """Whether ``path`` holds this run's complete ``ok`` record, which a resume keeps. A file
+    that is not a valid record (unreadable, or a field of the wrong type, such as an
+    ``f_best`` edited to a text while the record still says ``ok``) once failed its job on
+    every resume: it is set aside (:func:`_set_aside`) and its run is run again."""
     if not path.is_file():
         return False
     try:
         record = rec.read_record(path)
     except rec.CorruptRecordError as exc:
-        log.warning("%s; running it again", exc)
+        _set_aside(path, str(exc).removeprefix(f"{path}: "))
+        return False
+    bad = rec.check_record(record)
+    if bad is not None:
+        _set_aside(path, f"field {bad}")
         return False
     return record["run_id"] == rid and record["status"] == "ok"
+
+
+def _set_aside(path: Path, why: str) -> Path:
+    """Move the record file ``path`` into ``records/bad/`` (never read as a record; a name
+    taken there gets a number) and say so in one line."""
+    folder = path.parent / BAD_DIR
+    _refuse_swapped(folder)
+    folder.mkdir(exist_ok=True)
+    target = folder / path.name
+    n = 1
+    while target.exists():
+        target = folder / f"{path.stem}.{n}{path.suffix}"
+        n += 1
+    path.replace(target)
+    print(f"warning: record {path} is not a valid record ({why}); set aside in {target} and "
+          "its run is run again", file=sys.stderr, flush=True)
+    return target
 
 
 def _job_key(job: Job, registry: Registry | None, problem: Any) -> dict[str, Any]:
@@ -94,13 +124,16 @@ def _job_key(job: Job, registry: Registry | None, problem: Any) -> dict[str, Any
 
 
 def _read_records(paths: list[Path]) -> list[dict[str, Any]]:
-    """The job's readable records (an unreadable one is left out: resume runs it again)."""
+    """The job's valid records (an unreadable or badly typed one is left out: a resume sets
+    it aside and runs it again)."""
     records = []
     for path in paths:
         try:
-            records.append(rec.read_record(path))
+            record = rec.read_record(path)
         except rec.CorruptRecordError:
             continue
+        if rec.check_record(record) is None:
+            records.append(record)
     return records
 
 

@@ -13,6 +13,7 @@ plugin or data file does not reuse them.
 
 from ..fileio import _umask, write_text_atomic
 from .assemble import make_record
+from .check import check_record
 from .io import (
     OLD_SCHEMAS,
     RECORDS_DIR,
@@ -39,7 +40,8 @@ from .status import JOB_STATUS_FILE, read_job_status, write_job_status
 
 __all__ = [
     "OLD_SCHEMAS", "RECORDS_DIR", "REQUIRED_KEYS", "SCHEMA", "CorruptRecordError",
-    "OldRecordError", "_jsonable", "_umask", "canonical_json", "distribution_provenance",
+    "OldRecordError", "_jsonable", "_umask", "canonical_json", "check_record",
+    "distribution_provenance",
     "fingerprint", "iter_record_files", "job_key", "make_record", "package_versions",
     "parse_record", "parse_record_name", "read_record", "record_path", "run_id", "stable_hash",
     "write_json_atomic", "write_record",
