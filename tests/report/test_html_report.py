@@ -31,6 +31,10 @@ def test_every_page_type_is_written_with_its_links_resolving(report_dir):
             "problem-vehicle_b.html", "optimizer-de4.html", "optimizer-random.html"} <= names
     assert len([n for n in names if n.startswith("optimizer-")]) == 3
     assert site.check_links(report_dir, _pages(report_dir)) == []
+    # an optimizer's page links each context to its section on the problem's page
+    opt = (report_dir / "optimizer-de4.html").read_text(encoding="utf-8")
+    assert 'href="problem-vehicle.html#c-vehicle_ps=20"' in opt
+    assert 'id="c-vehicle_ps=20"' in (report_dir / "problem-vehicle.html").read_text()
     index = (report_dir / "index.html").read_text(encoding="utf-8")
     for target in ("problem-vehicle.html", "problem-vehicle_b.html", "optimizer-de4.html",
                    "optimizer-random.html", "protocol.html", "runs.csv", "report.md"):

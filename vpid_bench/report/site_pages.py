@@ -177,7 +177,14 @@ def _optimizer(model: Any, pages: Pages, name: str) -> dict[str, Any]:
 
         mine = [r for r in model.suite.rows if r[2] == name]
         suite = table(HEADERS, mine, _links(pages)) if mine else None
-    return {"table": table(OPTIMIZER_HEADERS, rows, _links(pages)), "suite": suite}
+    links = {**_links(pages), "context": lambda c: _context_href(pages, of, c)}
+    return {"table": table(OPTIMIZER_HEADERS, rows, links), "suite": suite}
+
+
+def _context_href(pages: Pages, of: Mapping[str, str], context: str) -> str | None:
+    """The link to a context's section on its problem's page."""
+    page = pages.problem(of.get(context, ""))
+    return f"{page}#{_anchor(context)}" if page else None
 
 
 def _protocol(model: Any) -> dict[str, Any]:
