@@ -56,7 +56,19 @@ def test_a_sweep_prints_its_progress_after_each_job(tmp_path):
     assert [re.sub(r" done, .*", " done", ln) for ln in lines] == [
         "sweep: 1/2 jobs, 2/4 runs done", "sweep: 2/2 jobs, 4/4 runs done"]
     assert lines[0].endswith(" left") and lines[1].endswith(", done")
-    quiet = run_cli(["-m", "problem=functions", "optimizer=random,de1", "runs=2",
-                     "problem.iterations=5", "problem.dim=2", "report=false", "progress=false",
-                     "isolation=none", "hydra.sweep.dir=q"], tmp_path)
-    assert quiet.returncode == 0 and "jobs, " not in quiet.stderr
+
+
+def test_no_line_without_a_plan_of_jobs_or_with_progress_false():
+    """The line needs a -m sweep whose jobs the pre-flight planned, with progress on."""
+    from types import SimpleNamespace as Ns
+
+    from vpid_bench.shell.main import _sweep_progress
+
+    def plan(multirun=True, progress=(True, True)):
+        return Ns(multirun=multirun, jobs=[Ns(spec=Ns(progress=p, runs=3)) for p in progress])
+
+    made = _sweep_progress(plan())
+    assert (made.jobs, made.runs) == (2, 6)
+    assert _sweep_progress(plan(multirun=False)) is None
+    assert _sweep_progress(plan(progress=(True, False))) is None
+    assert _sweep_progress(plan(progress=())) is None  # an optimizing sweeper: no plan

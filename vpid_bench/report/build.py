@@ -177,11 +177,15 @@ def _render(model: ReportModel, names: _Names) -> tuple[Path, list[Path]]:
     """The renderers, which only format the model: ``report.md`` (:mod:`.outline`) and the
     HTML site (:mod:`.site_pages`, ``index.html`` first). The terminal's text is made from
     the same model by :func:`.first_screen.terminal_text`."""
+    from .site import check_links
     from .site_pages import write_site
 
     md = names.claim(names.root / "report.md")
     md.write_text("\n".join(outline.markdown(model)), encoding="utf-8")
-    return md, write_site(model, names.claim)
+    site = write_site(model, names.claim)
+    model.section_errors += [f"html: broken link {b}" for b in check_links(
+        names.root, [p for p in site if p.suffix == ".html"])]
+    return md, site
 
 
 def _table(names: _Names, stem: str, headers: Sequence[str],
