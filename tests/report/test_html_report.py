@@ -163,3 +163,22 @@ def test_one_outline_orders_report_md_and_places_every_part_on_a_page(report_dir
     problem = (report_dir / "problem-vehicle.html").read_text(encoding="utf-8")
     assert "<h2>The mean identified vector" in problem  # the vehicle plugin's section
     assert "mean identified vector" not in protocol
+
+
+def test_the_suite_ecdf_figure_weighs_each_problem_the_same():
+    """Two problems of dimension 2 and 4; optimizer a hits its one target after 4 and 8
+    evaluations (2 per parameter on both), so at 2 evaluations/D it has solved the same
+    share on each: 1/7 each (one of 7 targets). b ran one problem only: left out."""
+    from vpid_bench.report.interactive import suite_ecdf_figure
+
+    nan = (math.nan,) * 6
+    runs = [RunHits("p2", "a", 20.0, 20.0, (4.0, *nan)),
+            RunHits("p4", "a", 40.0, 40.0, (8.0, *nan)),
+            RunHits("p2", "b", 20.0, 20.0, (1.0, *nan))]
+    fig = suite_ecdf_figure(runs, {"p2": ("f", 2), "p4": ("f", 4)})
+    assert [s.name for s in fig.series] == ["a"]
+    a = fig.series[0]
+    for x, y in zip(a.x, a.y, strict=True):
+        assert y == pytest.approx((1 / 7) if x >= 2.0 else 0.0)
+    assert a.y[-1] == pytest.approx(1 / 7)
+    assert suite_ecdf_figure(runs[:1], {"p2": ("f", 2)}) is None

@@ -261,4 +261,6 @@ def _suite_scores(data: ReportData, registry: Any, names: _Names
     fig = ss.figure(data.hits, facts, names.file("figures", "suite_ecdf", ".png"))
     if isinstance(fig, Path):
         written.append(fig)
-    return SuiteScores(rows, notes, ladder, fig), written
+    from .interactive import suite_ecdf_figure
+
+    return SuiteScores(rows, notes, ladder, fig, suite_ecdf_figure(data.hits, facts)), written

@@ -132,3 +132,39 @@ def convergence_figures(records: Sequence[Mapping[str, Any]],
         return {}
     panels = convergence_panels(traces, *reference_levels(records, rows))
     return {str(p["context"]): convergence_figure(p) for p in panels}
+
+
+def suite_ecdf_figure(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]]
+                      ) -> Figure | None:
+    """The runtime ECDF aggregated over every problem of the suite (each weighing the same;
+    :func:`.suite_scores.aggregated_ecdf`), against evaluations per parameter; one series per
+    optimizer that ran every problem. ``None`` below two problems with known optima."""
+    from .figures import thin_steps
+    from .suite_scores import aggregated_ecdf
+
+    budgets: dict[str, float] = {}
+    by_alg: dict[str, dict[str, list[RunHits]]] = {}
+    for r in runs:
+        budgets[r.context] = max(budgets.get(r.context, 0.0), r.budget)
+        by_alg.setdefault(r.algorithm, {}).setdefault(r.context, []).append(r)
+    contexts = sorted(c for c in budgets if c in facts)
+    if len(contexts) < 2:
+        return None
+    dims = {c: facts[c][1] for c in contexts}
+    top = max(budgets[c] / max(dims[c], 1) for c in contexts)
+    grid = np.geomspace(min(1.0 / max(max(dims.values()), 1), 0.1), max(top, 1.0), ECDF_GRID)
+    series = []
+    for name in sorted(by_alg):
+        per = by_alg[name]
+        if all(c in per for c in contexts):
+            x, y = thin_steps(grid, aggregated_ecdf({c: per[c] for c in contexts}, dims, grid),
+                              max_points=MAX_POINTS)
+            series.append(Series(name, _tuple(x), _tuple(y)))
+    alt = (f"Runtime ECDF aggregated over the {len(contexts)} problems, each weighing the "
+           f"same: for each of {len(series)} optimizers, the share of (run, target) pairs "
+           "reached (relative gap to each instance's optimum 1, 0.1, ..., 1e-6) against "
+           "objective evaluations per parameter, log scale.")
+    return Figure("ecdf:suite", "Runtime ECDF across the suite", alt,
+                  "objective evaluations / D (log scale)",
+                  "share of (run, target) pairs reached", True, False, tuple(series),
+                  y_range=(0.0, 1.0))

@@ -37,6 +37,8 @@ class SuiteScores:
     notes: list[str]
     ladder: list[list[Any]]
     figure: Path | str | None
+    #: the aggregated ECDF as an interactive figure (:func:`.interactive.suite_ecdf_figure`)
+    interactive: Any = None
 
 
 @dataclasses.dataclass

@@ -44,7 +44,7 @@ def build_pages(model: Any) -> dict[str, str]:
     }
     colour_of = dict(zip(optimizers, svg.colours(len(optimizers)), strict=True))
     out = {"index.html": render_page("index.html.j2", page="index", title="Overview",
-                                     **common, **_index(model, pages))}
+                                     **common, **_index(model, pages, colour_of))}
     for p in data.problems:
         out[pages.problem(p)] = render_page("problem.html.j2", page="problem",
                                             title=f"Problem {p}", name=p, **common,
@@ -64,7 +64,7 @@ def _links(pages: Pages) -> dict[str, Any]:
             "problem": pages.problem}
 
 
-def _index(model: Any, pages: Pages) -> dict[str, Any]:
+def _index(model: Any, pages: Pages, colour_of: Mapping[str, str]) -> dict[str, Any]:
     data = model.data
     of = model.problem_of()
     verdicts = []
@@ -78,18 +78,23 @@ def _index(model: Any, pages: Pages) -> dict[str, Any]:
     figures = [(relative(v, model.out_dir), k) for k, v in model.figs.items()
                if k in INDEX_FIGURES and isinstance(v, Path)]
     return {"verdicts": verdicts, "n_ok": n_ok, "short": data.short, "figures": figures,
-            "archive_notes": data.archive_notes, "suite": _suite(model, pages),
+            "archive_notes": data.archive_notes, "suite": _suite(model, pages, colour_of),
             "short_note": short_note}
 
 
-def _suite(model: Any, pages: Pages) -> dict[str, Any] | None:
+def _suite(model: Any, pages: Pages, colour_of: Mapping[str, str]) -> dict[str, Any] | None:
     from .suite_scores import HEADERS, LADDER_HEADERS
 
     s = model.suite
     if s is None or not s.rows:
         return None
     fig = s.figure if isinstance(s.figure, Path) else None
+    interactive = None
+    if s.interactive is not None:
+        interactive = {"figure": s.interactive, "id": "fig-suite",
+                       "layout": svg.layout(s.interactive, dict(colour_of))}
     return {"table": table(HEADERS, s.rows, _links(pages)), "notes": s.notes,
+            "interactive": interactive,
             "ladder": table(LADDER_HEADERS, s.ladder, _links(pages)) if s.ladder else None,
             "figure": relative(fig, model.out_dir) if fig else None}
 
