@@ -7,7 +7,8 @@ name is refused at once instead of blocking the reader, and so is a file over a 
 Every file vpid-bench writes (records, job statuses, reports, a problem's artifacts) goes
 through :func:`write_text_atomic`: a crash leaves the old file or the new one, never a torn
 one, and a link at the target path is replaced rather than followed (``os.replace`` renames
-over the link itself).
+over the link itself). The folders it keeps inside an output folder (``optima``, ``report``)
+are made by :func:`own_folder`, which never follows a link planted in their place.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from __future__ import annotations
 import json
 import os
 import stat
+import sys
 import tempfile
 from pathlib import Path
 
@@ -50,6 +52,20 @@ def read_text_limited(path: Path, max_bytes: int = MAX_READ_BYTES) -> str:
     if len(data) > max_bytes:
         raise OSError(f"{path}: more than {max_bytes} bytes")
     return data.decode("utf-8")
+
+
+def own_folder(path: Path) -> Path:
+    """``path`` as a real folder of vpid-bench's own (created if needed): a symbolic link
+    planted there (a sweep's ``optima`` or ``report`` pointing outside it: the files were
+    once written wherever it pointed) is removed, the link only, with one ``warning:`` line,
+    and a folder made in its place. Nothing is ever written through such a link."""
+    path = Path(path)
+    if path.is_symlink():
+        path.unlink(missing_ok=True)  # another process may have removed it first
+        print(f"warning: {path} was a symbolic link; removed (the link only) so that nothing "
+              "is written outside the output folder", file=sys.stderr, flush=True)
+    path.mkdir(parents=True, exist_ok=True)
+    return path
 
 
 def write_text_atomic(path: Path, text: str) -> Path:

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from ..fileio import loads_json
+from ..fileio import loads_json, own_folder
 from ..problem import PROTOCOL_KEYS, Problem
 from ..records.io import stable_hash, write_json_atomic
 
@@ -231,7 +231,7 @@ def update_instance_optimum(problem: Problem, settings: Mapping[str, Any], folde
         if not finite:
             raise ValueError("the optimum polish needs the true parameters or a run's best")
         x_start = np.asarray(min(finite, key=lambda b: b[1])[0], dtype=float)
-    path = Path(folder) / f"{instance_key(problem, settings)}.json"
+    path = own_folder(folder) / f"{instance_key(problem, settings)}.json"  # never a link
     with _locked(path):  # launcher workers share the folder: read, polish, write as one step
         return _update(problem, settings, path, x_start, run_bests)
 

@@ -23,6 +23,7 @@ from typing import Any
 
 from hydra.experimental.callback import Callback
 
+from ..fileio import own_folder
 from ..records import write_json_atomic
 
 log = logging.getLogger(__name__)
@@ -103,6 +104,7 @@ def write_report(folder: Path, short: bool, archive: bool = True) -> bool:
     status: dict[str, Any] = {"status": "ok", "problems": [],
                               "invocation": os.environ.get(INVOCATION_ENV)}
     try:
+        own_folder(out)  # a link planted there: removed, never written through
         report = build_report([folder], out, short=short, archive=archive)
     except NoRecordsError:  # every job failed: its own error line said why
         print(f"report: none, no run was recorded in {folder}", file=sys.stderr, flush=True)

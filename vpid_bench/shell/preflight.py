@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError, VpidBenchError
+from ..fileio import own_folder
 from ..plugins import Registry
 from ..problem import FILLED_PARAMS
 from ..spec import TOP_LEVEL_KEYS, Job, parse_job
@@ -39,6 +40,8 @@ GROUPS = ("problem", "optimizer")
 SHIPPED = ConfigSource()
 #: The most jobs one command may start (a typo in a range() should not plan a million).
 MAX_JOBS = 10_000
+#: The folders the command keeps in its output folder: the instance optima and the report.
+OWN_FOLDERS = ("optima", "report")
 
 
 @dataclasses.dataclass
@@ -572,10 +575,14 @@ def create_job_dirs(plan: Plan) -> None:
     cannot be created (a file in its place, a full disk) refuses the command; one that exists
     but cannot be written is left to its job, which fails alone and is reported. A symbolic
     link planted at the sweep's ``multirun.yaml`` (Hydra writes it, following links) is
-    removed first, so nothing is written through it."""
+    removed first, so nothing is written through it, and so is one planted in place of a
+    folder the command keeps in the output folder (:data:`OWN_FOLDERS`), with a warning."""
     planted = plan.output_dir / "multirun.yaml"
     if plan.multirun and planted.is_symlink():
         planted.unlink()
+    for name in OWN_FOLDERS:  # a link planted in their place: removed, never followed
+        if (plan.output_dir / name).is_symlink():
+            own_folder(plan.output_dir / name)
     for job_dir in plan.job_dirs:
         try:
             job_dir.mkdir(parents=True, exist_ok=True)
