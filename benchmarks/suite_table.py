@@ -72,6 +72,7 @@ def main() -> None:
     ap.add_argument("--suite", default="vpid1")
     ap.add_argument("--starts", type=int, default=100)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--only", default="", help="comma-separated members (default: all)")
     args = ap.parse_args()
     registry = Registry()
     print("| problem | set | d | input | sensors | noise | record | CRB norm (%) | cond. | "
@@ -80,6 +81,12 @@ def main() -> None:
     members = registry.suites().get(args.suite)
     if not members:
         ap.error(f"--suite {args.suite!r}: one of {', '.join(sorted(registry.suites()))}")
+    only = [n for n in args.only.split(",") if n]
+    unknown = [n for n in only if n not in members]
+    if unknown:
+        ap.error(f"--only {unknown[0]!r}: a member of {args.suite}, one of "
+                 f"{', '.join(members)}")
+    members = only or members
     for name in members:
         t0 = time.perf_counter()
         cls = registry.problem(name)

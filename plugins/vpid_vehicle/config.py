@@ -110,8 +110,9 @@ class ReferenceConfig:
 
     ``integrator``, ``dt`` (s, must divide ``problem.dt``) and ``sampling`` let the synthetic
     reference differ from the model that fits it (no "inverse crime"). ``file``: a CSV with
-    a measured record (columns ``t, z1dd, z2dd`` in s and m/s^2) fitted instead; no noise is
-    added to it.
+    a measured record (columns ``t, z1dd, z2dd`` in s and m/s^2, any rate and start, units
+    optional: :mod:`.record_file`) fitted instead; no noise is added to it, and the problem
+    has no truth.
     """
 
     integrator: str | None = None
@@ -194,9 +195,9 @@ def validate(config: VehicleConfig) -> None:
     # a measured record states no noise level (noise.level is what synthetic records add)
     estimators.check_objective(config.objective, config.noise.level
                                if config.reference.file is None else None)
-    check_size(config, T)
     if config.reference.file is not None:
-        check_reference_file(config, T)
+        T = check_reference_file(config)
+    check_size(config, T)
     _validate_bounds(config)
 
 
@@ -318,10 +319,10 @@ def check_size(config: VehicleConfig, T: float) -> None:
                           f"({what})")
 
 
-def check_reference_file(config: VehicleConfig, T: float) -> None:
+def check_reference_file(config: VehicleConfig) -> float:
     """Read ``problem.reference.file`` once, so a file that does not fit fails the command's
-    pre-flight (exit 2) rather than the job."""
+    pre-flight (exit 2) rather than the job; returns the record's span (s), the window the
+    model then integrates over."""
     from .reference_io import read_measured
-    from .road import time_grid
 
-    read_measured(config.reference.file, time_grid(T, config.dt), config.dt)
+    return read_measured(config.reference.file).span

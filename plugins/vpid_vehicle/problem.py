@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import copy
 import hashlib
+import logging
 from pathlib import Path
 from typing import Any
 
@@ -22,9 +23,12 @@ from vpid_bench import Bounds, Problem, estimators, relative_errors_percent
 from .config import PARAM_NAMES, PARAM_UNITS, VehicleConfig, validate, window
 from .model import KnownConstants, physical
 from .objective import add_noise, noise_summary
+from .record_file import Sampler
 from .reference_io import read_measured, write_reference
 from .road import Bump
 from .simulator import Simulator
+
+log = logging.getLogger(__name__)
 
 
 class VehicleProblem(Problem):
@@ -50,14 +54,24 @@ class VehicleProblem(Problem):
             PARAM_UNITS,
         )
         nm = config.newmark
+        ref = config.reference
+        #: How the model meets a measured record's times (None: a synthetic record, on the
+        #: model's own grid).
+        self.sampler: Sampler | None = None
+        if ref.file is not None:
+            record = read_measured(ref.file)
+            self.sampler = Sampler(record.t, config.dt)
+            self.T = float(self.sampler.steps[-1])
+            self.record_info = self.sampler.describe(record)
+            log.info("%s", self.record_info)
         self.model = Simulator(self.known, self.bump, self.T, config.dt, config.integrator,
                                config.sampling, nm.gamma, nm.beta)
         self.t = self.model.t_out
-        ref = config.reference
         if ref.file is not None:
             self.reference_source = "file"
             self.reference_clean: np.ndarray | None = None
-            self.reference = read_measured(ref.file, self.t, config.dt)
+            self.t = record.t
+            self.reference = record.outputs
             self._digest: str | None = hashlib.sha256(Path(ref.file).read_bytes()).hexdigest()
         else:
             self.reference_source = "synthetic"
@@ -175,14 +189,20 @@ class VehicleProblem(Problem):
         ok = physical(X, self.known)
         if np.any(ok):
             with np.errstate(all="ignore"):
-                out[ok] = self.model(X[ok])
+                y = self.model(X[ok])
+                out[ok] = y if self.sampler is None else self.sampler.at_record(y)
         return out
+
+    @property
+    def _on_grid(self) -> bool:
+        """True when the record's samples are the model's steps (the compiled Eq. 3 path)."""
+        return self.sampler is None or self.sampler.identity
 
     def evaluate(self, X: np.ndarray) -> np.ndarray:
         """The objective (Eq. 3 by default, ``objective``) for every row of ``X`` (shape
         ``(n, 9)``), ``inf`` where a simulation fails."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
-        if self.config.objective != "eq3":
+        if self.config.objective != "eq3" or not self._on_grid:
             return self.evaluate_with_residuals(X)[0]
         try:
             return self.model.objective(X, self.reference)
@@ -198,7 +218,7 @@ class VehicleProblem(Problem):
         numbers, index = np.unique(instance, return_inverse=True)
         insts = [self.instance(int(i)) for i in numbers]
         shared = all(getattr(inst, "model", None) is self.model for inst in insts)
-        if self.config.objective != "eq3" or not shared:
+        if self.config.objective != "eq3" or not shared or not self._on_grid:
             return super().evaluate_instances(X, instance)
         try:
             if len(insts) == 1:
@@ -295,7 +315,9 @@ class VehicleProblem(Problem):
             info.update(f_at_true=self._f_at_true(), metric_units={"NoRE": "%"})
         ref = cfg.reference
         if self.reference_source == "file":
-            info["reference"]["file"] = str(ref.file)
+            info["reference"].update(file=str(ref.file), info=self.record_info,
+                                     t0_s=float(self.t[0]), on_model_steps=bool(
+                                         self.sampler is not None and self.sampler.on_steps))
             info["noise"] = {"applied": False}
         else:
             info["reference"].update(

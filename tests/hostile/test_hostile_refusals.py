@@ -30,8 +30,9 @@ def _grid():
     return [float(t) for t in time_grid(window(config), config.dt)]
 
 
-def _csv(path, rows_of, encoding="utf-8"):
-    path.write_text("t,z1dd,z2dd\n" + "".join(rows_of(i, t) for i, t in enumerate(_grid())),
+def _csv(path, rows_of, encoding="utf-8", header="t,z1dd,z2dd", rows=None):
+    grid = _grid()[:rows] if rows else _grid()
+    path.write_text(header + "\n" + "".join(rows_of(i, t) for i, t in enumerate(grid)),
                     encoding=encoding)
     return path
 
@@ -43,7 +44,18 @@ def csv_files(tmp_path):
         "zero": _csv(tmp_path / "zero.csv", lambda i, t: f"{t!r},0,0\n"),
         "nan": _csv(tmp_path / "nan.csv", lambda i, t: f"{t!r},{'nan' if i == 7 else 1},1\n"),
         "inf": _csv(tmp_path / "inf.csv", lambda i, t: f"{t!r},1,{'-inf' if i == 9 else 1}\n"),
-        "grid": _csv(tmp_path / "grid.csv", lambda i, t: f"{t * 2!r},1,1\n"),
+        "backwards": _csv(tmp_path / "backwards.csv",
+                          lambda i, t: f"{t - 0.01 if i == 5 else t!r},1,1\n"),
+        "repeat": _csv(tmp_path / "repeat.csv", lambda i, t: f"{0.0 if i == 1 else t!r},1,1\n"),
+        "few": _csv(tmp_path / "few.csv", lambda i, t: f"{t!r},1,1\n", rows=5),
+        "nocol": _csv(tmp_path / "nocol.csv", lambda i, t: f"{t!r},1\n", header="t,z1dd"),
+        "unit": _csv(tmp_path / "unit.csv", lambda i, t: f"{t!r},1,1\n",
+                     header="t [s],z1dd [km/h],z2dd"),
+        "strange": _csv(tmp_path / "strange.csv", lambda i, t: f"{t!r},1,1\n",
+                        header="t [fortnight],z1dd,z2dd"),
+        "twice": _csv(tmp_path / "twice.csv", lambda i, t: f"{t!r},1,1,1\n",
+                      header="t,z1dd,z2dd,z1dd [g]"),
+        "text": _csv(tmp_path / "text.csv", lambda i, t: f"{t!r},{'abc' if i == 2 else 1},1\n"),
         "bom": _csv(tmp_path / "bom.csv", lambda i, t: f"{t!r},{np.sin(t)},{np.cos(t)}\n",
                     encoding="utf-8-sig"),
     }
@@ -132,11 +144,21 @@ def test_refused_in_one_line_before_any_work(case, argv, line, in_tmp, capsys):
 
 # (case, file, the key's message fragment)
 CSV_REFUSED = [
-    ("13", "zero", "a record with some nonzero acceleration"),
+    ("13", "zero", "a record with some nonzero measured value"),
     ("14", "nan", "finite numbers; row 9 column z1dd is nan"),
     ("14", "inf", "finite numbers; row 11 column z2dd is -inf"),
     ("14", "binary", "a text CSV file in UTF-8"),
-    ("11", "grid", "a t column equal to k * problem.dt"),
+    ("31", "backwards", "a t column that increases from row to row; row 7 has t = -0.005 s "
+     "after 0.004 s"),
+    ("31", "repeat", "a t column that increases from row to row; row 3 has t = 0 s"),
+    ("31", "few", "at least 10 rows of samples; found 5"),
+    ("31", "nocol", "a header with columns t, z1dd, z2dd (units optional, e.g. t [s]); column "
+     "z2dd is missing; found columns t, z1dd"),
+    ("31", "unit", "column z1dd in a unit of acceleration, one of g, m/s^2, m/s², mm/s^2 "
+     "(found [km/h])"),
+    ("31", "strange", "column t in a unit of time, one of ms, s (found [fortnight])"),
+    ("31", "twice", "each column once; column 'z1dd' appears twice"),
+    ("31", "text", "a number in column z1dd of every row; row 4 has none"),
 ]
 
 
@@ -147,6 +169,42 @@ def test_bad_reference_files_are_refused_by_the_preflight(case, name, fragment, 
     code, err = main_in_process([f"problem.reference.file={csv_files[name]}", "runs=1"], capsys)
     assert code == 2
     assert err.startswith(f"error: problem.reference.file='{csv_files[name]}' is not allowed: ")
+    assert fragment in err and err.count("\n") == 1
+
+
+def _ride_csv(path, header, row):
+    path.write_text(header + "\n" + "".join(row(k, 0.002 * k) for k in range(50)))
+    return path
+
+
+RIDE_REFUSED = [
+    ("iso road without its columns", ["problem=ride_full", "problem.road=iso8608"],
+     "t,bFLdd,bFRdd,bRLdd,bRRdd", lambda k, t: f"{t},1,1,1,1\n",
+     "input columns h_FL, h_FR, h_RL, h_RR (road=iso8608 is a random road, which a record "
+     "must carry: the road height under each wheel; or set problem.road to hump, bump or "
+     "step); column h_FL is missing"),
+    ("half the road columns", ["problem=ride_half"], "t,z1dd,z2dd,h1",
+     lambda k, t: f"{t},1,1,0\n",
+     "input columns h1, h2 (all of h1, h2 or none); column h2 is missing"),
+    ("a channel of the sensor set missing", ["problem=ride_quarter"], "t,zsdd",
+     lambda k, t: f"{t},1\n", "column zudd is missing"),
+    ("steer without speed", ["problem=lateral"], "t,r,ay,delta [deg]",
+     lambda k, t: f"{t},1,1,1\n", "input columns delta, vx (all of delta, vx or none); column "
+     "vx is missing"),
+    ("a speed that varies", ["problem=lateral_mf"], "t,r,ay,delta,vx [km/h]",
+     lambda k, t: f"{t},1,1,0.01,{72 + (10 if k == 30 else 0)}\n",
+     "a column vx (m/s) > 0 held within 2 % of its mean"),
+]
+
+
+@pytest.mark.parametrize(("what", "argv", "header", "row", "fragment"), RIDE_REFUSED,
+                         ids=[c[0] for c in RIDE_REFUSED])
+def test_bad_records_of_the_ride_and_lateral_problems_are_refused_by_the_preflight(
+        what, argv, header, row, fragment, in_tmp, capsys, tmp_path):
+    path = _ride_csv(tmp_path / "r.csv", header, row)
+    code, err = main_in_process([*argv, f"problem.reference.file={path}", "runs=1"], capsys)
+    assert code == 2, err
+    assert err.startswith(f"error: problem.reference.file='{path}' is not allowed: "), err
     assert fragment in err and err.count("\n") == 1
 
 

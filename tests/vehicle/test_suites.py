@@ -59,10 +59,11 @@ def test_the_cli_refuses_an_unknown_suite_before_any_work(in_tmp, capsys):
 @pytest.mark.parametrize("cls", MEMBERS, ids=lambda c: c.name)
 def test_every_member_builds_and_its_truth_fits_best(cls):
     """Each member is a problem with its defaults: its truth is inside the box and, but for
-    the model-error member, scores better than the box centre; its name is its registry name.
-    With model error (the linear model fitted to a Magic Formula record) the truth is not the
-    best linear fit: the linear model's optimum near the truth lies over 20 % NoRE from it,
-    which is what the member shows."""
+    the model-error members, scores better than the box centre; its name is its registry name.
+    With model error (the linear model fitted to a record of a richer model: Magic Formula
+    tyres, a bilinear damper, a seat) the truth is not the best linear fit: the linear model's
+    optimum near the truth lies over 10 % NoRE from it (each member's bound is under 20 %
+    except the lateral's, whose optimum lies 68 % off), which is what the members show."""
     from vpid_bench.analysis.optimum import polish
 
     p = cls(cls.Config())
@@ -73,7 +74,7 @@ def test_every_member_builds_and_its_truth_fits_best(cls):
     f_true, f_centre = p.evaluate(np.stack([x, centre]))
     assert np.isfinite(f_true)
     if getattr(p.config, "record_model", "linear") != "linear":
-        assert p.metrics(polish(p, x)[0])["NoRE"] > 20
+        assert p.metrics(polish(p, x)[0])["NoRE"] > 10
     else:
         assert f_true < f_centre
 
@@ -105,3 +106,16 @@ def test_the_instances_have_a_seed_root_of_their_own():
     c = cls(cls.Config(seed=1)).instance(2)
     np.testing.assert_array_equal(a.x_true, b.x_true)
     assert not np.allclose(a.x_true, c.x_true)  # the problem's seed, not the job's, sets it
+
+
+def test_vpid1_keeps_at_least_fifteen_members_and_two_with_model_error_above_the_noise():
+    """The archive is built from vpid1: it keeps 15 or more members; at least two have a
+    record from a richer model whose model error is at least the noise (ratio >= 1, computed
+    by vpid_vehicle.ride.model_error on instance 0)."""
+    from vpid_vehicle.ride.model_error import members_with_model_error, model_error
+
+    vpid1 = [m for m in MEMBERS if "vpid1" in m.suites]
+    assert len(vpid1) >= 15
+    ratios = {m.name: model_error(m(m.Config()))["ratio"] for m in members_with_model_error()}
+    assert sum(r >= 1 for r in ratios.values()) >= 2, ratios
+    assert ratios["vpid1_q_golden_bilinear"] > 3 and ratios["vpid1_h_gokdag_seat_iso_c"] > 1.2

@@ -59,6 +59,10 @@ class ContextResult:
     truth: bool = True  # False: the problem has no truth (a measured record)
     identified: Any = None  # without a truth: .estimates.Identified, the values and intervals
     comparisons: list[dict[str, Any]] = dataclasses.field(default_factory=list)
+    #: what biases the record's optimum, for a floor below the bound: the richer model that
+    #: made the record (its description), and the instances whose optimum the box holds
+    model_error: str = ""
+    on_edge: tuple[int, int] = (0, 0)  # (instances with the optimum on a box edge, instances)
 
     def value(self, x: float) -> str:
         """A metric value with its unit."""
@@ -135,10 +139,55 @@ def context_result(data: Any, context: str) -> ContextResult:
                            data.estimator_floors.get(context), pairs,
                            not data.no_truth.get(context, False),
                            data.identified.get(context), data.comparisons.get(context, []))
+    result.model_error, result.on_edge = _model_error(data, context), _edge(data, context)
     result.verdict = _verdict(result, mrows, [srows[a] for a in sorted(
         srows, key=lambda a: srows[a]["rank"])], mgroups, sgroups,
         data.centred.get(context, False))
     return result
+
+
+def _model_error(data: Any, context: str) -> str:
+    """What the richer model that made the context's records adds to the fitted one
+    (``problem.info.model_error.what``, a short text from the records), or ``""``."""
+    ids = {r["run_id"] for r in data.rows if r["context"] == context}
+    for rec in data.loaded.records:
+        if rec["run_id"] not in ids:
+            continue
+        info = (rec.get("problem") or {}).get("info")
+        me = info.get("model_error") if isinstance(info, Mapping) else None
+        what = me.get("what") if isinstance(me, Mapping) else None
+        if isinstance(what, str) and what:
+            return what[:300]
+    return ""
+
+
+def _edge(data: Any, context: str) -> tuple[int, int]:
+    """(instances whose optimum lies on a box edge, instances with a known optimum)."""
+    seen: dict[Any, float] = {}
+    for r in data.rows:
+        v = r.get("opt_on_edge", math.nan)
+        if r["context"] == context and isinstance(v, float) and math.isfinite(v):
+            seen[r.get("instance")] = v
+    return int(sum(seen.values())), len(seen)
+
+
+def _below_bound(res: ContextResult) -> str:
+    """Why a floor can lie below the Cramér–Rao bound: the bound holds for unbiased
+    estimators, and the record's optimum is biased by model error or by the box."""
+    why = []
+    if res.model_error:
+        why.append(f"the record was made by a richer model than the fitted one "
+                   f"({escape(res.model_error)}), which pulls the optimum to the fitted model's "
+                   "best compromise, a bias the bound does not describe")
+    k, n = res.on_edge
+    if k:
+        why.append(f"the box holds the optimum on an edge in {k} of {n} instance(s), "
+                   "cutting the error there")
+    if not why:
+        why.append("neither model error nor the box is known to bias it here: the bound "
+                   "linearises at the truth, and a median over few instances scatters")
+    return (". The floor lies below the bound, which only unbiased estimators must respect: "
+            + "; ".join(why))
 
 
 def _verdict(res: ContextResult, mrows: list[Mapping[str, Any]],
@@ -248,6 +297,8 @@ def _limits(res: ContextResult, m: float, srows: Sequence[Mapping[str, Any]],
         parts.append(f", an efficient estimator {res.value(bound)} (Cramér–Rao bound norm)")
     if not math.isfinite(floor):
         return "".join(parts)
+    if math.isfinite(bound) and floor < bound and not tied(floor, bound):
+        parts.append(_below_bound(res))
     reached = [q for q in srows if q["algorithm"] in use]
     at_opt = any(q["reached"] >= q["n"] / 2 or q["rel_gap_median"] <= REACHED
                  for q in reached)
@@ -256,7 +307,13 @@ def _limits(res: ContextResult, m: float, srows: Sequence[Mapping[str, Any]],
                      "of the optimum" + (" in a box centred on the truth" if centred else ""))
     elif at_opt or m <= AT_FLOOR * floor:
         parts.append(". More search will not help here")
-        if math.isfinite(bound) and bound > 0 and floor > ESTIMATOR_GAP * bound:
+        if math.isfinite(bound) and bound > 0 and floor > ESTIMATOR_GAP * bound \
+                and res.model_error:
+            parts.append(f": the floor is {fmt(floor / bound, 2)}× the bound, and the record was "
+                         f"made by a richer model than the fitted one ({escape(res.model_error)}"
+                         "): model error, which no estimator of the fitted model removes, may "
+                         "set it; a richer fitted model would")
+        elif math.isfinite(bound) and bound > 0 and floor > ESTIMATOR_GAP * bound:
             parts.append(f": the objective, not the data, sets the floor ({fmt(floor / bound, 2)}"
                          "× the bound), so a better estimator would" + _better(res))
         else:

@@ -240,7 +240,7 @@ def add_optimum_columns(rows: list[dict[str, Any]], records: Sequence[Mapping[st
             idx, bool) else row["run_index"])
         opt = match_optimum(rec, index)
         extra: dict[str, Any] = {"instance": label, "f_opt": math.nan, "gap": math.nan,
-                                 "rel_gap": math.nan}
+                                 "rel_gap": math.nan, "opt_on_edge": math.nan}
         if opt is not None:
             mnames = list(((rec.get("result") or {}).get("metrics") or {}).keys())
             mname = mnames[0] if mnames else next(iter(opt.metrics), None)
@@ -248,6 +248,7 @@ def add_optimum_columns(rows: list[dict[str, Any]], records: Sequence[Mapping[st
             if stem not in stems:
                 stems.append(stem)
             extra["f_opt"] = opt.f_opt
+            extra["opt_on_edge"] = on_edge(opt.x_opt, rec.get("parameters") or {})
             if row["status"] == "ok":
                 gap = float(row["f_best"]) - opt.f_opt
                 extra["gap"], extra["rel_gap"] = gap, rel_gap(gap, opt.f_opt)
@@ -270,6 +271,7 @@ def add_optimum_columns(rows: list[dict[str, Any]], records: Sequence[Mapping[st
     cols = ["instance", "f_opt", "gap", "rel_gap"]
     for s in stems:
         cols += [f"{s}_floor", f"{s}_to_opt"]
+    cols.append("opt_on_edge")
     for row, extra in zip(rows, computed, strict=True):
         new = {}
         for k, v in row.items():
@@ -279,6 +281,23 @@ def add_optimum_columns(rows: list[dict[str, Any]], records: Sequence[Mapping[st
         row.clear()
         row.update(new)
     return notes
+
+
+#: A parameter of an optimum within this fraction of the box width of a bound is on the edge.
+EDGE_RTOL = 1e-6
+
+
+def on_edge(x_opt: Sequence[float], params: Mapping[str, Any]) -> float:
+    """1.0 when a parameter of ``x_opt`` lies on the record's box edge (within
+    :data:`EDGE_RTOL` of the width), 0.0 when none does, NaN when the record's bounds are not
+    readable: the box then holds the optimum, and its error is cut by the box."""
+    lo, hi = params.get("lower"), params.get("upper")
+    n = len(x_opt)
+    if not (isinstance(lo, list) and isinstance(hi, list) and len(lo) == len(hi) == n
+            and all(_finite(v) for v in (*lo, *hi))):
+        return math.nan
+    return float(any(min(x - a, b - x) <= EDGE_RTOL * (b - a)
+                     for x, a, b in zip(x_opt, lo, hi, strict=True)))
 
 
 def opt_column_names(rows: Sequence[Mapping[str, Any]]) -> tuple[str | None, str | None]:

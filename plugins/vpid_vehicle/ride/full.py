@@ -24,7 +24,7 @@ from typing import Literal
 import numpy as np
 
 from . import linear
-from .problem import RideConfig, RideModel, RideProblem, Wheel
+from .problem import RideConfig, RideModel, RideProblem, Wheel, check_record_file
 
 #: Wheel order of the degrees of freedom 3..6 and of the inputs.
 WHEELS = ("FL", "FR", "RL", "RR")
@@ -66,6 +66,7 @@ def full_car_matrices(X: np.ndarray, known: dict[str, float]
 
 
 class FullCar(RideModel):
+    wheel_names = ("h_FL", "h_FR", "h_RL", "h_RR")
     names = ("m", "Ix", "Iy", "mf", "mr", "kf", "kr", "cf", "cr")
     units = ("kg", "kg m²", "kg m²", "kg", "kg", "N/m", "N/m", "N s/m", "N s/m")
     sets = {
@@ -130,6 +131,10 @@ class RideFullConfig(RideConfig):
     parameter_set: Literal["jazar", "jazar_symmetric", "bmw320i"] = "jazar"
     sensors: Literal["body", "body_wheel", "body_rates"] = "body"
 
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_record_file(self, FullCar())
 
 class RideFullProblem(RideProblem):
     """The full car identified from a two-track road record."""

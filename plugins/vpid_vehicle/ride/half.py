@@ -10,7 +10,9 @@ against a Lagrangian derivation). The body points above the axles move as
 ``z1 = x - a1 theta`` and ``z2 = x + a2 theta``.
 
 **Known quantities**: the wheelbase ``L`` and the tyre stiffnesses ``kt1``, ``kt2`` (as in the
-paper). Identified: ``m, I, m1, m2, k1, k2, c1, c2, a1``. The rear wheel follows the front one
+paper). Identified: ``m, I, m1, m2, k1, k2, c1, c2, a1``. **Model error**
+(``record_model=seat``): the record's car carries a driver seat the fitted one lacks
+(:mod:`.richer`). The rear wheel follows the front one
 on the same track, ``L / speed`` later.
 """
 
@@ -23,10 +25,11 @@ import numpy as np
 
 from ..model import KnownConstants, matrices, tyre_input
 from . import linear
-from .problem import RideConfig, RideModel, RideProblem, Wheel
+from .problem import RideConfig, RideModel, RideProblem, Wheel, check_record_file
 
 
 class HalfCar(RideModel):
+    wheel_names = ("h1", "h2")
     names = ("m", "I", "m1", "m2", "k1", "k2", "c1", "c2", "a1")
     units = ("kg", "kg m²", "kg", "kg", "N/m", "N/m", "N s/m", "N s/m", "m")
     sets = {
@@ -87,7 +90,14 @@ class RideHalfConfig(RideConfig):
 
     parameter_set: Literal["gokdag", "jazar_half"] = "gokdag"
     sensors: Literal["body", "body_wheel", "body_pitch_rate"] = "body"
+    #: The model that makes the record: ``linear`` (the fitted model's equations) or
+    #: ``seat`` (:mod:`.richer`: a seat mass the fitted model lacks, model error).
+    record_model: Literal["linear", "seat"] = "linear"
 
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_record_file(self, HalfCar())
 
 class RideHalfProblem(RideProblem):
     """The half car identified from a road record."""
@@ -96,3 +106,15 @@ class RideHalfProblem(RideProblem):
     name = "ride_half"
     family = "half car"
     model = HalfCar()
+
+    def _record(self, fine_u: np.ndarray, sub: int) -> np.ndarray:
+        """The linear model's record, or with ``record_model=seat`` the seated car's
+        (:func:`.richer.seated_half`), by the exact first-order-hold solution."""
+        if self.config.record_model == "linear":
+            return super()._record(fine_u, sub)
+        from .richer import seated_half
+
+        system = seated_half(self.model.system(self._x_true[None], self.known,
+                                               self.config.sensors))
+        y = linear.simulate(linear.exact_foh(system, self.config.dt / sub), fine_u)
+        return y[0, ::sub].T

@@ -19,9 +19,9 @@ of ``m, Iz, Cf, Cr`` by one factor (which leaves ``r`` and ``ay`` unchanged) is 
 Identified: ``Cf, Cr, Iz, lf`` (``lr = L - lf``). Steady state: ``r / delta = vx / (L + K
 vx^2)`` with the understeer gradient ``K = (m / L) (lr / Cf - lf / Cr)`` (tested).
 
-**Manoeuvres** (``manoeuvre``): ``step`` (the steer ramps to ``steer_deg`` over 0.2 s from
-0.5 s on and holds), ``sine`` (``steer_deg`` amplitude at ``sine_hz`` from 0.5 s on).
-Record, noise, instances and objective: :mod:`.problem`.
+**Manoeuvres** and sensor sets: :mod:`.steering`. Record, noise, instances and objective:
+:mod:`.problem`; ``record_model=magic_formula`` makes the record with the Magic Formula model
+of :mod:`.magic` (this module imports that one, never the reverse).
 """
 
 from __future__ import annotations
@@ -32,10 +32,12 @@ from typing import Any, Literal
 import numpy as np
 
 from . import linear
-from .problem import RideModel, RideProblem, SuiteConfig, _check
+from .magic import CURVATURE, MU, SHAPE, MagicSingleTrack
+from .problem import RideModel, RideProblem, SuiteConfig, _check, check_record_file
+from .steering import SENSORS, SteeredRecord, steer_input
 
 
-class SingleTrack(RideModel):
+class SingleTrack(SteeredRecord, RideModel):
     names = ("Cf", "Cr", "Iz", "lf")
     units = ("N/rad", "N/rad", "kg m²", "m")
     sets = {
@@ -48,11 +50,7 @@ class SingleTrack(RideModel):
         "smart": {"Cf": 70000.0, "Cr": 90000.0, "Iz": 3000.0, "lf": 1.142,
                   "m": 820.0, "L": 1.812},
     }
-    sensors = {
-        "yaw": (("r", "rad/s"),),
-        "yaw_ay": (("r", "rad/s"), ("ay", "m/s²")),
-        "yaw_ay_beta": (("r", "rad/s"), ("ay", "m/s²"), ("beta", "rad")),
-    }
+    sensors = SENSORS
 
     def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
         ok = np.all(np.isfinite(X) & (X > 0), axis=1)
@@ -60,14 +58,8 @@ class SingleTrack(RideModel):
 
     def inputs(self, config: Any, known: dict[str, float], dt: float,
                rng: np.random.Generator) -> np.ndarray:
-        """The steer angle at the road wheels (rad) ``(N, 1)``."""
-        t = np.arange(round(config.duration_s / dt)) * dt
-        amp = np.deg2rad(config.steer_deg)
-        if config.manoeuvre == "step":
-            delta = amp * np.clip((t - 0.5) / 0.2, 0.0, 1.0)
-        else:
-            delta = np.where(t >= 0.5, amp * np.sin(2 * np.pi * config.sine_hz * (t - 0.5)), 0)
-        return delta[:, None]
+        """The steer angle at the road wheels (rad) ``(N, 1)`` (:func:`.steering.steer_input`)."""
+        return steer_input(config, dt)
 
     def system(self, X: np.ndarray, known: dict[str, float], sensors: str,
                vx: float = 20.0) -> linear.LinearSystem:
@@ -122,6 +114,7 @@ class LateralConfig(SuiteConfig):
             ("sine_hz", 0 < self.sine_hz <= 5, "a frequency in (0, 5] Hz"),
             ("speed_kmh", 10 <= self.speed_kmh <= 200, "a speed in [10, 200] km/h"),
         ], self)
+        check_record_file(self, SingleTrack())
 
 
 class _SingleTrackAt(SingleTrack):
@@ -153,8 +146,6 @@ class LateralProblem(RideProblem):
         cornering stiffness ``B C D``, ``D = mu x`` the static axle load) by RK4."""
         if self.config.record_model == "linear":
             return super()._record(fine_u, sub)
-        from .magic import CURVATURE, MU, SHAPE, MagicSingleTrack
-
         Cf, Cr, Iz, lf = self._x_true
         m, L = self.known["m"], self.known["L"]
         Df, Dr = MU * m * 9.81 * (L - lf) / L, MU * m * 9.81 * lf / L

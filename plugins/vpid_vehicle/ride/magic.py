@@ -29,8 +29,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .lateral import SingleTrack
-from .problem import RideModel, RideProblem, SuiteConfig, _check
+from .problem import RideModel, RideProblem, SuiteConfig, _check, check_record_file
+from .steering import SENSORS, SteeredRecord, steer_input
 
 G = 9.81  # m/s^2
 #: PAC2002 lateral coefficients of the 185/80R14 tyre file published with Project Chrono:
@@ -47,11 +47,11 @@ def _civic_mf() -> dict[str, float]:
             "m": m, "L": L, "lf": lf, "E": E}
 
 
-class MagicSingleTrack(RideModel):
+class MagicSingleTrack(SteeredRecord, RideModel):
     names = ("Bf", "Cf", "Df", "Br", "Cr", "Dr", "Iz")
     units = ("1/rad", "1", "N", "1/rad", "1", "N", "kg m²")
     sets = {"civic_mf": _civic_mf()}
-    sensors = SingleTrack.sensors
+    sensors = SENSORS
 
     def __init__(self, vx: float = 20.0) -> None:
         self.vx = vx
@@ -69,7 +69,7 @@ class MagicSingleTrack(RideModel):
 
     def inputs(self, config: Any, known: dict[str, float], dt: float,
                rng: np.random.Generator) -> np.ndarray:
-        return SingleTrack().inputs(config, known, dt, rng)
+        return steer_input(config, dt)
 
     def simulate(self, X: np.ndarray, known: dict[str, float], sensors: str, u: np.ndarray,
                  dt: float, solver: str) -> np.ndarray:
@@ -111,6 +111,7 @@ class LateralMFConfig(SuiteConfig):
             ("sine_hz", 0 < self.sine_hz <= 5, "a frequency in (0, 5] Hz"),
             ("speed_kmh", 10 <= self.speed_kmh <= 200, "a speed in [10, 200] km/h"),
         ], self)
+        check_record_file(self, MagicSingleTrack())
 
 
 class LateralMFProblem(RideProblem):

@@ -30,6 +30,8 @@ truth.
 from __future__ import annotations
 
 import dataclasses
+import logging
+import types
 from typing import Any, ClassVar
 
 import numpy as np
@@ -43,7 +45,10 @@ from vpid_bench import (
     relative_errors_percent,
 )
 
+from ..record_file import Column, Record, Sampler, column_name, read_record
 from . import linear, roads
+
+log = logging.getLogger(__name__)
 
 #: Mixed into the instances' seed so the data's streams never equal an optimizer's
 #: (``SeedSequence(seed, spawn_key=(i,))``) at equal seeds.
@@ -60,6 +65,16 @@ def _check(checks: list[tuple[str, bool, str]], config: Any) -> None:
     for key, ok, allowed in checks:
         if not ok:
             raise ConfigError(f"problem.{key}", getattr(config, key), allowed)
+
+
+@dataclasses.dataclass(frozen=True)
+class RecordFileConfig:
+    """``file``: a CSV record of one's own vehicle fitted instead of the simulated one (any
+    rate and start time, the measured channels by name, units optional, the inputs as
+    columns where the configuration does not define them; docs/own-record.md). The problem
+    then has no truth and no noise is added."""
+
+    file: str | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -82,9 +97,12 @@ class SuiteConfig(ProblemConfig):
     record: str = "exact"
     record_substeps: int = 10
     objective: str = "eq3"
+    reference: RecordFileConfig = dataclasses.field(default_factory=RecordFileConfig)
 
     def __post_init__(self) -> None:
-        estimators.check_objective(self.objective, self.noise_level)
+        # a user's record states no noise level (noise_level is what simulated records add)
+        estimators.check_objective(self.objective, self.noise_level
+                                   if self.reference.file is None else None)
         _check([
             ("truth", self.truth in ("random", "set"), "one of random, set"),
             ("record", self.record in ("exact", "newmark"), "one of exact, newmark"),
@@ -140,6 +158,31 @@ class RideModel:
         """The wheels of the model at ``speed`` m/s."""
         raise NotImplementedError
 
+    #: The record columns of each wheel's road height (m), in the order of :meth:`wheels`.
+    wheel_names: ClassVar[tuple[str, ...]] = ()
+
+    def record_columns(self) -> tuple[Column, ...]:
+        """The input columns a user's record may carry: each wheel's road height (m)."""
+        return tuple(Column(n, "m") for n in self.wheel_names)
+
+    def needs_record_inputs(self, config: Any) -> str | None:
+        """Why a user's record must carry its inputs, or ``None`` when the configuration
+        defines them (a hump, a bump, a step)."""
+        if getattr(config, "road", None) == "iso8608":
+            return ("road=iso8608 is a random road, which a record must carry: the road "
+                    "height under each wheel; or set problem.road to hump, bump or step")
+        return None
+
+    def check_record(self, record: Record) -> None:
+        """Refuse a record this model cannot use beyond its columns (default: none)."""
+
+    def inputs_from_record(self, record: Record, sampler: Sampler) -> np.ndarray:
+        """The model's input channels ``(steps, r)`` from a record's input columns: each
+        wheel's height interpolated linearly onto the model's steps, its rate by central
+        differences there (as :func:`wheel_inputs`)."""
+        h = sampler.onto_steps(record.t, record.inputs)
+        return np.concatenate([h, np.gradient(h, sampler.dt, axis=0)], axis=1)
+
     def inputs(self, config: Any, known: dict[str, float], dt: float,
                rng: np.random.Generator) -> np.ndarray:
         """The input channels ``(N, r)`` sampled every ``dt`` s over the record (default:
@@ -169,6 +212,27 @@ class RideModel:
         if solver == "exact":
             return linear.simulate(linear.exact_foh(system, dt), u)
         return linear.newmark_outputs(system, dt, u)
+
+
+def check_record_file(config: Any, model: RideModel) -> None:
+    """Read ``reference.file`` once when a config is built, so a file that does not fit
+    fails the command's pre-flight (exit 2, one line) rather than the job."""
+    if config.reference.file is not None:
+        read_ride_record(model, config)
+
+
+def read_ride_record(model: RideModel, config: Any) -> Record:
+    """A user's record for ``model`` under ``config`` (``reference.file``): the configured
+    sensors' channels by their column names (:func:`.record_file.column_name`: ``zs''`` is
+    ``zsdd``), the model's input columns where given (required where
+    :meth:`RideModel.needs_record_inputs` says so). Raises :class:`ConfigError` naming the
+    column, row or time problem."""
+    channels = tuple(Column(column_name(c), unit, (c,)) for c, unit in
+                     model.sensors[config.sensors])
+    record = read_record(config.reference.file, channels, model.record_columns(),
+                         model.needs_record_inputs(config))
+    model.check_record(record)
+    return record
 
 
 def track_profile(cfg: RideConfig, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -211,6 +275,11 @@ class RideProblem(Problem):
         published = self.model.sets[config.parameter_set]
         self.nominal = np.array([published[k] for k in self.model.names])
         self.known = {k: v for k, v in published.items() if k not in self.model.names}
+        #: How the model meets a user's record (None: the simulated record, on its grid).
+        self.sampler: Sampler | None = None
+        if config.reference.file is not None:
+            self._from_file(config)
+            return
         streams = instance_streams(config.seed, index)
         truth_rng, road_rng, noise_rng = (np.random.default_rng(s) for s in streams)
         factors = truth_rng.uniform(1 - config.spread, 1 + config.spread, self.nominal.size)
@@ -235,6 +304,35 @@ class RideProblem(Problem):
         self.weights = estimators.weights(config.objective, self.measured,
                                           1.0 / self.scale[:, None], plug_in)
 
+    def _from_file(self, config: RideConfig) -> None:
+        """A user's record (``reference.file``): no truth, no noise added; the model at
+        rest at the record's first row, integrated at ``dt`` over its span, its inputs
+        from the record's columns or the configuration (docs/own-record.md)."""
+        record = read_ride_record(self.model, config)
+        self.sampler = sampler = Sampler(record.t, config.dt)
+        if record.inputs is not None:
+            self.u = self.model.inputs_from_record(record, sampler)
+        else:  # the configured input (a hump, a bump, a step, a manoeuvre) over the steps
+            span = types.SimpleNamespace(**vars(config))
+            span.duration_s = sampler.steps.size * config.dt
+            self.u = self.model.inputs(span, self.known, config.dt, None)
+        self.record_info = sampler.describe(record)
+        log.info("%s", self.record_info)
+        self._x_true = None
+        self.t = record.t
+        self.clean = None
+        self.sigma = None
+        self.measured = record.outputs
+        self.scale = np.linalg.norm(self.measured, axis=1)
+        if np.any(self.scale <= 0):
+            c = self.channels[int(np.flatnonzero(self.scale <= 0)[0])][0]
+            raise ConfigError("problem.reference.file", config.reference.file,
+                              f"a record in which every measured channel moves (column "
+                              f"{column_name(c)} is zero throughout)")
+        # ml is refused for a user's record (no stated noise): no plug-in sigma
+        self.weights = estimators.weights(config.objective, self.measured,
+                                          1.0 / self.scale[:, None], None)
+
     def _record(self, fine_u: np.ndarray, sub: int) -> np.ndarray:
         """The true vehicle's clean channels ``(p, N)`` sampled every ``dt``."""
         dt = self.config.dt / sub
@@ -253,8 +351,9 @@ class RideProblem(Problem):
         return Bounds(lower, upper, self.model.names, self.model.units)
 
     @property
-    def x_true(self) -> np.ndarray:
-        return self._x_true.copy()
+    def x_true(self) -> np.ndarray | None:
+        """The instance's truth; ``None`` for a user's record (no truth)."""
+        return None if self._x_true is None else self._x_true.copy()
 
     def responses(self, X: np.ndarray) -> np.ndarray:
         """The fitted model's channels ``(n, p, N)`` for the rows of ``X``; NaN rows for a
@@ -264,8 +363,9 @@ class RideProblem(Problem):
         ok = self.model.physical(X, self.known)
         if np.any(ok):
             with np.errstate(all="ignore"):
-                out[ok] = self.model.simulate(X[ok], self.known, self.config.sensors, self.u,
-                                              self.config.dt, "newmark").transpose(0, 2, 1)
+                y = self.model.simulate(X[ok], self.known, self.config.sensors, self.u,
+                                        self.config.dt, "newmark").transpose(0, 2, 1)
+                out[ok] = y if self.sampler is None else self.sampler.at_record(y)
         return out
 
     def _weighted(self, X: np.ndarray) -> np.ndarray:
@@ -295,8 +395,9 @@ class RideProblem(Problem):
         return estimators.groups(self.config.objective, self.measured.shape[0], self.t.size)
 
     def residual_sigma(self) -> np.ndarray | None:
-        """The simulated noise's sigma of each channel of :meth:`fisher_residuals`, ``(p,)``."""
-        if self.config.noise_level <= 0:
+        """The simulated noise's sigma of each channel of :meth:`fisher_residuals`, ``(p,)``;
+        ``None`` for a user's record (no noise was simulated)."""
+        if self.config.noise_level <= 0 or self.sigma is None:
             return None
         return self.sigma / self.scale
 
@@ -308,15 +409,30 @@ class RideProblem(Problem):
 
     def metrics(self, x: np.ndarray) -> dict[str, float]:
         """``{"NoRE": ...}``: the norm of the relative errors against this instance's truth
-        (percent)."""
+        (percent); none for a user's record (no truth)."""
+        if self._x_true is None:
+            return {}
         return {"NoRE": float(np.linalg.norm(relative_errors_percent(x, self._x_true)))}
+
+    def content_digest(self) -> str | None:
+        """The SHA-256 of a user's record file (it enters every run id: an edited record
+        runs again on resume), else ``None`` (the config defines the record)."""
+        if self.sampler is None:
+            return None
+        import hashlib
+        from pathlib import Path
+
+        return hashlib.sha256(Path(self.config.reference.file).read_bytes()).hexdigest()
 
     # --- instances ----------------------------------------------------------------------
     def instance(self, index: int) -> RideProblem:
-        return self if index == self._index else type(self)(self.config, index)
+        """Instance ``index``; a user's record is every instance's."""
+        if index == self._index or self.sampler is not None:
+            return self
+        return type(self)(self.config, index)
 
     def instance_id(self) -> str | None:
-        return f"seed={self.config.seed}/{self._index}"
+        return None if self.sampler is not None else f"seed={self.config.seed}/{self._index}"
 
     # --- signals ------------------------------------------------------------------------
     def signal_units(self) -> dict[str, str]:
@@ -332,8 +448,14 @@ class RideProblem(Problem):
 
     def describe(self) -> dict[str, Any]:
         cfg = self.config
+        if self.sampler is not None:
+            return {"samples": int(self.t.size), "known": dict(self.known),
+                    "record": {"source": "file", "file": str(cfg.reference.file),
+                               "info": self.record_info},
+                    "fitted_model": {"solver": "Newmark average acceleration",
+                                     "dt_s": cfg.dt}}
         exact = cfg.record == "exact"
-        return {
+        info = {
             "samples": int(self.t.size),
             "known": dict(self.known),
             "record": {"solver": "exact first-order hold" if exact
@@ -346,3 +468,9 @@ class RideProblem(Problem):
             "f_at_true": float(self.evaluate(self._x_true[None])[0]),
             "metric_units": {"NoRE": "%"},
         }
+        richer = getattr(cfg, "record_model", "linear")
+        if richer != "linear":  # the report explains a floor below the bound by it
+            from .richer import DESCRIPTIONS
+
+            info["model_error"] = {"record_model": richer, "what": DESCRIPTIONS[richer]}
+        return info

@@ -7,6 +7,9 @@ damper ``cs`` above the unsprung mass ``mu`` (wheel, height zu), on the tyre (st
     ms zs'' + cs (zs' - zu') + ks (zs - zu) = 0
     mu zu'' - cs (zs' - zu') - ks (zs - zu) + ct zu' + kt zu = kt h + ct h'
 
+**Model error** (``record_model=bilinear_damper``): the record's damper is bilinear
+(:mod:`.richer`), the fitted one linear.
+
 **Known quantity: the tyre.** With a road as input and only kinematic outputs, scaling every
 mass, stiffness and damping by one factor leaves the record unchanged; the tyre (``kt``,
 ``ct``, measured on a tyre rig) is therefore known and ``ms, mu, ks, cs`` are identified.
@@ -21,10 +24,11 @@ from typing import Literal
 import numpy as np
 
 from . import linear
-from .problem import RideConfig, RideModel, RideProblem, Wheel
+from .problem import RideConfig, RideModel, RideProblem, Wheel, check_record_file
 
 
 class QuarterCar(RideModel):
+    wheel_names = ("h",)
     names = ("ms", "mu", "ks", "cs")
     units = ("kg", "kg", "N/m", "N s/m")
     sets = {
@@ -76,7 +80,14 @@ class RideQuarterConfig(RideConfig):
 
     parameter_set: Literal["golden_car", "quarter_bus"] = "golden_car"
     sensors: Literal["body", "body_wheel", "body_wheel_stroke"] = "body_wheel"
+    #: The model that makes the record: ``linear`` (the fitted model's equations) or
+    #: ``bilinear_damper`` (:mod:`.richer`: the linear model fitted with model error).
+    record_model: Literal["linear", "bilinear_damper"] = "linear"
 
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_record_file(self, QuarterCar())
 
 class RideQuarterProblem(RideProblem):
     """The quarter car identified from a road record."""
@@ -85,3 +96,15 @@ class RideQuarterProblem(RideProblem):
     name = "ride_quarter"
     family = "quarter car"
     model = QuarterCar()
+
+    def _record(self, fine_u: np.ndarray, sub: int) -> np.ndarray:
+        """The linear model's record, or with ``record_model=bilinear_damper`` the bilinear
+        damper's (:func:`.richer.bilinear_quarter`, RK4 at the record's fine step)."""
+        if self.config.record_model == "linear":
+            return super()._record(fine_u, sub)
+        from .richer import QUARTER_CHANNELS, bilinear_quarter
+
+        y = bilinear_quarter(self._x_true, self.known["kt"], self.known["ct"], fine_u,
+                             self.config.dt / sub)
+        keep = [QUARTER_CHANNELS[c] for c, _ in self.channels]
+        return y[::sub, keep].T

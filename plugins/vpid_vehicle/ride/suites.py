@@ -4,10 +4,11 @@ suite it belongs to, so ``vpid-bench -m suite=smoke optimizer=...`` sweeps them.
 
 * ``smoke``: every family once, short records and a small protocol (``iterations=10``), for a
   first look in minutes;
-* ``vpid1``: the suite proper, 15 problems over the four families (quarter, half and full car,
+* ``vpid1``: the suite proper, 17 problems over the four families (quarter, half and full car,
   single-track lateral), dimensions 4 to 9, three road inputs and two manoeuvres, every sensor
-  set, one problem with model error (the linear model fitted to a Magic Formula record) and
-  one with several basins (the Magic Formula model).
+  set, three problems whose record comes from a richer model than the fitted one (a bilinear
+  damper, a seat mass, Magic Formula tyres: model error, :mod:`.richer` and
+  :mod:`.model_error`) and one with several basins (the Magic Formula model).
 
 A member's keys can still be changed on the command line; its defaults are what makes it the
 member (docs/suite.md lists them).
@@ -65,11 +66,15 @@ MEMBERS: tuple[type, ...] = (
            speed_kmh=80.0, sensors="body"),
     member(RideQuarterProblem, "vpid1_q_bus_step", ("vpid1",), parameter_set="quarter_bus",
            road="step", sensors="body_wheel_stroke"),
+    member(RideQuarterProblem, "vpid1_q_golden_bilinear", ("vpid1",),
+           record_model="bilinear_damper"),
     member(RideHalfProblem, "vpid1_h_gokdag_bump", ("vpid1",), road="bump", speed_kmh=20.0),
     member(RideHalfProblem, "vpid1_h_gokdag_iso_b", ("vpid1",), road="iso8608",
            road_class="B", speed_kmh=60.0, sensors="body_pitch_rate"),
     member(RideHalfProblem, "vpid1_h_jazar_hump", ("vpid1",), parameter_set="jazar_half",
            sensors="body_wheel"),
+    member(RideHalfProblem, "vpid1_h_gokdag_seat_iso_c", ("vpid1",), record_model="seat",
+           road="iso8608", speed_kmh=60.0),
     member(RideFullProblem, "vpid1_f_jazar_hump", ("vpid1",)),
     member(RideFullProblem, "vpid1_f_jazar_iso_c", ("vpid1",), road="iso8608",
            speed_kmh=60.0, sensors="body_rates"),

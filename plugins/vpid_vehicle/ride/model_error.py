@@ -1,0 +1,91 @@
+"""How large a member's model error is against its noise: ``python -m
+vpid_vehicle.ride.model_error [member ...]`` prints it (docs/suite.md shows the table).
+
+For a member whose record comes from a richer model (``record_model``, :mod:`.richer`), the
+*model error* is what the fitted model cannot reproduce of the clean record whatever its
+parameters. Per instance, with ``σ_c`` the member's noise on channel ``c`` (``noise_level x``
+the clean channel's rms):
+
+* ``ratio``: the rms over every sample of ``(clean_c − fitted_c(θ̂)) / σ_c`` at the fitted
+  model's best fit ``θ̂`` to the *clean* record (weighted least squares from the truth,
+  inside the box): the misfit no parameter removes, in units of the noise. ``≥ 1``: the
+  model error is at least as large as the noise;
+* ``ratio_at_truth``: the same at the truth (the fitted model with the richer model's
+  parameters; larger, since the fit absorbs part of the difference);
+* ``bias_nore``: the NoRE (%) of ``θ̂`` from the truth: the error the model error alone
+  leaves, with no noise at all (an estimator's floor cannot go below it in expectation).
+
+A member whose record is made by the fitted model's own equations has ``ratio`` of the order
+of its discretisation error (``record=exact`` against Newmark), far below 1.
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Any
+
+import numpy as np
+
+from vpid_bench import relative_errors_percent
+
+
+def model_error(problem: Any) -> dict[str, Any]:
+    """The model error of one ride or lateral problem instance (see the module)."""
+    from scipy.optimize import least_squares
+
+    clean, sigma = problem.clean, problem.sigma
+    x_true = problem.x_true
+    b = problem.bounds
+    scale = np.abs(x_true)
+
+    def whitened(z: np.ndarray) -> np.ndarray:
+        fitted = problem.responses((z * scale)[None])[0]
+        r = ((clean - fitted) / sigma[:, None]).reshape(-1)
+        return np.where(np.isfinite(r), r, 1e6)
+
+    z0 = np.ones(x_true.size)
+    fit = least_squares(whitened, z0, bounds=(b.lower / scale, b.upper / scale),
+                        x_scale=1.0, xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=2000)
+    x_fit = fit.x * scale
+
+    def rms(z: np.ndarray) -> float:
+        return float(np.sqrt(np.mean(whitened(z) ** 2)))
+
+    return {"ratio": rms(fit.x), "ratio_at_truth": rms(z0),
+            "bias_nore": float(np.linalg.norm(relative_errors_percent(x_fit, x_true))),
+            "x_fit": x_fit.tolist(), "noise_level": float(problem.config.noise_level)}
+
+
+def members_with_model_error() -> list[type]:
+    """The ``vpid1`` members whose record comes from a richer model."""
+    from .suites import MEMBERS
+
+    return [m for m in MEMBERS if "vpid1" in m.suites
+            and getattr(m.Config(), "record_model", "linear") != "linear"]
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Print each member's model error (instance 0; all model-error members by default)."""
+    from .suites import MEMBERS
+
+    names = list(sys.argv[1:] if argv is None else argv)
+    by_name = {m.name: m for m in MEMBERS}
+    unknown = [n for n in names if n not in by_name]
+    if unknown:
+        print(f"error: no suite member {unknown[0]!r}; allowed: {', '.join(sorted(by_name))}",
+              file=sys.stderr)
+        return 2
+    members = [by_name[n] for n in names] if names else members_with_model_error()
+    print("member | record model | noise level | model error / noise (at the fit) | "
+          "at the truth | NoRE of the noise-free fit (%)")
+    for cls in members:
+        p = cls(cls.Config())
+        out = model_error(p)
+        print(f"{cls.name} | {getattr(p.config, 'record_model', 'linear')} | "
+              f"{out['noise_level']:g} | {out['ratio']:.3g} | {out['ratio_at_truth']:.3g} | "
+              f"{out['bias_nore']:.3g}")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover - the command
+    raise SystemExit(main())

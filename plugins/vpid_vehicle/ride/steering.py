@@ -1,0 +1,81 @@
+"""What the single-track models share: their sensor sets and the steering manoeuvres.
+
+Both single-track models (:mod:`.lateral`, linear tyres; :mod:`.magic`, Magic Formula tyres)
+read them from here, so the two modules import in one direction only: :mod:`.lateral` uses
+:mod:`.magic` (its record with model error is made by the Magic Formula model), never the
+other way round.
+
+**Manoeuvres** (``manoeuvre``): ``step`` (the steer ramps to ``steer_deg`` over 0.2 s from
+0.5 s on and holds), ``sine`` (``steer_deg`` amplitude at ``sine_hz`` from 0.5 s on); the steer
+angle is at the road wheels, in rad. A user's record may carry the steer angle and the speed
+instead (:class:`SteeredRecord`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from vpid_bench import ConfigError
+
+from ..record_file import Column, Record, Sampler
+
+#: The measured channels of each sensor set, with their units.
+SENSORS: dict[str, tuple[tuple[str, str], ...]] = {
+    "yaw": (("r", "rad/s"),),
+    "yaw_ay": (("r", "rad/s"), ("ay", "m/s²")),
+    "yaw_ay_beta": (("r", "rad/s"), ("ay", "m/s²"), ("beta", "rad")),
+}
+
+
+def steer_input(config: Any, dt: float) -> np.ndarray:
+    """The steer angle at the road wheels (rad) of the configured manoeuvre, sampled every
+    ``dt`` s over ``config.duration_s``, ``(N, 1)``."""
+    t = np.arange(round(config.duration_s / dt)) * dt
+    amp = np.deg2rad(config.steer_deg)
+    if config.manoeuvre == "step":
+        delta = amp * np.clip((t - 0.5) / 0.2, 0.0, 1.0)
+    else:
+        delta = np.where(t >= 0.5, amp * np.sin(2 * np.pi * config.sine_hz * (t - 0.5)), 0)
+    return delta[:, None]
+
+
+#: How far a record's speed may stray from its mean (fraction): both single-track models hold
+#: the forward speed constant.
+SPEED_TOLERANCE = 0.02
+
+
+class SteeredRecord:
+    """A user's record for a single-track model: its inputs, when it carries them, are the
+    steer angle at the road wheels ``delta`` (rad) and the forward speed ``vx`` (m/s); the
+    configured manoeuvre and ``speed_kmh`` stand for them otherwise."""
+
+    vx: float
+
+    def record_columns(self) -> tuple[Column, ...]:
+        return (Column("delta", "rad"), Column("vx", "m/s"))
+
+    def needs_record_inputs(self, config: Any) -> str | None:
+        return None  # the configured manoeuvre is deterministic
+
+    def check_record(self, record: Record) -> None:
+        """Refuse a record whose ``vx`` strays more than :data:`SPEED_TOLERANCE` from its
+        mean (the models hold the speed constant), naming the first such row."""
+        if record.inputs is None:
+            return
+        vx = record.inputs[:, 1]
+        mean = float(np.mean(vx))
+        off = np.abs(vx - mean) > SPEED_TOLERANCE * abs(mean)
+        if mean <= 0 or np.any(off):
+            k = int(np.flatnonzero(off)[0]) if np.any(off) else 0
+            raise ConfigError("problem.reference.file", record.path,
+                              f"a column vx (m/s) > 0 held within {100 * SPEED_TOLERANCE:g} % "
+                              f"of its mean {mean:.4g} m/s (the single-track models hold the "
+                              f"speed constant); data row {k + 1} has {vx[k]:.4g} m/s")
+
+    def inputs_from_record(self, record: Record, sampler: Sampler) -> np.ndarray:
+        """The steer angle interpolated linearly onto the model's steps ``(steps, 1)``; the
+        model's speed becomes the record's mean ``vx`` (checked by :meth:`check_record`)."""
+        self.vx = float(np.mean(record.inputs[:, 1]))
+        return sampler.onto_steps(record.t, record.inputs[:, :1])
