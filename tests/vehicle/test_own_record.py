@@ -139,6 +139,23 @@ def test_a_lateral_member_takes_steer_and_speed_from_the_record(tmp_path):
     assert q.evaluate(src.x_true[None])[0] < 0.01 < q.evaluate(0.8 * src.x_true[None])[0]
 
 
+def test_the_noise_model_of_a_users_record_is_never_assumed(tmp_path):
+    """ml weighs samples by a stated noise: refused for a record (the configured level is
+    the simulation's); ml_profiled, which estimates each channel's sigma, is accepted."""
+    from vpid_bench import ConfigError
+
+    src = RideQuarterProblem(RideQuarterConfig(dt=0.002))
+    path = _write(tmp_path / "q.csv", "t,zsdd,zudd", [src.t, src.measured[0], src.measured[1]])
+    ref = RecordFileConfig(str(path))
+    with pytest.raises(ConfigError, match="no noise level is stated for this record"):
+        RideQuarterConfig(objective="ml", reference=ref)
+    vpath = _write(tmp_path / "v.csv", "t,z1dd,z2dd", [src.t, src.measured[0], src.measured[1]])
+    with pytest.raises(ConfigError, match="no noise level is stated for this record"):
+        make(**{"reference.file": str(vpath), "objective": "ml"})
+    q = RideQuarterProblem(RideQuarterConfig(objective="ml_profiled", reference=ref))
+    assert np.isfinite(q.evaluate(src.x_true[None])[0])
+
+
 # --- the issue's case, end to end --------------------------------------------------------------
 def _run(tmp_path, problem_cls, config, name):
     from vpid_bench.experiment import run_job
