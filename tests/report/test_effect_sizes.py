@@ -65,13 +65,15 @@ def test_the_floor_is_the_permutation_resolution():
 
 
 def test_methods_the_tests_do_not_separate_are_not_called_equivalent_beyond_the_margin():
-    from vpid_bench.report.first_screen import EQUIVALENCE_MARGIN, ContextResult, _not_equivalent
+    from vpid_bench.report.first_screen import verdict_text
+    from vpid_bench.report.verdicts import EQUIVALENCE_MARGIN, Evidence, Method, decide
 
-    res = ContextResult("c", "NoRE", "%", [], [], 1.0, 1.0, "", True)
-    rows = [{"algorithm": "a", "median": 10.0}, {"algorithm": "b", "median": 10.5},
-            {"algorithm": "c", "median": 15.0}]
-    assert _not_equivalent(res, "a", ["b"], rows) == ""  # 5 %: within the margin
-    text = _not_equivalent(res, "a", ["b", "c"], rows)
+    def verdict(*medians):
+        methods = tuple(Method(n, 10, m, "a") for n, m in zip("abc", medians, strict=False))
+        return decide(Evidence("ctx", "NoRE", "%", methods, True, (), references=()))
+
+    assert "differ by up to" not in verdict_text(verdict(10.0, 10.5))  # 5 %: within
+    text = verdict_text(verdict(10.0, 10.5, 15.0))
     assert "differ by up to 50 %" in text and f"{100 * EQUIVALENCE_MARGIN:g} % margin" in text
 
 
@@ -86,3 +88,25 @@ def test_mann_whitney_with_one_run_and_ties_gives_a_p_not_an_error():
     u, p, how = mann_whitney(np.array([1.0]), np.array([1.0, 2.0, 2.0, 3.0]))
     assert 0 < p < 1 and how == "normal approximation"
     assert mann_whitney(np.array([1.0]), np.array([2.0]))[1:] == (1.0, "exact")
+
+
+def test_a_friedman_p_at_the_permutation_floor_is_printed_as_a_bound():
+    """30 blocks ranking three optimizers alike: no permutation of 9999 is as extreme, so p is
+    the test's resolution 1/10000 and the report prints it as a bound; with 5 blocks and 3
+    optimizers the p is exact (6^5 arrangements) and is printed as a value."""
+    import pandas as pd
+
+    from vpid_bench.report.body import _friedman_md
+    from vpid_bench.report.stats import friedman_on_table
+
+    rng = np.random.default_rng(0)
+    base = rng.random(30)[:, None]
+    table = pd.DataFrame(base + np.array([0.0, 1.0, 2.0]), columns=["a", "b", "c"])
+    fr = friedman_on_table(table)
+    assert fr.p == pytest.approx(1 / (N_RESAMPLES + 1)) and fr.p_at_floor
+    text = " ".join(" ".join(_friedman_md(fr, "Across", 0.05, "")).split())
+    assert "p≤0.0001 (permutation" in text and "p = " not in text
+    exact = friedman_on_table(table.iloc[:5])
+    assert exact.p_method.startswith("exact") and not exact.p_at_floor
+    assert f"p={exact.p:.2g} (exact" in " ".join(" ".join(_friedman_md(exact, "A", 0.05,
+                                                                      "")).split())

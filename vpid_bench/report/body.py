@@ -154,14 +154,17 @@ def _friedman_md(fr: Any, label: str, alpha: float, files: str) -> list[str]:
     sig = fr.wilcoxon[fr.wilcoxon["significant"]]
     return [para(f"{label}: {len(fr.blocks)} blocks ({fr.kind}); optimizers present in every "
                  f"block: {escape(', '.join(fr.algorithms))}. Friedman χ² = "
-                 f"{render.fmt(fr.statistic)}, p = {render.fmt(fr.p)} ({fr.p_method}). "
+                 f"{render.fmt(fr.statistic)}, {render.p_text(fr.p, fr.p_at_floor)} "
+                 f"({fr.p_method}). "
                  f"{fr.note}"), "",
             para("Mean rank per optimizer (1 = best): " + ", ".join(
                 f"{escape(a)} {r:.2f}" for a, r in fr.mean_ranks.items())), "",
             para(f"Pairwise Wilcoxon signed-rank over the blocks, Holm-corrected: {len(sig)} of "
                  f"{len(fr.wilcoxon)} pairs significant (p_holm < {alpha})"
-                 + (": " + "; ".join(f"{escape(r.a)} vs {escape(r.b)} (p_holm={r.p_holm:.2g})"
-                                     for r in sig.itertuples()) if len(sig) else "")
+                 + (": " + "; ".join(
+                     f"{escape(r.a)} vs {escape(r.b)} "
+                     f"({render.p_text(r.p_holm, bool(r.p_at_floor), 'p_holm')})"
+                     for r in sig.itertuples()) if len(sig) else "")
                  + f". {files}"), ""]
 
 
@@ -191,7 +194,8 @@ def tests_md(kw: Any, pairs: Any, fr: Any, alpha: float,
                 ["better", "worse", "median better", "median worse", "p_holm", "A12", "effect"],
                 [[r.better, r.b if r.better == r.a else r.a,
                   r.median_a if r.better == r.a else r.median_b,
-                  r.median_b if r.better == r.a else r.median_a, r.p_holm,
+                  r.median_b if r.better == r.a else r.median_a,
+                  render.p_text(r.p_holm, bool(r.p_at_floor), "").lstrip("="),
                   r.A12 if r.better == r.a else 1 - r.A12, r.effect]
                  for r in sig.itertuples()], keep=2), ""]
     lines += ["### Friedman across blocks", "",

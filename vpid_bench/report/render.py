@@ -57,6 +57,12 @@ def fmt(value: Any, digits: int = 4) -> str:
     return f"{x:.{digits}g}"
 
 
+def p_text(p: float, bound: bool, name: str = "p") -> str:
+    """A p-value as text: ``p=0.012``, or ``p≤0.0002`` where it is a permutation test's
+    smallest value (``bound``): the true p may be smaller still."""
+    return f"{name}{'≤' if bound else '='}{float(p):.2g}"
+
+
 def format_column(values: Sequence[Any], digits: int = 4) -> list[str]:
     """Every value of one column in the same number format (see the module docstring)."""
     nums = [_number(v) for v in values]

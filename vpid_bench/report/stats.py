@@ -276,9 +276,19 @@ def _draw_counts(idx: np.ndarray, n: int) -> np.ndarray:
     return np.bincount(flat, minlength=rows * n).reshape(rows, n).astype(float)
 
 
-def p_floor(method: str) -> float:
-    """The smallest p a test's method can give (a permutation test's resolution), else 0."""
-    return 2.0 / (N_RESAMPLES + 1) if method.startswith("permutation") else 0.0
+def p_floor(method: str, two_sided: bool = True) -> float:
+    """The smallest p a test's method can give (a permutation test's resolution: scipy's
+    ``(hits + 1) / (N_RESAMPLES + 1)``, doubled for a two-sided test), else 0."""
+    if not method.startswith("permutation"):
+        return 0.0
+    return (2.0 if two_sided else 1.0) / (N_RESAMPLES + 1)
+
+
+def at_floor(p: float, method: str, two_sided: bool = True) -> bool:
+    """Whether ``p`` is the permutation test's smallest: the true p may be smaller, so the
+    value is printed as a bound (``p≤...``)."""
+    floor = p_floor(method, two_sided)
+    return bool(floor and math.isfinite(p) and p <= floor * (1 + 1e-9))
 
 
 #: The name of each pairwise test as the tables give it.
@@ -335,9 +345,7 @@ def pairwise_by_context(df: Any, alpha: float = ALPHA, value: str = "metric") ->
             block.append(row)
         for row, p_adj in zip(block, holm([r["p"] for r in block]), strict=True):
             row["p_holm"] = p_adj
-            floor = p_floor(row["p_method"])
-            row["p_at_floor"] = bool(floor and np.isfinite(row["p"])
-                                     and row["p"] <= floor * (1 + 1e-9))
+            row["p_at_floor"] = at_floor(float(row["p"]), row["p_method"])
             row["significant"] = bool(np.isfinite(p_adj) and p_adj < alpha)
             row["better"] = row.pop("_lower") if row["significant"] else ""
             row.pop("_lower", None)
@@ -427,6 +435,7 @@ class FriedmanResult:
     statistic: float = float("nan")
     p: float = float("nan")
     p_method: str = ""
+    p_at_floor: bool = False  # p is the permutation test's smallest: a bound
     mean_ranks: Any = None  # Series algorithm -> mean rank (1 = best)
     nemenyi: Any = None  # DataFrame of p-values
     wilcoxon: Any = None  # DataFrame a, b, n_blocks, W, p, p_method, p_holm, significant
@@ -489,6 +498,7 @@ def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts"
     values = table.to_numpy(float)
     res.mean_ranks = table.rank(axis=1, method="average").mean().sort_values()
     res.statistic, res.p, res.p_method = friedman_test(values)
+    res.p_at_floor = at_floor(res.p, res.p_method, two_sided=False)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res.nemenyi = pd.DataFrame(nemenyi_friedman(values), index=algos, columns=algos)
@@ -496,7 +506,8 @@ def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts"
     for a, b in itertools.combinations(algos, 2):
         x, y = table[a].to_numpy(float), table[b].to_numpy(float)
         w, p, how = wilcoxon_paired(x, y)
-        rows.append({"a": a, "b": b, "n_blocks": len(x), "W": w, "p": p, "p_method": how})
+        rows.append({"a": a, "b": b, "n_blocks": len(x), "W": w, "p": p, "p_method": how,
+                     "p_at_floor": at_floor(p, how)})
     for row, p_adj in zip(rows, holm([r["p"] for r in rows]), strict=True):
         row["p_holm"] = p_adj
         row["significant"] = bool(np.isfinite(p_adj) and p_adj < alpha)

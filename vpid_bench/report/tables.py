@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from .render import p_text
+
 #: The optimizer every report compares against by default (random search).
 BASELINE = "random"
 
@@ -150,7 +152,7 @@ def pair_detail(pair: Mapping[str, Any], first: str) -> str:
     from ``first`` (below 0.5: ``first`` tends to end lower); ``p_holm≤...`` when the raw p is
     the permutation test's smallest, so the value is a bound."""
     p = float(pair["p_holm"])
-    text = f"p_holm≤{p:.2g}" if bool(pair.get("p_at_floor", False)) else f"p_holm={p:.2g}"
+    text = p_text(p, bool(pair.get("p_at_floor", False)), "p_holm")
     a, lo, hi = (float(pair.get(k, np.nan)) for k in ("A12", "A12_lo", "A12_hi"))
     if pair["a"] != first:  # the row holds A12(a, b); seen from b it is 1 - A12
         a, lo, hi = 1 - a, 1 - hi, 1 - lo
