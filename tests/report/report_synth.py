@@ -103,3 +103,41 @@ def html_sweep(root: Path, short: bool = False, evil: str = EVIL) -> Path:
 
     build_report([root], out, short=short, archive=False)
     return out
+
+
+def optimum_file(folder: Path, problem: str, instance: str, x_opt: np.ndarray, f_opt: float,
+                 true: np.ndarray) -> Path:
+    """An instance optimum file as a job writes it (``optima/<name>.json``)."""
+    import json
+
+    data = {"schema": "vpid-bench/instance-optimum/1", "problem": problem,
+            "instance": instance, "settings": {"ps": 20, "iterations": 4},
+            "x_opt": list(map(float, x_opt)), "f_opt": f_opt, "f_true": 1.2 * f_opt,
+            "metrics": {"NoRE": nore(x_opt, true)}, "starts": 3}
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{problem}-{instance}.json"
+    path.write_text(json.dumps(data), encoding="utf-8")
+    return path
+
+
+def paired_sweep(root: Path, problem: str = "vehicle", ps: tuple[int, ...] = (20,),
+                 instances: int = 6) -> Path:
+    """Two optimizers on ``problem`` at each population size of ``ps``, run i on instance i
+    (ids set: the runs pair), with every instance's optimum: ``good`` reaches it, ``slow``
+    ends 10 % above it in f."""
+    for k in range(instances):
+        x_opt = OV * (1 + 0.1 * np.cos(np.arange(9) + k))
+        optimum_file(root / "optima", problem, f"inst{k}", x_opt, 0.1 + 0.01 * k, OV)
+    for size in ps:
+        for algo, factor in (("good", 1.0), ("slow", 1.1)):
+            recs = []
+            for k in range(instances):
+                fo = 0.1 + 0.01 * k
+                x = OV * (1 + 0.1 * np.cos(np.arange(9) + k)) * (1 + 0.01 * (factor - 1))
+                r = record(problem=problem, optimizer=algo, ps=size, run_index=k, x=x,
+                           f=fo * factor, names=PAPER_NAMES, true=OV,
+                           trace_best=[4 * fo, 2 * fo, 1.5 * fo, 1.2 * fo, fo * factor])
+                r["instance"]["id"] = f"inst{k}"
+                recs.append(r)
+            write_job(root / f"problem={problem},optimizer={algo},ps={size}", recs)
+    return root

@@ -200,6 +200,11 @@ def test_a_report_of_the_archive_alone_needs_no_run(made, tmp_path):
     assert {r["algorithm"] for r in rows} == {"random", "centre"} and len(rows) == 6
     assert all(float(r["rel_gap"]) >= 0 for r in rows)  # the archive's optima judge them
     assert report.failures == []
+    # the identifiability section uses the same optima as the rankings: it never says none
+    md = " ".join(report.report_md.read_text().split())
+    section = md.split("## Identifiability")[1]
+    assert "no instance optimum was found" not in section
+    assert "measured floor: median NoRE of the record optima x*" in section
 
 
 def test_the_per_job_files_travel_so_an_archive_alone_has_its_bounds(made, tmp_path):

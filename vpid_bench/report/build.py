@@ -247,12 +247,13 @@ def _write_headline(data: ReportData, extra: list[HeadlineColumn], names: _Names
 
 def _suite_scores(data: ReportData, registry: Any, names: _Names
                   ) -> tuple[SuiteScores | None, list[Path]]:
-    """The scores across the suite (none for fewer than two contexts with known optima),
-    their tables and figure (:mod:`.suite_scores`)."""
+    """The scores across the suite (none for fewer than two distinct problems with known
+    optima: two population sizes of one problem are one problem), their tables and figure
+    (:mod:`.suite_scores`)."""
     from . import suite_scores as ss
 
     facts = ss.context_facts(data.loaded.records, data.rows, ss.family_lookup(registry))
-    if len({h.context for h in data.hits}) < 2:
+    if len(ss.problems_scored(data.rows, data.hits)) < 2:
         return None, []
     rows, notes = ss.score_rows(data.hits, facts)
     ladder = ss.ladder_rows(data.hits, facts)

@@ -38,6 +38,7 @@ from ..records.io import stable_hash
 from .estimator_floors import read_estimator_floors
 from .estimator_floors import sentence as estimator_sentence
 from .load import first_file_by_context
+from .optima import opt_column_names
 from .safe import escape
 from .sections import Contribution, ReportContext, Section
 
@@ -273,10 +274,15 @@ def _floors(d: Mapping[str, Any], names: Sequence[str], metric: Any,
             optima: Mapping[str, Mapping[str, Any]]
             ) -> tuple[dict[Any, float], dict[Any, list[float]]]:
     """Per instance of a design: its optimum's metric, and its optimum's absolute relative
-    error per parameter (percent)."""
+    error per parameter (percent). The metric comes from the rows' floor column where the
+    report matched an optimum the files here do not hold (an archive's optima), so the
+    section never says "no optimum" while the rankings use one."""
     floors: dict[Any, float] = {}
     errors: dict[Any, list[float]] = {}
-    for rec in d["records"]:
+    column, _ = opt_column_names(d["rows"])
+    for rec, row in zip(d["records"], d["rows"], strict=True):
+        if column and _finite(row.get(column)):
+            floors.setdefault(_instance(rec), float(row[column]))
         opt = optima.get(rec["run_id"])
         if opt is None:
             continue
