@@ -4,44 +4,44 @@ came from a richer model."""
 
 from __future__ import annotations
 
-from vpid_bench.report.first_screen import ContextResult, _limits
+from vpid_bench.report.first_screen import verdict_text
 from vpid_bench.report.optima import on_edge
+from vpid_bench.report.verdicts import Evidence, Method, Search, decide
 
 
-def _res(floor, bound, model_error="", edge=(0, 0)):
-    r = ContextResult("p ps=20", "NoRE", "%", [], [], floor, bound, "", True)
-    r.model_error, r.on_edge = model_error, edge
-    return r
-
-
-SEARCHED = [{"algorithm": "lsq", "reached": 10, "n": 10, "rel_gap_median": 0.0}]
+def _limits(floor, bound, model_error="", edge=(0, 0)) -> str:
+    """The words of a verdict whose leader (lsq) reached every instance's optimum."""
+    lsq = Method("lsq", 10, floor, "", Search(10, 10, 0.0))
+    ev = Evidence("p ps=20", "NoRE", "%", (lsq,), False, floors={0: floor},
+                  bounds={0: bound}, model_error=model_error, on_edge=edge)
+    return verdict_text(decide(ev))
 
 
 def test_a_floor_below_the_bound_is_explained_by_model_error():
-    text = _limits(_res(1.0, 2.0, "a seat mass"), 1.0, SEARCHED, ["lsq"], False)
+    text = _limits(1.0, 2.0, "a seat mass")
     assert "below the bound, which only unbiased estimators must respect" in text
     assert "richer model than the fitted one (a seat mass)" in text
 
 
 def test_a_floor_below_the_bound_is_explained_by_the_box():
-    text = _limits(_res(1.0, 2.0, edge=(3, 10)), 1.0, SEARCHED, ["lsq"], False)
+    text = _limits(1.0, 2.0, edge=(3, 10))
     assert "the box holds the optimum on an edge in 3 of 10 instance(s)" in text
     assert "richer model" not in text
 
 
 def test_without_a_known_bias_the_text_says_so():
-    text = _limits(_res(1.0, 2.0), 1.0, SEARCHED, ["lsq"], False)
+    text = _limits(1.0, 2.0)
     assert "neither model error nor the box" in text
 
 
 def test_no_explanation_when_the_floor_is_above_the_bound():
-    assert "below the bound" not in _limits(_res(3.0, 2.0), 3.0, SEARCHED, ["lsq"], False)
+    assert "below the bound" not in _limits(3.0, 2.0)
 
 
 def test_a_floor_far_above_the_bound_with_model_error_blames_the_model_not_the_estimator():
-    text = _limits(_res(60.0, 20.0, "Magic Formula tyres"), 60.0, SEARCHED, ["lsq"], False)
+    text = _limits(60.0, 20.0, "Magic Formula tyres")
     assert "model error, which no estimator of the fitted model removes" in text
-    assert "a better estimator would" not in text
+    assert "estimator is the bottleneck" not in text
 
 
 def test_on_edge_reads_the_records_box():

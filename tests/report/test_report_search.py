@@ -196,7 +196,8 @@ def test_paired_report_ranks_twice_with_groups_and_explains_the_disagreement(tmp
     results = flat.split("## Rankings in detail")[0]
     assert "Ranked by NoRE, lower is better (floor 21.4)." in results
     assert ("Verdict for vehicle ps=20: use good (it gets closest to each record's own "
-            "optimum; against early: p_holm") in results  # the effect size beside the pick
+            "optimum; early ends nearer the truth by NoRE but searches worse; against early: "
+            "p_holm") in results  # the effect size beside the pick
     assert "A12=" in results.split("use good")[1].split(")")[0]
     assert "More search will not help here" in results
     assert ("The rankings of vehicle ps=20 disagree beyond ties (medians within 0.001 "

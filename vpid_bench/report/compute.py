@@ -17,7 +17,7 @@ from typing import Any
 from . import anytime, estimates, estimator_floors, rankings, tables
 from .identifiability import crb_norm_by_context
 from .load import LoadedRecords, NoRecordsError, load_records, reason, run_rows
-from .optima import add_optimum_columns, load_optima
+from .optima import add_optimum_columns, load_optima, opt_column_names
 
 
 @dataclasses.dataclass
@@ -94,6 +94,18 @@ class ReportData:
         value = found.pop() if len(found) == 1 else None
         return value if isinstance(value, str) and value.isidentifier() and len(value) <= 32 \
             else None
+
+    def floors(self, context: str) -> dict[Any, float]:
+        """Per instance of ``context`` whose optimum is known: the floor, the headline metric
+        of that optimum (the ``<metric>_floor`` column of the rows; one value per instance)."""
+        rows = [r for r in self.rows if r["context"] == context]
+        column, _ = opt_column_names(rows)
+        out: dict[Any, float] = {}
+        for r in rows if column else []:
+            v = float(r.get(column, math.nan))
+            if math.isfinite(v):
+                out.setdefault(r.get("instance"), v)
+        return out
 
     def groups(self, which: str, context: str) -> dict[str, str] | None:
         """Rank-group letters of a context's ranking (``"metric"`` or ``"search"``), or

@@ -8,41 +8,35 @@ never disagree (the terminal no longer re-reads the Markdown). Per context:
 * what the data allow: the floor (the metric of each instance's own optimum under the
   objective that was optimised, median over the instances) and the Cramér–Rao bound norm
   (what an efficient estimator could reach on such records);
-* one verdict an engineer identifying a system can act on: whom to use, how far from the
-  truth they end, and whether more search, a better estimator or better records would help.
-
-Medians within :data:`TIE_RTOL` of each other are ties: a ranking that differs from the other
-only within ties is never explained as anything.
+* one verdict (:mod:`.verdicts` decides it, this module writes it in words): whom to use, or
+  why no one, how far from the truth they end, and whether more search, a better estimator
+  or better records would help.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import shutil
+import textwrap
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 from ..estimators import DESCRIPTION
-from . import estimator_floors
+from . import anytime, verdicts
 from .body import verdict_short
-from .optima import REACHED
-from .rankings import TIE_RTOL
 from .render import fmt, markdown, para, terminal
 from .safe import clean, escape
 from .tables import pair_detail
+from .verdicts import Verdict
 
-#: A leader whose median metric is within this factor of the floor has searched enough.
-AT_FLOOR = 1.1
-#: Two methods whose medians differ by more than this (relative) are not called equivalent
-#: when the tests fail to separate them: the verdict says so.
-EQUIVALENCE_MARGIN = 0.10
-#: A floor this many times the bound means the estimator, not the data, limits accuracy.
-ESTIMATOR_GAP = 2.0
+#: How the reference optimizers are named in a verdict.
+REFERENCE_WORDS = {"random": "random search", "centre": "the box centre"}
 
 
 @dataclasses.dataclass
 class ContextResult:
-    """The first screen of one context, as data."""
+    """The first screen of one context, as data: its table and its verdict."""
 
     context: str
     metric: str
@@ -51,22 +45,20 @@ class ContextResult:
     rows: list[list[Any]]
     floor: float
     bound: float
-    verdict: str
+    verdict: str  # in words, Markdown-escaped (:func:`verdict_text` of ``decision``)
     tested: bool
-    estimator: str | None = None  # the objective the runs minimised (problem.objective)
-    floors: dict[str, Any] | None = None  # the floors of each estimator (estimators.json)
-    pairs: list[dict[str, Any]] = dataclasses.field(default_factory=list)  # pairwise tests
+    decision: Verdict | None = None  # the verdict as data, with its reasons (:mod:`.verdicts`)
     truth: bool = True  # False: the problem has no truth (a measured record)
     identified: Any = None  # without a truth: .estimates.Identified, the values and intervals
     comparisons: list[dict[str, Any]] = dataclasses.field(default_factory=list)
-    #: what biases the record's optimum, for a floor below the bound: the richer model that
-    #: made the record (its description), and the instances whose optimum the box holds
-    model_error: str = ""
-    on_edge: tuple[int, int] = (0, 0)  # (instances with the optimum on a box edge, instances)
 
     def value(self, x: float) -> str:
         """A metric value with its unit."""
-        return f"{fmt(x, 3)} {self.unit}".rstrip() if math.isfinite(x) else "n/a"
+        return _value(x, self.unit)
+
+
+def _value(x: float, unit: str) -> str:
+    return f"{fmt(x, 3)} {escape(unit)}".rstrip() if math.isfinite(x) else "n/a"
 
 
 def _names(items: Sequence[str]) -> str:
@@ -76,24 +68,8 @@ def _names(items: Sequence[str]) -> str:
     return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
 
 
-def _lead(items: Sequence[Mapping[str, Any]], groups: Mapping[str, str] | None,
-          value: str) -> list[Mapping[str, Any]]:
-    """The best group of a ranking: the items sharing the first one's rank-group letter, or
-    (untested) the first one and those tied with it within :data:`TIE_RTOL`."""
-    if not items:
-        return []
-    first = items[0]
-    if groups and groups.get(first["algorithm"]):
-        letter = groups[first["algorithm"]][0]
-        return [s for s in items if letter in groups.get(s["algorithm"], "")]
-    return [s for s in items if tied(s.get(value, math.nan), first.get(value, math.nan))]
-
-
-def tied(a: float, b: float) -> bool:
-    """Whether two medians are equal within :data:`TIE_RTOL` (relative)."""
-    if not (math.isfinite(a) and math.isfinite(b)):
-        return a == b
-    return abs(a - b) <= TIE_RTOL * max(abs(a), abs(b), 1e-300)
+def _ref(name: str) -> str:
+    return f"{REFERENCE_WORDS[name]} ({name})" if name in REFERENCE_WORDS else escape(name)
 
 
 def context_result(data: Any, context: str) -> ContextResult:
@@ -129,21 +105,45 @@ def context_result(data: Any, context: str) -> ContextResult:
         if show_vs:
             row.append(verdict_short(s.get(vs) or ""))
         body.append(row)
-    floors = [q["floor_median"] for q in srows.values() if math.isfinite(q["floor_median"])]
-    floor = floors[0] if floors else math.nan
-    bound = data.bounds.get(context, math.nan)
+    verdict = verdicts.decide(evidence(data, context))
+    return ContextResult(context, metric, unit, headers, body, verdict.floor, verdict.bound,
+                         verdict_text(verdict), mgroups is not None, verdict, verdict.truth,
+                         data.identified.get(context), data.comparisons.get(context, []))
+
+
+def evidence(data: Any, context: str) -> verdicts.Evidence:
+    """What the verdict of ``context`` rests on, from a :class:`~.compute.ReportData`."""
+    mrows = sorted((s for s in data.metric_rows(context) if s.get("n_runs")),
+                   key=lambda s: s["rank"])
+    srows = {s["algorithm"]: s for s in data.search_rows(context)}
+    mgroups = data.groups("metric", context) or {}
+    sgroups = data.groups("search", context) or {}
+    cost = _costs(data.hits, context)
+    methods = []
+    for s in mrows:
+        q = srows.get(s["algorithm"])
+        search = None if q is None else verdicts.Search(
+            q["reached"], q["n"], q["rel_gap_median"], sgroups.get(q["algorithm"], ""),
+            *cost.get(q["algorithm"], (math.inf, math.nan)))
+        methods.append(verdicts.Method(s["algorithm"], s["n_runs"],
+                                       float(s.get("median", math.nan)),
+                                       mgroups.get(s["algorithm"], ""), search))
+    refs = [data.baseline, *verdicts.REFERENCES]
+    present = {s["optimizer"]: s["algorithm"] for s in mrows}
     pairs = ([] if data.tests is None or data.tests.pairs.empty else
              data.tests.pairs[data.tests.pairs["context"] == context].to_dict("records"))
-    result = ContextResult(context, metric, unit, headers, body, floor, bound, "",
-                           mgroups is not None, data.estimator(context),
-                           data.estimator_floors.get(context), pairs,
-                           not data.no_truth.get(context, False),
-                           data.identified.get(context), data.comparisons.get(context, []))
-    result.model_error, result.on_edge = _model_error(data, context), _edge(data, context)
-    result.verdict = _verdict(result, mrows, [srows[a] for a in sorted(
-        srows, key=lambda a: srows[a]["rank"])], mgroups, sgroups,
-        data.centred.get(context, False))
-    return result
+    floors = data.floors(context)
+    bound = data.bounds.get(context, math.nan)
+    return verdicts.Evidence(
+        context, mrows[0]["metric_name"] if mrows else "metric", data.unit(context),
+        tuple(methods), data.tests is not None, tuple(pairs), floors,
+        {k: bound for k in floors} if floors else ({None: bound} if math.isfinite(bound)
+                                                    else {}),
+        data.estimator(context), data.estimator_floors.get(context),
+        tuple(dict.fromkeys(present[r] for r in refs if r in present)),
+        tuple(dict.fromkeys(r for r in refs if r not in present)),
+        data.centred.get(context, False), not data.no_truth.get(context, False),
+        _model_error(data, context), _edge(data, context))
 
 
 def _model_error(data: Any, context: str) -> str:
@@ -171,15 +171,188 @@ def _edge(data: Any, context: str) -> tuple[int, int]:
     return int(sum(seen.values())), len(seen)
 
 
-def _below_bound(res: ContextResult) -> str:
+def _costs(hits: Sequence[Any], context: str) -> dict[str, tuple[float, float]]:
+    """Per optimizer of ``context``: its ERT to the final target (each instance's optimum),
+    in evaluations and in seconds."""
+    by: dict[str, list[Any]] = {}
+    for h in hits:
+        if h.context == context:
+            by.setdefault(h.algorithm, []).append(h)
+    last = len(anytime.TARGETS) - 1
+    return {a: (anytime.ert(g, last), anytime.ert(g, last, "seconds")) for a, g in by.items()}
+
+
+def results(data: Any) -> list[ContextResult]:
+    """The first screen of every context, in report order."""
+    return [context_result(data, c) for c in data.contexts]
+
+
+def verdict_text(v: Verdict) -> str:
+    """The verdict of one context in words (one paragraph; record text escaped)."""
+    head = f"Verdict for {escape(v.context)}: "
+    if v.kind == verdicts.EMPTY:
+        return head + "no successful run to rank."
+    if v.kind == verdicts.DESCRIBE:
+        why = ("only one optimizer ran" if v.single else
+               "no tests were run (a single job's report)")
+        text = (f"{head}a description, not a recommendation ({why}). "
+                f"{_ends(v, escape(v.pick))} over {v.runs} run(s)")
+    elif v.kind == verdicts.NONE:
+        text = (f"{head}no method identifies this model from this record{_unidentified(v)}. "
+                f"The lowest median {escape(v.metric)}: {_ends(v, escape(v.pick))}")
+    else:
+        text = (f"{head}use {escape(v.pick)} ({_why(v)}{_effect(v)}{_missing(v)}). "
+                f"{_ends(v, 'It')}")
+    return text + _limits(v) + "."
+
+
+def _ends(v: Verdict, who: str) -> str:
+    if v.metric == "f_best":  # no accuracy metric: the problem knows no truth
+        return f"{who} ends at a median objective value of {fmt(v.median, 4)}"
+    if not v.truth:
+        return (f"{who} ends at a median {escape(v.metric)} of {_value(v.median, v.unit)} "
+                "(held out)")
+    return f"{who} ends a median {_value(v.median, v.unit)} {escape(v.metric)} from the truth"
+
+
+def _unidentified(v: Verdict) -> str:
+    """``": the Cramér–Rao bound ... and no optimizer is separated from ..."``."""
+    parts = []
+    if v.over_bound:
+        parts.append(f"the Cramér–Rao bound norm is {_value(v.bound, v.unit)}, above "
+                     f"{verdicts.BOUND_LIMIT:g} %: even an efficient estimator would miss the "
+                     "parameters by more than their own size")
+    refs = [_ref(r) for r in v.not_beaten]
+    if refs:
+        parts.append(f"no optimizer is separated from {' or '.join(refs)} by the "
+                     "Holm-corrected pairwise tests")
+    elif not v.over_bound:
+        parts.append("no optimizer is separated from each of "
+                     + " and ".join(_ref(r) for r in v.references)
+                     + " by the Holm-corrected pairwise tests")
+    return ": " + "; and ".join(parts) if parts else ""
+
+
+def _why(v: Verdict) -> str:
+    """Why the pick: how rule 3 chose it, in words."""
+    metric = escape(v.metric)
+    tied = (f"the tests do not separate it from {_names(v.tied)} by {metric} at {v.runs} "
+            "runs each" + _not_equivalent(v)) if v.tied else ""
+    if v.basis == verdicts.SEARCH_ONLY:
+        one = len(v.leaders) == 1
+        return ("it gets closest to each record's own optimum"
+                + (f"; {_names(v.leaders)} {'ends' if one else 'end'} nearer the truth by "
+                   f"{metric} but {'searches' if one else 'search'} worse" if v.leaders else "")
+                + _cost_words(v))
+    if v.basis == verdicts.ALONE:
+        return f"alone in the best group by {metric}"
+    if v.basis == verdicts.SEARCH:
+        return f"{tied}; it searches better (the best group by search quality)"
+    if v.basis == verdicts.COST:
+        return (f"{tied}; tied with {_names([c.name for c in v.costs[1:]])} by search quality "
+                f"too, it reaches the optimum sooner{_cost_words(v)}")
+    return f"{tied}; the first of them by the median"
+
+
+def _cost_words(v: Verdict) -> str:
+    """``": 23.7 evaluations (ERT) against 130 for de_lsq; 0.0202 s against 0.0158 s"``."""
+    if len(v.costs) < 2:
+        return ""
+    me, others = v.costs[0], v.costs[1:]
+
+    def listing(key: str, unit: str) -> str:
+        return ", ".join(f"{fmt(getattr(c, key), 3)}{unit} for {escape(c.name)}"
+                         for c in others)
+    text = (f": {fmt(me.evaluations, 3)} evaluations to it (ERT) against "
+            f"{listing('evaluations', '')}")
+    if math.isfinite(me.seconds):
+        text += f"; {fmt(me.seconds, 3)} s against {listing('seconds', ' s')}"
+    return text
+
+
+def _not_equivalent(v: Verdict) -> str:
+    """``", though their medians differ by up to 56 % (more than the 10 % margin within
+    which methods count as equivalent): more runs would tell"``, or ``""``."""
+    if v.spread <= verdicts.EQUIVALENCE_MARGIN:
+        return ""
+    return (f", though their medians differ by up to {fmt(100 * v.spread, 2)} % (more than the "
+            f"{100 * verdicts.EQUIVALENCE_MARGIN:g} % margin within which methods count as "
+            "equivalent): more runs would tell")
+
+
+def _effect(v: Verdict) -> str:
+    """``"; against de6: p_holm=0.31, A12=0.45 [0.31, 0.60]"``: the pick against the next
+    optimizer by the metric (A12 below 0.5: the pick tends to end lower)."""
+    row = v.next_pair
+    if row is None or not math.isfinite(float(row.get("A12", math.nan))):
+        return ""
+    return f"; against {escape(v.next_name)}: {pair_detail(row, v.pick)}"
+
+
+def _missing(v: Verdict) -> str:
+    if not v.missing:
+        return ""
+    one = len(v.missing) == 1
+    return (f"; {' and '.join(_ref(r) for r in v.missing)} {'was' if one else 'were'} not "
+            f"run: nothing here shows that it beats {'it' if one else 'them'}")
+
+
+def _estimator(v: Verdict) -> str:
+    """The estimator a floor belongs to, in words: the objective the runs minimised."""
+    if v.estimator is None:
+        return "the objective that was optimised"
+    words = DESCRIPTION.get(v.estimator)
+    key = f"objective={escape(v.estimator)}"
+    return f"{words} ({key})" if words else f"the objective {key}"
+
+
+def _limits(v: Verdict) -> str:
+    """What the records allow, and what limits the leader: search, the estimator or the
+    data; the estimator named as the bottleneck whenever its floor is far above the bound."""
+    if not v.truth:
+        return _limits_without_truth(v)
+    parts = []
+    if math.isfinite(v.floor):
+        parts.append(f"; the records allow {_value(v.floor, v.unit)} under {_estimator(v)} "
+                     "(floor: its own optimum's error, median over the instances)")
+    if math.isfinite(v.bound):
+        parts.append(f", an efficient estimator {_value(v.bound, v.unit)} (Cramér–Rao bound "
+                     "norm)")
+    if v.below_bound:
+        parts.append(_below_bound(v))
+    if v.limit == verdicts.LIMIT_BELOW:
+        parts.append(". Ending below the floor is not better search: the runs stopped short "
+                     "of the optimum" + (" in a box centred on the truth" if v.centred else ""))
+    elif v.limit == verdicts.LIMIT_TRUTH:  # a floor of 0: noise-free records
+        parts.append(". A larger budget or a better optimizer would still gain: the records "
+                     "allow the truth itself")
+    elif v.limit == verdicts.LIMIT_SEARCH:
+        parts.append(f". A larger budget or a better optimizer would still gain: the leader "
+                     f"ends {fmt(v.gain, 2)}× above the floor")
+    elif v.limit == verdicts.LIMIT_ESTIMATOR:
+        parts.append(". More search will not help here")
+    elif v.limit == verdicts.LIMIT_MODEL:
+        parts.append(f". More search will not help here: the floor is {fmt(v.ratio, 2)}× the "
+                     "bound, and the record was made by a richer model than the fitted one "
+                     f"({escape(v.model_error)}): model error, which no estimator of the fitted "
+                     "model removes, may set it; a richer fitted model would")
+    elif v.limit == verdicts.LIMIT_RECORDS:
+        parts.append(". More search will not help here: better records would (longer, other "
+                     "inputs or sensors)")
+    if v.advice is not None:
+        parts.append(_advice(v, v.advice))
+    return "".join(parts)
+
+
+def _below_bound(v: Verdict) -> str:
     """Why a floor can lie below the Cramér–Rao bound: the bound holds for unbiased
     estimators, and the record's optimum is biased by model error or by the box."""
     why = []
-    if res.model_error:
+    if v.model_error:
         why.append(f"the record was made by a richer model than the fitted one "
-                   f"({escape(res.model_error)}), which pulls the optimum to the fitted model's "
+                   f"({escape(v.model_error)}), which pulls the optimum to the fitted model's "
                    "best compromise, a bias the bound does not describe")
-    k, n = res.on_edge
+    k, n = v.on_edge
     if k:
         why.append(f"the box holds the optimum on an edge in {k} of {n} instance(s), "
                    "cutting the error there")
@@ -190,161 +363,37 @@ def _below_bound(res: ContextResult) -> str:
             + "; ".join(why))
 
 
-def _verdict(res: ContextResult, mrows: list[Mapping[str, Any]],
-             srows: list[Mapping[str, Any]], mgroups: Mapping[str, str] | None,
-             sgroups: Mapping[str, str] | None, centred: bool) -> str:
-    """One verdict: whom to use, how far from the truth, and what limits it."""
-    if not mrows:
-        return f"Verdict for {escape(res.context)}: no successful run to rank."
-    mlead = _lead(mrows, mgroups, "median")
-    slead = _lead(srows, sgroups, "rel_gap_median") if srows else []
-    in_s = {q["algorithm"] for q in slead}
-    both = [s["algorithm"] for s in mlead if s["algorithm"] in in_s]
-    if both or not slead:
-        pick = (both or [s["algorithm"] for s in mlead])[0]
-        first = srows[0]["algorithm"] if srows else pick
-        why = ("first by both rankings" if pick == mrows[0]["algorithm"] == first else
-               "in the best group of both rankings" if both else f"best by {escape(res.metric)}")
-        co = [s["algorithm"] for s in mlead if s["algorithm"] != pick]
-    else:
-        pick = slead[0]["algorithm"]
-        why = "it gets closest to each record's own optimum"
-        co = [q["algorithm"] for q in slead[1:]]
-    test = "" if res.tested else "; untested, a single job's report"
-    n = {s["algorithm"]: s["n_runs"] for s in mrows}
-    if co:
-        test += (f"; the tests do not separate it from {_names(co)} at {n.get(pick)} runs "
-                 "each") + _not_equivalent(res, pick, co, mrows)
-    test += _effect(res, pick, [s["algorithm"] for s in mrows])
-    use = [pick]
-    m = {s["algorithm"]: s["median"] for s in mrows}.get(pick, math.nan)
-    if res.metric == "f_best":  # no accuracy metric: the problem knows no truth
-        ends = f"It ends at a median objective value of {fmt(m, 4)}"
-    elif not res.truth:
-        ends = f"It ends at a median {escape(res.metric)} of {res.value(m)} (held out)"
-    else:
-        ends = f"It ends a median {res.value(m)} {escape(res.metric)} from the truth"
-    text = f"Verdict for {escape(res.context)}: use {escape(pick)} ({why}{test}). {ends}"
-    text += _limits(res, m, srows, use, centred)
-    return text + "."
+def _advice(v: Verdict, a: verdicts.EstimatorAdvice) -> str:
+    """The estimator as the bottleneck, and what the best other estimator gains."""
+    text = (f". The estimator is the bottleneck: its floor is {fmt(a.ratio, 2)}× the Cramér–Rao "
+            "bound (median per instance)")
+    if a.better is not None:
+        gain = (f", {fmt(a.chosen_floor / a.better_floor, 2)}× closer"
+                if math.isfinite(a.chosen_floor) and a.better_floor > 0 else "")
+        return (text + f"; problem.objective={escape(a.better)} "
+                f"({DESCRIPTION.get(a.better, 'another estimator')}) has its optimum a median "
+                f"{_value(a.better_floor, v.unit)} from the truth on the first {a.instances} "
+                f"instance(s){gain}")
+    if a.instances:
+        return text + (f"; no other built-in estimator's optimum lies closer on the first "
+                       f"{a.instances} instance(s)")
+    return text + ": an estimator that weighs the samples by their noise (a likelihood) would gain"
 
 
-def _estimator(res: ContextResult) -> str:
-    """The estimator a floor belongs to, in words: the objective the runs minimised."""
-    if res.estimator is None:
-        return "the objective that was optimised"
-    words = DESCRIPTION.get(res.estimator)
-    key = f"objective={escape(res.estimator)}"
-    return f"{words} ({key})" if words else f"the objective {key}"
-
-
-def _better(res: ContextResult) -> str:
-    """``" (the likelihood's optimum: 0.95 % on the first 5 instances)"``, when another
-    estimator's floor is known and lower."""
-    if not res.floors:
-        return ""
-    best = estimator_floors.best_other(res.floors)
-    if best is None or not best[1] < res.floor:
-        return ""
-    objective, value = best
-    return (f" ({DESCRIPTION[objective]}, objective={objective}, has its optimum a median "
-            f"{res.value(value)} from the truth on the first {res.floors['instances']} "
-            "instance(s))")
-
-
-def _not_equivalent(res: ContextResult, pick: str, co: Sequence[str],
-                    mrows: Sequence[Mapping[str, Any]]) -> str:
-    """``", though their medians differ by up to 56 % (more than the 10 % margin within
-    which methods count as equivalent): more runs would tell"``, when a method the tests do
-    not separate from the pick ends far from it; ``""`` otherwise."""
-    med = {s["algorithm"]: float(s.get("median", math.nan)) for s in mrows}
-    m = med.get(pick, math.nan)
-    gaps = [abs(med[c] - m) / abs(m) for c in co
-            if c in med and math.isfinite(med[c]) and math.isfinite(m) and m != 0]
-    worst = max(gaps, default=0.0)
-    if worst <= EQUIVALENCE_MARGIN:
-        return ""
-    return (f", though their medians differ by up to {fmt(100 * worst, 2)} % (more than the "
-            f"{100 * EQUIVALENCE_MARGIN:g} % margin within which methods count as "
-            "equivalent): more runs would tell")
-
-
-def _effect(res: ContextResult, pick: str, ranked: Sequence[str]) -> str:
-    """``"; against de6 p_holm=0.31, A12=0.45 [0.31, 0.60]"``: the effect size of the pick
-    against the next optimizer of the ranking by the metric (A12 below 0.5: the pick tends to
-    end lower), from the pairwise tests (none in a single job's report)."""
-    others = [a for a in ranked if a != pick]
-    if not others or not res.pairs:
-        return ""
-    other = others[0]
-    row = next((r for r in res.pairs if {r["a"], r["b"]} == {pick, other}), None)
-    if row is None or not math.isfinite(float(row.get("A12", math.nan))):
-        return ""
-    return f"; against {escape(other)}: {pair_detail(row, pick)}"
-
-
-def _limits(res: ContextResult, m: float, srows: Sequence[Mapping[str, Any]],
-            use: Sequence[str], centred: bool) -> str:
-    """What limits the leaders: search, the estimator (objective) or the data."""
-    floor, bound = res.floor, res.bound
-    parts = []
-    if not res.truth:
-        return _limits_without_truth(res, m, srows, use)
-    if math.isfinite(floor):
-        parts.append(f"; the records allow {res.value(floor)} under {_estimator(res)} "
-                     "(floor: its own optimum's error, median over the instances)")
-    if math.isfinite(bound):
-        parts.append(f", an efficient estimator {res.value(bound)} (Cramér–Rao bound norm)")
-    if not math.isfinite(floor):
-        return "".join(parts)
-    if math.isfinite(bound) and floor < bound and not tied(floor, bound):
-        parts.append(_below_bound(res))
-    reached = [q for q in srows if q["algorithm"] in use]
-    at_opt = any(q["reached"] >= q["n"] / 2 or q["rel_gap_median"] <= REACHED
-                 for q in reached)
-    if m < floor and not tied(m, floor) and not at_opt:
-        parts.append(". Ending below the floor is not better search: the runs stopped short "
-                     "of the optimum" + (" in a box centred on the truth" if centred else ""))
-    elif at_opt or m <= AT_FLOOR * floor:
-        parts.append(". More search will not help here")
-        if math.isfinite(bound) and bound > 0 and floor > ESTIMATOR_GAP * bound \
-                and res.model_error:
-            parts.append(f": the floor is {fmt(floor / bound, 2)}× the bound, and the record was "
-                         f"made by a richer model than the fitted one ({escape(res.model_error)}"
-                         "): model error, which no estimator of the fitted model removes, may "
-                         "set it; a richer fitted model would")
-        elif math.isfinite(bound) and bound > 0 and floor > ESTIMATOR_GAP * bound:
-            parts.append(f": the objective, not the data, sets the floor ({fmt(floor / bound, 2)}"
-                         "× the bound), so a better estimator would" + _better(res))
-        else:
-            parts.append(": better records would (longer, other inputs or sensors)")
-    elif floor > 0:
-        parts.append(f". A larger budget or a better optimizer would still gain: the leaders "
-                     f"end {fmt(m / floor, 2)}× above the floor")
-    else:  # a floor of exactly 0 (noise-free records: the optimum is the truth), no ratio
-        parts.append(". A larger budget or a better optimizer would still gain: the records "
-                     "allow the truth itself, and the leaders end "
-                     f"{res.value(m)} from it")
-    return "".join(parts)
-
-
-def _limits_without_truth(res: ContextResult, m: float, srows: Sequence[Mapping[str, Any]],
-                          use: Sequence[str]) -> str:
-    """Without a truth: whether the leaders reach the record's optimum of the objective, and
+def _limits_without_truth(v: Verdict) -> str:
+    """Without a truth: whether the leader reaches the record's optimum of the objective, and
     what that optimum scores by the headline metric (held out) where there is one."""
-    reached = [q for q in srows if q["algorithm"] in use]
-    if not reached:
+    if v.search is None:
         return ""
-    at_opt = any(q["reached"] >= q["n"] / 2 or q["rel_gap_median"] <= REACHED
-                 for q in reached)
     text = ("; it reaches the record's optimum of the objective, so more search will not "
-            "change the answer" if at_opt else
-            f"; it stops a median relative gap of {fmt(reached[0]['rel_gap_median'], 3)} "
+            "change the answer" if v.search.at_optimum else
+            f"; it stops a median relative gap of {fmt(v.search.rel_gap_median, 3)} "
             "above the record's optimum of the objective: more search would still move it")
-    if res.metric != "f_best" and math.isfinite(res.floor):
-        text += (f" (the optimum scores {res.value(res.floor)} {escape(res.metric)}"
+    if v.metric != "f_best" and math.isfinite(v.floor):
+        text += (f" (the optimum scores {_value(v.floor, v.unit)} {escape(v.metric)}"
                  + (": a better objective value does not always predict better"
-                    if res.floor > m and not tied(res.floor, m) else "") + ")")
+                    if v.floor > v.median and not verdicts.tied(v.floor, v.median) else "")
+                 + ")")
     return text
 
 
@@ -383,11 +432,6 @@ def _no_truth_lines(r: ContextResult) -> list[tuple[str, list[str], list[list[An
     return out
 
 
-def results(data: Any) -> list[ContextResult]:
-    """The first screen of every context, in report order."""
-    return [context_result(data, c) for c in data.contexts]
-
-
 def markdown_lines(items: Sequence[ContextResult]) -> list[str]:
     """The Results section of ``report.md`` (its first screen)."""
     lines = ["## Results", ""]
@@ -413,14 +457,26 @@ def extra_blocks(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]
     return [] if r.truth else _no_truth_lines(r)
 
 
-def terminal_text(items: Sequence[ContextResult]) -> str:
-    """The same first screen for the terminal: a table and a verdict per context."""
+def terminal_width() -> int:
+    """The terminal's width in columns (80 when it cannot be told, at least 40)."""
+    return max(40, shutil.get_terminal_size((80, 24)).columns)
+
+
+def _wrap(text: str, width: int) -> str:
+    return textwrap.fill(clean(" ".join(text.split())), width=width, break_long_words=False,
+                         break_on_hyphens=False)
+
+
+def terminal_text(items: Sequence[ContextResult], width: int | None = None) -> str:
+    """The same first screen for the terminal: a table and a verdict per context, the prose
+    wrapped to the terminal's width."""
+    width = width or terminal_width()
     blocks = []
     for r in items:
         extra = ""
         for text, headers, rows in extra_blocks(r):
-            extra += clean(" ".join(text.split())) + "\n" + (
-                terminal(headers, rows) + "\n" if headers else "")
+            extra += _wrap(text, width) + "\n" + (terminal(headers, rows) + "\n" if headers
+                                                  else "")
         blocks.append(f"{clean(r.context)}\n" + terminal(r.headers, r.rows) + "\n" + extra
-                      + clean(" ".join(r.verdict.split())))
+                      + _wrap(r.verdict, width))
     return "\n\n".join(blocks)

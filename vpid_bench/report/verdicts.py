@@ -1,0 +1,378 @@
+"""The report's verdicts as data: per context, whether an optimizer can be recommended, which
+one, and why. Pure computation, no words: :mod:`.first_screen` writes the same
+:class:`Verdict` for the terminal and Markdown, and any other renderer reads it too.
+
+The rules (each in docs/report.md, "Verdicts", with a test in tests/report/test_verdicts.py):
+
+1. **A description, not a recommendation**, where nothing was compared: runs that were not
+   tested (a single job's report, ``--short``) or a context with one optimizer.
+2. **No recommendation where no method identifies the model from the record**: the
+   Cramér–Rao bound (median over the instances) exceeds :data:`BOUND_LIMIT` (even an efficient
+   estimator misses the parameters by more than their size), or no optimizer is separated by
+   the Holm-corrected pairwise tests from each reference that was run (random search, the box
+   centre). The references are never recommended.
+3. **Whom to use**: among the optimizers that beat every reference run, the best group by the
+   metric (optimizers sharing the first one's rank-group letter: the tests separate none of
+   them from another). A tie there is broken by search quality (the best search group), then by
+   cost: the expected evaluations to each instance's optimum (ERT at the final target), then
+   its seconds; costs within :data:`COST_TIE` of each other are a tie. Where the metric's
+   leaders search worse than others, the best searcher is named (it gets closest to each
+   record's own optimum; a lower metric from runs that stop short is not better search).
+4. **Floor against bound, per instance**: the median over the instances of
+   ``floor_i / bound_i`` (:func:`floor_over_bound`). Above :data:`ESTIMATOR_GAP` the
+   estimator (the objective), not the data, limits the accuracy: the verdict says so at any
+   budget, with where the best other estimator's optimum lies (the job's ``estimators.json``)
+   -- unless a richer model than the fitted one made the record: then model error, which no
+   estimator of the fitted model removes, may set the floor. Below 1 the record's optimum is
+   biased (the bound holds for unbiased estimators): by model error or the box, when known.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import statistics
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from .optima import REACHED
+from .rankings import TIE_RTOL
+
+#: A bound (norm of the Cramér–Rao bounds, %) above this: no estimator determines the
+#: parameters from such a record (one standard deviation is larger than the values).
+BOUND_LIMIT = 100.0
+#: A floor this many times the bound (median per instance): the estimator limits accuracy.
+ESTIMATOR_GAP = 2.0
+#: A leader whose median metric is within this factor of the floor has searched enough.
+AT_FLOOR = 1.1
+#: Methods the tests do not separate whose medians differ by more than this (relative) are
+#: not called equivalent: the verdict says more runs would tell.
+EQUIVALENCE_MARGIN = 0.10
+#: Two costs (evaluations or seconds to the optimum) within this relative difference tie.
+COST_TIE = 0.10
+#: The optimizers a recommended method must beat, when they were run: random search and the
+#: centre of the box (names of the built-in baselines).
+REFERENCES: tuple[str, ...] = ("random", "centre")
+
+#: Kinds of verdict.
+USE, NONE, DESCRIBE, EMPTY = "use", "none", "describe", "empty"
+#: How the recommended optimizer was chosen (``Verdict.basis``).
+ALONE, SEARCH, COST, ORDER, SEARCH_ONLY = "alone", "search", "cost", "order", "search_only"
+#: What limits the accuracy of the leader (``Verdict.limit``).
+LIMIT_SEARCH, LIMIT_BELOW, LIMIT_ESTIMATOR, LIMIT_MODEL, LIMIT_RECORDS, LIMIT_TRUTH = (
+    "search", "below_floor", "estimator", "model", "records", "truth")
+
+
+@dataclasses.dataclass(frozen=True)
+class Search:
+    """One optimizer's search quality on a context: runs reaching their instance's optimum,
+    the median relative gap, its search rank group, and the cost to the optimum (ERT at the
+    final target in evaluations and in the runs' seconds; ``inf``: no run reached it)."""
+
+    reached: int
+    runs: int
+    rel_gap_median: float
+    group: str = ""
+    evaluations: float = math.inf
+    seconds: float = math.nan
+
+    @property
+    def at_optimum(self) -> bool:
+        """Most runs reach the optimum, or the median gap is at the reach threshold."""
+        return self.reached >= self.runs / 2 or self.rel_gap_median <= REACHED
+
+
+@dataclasses.dataclass(frozen=True)
+class Method:
+    """One optimizer of a context: its runs, median metric, metric rank group (``""``
+    untested) and search quality (``None`` where the optima are unknown)."""
+
+    name: str
+    runs: int
+    median: float
+    group: str = ""
+    search: Search | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class Evidence:
+    """What a context's verdict rests on. ``methods``: best first by the metric. ``pairs``:
+    the metric's Holm-corrected pairwise tests (rows with ``a``, ``b``, ``significant``,
+    ``better``, and the effect size). ``floors`` and ``bounds``: per instance, the metric of
+    the instance's optimum under the objective that was optimised, and the norm of its
+    Cramér–Rao bounds. ``references``: the reference optimizers among ``methods``;
+    ``missing``: the reference optimizers that were not run."""
+
+    context: str
+    metric: str
+    unit: str
+    methods: tuple[Method, ...]
+    tested: bool
+    pairs: tuple[Mapping[str, Any], ...] = ()
+    floors: Mapping[Any, float] = dataclasses.field(default_factory=dict)
+    bounds: Mapping[Any, float] = dataclasses.field(default_factory=dict)
+    estimator: str | None = None
+    estimator_floors: Mapping[str, Any] | None = None
+    references: tuple[str, ...] = ()
+    missing: tuple[str, ...] = ()
+    centred: bool = False
+    truth: bool = True  # False: the problem knows no truth (the metric is held out)
+    #: what biases the record's optimum: the richer model that made the record (its
+    #: description, ``""`` when the fitted model made it) and (instances whose optimum lies
+    #: on a box edge, instances with a known optimum)
+    model_error: str = ""
+    on_edge: tuple[int, int] = (0, 0)
+
+
+@dataclasses.dataclass(frozen=True)
+class Cost:
+    """What reaching the optimum cost one optimizer: ERT in evaluations and in seconds."""
+
+    name: str
+    evaluations: float
+    seconds: float
+
+
+@dataclasses.dataclass(frozen=True)
+class EstimatorAdvice:
+    """The estimator as the bottleneck: the chosen objective's floor is ``ratio`` times the
+    bound (median per instance); ``better`` is the objective whose optimum lies closest to
+    the truth on the first ``instances`` instances (``better_floor``, against
+    ``chosen_floor`` for the chosen one there), ``None`` when no other lies closer or the
+    floors per estimator are unknown."""
+
+    chosen: str | None
+    ratio: float
+    better: str | None = None
+    better_floor: float = math.nan
+    chosen_floor: float = math.nan
+    instances: int = 0
+
+
+@dataclasses.dataclass(frozen=True)
+class Verdict:
+    """The verdict of one context, with its reasons (see the module for the rules).
+
+    ``kind``: :data:`USE` (recommend ``pick``), :data:`NONE` (no method identifies the model:
+    ``over_bound`` and/or ``not_beaten``), :data:`DESCRIBE` (nothing compared: ``pick`` is
+    the leader described; ``single`` when only one optimizer ran) or :data:`EMPTY`.
+    ``basis``: how ``pick`` was chosen; ``tied``: the optimizers the metric's tests do not
+    separate from it; ``spread``: their largest relative difference of medians from the
+    pick's; ``costs``: the cost of the pick (first) and of those tied with it by search too.
+    ``floor``, ``bound``: medians over the instances; ``ratio``: the median of
+    floor / bound per instance. ``limit``: what limits the leader (search, the floor being
+    undercut by runs that stopped short, the estimator, the records; ``truth``: search, where
+    the floor is 0 and the records allow the truth itself), ``gain``: the leader's median over
+    the floor."""
+
+    context: str
+    metric: str
+    unit: str
+    kind: str
+    pick: str | None = None
+    runs: int = 0
+    median: float = math.nan
+    basis: str = ""
+    tied: tuple[str, ...] = ()
+    spread: float = 0.0
+    leaders: tuple[str, ...] = ()  # the metric's best group, when the pick is not among them
+    costs: tuple[Cost, ...] = ()
+    next_pair: Mapping[str, Any] | None = None
+    next_name: str | None = None
+    tested: bool = True
+    single: bool = False
+    over_bound: bool = False
+    not_beaten: tuple[str, ...] = ()
+    references: tuple[str, ...] = ()
+    missing: tuple[str, ...] = ()
+    floor: float = math.nan
+    bound: float = math.nan
+    ratio: float = math.nan
+    limit: str = ""
+    gain: float = math.nan
+    centred: bool = False
+    estimator: str | None = None
+    advice: EstimatorAdvice | None = None
+    truth: bool = True
+    search: Search | None = None  # the search quality of ``pick``
+    #: the floor lies below the bound (median per instance): the record's optimum is biased
+    #: (``model_error``, ``on_edge`` say by what, when known)
+    below_bound: bool = False
+    model_error: str = ""
+    on_edge: tuple[int, int] = (0, 0)
+
+
+def _median(values: Sequence[float]) -> float:
+    v = [float(x) for x in values if math.isfinite(float(x))]
+    return statistics.median(v) if v else math.nan
+
+
+def floor_over_bound(floors: Mapping[Any, float], bounds: Mapping[Any, float]) -> float:
+    """The median over the instances that have both of ``floor_i / bound_i`` (``nan`` when
+    none has both with a positive bound). Comparing a median floor with one instance's
+    bound mixes instances whose bounds differ by factors."""
+    ratios = [floors[k] / bounds[k] for k in floors
+              if k in bounds and math.isfinite(floors[k]) and math.isfinite(bounds[k])
+              and bounds[k] > 0]
+    return statistics.median(ratios) if ratios else math.nan
+
+
+def tied(a: float, b: float) -> bool:
+    """Whether two medians are equal within :data:`~.rankings.TIE_RTOL` (relative)."""
+    if not (math.isfinite(a) and math.isfinite(b)):
+        return a == b
+    return abs(a - b) <= TIE_RTOL * max(abs(a), abs(b), 1e-300)
+
+
+def _pair(pairs: Sequence[Mapping[str, Any]], a: str, b: str) -> Mapping[str, Any] | None:
+    return next((r for r in pairs if {r["a"], r["b"]} == {a, b}), None)
+
+
+def beats(pairs: Sequence[Mapping[str, Any]], a: str, b: str) -> bool:
+    """Whether the Holm-corrected test of ``a`` against ``b`` finds ``a`` significantly
+    lower."""
+    row = _pair(pairs, a, b)
+    return bool(row is not None and row.get("significant") and row.get("better") == a)
+
+
+def _lead(items: Sequence[Method], group: Any) -> list[Method]:
+    """The best group of ``items`` (ordered best first): those sharing the first one's first
+    rank-group letter (``group(m)``), or the first alone when it has no letter."""
+    if not items:
+        return []
+    letters = group(items[0])
+    if not letters:
+        return [items[0]]
+    return [m for m in items if letters[0] in group(m)]
+
+
+def _by_cost(items: Sequence[Method]) -> tuple[Method, str]:
+    """The cheapest of ``items`` to reach the optimum: fewest evaluations (ERT), then fewest
+    seconds, a difference within :data:`COST_TIE` counting as none; ``(items[0], "")`` when
+    cost does not decide."""
+    pool = list(items)
+    for key in ("evaluations", "seconds"):
+        values = {m.name: getattr(m.search, key) if m.search else math.nan for m in pool}
+        finite = [v for v in values.values() if math.isfinite(v)]
+        if not finite:
+            break
+        best = min(finite)
+        pool = [m for m in pool if math.isfinite(values[m.name])
+                and values[m.name] <= best * (1 + COST_TIE)]
+        if len(pool) == 1:
+            return pool[0], key
+    return pool[0], ""
+
+
+def _choose(ev: Evidence, eligible: list[Method]) -> tuple[Method, str, list[Method],
+                                                             list[Method], list[Method]]:
+    """Rule 3: (pick, basis, its metric group, those tied with it by search too, the
+    metric's leaders when the pick is not among them)."""
+    mlead = _lead(eligible, lambda m: m.group)
+    if not all(m.search for m in eligible):
+        pick = mlead[0]
+        return pick, ALONE if len(mlead) == 1 else ORDER, mlead, [], []
+    by_search = sorted(eligible, key=lambda m: (-m.search.reached / max(m.search.runs, 1),
+                                                m.search.rel_gap_median))
+    slead = _lead(by_search, lambda m: m.search.group)
+    names = {m.name for m in slead}
+    both = [m for m in sorted(mlead, key=by_search.index) if m.name in names]
+    pool = both or sorted(slead, key=by_search.index)
+    pick, decided = _by_cost(pool) if len(pool) > 1 else (pool[0], "")
+    if not both:
+        return pick, SEARCH_ONLY, mlead, pool, mlead
+    basis = (ALONE if len(mlead) == 1 else SEARCH if len(both) == 1
+             else COST if decided else ORDER)
+    if basis == ORDER:  # tied on everything: the first by the metric's median
+        pick = next(m for m in mlead if m in both)
+    return pick, basis, mlead, pool, []
+
+
+def _limit(pick: Method, floor: float, ratio: float, model_error: str = ""
+           ) -> tuple[str, float]:
+    """What limits the leader: (limit, the leader's median over the floor). At the floor,
+    where the floor is far above the bound: model error when a richer model made the record,
+    else the estimator; otherwise the records."""
+    if not math.isfinite(floor) or floor < 0:
+        return "", math.nan
+    m = pick.median
+    at_opt = pick.search is not None and pick.search.at_optimum
+    if floor == 0:  # noise-free records: the optimum is the truth, no ratio to it
+        return (LIMIT_RECORDS if at_opt or m <= 0 else LIMIT_TRUTH), math.nan
+    if m < floor and not tied(m, floor) and not at_opt:
+        return LIMIT_BELOW, m / floor
+    if at_opt or m <= AT_FLOOR * floor:
+        if math.isfinite(ratio) and ratio > ESTIMATOR_GAP:
+            return (LIMIT_MODEL if model_error else LIMIT_ESTIMATOR), m / floor
+        return LIMIT_RECORDS, m / floor
+    return LIMIT_SEARCH, m / floor
+
+
+def estimator_advice(chosen: str | None, ratio: float,
+                     floors: Mapping[str, Any] | None) -> EstimatorAdvice | None:
+    """Rule 4: the advice when the floor is more than :data:`ESTIMATOR_GAP` times the bound
+    (median per instance), else ``None``. ``floors``: a job's ``estimators.json`` (checked
+    by :func:`.estimator_floors.read_estimator_floors`)."""
+    if not (math.isfinite(ratio) and ratio > ESTIMATOR_GAP):
+        return None
+    if not floors:
+        return EstimatorAdvice(chosen, ratio)
+    per = floors["floors"]
+    mine = float(per[chosen]["median"]) if chosen in per else math.nan
+    others = [(o, float(v["median"])) for o, v in per.items() if o != chosen]
+    best = min(others, key=lambda item: item[1], default=None)
+    if best is None or not (best[1] < mine or not math.isfinite(mine)):
+        return EstimatorAdvice(chosen, ratio, None, math.nan, mine, int(floors["instances"]))
+    return EstimatorAdvice(chosen, ratio, best[0], best[1], mine, int(floors["instances"]))
+
+
+def decide(ev: Evidence) -> Verdict:
+    """The verdict of one context (the rules of the module)."""
+    base = {"context": ev.context, "metric": ev.metric, "unit": ev.unit, "tested": ev.tested,
+            "references": ev.references, "missing": ev.missing, "centred": ev.centred,
+            "estimator": ev.estimator, "truth": ev.truth}
+    if not ev.methods:
+        return Verdict(kind=EMPTY, **base)
+    floor = _median(list(ev.floors.values()))
+    bound = _median(list(ev.bounds.values()))
+    ratio = floor_over_bound(ev.floors, ev.bounds)
+    base |= {"floor": floor, "bound": bound, "ratio": ratio,
+             # a floor far above the bound from a richer model's record: model error, which
+             # no estimator of the fitted model removes, not the estimator
+             "advice": None if ev.model_error else estimator_advice(
+                 ev.estimator, ratio, ev.estimator_floors),
+             "below_bound": math.isfinite(ratio) and ratio < 1 and not tied(ratio, 1.0),
+             "model_error": ev.model_error, "on_edge": ev.on_edge}
+    candidates = [m for m in ev.methods if m.name not in ev.references]
+    if not ev.tested or len(ev.methods) < 2 or not candidates:
+        lead = (candidates or list(ev.methods))[0]
+        limit, gain = _limit(lead, floor, ratio, ev.model_error)
+        return Verdict(kind=DESCRIBE, pick=lead.name, runs=lead.runs, median=lead.median,
+                       single=len(ev.methods) < 2, limit=limit, gain=gain,
+                       search=lead.search, **base)
+    eligible = [m for m in candidates
+                if all(beats(ev.pairs, m.name, r) for r in ev.references)]
+    not_beaten = tuple(r for r in ev.references
+                       if not any(beats(ev.pairs, m.name, r) for m in candidates))
+    over = math.isfinite(bound) and bound > BOUND_LIMIT
+    if over or not eligible:
+        lead = candidates[0]
+        limit, gain = _limit(lead, floor, ratio, ev.model_error)
+        return Verdict(kind=NONE, pick=lead.name, runs=lead.runs, median=lead.median,
+                       over_bound=over, not_beaten=not_beaten, limit=limit, gain=gain,
+                       search=lead.search, **base)
+    pick, basis, mlead, pool, leaders = _choose(ev, eligible)
+    tied_with = [m for m in mlead if m.name != pick.name]
+    spread = max((abs(m.median - pick.median) / abs(pick.median) for m in tied_with
+                  if math.isfinite(m.median) and math.isfinite(pick.median)
+                  and pick.median != 0), default=0.0)
+    costs = tuple(Cost(m.name, m.search.evaluations, m.search.seconds)
+                  for m in [pick] + [m for m in pool if m.name != pick.name] if m.search)
+    nxt = next((m.name for m in ev.methods if m.name != pick.name), None)
+    limit, gain = _limit(pick, floor, ratio, ev.model_error)
+    return Verdict(kind=USE, pick=pick.name, runs=pick.runs, median=pick.median, basis=basis,
+                   tied=tuple(m.name for m in tied_with), spread=spread,
+                   leaders=tuple(m.name for m in leaders),
+                   costs=costs,
+                   next_pair=None if nxt is None else _pair(ev.pairs, pick.name, nxt),
+                   next_name=nxt, limit=limit, gain=gain, search=pick.search, **base)
