@@ -221,5 +221,23 @@ def test_across_the_suite_needs_two_distinct_problems(tmp_path, problems, ps, sh
     roots = [paired_sweep(tmp_path / p, p, ps) for p in problems]
     data = compute(roots, True, 0.05, "random")
     assert len(data.contexts) == 2 and len({h.context for h in data.hits}) == 2
-    lines, files = build._suite_scores(data, object(), build._Names(tmp_path / "out"))
-    assert ("## Across the suite" in lines) == shown and bool(files) == shown
+    suite, files = build._suite_scores(data, object(), build._Names(tmp_path / "out"))
+    assert (suite is not None) == shown and bool(files) == shown
+
+
+def test_the_terminal_never_breaks_a_line_inside_a_name():
+    """A name's own words never start a terminal line (a hostile name could look like a
+    table row there); the text has no trace of the marks that keep names whole."""
+    name = "forged | row with many words inside"
+    methods = [Method(name, 30, 1.0, "a"), Method("random", 30, 9.0, "b")]
+    v = vd.decide(_evidence(methods, [_pair(name, "random", name)], refs=("random",)))
+    res = ContextResult("ctx with spaces", "NoRE", "%", ["optimizer"], [["x"]], v.floor,
+                        v.bound, verdict_text(v), True, v)
+    for width in (40, 50, 60, 70):
+        lines = terminal_text([res], width=width).splitlines()[4:]
+        assert not any(line.startswith(("row", "with", "many", "words", "inside", "spaces"))
+                       for line in lines), lines
+        flat = " ".join(" ".join(lines).split())
+        assert "use forged \\| row with many words inside" in flat
+        assert "\x02" not in flat and "\x03" not in flat and "\u00a0" not in flat
+    assert "\x02" not in res.verdict and "use forged \\| row with" in res.verdict

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import shutil
 import textwrap
 from collections.abc import Mapping, Sequence
@@ -54,22 +55,42 @@ class ContextResult:
 
     def value(self, x: float) -> str:
         """A metric value with its unit."""
-        return _value(x, self.unit)
+        return _value(x, self.unit, escape)
 
 
-def _value(x: float, unit: str) -> str:
-    return f"{fmt(x, 3)} {escape(unit)}".rstrip() if math.isfinite(x) else "n/a"
+#: Record text in a verdict is marked (``_name``) so that the terminal never breaks a line
+#: inside it: a name's own words never start a line there (a hostile name could look like
+#: a table row); :func:`verdict_text` removes the marks.
+_OPEN, _CLOSE = "\x02", "\x03"
+_MARKED = re.compile(f"{_OPEN}(.*?){_CLOSE}", re.S)
+
+
+def _name(text: Any) -> str:
+    """Record text for a verdict: Markdown-escaped and marked (see :data:`_OPEN`)."""
+    return f"{_OPEN}{escape(text)}{_CLOSE}"
+
+
+def _unmarked(text: str, glue: str = " ") -> str:
+    """``text`` without the marks, the spaces inside marked names replaced by ``glue``."""
+    return _MARKED.sub(lambda m: m.group(1).replace(" ", glue), text)
+
+
+def _value(x: float, unit: str, name: Any = None) -> str:
+    """``x`` with its unit (record text: marked by default, see :func:`_name`)."""
+    if not math.isfinite(x):
+        return "n/a"
+    return f"{fmt(x, 3)} {(name or _name)(unit)}" if unit else fmt(x, 3)
 
 
 def _names(items: Sequence[str]) -> str:
-    items = [escape(i) for i in items]
+    items = [_name(i) for i in items]
     if not items:
         return ""
     return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
 
 
 def _ref(name: str) -> str:
-    return f"{REFERENCE_WORDS[name]} ({name})" if name in REFERENCE_WORDS else escape(name)
+    return f"{REFERENCE_WORDS[name]} ({name})" if name in REFERENCE_WORDS else _name(name)
 
 
 def context_result(data: Any, context: str) -> ContextResult:
@@ -189,19 +210,24 @@ def results(data: Any) -> list[ContextResult]:
 
 def verdict_text(v: Verdict) -> str:
     """The verdict of one context in words (one paragraph; record text escaped)."""
-    head = f"Verdict for {escape(v.context)}: "
+    return _unmarked(_marked_verdict(v))
+
+
+def _marked_verdict(v: Verdict) -> str:
+    """:func:`verdict_text` with its record text marked (:func:`_name`)."""
+    head = f"Verdict for {_name(v.context)}: "
     if v.kind == verdicts.EMPTY:
         return head + "no successful run to rank."
     if v.kind == verdicts.DESCRIBE:
         why = ("only one optimizer ran" if v.single else
                "no tests were run (a single job's report)")
         text = (f"{head}a description, not a recommendation ({why}). "
-                f"{_ends(v, escape(v.pick))} over {v.runs} run(s)")
+                f"{_ends(v, _name(v.pick))} over {v.runs} run(s)")
     elif v.kind == verdicts.NONE:
         text = (f"{head}no method identifies this model from this record{_unidentified(v)}. "
-                f"The lowest median {escape(v.metric)}: {_ends(v, escape(v.pick))}")
+                f"The lowest median {_name(v.metric)}: {_ends(v, _name(v.pick))}")
     else:
-        text = (f"{head}use {escape(v.pick)} ({_why(v)}{_effect(v)}{_missing(v)}). "
+        text = (f"{head}use {_name(v.pick)} ({_why(v)}{_effect(v)}{_missing(v)}). "
                 f"{_ends(v, 'It')}")
     return text + _limits(v) + "."
 
@@ -210,9 +236,9 @@ def _ends(v: Verdict, who: str) -> str:
     if v.metric == "f_best":  # no accuracy metric: the problem knows no truth
         return f"{who} ends at a median objective value of {fmt(v.median, 4)}"
     if not v.truth:
-        return (f"{who} ends at a median {escape(v.metric)} of {_value(v.median, v.unit)} "
+        return (f"{who} ends at a median {_name(v.metric)} of {_value(v.median, v.unit)} "
                 "(held out)")
-    return f"{who} ends a median {_value(v.median, v.unit)} {escape(v.metric)} from the truth"
+    return f"{who} ends a median {_value(v.median, v.unit)} {_name(v.metric)} from the truth"
 
 
 def _unidentified(v: Verdict) -> str:
@@ -235,7 +261,7 @@ def _unidentified(v: Verdict) -> str:
 
 def _why(v: Verdict) -> str:
     """Why the pick: how rule 3 chose it, in words."""
-    metric = escape(v.metric)
+    metric = _name(v.metric)
     tied = (f"the tests do not separate it from {_names(v.tied)} by {metric} at {v.runs} "
             "runs each" + _not_equivalent(v)) if v.tied else ""
     if v.basis == verdicts.SEARCH_ONLY:
@@ -261,7 +287,7 @@ def _cost_words(v: Verdict) -> str:
     me, others = v.costs[0], v.costs[1:]
 
     def listing(key: str, unit: str) -> str:
-        return ", ".join(f"{fmt(getattr(c, key), 3)}{unit} for {escape(c.name)}"
+        return ", ".join(f"{fmt(getattr(c, key), 3)}{unit} for {_name(c.name)}"
                          for c in others)
     text = (f": {fmt(me.evaluations, 3)} evaluations to it (ERT) against "
             f"{listing('evaluations', '')}")
@@ -286,7 +312,7 @@ def _effect(v: Verdict) -> str:
     row = v.next_pair
     if row is None or not math.isfinite(float(row.get("A12", math.nan))):
         return ""
-    return f"; against {escape(v.next_name)}: {pair_detail(row, v.pick)}"
+    return f"; against {_name(v.next_name)}: {pair_detail(row, v.pick)}"
 
 
 def _missing(v: Verdict) -> str:
@@ -302,7 +328,7 @@ def _estimator(v: Verdict) -> str:
     if v.estimator is None:
         return "the objective that was optimised"
     words = DESCRIPTION.get(v.estimator)
-    key = f"objective={escape(v.estimator)}"
+    key = f"objective={_name(v.estimator)}"
     return f"{words} ({key})" if words else f"the objective {key}"
 
 
@@ -370,7 +396,7 @@ def _advice(v: Verdict, a: verdicts.EstimatorAdvice) -> str:
     if a.better is not None:
         gain = (f", {fmt(a.chosen_floor / a.better_floor, 2)}× closer"
                 if math.isfinite(a.chosen_floor) and a.better_floor > 0 else "")
-        return (text + f"; problem.objective={escape(a.better)} "
+        return (text + f"; problem.objective={_name(a.better)} "
                 f"({DESCRIPTION.get(a.better, 'another estimator')}) has its optimum a median "
                 f"{_value(a.better_floor, v.unit)} from the truth on the first {a.instances} "
                 f"instance(s){gain}")
@@ -390,7 +416,7 @@ def _limits_without_truth(v: Verdict) -> str:
             f"; it stops a median relative gap of {fmt(v.search.rel_gap_median, 3)} "
             "above the record's optimum of the objective: more search would still move it")
     if v.metric != "f_best" and math.isfinite(v.floor):
-        text += (f" (the optimum scores {_value(v.floor, v.unit)} {escape(v.metric)}"
+        text += (f" (the optimum scores {_value(v.floor, v.unit)} {_name(v.metric)}"
                  + (": a better objective value does not always predict better"
                     if v.floor > v.median and not verdicts.tied(v.floor, v.median) else "")
                  + ")")
@@ -462,9 +488,20 @@ def terminal_width() -> int:
     return max(40, shutil.get_terminal_size((80, 24)).columns)
 
 
+#: Joins the words of a name while the terminal's verdict is wrapped (never in the output).
+_GLUE = "\u00a0"
+
+
 def _wrap(text: str, width: int) -> str:
     return textwrap.fill(clean(" ".join(text.split())), width=width, break_long_words=False,
                          break_on_hyphens=False)
+
+
+def _wrap_glued(marked: str, width: int) -> str:
+    """A marked verdict wrapped at ``width`` without breaking inside a marked name."""
+    glued = re.sub(r"[ \t\n]+", " ", _unmarked(marked, _GLUE))
+    lines = textwrap.wrap(glued, width=width, break_long_words=False, break_on_hyphens=False)
+    return clean("\n".join(lines).replace(_GLUE, " "), keep_newlines=True)
 
 
 def terminal_text(items: Sequence[ContextResult], width: int | None = None) -> str:
@@ -477,6 +514,8 @@ def terminal_text(items: Sequence[ContextResult], width: int | None = None) -> s
         for text, headers, rows in extra_blocks(r):
             extra += _wrap(text, width) + "\n" + (terminal(headers, rows) + "\n" if headers
                                                   else "")
+        verdict = (_wrap(r.verdict, width) if r.decision is None else
+                   _wrap_glued(_marked_verdict(r.decision), width))
         blocks.append(f"{clean(r.context)}\n" + terminal(r.headers, r.rows) + "\n" + extra
-                      + _wrap(r.verdict, width))
+                      + verdict)
     return "\n\n".join(blocks)
