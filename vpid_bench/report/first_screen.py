@@ -360,7 +360,7 @@ def _limits(v: Verdict) -> str:
     elif v.limit == verdicts.LIMIT_MODEL:
         parts.append(f". More search will not help here: the floor is {fmt(v.ratio, 2)}× the "
                      "bound, and the record was made by a richer model than the fitted one "
-                     f"({escape(v.model_error)}): model error, which no estimator of the fitted "
+                     f"({_name(v.model_error)}): model error, which no estimator of the fitted "
                      "model removes, may set it; a richer fitted model would")
     elif v.limit == verdicts.LIMIT_RECORDS:
         parts.append(". More search will not help here: better records would (longer, other "
@@ -376,7 +376,7 @@ def _below_bound(v: Verdict) -> str:
     why = []
     if v.model_error:
         why.append(f"the record was made by a richer model than the fitted one "
-                   f"({escape(v.model_error)}), which pulls the optimum to the fitted model's "
+                   f"({_name(v.model_error)}), which pulls the optimum to the fitted model's "
                    "best compromise, a bias the bound does not describe")
     k, n = v.on_edge
     if k:
