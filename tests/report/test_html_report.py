@@ -182,3 +182,21 @@ def test_the_suite_ecdf_figure_weighs_each_problem_the_same():
         assert y == pytest.approx((1 / 7) if x >= 2.0 else 0.0)
     assert a.y[-1] == pytest.approx(1 / 7)
     assert suite_ecdf_figure(runs[:1], {"p2": ("f", 2)}) is None
+
+
+@pytest.mark.parametrize("planted", ["index.html", "assets"])
+def test_a_link_planted_in_the_report_folder_is_never_written_through(tmp_path, planted):
+    """A symbolic link where the site writes a page or its assets, pointing outside the
+    report folder: nothing is written outside (the report refuses, naming the path)."""
+    from vpid_bench.report.safe import UnsafePathError
+
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    report = tmp_path / "s" / "report"
+    report.mkdir(parents=True)
+    (report / planted).symlink_to(outside / planted, target_is_directory=planted == "assets")
+    if planted == "assets":
+        (outside / planted).mkdir()
+    with pytest.raises(UnsafePathError, match="outside the report folder"):
+        html_sweep(tmp_path / "s", short=True, evil="ga")
+    assert [p for p in outside.rglob("*") if p.is_file()] == []
