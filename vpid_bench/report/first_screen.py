@@ -349,6 +349,10 @@ def _limits(v: Verdict) -> str:
     if v.limit == verdicts.LIMIT_BELOW:
         parts.append(". Ending below the floor is not better search: the runs stopped short "
                      "of the optimum" + (" in a box centred on the truth" if v.centred else ""))
+        if v.model_error:
+            parts.append(f", which model error has pulled off the truth (the record was made "
+                         f"by a richer model: {_name(v.model_error)}): ending nearer the "
+                         "truth with a worse fit is chance, not identification")
     elif v.limit == verdicts.LIMIT_TRUTH:  # a floor of 0: noise-free records
         parts.append(". A larger budget or a better optimizer would still gain: the records "
                      "allow the truth itself")
