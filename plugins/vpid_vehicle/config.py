@@ -323,6 +323,9 @@ def check_reference_file(config: VehicleConfig) -> float:
     """Read ``problem.reference.file`` once, so a file that does not fit fails the command's
     pre-flight (exit 2) rather than the job; returns the record's span (s), the window the
     model then integrates over."""
+    from .record_file import check_span
     from .reference_io import read_measured
 
-    return read_measured(config.reference.file).span
+    record = read_measured(config.reference.file)
+    check_span(record, config.dt, MAX_SAMPLES)
+    return record.span

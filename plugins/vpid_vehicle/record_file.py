@@ -242,6 +242,17 @@ def _numbers(path: Path, body: list[tuple[int, list[str]]],
     return data
 
 
+def check_span(record: Record, dt: float, max_steps: int) -> None:
+    """Refuse a record whose span needs more than ``max_steps`` model steps of ``dt`` s (a
+    time column in ms read as s once asked for hours of simulation), naming the span."""
+    steps = record.span / dt + 1
+    if steps > max_steps:
+        raise _fail(Path(record.path), f"a record spanning at most {max_steps} model steps "
+                    f"(this one: t = {record.t[0]:.6g} ... {record.t[-1]:.6g} s, "
+                    f"{record.span:.6g} s at dt = {dt:g} s is {steps:.4g} steps; a time in ms "
+                    "is written t [ms])")
+
+
 class Sampler:
     """The model's steps for a record and how the model is read at the record's times.
 

@@ -48,6 +48,7 @@ def csv_files(tmp_path):
                           lambda i, t: f"{t - 0.01 if i == 5 else t!r},1,1\n"),
         "repeat": _csv(tmp_path / "repeat.csv", lambda i, t: f"{0.0 if i == 1 else t!r},1,1\n"),
         "few": _csv(tmp_path / "few.csv", lambda i, t: f"{t!r},1,1\n", rows=5),
+        "long": _csv(tmp_path / "long.csv", lambda i, t: f"{1e4 * t!r},1,1\n"),
         "nocol": _csv(tmp_path / "nocol.csv", lambda i, t: f"{t!r},1\n", header="t,z1dd"),
         "unit": _csv(tmp_path / "unit.csv", lambda i, t: f"{t!r},1,1\n",
                      header="t [s],z1dd [km/h],z2dd"),
@@ -152,6 +153,7 @@ CSV_REFUSED = [
      "after 0.004 s"),
     ("31", "repeat", "a t column that increases from row to row; row 3 has t = 0 s"),
     ("31", "few", "at least 10 rows of samples; found 5"),
+    ("31", "long", "a record spanning at most 1000000 model steps"),
     ("31", "nocol", "a header with columns t, z1dd, z2dd (units optional, e.g. t [s]); column "
      "z2dd is missing; found columns t, z1dd"),
     ("31", "unit", "column z1dd in a unit of acceleration, one of g, m/s^2, m/s², mm/s^2 "
@@ -188,6 +190,9 @@ RIDE_REFUSED = [
      "input columns h1, h2 (all of h1, h2 or none); column h2 is missing"),
     ("a channel of the sensor set missing", ["problem=ride_quarter"], "t,zsdd",
      lambda k, t: f"{t},1\n", "column zudd is missing"),
+    ("t in ms read as s", ["problem=ride_quarter"], "t,zsdd,zudd",
+     lambda k, t: f"{1e4 * t},1,1\n", "a record spanning at most 200000 model steps (this one: "
+     "t = 0 ... 980 s, 980 s at dt = 0.001 s is 9.8e+05 steps; a time in ms is written t [ms])"),
     ("steer without speed", ["problem=lateral"], "t,r,ay,delta [deg]",
      lambda k, t: f"{t},1,1,1\n", "input columns delta, vx (all of delta, vx or none); column "
      "vx is missing"),

@@ -45,10 +45,12 @@ from vpid_bench import (
     relative_errors_percent,
 )
 
-from ..record_file import Column, Record, Sampler, column_name, read_record
+from ..record_file import Column, Record, Sampler, check_span, column_name, read_record
 from . import linear, roads
 
 log = logging.getLogger(__name__)
+#: Most model steps of one record (a simulated one's ``duration_s / dt``, a user's span).
+MAX_STEPS = 200_000
 
 #: Mixed into the instances' seed so the data's streams never equal an optimizer's
 #: (``SeedSequence(seed, spawn_key=(i,))``) at equal seeds.
@@ -112,7 +114,7 @@ class SuiteConfig(ProblemConfig):
             ("spread", 0 <= self.spread < 0.5, "a fraction in [0, 0.5): the box is 0.5-1.5x"),
             ("record_substeps", 1 <= self.record_substeps <= 100, "an integer in [1, 100]"),
         ], self)
-        if self.duration_s / self.dt > 200_000:
+        if self.duration_s / self.dt > MAX_STEPS:
             raise ConfigError("problem.duration_s", self.duration_s,
                               "at most 200000 samples (duration_s / dt)")
 
@@ -232,6 +234,7 @@ def read_ride_record(model: RideModel, config: Any) -> Record:
     record = read_record(config.reference.file, channels, model.record_columns(),
                          model.needs_record_inputs(config))
     model.check_record(record)
+    check_span(record, config.dt, MAX_STEPS)
     return record
 
 
