@@ -200,3 +200,20 @@ def test_a_link_planted_in_the_report_folder_is_never_written_through(tmp_path, 
     with pytest.raises(UnsafePathError, match="outside the report folder"):
         html_sweep(tmp_path / "s", short=True, evil="ga")
     assert [p for p in outside.rglob("*") if p.is_file()] == []
+
+
+def test_the_index_renders_the_verdict_objects(report_dir):
+    """The verdict as data (report/verdicts.py) gives the index's one-line headline: the
+    pick and those not separated from it, linked to their pages, and what limits it."""
+    from vpid_bench.report.site_pages import decision
+    from vpid_bench.report.verdicts import USE, Verdict
+
+    pages = site.Pages(["p"], ["de1", "de4"])
+    v = Verdict("p ps=20", "NoRE", "%", USE, pick="de4", tied=("de1",), limit="search")
+    assert decision(v, pages) == {
+        "kind": USE, "pick": ("de4", "optimizer-de4.html"),
+        "tied": [("de1", "optimizer-de1.html")], "limit": "more search would still gain",
+        "not_beaten": [], "over_bound": False}
+    assert decision(Verdict("c", "m", "", "empty"), pages) is None
+    index = (report_dir / "index.html").read_text(encoding="utf-8")
+    assert index.count('<p class="pick">') == 2  # one per context, beside the verdict text

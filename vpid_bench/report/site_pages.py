@@ -70,7 +70,8 @@ def _index(model: Any, pages: Pages, colour_of: Mapping[str, str]) -> dict[str, 
     verdicts = []
     for p in data.problems:
         items = [{"verdict": r.verdict, "context": r.context, "anchor": _anchor(r.context),
-                  "n": len(r.rows)} for r in model.results if of.get(r.context) == p]
+                  "n": len(r.rows), "decision": decision(getattr(r, "decision", None), pages)}
+                 for r in model.results if of.get(r.context) == p]
         verdicts.append({"name": p, "href": pages.problem(p), "contexts": items})
     n_ok = sum(r["status"] == "ok" for r in data.loaded.records)
     short_note = ("A single job's report: statistics, no tests, no figures; "
@@ -80,6 +81,26 @@ def _index(model: Any, pages: Pages, colour_of: Mapping[str, str]) -> dict[str, 
     return {"verdicts": verdicts, "n_ok": n_ok, "short": data.short, "figures": figures,
             "archive_notes": data.archive_notes, "suite": _suite(model, pages, colour_of),
             "short_note": short_note}
+
+
+#: What limits the leader (:data:`.verdicts.LIMIT_SEARCH` ...), in a few words.
+LIMITS = {"search": "more search would still gain",
+          "below_floor": "its runs stopped short of the optimum (below the floor)",
+          "estimator": "the estimator (objective) sets the floor",
+          "model": "model error sets the floor",
+          "records": "the records set the floor: more search will not help",
+          "truth": "the records allow the truth itself: only search limits it"}
+
+
+def decision(v: Any, pages: Pages) -> dict[str, Any] | None:
+    """The headline of a verdict object (:class:`.verdicts.Verdict`): its kind, the pick and
+    those the tests do not separate from it (with their pages), and what limits it."""
+    if v is None or v.kind == "empty":
+        return None
+    names = [(n, pages.optimizer(n)) for n in v.tied]
+    return {"kind": v.kind, "pick": (v.pick, pages.optimizer(v.pick)) if v.pick else None,
+            "tied": names, "limit": LIMITS.get(v.limit, ""),
+            "not_beaten": list(v.not_beaten), "over_bound": v.over_bound}
 
 
 def _suite(model: Any, pages: Pages, colour_of: Mapping[str, str]) -> dict[str, Any] | None:
