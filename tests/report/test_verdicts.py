@@ -3,7 +3,9 @@ known, and their words: whom to use, or why no one, and what limits the accuracy
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import statistics
 
 import pytest
 
@@ -241,3 +243,39 @@ def test_the_terminal_never_breaks_a_line_inside_a_name():
         assert "use forged \\| row with many words inside" in flat
         assert "\x02" not in flat and "\x03" not in flat and "\u00a0" not in flat
     assert "\x02" not in res.verdict and "use forged \\| row with" in res.verdict
+
+
+def test_each_instances_floor_meets_its_own_bound_from_the_jobs_file(tmp_path):
+    """The jobs' identifiability.json lists each instance's bound: instance 0's is far above
+    every floor, the others' far below. The verdict compares per instance (the estimator is
+    named), where instance 0's bound alone would have hidden it."""
+    import json
+
+    from report_synth import paired_sweep
+
+    from vpid_bench.report.compute import compute
+    from vpid_bench.report.first_screen import evidence
+
+    root = paired_sweep(tmp_path / "s", "vehicle", (20,), instances=6)
+    norms = {f"inst{k}": (500.0 if k == 0 else 1.0) for k in range(6)}
+    crb = {"names": ["m", "I", "m1", "m2", "k1", "k2", "c1", "c2", "a1"],
+           "crb_percent": [1.0] * 9, "crb_norm_percent": 500.0, "singular_values": [1.0],
+           "condition_number": 1.0, "sigma": [1.0],
+           "instances": [{"instance": i, "runs": [k], "crb_percent": [1.0] * 9,
+                          "crb_norm_percent": n} for k, (i, n) in enumerate(norms.items())]}
+    for job in root.glob("problem=*"):
+        (job / "identifiability.json").write_text(json.dumps(crb))
+    data = compute([root], True, 0.05, "random")
+    (context,) = data.contexts
+    assert data.instance_bounds[context] == norms and data.bounds[context] == 500.0
+    ev = evidence(data, context)
+    floors = data.floors(context)
+    assert set(floors) == set(norms) and all(10 < f < 40 for f in floors.values())
+    v = vd.decide(ev)
+    assert v.ratio == pytest.approx(statistics.median(floors[k] / norms[k] for k in norms))
+    assert v.bound == 1.0 and v.advice is not None
+    text = " ".join(verdict_text(v).split())
+    assert "median of each instance's own, 1 to 500" in text
+    assert "The estimator is the bottleneck" in text
+    one = vd.decide(dataclasses.replace(ev, bounds={k: 500.0 for k in floors}))
+    assert one.advice is None and one.below_bound  # instance 0's bound for all: hidden

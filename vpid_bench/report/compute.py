@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from . import anytime, estimates, estimator_floors, rankings, tables
-from .identifiability import crb_norm_by_context
+from .identifiability import crb_norm_by_context, crb_norms_by_instance
 from .load import LoadedRecords, NoRecordsError, load_records, reason, run_rows
 from .optima import add_optimum_columns, load_optima, opt_column_names
 
@@ -60,6 +60,8 @@ class ReportData:
     identified: dict[str, Any] = dataclasses.field(default_factory=dict)
     #: per context: the problem's fixed comparison rows (never truths)
     comparisons: dict[str, list[dict[str, Any]]] = dataclasses.field(default_factory=dict)
+    #: per context: each instance's own bound norm (%), keyed as the rows' ``instance``
+    instance_bounds: dict[str, dict[Any, float]] = dataclasses.field(default_factory=dict)
 
     @property
     def contexts(self) -> list[str]:
@@ -164,7 +166,8 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
                       rankings.box_centred(loaded.records, rows), verdicts, tests,
                       estimator_floors.by_context(loaded.records, rows), notes, truthless,
                       estimates.identified_by_context(loaded.records, rows, truthless),
-                      estimates.comparisons_by_context(loaded.records, rows))
+                      estimates.comparisons_by_context(loaded.records, rows),
+                      crb_norms_by_instance(loaded.records, rows))
 
 
 def _load(paths: Sequence[Path]) -> tuple[LoadedRecords, list[Any]]:

@@ -154,12 +154,14 @@ def evidence(data: Any, context: str) -> verdicts.Evidence:
     pairs = ([] if data.tests is None or data.tests.pairs.empty else
              data.tests.pairs[data.tests.pairs["context"] == context].to_dict("records"))
     floors = data.floors(context)
-    bound = data.bounds.get(context, math.nan)
+    bounds = data.instance_bounds.get(context)
+    if not bounds:  # a file without each instance's bound: its design's, for every instance
+        bound = data.bounds.get(context, math.nan)
+        bounds = ({k: bound for k in floors} if floors else {None: bound}) \
+            if math.isfinite(bound) else {}
     return verdicts.Evidence(
         context, mrows[0]["metric_name"] if mrows else "metric", data.unit(context),
-        tuple(methods), data.tests is not None, tuple(pairs), floors,
-        {k: bound for k in floors} if floors else ({None: bound} if math.isfinite(bound)
-                                                    else {}),
+        tuple(methods), data.tests is not None, tuple(pairs), floors, bounds,
         data.estimator(context), data.estimator_floors.get(context),
         tuple(dict.fromkeys(present[r] for r in refs if r in present)),
         tuple(dict.fromkeys(r for r in refs if r not in present)),
@@ -342,8 +344,11 @@ def _limits(v: Verdict) -> str:
         parts.append(f"; the records allow {_value(v.floor, v.unit)} under {_estimator(v)} "
                      "(floor: its own optimum's error, median over the instances)")
     if math.isfinite(v.bound):
+        lo, hi = v.bound_range
+        spread = (f", median of each instance's own, {fmt(lo, 3)} to {fmt(hi, 3)}"
+                  if hi > lo * (1 + 1e-6) else "")
         parts.append(f", an efficient estimator {_value(v.bound, v.unit)} (Cramér–Rao bound "
-                     "norm)")
+                     f"norm{spread})")
     if v.below_bound:
         parts.append(_below_bound(v))
     if v.limit == verdicts.LIMIT_BELOW:

@@ -225,6 +225,28 @@ def crb_norm_by_context(records: Sequence[Mapping[str, Any]],
     return {c: float(d["crb_norm_percent"]) for c, d in found.items()}
 
 
+def crb_norms_by_instance(records: Sequence[Mapping[str, Any]],
+                          rows: Sequence[Mapping[str, Any]]) -> dict[str, dict[Any, float]]:
+    """Per context, the norm of each instance's own Cramér–Rao bounds (percent; the
+    ``instances`` of the first readable ``identifiability.json`` of its jobs that has them),
+    keyed as the rows' ``instance`` column: the instance's id, or the run index where every
+    run fits the same data. For the verdicts, which compare each instance's floor with its
+    own bound (:func:`.verdicts.floor_over_bound`); contexts without them are left out."""
+    def read(path: Path, rec: Mapping[str, Any]) -> Any:
+        names = list((rec.get("parameters") or {}).get("names") or [])
+        data = read_identifiability(path, names)[0] if path.exists() else None
+        return (data or {}).get("instances") or None
+
+    out: dict[str, dict[Any, float]] = {}
+    for context, entries in first_file_by_context(records, rows, FILE, read).items():
+        norms: dict[Any, float] = {}
+        for e in entries:
+            keys = [e["instance"]] if isinstance(e["instance"], str) else e["runs"]
+            norms.update({k: float(e["crb_norm_percent"]) for k in keys})
+        out[context] = norms
+    return out
+
+
 def _design_label(contexts: Sequence[str]) -> str:
     """The contexts of a design without their protocol tokens (``ps=20``, ...)."""
     labels = []

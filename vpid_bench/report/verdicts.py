@@ -197,6 +197,7 @@ class Verdict:
     search: Search | None = None  # the search quality of ``pick``
     #: the floor lies below the bound (median per instance): the record's optimum is biased
     #: (``model_error``, ``on_edge`` say by what, when known)
+    bound_range: tuple[float, float] = (math.nan, math.nan)  # the instances' least, largest
     below_bound: bool = False
     model_error: str = ""
     on_edge: tuple[int, int] = (0, 0)
@@ -336,7 +337,9 @@ def decide(ev: Evidence) -> Verdict:
     floor = _median(list(ev.floors.values()))
     bound = _median(list(ev.bounds.values()))
     ratio = floor_over_bound(ev.floors, ev.bounds)
+    finite = [b for b in ev.bounds.values() if math.isfinite(b)]
     base |= {"floor": floor, "bound": bound, "ratio": ratio,
+             "bound_range": (min(finite), max(finite)) if finite else (math.nan, math.nan),
              # a floor far above the bound from a richer model's record: model error, which
              # no estimator of the fitted model removes, not the estimator
              "advice": None if ev.model_error else estimator_advice(
