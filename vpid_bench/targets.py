@@ -3,9 +3,11 @@
 A run may end before its budget once it is within the final target of its instance's optimum,
 but only where that optimum is known *in advance*: the archive of the problem's suite ships
 each instance's optimum (``optima.jsonl``: the value, the vector, and how many polished
-starts found it). A run of instance ``i`` then stops after the batch whose best value is at
-most ``f_opt + target * |f_opt|`` (``target`` itself where ``f_opt`` is 0), recorded as
-``stopped_by: "target"``.
+starts found it). An archive is untrusted: before a job trusts an optimum, the installed
+problem evaluates its objective at the optimum's vector and must find its value; archives
+that disagree on an instance's optimum are refused. A run of instance ``i`` then stops
+after the batch whose best value is at most ``f_opt + target * |f_opt|`` (``target`` itself
+where ``f_opt`` is 0), recorded as ``stopped_by: "target"``.
 
 The fixed-target results (hits, ECDF, ERT, AUC) are unchanged by the stop: the report's
 targets (relative gaps 1 to 1e-6) are all hit before a final target of 1e-8 is. What changes
@@ -20,6 +22,8 @@ import math
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from .errors import ConfigError
 from .problem import Problem
 from .spec import Job
@@ -31,13 +35,62 @@ def stop_value(f_opt: float, target: float) -> float:
     return f_opt + target * abs(f_opt) if f_opt != 0 else target
 
 
+#: Relative tolerance within which the installed problem's objective at a certified point
+#: must give the archived value (and within which two archives' values agree): a batch
+#: evaluation may differ from a single one by a few ulps, a changed or forged value by more.
+CERTIFY_RTOL = 1e-9
+
+
+def _close(a: float, b: float) -> bool:
+    return math.isfinite(a) and math.isfinite(b) and \
+        abs(a - b) <= CERTIFY_RTOL * max(abs(a), abs(b), 1e-12)
+
+
+def _refused(job: Job, run: int, instance: Problem, why: str) -> ConfigError:
+    return ConfigError("target", job.spec.target, f"optima the installed problem confirms: "
+                       f"{job.problem_name} run {run} (instance {instance.instance_id()}): "
+                       f"{why}; rebuild the archive (benchmarks/build_archive.py, "
+                       "docs/protocol.md) or leave target= out")
+
+
+def _certify(job: Job, run: int, instance: Problem, found: list[Any]) -> Any:
+    """The optimum of run ``run``'s instance that the archives agree on and the installed
+    problem confirms: the objective at its point (inside the box) is its value, and it is no
+    higher than the objective at the truth when the truth is known. A forged ``f_opt`` once
+    stopped every run after a few evaluations, recorded ``ok``."""
+    opt = min(found, key=lambda o: o.f_opt)
+    for other in found:
+        if not _close(other.f_opt, opt.f_opt):
+            raise _refused(job, run, instance, f"the archives disagree on its optimum "
+                           f"({opt.f_opt:.10g} in {opt.path}, {other.f_opt:.10g} in "
+                           f"{other.path})")
+    x = np.asarray(opt.x_opt, dtype=float)
+    box = instance.bounds
+    if not (np.all(x >= box.lower) and np.all(x <= box.upper)):
+        raise _refused(job, run, instance, f"its certified point ({opt.path}) lies outside "
+                       "the search box")
+    f = float(np.asarray(instance.evaluate(x[None, :]), dtype=float).ravel()[0])
+    if not _close(f, opt.f_opt):
+        raise _refused(job, run, instance, f"the archive gives f_opt {opt.f_opt:.10g} at its "
+                       f"point ({opt.path}), the installed problem {f:.10g} there")
+    truth = instance.x_true
+    if truth is not None:
+        f_true = float(np.asarray(instance.evaluate(np.asarray(truth, dtype=float)[None, :]),
+                                  dtype=float).ravel()[0])
+        if opt.f_opt > f_true and not _close(opt.f_opt, f_true):
+            raise _refused(job, run, instance, f"the archive's optimum {opt.f_opt:.10g} "
+                           f"({opt.path}) lies above the objective at the truth, {f_true:.10g}")
+    return opt
+
+
 def certified_optima(job: Job, problem: Problem, root: Path | None = None) -> dict[int, Any]:
     """Per run index of ``job``, the optimum of its instance found in the archives below
     ``root`` (default: those shipped with the package), matched as the report matches an
-    optimum file (problem, instance id, data settings, dimension); runs without one are
-    left out."""
+    optimum file (problem, instance id, data settings, dimension) and confirmed by the
+    installed problem (:func:`_certify`; :class:`ConfigError` when it is not); runs without
+    one are left out."""
     from .report.archive import load_all
-    from .report.optima import OptimaIndex, match_optimum
+    from .report.optima import OptimaIndex, matching_optima
 
     archives, _ = load_all(root, {job.problem_name})  # an unusable archive certifies nothing
     optima = [o for a in archives for o in a.optima if o.problem == job.problem_name]
@@ -45,12 +98,13 @@ def certified_optima(job: Job, problem: Problem, root: Path | None = None) -> di
     names = [""] * problem.bounds.dim
     found = {}
     for i in range(job.spec.runs):
+        instance = problem.instance(i)
         record = {"problem": {"name": job.problem_name, "config": job.problem_settings()},
-                  "instance": {"id": problem.instance(i).instance_id()},
+                  "instance": {"id": instance.instance_id()},
                   "parameters": {"names": names}}
-        opt = match_optimum(record, index)
-        if opt is not None:
-            found[i] = opt
+        matches = matching_optima(record, index)
+        if matches:
+            found[i] = _certify(job, i, instance, matches)
     return found
 
 

@@ -169,19 +169,18 @@ def _data_settings(settings: Mapping[str, Any] | None) -> str | None:
                       sort_keys=True, default=str)
 
 
-def match_optimum(record: Mapping[str, Any], index: OptimaIndex) -> Optimum | None:
-    """The optimum of a record's instance: files with the record's problem, instance id,
+def matching_optima(record: Mapping[str, Any], index: OptimaIndex) -> list[Optimum]:
+    """Every optimum of a record's instance: files with the record's problem, instance id,
     data settings (the protocol keys ``ps``/``iterations`` do not change a record's data) and
-    dimension. Several such files (e.g. one per population size of a sweep on the same
-    record) hold optima of the same instance: the lowest is the best known. A file without
-    settings matches only by a non-null instance id (the id names the data)."""
+    dimension. A file without settings matches only by a non-null instance id (the id names
+    the data)."""
     problem = record["problem"]["name"]
     inst = (record.get("instance") or {}).get("id") if isinstance(
         record.get("instance"), Mapping) else None
     inst = inst if isinstance(inst, str) else None
     settings = _data_settings(record["problem"].get("config") or {})
     dim = len((record.get("parameters") or {}).get("names") or [])
-    best = None
+    found = []
     for o in index.optima:
         if o.problem != problem or o.instance != inst or len(o.x_opt) != dim:
             continue
@@ -190,9 +189,15 @@ def match_optimum(record: Mapping[str, Any], index: OptimaIndex) -> Optimum | No
                 continue
         elif _data_settings(o.settings) != settings:
             continue
-        if best is None or o.f_opt < best.f_opt:
-            best = o
-    return best
+        found.append(o)
+    return found
+
+
+def match_optimum(record: Mapping[str, Any], index: OptimaIndex) -> Optimum | None:
+    """The optimum of a record's instance (:func:`matching_optima`). Several files (e.g. one
+    per population size of a sweep on the same record) hold optima of the same instance: the
+    lowest is the best known."""
+    return min(matching_optima(record, index), key=lambda o: o.f_opt, default=None)
 
 
 def column_stem(metrics: Mapping[str, float], record_metrics: Sequence[str]) -> str:

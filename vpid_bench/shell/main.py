@@ -356,7 +356,8 @@ def _main(argv: Sequence[str] | None) -> None:
         lock = FolderLock(plan.output_dir, key)
         preflight.check_writable(plan.output_dir, key)
         lock.acquire()
-        task.lock, task.progress = lock, _sweep_progress(plan)
+        # the problems the pre-flight's checks built are not built twice
+        task.lock, task.progress, task._problems = lock, _sweep_progress(plan), plan.problems
         preflight.create_job_dirs(plan)
     except VpidBenchError as exc:
         _refuse(exc)

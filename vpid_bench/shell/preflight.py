@@ -56,6 +56,8 @@ class Plan:
     #: The folder of every job of a sweep, as Hydra's basic sweeper will name them (empty for a
     #: single run, an optimizing sweeper or a custom ``hydra.sweep.subdir``).
     job_dirs: list[Path] = dataclasses.field(default_factory=list)
+    #: The problems the pre-flight built (a :class:`~vpid_bench.build.ProblemCache`), or None.
+    problems: Any = None
 
 
 def _parser() -> Any:
@@ -475,6 +477,7 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
         raise _hydra_error(exc) from None
     if custom_sweeper:
         refuse_test_instances(jobs)
+    problems = check_sized_jobs(jobs)
     key = "hydra.sweep.dir" if cmd.multirun else "hydra.run.dir"
     folder = _resume_folder(cmd, full, key) if cmd.resume is not None else None
     if folder is not None:
@@ -488,7 +491,32 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
     hydra_args.append(f"{key}={_quote(str(folder))}")
     job_dirs = (planned_job_dirs(points, full, folder)
                 if cmd.multirun and not custom_sweeper else [])
-    return Plan(hydra_args, folder, cmd.multirun, jobs, points, job_dirs)
+    return Plan(hydra_args, folder, cmd.multirun, jobs, points, job_dirs, problems)
+
+
+def check_sized_jobs(jobs: Sequence[Job]) -> Any:
+    """The checks a job makes once its problem is built, made here for every job that needs
+    them: ``budget_per_dim`` against the problem's dimension (:meth:`Job.sized`) and
+    ``target`` against the optima certified for its runs' instances
+    (:func:`vpid_bench.targets.with_stops`). A bad value there once stopped its job only when
+    it started (exit 1, two lines); now it is one line before any job runs. Each problem is
+    built once per config; the cache is handed to the jobs (a basic launcher's jobs reuse
+    it). A problem whose construction fails is left to its job, which reports it."""
+    from ..build import ProblemCache
+    from ..targets import with_stops
+
+    cache = ProblemCache()
+    for job in jobs:
+        if job.spec.target is None and job.spec.budget_per_dim is None:
+            continue
+        try:
+            problem = cache.get(job)
+        except VpidBenchError:
+            raise
+        except Exception:  # noqa: BLE001 - plugin code: its job runs it again and says why
+            continue
+        with_stops(job.sized(problem.bounds.dim), problem)
+    return cache
 
 
 def _globs_listed(hydra_args: Sequence[str], parsed: Sequence[Any], registry: Registry,

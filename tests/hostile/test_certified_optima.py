@@ -1,0 +1,143 @@
+"""Issue 35, failures 10 and 14.
+
+10. ``target=`` trusted an archive's optima: a forged ``f_opt`` stopped every run after a few
+    evaluations, recorded ``ok``, and optima of two archives that disagree were resolved
+    silently (the lowest won). An optimum now carries its point, and the installed problem
+    evaluates its objective there (and at the truth) before the optimum is trusted;
+    archives that disagree are refused.
+14. Bad ``target=`` and ``budget_per_dim=`` values were refused only when their job started
+    (exit 1, two lines): the pre-flight now refuses them, one ``error:`` line, exit 2,
+    before any job runs.
+
+The archives here are optima-only copies of the shipped smoke archive's optima of
+``smoke_quarter``, forged and re-hashed as a forger would.
+"""
+
+from __future__ import annotations
+
+import gzip
+import hashlib
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hostile_helpers import error_lines, run_cli
+
+from vpid_bench.report import archive as arch
+
+PROBLEM = "smoke_quarter"
+JOB = [f"problem={PROBLEM}", "optimizer=random", "runs=2", "progress=false", "report=false",
+       "archive=false"]
+
+
+def _shipped_optima() -> list[dict]:
+    lines = (arch.default_root() / "smoke" / arch.OPTIMA).read_text().splitlines()
+    return [d for d in map(json.loads, lines) if d["problem"] == PROBLEM]
+
+
+def _archive(folder: Path, optima: list[dict]) -> Path:
+    """An optima-only archive of ``optima`` in ``folder`` whose checksums match."""
+    folder.mkdir(parents=True)
+    (folder / arch.RECORDS).write_bytes(gzip.compress(b"", mtime=0))
+    (folder / arch.OPTIMA).write_text("".join(json.dumps(o) + "\n" for o in optima))
+    files = {name: {"sha256": hashlib.sha256((folder / name).read_bytes()).hexdigest()}
+             for name in (arch.RECORDS, arch.OPTIMA)}
+    (folder / arch.MANIFEST).write_text(json.dumps({
+        "schema": arch.SCHEMA, "suite": folder.name, "files": files,
+        "problems": {PROBLEM: {}}, "optima_only": True}))
+    return folder
+
+
+def _instance(index: int):
+    from vpid_bench.build import build_problem
+    from vpid_bench.plugins import Registry
+
+    return build_problem(Registry(), {"name": PROBLEM}).instance(index)
+
+
+def _job(tmp_path: Path, root: Path, *extra: str):
+    return run_cli([*JOB, "target=1e-8", *extra, f"hydra.run.dir={tmp_path / 'job'}"],
+                   tmp_path, env={arch.ARCHIVE_DIR_ENV: str(root)})
+
+
+def _refused(done, *words: str) -> str:
+    assert done.returncode == 2, done.stderr[-2000:]
+    (line,) = done.stderr.splitlines()
+    assert line == error_lines(done.stderr)[0]
+    assert line.startswith("error: target=1e-08 is not allowed: optima the installed problem "
+                           f"confirms: {PROBLEM} run 0 (instance seed=0/0): ")
+    for w in words:
+        assert w in line, line
+    return line
+
+
+def test_10_a_genuine_archive_is_confirmed_and_its_runs_stop(tmp_path):
+    """The control: the shipped optima pass the re-evaluation and the runs stop there."""
+    root = tmp_path / "archives"
+    _archive(root / "smoke", _shipped_optima())
+    done = _job(tmp_path, root)
+    assert done.returncode == 0, done.stderr[-2000:]
+    records = [json.loads(p.read_text()) for p in (tmp_path / "job").glob("records/run-*")]
+    assert len(records) == 2 and all("target" in r for r in records)
+
+
+def test_10_a_forged_f_opt_is_refused_before_any_run(tmp_path):
+    """f_opt raised tenfold: every run would stop at once (after one batch), recorded ok."""
+    optima = _shipped_optima()
+    optima[0]["f_opt"] *= 10
+    root = tmp_path / "archives"
+    _archive(root / "smoke", optima)
+    done = _job(tmp_path, root)
+    _refused(done, "the archive gives f_opt", "the installed problem", "there",
+             "rebuild the archive")
+    assert not list(tmp_path.rglob("records/run-*.json"))  # nothing ran
+
+
+def test_10_a_consistent_forgery_above_the_truth_is_refused(tmp_path):
+    """A forger who evaluates the problem: a point 10 % off the truth with its true value.
+    The value checks out there, but it lies above the objective at the truth: no optimum."""
+    optima = _shipped_optima()
+    inst = _instance(0)
+    x = np.clip(np.asarray(inst.x_true) * 1.1, inst.bounds.lower, inst.bounds.upper)
+    optima[0].update(x_opt=x.tolist(), f_opt=float(inst.evaluate(x[None, :])[0]))
+    root = tmp_path / "archives"
+    _archive(root / "smoke", optima)
+    _refused(_job(tmp_path, root), "lies above the objective at the truth")
+
+
+def test_10_a_point_outside_the_box_is_refused(tmp_path):
+    optima = _shipped_optima()
+    optima[0]["x_opt"][0] = 1e6
+    root = tmp_path / "archives"
+    _archive(root / "smoke", optima)
+    _refused(_job(tmp_path, root), "lies outside the search box")
+
+
+def test_10_archives_that_disagree_are_refused(tmp_path):
+    """Two archives certify instance 0 with different values; the lower one once won."""
+    genuine, other = _shipped_optima(), _shipped_optima()
+    other[0]["f_opt"] *= 1 - 1e-3
+    root = tmp_path / "archives"
+    _archive(root / "a", genuine)
+    _archive(root / "b", other)
+    line = _refused(_job(tmp_path, root), "the archives disagree on its optimum")
+    assert str(root / "a") in line and str(root / "b") in line
+
+
+@pytest.mark.parametrize(("args", "words"), [
+    ([f"problem={PROBLEM}", "budget_per_dim=999999999"],
+     "budget_per_dim=999999999 is not allowed: at most 250000000 for a problem of 4"),
+    (["problem=functions", "target=1e-8"],
+     "target=1e-08 is not allowed: runs whose instance optimum is certified in advance: "
+     "functions run 0"),
+    (["-m", f"problem={PROBLEM},functions", "target=1e-8"],  # the second job's value
+     "target=1e-08 is not allowed: runs whose instance optimum is certified in advance: "
+     "functions run 0"),
+], ids=["budget_per_dim", "target", "target-in-a-sweep"])
+def test_14_the_preflight_refuses_what_only_the_built_problem_tells(args, words, tmp_path):
+    done = run_cli([*args, *JOB[1:]], tmp_path)
+    assert done.returncode == 2, done.stderr[-2000:]
+    (line,) = done.stderr.splitlines()
+    assert line.startswith(f"error: {words}"), line
+    assert not (tmp_path / "outputs").exists()  # refused before any folder was written
