@@ -9,8 +9,8 @@
     (exit 1, two lines): the pre-flight now refuses them, one ``error:`` line, exit 2,
     before any job runs.
 
-The archives here are optima-only copies of the shipped smoke archive's optima of
-``smoke_quarter``, forged and re-hashed as a forger would.
+The archives here are optima-only archives of ``smoke_quarter``'s first instances, packed
+from a small sweep by this code, then forged and re-hashed as a forger would.
 """
 
 from __future__ import annotations
@@ -31,9 +31,27 @@ JOB = [f"problem={PROBLEM}", "optimizer=random", "runs=2", "progress=false", "re
        "archive=false"]
 
 
-def _shipped_optima() -> list[dict]:
-    lines = (arch.default_root() / "smoke" / arch.OPTIMA).read_text().splitlines()
-    return [d for d in map(json.loads, lines) if d["problem"] == PROBLEM]
+@pytest.fixture(scope="module")
+def genuine(tmp_path_factory, compose_config, registry) -> list[dict]:
+    """The optima of instances 0 and 1, polished by this code (a sweep of 2 runs, packed)."""
+    from vpid_bench.experiment import run_from_config
+    from vpid_bench.report.pack import pack
+
+    root = tmp_path_factory.mktemp("optima")
+    run_from_config(compose_config([*JOB, "problem.iterations=2"]), root / "sweep" / "job",
+                    registry, optima_dir=root / "sweep" / "optima")
+    pack(root / "sweep", "smoke", root / "packed", command="t", commit=None,
+         made_at="2026-01-01T00:00:00+00:00", optima_only=True)
+    optima = [json.loads(line) for line in (root / "packed" / arch.OPTIMA).read_text()
+              .splitlines()]
+    assert [o["instance"] for o in optima] == ["seed=0/0", "seed=0/1"]
+    return optima
+
+
+@pytest.fixture
+def optima(genuine) -> list[dict]:
+    """A fresh copy to forge."""
+    return json.loads(json.dumps(genuine))
 
 
 def _archive(folder: Path, optima: list[dict]) -> Path:
@@ -72,19 +90,18 @@ def _refused(done, *words: str) -> str:
     return line
 
 
-def test_10_a_genuine_archive_is_confirmed_and_its_runs_stop(tmp_path):
-    """The control: the shipped optima pass the re-evaluation and the runs stop there."""
+def test_10_a_genuine_archive_is_confirmed_and_its_runs_stop(tmp_path, optima):
+    """The control: genuine optima pass the re-evaluation and the runs stop there."""
     root = tmp_path / "archives"
-    _archive(root / "smoke", _shipped_optima())
+    _archive(root / "smoke", optima)
     done = _job(tmp_path, root)
     assert done.returncode == 0, done.stderr[-2000:]
     records = [json.loads(p.read_text()) for p in (tmp_path / "job").glob("records/run-*")]
     assert len(records) == 2 and all("target" in r for r in records)
 
 
-def test_10_a_forged_f_opt_is_refused_before_any_run(tmp_path):
+def test_10_a_forged_f_opt_is_refused_before_any_run(tmp_path, optima):
     """f_opt raised tenfold: every run would stop at once (after one batch), recorded ok."""
-    optima = _shipped_optima()
     optima[0]["f_opt"] *= 10
     root = tmp_path / "archives"
     _archive(root / "smoke", optima)
@@ -94,10 +111,9 @@ def test_10_a_forged_f_opt_is_refused_before_any_run(tmp_path):
     assert not list(tmp_path.rglob("records/run-*.json"))  # nothing ran
 
 
-def test_10_a_consistent_forgery_above_the_truth_is_refused(tmp_path):
+def test_10_a_consistent_forgery_above_the_truth_is_refused(tmp_path, optima):
     """A forger who evaluates the problem: a point 10 % off the truth with its true value.
     The value checks out there, but it lies above the objective at the truth: no optimum."""
-    optima = _shipped_optima()
     inst = _instance(0)
     x = np.clip(np.asarray(inst.x_true) * 1.1, inst.bounds.lower, inst.bounds.upper)
     optima[0].update(x_opt=x.tolist(), f_opt=float(inst.evaluate(x[None, :])[0]))
@@ -106,21 +122,19 @@ def test_10_a_consistent_forgery_above_the_truth_is_refused(tmp_path):
     _refused(_job(tmp_path, root), "lies above the objective at the truth")
 
 
-def test_10_a_point_outside_the_box_is_refused(tmp_path):
-    optima = _shipped_optima()
+def test_10_a_point_outside_the_box_is_refused(tmp_path, optima):
     optima[0]["x_opt"][0] = 1e6
     root = tmp_path / "archives"
     _archive(root / "smoke", optima)
     _refused(_job(tmp_path, root), "lies outside the search box")
 
 
-def test_10_archives_that_disagree_are_refused(tmp_path):
+def test_10_archives_that_disagree_are_refused(tmp_path, genuine, optima):
     """Two archives certify instance 0 with different values; the lower one once won."""
-    genuine, other = _shipped_optima(), _shipped_optima()
-    other[0]["f_opt"] *= 1 - 1e-3
+    optima[0]["f_opt"] *= 1 - 1e-3
     root = tmp_path / "archives"
     _archive(root / "a", genuine)
-    _archive(root / "b", other)
+    _archive(root / "b", optima)
     line = _refused(_job(tmp_path, root), "the archives disagree on its optimum")
     assert str(root / "a") in line and str(root / "b") in line
 
@@ -135,9 +149,13 @@ def test_10_archives_that_disagree_are_refused(tmp_path):
      "target=1e-08 is not allowed: runs whose instance optimum is certified in advance: "
      "functions run 0"),
 ], ids=["budget_per_dim", "target", "target-in-a-sweep"])
-def test_14_the_preflight_refuses_what_only_the_built_problem_tells(args, words, tmp_path):
-    done = run_cli([*args, *JOB[1:]], tmp_path)
+def test_14_the_preflight_refuses_what_only_the_built_problem_tells(args, words, tmp_path,
+                                                                     genuine):
+    root = tmp_path / "archives"  # certifies smoke_quarter's runs: only functions lacks one
+    _archive(root / "smoke", genuine)
+    done = run_cli([*args, *JOB[1:]], tmp_path, env={arch.ARCHIVE_DIR_ENV: str(root)})
     assert done.returncode == 2, done.stderr[-2000:]
     (line,) = done.stderr.splitlines()
     assert line.startswith(f"error: {words}"), line
     assert not (tmp_path / "outputs").exists()  # refused before any folder was written
+    assert not list(tmp_path.rglob("records"))
