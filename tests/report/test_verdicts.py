@@ -192,7 +192,7 @@ def test_references_not_run_are_said():
                             missing=("random", "centre")))
     assert (v.kind, v.pick) == (vd.USE, "de4")
     assert ("random search (random) and the box centre (centre) were not run: nothing here "
-            "shows that it beats them") in verdict_text(v)
+            "shows that de4 beats them") in verdict_text(v)
 
 
 def test_verdicts_wrap_to_the_terminals_width(monkeypatch):

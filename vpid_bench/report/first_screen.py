@@ -322,7 +322,7 @@ def _missing(v: Verdict) -> str:
         return ""
     one = len(v.missing) == 1
     return (f"; {' and '.join(_ref(r) for r in v.missing)} {'was' if one else 'were'} not "
-            f"run: nothing here shows that it beats {'it' if one else 'them'}")
+            f"run: nothing here shows that {_name(v.pick)} beats {'it' if one else 'them'}")
 
 
 def _estimator(v: Verdict) -> str:
