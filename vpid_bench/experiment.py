@@ -112,7 +112,8 @@ def _job_key(job: Job, registry: Registry | None, problem: Any) -> dict[str, Any
     if registry is not None:
         for kind, name in (("problem", job.problem_name), ("optimizer", job.optimizer_name)):
             source = registry.provenance(kind, name)
-            plugins[kind] = [source.get("distribution"), source.get("version")]
+            plugins[kind] = [source.get("distribution"), source.get("version"),
+                             source.get("code")]  # a plugin changed under the same version
     more: dict[str, Any] = {}
     if job.stop_at:  # only then: the run ids of every job without a target stay as they were
         more["target"] = [job.spec.target, sorted(job.stop_at.items())]
@@ -257,11 +258,14 @@ def _run_job(job: Job, job_dir: Path, registry: Registry | None, problem: Any,
 SUPERSEDED_DIR = "superseded"
 
 
-def set_aside_superseded(job_dir: Path, key: Mapping[str, Any]) -> int:
+def set_aside_superseded(job_dir: Path, key: Mapping[str, Any],
+                         provenance: Mapping[str, Mapping[str, Any]] | None = None) -> int:
     """Move every record of ``job_dir`` whose run id is not the one this job gives its run
     index (made from superseded data: after ``problem.reference.file`` changed, the old
-    records once stayed beside the new ones and the report counted both) into
-    ``records/superseded/``. Returns how many; says so in one line."""
+    records once stayed beside the new ones and the report counted both; or by another
+    release or another code of a plugin) into ``records/superseded/``. Returns how many;
+    says so in one line, naming what changed where the records tell (:func:`_what_changed`,
+    against the plugins' ``provenance``)."""
     folder = job_dir / rec.RECORDS_DIR
     moved = []
     for path in sorted(folder.glob("run-*.json")) if folder.is_dir() else []:
@@ -269,14 +273,43 @@ def set_aside_superseded(job_dir: Path, key: Mapping[str, Any]) -> int:
         if named is not None and named[1] != rec.run_id(key, named[0]):
             moved.append(path)
     if moved:
+        why = _what_changed(moved, provenance or {})
         target = folder / SUPERSEDED_DIR
         _refuse_swapped(target)
         target.mkdir(exist_ok=True)
         for path in moved:
             path.replace(target / path.name)
-        print(f"warning: {len(moved)} record(s) in {folder} were made from other data, plugins "
-              f"or settings; set aside in {target} (never counted)", file=sys.stderr, flush=True)
+        print(f"warning: {len(moved)} record(s) in {folder} were made {why}; set aside in "
+              f"{target} (never counted) and their runs are run again", file=sys.stderr,
+              flush=True)
     return len(moved)
+
+
+def _what_changed(paths: list[Path], provenance: Mapping[str, Mapping[str, Any]]) -> str:
+    """What made the records at ``paths`` another job's, as far as they record it: another
+    release of a plugin, or its code changed under the same version (the digest of its
+    installed source, :func:`~vpid_bench.records.provenance.code_digest`); else the
+    general words."""
+    found: set[str] = set()
+    for path in paths[:20]:  # a few tell; a job folder may hold thousands
+        try:
+            old = rec.read_record(path)
+        except rec.CorruptRecordError:
+            continue
+        for kind, now in provenance.items():
+            was = (old.get(kind) or {}).get("plugin") if isinstance(old.get(kind), dict) \
+                else None
+            if not isinstance(was, dict) or not now:
+                continue
+            name = f"{kind} plugin {now.get('plugin')!s}"
+            if was.get("version") != now.get("version"):
+                found.add(f"by another release of the {name} ({was.get('version')!s}, now "
+                          f"{now.get('version')!s})")
+            elif was.get("code") != now.get("code"):
+                found.add(f"by other code of the {name} (its installed source changed under "
+                          f"the same version {now.get('version')!s})" if was.get("code") else
+                          f"before vpid-bench recorded the code of the {name}")
+    return "; ".join(sorted(found)) or "from other data, plugins or settings"
 
 
 def analysis_limit_s(job: Job) -> float | None:
@@ -306,7 +339,7 @@ def _run_missing(job: Job, problem: Any, job_dir: Path, key: Mapping[str, Any],
                 bar.update(1)
             else:
                 todo[i] = (rid, path)
-        set_aside_superseded(job_dir, key)
+        set_aside_superseded(job_dir, key, provenance)
         lockstep = len(todo) > 1 and joins_lockstep(job, problem)
         if pool is not None:  # each worker warms up once per job
             outcomes = outcomes_isolated(pool, job, list(todo), lockstep)

@@ -1,21 +1,28 @@
 """Provenance: which versions of what produced a record.
 
-Two kinds of facts, both looked up once per process (reading package metadata costs
+Three kinds of facts, each looked up once per process (reading package metadata costs
 milliseconds and a record is written per run):
 
 * :func:`package_versions`: Python and the numerical stack that can change any result;
 * :func:`distribution_provenance`: for a plugin, the distribution that ships it, its version
   and the installed versions of what it declares it requires. The plugin registry records this
   when it loads each entry point, so a record can name the exact plugin release, and a resumed
-  job can tell runs made by another release (see :mod:`vpid_bench.experiment`).
+  job can tell runs made by another release (see :mod:`vpid_bench.experiment`);
+* :func:`code_digest`: a digest of the installed source of the package that defines a
+  plugin's class. A plugin changed and reinstalled under the same version (as one does while
+  developing it) was once served its old records without a word; the digest enters each
+  run's id, so its runs are run again.
 """
 
 from __future__ import annotations
 
 import functools
+import hashlib
 import importlib.metadata
 import platform
 import re
+import sys
+from pathlib import Path
 from typing import Any
 
 #: Packages whose version can change a result, recorded in every record.
@@ -72,3 +79,47 @@ def distribution_provenance(dist: importlib.metadata.Distribution | None) -> dic
         return {"distribution": str(dist.metadata["Name"]), "version": str(dist.version),
                 "requires": {}}
     return {"distribution": name, "version": version, "requires": dict(requires)}
+
+
+#: Source bytes read for a plugin's code digest; past it, the remaining files count by path,
+#: size and modification time (a plugin package is a few hundred kB; a class defined inside
+#: a large library should not cost a read of all of it).
+MAX_CODE_BYTES = 32 * 1024 * 1024
+
+
+@functools.lru_cache(maxsize=64)
+def _tree_digest(root: str) -> str:
+    """SHA-256 (16 hex digits) of every ``.py`` file below ``root`` (or of the file
+    ``root``): relative paths and contents, in sorted order."""
+    base = Path(root)
+    files = [base] if base.is_file() else sorted(
+        p for p in base.rglob("*.py") if "__pycache__" not in p.parts and p.is_file())
+    h = hashlib.sha256()
+    budget = MAX_CODE_BYTES
+    for path in files:
+        rel = path.name if path == base else str(path.relative_to(base))
+        info = path.stat()
+        h.update(f"{rel}\0{info.st_size}\0".encode())
+        if info.st_size <= budget:
+            budget -= info.st_size
+            h.update(path.read_bytes())
+        else:
+            h.update(str(info.st_mtime_ns).encode())
+    return h.hexdigest()[:16]
+
+
+def code_digest(cls: type) -> str | None:
+    """A digest of the installed code of the package that defines ``cls`` (every ``.py``
+    file of its top-level package, or its module's file when that is not a package), or
+    ``None`` when it has no source file (defined interactively, or in a zip)."""
+    top = cls.__module__.split(".")[0]
+    for name in (top, cls.__module__):
+        file = getattr(sys.modules.get(name), "__file__", None)
+        if file:
+            path = Path(file)
+            root = path.parent if path.name == "__init__.py" else path
+            try:
+                return _tree_digest(str(root.resolve()))
+            except OSError:
+                return None
+    return None
