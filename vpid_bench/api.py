@@ -26,6 +26,7 @@ from .bridge import LoopOptimizer
 from .errors import ConfigError, OptimizerContractError, PluginError, VpidBenchError
 from .fileio import write_text_atomic
 from .optimizer import GenerationalOptimizer, Optimizer, OptimizerParams, check_compatible
+from .params import added_setting
 from .plugins import registered_optimizer
 from .problem import (
     FILLED_PARAMS,
@@ -50,6 +51,7 @@ __all__ = [
     "Problem",
     "ProblemConfig",
     "VpidBenchError",
+    "added_setting",
     "check_compatible",
     "default_budget",
     "offers_residuals",

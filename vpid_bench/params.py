@@ -143,6 +143,43 @@ def build_dataclass(cls: type[T], mapping: Mapping[str, Any] | None, prefix: str
         raise ConfigError(prefix or cls.__name__, kwargs, str(exc)) from exc
 
 
+#: Field metadata of :func:`added_setting`.
+ADDED_SETTING = "vpid_bench_added_setting"
+
+
+def added_setting(default: Any = dataclasses.MISSING,
+                  default_factory: Any = dataclasses.MISSING) -> Any:
+    """A config field added after runs and archives were recorded, whose default reproduces
+    the problem as it was (``reference: RecordFileConfig = added_setting(default_factory=
+    RecordFileConfig)``). At its default it is left out of a job's settings
+    (:func:`settings_of`): records, run ids and instance optima made before the key existed
+    stay valid, and so do archives; any other value is recorded as usual."""
+    return dataclasses.field(default=default, default_factory=default_factory,
+                             metadata={ADDED_SETTING: True})
+
+
+def settings_of(obj: Any) -> Any:
+    """:func:`to_plain` of a config, leaving out every :func:`added_setting` field (at any
+    depth) whose value equals its default."""
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        out = {}
+        for f in dataclasses.fields(obj):
+            value = getattr(obj, f.name)
+            if f.metadata.get(ADDED_SETTING) and value == _default_of(f):
+                continue
+            out[f.name] = settings_of(value)
+        return out
+    return to_plain(obj)
+
+
+def _default_of(f: dataclasses.Field) -> Any:
+    if f.default is not dataclasses.MISSING:
+        return f.default
+    if f.default_factory is not dataclasses.MISSING:
+        return f.default_factory()
+    return dataclasses.MISSING
+
+
 def to_plain(obj: Any) -> Any:
     """A dataclass (possibly nested) as plain JSON-able dicts, lists and scalars."""
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):

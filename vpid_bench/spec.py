@@ -29,7 +29,7 @@ from typing import Any
 from .contract import check_problem_class
 from .errors import ConfigError
 from .optimizer import Optimizer, OptimizerParams, check_compatible
-from .params import build_dataclass, to_plain
+from .params import build_dataclass, settings_of, to_plain
 from .plugins import Registry
 from .problem import FILLED_PARAMS, PROTOCOL_KEYS, Problem, ProblemConfig, default_budget
 
@@ -163,8 +163,9 @@ class Job:
                                    params=dataclasses.replace(self.params, budget=budget))
 
     def problem_settings(self) -> dict[str, Any]:
-        """The problem's settings as plain data (the protocol included)."""
-        return to_plain(self.problem_config)
+        """The problem's settings as plain data (the protocol included; a key added later
+        left out at its default, :func:`~vpid_bench.params.added_setting`)."""
+        return settings_of(self.problem_config)
 
     def optimizer_settings(self) -> dict[str, Any]:
         """The optimizer's own settings as plain data (what the job filled in left out: the

@@ -70,3 +70,31 @@ def test_hydra_node_leaves_out_the_protocol_keys():
 
     assert hydra_node(P, "mine", exclude=("ps", "iterations")) == {"name": "mine", "F": 0.5}
     assert hydra_node(P, "mine") == {"name": "mine", "ps": 20, "F": 0.5}
+
+
+def test_a_setting_added_later_is_left_out_at_its_default():
+    """added_setting: at its default a key added to a config after runs were recorded is
+    not in the job's settings (records, run ids, optimum keys and archives made before it
+    stay valid); any other value is recorded."""
+    import dataclasses
+
+    from vpid_bench import ProblemConfig, added_setting
+    from vpid_bench.params import settings_of, to_plain
+
+    @dataclasses.dataclass(frozen=True)
+    class Inner:
+        file: str | None = None
+
+    @dataclasses.dataclass(frozen=True)
+    class Old(ProblemConfig):
+        level: float = 0.05
+
+    @dataclasses.dataclass(frozen=True)
+    class New(Old):
+        model: str = added_setting("linear")
+        reference: Inner = added_setting(default_factory=Inner)
+
+    assert settings_of(New()) == to_plain(Old())
+    assert settings_of(New(model="bilinear"))["model"] == "bilinear"
+    assert settings_of(New(reference=Inner("r.csv")))["reference"] == {"file": "r.csv"}
+    assert "model" in to_plain(New())  # the full config is still all there

@@ -23,6 +23,8 @@ from typing import Literal
 
 import numpy as np
 
+from vpid_bench import added_setting
+
 from ..model import KnownConstants, matrices, tyre_input
 from . import linear
 from .problem import RideConfig, RideModel, RideProblem, Wheel, check_record_file
@@ -92,7 +94,7 @@ class RideHalfConfig(RideConfig):
     sensors: Literal["body", "body_wheel", "body_pitch_rate"] = "body"
     #: The model that makes the record: ``linear`` (the fitted model's equations) or
     #: ``seat`` (:mod:`.richer`: a seat mass the fitted model lacks, model error).
-    record_model: Literal["linear", "seat"] = "linear"
+    record_model: Literal["linear", "seat"] = added_setting("linear")
 
 
     def __post_init__(self) -> None:

@@ -41,6 +41,7 @@ from vpid_bench import (
     ConfigError,
     Problem,
     ProblemConfig,
+    added_setting,
     estimators,
     relative_errors_percent,
 )
@@ -99,7 +100,7 @@ class SuiteConfig(ProblemConfig):
     record: str = "exact"
     record_substeps: int = 10
     objective: str = "eq3"
-    reference: RecordFileConfig = dataclasses.field(default_factory=RecordFileConfig)
+    reference: RecordFileConfig = added_setting(default_factory=RecordFileConfig)
 
     def __post_init__(self) -> None:
         # a user's record states no noise level (noise_level is what simulated records add)

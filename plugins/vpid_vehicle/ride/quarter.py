@@ -23,6 +23,8 @@ from typing import Literal
 
 import numpy as np
 
+from vpid_bench import added_setting
+
 from . import linear
 from .problem import RideConfig, RideModel, RideProblem, Wheel, check_record_file
 
@@ -82,7 +84,7 @@ class RideQuarterConfig(RideConfig):
     sensors: Literal["body", "body_wheel", "body_wheel_stroke"] = "body_wheel"
     #: The model that makes the record: ``linear`` (the fitted model's equations) or
     #: ``bilinear_damper`` (:mod:`.richer`: the linear model fitted with model error).
-    record_model: Literal["linear", "bilinear_damper"] = "linear"
+    record_model: Literal["linear", "bilinear_damper"] = added_setting("linear")
 
 
     def __post_init__(self) -> None:
