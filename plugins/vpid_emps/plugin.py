@@ -1,0 +1,13 @@
+"""Registers ``problem=emps``. Light on purpose: importing this module reads no data and pulls
+in neither numba nor scipy.io (the records are read when the problem is built)."""
+
+from __future__ import annotations
+
+from vpid_bench import hookimpl
+
+from .problem import EmpsProblem
+
+
+@hookimpl
+def vpid_bench_register_problems(register):
+    register("emps", EmpsProblem)

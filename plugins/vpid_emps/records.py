@@ -1,0 +1,111 @@
+"""The two EMPS records shipped with this plugin, read and checked.
+
+Both are MATLAB files of the EMPS data set (Janot, Gautier and Brunot), copied byte for byte
+from the repository forgi86/sysid-neural-continuous at commit 956aa7ec (folder
+``examples/EMPS/data/``, Apache License 2.0: ``data/LICENSE``). Each file is verified against
+its SHA-256 below before it is read: a missing or altered file is one error naming the file
+and the checksum expected (nothing is downloaded).
+
+Contents (SI units): ``t`` (s, 1 kHz), ``qm`` the motor position (m, encoder quantum 0.05 µm),
+``qg`` the reference position (m), ``vir`` the logged motor voltage (V; the force is
+``gtau vir``), the loop's constants ``gtau`` (N/V), ``kp`` (1/s), ``kv`` (V s/m), and in the
+validation record ``pulses_N``, 0 or 5 where a force pulse is added (see :mod:`.problem`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import hashlib
+from pathlib import Path
+
+import numpy as np
+
+from vpid_bench import VpidBenchError
+
+DATA = Path(__file__).parent / "data"
+#: The files this plugin reads and their SHA-256: the one list of them.
+SHA256 = {
+    "DATA_EMPS.mat": "6cf6814ae14618795da0101aae2bb97ff0c6351b0501b5492751b02b07facf7e",
+    "DATA_EMPS_PULSES.mat": "0eab75bb1f6b16228ee78791343a88bf9bfd9a51036ac9807d7b5fc11c0e1704",
+}
+#: The sampling step of both records (s): the controller's period.
+DT = 1e-3
+
+
+@dataclasses.dataclass(frozen=True)
+class EmpsRecord:
+    """One record: time (s), measured and reference positions (m), logged voltage (V), the
+    added pulse (its column as stored: 0 or 5), and the loop's constants."""
+
+    name: str
+    t: np.ndarray
+    qm: np.ndarray
+    qg: np.ndarray
+    vir: np.ndarray
+    pulse: np.ndarray
+    gtau: float
+    kp: float
+    kv: float
+
+    def controller(self) -> np.ndarray:
+        """The controller's voltage (V) recomputed from the measured positions, sample by
+        sample (the two-sample mean of the position, differenced; the first sample's past
+        taken as itself): what the logged voltage is compared with to read the pulses."""
+        q = self.qm
+        qf = 0.5 * (q + np.concatenate([q[:1], q[:-1]]))
+        dq = np.diff(qf, prepend=qf[0]) / DT
+        return self.kv * (self.kp * (self.qg - q) - dq)
+
+
+def sha256(path: Path) -> str:
+    """The SHA-256 of a file's bytes, hex."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def verified(name: str, folder: Path = DATA) -> Path:
+    """The path of data file ``name`` after checking its SHA-256; one-line error otherwise."""
+    expected = SHA256[name]
+    path = folder / name
+    if not path.is_file():
+        raise VpidBenchError(f"the EMPS data file {path} is missing (expected SHA-256 "
+                             f"{expected}); reinstall vpid-bench")
+    found = sha256(path)
+    if found != expected:
+        raise VpidBenchError(f"the EMPS data file {path} has SHA-256 {found}, expected "
+                             f"{expected}: it is not the file of the data set")
+    return path
+
+
+def _column(data: dict, key: str, name: str) -> np.ndarray:
+    value = np.asarray(data.get(key, np.empty(0)), dtype=float).reshape(-1)
+    if value.size == 0 or not np.all(np.isfinite(value)):
+        raise VpidBenchError(f"the EMPS data file {name} has no finite column {key!r}")
+    return value
+
+
+@functools.lru_cache(maxsize=4)
+def load(name: str, folder: Path = DATA) -> EmpsRecord:
+    """Record ``name`` (a key of :data:`SHA256`), verified and checked: equal lengths, a 1 ms
+    grid from 0, positive constants."""
+    from scipy.io import loadmat
+
+    path = verified(name, folder)
+    data = loadmat(path)
+    cols = {k: _column(data, k, name) for k in ("t", "qm", "qg", "vir", "gtau", "kp", "kv")}
+    N = cols["t"].size
+    pulse = (_column(data, "pulses_N", name) if "pulses_N" in data else np.zeros(N))
+    if any(cols[k].size != N for k in ("qm", "qg", "vir")) or pulse.size != N:
+        raise VpidBenchError(f"the EMPS data file {name}: columns of unequal length")
+    if not np.allclose(cols["t"], np.arange(N) * DT, rtol=0, atol=1e-6):
+        raise VpidBenchError(f"the EMPS data file {name}: t is not a 1 ms grid from 0")
+    consts = {k: float(cols[k][0]) for k in ("gtau", "kp", "kv")}
+    if not all(v > 0 for v in consts.values()):
+        raise VpidBenchError(f"the EMPS data file {name}: gtau, kp and kv must be > 0")
+    for a in (cols["t"], cols["qm"], cols["qg"], cols["vir"], pulse):
+        a.setflags(write=False)
+    return EmpsRecord(name, cols["t"], cols["qm"], cols["qg"], cols["vir"], pulse, **consts)
