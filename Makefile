@@ -12,8 +12,10 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --upgrade "pip>=23.1"
 
-$(VENV)/.installed: $(BIN)/python pyproject.toml
+# records-gpl/: third-party records under GPL-3.0, a separate data distribution (docs/measured.md)
+$(VENV)/.installed: $(BIN)/python pyproject.toml records-gpl/pyproject.toml
 	$(BIN)/python -m pip install -e ".[test,ioh,joblib,submitit,peers,tune]"
+	$(BIN)/python -m pip install ./records-gpl
 	touch $@
 
 install: $(VENV)/.installed

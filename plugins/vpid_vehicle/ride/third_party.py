@@ -1,0 +1,142 @@
+"""Third-party records of :mod:`.bayesrace` and :mod:`.racecar`: where they are, their
+checksums, and readers that check what they read.
+
+The files come from the repository linklab-uva/deep-dynamics at commit 88c85653 (GPL-3.0).
+vpid-bench (MIT) does not contain them: they are a separately licensed data distribution,
+``records-gpl/`` of the repository (``vpid-records-gpl``, installed by ``make install``), or a
+folder the user names with ``problem.data_dir`` holding the same files under the same names
+(for example the repository's ``deep_dynamics/data/``). Either way each file is checked against
+its SHA-256 below before it is read, and a missing or different file is one error naming the
+file and the checksum expected. Nothing is downloaded.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import hashlib
+import importlib.resources
+from pathlib import Path
+
+import numpy as np
+
+from vpid_bench import ConfigError
+
+#: The files read and their SHA-256: the one list of them.
+SHA256 = {
+    "DYN-PP-ETHZ.npz": "3337c2a9ef88e40613624de254e8ad1dd0d93ef44c23313de4181b99a0af68f3",
+    "DYN-PP-ETHZMobil.npz": "f5be95da22cfb5cd68a85469666c20c533721f53fcc839f85bfcdd9fcbf812a8",
+    "LVMS_23_01_04_B.csv": "2b160f4629eb9204ad72ac3e6adc91eb20ffeffb07bc07788f1bcc37a532d717",
+    "Putnam_park2023_run4_2.csv":
+        "4e35c801c16c048046662cfd63a062f24bb5ce8061ef644ea41abed956de7e07",
+}
+#: The installed data distribution's package (``records-gpl/`` of the repository).
+PACKAGE = "vpid_records_gpl"
+KEY = "problem.data_dir"
+
+
+def installed_folder() -> Path | None:
+    """The folder of the installed data distribution, or ``None`` when it is not installed."""
+    try:
+        return Path(str(importlib.resources.files(PACKAGE)))
+    except ModuleNotFoundError:
+        return None
+
+
+def _sha256(path: Path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+@functools.lru_cache(maxsize=16)
+def _digest(path: str, size: int, mtime_ns: int) -> str:
+    return _sha256(Path(path))
+
+
+def verified(name: str, data_dir: str | None) -> Path:
+    """The path of file ``name`` (a key of :data:`SHA256`) in ``data_dir`` or else the installed
+    distribution, after checking its SHA-256 (once per file state); :class:`ConfigError`
+    naming ``problem.data_dir``, the file and the checksum otherwise."""
+    expected = SHA256[name]
+    folder = Path(data_dir).expanduser() if data_dir else installed_folder()
+    if folder is None:
+        raise ConfigError(KEY, data_dir, f"a folder holding {name} (SHA-256 {expected}): the "
+                          f"data distribution {PACKAGE} is not installed (make install "
+                          "installs it from records-gpl/)")
+    path = folder / name
+    if not path.is_file():
+        raise ConfigError(KEY, str(folder), f"a folder holding {name} (SHA-256 {expected}); "
+                          "it is not there")
+    stat = path.stat()
+    found = _digest(str(path.resolve()), stat.st_size, stat.st_mtime_ns)
+    if found != expected:
+        raise ConfigError(KEY, str(folder), f"a folder holding the published {name}: this one "
+                          f"has SHA-256 {found}, expected {expected}")
+    return path
+
+
+@dataclasses.dataclass(frozen=True)
+class SimulatorRecord:
+    """A Bayesrace record: ``t`` (s, ``N``), the states ``(3, N)`` forward velocity, lateral
+    velocity (m/s) and yaw rate (rad/s) as the simulator's explicit Euler made them, and the
+    inputs held over each interval, drive command (1) and steer angle (rad), each
+    ``(N - 1,)``."""
+
+    name: str
+    t: np.ndarray
+    states: np.ndarray
+    drive: np.ndarray
+    steer: np.ndarray
+
+
+def read_simulator_record(name: str, data_dir: str | None) -> SimulatorRecord:
+    """Read a Bayesrace ``.npz`` (no pickled objects are loaded). Its ``dstates`` rows 3-5
+    are the Euler trajectory (vx, vy, yaw rate) from the first state of ``states``; column 0
+    of ``dstates`` holds that first state's velocities."""
+    path = verified(name, data_dir)
+    with np.load(path, allow_pickle=False) as data:
+        t = np.asarray(data["time"], dtype=float)
+        states = np.asarray(data["dstates"], dtype=float)[3:6].copy()
+        inputs = np.asarray(data["inputs"], dtype=float)
+    N = t.size
+    if states.shape != (3, N) or inputs.shape != (2, N - 1) or not (
+            np.all(np.isfinite(states)) and np.all(np.isfinite(inputs))):
+        raise ConfigError(KEY, data_dir, f"{name} with finite dstates (8 x N) and inputs "
+                          "(2 x N-1)")
+    return SimulatorRecord(name, t, states, inputs[0].copy(), inputs[1].copy())
+
+
+@dataclasses.dataclass(frozen=True)
+class RacecarLog:
+    """A racecar log at 25 Hz: ``t`` (s from the first row), forward and lateral velocity
+    (m/s), yaw rate (rad/s) and steer angle at the road wheels (rad), each ``(N,)``."""
+
+    name: str
+    t: np.ndarray
+    vx: np.ndarray
+    vy: np.ndarray
+    r: np.ndarray
+    delta: np.ndarray
+
+
+#: The log's columns read, by their header names (units in the header: m/s, rad/s, rad).
+LOG_COLUMNS = {"vx": "vx(m/s)", "vy": "vy(m/s)", "r": "omega(rad/s)", "delta": "delta(rad)"}
+
+
+def read_racecar_log(name: str, data_dir: str | None) -> RacecarLog:
+    """Read a racecar CSV log by its header's column names (a header line starting ``# ``)."""
+    path = verified(name, data_dir)
+    with open(path, encoding="utf-8") as f:
+        header = [h.strip() for h in f.readline().lstrip("# ").split(",")]
+    missing = [c for c in ("time(s)", *LOG_COLUMNS.values()) if c not in header]
+    if missing:
+        raise ConfigError(KEY, data_dir, f"{name} with the columns {', '.join(missing)}")
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    col = {h: data[:, i] for i, h in enumerate(header)}
+    t = col["time(s)"] - col["time(s)"][0]
+    if not (np.all(np.isfinite(data)) and np.all(np.diff(t) > 0)):
+        raise ConfigError(KEY, data_dir, f"{name} with finite values and increasing time")
+    return RacecarLog(name, t, *(col[c].copy() for c in LOG_COLUMNS.values()))
