@@ -8,11 +8,13 @@ from vpid_bench import hookimpl
 
 from .problem import VehicleProblem
 from .report import vehicle_sections
+from .ride.bayesrace import BayesraceProblem
 from .ride.full import RideFullProblem
 from .ride.half import RideHalfProblem
 from .ride.lateral import LateralProblem
 from .ride.magic import LateralMFProblem
 from .ride.quarter import RideQuarterProblem
+from .ride.racecar import RacecarProblem
 from .ride.suites import MEMBERS
 
 
@@ -24,6 +26,8 @@ def vpid_bench_register_problems(register):
     register("ride_full", RideFullProblem)
     register("lateral", LateralProblem)
     register("lateral_mf", LateralMFProblem)
+    register("bayesrace", BayesraceProblem)
+    register("racecar", RacecarProblem)
     for member in MEMBERS:
         register(member.name, member)
 

@@ -7,6 +7,8 @@ across candidates. No fast-math: each candidate's arithmetic is the same whateve
 
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 
@@ -287,3 +289,144 @@ def run_table_loops(T, w0, u, y):  # pragma: no cover - compiled
             for j in range(p):
                 for lane in range(min(LANES, n - j0)):
                     y[j, k, j0 + lane] = blk[st + (s + j) * LANES + lane]
+
+
+#: Rows of the parameter block of :func:`dynamic_single_track`: each axle's Magic Formula
+#: (``B, C, D, E`` and the horizontal and vertical shifts ``Sh``, ``Sv``), the drive
+#: (``Cm1, Cm2``), the resistance (``Cr0, Cr2``) and the yaw inertia.
+DYNAMIC_ROWS = ("Bf", "Cf", "Df", "Ef", "Shf", "Svf", "Br", "Cr", "Dr", "Er", "Shr", "Svr",
+                "Cm1", "Cm2", "Cr0", "Cr2", "Iz")
+
+
+@numba.njit(inline="always", error_model="numpy")
+def _slip_angle(lateral, vx):  # pragma: no cover - compiled
+    """``atan2(lateral, |vx|)`` (rad) by the vectorisable arc tangent (``|vx|`` floored at
+    1e-12 m/s: the same value wherever the forward speed is not vanishing)."""
+    return vecmath.atan(lateral / max(abs(vx), 1e-12))
+
+
+@numba.njit(inline="always", error_model="numpy")
+def _dynamic_rates(vx, vy, r, d, sd, cd, delta, P, i, m, lf, lr):  # pragma: no cover
+    """The rates ``(vx', vy', r')`` of the dynamic single-track model (Bayesrace's equations):
+    slip ``af = delta - atan2(lf r + vy, |vx|) + Shf``, ``ar = atan2(lr r - vy, |vx|) + Shr``,
+    lateral forces ``Sv + D sin(C atan(B a - E (B a - atan(B a))))``, longitudinal force
+    ``(Cm1 - Cm2 vx) d - Cr0 - Cr2 vx^2`` at the drive command ``d``; ``sd``, ``cd`` the sine
+    and cosine of the steer angle ``delta``."""
+    af = delta - _slip_angle(lf * r + vy, vx) + P[4, i]
+    ar = _slip_angle(lr * r - vy, vx) + P[10, i]
+    ffy = P[5, i] + _mf(af, P[0, i], P[1, i], P[2, i], P[3, i])
+    fry = P[11, i] + _mf(ar, P[6, i], P[7, i], P[8, i], P[9, i])
+    frx = (P[12, i] - P[13, i] * vx) * d - P[14, i] - P[15, i] * vx * vx
+    return ((frx - ffy * sd) / m + vy * r, (fry + ffy * cd) / m - vx * r,
+            (ffy * lf * cd - fry * lr) / P[16, i])
+
+
+@numba.njit(**_OPTS)
+def dynamic_single_track(P, drive, steer, dt, sub, m, lf, lr, x0, y):  # pragma: no cover
+    """The dynamic single-track model (forward speed a state) for the candidates ``P``
+    (``(17, n)``, rows :data:`DYNAMIC_ROWS`), driven by the drive command ``drive`` and the
+    steer angle ``steer`` (rad), each ``(N - 1,)`` and held over its sampling interval (as a
+    zero-order hold), by classical RK4 at ``dt / sub``; from the state ``x0 = (vx, vy, r)``.
+    Writes ``y[k, :, i] = (vx, vy, r)`` at the ``N`` samples (m/s, m/s, rad/s)."""
+    n, N = P.shape[1], y.shape[0]
+    vx, vy, r = np.full(n, x0[0]), np.full(n, x0[1]), np.full(n, x0[2])
+    ax, ay, ar = np.empty((4, n)), np.empty((4, n)), np.empty((4, n))  # stage rates
+    h = dt / sub
+    for k in range(N):
+        for i in range(n):
+            y[k, 0, i], y[k, 1, i], y[k, 2, i] = vx[i], vy[i], r[i]
+        if k + 1 == N:
+            break
+        d, delta = drive[k], steer[k]
+        sd, cd = math.sin(delta), math.cos(delta)
+        for _ in range(sub):
+            for i in range(n):
+                ax[0, i], ay[0, i], ar[0, i] = _dynamic_rates(vx[i], vy[i], r[i], d, sd, cd,
+                                                              delta, P, i, m, lf, lr)
+            for i in range(n):
+                ax[1, i], ay[1, i], ar[1, i] = _dynamic_rates(
+                    vx[i] + 0.5 * h * ax[0, i], vy[i] + 0.5 * h * ay[0, i],
+                    r[i] + 0.5 * h * ar[0, i], d, sd, cd, delta, P, i, m, lf, lr)
+            for i in range(n):
+                ax[2, i], ay[2, i], ar[2, i] = _dynamic_rates(
+                    vx[i] + 0.5 * h * ax[1, i], vy[i] + 0.5 * h * ay[1, i],
+                    r[i] + 0.5 * h * ar[1, i], d, sd, cd, delta, P, i, m, lf, lr)
+            for i in range(n):
+                ax[3, i], ay[3, i], ar[3, i] = _dynamic_rates(
+                    vx[i] + h * ax[2, i], vy[i] + h * ay[2, i], r[i] + h * ar[2, i], d, sd,
+                    cd, delta, P, i, m, lf, lr)
+                vx[i] += h / 6.0 * (ax[0, i] + 2 * ax[1, i] + 2 * ax[2, i] + ax[3, i])
+                vy[i] += h / 6.0 * (ay[0, i] + 2 * ay[1, i] + 2 * ay[2, i] + ay[3, i])
+                r[i] += h / 6.0 * (ar[0, i] + 2 * ar[1, i] + 2 * ar[2, i] + ar[3, i])
+
+
+@numba.njit(inline="always", error_model="numpy")
+def _axle_force(alpha, P, i, first, linear):  # pragma: no cover - compiled
+    """An axle's lateral force (N) at slip ``alpha``: ``C alpha`` (``linear``; ``C`` in row
+    ``first``) or the Magic Formula ``D sin(C atan(B alpha))`` (rows ``first .. first + 2``:
+    ``B, C, D``)."""
+    if linear:
+        return P[first, i] * alpha
+    return _mf(alpha, P[first, i], P[first + 1, i], P[first + 2, i], 0.0)
+
+
+@numba.njit(inline="always", error_model="numpy")
+def _scheduled_rates(vy, r, vx, cd, delta, P, i, linear, m, lf, lr):  # pragma: no cover
+    """``(vy', r')`` of the single-track model at the forward speed ``vx`` (an input);
+    ``cd`` the cosine of the steer angle ``delta``."""
+    rear = 1 if linear else 3
+    ffy = _axle_force(delta - _slip_angle(vy + lf * r, vx), P, i, 0, linear)
+    fry = _axle_force(_slip_angle(lr * r - vy, vx), P, i, rear, linear)
+    return (fry + ffy * cd) / m - vx * r, (lf * ffy * cd - lr * fry) / P[P.shape[0] - 1, i]
+
+
+@numba.njit(**_OPTS)
+def scheduled_single_track(P, linear, vx, delta, starts, H, sub, dt, m, lf, lr, x0,
+                           y):  # pragma: no cover - compiled
+    """The single-track model with the forward speed as an input, over prediction windows.
+
+    ``P``: the candidates' parameters, ``(3, n)`` ``[Cf, Cr, Iz]`` with ``linear`` tyres
+    (cornering stiffnesses, N/rad) or ``(7, n)`` ``[Bf, Cf, Df, Br, Cr, Dr, Iz]`` (Magic
+    Formula, curvature 0). ``vx``, ``delta`` ``(N,)``: the logged forward speed (m/s) and
+    steer angle (rad) at the samples, linear between them. Window ``w`` starts at sample
+    ``starts[w]`` from the state ``x0[w] = (vy, r)`` and runs ``H`` samples by RK4 at ``dt /
+    sub``; writes ``y[w, j, :, i] = (vy, r)`` at its samples ``j``."""
+    n, W = P.shape[1], starts.shape[0]
+    vy, r = np.empty(n), np.empty(n)
+    avy, ar = np.empty((4, n)), np.empty((4, n))  # stage rates
+    h = dt / sub
+    for w in range(W):
+        vy[:], r[:] = x0[w, 0], x0[w, 1]
+        for j in range(H):
+            for i in range(n):
+                y[w, j, 0, i], y[w, j, 1, i] = vy[i], r[i]
+            if j + 1 == H:
+                break
+            k = starts[w] + j
+            for s in range(sub):
+                # the inputs at the stage times: start, middle and end of the substep
+                a0, a1, a2 = s / sub, (s + 0.5) / sub, (s + 1.0) / sub
+                v0 = vx[k] + a0 * (vx[k + 1] - vx[k])
+                v1 = vx[k] + a1 * (vx[k + 1] - vx[k])
+                v2 = vx[k] + a2 * (vx[k + 1] - vx[k])
+                d0 = delta[k] + a0 * (delta[k + 1] - delta[k])
+                d1 = delta[k] + a1 * (delta[k + 1] - delta[k])
+                d2 = delta[k] + a2 * (delta[k + 1] - delta[k])
+                c0, c1, c2 = math.cos(d0), math.cos(d1), math.cos(d2)
+                for i in range(n):
+                    avy[0, i], ar[0, i] = _scheduled_rates(vy[i], r[i], v0, c0, d0, P, i,
+                                                           linear, m, lf, lr)
+                for i in range(n):
+                    avy[1, i], ar[1, i] = _scheduled_rates(
+                        vy[i] + 0.5 * h * avy[0, i], r[i] + 0.5 * h * ar[0, i], v1, c1,
+                        d1, P, i, linear, m, lf, lr)
+                for i in range(n):
+                    avy[2, i], ar[2, i] = _scheduled_rates(
+                        vy[i] + 0.5 * h * avy[1, i], r[i] + 0.5 * h * ar[1, i], v1, c1,
+                        d1, P, i, linear, m, lf, lr)
+                for i in range(n):
+                    avy[3, i], ar[3, i] = _scheduled_rates(
+                        vy[i] + h * avy[2, i], r[i] + h * ar[2, i], v2, c2, d2, P, i,
+                        linear, m, lf, lr)
+                    vy[i] += h / 6.0 * (avy[0, i] + 2 * avy[1, i] + 2 * avy[2, i] + avy[3, i])
+                    r[i] += h / 6.0 * (ar[0, i] + 2 * ar[1, i] + 2 * ar[2, i] + ar[3, i])

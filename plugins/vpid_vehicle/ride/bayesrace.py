@@ -1,0 +1,234 @@
+"""``problem=bayesrace``: a 1:43 race car's tyre, drive and yaw coefficients from records that
+somebody else's simulator made (Bayesrace, as published with Deep Dynamics), fitted by our own
+continuous-time model. The simulator's coefficients are the truth; the model that made the
+records is not the fitted one.
+
+**Records** (:mod:`.third_party`; GPL-3.0, not part of vpid-bench): ``DYN-PP-ETHZ.npz`` and
+``DYN-PP-ETHZMobil.npz``, the ETH Zurich 1:43 car driven by a controller for 20 s on two
+tracks, 50 Hz. Their state trajectory (``dstates``: forward velocity, lateral velocity, yaw
+rate) is the simulator's **explicit Euler step at 50 Hz** of the equations below with the true
+coefficients: one Euler step from each sample reproduces the next to 1e-15 (tested). At this
+step Euler is at the edge of stability for this car (its yaw mode is fast: 85 rad/s at 1 m/s):
+the recorded yaw rate alternates in sign from sample to sample where the car is slow, which
+no continuous-time model does. That is the discretisation's cost: the record is not the
+continuous system's response. No noise is added; what the fit cannot explain is model error.
+
+**Model** (SI units; the simulator's equations, :func:`.kernel.dynamic_single_track`): states
+forward velocity ``vx``, lateral velocity ``vy``, yaw rate ``r``; inputs the drive command
+``d`` and the steer angle ``delta``, each held over its 20 ms interval;
+
+    af = delta - atan2(lf r + vy, |vx|) + Shf,      ar = atan2(lr r - vy, |vx|) + Shr
+    Ffy = Svf + Df sin(Cf atan(Bf af - Ef (Bf af - atan(Bf af))))    (Fry likewise)
+    Frx = (Cm1 - Cm2 vx) d - Cr0 - Cr2 vx^2
+    vx' = (Frx - Ffy sin delta) / m + vy r
+    vy' = (Fry + Ffy cos delta) / m - vx r
+    r'  = (Ffy lf cos delta - Fry lr) / Iz
+
+integrated as a user would integrate a continuous-time model: classical RK4 at ``20 ms /
+substeps`` (10 by default: within 2e-6 of each channel's rms of the solution at 40 substeps;
+5 substeps miss the yaw rate by 3e-3 of its rms at the records' lowest speeds), from the record's
+first state.
+
+**Identified** (10): ``Bf, Cf, Df, Br, Cr, Dr, Cm1, Cm2, Cr0, Iz``, in the simulator's own
+ranges (``deep_dynamics.yaml``: Min and Max of each). **Known** (fixed at the simulator's
+values, stated as such): ``m`` 0.041 kg, ``lf`` 0.029 m, ``lr`` 0.033 m, and ``Ef, Er, Cr2``
+(practically non-identifiable from these records: the curvature factors matter only at large
+slip, the quadratic drag only at speeds the car barely reaches) and the four shifts ``Shf,
+Svf, Shr, Svr`` (offsets near zero, whose relative error would be meaningless).
+
+**Objective**: ``problem.objective`` (:mod:`vpid_bench.estimators`, ``eq3`` by default: the
+sum over the three channels of ``||measured - computed|| / ||measured||``). **Metrics**: NoRE
+(%) over the 10 identified coefficients against the simulator's, then the rms error of each
+channel on the other track's record (held out).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+
+from vpid_bench import (
+    Bounds,
+    ConfigError,
+    Problem,
+    ProblemConfig,
+    estimators,
+    relative_errors_percent,
+)
+
+from . import third_party
+from .kernel import DYNAMIC_ROWS
+
+#: The simulator's coefficients, ``deep_dynamics.yaml`` of the records' repository (its
+#: PARAMETERS and VEHICLE_SPECS): value, Min, Max. A test reads the shipped file against them.
+SIMULATOR: dict[str, tuple[float, float, float]] = {
+    "Bf": (5.579, 5.0, 30.0), "Cf": (1.2, 0.5, 2.0), "Df": (0.192, 0.1, 0.9),
+    "Ef": (-0.083, -2.0, 0.0), "Br": (5.3852, 5.0, 30.0), "Cr": (1.2691, 0.5, 2.0),
+    "Dr": (0.1737, 0.1, 0.9), "Er": (-0.019, -2.0, 0.0), "Cm1": (0.287, 0.1435, 0.574),
+    "Cm2": (0.0545, 0.02725, 0.109), "Cr0": (0.0518, 0.0259, 0.1036),
+    "Cr2": (0.00035, 1.75e-4, 7.0e-4), "Iz": (27.8e-6, 1.39e-5, 5.56e-5),
+    "Shf": (-0.0013, -0.02, 0.02), "Svf": (0.00043, -0.003, 0.003),
+    "Shr": (-0.00376, -0.02, 0.02), "Svr": (0.00091, -0.003, 0.003),
+}
+VEHICLE = {"m": 0.041, "lf": 0.029, "lr": 0.033}
+IDENTIFIED = ("Bf", "Cf", "Df", "Br", "Cr", "Dr", "Cm1", "Cm2", "Cr0", "Iz")
+UNITS = ("1/rad", "1", "N", "1/rad", "1", "N", "N", "N s/m", "N", "kg m²")
+TRACKS = {"ETHZ": "DYN-PP-ETHZ.npz", "ETHZMobil": "DYN-PP-ETHZMobil.npz"}
+CHANNELS = (("vx", "m/s"), ("vy", "m/s"), ("r", "rad/s"))
+#: The records' sampling step (s).
+DT = 0.02
+
+
+def check_data(names: list[str], data_dir: str | None) -> None:
+    for name in names:
+        third_party.verified(name, data_dir)
+
+
+@dataclasses.dataclass(frozen=True)
+class BayesraceConfig(ProblemConfig):
+    """``track``: the record fitted (``ETHZ`` or ``ETHZMobil``; the other is held out).
+    ``substeps``: RK4 steps per 20 ms sample. ``objective``: ``eq3`` or ``ols``
+    (:mod:`vpid_bench.estimators`; ``ml`` needs a noise level these records do not have).
+    ``data_dir``: a folder holding the records (default: the installed data distribution)."""
+
+    track: Literal["ETHZ", "ETHZMobil"] = "ETHZ"
+    substeps: int = 10
+    objective: str = "eq3"
+    data_dir: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.track not in TRACKS:
+            raise ConfigError("problem.track", self.track, "ETHZ or ETHZMobil")
+        if not (isinstance(self.substeps, int) and 1 <= self.substeps <= 100):
+            raise ConfigError("problem.substeps", self.substeps, "an integer in [1, 100]")
+        if self.objective not in ("eq3", "ols"):
+            raise ConfigError("problem.objective", self.objective, "eq3 or ols (a measured "
+                              "or simulated record without a stated noise level)")
+        check_data(list(TRACKS.values()), self.data_dir)
+
+
+class TrackRecord:
+    """One record and the continuous-time model's simulation of it."""
+
+    def __init__(self, record: third_party.SimulatorRecord, substeps: int) -> None:
+        self.record = record
+        self.substeps = substeps
+        self.full = np.array([SIMULATOR[k][0] for k in DYNAMIC_ROWS])
+        self.rows = [DYNAMIC_ROWS.index(k) for k in IDENTIFIED]
+
+    def simulate(self, X: np.ndarray) -> np.ndarray:
+        """The channels ``(n, 3, N)`` (vx, vy, r) of the rows ``X`` (the identified
+        coefficients); NaN rows where a row has a coefficient <= 0 or not finite."""
+        from .kernel import dynamic_single_track
+
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        ok = np.all(np.isfinite(X) & (X > 0), axis=1)
+        N = self.record.t.size
+        out = np.full((X.shape[0], 3, N), np.nan)
+        if np.any(ok):
+            P = np.repeat(self.full[:, None], int(ok.sum()), axis=1)
+            P[self.rows] = X[ok].T
+            y = np.empty((N, 3, P.shape[1]))
+            with np.errstate(all="ignore"):
+                dynamic_single_track(np.ascontiguousarray(P), self.record.drive,
+                                     self.record.steer, DT, self.substeps, VEHICLE["m"],
+                                     VEHICLE["lf"], VEHICLE["lr"],
+                                     np.ascontiguousarray(self.record.states[:, 0]), y)
+            out[ok] = y.transpose(2, 1, 0)
+        return out
+
+
+class BayesraceProblem(Problem):
+    """The Bayesrace records fitted by the continuous-time model (module docstring)."""
+
+    Config = BayesraceConfig
+    name = "bayesrace"
+    family = "single-track dynamic, third-party simulator"
+    rows_independent: ClassVar[bool] = True
+
+    def __init__(self, config: BayesraceConfig) -> None:
+        super().__init__(config)
+        held_out = next(t for t in TRACKS if t != config.track)
+        self.fit = TrackRecord(third_party.read_simulator_record(TRACKS[config.track],
+                                                                 config.data_dir),
+                               config.substeps)
+        self.held_out = TrackRecord(third_party.read_simulator_record(TRACKS[held_out],
+                                                                      config.data_dir),
+                                    config.substeps)
+        self.measured = self.fit.record.states
+        self.weights = estimators.weights(
+            config.objective, self.measured,
+            1.0 / np.linalg.norm(self.measured, axis=1, keepdims=True), None)
+        self._x_true = np.array([SIMULATOR[k][0] for k in IDENTIFIED])
+        self._bounds = Bounds(np.array([SIMULATOR[k][1] for k in IDENTIFIED]),
+                              np.array([SIMULATOR[k][2] for k in IDENTIFIED]), IDENTIFIED,
+                              UNITS)
+
+    @property
+    def bounds(self) -> Bounds:
+        return self._bounds
+
+    @property
+    def x_true(self) -> np.ndarray:
+        return self._x_true.copy()
+
+    def residuals(self, X: np.ndarray) -> np.ndarray:
+        """``(measured - computed)`` times the objective's weights, channels one after
+        another, ``(n, 3 N)``; inf rows where a simulation fails."""
+        R = (self.measured[None] - self.fit.simulate(X)) * self.weights[None]
+        R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
+        return R.reshape(R.shape[0], -1)
+
+    def residual_groups(self) -> np.ndarray:
+        return estimators.groups(self.config.objective, 3, self.measured.shape[1])
+
+    def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        R = self.residuals(X)
+        f = estimators.value(self.config.objective, R.reshape(R.shape[0], 3, -1))
+        return f, R
+
+    def evaluate(self, X: np.ndarray) -> np.ndarray:
+        return self.evaluate_with_residuals(X)[0]
+
+    def metrics(self, x: np.ndarray) -> dict[str, float]:
+        """``NoRE`` (%) against the simulator's coefficients, then the held-out track's rms
+        error per channel (``val_rms_r`` rad/s, ``val_rms_vx`` and ``val_rms_vy`` m/s)."""
+        x = np.asarray(x, dtype=float).reshape(-1)
+        out = {"NoRE": float(np.linalg.norm(relative_errors_percent(x, self._x_true)))}
+        sim = self.held_out.simulate(x[None])[0]
+        err = np.sqrt(np.mean((self.held_out.record.states - sim) ** 2, axis=1))
+        for (name, _), e in zip(CHANNELS, err, strict=True):
+            out[f"val_rms_{name}"] = float(e) if np.isfinite(e) else float("inf")
+        return out
+
+    def signal_units(self) -> dict[str, str]:
+        return dict(CHANNELS)
+
+    def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        sim = self.fit.simulate(np.asarray(x, dtype=float).reshape(1, -1))[0]
+        out = {"t": self.fit.record.t.copy()}
+        for c, (name, _) in enumerate(CHANNELS):
+            out[f"{name}:measured"], out[f"{name}:fitted"] = self.measured[c].copy(), sim[c]
+        return out
+
+    def describe(self) -> dict[str, Any]:
+        fixed = {k: SIMULATOR[k][0] for k in DYNAMIC_ROWS if k not in IDENTIFIED}
+        return {
+            "samples": int(self.measured.shape[1]),
+            "known": {**VEHICLE, **fixed},
+            "record": {"fitted": TRACKS[self.config.track],
+                       "held_out": self.held_out.record.name,
+                       "made_by": "the Bayesrace simulator: explicit Euler at 50 Hz"},
+            "fitted_model": {"solver": "RK4", "dt_s": DT / self.config.substeps},
+            "noise": {"model": "none added (model error only)",
+                      "channels": [c for c, _ in CHANNELS]},
+            "truth": self._x_true.tolist(),
+            "f_at_true": float(self.evaluate(self._x_true[None])[0]),
+            "metric_units": {"NoRE": "%", "val_rms_r": "rad/s", "val_rms_vx": "m/s",
+                             "val_rms_vy": "m/s"},
+        }
+
+    def content_digest(self) -> str | None:
+        return "+".join(third_party.SHA256[n][:16] for n in TRACKS.values())
