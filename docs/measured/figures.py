@@ -52,8 +52,7 @@ def emps_figure(sweep: Path) -> Path:
     from vpid_emps.problem import PUBLISHED, EmpsConfig, EmpsProblem
 
     rec = best_record(sweep, "emps")
-    cfg = {k: v for k, v in rec["problem"]["config"].items() if k in ("controller_delay",)}
-    problem = EmpsProblem(EmpsConfig(**cfg))
+    problem = EmpsProblem(_config(rec, EmpsConfig))
     x = np.asarray(rec["result"]["x_best"], dtype=float)
     val = problem.validation
     r = val.record
@@ -86,8 +85,8 @@ def emps_figure(sweep: Path) -> Path:
     ax.legend(fontsize=8, loc="upper center", ncol=2)
     for a in axes:
         a.grid(alpha=0.3)
-    fig.suptitle("EMPS, validation record (DATA_EMPS_PULSES.mat): measured against simulated "
-                 "in the closed loop", fontsize=10)
+    fig.suptitle(f"EMPS, validation record ({r.name}): measured against simulated in the "
+                 "closed loop", fontsize=10)
     fig.tight_layout()
     out = HERE / "emps_validation.png"
     fig.savefig(out, dpi=110)

@@ -56,9 +56,20 @@ def test_an_intact_copy_reads_the_same(tmp_path):
     assert (a.kp, a.kv) == (160.18, 243.45) and a.t.size == 24841
 
 
-def test_a_bad_controller_delay_names_the_key():
+def test_a_bad_controller_delay_or_record_names_the_key():
     with pytest.raises(ConfigError, match=r"problem\.controller_delay=2 .*0 or 1"):
         EmpsConfig(controller_delay=2)
+    with pytest.raises(ConfigError, match=r"problem\.fit_record='both' .*estimation or pulses"):
+        EmpsConfig(fit_record="both")
+
+
+def test_fitting_the_pulses_record_swaps_the_records():
+    p = EmpsProblem(EmpsConfig(fit_record="pulses"))
+    assert p.estimation.record.name == "DATA_EMPS_PULSES.mat"
+    assert p.validation.record.name == "DATA_EMPS.mat" and p.validation.pulse_volts == 0.0
+    m = p.metrics(PUBLISHED)
+    assert m["val_rms_um"] == pytest.approx(np.sqrt(EmpsProblem(EmpsConfig()).evaluate(
+        PUBLISHED[None])[0]), rel=1e-12)
 
 
 # --- the plant, step by step --------------------------------------------------------------
