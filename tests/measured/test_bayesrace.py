@@ -105,15 +105,23 @@ def test_the_problem_has_a_truth_and_held_out_metrics(problem):
     assert sorted(m)[0] == "NoRE"  # first also as records store them (by name)
     X = np.array([x, x * 1.1, np.r_[x[:-1], -1.0]])
     f, R = problem.evaluate_with_residuals(X)
+    assert problem.config.objective == "ml_profiled"
     assert np.isinf(f[2]) and np.isinf(R[2]).all() and np.all(np.isfinite(f[:2]))
-    groups = problem.residual_groups()
-    assert groups.shape == (R.shape[1],) and set(groups) == {0, 1, 2}
-    assert np.isclose(f[1], sum(np.linalg.norm(R[1][groups == g]) for g in range(3)))
+    # ml_profiled: the geometric mean of the channels' relative rms misfits, ||R|| = sqrt(m) f
+    F = problem.fisher_residuals(X[1:2])[0].reshape(3, -1)
+    rel = np.sqrt(np.mean(F**2, axis=1) * F.shape[1])  # rms(y - g) / rms(y) per channel
+    assert np.isclose(f[1], np.exp(np.mean(np.log(rel))), rtol=1e-12)
+    assert np.isclose(np.linalg.norm(R[1]), np.sqrt(R.shape[1]) * f[1])
+    eq3 = BayesraceProblem(BayesraceConfig(objective="eq3"))
+    f3, R3 = eq3.evaluate_with_residuals(X[1:2])
+    groups = eq3.residual_groups()
+    assert groups.shape == (R3.shape[1],) and set(groups) == {0, 1, 2}
+    assert np.isclose(f3[0], sum(np.linalg.norm(R3[0][groups == g]) for g in range(3)))
 
 
 @pytest.mark.parametrize("key, value, words", [
     ("track", "Mobil", "ETHZ or ETHZMobil"), ("substeps", 0, "[1, 100]"),
-    ("objective", "ml", "eq3 or ols")])
+    ("objective", "ml", "eq3, ols or ml_profiled")])
 def test_bad_keys_name_themselves(key, value, words):
     with pytest.raises(ConfigError, match=rf"problem\.{key}=.*{__import__('re').escape(words)}"):
         BayesraceConfig(**{key: value})

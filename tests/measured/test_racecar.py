@@ -108,7 +108,8 @@ def test_a_known_steer_delay_shifts_the_logged_angle():
     assert np.allclose(p2.fitted.delta[10:], p0.fitted.delta[8:-2], atol=1e-8)
 
 
-def test_residuals_objective_and_bad_rows(problem):
+def test_residuals_objective_and_bad_rows():
+    problem = RacecarProblem(RacecarConfig(objective="eq3"))
     X = np.array([LINEAR, LINEAR * 1.2, [np.nan, 1e5, 1e3]])
     f, R = problem.evaluate_with_residuals(X)
     g = problem.residual_groups()

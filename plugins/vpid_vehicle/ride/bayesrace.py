@@ -36,8 +36,10 @@ values, stated as such): ``m`` 0.041 kg, ``lf`` 0.029 m, ``lr`` 0.033 m, and ``E
 slip, the quadratic drag only at speeds the car barely reaches) and the four shifts ``Shf,
 Svf, Shr, Svr`` (offsets near zero, whose relative error would be meaningless).
 
-**Objective**: ``problem.objective`` (:mod:`vpid_bench.estimators`, ``eq3`` by default: the
-sum over the three channels of ``||measured - computed|| / ||measured||``). **Metrics**: NoRE
+**Objective**: ``problem.objective`` (:mod:`vpid_bench.estimators`): ``ml_profiled`` by
+default, the Gaussian likelihood with each channel's σ unknown and estimated from the residuals
+(no noise level is known: the misfit is the discretisation's), or ``eq3`` (the sum over the
+three channels of ``||measured - computed|| / ||measured||``) or ``ols``. **Metrics**: NoRE
 (%) over the 10 identified coefficients against the simulator's, then the rms error of each
 channel on the other track's record (held out).
 """
@@ -89,23 +91,22 @@ def check_data(names: list[str], data_dir: str | None) -> None:
 @dataclasses.dataclass(frozen=True)
 class BayesraceConfig(ProblemConfig):
     """``track``: the record fitted (``ETHZ`` or ``ETHZMobil``; the other is held out).
-    ``substeps``: RK4 steps per 20 ms sample. ``objective``: ``eq3`` or ``ols``
-    (:mod:`vpid_bench.estimators`; ``ml`` needs a noise level these records do not have).
+    ``substeps``: RK4 steps per 20 ms sample. ``objective``: ``ml_profiled``, ``eq3`` or
+    ``ols`` (:mod:`vpid_bench.estimators`; ``ml`` needs a noise level these records do not
+    state).
     ``data_dir``: a folder holding the records (default: the installed data distribution)."""
 
     track: Literal["ETHZ", "ETHZMobil"] = "ETHZ"
     substeps: int = 10
-    objective: str = "eq3"
+    objective: str = "ml_profiled"
     data_dir: str | None = None
 
     def __post_init__(self) -> None:
+        estimators.check_objective(self.objective, None)
         if self.track not in TRACKS:
             raise ConfigError("problem.track", self.track, "ETHZ or ETHZMobil")
         if not (isinstance(self.substeps, int) and 1 <= self.substeps <= 100):
             raise ConfigError("problem.substeps", self.substeps, "an integer in [1, 100]")
-        if self.objective not in ("eq3", "ols"):
-            raise ConfigError("problem.objective", self.objective, "eq3 or ols (a measured "
-                              "or simulated record without a stated noise level)")
         check_data(list(TRACKS.values()), self.data_dir)
 
 
@@ -174,20 +175,31 @@ class BayesraceProblem(Problem):
     def x_true(self) -> np.ndarray:
         return self._x_true.copy()
 
+    def _weighted(self, X: np.ndarray) -> np.ndarray:
+        """``measured - computed`` times the objective's weights, ``(n, 3, N)``."""
+        return (self.measured[None] - self.fit.simulate(X)) * self.weights[None]
+
     def residuals(self, X: np.ndarray) -> np.ndarray:
-        """``(measured - computed)`` times the objective's weights, channels one after
-        another, ``(n, 3 N)``; inf rows where a simulation fails."""
-        R = (self.measured[None] - self.fit.simulate(X)) * self.weights[None]
+        """What a least-squares optimizer minimises (:func:`estimators.residuals_and_value`),
+        channels one after another, ``(n, 3 N)``; inf rows where a simulation fails."""
+        return self.evaluate_with_residuals(X)[1]
+
+    def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
+        """``(measured_c - computed_c) / ||measured_c||`` whatever the objective, channels one
+        after another, ``(n, 3 N)`` (what intervals and bounds differentiate)."""
+        scale = np.linalg.norm(self.measured, axis=1)[None, :, None]
+        R = (self.measured[None] - self.fit.simulate(X)) / scale
         R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
         return R.reshape(R.shape[0], -1)
+
+    def fisher_groups(self) -> np.ndarray:
+        return np.repeat(np.arange(3), self.measured.shape[1])
 
     def residual_groups(self) -> np.ndarray:
         return estimators.groups(self.config.objective, 3, self.measured.shape[1])
 
     def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        R = self.residuals(X)
-        f = estimators.value(self.config.objective, R.reshape(R.shape[0], 3, -1))
-        return f, R
+        return estimators.residuals_and_value(self.config.objective, self._weighted(X))
 
     def evaluate(self, X: np.ndarray) -> np.ndarray:
         return self.evaluate_with_residuals(X)[0]

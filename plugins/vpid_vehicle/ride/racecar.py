@@ -32,11 +32,13 @@ the car runs at ``min_speed`` or more throughout. Each window is predicted from 
 window; a model must beat it to count.
 
 **Noise** (channels ``vy`` m/s, ``r`` rad/s): additive, sigma unknown per channel (estimated
-from the residuals). **Objective**: ``problem.objective`` (:mod:`vpid_bench.estimators`;
-``eq3`` by default: per channel ``||measured - predicted|| / ||measured||`` over the fitted
-windows' samples after the first). **Metrics** (lower is better, held out): ``val_rel_naive``,
-the mean over the two channels of the model's rms error over the naive predictor's (below 1:
-it beats holding the state), then ``val_rms_r`` and ``val_rms_vy``.
+from the residuals). **Objective**: ``problem.objective`` (:mod:`vpid_bench.estimators`, over
+the fitted windows' samples after each window's first): ``ml_profiled`` by default, the
+Gaussian likelihood with each channel's σ unknown and estimated from the residuals, or ``eq3``
+(per channel ``||measured - predicted|| / ||measured||``) or ``ols``. **Metrics** (lower is
+better, held out): ``val_rel_naive``, the mean over the two channels of the model's rms error
+over the naive predictor's (below 1: it beats holding the state), then ``val_rms_r`` and
+``val_rms_vy``.
 """
 
 from __future__ import annotations
@@ -76,8 +78,9 @@ class RacecarConfig(ProblemConfig):
     ``lvms``, whole or ``_first_half`` / ``_second_half`` (not overlapping). ``horizon_s``:
     the prediction window (s). ``min_speed``: windows where ``vx`` stays at or above it (m/s).
     ``substeps``: RK4 steps per 40 ms sample. ``steer_delay_s``: the logged steer angle's
-    known delay (s). ``objective``: ``eq3`` or ``ols``. ``data_dir``: a folder holding the
-    logs (default: the installed data distribution)."""
+    known delay (s). ``objective``: ``ml_profiled``, ``eq3`` or ``ols`` (``ml`` needs a
+    stated noise level). ``data_dir``: a folder holding the logs (default: the installed data
+    distribution)."""
 
     tyres: Literal["linear", "magic_formula"] = "linear"
     fit: str = "putnam_first_half"
@@ -86,10 +89,11 @@ class RacecarConfig(ProblemConfig):
     min_speed: float = 5.0
     substeps: int = 4
     steer_delay_s: float = 0.0
-    objective: str = "eq3"
+    objective: str = "ml_profiled"
     data_dir: str | None = None
 
     def __post_init__(self) -> None:
+        estimators.check_objective(self.objective, None)
         checks = [
             ("tyres", self.tyres in TYRES, "linear or magic_formula"),
             ("fit", self.fit in PARTS, "one of " + ", ".join(PARTS)),
@@ -102,8 +106,6 @@ class RacecarConfig(ProblemConfig):
              "an integer in [1, 50]"),
             ("steer_delay_s", isinstance(self.steer_delay_s, (int, float)) and
              0 <= self.steer_delay_s <= 1, "a delay in [0, 1] s"),
-            ("objective", self.objective in ("eq3", "ols"), "eq3 or ols (a measured record "
-             "without a stated noise level)"),
         ]
         for key, ok, allowed in checks:
             if not ok:
@@ -211,19 +213,32 @@ class RacecarProblem(Problem):
             out[ok] = windows.predict(X[ok].T, self.linear, self.config.substeps)
         return out
 
+    def _weighted(self, X: np.ndarray) -> np.ndarray:
+        """``measured - predicted`` over the fitted windows times the objective's weights,
+        ``(n, 2, W (H - 1))``."""
+        return (self.measured[None] - self._flat(self._predict(X, self.fitted))) * self.weights
+
     def residuals(self, X: np.ndarray) -> np.ndarray:
-        """Weighted ``measured - predicted`` over the fitted windows, channel after channel,
-        ``(n, 2 W (H - 1))``; inf rows where a prediction fails."""
-        R = (self.measured[None] - self._flat(self._predict(X, self.fitted))) * self.weights
+        """What a least-squares optimizer minimises (:func:`estimators.residuals_and_value`),
+        channel after channel, ``(n, 2 W (H - 1))``; inf rows where a prediction fails."""
+        return self.evaluate_with_residuals(X)[1]
+
+    def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
+        """``(measured_c - predicted_c) / ||measured_c||`` whatever the objective, channel after
+        channel, ``(n, 2 W (H - 1))`` (what intervals differentiate)."""
+        scale = np.linalg.norm(self.measured, axis=1)[None, :, None]
+        R = (self.measured[None] - self._flat(self._predict(X, self.fitted))) / scale
         R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
         return R.reshape(R.shape[0], -1)
+
+    def fisher_groups(self) -> np.ndarray:
+        return np.repeat(np.arange(2), self.measured.shape[1])
 
     def residual_groups(self) -> np.ndarray:
         return estimators.groups(self.config.objective, 2, self.measured.shape[1])
 
     def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        R = self.residuals(X)
-        return estimators.value(self.config.objective, R.reshape(R.shape[0], 2, -1)), R
+        return estimators.residuals_and_value(self.config.objective, self._weighted(X))
 
     def evaluate(self, X: np.ndarray) -> np.ndarray:
         return self.evaluate_with_residuals(X)[0]
@@ -243,8 +258,8 @@ class RacecarProblem(Problem):
     def naive_objective(self) -> float:
         """The objective of the naive predictor on the fitted windows."""
         naive = self._flat(self.fitted.naive()[None])
-        R = (self.measured[None] - naive) * self.weights
-        return float(estimators.value(self.config.objective, R)[0])
+        return float(estimators.value(self.config.objective,
+                                      (self.measured[None] - naive) * self.weights)[0])
 
     def comparisons(self) -> dict[str, dict[str, Any]]:
         """The naive predictor (no parameters): its held-out metrics, the point a model must
