@@ -90,6 +90,7 @@ def test_the_metric_leaders_that_search_worse_lose_to_the_best_searcher():
     pairs = [_pair("early", "good", better="early"), *_refs_beaten(["early", "good"])]
     v = vd.decide(_evidence(methods, pairs))
     assert (v.pick, v.basis, v.leaders) == ("good", vd.SEARCH_ONLY, ("early",))
+    assert v.tied == ()  # early is separated from good: not "not separated"
     assert "it gets closest to each record's own optimum; early ends nearer" in verdict_text(v)
 
 

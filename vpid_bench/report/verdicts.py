@@ -365,7 +365,12 @@ def decide(ev: Evidence) -> Verdict:
                        over_bound=over, not_beaten=not_beaten, limit=limit, gain=gain,
                        search=lead.search, **base)
     pick, basis, mlead, pool, leaders = _choose(ev, eligible)
-    tied_with = [m for m in mlead if m.name != pick.name]
+    # those the metric's tests do not separate from the pick: its rank group, or, where the
+    # pick is not in the metric's best group, each eligible method without a significant pair
+    tied_with = ([m for m in mlead if m.name != pick.name] if basis != SEARCH_ONLY else
+                 [m for m in eligible if m.name != pick.name
+                  and not beats(ev.pairs, m.name, pick.name)
+                  and not beats(ev.pairs, pick.name, m.name)])
     spread = max((abs(m.median - pick.median) / abs(pick.median) for m in tied_with
                   if math.isfinite(m.median) and math.isfinite(pick.median)
                   and pick.median != 0), default=0.0)
