@@ -4,7 +4,8 @@
 the command's shell (:mod:`vpid_bench.shell`) calls it once per job. The rooms of a job:
 
 * building the problem and each run's generator: :mod:`vpid_bench.build` (run ``i`` draws
-  from ``SeedSequence(seed, spawn_key=(i,))``);
+  from ``SeedSequence(seed, spawn_key=(i,))``), and what the job reads of the problem:
+  :mod:`vpid_bench.facts`;
 * the runs themselves, alone or in lockstep, through the one run loop:
   :mod:`vpid_bench.job_runs`;
 * one record per run: :func:`vpid_bench.records.make_record`;
@@ -18,32 +19,37 @@ recorded under another plugin release or another data file are run again, never 
 
 Crash isolation: an exception (``SystemExit`` included) inside one run is written into that
 run's record (status ``failed``) and the job goes on; only ``KeyboardInterrupt`` stops it.
+With worker processes every call into plugin code goes through :meth:`Workers.call
+<vpid_bench.workers.Workers.call>` or the runs' tasks, and this process never builds the
+problem (:class:`_Here` makes the same calls in this process when there are no workers).
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import logging
 import multiprocessing
 import sys
 import time
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
-from . import interrupts
 from . import records as rec
 from .analysis.job import analyse_job, job_score
 from .artifacts import best_of, write_best_signals
-from .build import ProblemCache, run_rng
+from .build import ProblemCache
 from .errors import PluginError, VpidBenchError
-from .job_runs import joins_lockstep, run_outcomes, warm_up
+from .facts import ProblemFacts, problem_facts
+from .job_runs import RunOutcome, joins_lockstep, now_utc, run_outcomes, warm_up
 from .machine import available_cores, one_blas_thread
 from .plugins import Registry
-from .runner import RunTimeoutError, keep_cwd, time_limit
+from .runner import RunTimeoutError, time_limit
 from .spec import Job, parse_job
 from .targets import with_stops
-from .workers import Workers, can_send, outcomes_isolated
+from .worker_loop import probe
+from .workers import GRACE_S, Workers, can_send, is_timeout, outcomes_isolated
 
 log = logging.getLogger(__name__)
 
@@ -107,7 +113,7 @@ def _set_aside(path: Path, why: str) -> Path:
     return target
 
 
-def _job_key(job: Job, registry: Registry | None, problem: Any) -> dict[str, Any]:
+def _job_key(job: Job, registry: Registry | None, facts: ProblemFacts) -> dict[str, Any]:
     plugins = {}
     if registry is not None:
         for kind, name in (("problem", job.problem_name), ("optimizer", job.optimizer_name)):
@@ -120,7 +126,7 @@ def _job_key(job: Job, registry: Registry | None, problem: Any) -> dict[str, Any
     return rec.job_key(
         {**job.problem_settings(), "name": job.problem_name},
         {**job.optimizer_settings(), "name": job.optimizer_name},
-        job.spec.seed, job.budget, plugins=plugins, data=problem.content_digest(), **more,
+        job.spec.seed, job.budget, plugins=plugins, data=facts.content_digest, **more,
     )
 
 
@@ -167,15 +173,26 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
     write what the records allow (:func:`~vpid_bench.analysis.job.analyse_job`) into
     ``optima_dir`` (default ``job_dir/optima``). ``pool``: the sweep's worker processes
     (``isolation=auto`` uses them when given; ``process`` starts its own without)."""
-    problem = (problems or ProblemCache(size=1)).get(job)
-    problem.set_threads(job.spec.threads or available_cores())
-    job = with_stops(job.sized(problem.bounds.dim), problem)
     pool, own_pool = _choose_workers(job, pool)
     try:
-        return _run_job(job, Path(job_dir), registry, problem, optima_dir, pool)
+        calls = pool if pool is not None else _Here(job, problems)
+        return _run_job(job, Path(job_dir), registry, calls, optima_dir, pool)
     finally:
         if own_pool:
             pool.close()
+
+
+class _Here:
+    """Calls into plugin code in this process (no worker processes): :meth:`call` has the
+    signature of :meth:`Workers.call <vpid_bench.workers.Workers.call>`, and the job's problem
+    is built here."""
+
+    def __init__(self, job: Job, problems: ProblemCache | None) -> None:
+        self.problem = (problems or ProblemCache(size=1)).get(job)
+        self.problem.set_threads(job.spec.threads or available_cores())
+
+    def call(self, job: Job, fn: Any, *args: Any, what: str, limit: float | None) -> Any:
+        return fn(job, self.problem, *args)
 
 
 def _choose_workers(job: Job, pool: Workers | None) -> tuple[Workers | None, bool]:
@@ -202,55 +219,135 @@ def _choose_workers(job: Job, pool: Workers | None) -> tuple[Workers | None, boo
     return pool, False
 
 
-def _build_one_optimizer(job: Job, problem: Any, pool: Workers | None) -> None:
-    """Build one optimizer up front: a fault in its constructor stops the job before any
-    run; a constructor that never returns is bounded by the run's time limit."""
-    if pool is not None:
-        pool.probe(job)
-        return
+# --- what the job asks of its plugins: module-level functions, so a worker can run them
+# (``calls.call(job, fn, *args)`` runs ``fn(job, problem, *args)``)
+
+
+def setup_limit_s(job: Job) -> float | None:
+    """Wall-time limit (s) of each set-up call into the problem (its facts, its artifacts,
+    its certified optima): what all the job's runs together are
+    allowed, ``run_timeout_s x runs``, but at least :data:`~vpid_bench.workers.GRACE_S`, so
+    a tiny limit still lets every run be tried and recorded (``None`` without
+    ``run_timeout_s``)."""
+    limit = analysis_limit_s(job)
+    return None if limit is None else max(GRACE_S, limit)
+
+
+@contextlib.contextmanager
+def _limited(seconds: float | None, what: str) -> Iterator[None]:
+    """:func:`~vpid_bench.runner.time_limit`, its error naming ``what`` and the limit."""
     try:
-        with time_limit(job.spec.run_timeout_s), keep_cwd():
-            job.optimizer_cls(job.params, problem.bounds, run_rng(job.spec.seed, 0))
-    except KeyboardInterrupt:
-        if interrupts.from_user():
+        with time_limit(seconds):
+            yield
+    except RunTimeoutError as exc:
+        raise RunTimeoutError(f"{what} took longer than {seconds:g} s (its limit from "
+                              "run_timeout_s)") from exc
+
+
+def _facts(job: Job, problem: Any) -> ProblemFacts:
+    with _limited(setup_limit_s(job), "the problem's set-up"):
+        return problem_facts(problem, job.spec.runs)
+
+
+def _stops(job: Job, problem: Any) -> dict[int, float]:
+    with _limited(setup_limit_s(job), "the certified optima's check"):
+        return with_stops(job, problem).stop_at
+
+
+def _write_artifacts(job: Job, problem: Any, job_dir: Path) -> list[Any]:
+    with _limited(setup_limit_s(job), "the problem's write_artifacts()"):
+        return list(problem.write_artifacts(job_dir) or [])
+
+
+def _analyse(job: Job, problem: Any, job_dir: Path, optima_dir: Path,
+             records: list[dict[str, Any]]) -> dict[int, float]:
+    with time_limit(analysis_limit_s(job)), one_blas_thread():
+        return analyse_job(job, problem, job_dir, optima_dir, records)
+
+
+def _signals(job: Job, problem: Any, job_dir: Path, index: int, x: Any,
+             source: dict[str, Any]) -> None:
+    with _limited(analysis_limit_s(job), "the best run's signals"):
+        write_best_signals(job_dir, problem.instance(index), x, source)
+
+
+def _limit(limit: float | None) -> float | None:
+    """A worker's allowance for a call limited to ``limit`` s in the worker itself (its
+    in-process limit raises first; past this it is killed)."""
+    return None if limit is None else limit + GRACE_S
+
+
+def _build_one_optimizer(job: Job, calls: Any) -> BaseException | None:
+    """Build one optimizer up front: a fault in its constructor stops the job before any
+    run. A constructor that passes the run's time limit does not: it is returned, and every
+    run is recorded as failed with it (a job whose runs all time out once recorded none)."""
+    try:
+        calls.call(job, probe, what="the optimizer's constructor",
+                   limit=_limit(job.spec.run_timeout_s))
+    except Exception as exc:
+        if not is_timeout(exc):
             raise
-        raise interrupts.PluginInterruptError("its constructor") from None
+        text = (f"{job.optimizer_name} on {job.problem_name}: {' '.join(str(exc).split())}; "
+                "every run is recorded as failed with this reason")
+        log.error("%s", text)
+        print(f"error: {text}", file=sys.stderr, flush=True)
+        return exc
+    return None
 
 
-def _run_job(job: Job, job_dir: Path, registry: Registry | None, problem: Any,
+def _run_job(job: Job, job_dir: Path, registry: Registry | None, calls: Any,
              optima_dir: Path | None, pool: Workers | None) -> JobSummary:
-    _build_one_optimizer(job, problem, pool)
+    facts = calls.call(job, _facts, what="the problem's set-up (its instances, bounds, "
+                       "x_true, instance_id(), describe(), content_digest())",
+                       limit=_limit(setup_limit_s(job)))
+    job = job.sized(facts.dim)
+    if job.spec.target is not None:
+        job = dataclasses.replace(job, stop_at=calls.call(
+            job, _stops, what="the certified optima's check", limit=_limit(setup_limit_s(job))))
+    failure = _build_one_optimizer(job, calls)
     provenance = {kind: (registry.provenance(kind, name) if registry is not None else {})
                   for kind, name in (("problem", job.problem_name),
                                      ("optimizer", job.optimizer_name))}
     job_dir.mkdir(parents=True, exist_ok=True)
-    _check_artifacts(job_dir, problem.write_artifacts(job_dir), job.problem_name)
+    written = calls.call(job, _write_artifacts, job_dir, what="the problem's write_artifacts()",
+                         limit=_limit(setup_limit_s(job)))
+    _check_artifacts(job_dir, written, job.problem_name)
     spec = job.spec
     summary = JobSummary(job_dir, job.problem_name, job.optimizer_name, spec.runs, 0, 0, [],
                          [], 0.0)
     start = time.perf_counter()
     with one_blas_thread():
-        _run_missing(job, problem, job_dir, _job_key(job, registry, problem), provenance,
-                     summary, pool)
-        records = _read_records(summary.record_paths)  # once, for all that follows
-        gaps: dict[int, float] = {}
-        try:
-            with time_limit(analysis_limit_s(job)):
-                gaps = analyse_job(job, problem, job_dir,
-                                   Path(optima_dir or job_dir / "optima"), records)
-        except Exception as exc:  # noqa: BLE001 - the runs are recorded; say what failed
-            text = " ".join(str(exc).split())[:300]
-            log.warning("the optimum / identifiability analysis failed: %s: %s",
-                        type(exc).__name__, text)
-            print(f"warning: {job.optimizer_name} on {job.problem_name}: the optimum / "
-                  f"identifiability analysis failed ({type(exc).__name__}: {text}); the runs "
-                  "are recorded, their gaps to the optimum are not", file=sys.stderr, flush=True)
-        summary.score = job_score(gaps, records)
-        summary.wall_time_s = time.perf_counter() - start
+        _run_missing(job, calls, facts, job_dir, _job_key(job, registry, facts), provenance,
+                     summary, pool, failure)
+    records = _read_records(summary.record_paths)  # once, for all that follows
+    gaps = _after_runs(job, calls, "the optimum / identifiability analysis", _analyse, job_dir,
+                       Path(optima_dir or job_dir / "optima"), records,
+                       what="its gaps to the optimum are not",
+                       limit=_limit(analysis_limit_s(job))) or {}
+    summary.score = job_score(gaps, records)
+    summary.wall_time_s = time.perf_counter() - start
     best = best_of(records)
     if best is not None:  # the best run's own instance: its record is the one it fitted
-        write_best_signals(job_dir, problem.instance(int(best[1]["run_index"])), *best)
+        _after_runs(job, calls, "the best run's signals", _signals, job_dir,
+                    int(best[1]["run_index"]), *best,
+                    what="best_signals.csv may be missing or out of date",
+                    limit=_limit(analysis_limit_s(job)))
     return summary
+
+
+def _after_runs(job: Job, calls: Any, name: str, fn: Any, *args: Any, what: str,
+                limit: float | None) -> Any:
+    """A call after the runs (they are recorded): its value, or ``None`` and one warning
+    line saying what failed and what is missing because of it."""
+    try:
+        return calls.call(job, fn, *args, what=name, limit=limit)
+    except Exception as exc:  # noqa: BLE001 - the runs are recorded; say what failed
+        kind = getattr(exc, "remote_type", type(exc).__name__)
+        text = " ".join(str(exc).split())[:300]
+        log.warning("%s failed: %s: %s", name, kind, text)
+        print(f"warning: {job.optimizer_name} on {job.problem_name}: {name} failed ({kind}: "
+              f"{text}); the runs are recorded, {what}", file=sys.stderr, flush=True)
+        return None
 
 
 #: Where records made under another run id (another plugin version, data file or setting)
@@ -320,11 +417,13 @@ def analysis_limit_s(job: Job) -> float | None:
     return None if limit is None else limit * max(1, job.spec.runs)
 
 
-def _run_missing(job: Job, problem: Any, job_dir: Path, key: Mapping[str, Any],
-                 provenance: Mapping[str, Any], summary: JobSummary,
-                 pool: Workers | None) -> None:
+def _run_missing(job: Job, calls: Any, facts: ProblemFacts, job_dir: Path,
+                 key: Mapping[str, Any], provenance: Mapping[str, Any], summary: JobSummary,
+                 pool: Workers | None, failure: BaseException | None) -> None:
     """Run the runs without a complete record (all of them without ``resume``), here or in
-    ``pool``'s worker processes, and write a record for each as soon as it is over."""
+    ``pool``'s worker processes, and write a record for each as soon as it is over.
+    ``failure``: the job's up-front build timed out, so every run is recorded as failed with
+    it instead of being run."""
     spec = job.spec
     bar = _progress_bar(spec.runs, f"{job.optimizer_name} on {job.problem_name}",
                         enabled=spec.progress)
@@ -340,15 +439,9 @@ def _run_missing(job: Job, problem: Any, job_dir: Path, key: Mapping[str, Any],
             else:
                 todo[i] = (rid, path)
         set_aside_superseded(job_dir, key, provenance)
-        lockstep = len(todo) > 1 and joins_lockstep(job, problem)
-        if pool is not None:  # each worker warms up once per job
-            outcomes = outcomes_isolated(pool, job, list(todo), lockstep)
-        else:
-            summary.warmup_s = warm_up(job, problem, lockstep) if todo else 0.0
-            outcomes = run_outcomes(job, problem, list(todo), lockstep)
-        for run in outcomes:
+        for run in _outcomes(job, calls, facts, list(todo), summary, pool, failure):
             rid, path = todo[run.index]
-            record = rec.make_record(job, run, rid, problem.instance(run.index), provenance)
+            record = rec.make_record(job, run, rid, facts.instance(run.index), provenance)
             _refuse_swapped(job_dir, path.parent)
             if not job_dir.is_dir():  # moved away: writing would re-create it, half empty
                 raise VpidBenchError(f"{job_dir} was moved, renamed or removed while the job "
@@ -362,6 +455,20 @@ def _run_missing(job: Job, problem: Any, job_dir: Path, key: Mapping[str, Any],
                 bar.set_postfix_str(_postfix(record), refresh=False)
     finally:
         bar.close()
+
+
+def _outcomes(job: Job, calls: Any, facts: ProblemFacts, todo: list[int], summary: JobSummary,
+              pool: Workers | None, failure: BaseException | None) -> Any:
+    """The outcomes of the runs in ``todo``: from ``pool``'s workers, from this process, or
+    each failed with ``failure`` (see :func:`_run_missing`)."""
+    if failure is not None:
+        started = now_utc()
+        return iter([RunOutcome(i, failure, started, 0.0) for i in todo])
+    lockstep = len(todo) > 1 and joins_lockstep(job, facts)
+    if pool is not None:  # each worker warms up once per job
+        return outcomes_isolated(pool, job, todo, lockstep)
+    summary.warmup_s = warm_up(job, calls.problem, lockstep) if todo else 0.0
+    return run_outcomes(job, calls.problem, todo, lockstep)
 
 
 def run_from_config(cfg: Any, job_dir: str | Path, registry: Registry | None = None,

@@ -11,6 +11,11 @@ tell, plus its rows' share of each gathered evaluation.
 
 Timing: before the first timed run the job makes one untimed warm-up run of at most two
 batches, so compiled kernels (numba) are compiled before any run is timed.
+
+What the problem says of each run's best vector (its :meth:`~vpid_bench.api.Problem.metrics`;
+where the truth is unknown, the parameters' intervals from its residuals) is computed here
+too, where the run ran (a worker process, :mod:`vpid_bench.workers`): problem code that
+raises, passes ``run_timeout_s`` or ends its process there costs its run, never the sweep.
 """
 
 from __future__ import annotations
@@ -21,15 +26,18 @@ import logging
 import math
 import time
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from . import interrupts
 from .bridge import LoopOptimizer
 from .build import run_rng
-from .problem import Problem
+from .errors import PluginError
+from .facts import ProblemFacts
+from .problem import Problem, offers_residuals
 from .runner import Lane, RunResult, run, run_many, time_limit, timeout_error
 from .spec import Job
 
@@ -39,12 +47,15 @@ log = logging.getLogger(__name__)
 @dataclasses.dataclass
 class RunOutcome:
     """How run ``index`` ended: its result or the exception that ended it, when it started
-    (UTC, ISO 8601) and its own time in seconds."""
+    (UTC, ISO 8601), its own time in seconds, and what the problem says of its best vector
+    (:func:`with_problem_results`: ``metrics``, and ``intervals`` where the truth is
+    unknown)."""
 
     index: int
     outcome: RunResult | BaseException
     started_at: str
     seconds: float
+    derived: dict[str, Any] = dataclasses.field(default_factory=dict)
 
     @property
     def result(self) -> RunResult | None:
@@ -55,8 +66,9 @@ class RunOutcome:
         return None if isinstance(self.outcome, RunResult) else self.outcome
 
 
-def joins_lockstep(job: Job, problem: Problem) -> bool:
-    """Whether the runs of ``job`` can run in lockstep (see module)."""
+def joins_lockstep(job: Job, problem: Problem | ProblemFacts) -> bool:
+    """Whether the runs of ``job`` can run in lockstep (see module), from its problem or the
+    problem's facts (:mod:`vpid_bench.facts`)."""
     cls = job.optimizer_cls
     return (bool(getattr(problem, "rows_independent", False))
             and not getattr(cls, "wants_residuals", False)
@@ -80,17 +92,54 @@ def warm_up(job: Job, problem: Problem, lockstep: bool = False) -> float:
     return time.perf_counter() - t0
 
 
-def run_outcomes(job: Job, problem: Problem, indices: Sequence[int], lockstep: bool
-                 ) -> Iterator[RunOutcome]:
-    """The outcome of each run in ``indices``, in order: all in one lockstep group, or one at
-    a time (each yielded as soon as it is over)."""
+def run_outcomes(job: Job, problem: Problem, indices: Sequence[int], lockstep: bool,
+                 announce: Callable[[str], None] | None = None) -> Iterator[RunOutcome]:
+    """The outcome of each run in ``indices``, in order, with its metrics: all in one lockstep
+    group, or one at a time (each yielded as soon as it is over). ``announce("metrics")`` is
+    called before each run's metrics are computed (a worker tells its supervisor, which then
+    knows whom to blame if the process ends)."""
     groups = [list(indices)] if lockstep else [[i] for i in indices]
     for group in groups:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("default")  # each place once
             outcomes = _group(job, problem, group)
         _say_warnings(job, group, caught)
-        yield from outcomes
+        for outcome in outcomes:
+            if outcome.result is not None and announce is not None:
+                announce("metrics")
+            yield with_problem_results(job, problem, outcome)
+
+
+def with_problem_results(job: Job, problem: Problem, outcome: RunOutcome) -> RunOutcome:
+    """``outcome`` with what the problem says of its best vector (nothing for a failed run or
+    a non-finite vector): its ``metrics`` and, where the truth is unknown and the problem has
+    residuals, the parameters' ``intervals`` (``None`` where they cannot be computed there),
+    under the run's time limit. Problem code that raises or passes the limit here fails the
+    run, naming it."""
+    result = outcome.result
+    if result is None or not np.all(np.isfinite(result.x_best)):
+        return outcome
+    inst = problem.instance(outcome.index)
+    x = np.asarray(result.x_best, dtype=float)
+    try:
+        with time_limit(job.spec.run_timeout_s):
+            derived: dict[str, Any] = {"metrics": {str(k): float(v) for k, v in
+                                                   (inst.metrics(x) or {}).items()}}
+            if inst.x_true is None and offers_residuals(inst):
+                derived["intervals"] = _intervals(inst, x)
+    except KeyboardInterrupt:
+        if interrupts.from_user():
+            raise
+        error: BaseException = interrupts.PluginInterruptError("its metrics()")
+    except BaseException as exc:  # noqa: BLE001 - crash isolation: this run only
+        error = PluginError(f"problem {job.problem_name!r}: metrics() or residuals() at run "
+                            f"{outcome.index}'s best vector raised {type(exc).__name__}: {exc}")
+        error.__cause__ = exc
+    else:
+        return dataclasses.replace(outcome, derived=derived)
+    log.error("run %d of %s on %s failed: %s", outcome.index, job.optimizer_name,
+              job.problem_name, error)
+    return dataclasses.replace(outcome, outcome=error)
 
 
 def _say_warnings(job: Job, group: Sequence[int], caught: Sequence[warnings.WarningMessage]
@@ -104,6 +153,17 @@ def _say_warnings(job: Job, group: Sequence[int], caught: Sequence[warnings.Warn
     log.warning("%s on %s, %s: %d warning(s) from plugin code (first: %s: %s, %s:%d); the "
                 "runs are recorded", job.optimizer_name, job.problem_name, runs, len(caught),
                 first.category.__name__, first.message, Path(first.filename).name, first.lineno)
+
+
+def _intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None:
+    """The parameters' intervals at ``x`` (:func:`~vpid_bench.analysis.intervals.
+    jacobian_intervals`), ``None`` where a simulation near ``x`` fails."""
+    from .analysis.intervals import jacobian_intervals
+
+    try:
+        return jacobian_intervals(problem, x)
+    except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+        return None
 
 
 def now_utc() -> str:

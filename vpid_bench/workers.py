@@ -1,12 +1,15 @@
 """Supervised worker processes: a plugin's fault costs its run, never the sweep.
 
-With ``isolation=process`` (the command's default) the optimizer's code of every run (its
-constructor, ``ask``, ``tell``, ``close``) and the problem's evaluations run in long-lived
-worker processes; the sweep's own process only hands out runs, receives each run's outcome and
-writes every record, job status and report. A worker is started once and reused by every job
-of the sweep (imports and compiled kernels are paid once per worker), and runs of one job go
-to several workers at once (``workers``, default every core), so one machine's cores work on a
-study.
+With ``isolation=process`` (the command's default) every call into plugin code runs in
+long-lived worker processes: the optimizer's (its constructor, ``ask``, ``tell``, ``close``)
+and the problem's (its constructor, evaluations, ``describe()`` and the other facts a record
+holds, :mod:`vpid_bench.facts`; ``metrics()``; the analysis after the runs and its optimum
+polish; the best run's signals), through :meth:`Workers.outcomes` (runs) and
+:meth:`Workers.call` (everything else). The sweep's own process never builds a problem: it
+hands out tasks, receives their outcomes and writes every record, job status and report. A
+worker is started once and reused by every job of the sweep (imports and compiled kernels are
+paid once per worker), and runs of one job go to several workers at once (``workers``, default
+every core), so one machine's cores work on a study.
 
 What a worker can no longer take down:
 
@@ -16,7 +19,15 @@ What a worker can no longer take down:
   (SIGALRM, Python code only) cannot stop it, so the supervisor kills its worker
   :data:`GRACE_S` seconds after the limit and records the run as timed out;
 * a plugin's ``os.chdir``, lingering threads, signal handlers and ``KeyboardInterrupt``: they
-  live and die with the worker.
+  live and die with the worker;
+* processes a plugin starts (a fork whose copies both go on, a child left sleeping, a daemon):
+  the supervisor watches each worker's process, not only its pipe (a child holding the pipe
+  open once hid its worker's death), and each worker leads its own session, ended whole
+  when its task fails or leaves a process running (:mod:`vpid_bench.process_tree`); no
+  descendant holds the command's standard streams (a worker's output comes through the
+  supervisor);
+* a plugin that closes the worker's pipe: the worker ends quietly and the run fails with that
+  reason (:mod:`vpid_bench.worker_loop`).
 
 Runs that went together (a lockstep group) and lost their worker are run again one by one, so
 only the run that caused the fault is charged. Records are bit-identical to ``isolation=none``
@@ -24,8 +35,10 @@ only the run that caused the fault is charged. Records are bit-identical to ``is
 
 Why :mod:`multiprocessing` and not an executor: on Python 3.11, :mod:`concurrent.futures`
 cannot kill one hung worker (only break the whole pool), and loky's reusable executor is
-available here only as a copy vendored inside joblib, not as a public package. A worker is a
-``spawn``-ed :class:`multiprocessing.Process` with one :func:`multiprocessing.Pipe`.
+available here only as a copy vendored inside joblib, not as a public package; and neither
+ends the processes a task leaves behind. A worker is a ``spawn``-ed
+:class:`multiprocessing.Process` with one :func:`multiprocessing.Pipe`, whose loop is
+:func:`vpid_bench.worker_loop.serve`.
 """
 
 from __future__ import annotations
@@ -39,20 +52,18 @@ import signal
 import sys
 import threading
 import time
-import traceback
 import weakref
 from collections import deque
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from multiprocessing import get_context
 from multiprocessing.connection import Connection, wait
 from typing import Any
 
-from . import interrupts
-from .errors import PluginError, VpidBenchError
-from .job_runs import RunOutcome, now_utc, run_outcomes, warm_up
-from .machine import one_blas_thread
-from .runner import RunTimeoutError, keep_cwd, time_limit
+from .job_runs import RunOutcome, now_utc
+from .process_tree import Output, end_tree, exited, handle, watch
+from .runner import RunTimeoutError
 from .spec import Job
+from .worker_loop import LOST_PIPE_EXIT, RemoteError, portable, probe, serve
 
 log = logging.getLogger(__name__)
 
@@ -63,6 +74,18 @@ START_S = 120.0
 GRACE_S = 10.0
 #: Runs per task of a lockstep job, at most (a lost task costs at most this many re-runs).
 LOCKSTEP_CHUNK = 10
+#: Memory one worker process takes (MB, resident): 227 MB measured for a worker after a job of
+#: the default problem (docs/sweeps.md), rounded up. :func:`worker_cap` allows one worker per
+#: this much of the memory available.
+WORKER_MB = 250
+#: File descriptors the supervisor holds per worker (its pipe, its multiprocessing sentinel,
+#: its pidfd, two output pipes), and how many it keeps free for everything else.
+FDS_PER_WORKER, FDS_SPARE = 5, 128
+#: Seconds between checks that a worker still runs where no descriptor tells (no pidfd).
+POLL_S = 0.5
+#: Where a run's worker was, by the last phase it announced, when it ended: said in the record.
+_DURING = {None: " while it built the problem",
+           "metrics": " in the problem's metrics() (or the residuals of its intervals)"}
 
 
 class WorkerDiedError(RuntimeError):
@@ -74,29 +97,6 @@ class WorkerKilledError(RunTimeoutError):
     the supervisor killed its worker process."""
 
 
-class RemoteError(Exception):
-    """An exception raised in a worker, carried as its type name, message and traceback (the
-    original may not pickle, or not unpickle in this process)."""
-
-    def __init__(self, type_name: str, message: str, traceback_text: str,
-                 plain: bool = False) -> None:
-        super().__init__(message)
-        self.remote_type, self.remote_traceback = type_name, traceback_text
-        #: Our own errors and ``ValueError``s are shown without their type (as in-process).
-        self.plain = plain
-
-    def __reduce__(self) -> tuple[Any, ...]:
-        return (RemoteError, (self.remote_type, str(self), self.remote_traceback, self.plain))
-
-
-def portable(exc: BaseException) -> RemoteError:
-    """``exc`` as a :class:`RemoteError` (what a record needs of it, always picklable)."""
-    if isinstance(exc, RemoteError):
-        return exc
-    return RemoteError(type(exc).__name__, str(exc), "".join(traceback.format_exception(exc)),
-                       isinstance(exc, (VpidBenchError, ValueError)))
-
-
 def describe_exit(code: int | None) -> str:
     """How a process ended, for a record: ``exit code 3`` or ``signal SIGSEGV``."""
     if code is None:
@@ -105,7 +105,35 @@ def describe_exit(code: int | None) -> str:
         with contextlib.suppress(ValueError):
             return f"signal {signal.Signals(-code).name}"
         return f"signal {-code}"
+    if code == LOST_PIPE_EXIT:
+        return (f"exit code {code}: its pipe to the sweep was closed under it, as by a "
+                "plugin that closes file descriptors")
     return f"exit code {code}"
+
+
+def is_timeout(exc: BaseException) -> bool:
+    """Whether ``exc`` (raised here or carried from a worker) says a time limit passed."""
+    return isinstance(exc, RunTimeoutError) or getattr(exc, "remote_type", "") in (
+        "RunTimeoutError", "WorkerKilledError")
+
+
+def worker_cap() -> tuple[int, str]:
+    """The most worker processes this machine holds at once, and why: one per
+    :data:`WORKER_MB` of the memory available now, and no more than the open-file limit
+    allows the supervisor (:data:`FDS_PER_WORKER` each); at least one."""
+    import resource
+
+    import psutil
+
+    available = psutil.virtual_memory().available
+    by_memory = max(1, int(available // (WORKER_MB * 2**20)))
+    soft = resource.getrlimit(resource.RLIMIT_NOFILE)[0]
+    by_files = (max(1, (soft - FDS_SPARE) // FDS_PER_WORKER)
+                if soft != resource.RLIM_INFINITY else by_memory)
+    if by_files < by_memory:
+        return by_files, f"the open-file limit, {soft}, allows {by_files}"
+    return by_memory, (f"{available / 2**30:.1f} GB of memory available, about {WORKER_MB} MB "
+                       f"per worker, allow {by_memory}")
 
 
 def can_send(job: Job) -> str | None:
@@ -118,27 +146,12 @@ def can_send(job: Job) -> str | None:
     return None
 
 
-# --------------------------------------------------------------------- the worker's side
-
-
-class _PipeLog(logging.Handler):
-    """Sends the worker's log records to the supervisor, which logs them (job log included)."""
-
-    def __init__(self, send: Any) -> None:
-        super().__init__(logging.INFO)
-        self._send = send
-
-    def emit(self, record: logging.LogRecord) -> None:
-        with contextlib.suppress(Exception):
-            self._send(("log", record.levelno, record.name, record.getMessage()))
-
-
 @contextlib.contextmanager
 def _sigint_held() -> Iterator[None]:
     """A Ctrl-C inside the block is noted and delivered (to the handler in place before) when
     the block ends. SIGINT is also blocked for this thread, so a process started inside
-    inherits it blocked (released by :func:`_serve`). Main thread only (elsewhere a no-op:
-    Python runs signal handlers on the main thread)."""
+    inherits it blocked (released by :func:`~.worker_loop.serve`). Main thread only
+    (elsewhere a no-op: Python runs signal handlers on the main thread)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -156,94 +169,19 @@ def _sigint_held() -> Iterator[None]:
             signal.raise_signal(signal.SIGINT)
 
 
-def _serve(conn: Connection) -> None:
-    """The worker's loop: one task at a time until told to stop or the pipe closes."""
-    from .build import ProblemCache
-
-    interrupts.plugin_only()  # the user's Ctrl-C is the supervisor's to handle
-    if hasattr(signal, "pthread_sigmask"):  # held by the supervisor while it started us
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
-    lock = threading.Lock()
-
-    def send(msg: Any) -> None:
-        with lock:  # a plugin's thread may log while the main thread sends an outcome
-            conn.send(msg)
-
-    root = logging.getLogger()
-    root.handlers[:] = [_PipeLog(send)]
-    root.setLevel(logging.INFO)
-    threading.excepthook = _thread_exception(send)
-    state = {"problems": ProblemCache(size=4), "warm": set()}
-    while True:
-        try:
-            msg = conn.recv()
-        except (EOFError, OSError):
-            break
-        if msg is None:
-            break
-        kind, job, payload = msg
-        try:
-            if kind == "probe":
-                problem = state["problems"].get(job)
-                send(("phase", "built"))  # the constructor's own limit starts now
-                send(("probed", _probe(job, problem)))
-            else:
-                _run_task(job, payload, state, send)
-        except BaseException as exc:  # noqa: BLE001 - the supervisor records it; keep serving
-            send(("task_failed", portable(exc)))
-    os._exit(0)  # a plugin's non-daemon thread must not keep the worker alive
-
-
-def _thread_exception(send: Any) -> Any:
-    """The worker's ``threading.excepthook``: one line on the command's stderr for an
-    exception in a plugin's own thread (as in the command's own process), no traceback."""
-    def hook(args: Any) -> None:
-        with contextlib.suppress(Exception):
-            send(("say", interrupts.thread_exception_line(args)))
-    return hook
-
-
-def _probe(job: Job, problem: Any) -> RemoteError | None:
-    """Build one optimizer (a fault in its constructor stops the job before any run)."""
-    from .build import run_rng
-
-    try:
-        with time_limit(job.spec.run_timeout_s), keep_cwd():
-            job.optimizer_cls(job.params, problem.bounds, run_rng(job.spec.seed, 0))
-    except KeyboardInterrupt:
-        return portable(interrupts.PluginInterruptError("its constructor"))
-    except BaseException as exc:  # noqa: BLE001 - carried to the supervisor
-        return portable(exc)
-    return None
-
-
-def _run_task(job: Job, payload: tuple[list[int], bool, int], state: dict[str, Any],
-              send: Any) -> None:
-    indices, lockstep, threads = payload
-    problem = state["problems"].get(job)
-    problem.set_threads(threads)
-    send(("phase", "built"))  # from here on plugin code runs: the runs' limits apply
-    warm_key = (id(problem), job.optimizer_cls, job.optimizer_name, lockstep)
-    with one_blas_thread():
-        if warm_key not in state["warm"]:
-            warm_up(job, problem, lockstep)
-            state["warm"].add(warm_key)
-            send(("phase", "warmed"))
-        for outcome in run_outcomes(job, problem, indices, lockstep):
-            if outcome.error is not None:
-                outcome = dataclasses.replace(outcome, outcome=portable(outcome.error))
-            send(("outcome", outcome))
-    send(("done", None))
-
-
-# ----------------------------------------------------------------- the supervisor's side
-
-
-@dataclasses.dataclass
+@dataclasses.dataclass(eq=False)
 class _Worker:
     process: Any
     conn: Connection
+    output: Output
+    tree: Any  # process_tree.handle of the process
+    #: Readable once the process ended (process_tree.watch), or None: ask ended() in turns.
+    watch: int | None
     jobs: set[str] = dataclasses.field(default_factory=set)
+
+    def ended(self) -> bool:
+        """Whether the process has ended (without reaping it: see :meth:`Workers._end`)."""
+        return exited(self.process.pid)
 
 
 @dataclasses.dataclass
@@ -252,6 +190,8 @@ class _Busy:
     remaining: list[int]
     deadline: float | None
     started: str
+    #: The last phase the worker announced (``None``: still building the problem).
+    phase: str | None = None
 
 
 class Workers:
@@ -261,11 +201,14 @@ class Workers:
     def __init__(self, size: int) -> None:
         if size < 1:
             raise ValueError("a worker set needs at least one worker")
-        self.size = size
+        #: The most workers at once (:func:`worker_cap`) and why.
+        self.cap, self._cap_why = worker_cap()
+        self.size = min(size, self.cap)
+        self._said: set[tuple[int, int]] = set()
         self._ctx = get_context("spawn")
         self._idle: list[_Worker] = []
         self._all: list[_Worker] = []
-        self._finalizer = weakref.finalize(self, _kill_all, self._all)
+        self._finalizer = weakref.finalize(self, _end_all, self._all)
 
     # --- workers
 
@@ -274,83 +217,199 @@ class Workers:
         ``start()`` once cut the start-up data the child reads from its pipe, and the child
         printed Python's traceback of the truncated pickle (the Ctrl-C, still pending, is
         raised as soon as the worker is started and tracked). The child inherits the held
-        SIGINT and releases it once it ignores SIGINT (:func:`_serve`)."""
+        SIGINT and releases it once it ignores SIGINT (:func:`~.worker_loop.serve`). Its
+        standard output and error come through this process (:class:`~.process_tree.Output`)."""
         with _sigint_held():
             ours, theirs = self._ctx.Pipe(duplex=True)
-            process = self._ctx.Process(target=_serve, args=(theirs,),
+            output = Output()
+            process = self._ctx.Process(target=serve, args=(theirs, *output.child_ends()),
                                         name="vpid-bench-worker")
             process.start()
             theirs.close()
-            worker = _Worker(process, ours)
+            output.started()
+            worker = _Worker(process, ours, output, handle(process.pid), watch(process.pid))
             self._all.append(worker)
         return worker
 
-    def prestart(self) -> None:
-        """Start every worker now, so their start-up (imports) overlaps the sweep's own set-up
+    def prestart(self, count: int | None = None) -> None:
+        """Start ``count`` workers now (default and at most :attr:`size`; a job never uses
+        more than its runs), so their start-up (imports) overlaps the sweep's own set-up
         instead of delaying the first runs."""
-        while len(self._all) < self.size:
+        while len(self._all) < min(self.size, self.size if count is None else count):
             self._idle.append(self._start())
+
+    def how_many(self, requested: int, tasks: int) -> int:
+        """How many workers run a job's ``tasks`` at once when ``requested`` (its ``workers``
+        key, or the set's size): never more than its tasks nor than :attr:`cap`. When that is
+        fewer than requested because of the cap, one line says so (once per pair)."""
+        count = max(1, min(requested, tasks, self.cap))
+        if requested > self.cap and (requested, count) not in self._said:
+            self._said.add((requested, count))
+            print(f"note: workers={requested}: at most {self.cap} worker processes on this "
+                  f"machine ({self._cap_why}); a job also never starts more than it has "
+                  f"runs to give them", file=sys.stderr, flush=True)
+        return count
 
     def _take(self) -> _Worker:
         while self._idle:
             worker = self._idle.pop()
-            if worker.process.is_alive():
+            if not worker.ended():
                 return worker
-            self._discard(worker)
+            self._end(worker)
         return self._start()
 
-    def _discard(self, worker: _Worker) -> None:
-        with contextlib.suppress(Exception):
-            worker.process.kill()
-        worker.process.join(timeout=5)
+    def _end(self, worker: _Worker) -> str:
+        """End ``worker`` and every process it started (:func:`~.process_tree.end_tree`),
+        copy what it printed, close its pipes and forget it; how it ended, for a record."""
+        end_tree(worker.tree, worker.process.pid)  # before reaping it (join): see end_tree
+        end = time.monotonic() + 5.0
+        while not worker.ended() and time.monotonic() < end:
+            time.sleep(0.02)
+        if worker.ended():  # reaped (its exit code read) only once it has ended
+            worker.process.join()
+        worker.output.close()
         with contextlib.suppress(Exception):
             worker.conn.close()
+        if worker.watch is not None:
+            with contextlib.suppress(OSError):
+                os.close(worker.watch)
+            worker.watch = None
         if worker in self._all:
             self._all.remove(worker)
+        if worker in self._idle:
+            self._idle.remove(worker)
+        return describe_exit(worker.process.exitcode)
+
+    def _release(self, worker: _Worker, left: int, who: str) -> None:
+        """A worker whose task is over goes back to the idle ones, unless the task left
+        processes running: then it is ended with them (no process a plugin starts outlives
+        the task that started it)."""
+        if left:
+            log.warning("%s left %d process(es) running after its task; ended with its worker "
+                        "process", who, left)
+            self._end(worker)
+        else:
+            self._idle.append(worker)
 
     def close(self) -> None:
-        """Stop every worker (politely, then by force)."""
+        """End every worker and every process they started."""
         for worker in list(self._all):
-            with contextlib.suppress(Exception):
-                worker.conn.send(None)
-        for worker in list(self._all):
-            worker.process.join(timeout=2)
-            self._discard(worker)
+            self._end(worker)
         self._idle.clear()
 
-    # --- tasks
+    # --- waiting
 
-    def probe(self, job: Job) -> None:
-        """Build one optimizer of ``job`` in a worker; raise what its constructor raised."""
+    def _events(self, workers: Sequence[_Worker], timeout: float | None) -> list[_Worker]:
+        """The workers among ``workers`` with a message waiting or whose process ended,
+        waiting at most ``timeout`` seconds (``None``: for ever; an empty list: none by
+        then). What they print meanwhile is copied to this process's streams."""
+        end = None if timeout is None else time.monotonic() + timeout
+        unwatched = [w for w in workers if w.watch is None]
+        while True:
+            handles: dict[Any, Any] = {}
+            for w in workers:
+                handles[w.conn] = w
+                if w.watch is not None:
+                    handles[w.watch] = w
+                handles.update({fd: (w.output, fd) for fd in w.output.fds})
+            left = None if end is None else max(0.0, end - time.monotonic())
+            if unwatched:
+                left = POLL_S if left is None else min(left, POLL_S)
+            hits = [w for w in unwatched if w.ended()]
+            for ready in wait(list(handles), timeout=0 if hits else left):
+                target = handles[ready]
+                if isinstance(target, tuple):
+                    target[0].forward(target[1])
+                elif target not in hits:
+                    hits.append(target)
+            if hits or (end is not None and time.monotonic() >= end):
+                return hits
+
+    def _receive(self, worker: _Worker) -> tuple[Any, str | None]:
+        """The worker's next message, or ``(None, how it ended)`` when its process is gone
+        or sent what cannot be read (it is then ended, its tree too): the one place both
+        calls and runs learn that a worker died. Its liveness, not its pipe, decides: a
+        process a plugin forked may keep the pipe open long after the worker died."""
+        try:
+            if worker.conn.poll():
+                msg = worker.conn.recv()
+                if isinstance(msg, tuple) and msg:
+                    return msg, None
+                raise TypeError(f"a {type(msg).__name__}, not a message")
+        except (EOFError, OSError):  # every copy of its end is closed
+            # on its way out, or alive with its pipe closed under it: a second to end alone
+            end = time.monotonic() + 1.0
+            while not worker.ended() and time.monotonic() < end:
+                time.sleep(0.02)
+            if not worker.ended():
+                self._end(worker)
+                return None, ("its pipe to the sweep was closed under it, as by a plugin that "
+                              "closes file descriptors; it was killed")
+        except Exception as exc:  # noqa: BLE001 - a message that does not unpickle
+            return None, (f"{self._end(worker)} after a message that could not be read "
+                          f"({type(exc).__name__})")
+        return None, self._end(worker)
+
+    # --- calls
+
+    def call(self, job: Job, fn: Callable[..., Any], *args: Any, what: str,
+             limit: float | None) -> Any:
+        """``fn(job, problem, *args)`` in a worker (``fn`` a module-level function; the
+        problem of ``job`` built there once and kept), and its value; raises what it raised,
+        or :class:`WorkerDiedError` / :class:`WorkerKilledError` naming ``what`` when it
+        ended its worker or did not return. :data:`START_S` to build the problem, then
+        ``limit`` seconds (``None``: no limit)."""
         worker = self._take()
-        reply = self._ask(worker, ("probe", job, None), _allowance(job, 1))
-        if isinstance(reply, BaseException):
-            raise reply
-        kind, value = reply
-        if kind == "task_failed" or value is not None:
-            raise value
-        self._idle.append(worker)
+        try:
+            return self._call(worker, job, fn, args, what, limit)
+        except KeyboardInterrupt:  # its state is unknown
+            self._end(worker)
+            raise
 
-    def _ask(self, worker: _Worker, msg: Any, limit: float | None) -> Any:
-        """Send one message and wait for the worker's answer: :data:`START_S` to build the
-        problem, then ``limit`` seconds (``None``: no limit)."""
-        worker.conn.send(msg)
+    def _call(self, worker: _Worker, job: Job, fn: Callable[..., Any], args: tuple[Any, ...],
+              what: str, limit: float | None) -> Any:
+        try:
+            worker.conn.send(("call", job, (fn, args)))
+        except OSError:
+            raise WorkerDiedError(f"its worker process ended ({self._end(worker)}) before "
+                                  f"{what}") from None
+        built = False
         deadline = None if limit is None else time.monotonic() + START_S
         while True:
             left = None if deadline is None else max(0.0, deadline - time.monotonic())
-            if not wait([worker.conn], timeout=left):
-                self._discard(worker)
-                return PluginError(f"the optimizer's constructor did not return within "
-                                   f"{limit:.0f} s (run_timeout_s + {GRACE_S:.0f} s; blocked "
-                                   "in C or ignoring SIGALRM): its worker process was killed")
-            reply, ended = self._receive(worker)
+            if not self._events([worker], left):
+                self._end(worker)
+                raise WorkerKilledError(
+                    f"{what} did not return within {limit:.0f} s (run_timeout_s + "
+                    f"{GRACE_S:.0f} s; blocked in C or ignoring SIGALRM): its worker process "
+                    "was killed" if built else f"building the problem took more than "
+                    f"{START_S:.0f} s: its worker process was killed")
+            msg, ended = self._receive(worker)
             if ended is not None:
-                return PluginError(f"the optimizer's constructor ended its worker process "
-                                   f"({ended})")
-            if reply[0] == "phase":
+                raise WorkerDiedError(f"{what} ended its worker process ({ended})" if built
+                                      else f"its worker process ended ({ended}) while it "
+                                      "built the problem")
+            if _aside(msg):
+                continue
+            if msg[0] == "phase":
+                built = True
                 deadline = None if limit is None else time.monotonic() + limit
-            elif not _aside(reply):
-                return reply
+            elif msg[0] == "end":
+                _, error, value, strays = msg
+                self._release(worker, strays, what)
+                if error is not None:
+                    raise error
+                return value
+            else:
+                self._end(worker)
+                raise WorkerDiedError(f"{what}: its worker process sent {msg[0]!r}, not an "
+                                      "answer; it was ended")
+
+    def probe(self, job: Job) -> None:
+        """Build one optimizer of ``job`` in a worker; raise what its constructor raised."""
+        self.call(job, probe, what="the optimizer's constructor", limit=_allowance(job, 1))
+
+    # --- runs
 
     def outcomes(self, job: Job, indices: Sequence[int], lockstep: bool, workers: int,
                  threads: int) -> Iterator[RunOutcome]:
@@ -367,7 +426,7 @@ class Workers:
                 yield from self._collect(job, busy, pending)
         finally:
             for b in busy.values():  # interrupted: their state is unknown
-                self._discard(b.worker)
+                self._end(b.worker)
 
     def _hand_out(self, job: Job, runs: list[int], threads: int,
                   busy: dict[Connection, _Busy]) -> None:
@@ -375,68 +434,74 @@ class Workers:
         key = _job_key(job)
         fresh = key not in worker.jobs
         worker.jobs.add(key)
-        worker.conn.send(("runs", job, (runs, len(runs) > 1, threads)))
         # a worker new to the job first builds its problem (no plugin optimizer code yet)
         limit = _allowance(job, len(runs))
         limit = START_S if fresh and limit is not None else limit
         deadline = None if limit is None else time.monotonic() + limit
         busy[worker.conn] = _Busy(worker, list(runs), deadline, now_utc())
-
-    def _receive(self, worker: _Worker) -> tuple[Any, str | None]:
-        """The worker's next message, or ``(None, how it ended)`` when its process is gone
-        (it is then discarded): the one place both the constructor probe and the runs learn
-        that a worker died."""
-        try:
-            return worker.conn.recv(), None
-        except (EOFError, OSError):
-            ended = describe_exit(_exit_code(worker))
-            self._discard(worker)
-            return None, ended
+        with contextlib.suppress(OSError):  # a worker already gone: the next wait says so
+            worker.conn.send(("runs", job, (runs, len(runs) > 1, threads)))
 
     def _collect(self, job: Job, busy: dict[Connection, _Busy],
                  pending: deque[list[int]]) -> Iterator[RunOutcome]:
         deadlines = [b.deadline for b in busy.values() if b.deadline is not None]
         left = max(0.0, min(deadlines) - time.monotonic()) if deadlines else None
-        for conn in wait(list(busy), timeout=left):
-            b = busy[conn]
-            msg, ended = self._receive(b.worker)
+        for worker in self._events([b.worker for b in busy.values()], left):
+            b = busy[worker.conn]
+            msg, ended = self._receive(worker)
             if ended is not None:
-                del busy[conn]
-                yield from _lost(job, b, WorkerDiedError(f"its worker process ended ({ended})"),
-                                 pending)
-                continue
-            yield from self._handle(job, conn, msg, busy)
+                del busy[worker.conn]
+                cause = WorkerDiedError(f"its worker process ended ({ended})"
+                                        f"{_DURING.get(b.phase, '')}")
+                yield from _lost(job, b, cause, pending)
+            elif not _aside(msg):
+                yield from self._handle(job, worker.conn, msg, busy, pending)
         now = time.monotonic()
         for conn, b in list(busy.items()):
             if b.deadline is not None and now > b.deadline:
                 del busy[conn]
-                self._discard(b.worker)
+                self._end(b.worker)
                 cause = WorkerKilledError(
                     f"the run passed run_timeout_s={job.spec.run_timeout_s} s and did not return "
                     f"within {GRACE_S:.0f} s more (blocked in C code or ignoring SIGALRM): its "
                     "worker process was killed")
                 yield from _lost(job, b, cause, pending)
 
-    def _handle(self, job: Job, conn: Connection, msg: Any, busy: dict[Connection, _Busy]
-                ) -> Iterator[RunOutcome]:
+    def _handle(self, job: Job, conn: Connection, msg: Any, busy: dict[Connection, _Busy],
+                pending: deque[list[int]]) -> Iterator[RunOutcome]:
+        """A worker's message about its runs: progress, an outcome, or the task's end."""
         b = busy[conn]
-        kind, value = msg[0], msg[1]
-        if _aside(msg):
-            pass
+        kind = msg[0]
+        if kind == "outcome" and msg[1].index not in b.remaining:
+            # not one of its runs (never sent by a worker that keeps to the protocol)
+            del busy[conn]
+            cause = WorkerDiedError(f"its worker process sent the outcome of run "
+                                    f"{msg[1].index}, which it was not running; it was ended "
+                                    f"({self._end(b.worker)})")
+            yield from _lost(job, b, cause, pending)
         elif kind in ("phase", "outcome"):  # progress: the clock restarts for what is left
             if kind == "outcome":
-                b.remaining.remove(value.index)
-                yield value
+                b.remaining.remove(msg[1].index)
+                b.phase = "built"
+                yield msg[1]
+            else:
+                b.phase = msg[1]
             limit = _allowance(job, len(b.remaining))
             b.deadline = None if limit is None else time.monotonic() + limit
-        elif kind == "task_failed":  # building the problem failed: every run of the task
+        elif kind == "end":
+            _, error, _, strays = msg
             del busy[conn]
-            self._idle.append(b.worker)
+            # building the problem failed (or the worker ended the task early): every run left
+            cause = error if error is not None else WorkerDiedError(
+                "its worker process ended the task without the run's outcome")
             for i in b.remaining:
-                yield RunOutcome(i, value, b.started, 0.0)
-        else:  # "done"
+                yield RunOutcome(i, cause, b.started, 0.0)
+            self._release(b.worker, strays, f"{job.optimizer_name} on {job.problem_name}")
+        else:
             del busy[conn]
-            self._idle.append(b.worker)
+            cause = WorkerDiedError(f"its worker process sent {kind!r}, not a run's outcome; "
+                                    f"it was ended ({self._end(b.worker)})")
+            yield from _lost(job, b, cause, pending)
 
 
 def _lost(job: Job, b: _Busy, cause: BaseException, pending: deque[list[int]]
@@ -476,11 +541,6 @@ def _job_key(job: Job) -> str:
                  job.optimizer_settings()))
 
 
-def _exit_code(worker: _Worker) -> int | None:
-    worker.process.join(timeout=5)
-    return worker.process.exitcode
-
-
 def _aside(msg: Any) -> bool:
     """Handle a worker's log record or line for stderr; ``False`` for any other message."""
     if msg[0] == "log":
@@ -493,23 +553,29 @@ def _aside(msg: Any) -> bool:
     return True
 
 
-def _kill_all(workers: list[_Worker]) -> None:
+def _end_all(workers: list[_Worker]) -> None:
+    """At exit: every worker left and what it started, ended."""
     for worker in list(workers):
         with contextlib.suppress(Exception):
-            worker.process.kill()
+            end_tree(worker.tree, worker.process.pid)
             worker.process.join(timeout=2)
 
 
 def outcomes_isolated(pool: Workers, job: Job, indices: Sequence[int], lockstep: bool
                       ) -> Iterator[RunOutcome]:
-    """:meth:`Workers.outcomes` with the job's ``workers`` and ``threads`` keys applied: each
-    worker's problem gets an equal share of the cores unless ``threads`` is set."""
+    """:meth:`Workers.outcomes` with the job's ``workers`` and ``threads`` keys applied
+    (:meth:`Workers.how_many`): each worker's problem gets an equal share of the cores unless
+    ``threads`` is set."""
     from .machine import available_cores
 
-    workers = job.spec.workers or pool.size
+    requested = job.spec.workers or pool.size
+    tasks = (len(_tasks(list(indices), min(requested, pool.cap))) if lockstep
+             else len(indices))
+    workers = pool.how_many(requested, tasks)
     threads = job.spec.threads or max(1, available_cores() // workers)
     return pool.outcomes(job, indices, lockstep, workers, threads)
 
 
 __all__ = ["GRACE_S", "RemoteError", "WorkerDiedError", "WorkerKilledError",
-           "Workers", "can_send", "describe_exit", "outcomes_isolated", "portable"]
+           "Workers", "can_send", "describe_exit", "is_timeout", "outcomes_isolated",
+           "portable", "worker_cap"]

@@ -138,7 +138,7 @@ class DeafBuild(Base):
         import signal
 
         signal.signal(signal.SIGALRM, signal.SIG_IGN)
-        time.sleep(30)
+        time.sleep(60)
         super().__init__(*args, **kwargs)
 
 
@@ -283,16 +283,21 @@ def test_a_run_deaf_to_the_alarm_is_killed_with_its_worker(site, tmp_path):
 
 
 def test_a_constructor_deaf_to_the_alarm_fails_its_job_at_the_limit(site, tmp_path):
-    """A constructor that ignores SIGALRM and sleeps 30 s: the job's up-front build, in a
-    worker, is killed GRACE_S after run_timeout_s; the job fails in one line, random runs."""
+    """A constructor that ignores SIGALRM and sleeps 60 s: the job's up-front build, in a
+    worker, is killed GRACE_S after run_timeout_s; every run of the job is recorded as failed
+    with that reason at once (issue 35, failure 18: the job once failed whole, no record),
+    random runs."""
+    import json
     import time
 
     t0 = time.monotonic()
     out = _sweep(site, tmp_path, "deafbuild", "run_timeout_s=1", timeout=120)
-    assert time.monotonic() - t0 < 30  # the sleep alone would take 30 s
+    assert time.monotonic() - t0 < 50  # the sleep alone would take 60 s
     assert out.returncode == 1, out.stderr[-2000:]
     assert len(_records(tmp_path, "random")) == 2
-    assert "constructor did not return within 11 s" in out.stderr
+    assert "constructor did not return within 11 s" in out.stderr, out.stderr[-2000:]
+    failed = [json.loads(p.read_text()) for p in _records(tmp_path, "deafbuild")]
+    assert [r["error"]["type"] for r in failed] == ["WorkerKilledError"] * 2
 
 
 def test_a_sweep_folder_renamed_mid_sweep_is_said_not_split(site, tmp_path):

@@ -29,47 +29,34 @@ import numpy as np
 
 from ..bounds import relative_errors_percent
 from ..machine import machine_facts
-from ..problem import Problem, offers_residuals
 from ..runner import RunResult
 from .io import SCHEMA
 from .provenance import package_versions
 
 if TYPE_CHECKING:  # the job's types; records sit below the job in the layers
+    from ..facts import InstanceFacts
     from ..job_runs import RunOutcome
     from ..spec import Job
 
 
-def _metrics(problem: Problem, x: np.ndarray) -> dict[str, Any]:
-    """The problem's named metrics of ``x`` (empty when it has none or ``x`` is not finite)."""
-    metrics = getattr(problem, "metrics", None)
-    if metrics is None or not np.all(np.isfinite(x)):
-        return {}
-    return {str(k): float(v) for k, v in (metrics(x) or {}).items()}
-
-
-def result_section(result: RunResult, problem: Problem) -> dict[str, Any]:
-    """The ``result`` section: the loop's own best, and how far it is from a known truth."""
+def result_section(result: RunResult, derived: Mapping[str, Any],
+                   x_true: np.ndarray | None) -> dict[str, Any]:
+    """The ``result`` section: the loop's own best, what the problem said of it (its
+    ``metrics``, and ``intervals`` where the truth is unknown: computed where the run ran,
+    :func:`vpid_bench.job_runs.with_problem_results`) and how far it is from a known truth."""
     section: dict[str, Any] = {
         "x_best": result.x_best,
         "f_best": result.f_best,
         "evaluations": result.evaluations,
         "batches": result.batches,
         "stopped_by": result.stopped_by,
-        "metrics": _metrics(problem, result.x_best),
+        "metrics": dict(derived.get("metrics") or {}),
         "rel_error_percent": None,
     }
-    x_true = problem.x_true
-    finite = bool(np.all(np.isfinite(result.x_best)))
-    if x_true is not None and finite:
+    if x_true is not None and np.all(np.isfinite(result.x_best)):
         section["rel_error_percent"] = relative_errors_percent(result.x_best, x_true)
-    elif x_true is None and finite and offers_residuals(problem):
-        from ..analysis.intervals import jacobian_intervals
-
-        try:
-            section["intervals"] = jacobian_intervals(problem,
-                                                      np.asarray(result.x_best, float))
-        except (ValueError, FloatingPointError, np.linalg.LinAlgError):
-            section["intervals"] = None  # a simulation failing near x_best: no interval
+    if "intervals" in derived:  # a problem without a truth (job_runs.with_problem_results)
+        section["intervals"] = derived["intervals"]
     return section
 
 
@@ -84,11 +71,13 @@ def error_section(error: BaseException) -> dict[str, str]:
     }
 
 
-def make_record(job: Job, run: RunOutcome, rid: str, instance: Problem,
+def make_record(job: Job, run: RunOutcome, rid: str, instance: InstanceFacts,
                 provenance: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
     """The JSON record of one run of ``job``: status ``ok`` with a result, or ``failed`` with
-    an error. ``instance`` is the problem instance the run fitted, ``provenance`` the plugins'
-    (``{"problem": {...}, "optimizer": {...}}``). The one place a record is built."""
+    an error. ``instance`` holds the facts of the problem instance the run fitted (read where
+    the problem was built, :mod:`vpid_bench.facts`: no problem code runs here),
+    ``provenance`` the plugins' (``{"problem": {...}, "optimizer": {...}}``). The one place a
+    record is built."""
     b = instance.bounds
     result, error = run.result, run.error
     record: dict[str, Any] = {
@@ -98,12 +87,12 @@ def make_record(job: Job, run: RunOutcome, rid: str, instance: Problem,
         "status": "ok" if error is None else "failed",
         "error": None if error is None else error_section(error),
         "problem": {"name": job.problem_name, "plugin": dict(provenance.get("problem") or {}),
-                    "config": job.problem_settings(), "info": instance.describe()},
+                    "config": job.problem_settings(), "info": instance.info},
         "optimizer": {"name": job.optimizer_name,
                       "plugin": dict(provenance.get("optimizer") or {}),
                       "params": job.optimizer_settings()},
         "seeds": {"seed": job.spec.seed, "spawn_key": [run.index]},
-        "instance": {"index": run.index, "id": instance.instance_id()},
+        "instance": {"index": run.index, "id": instance.id},
         "budget": job.budget,
         "parameters": {"names": list(b.names), "units": list(b.units), "lower": b.lower,
                        "upper": b.upper, "true": instance.x_true},
@@ -116,7 +105,7 @@ def make_record(job: Job, run: RunOutcome, rid: str, instance: Problem,
     if run.index in job.stop_at:  # stop at the final target (vpid_bench.targets)
         record["target"] = {"gap": job.spec.target, "f_stop": job.stop_at[run.index]}
     if result is not None:
-        record["result"] = result_section(result, instance)
+        record["result"] = result_section(result, run.derived, instance.x_true)
         record["trace"] = {"evaluations": result.trace_evaluations, "best": result.trace_best}
         record["timing"]["run_time_s"] = result.wall_time_s
         # the run's own time at each trace point: wall time to a target (not in the trace,

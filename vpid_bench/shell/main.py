@@ -125,7 +125,8 @@ class JobTask:
             if self._pool is None and _basic_launcher(hydra_cfg):
                 workers = cfg.get("workers")  # checked by the pre-flight: null or >= 1
                 self._pool = Workers(workers if isinstance(workers, int) else available_cores())
-                self._pool.prestart()  # their imports overlap this job's set-up
+                runs = cfg.get("runs")  # their imports overlap this job's set-up; no more
+                self._pool.prestart(runs if isinstance(runs, int) else None)  # than its runs
             if hydra_cfg.output_subdir is None:
                 _save_job_config(cfg, job_dir)
             # The jobs of a sweep share one folder of instance optima (each polished once).

@@ -1,0 +1,238 @@
+"""Inside a worker process (:mod:`vpid_bench.workers` is the supervisor's side): the loop that
+takes one task at a time from the supervisor's pipe and answers on it.
+
+A task is ``("runs", job, (indices, lockstep, threads))``: run those runs of the job, sending
+each run's outcome as it ends; or ``("call", job, (fn, args))``: ``fn(job, problem, *args)``
+with the job's problem (built once per worker and kept), sending its value. Either ends with
+one ``("end", error, value, strays)`` message, ``strays`` being how many processes the
+task's plugin code left running (the supervisor then ends this worker with them). On the
+way: ``("phase", name)`` (progress: the supervisor's clock restarts; ``"built"`` once the
+problem is built, ``"metrics"`` before a run's metrics), ``("outcome", RunOutcome)``, and a
+plugin's log records and lines for the terminal.
+
+What a plugin can do to this loop, and what it costs (round four's attack):
+
+* fork (both copies going on, or a child left behind): the child's copy of the pipe is
+  closed at the fork and nothing it sends reaches the supervisor, so its outcomes are never
+  counted twice; the task ends with the child among its ``strays``;
+* close the pipe (``os.closerange``): the worker ends at once with exit code
+  :data:`LOST_PIPE_EXIT` (no traceback on the terminal), and the run fails with that reason.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import logging
+import os
+import signal
+import sys
+import threading
+import traceback
+from collections.abc import Callable
+from multiprocessing.connection import Connection
+from typing import Any
+
+from . import interrupts
+from .errors import VpidBenchError
+from .job_runs import RunOutcome, run_outcomes, warm_up
+from .machine import one_blas_thread
+from .process_tree import detach, redirect, strays
+from .runner import RunTimeoutError, keep_cwd, time_limit
+from .spec import Job
+
+#: A worker's exit code when it can no longer write to its pipe (a plugin closed it).
+LOST_PIPE_EXIT = 86
+
+
+class RemoteError(Exception):
+    """An exception raised in a worker, carried as its type name, message and traceback (the
+    original may not pickle, or not unpickle in this process)."""
+
+    def __init__(self, type_name: str, message: str, traceback_text: str,
+                 plain: bool = False) -> None:
+        super().__init__(message)
+        self.remote_type, self.remote_traceback = type_name, traceback_text
+        #: Our own errors and ``ValueError``s are shown without their type (as in-process).
+        self.plain = plain
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (RemoteError, (self.remote_type, str(self), self.remote_traceback, self.plain))
+
+
+def portable(exc: BaseException) -> RemoteError:
+    """``exc`` as a :class:`RemoteError` (what a record needs of it, always picklable)."""
+    if isinstance(exc, RemoteError):
+        return exc
+    return RemoteError(type(exc).__name__, str(exc), "".join(traceback.format_exception(exc)),
+                       isinstance(exc, (VpidBenchError, ValueError)))
+
+
+class _PipeLog(logging.Handler):
+    """Sends the worker's log records to the supervisor, which logs them (job log included)."""
+
+    def __init__(self, send: Callable[[Any], None]) -> None:
+        super().__init__(logging.INFO)
+        self._send = send
+
+    def emit(self, record: logging.LogRecord) -> None:
+        with contextlib.suppress(Exception):
+            self._send(("log", record.levelno, record.name, record.getMessage()))
+
+
+def _sender(conn: Connection) -> Callable[[Any], None]:
+    """``send(message)`` to the supervisor, from any thread of this worker only: in a process
+    a plugin forked from it, nothing is sent; when the pipe is gone (a plugin closed it, or
+    its descriptor now names another file) the worker ends with :data:`LOST_PIPE_EXIT`."""
+    me = os.getpid()
+    lock = threading.Lock()
+    fd = conn.fileno()
+    identity = _identity(fd)
+
+    def send(msg: Any) -> None:
+        if os.getpid() != me:
+            return
+        with lock:  # a plugin's thread may log while the main thread sends an outcome
+            try:
+                if _identity(fd) != identity:
+                    raise OSError("the pipe's descriptor was closed or reused")
+                conn.send(msg)
+            except (OSError, ValueError):  # closed under us: nobody to tell; end quietly
+                os._exit(LOST_PIPE_EXIT)
+
+    def close_in_child() -> None:
+        with contextlib.suppress(Exception):
+            conn.close()
+
+    os.register_at_fork(after_in_child=close_in_child)
+    return send
+
+
+def _identity(fd: int) -> tuple[int, int] | None:
+    """Which file descriptor ``fd`` names (device, inode), ``None`` when it is closed."""
+    try:
+        st = os.fstat(fd)
+    except OSError:
+        return None
+    return st.st_dev, st.st_ino
+
+
+def serve(conn: Connection, out: Connection, err: Connection) -> None:
+    """The worker's loop (the target of its process): one task at a time until told to stop
+    or the pipe closes. ``out`` and ``err`` become its standard output and error."""
+    from .build import ProblemCache
+
+    detach()
+    redirect(out, err)
+    interrupts.plugin_only()  # the user's Ctrl-C is the supervisor's to handle
+    if hasattr(signal, "pthread_sigmask"):  # held by the supervisor while it started us
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    send = _sender(conn)
+    root = logging.getLogger()
+    root.handlers[:] = [_PipeLog(send)]
+    root.setLevel(logging.INFO)
+    threading.excepthook = _thread_exception(send)
+    sys.unraisablehook = _unraisable(send)
+    state = {"problems": ProblemCache(size=4), "warm": set()}
+    me = os.getpid()
+    while os.getpid() == me:  # a forked copy that got back here ends below
+        try:
+            msg = conn.recv()
+        except (EOFError, OSError):
+            break
+        if msg is None:
+            break
+        kind, job, payload = msg
+        value, error = None, None
+        try:
+            if kind == "call":
+                value = _call(job, payload, state, send)
+            else:
+                _run_task(job, payload, state, send)
+        except BaseException as exc:  # noqa: BLE001 - the supervisor records it; keep serving
+            error = portable(exc)
+        _end(send, error, value)
+    os._exit(0)  # a plugin's non-daemon thread must not keep the worker alive
+
+
+def _end(send: Callable[[Any], None], error: RemoteError | None, value: Any) -> None:
+    """The task's last message (with the processes it left running)."""
+    left = len(strays(os.getpid()))
+    try:
+        send(("end", error, value, left))
+    except Exception as exc:  # noqa: BLE001 - a value that does not pickle
+        send(("end", portable(exc), None, left))
+
+
+def _thread_exception(send: Callable[[Any], None]) -> Any:
+    """The worker's ``threading.excepthook``: one line on the command's stderr for an
+    exception in a plugin's own thread (as in the command's own process), no traceback."""
+    def hook(args: Any) -> None:
+        with contextlib.suppress(Exception):
+            send(("say", interrupts.thread_exception_line(args)))
+    return hook
+
+
+def _unraisable(send: Callable[[Any], None]) -> Any:
+    """The worker's ``sys.unraisablehook``: one line for an exception Python cannot raise
+    (in a destructor, an at-fork hook a run's time limit interrupted), no traceback."""
+    def hook(args: Any) -> None:
+        with contextlib.suppress(Exception):
+            send(("say", f"warning: an exception was ignored in {args.object!r}: "
+                         f"{args.exc_type.__name__}: {args.exc_value}"))
+    return hook
+
+
+def _call(job: Job, payload: tuple[Callable[..., Any], tuple[Any, ...]], state: dict[str, Any],
+          send: Callable[[Any], None]) -> Any:
+    fn, args = payload
+    with keep_cwd():
+        problem = state["problems"].get(job)
+        send(("phase", "built"))  # the call's own limit starts now
+        return fn(job, problem, *args)
+
+
+def _run_task(job: Job, payload: tuple[list[int], bool, int], state: dict[str, Any],
+              send: Callable[[Any], None]) -> None:
+    indices, lockstep, threads = payload
+    with keep_cwd():
+        problem = state["problems"].get(job)
+        problem.set_threads(threads)
+    send(("phase", "built"))  # from here on plugin code runs: the runs' limits apply
+    warm_key = (id(problem), job.optimizer_cls, job.optimizer_name, lockstep)
+    with one_blas_thread():
+        if warm_key not in state["warm"]:
+            warm_up(job, problem, lockstep)
+            state["warm"].add(warm_key)
+            send(("phase", "warmed"))
+        for outcome in run_outcomes(job, problem, indices, lockstep,
+                                    announce=lambda phase: send(("phase", phase))):
+            send(("outcome", portable_outcome(outcome)))
+
+
+def portable_outcome(outcome: RunOutcome) -> RunOutcome:
+    """``outcome`` with its error as a :class:`RemoteError` (always picklable)."""
+    if outcome.error is None:
+        return outcome
+    return dataclasses.replace(outcome, outcome=portable(outcome.error))
+
+
+def probe(job: Job, problem: Any) -> None:
+    """Build one optimizer of ``job`` (run 0's), under the run's time limit: a fault in its
+    constructor stops the job before any run. Raises what the constructor raised."""
+    from .build import run_rng
+
+    limit = job.spec.run_timeout_s
+    try:
+        with time_limit(limit), keep_cwd():
+            job.optimizer_cls(job.params, problem.bounds, run_rng(job.spec.seed, 0))
+    except KeyboardInterrupt:
+        if interrupts.from_user():
+            raise
+        raise interrupts.PluginInterruptError("its constructor") from None
+    except RunTimeoutError as exc:
+        raise RunTimeoutError(f"the optimizer's constructor took longer than "
+                              f"run_timeout_s={limit:g} s") from exc
+
+
+__all__ = ["LOST_PIPE_EXIT", "RemoteError", "portable", "portable_outcome", "probe", "serve"]
