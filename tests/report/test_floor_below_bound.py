@@ -18,24 +18,33 @@ def _limits(floor, bound, model_error="", edge=(0, 0)) -> str:
 
 
 def test_a_floor_below_the_bound_is_explained_by_model_error():
-    text = _limits(1.0, 2.0, "a seat mass")
+    text = _limits(1.0, 2.5, "a seat mass")
     assert "below the bound, which only unbiased estimators must respect" in text
     assert "richer model than the fitted one (a seat mass)" in text
 
 
 def test_a_floor_below_the_bound_is_explained_by_the_box():
-    text = _limits(1.0, 2.0, edge=(3, 10))
+    text = _limits(1.0, 2.5, edge=(3, 10))
     assert "the box holds the optimum on an edge in 3 of 10 instance(s)" in text
     assert "richer model" not in text
 
 
 def test_without_a_known_bias_the_text_says_so():
-    text = _limits(1.0, 2.0)
+    text = _limits(1.0, 2.5)
     assert "neither model error nor the box" in text
 
 
 def test_no_explanation_when_the_floor_is_above_the_bound():
     assert "below the bound" not in _limits(3.0, 2.0)
+
+
+def test_no_explanation_where_an_efficient_estimator_would_end_as_low():
+    """An efficient unbiased estimator's median error norm lies between about 0.67 and 0.96
+    of the bound's norm: a floor at 0.9 of the bound (smoke_quarter: 0.638 % against 0.644 %)
+    is no sign of bias, one at 0.4 is."""
+    assert "below the bound" not in _limits(0.9, 1.0)
+    assert "below the bound" not in _limits(0.67, 1.0)
+    assert "below the bound" in _limits(0.4, 1.0)
 
 
 def test_a_floor_far_above_the_bound_with_model_error_blames_the_model_not_the_estimator():

@@ -23,8 +23,9 @@ The rules (each in docs/report.md, "Verdicts", with a test in tests/report/test_
    estimator (the objective), not the data, limits the accuracy: the verdict says so at any
    budget, with where the best other estimator's optimum lies (the job's ``estimators.json``)
    -- unless a richer model than the fitted one made the record: then model error, which no
-   estimator of the fitted model removes, may set the floor. Below 1 the record's optimum is
-   biased (the bound holds for unbiased estimators): by model error or the box, when known.
+   estimator of the fitted model removes, may set the floor. Below :data:`BELOW_BOUND` the
+   record's optimum is biased (the bound holds for unbiased estimators): by model error or
+   the box, when known.
 """
 
 from __future__ import annotations
@@ -43,6 +44,12 @@ from .rankings import TIE_RTOL
 BOUND_LIMIT = 100.0
 #: A floor this many times the bound (median per instance): the estimator limits accuracy.
 ESTIMATOR_GAP = 2.0
+#: A floor below this many times the bound (median per instance) is called biased. An
+#: efficient unbiased estimator's error norm has the bound's norm as its rms; its median lies
+#: between about 0.67 (one parameter's error dominating) and 0.96 (nine alike) of it with
+#: Gaussian errors, and a median over 30 instances scatters by some 0.15 around that: a
+#: median ratio of 0.9 says nothing about bias, one below 0.5 does.
+BELOW_BOUND = 0.5
 #: A leader whose median metric is within this factor of the floor has searched enough.
 AT_FLOOR = 1.1
 #: Methods the tests do not separate whose medians differ by more than this (relative) are
@@ -344,7 +351,7 @@ def decide(ev: Evidence) -> Verdict:
              # no estimator of the fitted model removes, not the estimator
              "advice": None if ev.model_error else estimator_advice(
                  ev.estimator, ratio, ev.estimator_floors),
-             "below_bound": math.isfinite(ratio) and ratio < 1 and not tied(ratio, 1.0),
+             "below_bound": math.isfinite(ratio) and ratio < BELOW_BOUND,
              "model_error": ev.model_error, "on_edge": ev.on_edge}
     candidates = [m for m in ev.methods if m.name not in ev.references]
     if not ev.tested or len(ev.methods) < 2 or not candidates:
