@@ -45,6 +45,7 @@ from .facts import ProblemFacts, problem_facts
 from .job_runs import RunOutcome, joins_lockstep, now_utc, run_outcomes, warm_up
 from .machine import available_cores, one_blas_thread
 from .plugins import Registry
+from .problem import kept_instance
 from .runner import RunTimeoutError, time_limit
 from .spec import Job, parse_job
 from .targets import with_stops
@@ -268,7 +269,7 @@ def _analyse(job: Job, problem: Any, job_dir: Path, optima_dir: Path,
 def _signals(job: Job, problem: Any, job_dir: Path, index: int, x: Any,
              source: dict[str, Any]) -> None:
     with _limited(analysis_limit_s(job), "the best run's signals"):
-        write_best_signals(job_dir, problem.instance(index), x, source)
+        write_best_signals(job_dir, kept_instance(problem, index), x, source)
 
 
 def _limit(limit: float | None) -> float | None:

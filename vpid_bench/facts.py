@@ -18,7 +18,7 @@ import numpy as np
 
 from .bounds import Bounds
 from .errors import PluginError
-from .problem import Problem
+from .problem import Problem, kept_instance
 
 
 @dataclasses.dataclass(frozen=True)
@@ -62,7 +62,7 @@ def problem_facts(problem: Problem, runs: int) -> ProblemFacts:
 
     instances = []
     for i in range(runs):
-        inst = read(f"instance({i})", lambda i=i: problem.instance(i))
+        inst = read(f"instance({i})", lambda i=i: kept_instance(problem, i))
         info = read(f"describe() of instance {i}", inst.describe)
         if not isinstance(info, dict):
             raise PluginError(f"problem {name!r}: describe() of instance {i} returned "

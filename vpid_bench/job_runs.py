@@ -37,7 +37,7 @@ from .bridge import LoopOptimizer
 from .build import run_rng
 from .errors import PluginError
 from .facts import ProblemFacts
-from .problem import Problem, offers_residuals
+from .problem import Problem, kept_instance, offers_residuals
 from .runner import Lane, RunResult, run, run_many, time_limit, timeout_error
 from .spec import Job
 
@@ -119,7 +119,7 @@ def with_problem_results(job: Job, problem: Problem, outcome: RunOutcome) -> Run
     result = outcome.result
     if result is None or not np.all(np.isfinite(result.x_best)):
         return outcome
-    inst = problem.instance(outcome.index)
+    inst = kept_instance(problem, outcome.index)
     x = np.asarray(result.x_best, dtype=float)
     try:
         with time_limit(job.spec.run_timeout_s):
@@ -180,7 +180,7 @@ def _group(job: Job, problem: Problem, indices: list[int]) -> list[RunOutcome]:
     failed: dict[int, BaseException] = {}
     built_s: dict[int, float] = {}
     for i in indices:
-        inst = problem.instance(i)
+        inst = kept_instance(problem, i)
         t0 = time.perf_counter()
         try:
             with time_limit(timeout):

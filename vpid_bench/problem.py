@@ -12,7 +12,7 @@ import numpy as np
 
 from .bounds import Bounds
 
-#: Instances :meth:`Problem.evaluate_instances` keeps built (more than a job runs at once in
+#: Instances :func:`kept_instance` keeps built per problem (more than a job runs at once in
 #: lockstep; past it the kept ones are dropped and built again).
 KEPT_INSTANCES = 256
 
@@ -207,9 +207,9 @@ class Problem(abc.ABC):
 
         The default groups the rows by instance (instances that are the same object, e.g. the
         problem itself, form one group) and calls each group's ``evaluate`` once. Each
-        instance is built once and kept (up to :data:`KEPT_INSTANCES`): this call comes once
-        per step of the run loop, and a problem whose ``instance`` makes a record (the suite's
-        ride problems solve it exactly) once spent most of a sweep rebuilding it. A problem
+        instance is built once and kept (:func:`kept_instance`): this call comes once per step
+        of the run loop, and a problem whose ``instance`` makes a record (the suite's ride
+        problems solve it exactly) once spent most of a sweep rebuilding it. A problem
         whose instances share an expensive part overrides it to evaluate every row in one go.
         """
         X = np.atleast_2d(np.asarray(X, dtype=float))
@@ -217,14 +217,9 @@ class Problem(abc.ABC):
         if instance.shape != (X.shape[0],):
             raise ValueError(f"evaluate_instances: {instance.shape[0]} instance indices for "
                              f"{X.shape[0]} rows")
-        kept = self.__dict__.setdefault("_vpid_bench_instances", {})
         groups: dict[int, tuple[Problem, list[int]]] = {}
         for i in np.unique(instance):
-            if int(i) not in kept:
-                if len(kept) >= KEPT_INSTANCES:
-                    kept.clear()
-                kept[int(i)] = self.instance(int(i))
-            inst = kept[int(i)]
+            inst = kept_instance(self, int(i))
             groups.setdefault(id(inst), (inst, []))[1].append(int(i))
         if len(groups) == 1:
             inst = next(iter(groups.values()))[0]
@@ -262,6 +257,25 @@ class Problem(abc.ABC):
         """How many threads ``evaluate`` may use (the job's ``threads`` key); results must not
         depend on it. Default: ignored."""
         return None
+
+
+def kept_instance(problem: Problem, index: int) -> Problem:
+    """``problem.instance(index)``, built once per problem object and kept (up to
+    :data:`KEPT_INSTANCES`; past it the kept ones are dropped and built again).
+
+    Every place the framework needs an instance goes through here: the run loop's gathered
+    calls, the records, the optimum analysis, the floors, the stopping values. An instance is
+    a pure function of the problem's config and its index, so keeping it changes no result;
+    building it can be costly (the suite's ride problems solve their record exactly, 0.1 to
+    0.5 s), and a job once built each instance about eight times, and every job of a sweep
+    again (the jobs of one problem config share its problem object, :class:`~.build.ProblemCache`).
+    """
+    kept = problem.__dict__.setdefault("_vpid_bench_instances", {})
+    if index not in kept:
+        if len(kept) >= KEPT_INSTANCES:
+            kept.clear()
+        kept[index] = problem.instance(index)
+    return kept[index]
 
 
 def offers_residuals(problem: Problem | type[Problem]) -> bool:

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from .errors import ConfigError
-from .problem import Problem
+from .problem import Problem, kept_instance
 from .spec import Job
 
 
@@ -98,7 +98,7 @@ def certified_optima(job: Job, problem: Problem, root: Path | None = None) -> di
     names = [""] * problem.bounds.dim
     found = {}
     for i in range(job.spec.runs):
-        instance = problem.instance(i)
+        instance = kept_instance(problem, i)
         record = {"problem": {"name": job.problem_name, "config": job.problem_settings()},
                   "instance": {"id": instance.instance_id()},
                   "parameters": {"names": names}}
@@ -122,7 +122,7 @@ def with_stops(job: Job, problem: Problem, root: Path | None = None) -> Job:
         raise ConfigError(
             "target", target,
             f"runs whose instance optimum is certified in advance: {job.problem_name} run "
-            f"{missing[0]} (instance {problem.instance(missing[0]).instance_id()}) has none "
+            f"{missing[0]} (instance {kept_instance(problem, missing[0]).instance_id()}) has none "
             f"in the archives ({have} of {job.spec.runs} runs have one; the archives ship "
             "the optima of their suite's problems at the default settings, docs/protocol.md)")
     stops = {i: stop_value(o.f_opt, target) for i, o in optima.items()}

@@ -76,3 +76,41 @@ def test_lockstep_runs_on_distinct_instances_equal_runs_alone(noisy):
     for a, b in zip(alone, together):
         np.testing.assert_array_equal(a.x_best, b.x_best)
         assert a.trace_best == b.trace_best and a.f_best == b.f_best
+
+
+def test_a_sweeps_jobs_build_each_instance_once(registry, compose_config, tmp_path,
+                                                monkeypatch):
+    """Every place a job needs instance i (the lockstep call, its record, the optimum
+    analysis, the floors, the best run's signals) gets the one kept on the problem
+    (``vpid_bench.problem.kept_instance``): a suite member solves its record exactly when
+    an instance is built, and a job once built each about eight times. The sweep's later
+    jobs on the same problem (one ProblemCache) build none; the floors per estimator and the
+    bounds are made once per sweep (``optima/per-problem/``) and copied."""
+    from vpid_vehicle.ride import problem as ride
+
+    from vpid_bench.experiment import run_job
+
+    built: list[int] = []
+    real = ride.RideProblem.__init__
+
+    def counted(self, config, index=0):
+        built.append(index)
+        real(self, config, index)
+
+    monkeypatch.setattr(ride.RideProblem, "__init__", counted)
+    cache = ProblemCache()
+    jobs = {}
+    for name in ("random", "de1"):
+        jobs[name] = parse_job(compose_config([
+            "problem=smoke_quarter", f"optimizer={name}", "runs=3", "isolation=none",
+            "progress=false", "report=false"]), registry)
+    run_job(jobs["random"], tmp_path / "random", registry, cache, tmp_path / "optima")
+    first = sorted(built)
+    # the problem (instance 0) and instances 1, 2 once; the floors' other objectives
+    # (ols, ml) rebuild the problem with their own records: instances 0-2 each
+    assert first.count(1) == first.count(2) == 1 + 2 and first.count(0) == 1 + 2, first
+    built.clear()
+    run_job(jobs["de1"], tmp_path / "de1", registry, cache, tmp_path / "optima")
+    assert built == []
+    for f in ("estimators.json", "identifiability.json"):
+        assert (tmp_path / "de1" / f).read_text() == (tmp_path / "random" / f).read_text()

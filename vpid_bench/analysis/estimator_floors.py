@@ -17,7 +17,7 @@ from typing import Any
 
 from ..errors import VpidBenchError
 from ..estimators import OBJECTIVES
-from ..problem import Problem
+from ..problem import Problem, kept_instance
 
 #: The instances each objective's optimum is polished on (0 .. INSTANCES - 1, at most the
 #: job's runs): a few polishes per objective keep the job's analysis short.
@@ -41,7 +41,7 @@ def truth_optima_metric(problem: Problem, n: int) -> tuple[str, list[float]] | N
     metric: str | None = None
     values = []
     for i in range(n):
-        inst = problem.instance(i)
+        inst = kept_instance(problem, i)
         metrics = inst.metrics(polish(inst, inst.x_true)[0])
         metric = metric or next(iter(metrics), None)
         if metric is None:

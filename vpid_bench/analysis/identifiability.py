@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from ..problem import Problem
+from ..problem import Problem, kept_instance
 
 #: Relative step of the central differences.
 STEP = 1e-6
@@ -157,7 +157,7 @@ def per_instance(problem: Problem, runs: int) -> list[dict[str, Any]]:
     out: list[dict[str, Any]] = []
     by_id: dict[str | None, dict[str, Any]] = {}
     for i in range(runs):
-        inst = problem.instance(i)
+        inst = kept_instance(problem, i)
         key = inst.instance_id()
         if key in by_id:
             by_id[key]["runs"].append(i)

@@ -4,13 +4,14 @@ optimum, and the job's search score."""
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..problem import Problem, offers_residuals
+from ..fileio import loads_json, read_text_limited
+from ..problem import Problem, kept_instance, offers_residuals
 from ..records.io import write_json_atomic
 from ..spec import Job
 
@@ -39,27 +40,15 @@ def _residual_analysis(job: Job, problem: Problem, job_dir: Path, optima_dir: Pa
                        records: list[dict[str, Any]]) -> dict[int, float]:
     """:func:`analyse_job` for a problem with residuals."""
     from .estimates import write_profile
-    from .estimator_floors import FILE as FLOORS_FILE
-    from .estimator_floors import estimator_floors
-    from .identifiability import cramer_rao, per_instance
     from .optimum import update_instance_optimum
 
     truth = problem.x_true is not None
-    target = job_dir / "identifiability.json"
-    if truth and not target.is_file():
-        crb = cramer_rao(problem)
-        if crb is not None:
-            crb["instances"] = per_instance(problem, job.spec.runs)
-            write_json_atomic(target, crb)
-    floors_file = job_dir / FLOORS_FILE
-    if truth and not floors_file.is_file():
-        floors = estimator_floors(problem, job.spec.runs)
-        if floors is not None:
-            write_json_atomic(floors_file, floors)
+    if truth:
+        _per_problem_files(job, problem, job_dir, Path(optima_dir))
     bests = _run_bests(records)
     by_instance: dict[str | None, tuple[Problem, list, list[int]]] = {}
     for i in range(job.spec.runs):
-        inst = problem.instance(i)
+        inst = kept_instance(problem, i)
         entry = by_instance.setdefault(inst.instance_id(), (inst, [], []))
         entry[1].extend(bests.get(i, []))
         entry[2].append(i)
@@ -78,6 +67,65 @@ def _residual_analysis(job: Job, problem: Problem, job_dir: Path, optima_dir: Pa
         inst, optimum = min(optima, key=lambda o: o[1]["f_opt"])
         write_profile(inst, optimum, job_dir)
     return gaps
+
+
+def _per_problem_files(job: Job, problem: Problem, job_dir: Path, optima_dir: Path) -> None:
+    """The job's ``identifiability.json`` (instance 0's bounds, and each instance's under
+    ``instances``) and ``estimators.json`` (the floors per estimator), each made once per
+    sweep (:func:`shared_file`): they depend on the problem's data and the runs only."""
+    from .estimator_floors import FILE as FLOORS_FILE
+    from .estimator_floors import INSTANCES as FLOORS_INSTANCES
+    from .estimator_floors import estimator_floors
+    from .identifiability import cramer_rao, per_instance
+
+    def bounds() -> dict[str, Any] | None:
+        crb = cramer_rao(problem)
+        if crb is not None:
+            crb["instances"] = per_instance(problem, job.spec.runs)
+        return crb
+
+    settings = job.problem_settings()
+    n_floors = max(1, min(FLOORS_INSTANCES, job.spec.runs))  # what the floors depend on
+    for name, make, more in (
+            ("identifiability.json", bounds, job.spec.runs),
+            (FLOORS_FILE, lambda: estimator_floors(problem, job.spec.runs), n_floors)):
+        if not (job_dir / name).is_file():
+            data = shared_file(optima_dir, name, problem, settings, more, make)
+            if data is not None:
+                write_json_atomic(job_dir / name, data)
+
+
+#: Where :func:`shared_file` keeps a sweep's per-problem files, inside its optima folder.
+SHARED_DIR = "per-problem"
+
+
+def shared_file(optima_dir: Path, name: str, problem: Problem, settings: Mapping[str, Any],
+                more: Any, make: Callable[[], dict[str, Any] | None]) -> dict[str, Any] | None:
+    """A per-job file that depends only on the problem's data (its Cramér–Rao bounds, its
+    floors per estimator), made once per sweep: kept under ``optima_dir/per-problem/`` by a
+    hash of the problem's name, record settings, data digest and ``more``, and copied by
+    every later job of the same problem (a vpid1 build has 19 jobs per problem; the floors
+    polish 15 optima each). A kept file that is not a JSON object is made again."""
+    from .optimum import _locked, optimum_key
+
+    key = optimum_key(problem.name, settings, problem.content_digest(), str(more))
+    path = optima_dir / SHARED_DIR / f"{Path(name).stem}-{key}.json"
+    with _locked(path):  # launcher workers share the folder
+        try:
+            kept = loads_json(read_text_limited(path, MAX_SHARED_BYTES)) if path.is_file() \
+                else None
+        except (OSError, UnicodeDecodeError, ValueError):
+            kept = None
+        if isinstance(kept, dict):
+            return kept
+        data = make()
+        if data is not None:
+            write_json_atomic(path, data)
+        return data
+
+
+#: The largest per-problem file read back (bytes).
+MAX_SHARED_BYTES = 1_000_000
 
 
 def _run_bests(records: list[dict[str, Any]]) -> dict[int, list[tuple[np.ndarray, float]]]:

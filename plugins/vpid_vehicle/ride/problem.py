@@ -321,7 +321,7 @@ class RideProblem(Problem):
                         else self.nominal.copy())
         sub = config.record_substeps if config.record == "exact" else 1
         fine = self.model.inputs(config, self.known, config.dt / sub, road_rng)
-        self.u = fine[::sub]
+        self.u = fine[::sub].copy()  # a copy: a view would keep the fine input (10x larger) alive
         self.t = np.arange(self.u.shape[0]) * config.dt
         self.clean = self._record(fine, sub)
         self.sigma = config.noise_level * np.sqrt(np.mean(self.clean**2, axis=1))
