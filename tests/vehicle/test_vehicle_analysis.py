@@ -101,6 +101,32 @@ def test_a_run_below_the_known_optimum_is_polished_again(tmp_path):
     assert again["f_opt"] == out["f_opt"] and again["starts"] == out["starts"]
 
 
+def test_a_run_at_the_optimums_own_point_is_not_polished_again(tmp_path, monkeypatch):
+    """A run best within SAME_POINT of the known optimum's point on every parameter (and not
+    below it) lies in its basin: no polish. One a little farther is polished, and so is one
+    at the same point whose value is lower (its own value then becomes the optimum)."""
+    from vpid_bench.analysis import optimum as opt_mod
+
+    inst = VehicleProblem(build_dataclass(VehicleConfig, {}, prefix="problem")).instance(2)
+    inst.name = "vehicle"
+    settings = {"ps": 20}
+    x_star, f_star = polish(inst, inst.x_true)
+    update_instance_optimum(inst, settings, tmp_path, [])  # the truth's polish, once
+    calls = []
+    real = opt_mod.polish
+    monkeypatch.setattr(opt_mod, "polish", lambda p, x, **k: calls.append(x) or real(p, x, **k))
+    width = inst.bounds.width
+    near = x_star + 0.5 * opt_mod.SAME_POINT * width
+    f_near = float(inst.evaluate(near[None])[0])
+    out = update_instance_optimum(inst, settings, tmp_path, [(near, f_near)])
+    assert calls == [] and out["f_opt"] == pytest.approx(f_star, rel=1e-9)
+    farther = x_star + 2 * opt_mod.SAME_POINT * width
+    update_instance_optimum(inst, settings, tmp_path,
+                            [(farther, float(inst.evaluate(farther[None])[0]))])
+    assert len(calls) == 1
+    below = update_instance_optimum(inst, settings, tmp_path, [(near, out["f_opt"] * 0.999)])
+    assert len(calls) == 2 and below["f_opt"] <= out["f_opt"] * 0.999
+
 def test_untrusted_optimum_files_are_skipped(sweep, tmp_path):
     root, jobs = sweep
     record = _records(jobs["de4"])[1]
