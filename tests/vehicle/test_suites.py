@@ -153,3 +153,26 @@ def test_members_of_equal_dimension_draw_independent_truths():
         assert not np.allclose(rel[0], rel[1])
         r = np.corrcoef(rel[0].ravel(), rel[1].ravel())[0, 1]
         assert abs(r) < 0.3, (pair, r)
+
+
+def test_a_vpid1_member_runs_the_archives_budget_by_default(registry):
+    """The vpid1 protocol: every member's default budget is 1,000 evaluations per parameter
+    (``iterations = 50 D - 1`` at ``ps`` 20), so ``vpid-bench -m suite=vpid1 optimizer=<yours>``
+    runs with the settings of ``archive/vpid1`` and is ranked among it; smoke keeps its
+    short protocol."""
+    from vpid_vehicle.ride.suites import VPID1_BUDGET_PER_DIM
+
+    from vpid_bench.problem import default_budget
+
+    assert VPID1_BUDGET_PER_DIM == 1000
+    for suite, per_dim in (("vpid1", {1000}), ("smoke", None)):
+        budgets = set()
+        for name in registry.suites()[suite]:
+            cls = registry.problem(name)
+            config = cls.Config()
+            dim = cls(config).bounds.dim
+            budgets.add(default_budget(config.ps, config.iterations) / dim)
+            if suite == "smoke":
+                assert config.iterations == 10 and config.duration_s == 2.0
+        if per_dim is not None:
+            assert budgets == per_dim

@@ -8,7 +8,10 @@ suite it belongs to, so ``vpid-bench -m suite=smoke optimizer=...`` sweeps them.
   single-track lateral), dimensions 4 to 9, three road inputs and two manoeuvres, every sensor
   set, three problems whose record comes from a richer model than the fitted one (a bilinear
   damper, a seat mass, Magic Formula tyres: model error, :mod:`.richer` and
-  :mod:`.model_error`) and one with several basins (the Magic Formula model).
+  :mod:`.model_error`) and one with several basins (the Magic Formula model). Its protocol
+  is the archive's: a run's default budget is 1,000·D evaluations (``iterations = 50 D - 1``
+  at ``ps`` 20, so the paper's methods also end there), so ``vpid-bench -m suite=vpid1
+  optimizer=<yours>`` runs what ``archive/vpid1`` holds and is ranked among it.
 
 A member's keys can still be changed on the command line; its defaults are what makes it the
 member (docs/suite.md lists them).
@@ -26,10 +29,29 @@ from .lateral import LateralProblem
 from .magic import LateralMFProblem
 from .quarter import RideQuarterProblem
 
+#: The ``smoke`` protocol: 2 s records, 10 generations.
+SMOKE = dict(iterations=10, duration_s=2.0)
+#: Evaluations per parameter of a ``vpid1`` member's default budget (the archive's budget).
+VPID1_BUDGET_PER_DIM = 1000
+
+
+def protocol(base: type, suites: tuple[str, ...]) -> dict[str, Any]:
+    """The protocol defaults a suite gives each member (a member's own defaults come after):
+    ``smoke`` a short look (``iterations=10``, 2 s records), ``vpid1`` a default budget of
+    :data:`VPID1_BUDGET_PER_DIM` evaluations per parameter at ``ps`` 20."""
+    if "smoke" in suites:
+        return dict(SMOKE)
+    if "vpid1" in suites:
+        ps = typing.cast(int, base.Config().ps)
+        dim = len(base.model.names)
+        return {"iterations": VPID1_BUDGET_PER_DIM * dim // ps - 1}
+    return {}
+
 
 def member(base: type, name: str, suites: tuple[str, ...], **defaults: Any) -> type:
-    """A subclass of the problem ``base`` named ``name`` whose Config defaults are
-    ``defaults``, listed in ``suites``."""
+    """A subclass of the problem ``base`` named ``name`` whose Config defaults are its suites'
+    :func:`protocol` and then ``defaults``, listed in ``suites``."""
+    defaults = {**protocol(base, suites), **defaults}
     hints = typing.get_type_hints(base.Config)
     unknown = set(defaults) - set(hints)
     if unknown:
@@ -53,14 +75,12 @@ def member(base: type, name: str, suites: tuple[str, ...], **defaults: Any) -> t
     return cls
 
 
-SMOKE = dict(iterations=10, duration_s=2.0)
-
 MEMBERS: tuple[type, ...] = (
-    member(RideQuarterProblem, "smoke_quarter", ("smoke",), **SMOKE),
-    member(RideHalfProblem, "smoke_half", ("smoke",), **SMOKE),
-    member(RideFullProblem, "smoke_full", ("smoke",), **SMOKE),
-    member(LateralProblem, "smoke_lateral", ("smoke",), **SMOKE),
-    member(LateralMFProblem, "smoke_lateral_mf", ("smoke",), **SMOKE),
+    member(RideQuarterProblem, "smoke_quarter", ("smoke",)),
+    member(RideHalfProblem, "smoke_half", ("smoke",)),
+    member(RideFullProblem, "smoke_full", ("smoke",)),
+    member(LateralProblem, "smoke_lateral", ("smoke",)),
+    member(LateralMFProblem, "smoke_lateral_mf", ("smoke",)),
     member(RideQuarterProblem, "vpid1_q_golden_hump", ("vpid1",)),
     member(RideQuarterProblem, "vpid1_q_golden_iso_c", ("vpid1",), road="iso8608",
            speed_kmh=80.0, sensors="body"),
