@@ -23,7 +23,7 @@ from sweep_helpers import run_cli  # noqa: E402
 
 from vpid_bench.report import archive as arch  # noqa: E402
 from vpid_bench.report.build import build_report  # noqa: E402
-from vpid_bench.report.pack import pack  # noqa: E402
+from vpid_bench.report.pack import compact_trace, pack  # noqa: E402
 
 SWEEP = ["report=false", "archive=false", "isolation=none", "problem=smoke_quarter"]
 
@@ -252,6 +252,52 @@ def test_packing_the_same_sweep_twice_gives_the_same_bytes(made, tmp_path):
     assert rows[0].startswith("problem,optimizer,runs,ok,metric")
     assert len(rows) == 1 + 2  # random and centre on smoke_quarter
 
+
+
+def test_archived_traces_keep_their_improvements_and_lose_nothing(made):
+    """An archive cuts each trace to the batches that improved its best (and the last one),
+    with their batch numbers: every batch's best-so-far, and every hit in evaluations,
+    batches and seconds, reads the same off the cut trace as off the record it came from."""
+    import dataclasses
+
+    from vpid_bench.report.anytime import run_hits
+    from vpid_bench.report.load import load_records
+
+    own = {r["run_id"]: r for r in load_records([made["base"]]).records}
+    archived = arch.read_archive(made["archives"] / "smoke").records
+    cut = 0
+    for rec in archived:
+        full = own[rec["run_id"]]
+        ev, best = full["trace"]["evaluations"], full["trace"]["best"]
+        kept = rec["trace"]
+        cut += len(kept["evaluations"]) < len(ev)
+        assert kept["evaluations"][-1] == ev[-1] and kept["batch"][-1] == len(ev)
+        for i in range(len(ev)):  # the step function at every batch
+            j = int(np.searchsorted(kept["batch"], i + 1, side="right")) - 1
+            assert kept["best"][j] == best[i]
+            assert kept["evaluations"][j] <= ev[i]
+        f_opt = min(best) / 1.005  # the run ends 0.5 % above it: the targets 1 to 1e-2 are hit
+        row = {"run_id": rec["run_id"], "f_opt": f_opt, "status": "ok", "context": "c",
+               "algorithm": "a", "evaluations": float(ev[-1]), "budget": rec["budget"],
+               "run_time_s": 1.0}
+        a, b = run_hits([full], [row]), run_hits([rec], [row])
+        for field in dataclasses.fields(a[0])[2:]:  # budget, used, hits, ... in each cost
+            np.testing.assert_array_equal(np.asarray(getattr(a[0], field.name), float),
+                                          np.asarray(getattr(b[0], field.name), float))
+        assert sum(np.isfinite(a[0].hits)) == 3
+    assert cut  # random search does not improve every batch
+
+
+def test_a_trace_is_cut_to_its_improvements():
+    record = {"trace": {"evaluations": [20, 40, 60, 80, 100], "best": [None, 3.0, 3.0, 2.0, 2.0]},
+              "timing": {"trace_s": [0.1, 0.2, 0.3, 0.4, 0.5]}}
+    out = compact_trace(record)
+    assert out["trace"] == {"evaluations": [40, 80, 100], "best": [3.0, 2.0, 2.0],
+                            "batch": [2, 4, 5]}
+    assert out["timing"]["trace_s"] == [0.2, 0.4, 0.5]
+    assert "batch" not in record["trace"]  # the record itself is not changed
+    odd = {"trace": {"evaluations": [1, 2], "best": [1.0]}}  # not aligned: left as it is
+    assert compact_trace(odd) == odd
 
 
 # --- the archive shipped with the package ---------------------------------------------------

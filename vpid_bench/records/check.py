@@ -91,6 +91,8 @@ def check_record(record: Mapping[str, Any]) -> str | None:
         ("trace.best", lambda: len((get("trace") or {}).get("best") or [])
          == len((get("trace") or {}).get("evaluations") or []),
          "one value per entry of trace.evaluations"),
+        ("trace.batch", lambda: _num_list((get("trace") or {}).get("batch") or []),
+         "a list of numbers (an archive's batch numbers)"),
         ("timing", lambda: isinstance(get("timing") or {}, Mapping), "a mapping"),
         ("timing.wall_time_s", lambda: _is_num((get("timing") or {}).get("wall_time_s")),
          "a number"),

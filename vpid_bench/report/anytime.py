@@ -66,6 +66,16 @@ def hit_times(evaluations: Sequence[float], gaps: Sequence[float],
     return tuple(out)
 
 
+def batch_numbers(trace: Mapping[str, Any], n: int) -> list[float]:
+    """The batch number (1, 2, ...) of each of the ``n`` trace entries: the trace's own
+    ``batch`` list where an archive cut the trace to its improvements
+    (:func:`.pack.compact_trace`), else one entry per batch."""
+    batch = trace.get("batch")
+    if isinstance(batch, list) and len(batch) == n:
+        return [float(b) for b in batch]
+    return [float(i) for i in range(1, n + 1)]
+
+
 def run_hits(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]],
              targets: Sequence[float] = TARGETS) -> list[RunHits]:
     """:class:`RunHits` of every successful run whose instance's optimum is known."""
@@ -86,10 +96,10 @@ def run_hits(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, A
         secs = (by_id[row["run_id"]].get("timing") or {}).get("trace_s") or []
         secs = secs if isinstance(secs, list) and len(secs) == len(ev) else [math.nan] * len(ev)
         secs = [float(v) if isinstance(v, (int, float)) else math.nan for v in secs]
-        index = list(range(1, len(ev) + 1))
+        index = batch_numbers(trace, len(ev))
         out.append(RunHits(row["context"], row["algorithm"], max(budget, used), used,
                            hit_times(ev, gaps, targets), hit_times(index, gaps, targets),
-                           hit_times(secs, gaps, targets), float(len(ev)),
+                           hit_times(secs, gaps, targets), float(index[-1]),
                            float(row.get("run_time_s", math.nan))))
     return out
 

@@ -7,7 +7,8 @@ An archive is a folder ``<root>/<suite>/`` (shipped in the package as ``vpid_ben
                         every problem with its plugin version and config, and the SHA-256
                         and size of each file below
     records.jsonl.gz    one run record per line (the records' own schema, plugin
-                        dependency lists left out)
+                        dependency lists left out, traces cut to their improvements:
+                        :func:`.pack.compact_trace`)
     optima.jsonl        one instance optimum per line (the optimum files' own schema)
     summary.csv         per problem and optimizer: runs, median metric, median relative gap
     ioh.zip             the runs in IOHprofiler's format
