@@ -156,6 +156,22 @@ def thin_steps(x: np.ndarray, *ys: np.ndarray, max_points: int = MAX_CURVE_POINT
 TraceSets = Mapping[str, Mapping[str, Sequence[tuple[np.ndarray, np.ndarray]]]]
 
 
+def nan_column_quantiles(m: np.ndarray, qs: Sequence[float]) -> np.ndarray:
+    """``np.nanquantile(m, qs, axis=0)`` of a 2-D ``m``, the same numbers (tested), with one
+    ``np.quantile`` call per count of values that are not NaN in a column: numpy's own loops
+    over the columns in Python, which made the convergence figure of an archive of 4,000
+    runs take minutes. A column of NaN only gives NaN."""
+    m = np.asarray(m, dtype=float)
+    out = np.full((len(qs), m.shape[1]), np.nan)
+    counts = np.count_nonzero(~np.isnan(m), axis=0)
+    ordered = np.sort(m, axis=0)  # NaN last
+    for k in np.unique(counts):
+        if k:
+            cols = counts == k
+            out[:, cols] = np.quantile(ordered[:k, cols], qs, axis=0)
+    return out
+
+
 def convergence_panels(traces: TraceSets, f_true: Mapping[str, float] | None = None,
                        f_opt: Mapping[str, float] | None = None) -> list[dict[str, Any]]:
     """The convergence figure's data, one panel per context (sorted) with a finite value:
@@ -186,7 +202,7 @@ def convergence_panels(traces: TraceSets, f_true: Mapping[str, float] | None = N
             cols = ~np.all(np.isnan(m), axis=0)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                q = np.nanquantile(m[:, cols], [0.25, 0.5, 0.75], axis=0)
+                q = nan_column_quantiles(m[:, cols], [0.25, 0.5, 0.75])
             x, q25, q50, q75 = thin_steps(grid[cols], q[0], q[1], q[2])
             curves.append({"algorithm": algorithm, "x": x, "q25": q25, "median": q50,
                            "q75": q75})
