@@ -147,6 +147,37 @@ def test_on_the_smoke_suite_it_is_ranked_among_the_archived_builtins(site, tmp_p
     assert headline.count("one_plus_one") == len(members)
 
 
+@pytest.mark.slow  # an archive build, then the newcomer's sweep: a few minutes
+def test_on_a_vpid1_member_at_its_defaults_it_is_ranked_among_an_archive_build(site, tmp_path):
+    """``vpid-bench -m suite=vpid1 optimizer=mine`` needs nothing but the member's defaults to
+    meet ``archive/vpid1``: an archive built by benchmarks/build_archive.py (a slice: one
+    member, two built-ins, with stop at the final target) ranks the newcomer's runs at the
+    member's default budget (1,000·D) beside its built-ins, and only the newcomer runs."""
+    archives = tmp_path / "archives"
+    build = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "build_archive.py"), "--suite", "vpid1",
+         "--problems", "vpid1_q_golden_hump", "--optimizers", "random,de1", "--runs", "2",
+         "--target", "1e-8", "--sweep", str(tmp_path / "build"), "--out",
+         str(archives / "vpid1"), "--", "progress=false"],
+        cwd=ROOT, capture_output=True, text=True, timeout=900,
+        env={**os.environ, "MPLBACKEND": "Agg"})
+    assert build.returncode == 0, build.stderr[-3000:]
+    env_dir = {"VPID_BENCH_ARCHIVE_DIR": str(archives)}
+    proc = subprocess.run(
+        [str(BIN / "vpid-bench"), "-m", "problem=vpid1_q_golden_hump", "optimizer=one_plus_one",
+         "runs=2", "progress=false", f"hydra.sweep.dir={tmp_path}/sweep"], cwd=tmp_path,
+        env={**os.environ, "PYTHONPATH": str(site), "MPLBACKEND": "Agg", **env_dir},
+        capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "from the archive of suite vpid1" in proc.stderr
+    assert {r["optimizer"]["name"] for r in _records(tmp_path / "sweep")} == {"one_plus_one"}
+    assert {r["budget"] for r in _records(tmp_path / "sweep")} == {4000}
+    import csv
+
+    with open(tmp_path / "sweep" / "report" / "runs.csv", encoding="utf-8") as fh:
+        ranked = {r["algorithm"] for r in csv.DictReader(fh)}
+    assert ranked == {"one_plus_one", "random", "de1"}
+
 @pytest.mark.parametrize("override, line", [
     ("problem.noise=0.05,-1", "error: problem.noise=-1.0 is not allowed: a level in [0, 1]"),
     ("optimizer.sigma0=0.2,2", "error: optimizer.sigma0=2.0 is not allowed: a fraction in (0, 1]"),

@@ -4,7 +4,9 @@ the command exit non-zero and is named in the sweep summary.
 
 Beyond one process (marker ``scaleout``, excluded by default; ``make test-scaleout`` runs them
 in their own environment with the ``ray`` extra): Hydra's Ray launcher on a local Ray instance
-and submitit's launcher on its local executor write the same records as the basic launcher."""
+and submitit's launcher on its local executor write the same records as the basic launcher,
+and so does the archive build (``benchmarks/build_archive.py``, a slice) run unchanged through
+them."""
 
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ import importlib.util
 
 import pytest
 from sweep_helpers import fingerprints, planned_job_dirs, run_cli
+from test_build_archive import build
 
 # Three jobs fail in every launcher: a folder planted where they write reference.csv (a fault
 # of the job folder, which no pre-flight can see), so the job fails after it started.
@@ -87,3 +90,35 @@ def test_ray_local_records_match_basic(basic, tmp_path):
     _check_failed_job_reported(done)
     assert "Ray" in done.stdout + done.stderr  # it ran in the Ray launcher
     assert fingerprints(tmp_path / "sweep") == fingerprints(cwd / "sweep")
+
+
+@pytest.fixture(scope="module")
+def basic_build(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("basic_build")
+    done = build(tmp)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return tmp
+
+
+RAY = ["hydra/launcher=ray", "+hydra.launcher.ray.init.num_cpus=2",
+       "+hydra.launcher.ray.init.include_dashboard=false"]
+
+
+@pytest.mark.scaleout
+@pytest.mark.parametrize("launcher", [["hydra/launcher=submitit_local"], RAY],
+                         ids=["submitit_local", "ray"])
+def test_the_archive_build_runs_unchanged_through_a_launcher(basic_build, tmp_path, launcher):
+    """The build's two sweeps (certify, then the runs with stop at the target, which find the
+    certified optima through the environment) in the launcher's processes: the records are
+    the basic launcher's, bit for bit apart from timing, and the archive packs the same
+    runs."""
+    if launcher == RAY:
+        pytest.importorskip("ray", reason="Ray not installed (make test-scaleout)")
+    name = "hydra_submitit_launcher" if launcher != RAY else "hydra_ray_launcher"
+    if importlib.util.find_spec(f"hydra_plugins.{name}") is None:
+        pytest.skip(f"{name} not installed (make test-scaleout)")
+    done = build(tmp_path, *launcher, timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert ("Ray" if launcher == RAY else "Submitit") in done.stdout + done.stderr
+    assert fingerprints(tmp_path / "b") == fingerprints(basic_build / "b")
+    assert len(fingerprints(tmp_path / "b")) == 2 + 4  # certify: 2 runs; runs: 2 x 2

@@ -1,0 +1,90 @@
+"""The archive build (``benchmarks/build_archive.py``): one command, resumable, that certifies
+each instance's optimum, runs every optimizer with stop at the final target and packs the
+archive; run again, it runs nothing that is recorded and packs the same records.
+
+The same build through Ray and submitit's local executor: ``tests/sweeps/test_launchers.py``
+(marker ``scaleout``)."""
+
+from __future__ import annotations
+
+import gzip
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from sweep_helpers import cli_env, fingerprints
+
+ROOT = Path(__file__).resolve().parents[2]
+#: A slice: one smoke member, two optimizers, two instances, 20·D per run.
+SLICE = ["--suite", "smoke", "--problems", "smoke_quarter", "--optimizers", "random,de1",
+         "--runs", "2", "--target", "1e-8", "--budget-per-dim", "20"]
+
+
+def build(tmp: Path, *extra: str, timeout: float = 600,
+          python: str = sys.executable) -> subprocess.CompletedProcess:
+    """``build_archive.py`` on :data:`SLICE` into ``tmp`` (sweep ``tmp/b``, archive
+    ``tmp/archive``); ``extra``: overrides for its sweeps (e.g. a launcher)."""
+    return subprocess.run(
+        [python, str(ROOT / "benchmarks" / "build_archive.py"), *SLICE,
+         "--sweep", str(tmp / "b"), "--out", str(tmp / "archive"), "--", "progress=false",
+         *extra],
+        cwd=ROOT, env=cli_env(), capture_output=True, text=True, timeout=timeout, check=False)
+
+
+def archived(folder: Path) -> list[dict]:
+    with gzip.open(folder / "records.jsonl.gz", "rt", encoding="utf-8") as fh:
+        return [json.loads(line) for line in fh]
+
+
+@pytest.fixture(scope="module")
+def first(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("build")
+    return tmp, build(tmp)
+
+
+def test_the_build_certifies_runs_with_the_stop_and_packs(first):
+    tmp, done = first
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "optimizer=lsq" in done.stdout and "budget_per_dim=100" in done.stdout  # certify
+    manifest = json.loads((tmp / "archive" / "manifest.json").read_text())
+    assert manifest["runs"] == 4 and manifest["optimizers"] == ["de1", "random"]
+    assert "target=1e-08" in manifest["command"]
+    records = archived(tmp / "archive")
+    assert {r["budget"] for r in records} == {80}  # 20·D, D = 4
+    assert all(r["trace"]["batch"][-1] == r["result"]["batches"] for r in records)
+    # the runs' sweep started from the certified optima (the same files, never worse), and
+    # every run of an instance ended at or above its optimum
+    certified = sorted((tmp / "b" / "certify" / "optima").glob("*.json"))
+    assert len(certified) == 2
+    for path in certified:
+        cert = json.loads(path.read_text())
+        final = json.loads((tmp / "b" / "runs" / "optima" / path.name).read_text())
+        assert final["f_opt"] <= cert["f_opt"]
+        assert all(r["result"]["f_best"] >= final["f_opt"] for r in records
+                   if r["instance"]["id"] == cert["instance"])
+
+@pytest.mark.slow  # three builds: a few minutes on a shared machine
+def test_run_again_it_runs_nothing_and_packs_the_same_records(first, tmp_path):
+    tmp, done = first
+    assert done.returncode == 0, done.stderr[-3000:]
+    before = fingerprints(tmp / "b")
+    packed = (tmp / "archive" / "records.jsonl.gz").read_bytes()
+    again = build(tmp)
+    assert again.returncode == 0, again.stderr[-3000:]
+    assert "0 run(s) done, 2 already recorded" in again.stdout + again.stderr
+    assert (tmp / "archive" / "records.jsonl.gz").read_bytes() == packed
+    # a lost record (a build killed mid-way) is run again, alone, and comes back the same
+    lost = sorted((tmp / "b" / "runs").glob("*optimizer=random*/records/run-001-*.json"))[0]
+    lost.unlink()
+    third = build(tmp)
+    assert third.returncode == 0, third.stderr[-3000:]
+    assert "1 run(s) done, 1 already recorded" in third.stdout + third.stderr
+    assert fingerprints(tmp / "b") == before
+
+
+def test_a_failed_build_is_not_packed(tmp_path):
+    done = build(tmp_path, "optimizer.no_such_key=1")
+    assert done.returncode != 0
+    assert not (tmp_path / "archive").exists()
