@@ -2,6 +2,7 @@
 side with the runs they report on.
 
     .venv/bin/python benchmarks/bench_report.py [--repeats 3] [--records SWEEP_DIR]
+    .venv/bin/python benchmarks/bench_report.py --archive ARCHIVE [--instances 15]
 
 * **Full report**: ``vpid-bench-report SWEEP -o OUT`` in a child process (imports included,
   what a user runs) on the paper experiment's records (9 optimizers x ps 20, 30 x 30 runs;
@@ -10,6 +11,13 @@ side with the runs they report on.
 * **Short report**: ``vpid-bench runs=30 progress=false`` (DE4 on the vehicle) with
   ``report=true`` and ``report=false`` alternately, each into a fresh folder: the difference
   is what the single job's report adds.
+
+* **An archive's report** (``--archive``): ``vpid-bench-report <archive>`` (nothing run) on
+  an archive, as is; with ``--instances N``, first on an archive of the same runs made N
+  times as large (each run copied to N instances, its values scaled by a factor in
+  [1, 1.05) drawn per copy, so the copies are not tied; each instance's optimum copied
+  alike): the size of a full build, measured from a slice of it
+  (``benchmarks/archive_cost.py``). Prints the time of each and their ratio.
 
 Timings on a shared machine are noisy; compare the columns of one run, not across runs.
 """
@@ -61,13 +69,83 @@ def short_report(repeats: int, tmp: Path) -> None:
           f"report=false median {off:.2f} s; the short report adds {on - off:+.2f} s")
 
 
+def scaled_archive(archive: Path, instances: int, tmp: Path) -> Path:
+    """An archive of the runs of ``archive`` copied to ``instances`` instances each (see the
+    module), packed by the real packer from a sweep folder written here."""
+    import gzip
+    import json
+
+    import numpy as np
+
+    from vpid_bench.analysis.optimum import optimum_key, record_settings
+    from vpid_bench.records.io import stable_hash, write_json_atomic
+    from vpid_bench.report.archive import JOBS, MANIFEST, OPTIMA, RECORDS, pack
+
+    sweep = tmp / "scaled-sweep"
+    rng = np.random.default_rng(0)
+    manifest = json.loads((archive / MANIFEST).read_text(encoding="utf-8"))
+    with gzip.open(archive / RECORDS, "rt", encoding="utf-8") as fh:
+        records = [json.loads(line) for line in fh if line.strip()]
+    for rec in records:
+        job = sweep / f"{rec['problem']['name']}-{rec['optimizer']['name']}"
+        source = archive / JOBS / rec["problem"]["name"]
+        for f in source.glob("*.json") if source.is_dir() else []:
+            job.mkdir(parents=True, exist_ok=True)
+            (job / f.name).write_bytes(f.read_bytes())
+        for k in range(instances):
+            c = 1.0 + 0.05 * rng.random()
+            copy = json.loads(json.dumps(rec))
+            copy["instance"] = {"id": f"{rec['instance']['id']}~{k}", "index": k}
+            copy["run_index"] = k
+            copy["run_id"] = stable_hash([rec["run_id"], k])
+            res, trace = copy.get("result") or {}, copy.get("trace") or {}
+            if isinstance(res.get("f_best"), float):
+                res["f_best"] *= c
+            trace["best"] = [b * c if isinstance(b, float) else b
+                             for b in trace.get("best") or []]
+            write_json_atomic(job / "records" / f"run-{k:03d}-{copy['run_id']}.json", copy)
+    for line in (archive / OPTIMA).read_text(encoding="utf-8").splitlines():
+        opt = json.loads(line)
+        for k in range(instances):
+            copy = {**opt, "instance": f"{opt['instance']}~{k}"}
+            key = optimum_key(opt["problem"], record_settings(opt["settings"]), opt.get("data"),
+                              copy["instance"])
+            write_json_atomic(sweep / "optima" / f"{key}.json", copy)
+    out = tmp / "scaled-archive" / manifest["suite"]
+    pack(sweep, manifest["suite"], out, command=f"scaled x{instances} from {archive}",
+         commit=manifest.get("commit"), made_at="")
+    return out
+
+
+def archive_report(archive: Path, instances: int | None, tmp: Path) -> None:
+    """The report of ``archive`` (nothing run), and of its scaled copy (see the module)."""
+    from vpid_bench.report.archive import read_archive
+
+    plain = timed([*REPORT, str(archive), "-o", str(tmp / "report-archive")])
+    n = len(read_archive(archive).records)
+    print(f"report of the archive {archive} ({n} runs): {plain:.1f} s")
+    if instances:
+        scaled = scaled_archive(archive, instances, tmp)
+        big = timed([*REPORT, str(scaled), "-o", str(tmp / "report-scaled")])
+        size = sum(f.stat().st_size for f in scaled.rglob("*") if f.is_file())
+        print(f"report of it scaled to {instances} instances ({n * instances} runs, "
+              f"{size / 1e6:.1f} MB): {big:.1f} s ({big / plain:.1f}x)")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--records", type=Path, default=None,
                     help="an existing sweep folder to report on (default: run the paper sweep)")
+    ap.add_argument("--archive", type=Path, default=None,
+                    help="time the report of this archive instead (and, with --instances, "
+                         "of its copy scaled to that many instances)")
+    ap.add_argument("--instances", type=int, default=None)
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
+        if args.archive is not None:
+            archive_report(args.archive, args.instances, Path(tmp))
+            return
         full_report(args.records, args.repeats, Path(tmp))
         short_report(args.repeats, Path(tmp))
 
