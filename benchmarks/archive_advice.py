@@ -103,8 +103,10 @@ def not_separated(aucs: dict[str, dict[tuple[str, str], float]],
     for row in scored[1:]:
         theirs = aucs.get(row[2], {})
         d = np.array([mine[k] - theirs[k] for k in sorted(set(mine) & set(theirs))])
-        if d.size < 2 or np.all(d == d[0]):
-            lo = hi = float(d[0]) if d.size else math.nan
+        if d.size < 2:  # nothing to resample: not separated
+            lo = hi = math.nan
+        elif np.all(d == d[0]):
+            lo = hi = float(d[0])
         else:
             ci = bootstrap((d,), np.mean, confidence_level=0.95, n_resamples=RESAMPLES,
                            method="percentile", random_state=0).confidence_interval
@@ -167,7 +169,7 @@ def caveats(manifest: dict[str, Any], records: list[dict[str, Any]]) -> list[str
         stops += (r.get("result") or {}).get("stopped_by") == "target"
     n = sorted(set(per_cell.values()))
     return [
-        f"{'-'.join(map(str, n[:1] + n[-1:] if len(n) > 1 else n))} instances per problem and "
+        f"{'-'.join(map(str, n[:1] + n[-1:] if len(n) > 1 else n))} instance(s) per problem and "
         "optimizer (truth, road and noise drawn per instance, shared by every optimizer): a "
         "small sample; the intervals say how small.",
         f"Budgets: {', '.join(f'{b:,}·D' for b in sorted(per_dim))} per run; the rungs are read "
