@@ -79,7 +79,8 @@ def scaled_archive(archive: Path, instances: int, tmp: Path) -> Path:
 
     from vpid_bench.analysis.optimum import optimum_key, record_settings
     from vpid_bench.records.io import stable_hash, write_json_atomic
-    from vpid_bench.report.archive import JOBS, MANIFEST, OPTIMA, RECORDS, pack
+    from vpid_bench.report.archive import JOBS, MANIFEST, OPTIMA, RECORDS
+    from vpid_bench.report.pack import pack
 
     sweep = tmp / "scaled-sweep"
     rng = np.random.default_rng(0)
