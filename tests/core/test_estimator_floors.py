@@ -93,6 +93,7 @@ def test_the_report_names_each_floors_estimator_and_points_to_a_better_one(tmp_p
     md = " ".join(build_report([tmp_path / "job"], tmp_path / "report", registry=registry,
                                short=True).report_md.read_text().split())
     assert "under the sum of channel norms of Eq. 3 (objective=eq3)" in md
-    assert "so a better estimator would (the Gaussian likelihood of the stated noise model, " \
-           "objective=ml, has its optimum a median" in md
+    assert ("The estimator is the bottleneck: its floor is" in md
+            and "problem.objective=ml (the Gaussian likelihood of the stated noise model) has "
+                "its optimum a median" in md)
     assert "Floors per estimator: median NoRE of each estimator's optimum on the first 3" in md
