@@ -139,8 +139,8 @@ def bayesrace_figure(sweep: Path) -> Path:
     fig.savefig(out, dpi=110)
     plt.close(fig)
     jac = jacobian_intervals(problem, x)
-    r = problem.residuals(x[None])[0]
-    sigma = group_sigma(r, problem.residual_groups(), x.size)
+    r = problem.fisher_residuals(x[None])[0]
+    sigma = group_sigma(r, problem.fisher_groups(), x.size)
     rel = np.array([np.inf if v is None else v for v in jac["se"]]) / np.abs(x)
     prof = profile_intervals(problem, start=x, sigma=sigma, rel_sd=rel)
     print("| coefficient | simulator | identified | 95 % (Jacobian) | 95 % (profile) | "
