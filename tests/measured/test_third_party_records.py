@@ -13,8 +13,8 @@ from vpid_vehicle.ride import bayesrace, racecar, third_party
 
 from vpid_bench import ConfigError
 
-#: The upstream copies, when this machine has them (the project's own shared folder).
-UPSTREAM = Path(os.environ.get("VPID_MEASURED_DATA", "/work/shared/data/measured"))
+#: A folder holding upstream copies (``bayesrace/`` and ``racecar/``), when one is named.
+UPSTREAM = Path(os.environ.get("VPID_MEASURED_DATA", "/nonexistent"))
 
 
 @pytest.fixture(scope="module")
@@ -62,9 +62,9 @@ def test_a_missing_data_folder_refuses_the_config_at_the_preflight(tmp_path):
         racecar.RacecarConfig(data_dir=str(tmp_path))
 
 
-@pytest.mark.skipif(not (UPSTREAM / "bayesrace").is_dir(), reason="the upstream copies are "
-                    "not on this machine (set VPID_MEASURED_DATA to a folder holding "
-                    "bayesrace/ and racecar/)")
+@pytest.mark.skipif(not (UPSTREAM / "bayesrace").is_dir(), reason="no folder of upstream "
+                    "copies named (set VPID_MEASURED_DATA to a folder holding bayesrace/ and "
+                    "racecar/ with the published files)")
 def test_the_upstream_copies_verify_as_a_users_folder():
     for sub, names in (("bayesrace", bayesrace.TRACKS.values()),
                        ("racecar", racecar.LOGS.values())):
