@@ -7,6 +7,7 @@ either. Nothing is written outside the output folder."""
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import pytest
@@ -52,9 +53,7 @@ def test_15_a_link_planted_while_the_sweep_runs_is_not_followed(tmp_path, compos
     run_from_config(compose_config([*SMALL, "optimizer=random"]), sweep / "a", registry,
                     optima_dir=sweep / "optima")
     planted = sweep / "optima"
-    for p in planted.iterdir():
-        p.unlink()
-    planted.rmdir()
+    shutil.rmtree(planted)
     target = _plant(sweep, "optima", outside)
     capsys.readouterr()
     run_from_config(compose_config([*SMALL, "optimizer=centre"]), sweep / "b", registry,
@@ -73,3 +72,24 @@ def test_15_the_report_folder_of_a_sweep_is_never_a_link(tmp_path, compose_confi
     write_report(sweep, short=True, archive=False)
     assert list(target.iterdir()) == []
     assert (sweep / "report" / "report.md").is_file()
+
+
+def test_15_the_per_problem_files_of_a_sweep_are_never_written_through_a_link(
+        tmp_path, compose_config, registry, capsys):
+    """The bounds and floors a sweep makes once per problem live in ``optima/per-problem``
+    (``vpid_bench.analysis.job.shared_file``): a link planted there between two jobs is
+    removed like one named ``optima``, and the second job still gets its files."""
+    sweep, outside = tmp_path / "sweep", tmp_path / "outside"
+    run_from_config(compose_config([*SMALL, "optimizer=random"]), sweep / "a", registry,
+                    optima_dir=sweep / "optima")
+    shutil.rmtree(sweep / "optima" / "per-problem")
+    target = _plant(sweep / "optima", "per-problem", outside)
+    capsys.readouterr()
+    run_from_config(compose_config([*SMALL, "optimizer=centre"]), sweep / "b", registry,
+                    optima_dir=sweep / "optima")
+    assert list(target.iterdir()) == []
+    shared = sweep / "optima" / "per-problem"
+    assert shared.is_dir() and not shared.is_symlink() and list(shared.glob("*.json"))
+    assert (sweep / "b" / "estimators.json").read_text() == \
+        (sweep / "a" / "estimators.json").read_text()
+    assert f"warning: {shared} was a symbolic link" in capsys.readouterr().err

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ..fileio import loads_json, read_text_limited
+from ..fileio import loads_json, own_folder, read_text_limited
 from ..problem import Problem, kept_instance, offers_residuals
 from ..records.io import write_json_atomic
 from ..spec import Job
@@ -109,7 +109,7 @@ def shared_file(optima_dir: Path, name: str, problem: Problem, settings: Mapping
     from .optimum import _locked, optimum_key
 
     key = optimum_key(problem.name, settings, problem.content_digest(), str(more))
-    path = optima_dir / SHARED_DIR / f"{Path(name).stem}-{key}.json"
+    path = own_folder(own_folder(optima_dir) / SHARED_DIR) / f"{Path(name).stem}-{key}.json"
     with _locked(path):  # launcher workers share the folder
         try:
             kept = loads_json(read_text_limited(path, MAX_SHARED_BYTES)) if path.is_file() \
