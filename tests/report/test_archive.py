@@ -363,3 +363,34 @@ def test_the_shipped_paper_optima_belong_to_this_codes_records(registry):
             (o,) = [o for o in optima if o.instance == inst.instance_id()]
             f = float(inst.evaluate(np.array([o.x_opt]))[0])
             assert f == pytest.approx(o.f_opt, rel=1e-9)
+
+
+def test_the_advice_section_is_written_from_an_archive_alone(made, tmp_path):
+    """benchmarks/archive_advice.py (the advice per family and budget of docs/study.md, to be
+    regenerated when archive/vpid1 is built) reads only the archive: per group the share
+    solved at each rung the runs reached, the score table with intervals, who is not
+    separated from the leader (a paired bootstrap over problem and instance), the caveats
+    with the archive's own numbers."""
+    import csv
+    import os
+    import subprocess
+
+    root = Path(__file__).resolve().parents[2]
+    out = tmp_path / "advice"
+    done = subprocess.run(
+        [sys.executable, str(root / "benchmarks" / "archive_advice.py"),
+         str(made["archives"] / "smoke"), "-o", str(out)],
+        capture_output=True, text=True, timeout=300, env={**os.environ, "MPLBACKEND": "Agg"})
+    assert done.returncode == 0, done.stderr[-2000:]
+    md = (out / "advice.md").read_text(encoding="utf-8")
+    assert "| optimizer | 10·D | score [95 % interval] |" in md  # 100·D: never reached
+    assert "Not separated from the leader" in md and "3 instance(s) per problem" in md
+    with open(out / "ladder.csv", encoding="utf-8") as fh:
+        ladder = list(csv.DictReader(fh))
+    assert {r["algorithm"] for r in ladder} == {"random", "centre"}
+    # smoke_quarter's budget is 220 evaluations, 55·D: the rung at 100·D was not reached
+    assert all(r["solved_at_100D"] == "nan" and r["solved_at_10D"] != "nan" for r in ladder)
+    with open(out / "scores.csv", encoding="utf-8") as fh:
+        scores = list(csv.DictReader(fh))
+    assert all(float(r["score_lo"]) <= float(r["score_auc"]) <= float(r["score_hi"])
+               for r in scores)
