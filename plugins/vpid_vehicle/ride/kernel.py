@@ -367,7 +367,8 @@ def _axle_force(alpha, P, i, first, linear):  # pragma: no cover - compiled
     ``B, C, D``)."""
     if linear:
         return P[first, i] * alpha
-    return _mf(alpha, P[first, i], P[first + 1, i], P[first + 2, i], 0.0)
+    # the Magic Formula with curvature 0, written out: one arc tangent, not two
+    return P[first + 2, i] * vecmath.sin(P[first + 1, i] * vecmath.atan(P[first, i] * alpha))
 
 
 @numba.njit(inline="always", error_model="numpy")
@@ -380,9 +381,9 @@ def _scheduled_rates(vy, r, vx, cd, delta, P, i, linear, m, lf, lr):  # pragma: 
     return (fry + ffy * cd) / m - vx * r, (lf * ffy * cd - lr * fry) / P[P.shape[0] - 1, i]
 
 
-@numba.njit(**_OPTS)
-def scheduled_single_track(P, linear, vx, delta, starts, H, sub, dt, m, lf, lr, x0,
-                           y):  # pragma: no cover - compiled
+@numba.njit(inline="always", error_model="numpy")
+def _scheduled(P, linear, vx, delta, starts, H, sub, dt, m, lf, lr, x0,
+               y):  # pragma: no cover - compiled
     """The single-track model with the forward speed as an input, over prediction windows.
 
     ``P``: the candidates' parameters, ``(3, n)`` ``[Cf, Cr, Iz]`` with ``linear`` tyres
@@ -430,3 +431,14 @@ def scheduled_single_track(P, linear, vx, delta, starts, H, sub, dt, m, lf, lr, 
                         linear, m, lf, lr)
                     vy[i] += h / 6.0 * (avy[0, i] + 2 * avy[1, i] + 2 * avy[2, i] + avy[3, i])
                     r[i] += h / 6.0 * (ar[0, i] + 2 * ar[1, i] + 2 * ar[2, i] + ar[3, i])
+
+
+@numba.njit(**_OPTS)
+def scheduled_single_track(P, linear, vx, delta, starts, H, sub, dt, m, lf, lr, x0,
+                           y):  # pragma: no cover - compiled
+    """:func:`_scheduled` with the tyre model a constant in each branch, so that the compiler
+    drops the other tyre's code from the loops over the candidates (``linear``: see there)."""
+    if linear:
+        _scheduled(P, True, vx, delta, starts, H, sub, dt, m, lf, lr, x0, y)
+    else:
+        _scheduled(P, False, vx, delta, starts, H, sub, dt, m, lf, lr, x0, y)
