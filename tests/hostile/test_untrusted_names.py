@@ -68,10 +68,10 @@ def _assert_sanitised(text: str, where: str) -> None:
     assert _forged(text) == [], f"{where} has a forged line"
 
 
-def test_9_report_command_terminal_markdown_and_latex_are_sanitised(hostile_sweep, tmp_path):
-    """The full report (tests, figures, LaTeX tables): the terminal, report.md and every
-    .tex table show the name visibly escaped (figure labels too: matplotlib once warned of
-    the missing glyph of ESC on stderr, raw)."""
+def test_9_report_command_terminal_markdown_latex_html_are_sanitised(hostile_sweep, tmp_path):
+    """The full report (tests, figures, LaTeX tables, HTML pages): the terminal, report.md,
+    every .tex table and every page show the name visibly escaped (figure labels too:
+    matplotlib once warned of the missing glyph of ESC on stderr, raw)."""
     out = tmp_path / "report"
     done = run_cli([str(hostile_sweep), "-o", str(out)], tmp_path, report=True)
     assert "Traceback" not in done.stderr, done.stderr[-2000:]
@@ -82,9 +82,9 @@ def test_9_report_command_terminal_markdown_and_latex_are_sanitised(hostile_swee
     md = (out / "report.md").read_text(encoding="utf-8")
     _assert_sanitised(md, "report.md")
     assert "evil\\x1b]0;pwned\\x07" in md
-    tex = sorted(out.rglob("*.tex"))
-    assert tex
-    for path in tex:
+    tex, html = sorted(out.rglob("*.tex")), sorted(out.rglob("*.html"))
+    assert tex and html
+    for path in tex + html:  # LaTeX tables and the HTML pages (their labels are cleaned)
         _assert_sanitised(path.read_text(encoding="utf-8"), path.name)
 
 

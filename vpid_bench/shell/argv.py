@@ -1,4 +1,5 @@
-"""The command line as vpid-bench reads it: Hydra's flags plus ``--resume`` and ``--version``.
+"""The command line as vpid-bench reads it: Hydra's flags plus ``--resume``, ``--merge`` and
+``--version``.
 
 Hydra parses the command line again when it runs; this module only learns what the command
 asks for (run, sweep, show information), so that the pre-flight can check it first. It mirrors
@@ -16,6 +17,8 @@ from collections.abc import Sequence
 from ..errors import ConfigError
 
 RESUME_FLAG = "--resume"
+#: Add this command's jobs to an output folder that holds another command's jobs.
+MERGE_FLAG = "--merge"
 
 
 #: The shipped configs' place in Hydra's search path.
@@ -60,6 +63,9 @@ class CommandLine:
     info: str | None  # the information-only flag used (--help, --cfg, ...), else None
     hydra_args: list[str]  # the command line for Hydra (ours removed, folders made absolute)
     config: ConfigSource = dataclasses.field(default_factory=ConfigSource)
+    #: ``--merge``: the output folder may hold jobs of another command (see
+    #: :func:`~vpid_bench.shell.resume.check_reuse`)
+    merge: bool = False
 
     @property
     def custom_config(self) -> bool:
@@ -140,12 +146,14 @@ def _without_config_flags(hydra_args: Sequence[str]) -> list[str]:
     return out
 
 
-def parse_command_line(argv: Sequence[str]) -> CommandLine:
-    """Read ``argv`` (without the program name). Raises :class:`ConfigError` for a command
-    line Hydra would refuse, and for flag combinations Hydra cannot honour."""
-    hydra_args, resume = [], None
+def _own_flags(argv: Sequence[str]) -> tuple[list[str], str | None, bool]:
+    """``argv`` without vpid-bench's own flags, and their values: ``--resume`` (None: not
+    given; "": find the folder; else the folder) and ``--merge``."""
+    hydra_args, resume, merge = [], None, False
     for arg in argv:
-        if arg == RESUME_FLAG:
+        if arg == MERGE_FLAG:
+            merge = True
+        elif arg == RESUME_FLAG:
             resume = ""
         elif arg.startswith(RESUME_FLAG + "="):
             resume = arg.split("=", 1)[1]
@@ -153,6 +161,13 @@ def parse_command_line(argv: Sequence[str]) -> CommandLine:
                 raise ConfigError(RESUME_FLAG, resume, "a folder, or --resume alone to find it")
         else:
             hydra_args.append(arg)
+    return hydra_args, resume, merge
+
+
+def parse_command_line(argv: Sequence[str]) -> CommandLine:
+    """Read ``argv`` (without the program name). Raises :class:`ConfigError` for a command
+    line Hydra would refuse, and for flag combinations Hydra cannot honour."""
+    hydra_args, resume, merge = _own_flags(argv)
     args = _parser(hydra_args).parse_args(hydra_args)
     info = None
     for flag, given in (("--help", args.help), ("--hydra-help", args.hydra_help),
@@ -172,8 +187,9 @@ def parse_command_line(argv: Sequence[str]) -> CommandLine:
         if query and "COMP_LINE" not in os.environ:
             raise ConfigError("-sc", query[0], "install=bash (or zsh, fish) to install "
                               "completion; query= is what the installed completion runs")
-    if resume is not None and (info or args.version):
-        raise ConfigError(RESUME_FLAG, resume or True, "a command that runs jobs")
+    if (resume is not None or merge) and (info or args.version):
+        raise ConfigError(RESUME_FLAG if resume is not None else MERGE_FLAG,
+                          resume or True, "a command that runs jobs")
     source = _config_source(args, args.overrides or [])
     hydra_args = [*source.hydra_flags(), *_without_config_flags(hydra_args),
                   *source.search_override()]
@@ -185,4 +201,5 @@ def parse_command_line(argv: Sequence[str]) -> CommandLine:
         info=info,
         hydra_args=hydra_args,
         config=source,
+        merge=merge,
     )

@@ -23,6 +23,7 @@ import dataclasses
 import itertools
 import math
 import os
+import sys
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
@@ -34,6 +35,7 @@ from ..plugins import Registry
 from ..problem import FILLED_PARAMS
 from ..spec import TOP_LEVEL_KEYS, Job, parse_job
 from .argv import CommandLine, ConfigSource
+from .resume import check_reuse
 
 GROUPS = ("problem", "optimizer")
 #: The shipped config (no -cp, -cn, -cd).
@@ -413,9 +415,8 @@ def _raw_dir(full_cfg: Any, multirun: bool) -> str:
 
 
 def _resume_folder(cmd: CommandLine, full_cfg: Any, key: str) -> Path | None:
-    """The folder ``--resume`` continues, or None for a new one (said on stderr)."""
-    import sys
-
+    """The folder ``--resume`` continues (None: the one named on the command line);
+    :class:`VpidBenchError` when there is none to continue."""
     from .resume import find_previous
 
     if cmd.resume:
@@ -427,9 +428,11 @@ def _resume_folder(cmd: CommandLine, full_cfg: Any, key: str) -> Path | None:
         return None  # the folder is named on the command line: that is the one continued
     root = output_root(_raw_dir(full_cfg, cmd.multirun))
     folder = find_previous(root, cmd.overrides, cmd.multirun)
-    if folder is None:
-        print(f"resume: no earlier {'sweep' if cmd.multirun else 'run'} under {root} has "
-              "these overrides; starting a new one", file=sys.stderr)
+    if folder is None:  # it once started a whole new sweep: asking to resume asks for none
+        kind = "sweep" if cmd.multirun else "run"
+        raise VpidBenchError(f"--resume: no earlier {kind} under {root} has these overrides, "
+                             f"so there is nothing to resume; to start a new {kind}, run the "
+                             "command without --resume")
     return folder
 
 
@@ -481,8 +484,6 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
     key = "hydra.sweep.dir" if cmd.multirun else "hydra.run.dir"
     folder = _resume_folder(cmd, full, key) if cmd.resume is not None else None
     if folder is not None:
-        import sys
-
         print(f"resume: continuing {folder}", file=sys.stderr)
     else:
         folder = output_dir(full, cmd.multirun)
@@ -491,6 +492,10 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
     hydra_args.append(f"{key}={_quote(str(folder))}")
     job_dirs = (planned_job_dirs(points, full, folder)
                 if cmd.multirun and not custom_sweeper else [])
+    merged = check_reuse(folder, job_dirs if cmd.multirun else [folder], cmd.overrides,
+                         cmd.multirun, cmd.merge, key)
+    if merged:
+        print(merged, file=sys.stderr)
     return Plan(hydra_args, folder, cmd.multirun, jobs, points, job_dirs, problems)
 
 

@@ -4,6 +4,8 @@
   run) whose command-line overrides match the current ones, ignoring ``hydra.*`` (launcher
   choice, ...) and the keys that change no result (``progress``, ``report``, ``resume``,
   ``threads``).
+* :func:`check_reuse` keeps an earlier command's jobs in an output folder from being merged
+  with this command's without a word: refused, unless ``--merge`` asks for it.
 * :class:`FolderLock` keeps two commands out of one output folder: the second is refused in
   one line instead of running everything twice.
 * :func:`collect_job_statuses` reads the ``job.json`` each job wrote, tagged with this
@@ -73,6 +75,50 @@ def find_previous(root: Path, overrides: Sequence[str], multirun: bool) -> Path 
         if saved is not None and normalise_overrides(saved) == wanted:
             return folder
     return None
+
+
+def earlier_jobs(folder: Path) -> set[Path]:
+    """The job folders an earlier command left in ``folder``: the folder itself when it is a
+    job's (a single run), and each folder directly below it that holds records or a job
+    status (a sweep's jobs; links are not followed)."""
+    def is_job(p: Path) -> bool:
+        return not p.is_symlink() and ((p / "records").is_dir() or (p / JOB_STATUS_FILE).is_file())
+
+    folder = Path(folder)
+    if not folder.is_dir():
+        return set()
+    found = {p.resolve() for p in folder.iterdir() if p.is_dir() and is_job(p)}
+    return found | ({folder.resolve()} if is_job(folder) else set())
+
+
+def check_reuse(folder: Path, planned: Sequence[Path], overrides: Sequence[str],
+                multirun: bool, merge: bool, key: str) -> str | None:
+    """Whether this command may write into ``folder``, which may hold an earlier command's
+    jobs. A second sweep into a finished sweep's folder was once merged into it without a
+    word (the terminal said 2 jobs, the report ranked 4 optimizers). Jobs there that this
+    command does not plan (``planned``: its job folders; a single run's is ``folder``) are
+    another command's: refused with :class:`ConfigError`, unless ``merge`` (``--merge``) asks
+    for it, when the returned line says so. Re-running the same jobs (a resume) or adding
+    jobs to them is no merge. Without ``planned`` (an optimizing sweeper, a custom
+    ``hydra.sweep.subdir``) the earlier command's saved overrides must equal these."""
+    earlier = earlier_jobs(folder)
+    if not earlier:
+        return None
+    if planned:
+        foreign = sorted(earlier - {Path(p).resolve() for p in planned})
+    else:
+        saved = _saved_task_overrides(folder, multirun)
+        same = saved is not None and normalise_overrides(saved) == normalise_overrides(overrides)
+        foreign = [] if same else sorted(earlier)
+    if not foreign:
+        return None
+    names = ", ".join(p.name for p in foreign[:2]) + (", ..." if len(foreign) > 2 else "")
+    what = (f"{len(foreign)} job(s) another command ran ({names}), which its report would "
+            "rank beside this command's")
+    if merge:
+        return f"merge: {folder} holds {what}: merged, as --merge asks"
+    raise ConfigError(key, str(folder), f"a folder without another command's jobs: it holds "
+                      f"{what}; choose another folder, or add --merge to merge them")
 
 
 class FolderLock:
