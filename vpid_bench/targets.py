@@ -129,3 +129,10 @@ def with_stops(job: Job, problem: Problem, root: Path | None = None) -> Job:
     if not all(math.isfinite(v) for v in stops.values()):
         raise ConfigError("target", target, "a target that gives finite stopping values")
     return dataclasses.replace(job, stop_at=stops)
+
+
+def check_sized(job: Job, problem: Problem) -> None:
+    """What a job's ``budget_per_dim`` and ``target`` need of its built problem, checked
+    (:meth:`Job.sized`, :func:`with_stops`): :class:`ConfigError` for a bad value. The
+    pre-flight calls it for every job that sets either, before any job runs."""
+    with_stops(job.sized(problem.bounds.dim), problem)

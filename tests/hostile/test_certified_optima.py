@@ -159,3 +159,22 @@ def test_14_the_preflight_refuses_what_only_the_built_problem_tells(args, words,
     assert line.startswith(f"error: {words}"), line
     assert not (tmp_path / "outputs").exists()  # refused before any folder was written
     assert not list(tmp_path.rglob("records"))
+
+
+@pytest.mark.parametrize("fault", ["abort", "exit", "raise"])
+def test_14_the_preflight_builds_problems_in_a_supervised_worker(fault):
+    """A problem whose constructor aborts (or exits, or raises) costs the pre-flight's check
+    nothing: it runs in a worker process, like the jobs' calls into plugin code, and the job
+    meets the fault again and says why. This process goes on, in the same folder."""
+    import dataclasses
+    import os
+
+    from test_fault_matrix import PS, _job
+
+    from vpid_bench.shell.preflight import check_sized_jobs
+
+    here = os.getcwd()
+    job = _job(fault, "build")
+    job = dataclasses.replace(job, spec=dataclasses.replace(job.spec, budget_per_dim=PS))
+    assert check_sized_jobs([job]) is None
+    assert os.getcwd() == here

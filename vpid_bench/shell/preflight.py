@@ -502,25 +502,60 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
 def check_sized_jobs(jobs: Sequence[Job]) -> Any:
     """The checks a job makes once its problem is built, made here for every job that needs
     them: ``budget_per_dim`` against the problem's dimension (:meth:`Job.sized`) and
-    ``target`` against the optima certified for its runs' instances
-    (:func:`vpid_bench.targets.with_stops`). A bad value there once stopped its job only when
-    it started (exit 1, two lines); now it is one line before any job runs. Each problem is
-    built once per config; the cache is handed to the jobs (a basic launcher's jobs reuse
-    it). A problem whose construction fails is left to its job, which reports it."""
+    ``target`` against the optima certified for its runs' instances, confirmed by the
+    problem (:func:`vpid_bench.targets.check_sized`). A bad value there once stopped its job
+    only when it started (exit 1, two lines); now it is one line before any job runs.
+
+    The problems are built in a supervised worker process, like every call into plugin code
+    of the jobs (a crash there costs nothing but the check: the job runs it again and says
+    why); with ``isolation=none``, or a job that cannot be sent to a worker, here, and the
+    problems built are returned (a :class:`~vpid_bench.build.ProblemCache`) for the jobs to
+    reuse (``None`` otherwise)."""
+    from ..workers import can_send
+
+    wanted = [j for j in jobs if j.spec.target is not None or j.spec.budget_per_dim is not None]
+    if not wanted:
+        return None
+    if all(j.spec.isolation != "none" and can_send(j) is None for j in wanted):
+        _check_in_a_worker(wanted)
+        return None
+    return _check_here(wanted)
+
+
+def _check_in_a_worker(jobs: Sequence[Job]) -> None:
+    """:func:`vpid_bench.targets.check_sized` of each job in one supervised worker process;
+    its :class:`ConfigError` as one line; any other failure is left to the job."""
+    from ..experiment import setup_limit_s
+    from ..targets import check_sized
+    from ..workers import Workers
+
+    pool = Workers(1)
+    try:
+        for job in jobs:
+            try:
+                pool.call(job, check_sized, what="the pre-flight's check of target= and "
+                          "budget_per_dim=", limit=setup_limit_s(job))
+            except Exception as exc:  # noqa: BLE001 - plugin code: its job says why
+                if getattr(exc, "remote_type", None) == "ConfigError":
+                    raise VpidBenchError(str(exc)) from None
+    finally:
+        pool.close()
+
+
+def _check_here(jobs: Sequence[Job]) -> Any:
+    """:func:`vpid_bench.targets.check_sized` of each job in this process; the problems."""
     from ..build import ProblemCache
-    from ..targets import with_stops
+    from ..targets import check_sized
 
     cache = ProblemCache()
     for job in jobs:
-        if job.spec.target is None and job.spec.budget_per_dim is None:
-            continue
         try:
             problem = cache.get(job)
         except VpidBenchError:
             raise
         except Exception:  # noqa: BLE001 - plugin code: its job runs it again and says why
             continue
-        with_stops(job.sized(problem.bounds.dim), problem)
+        check_sized(job, problem)
     return cache
 
 
