@@ -40,7 +40,7 @@ browser:
 
 test: install browser
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n auto
 
 # Launchers beyond one process (Ray on a local instance, submitit's local executor): their
 # own environment, every extra in ONE pip run (the Ray launcher pins cloudpickle<3), so the

@@ -143,9 +143,14 @@ def test_a_ctrl_c_while_a_worker_starts_waits_until_it_is_started():
 
     from vpid_bench.workers import _sigint_held
 
+    # Python's own handler, as in a command: pytest-xdist's workers ignore SIGINT
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     reached = False
-    with pytest.raises(KeyboardInterrupt), _sigint_held():
-        os.kill(os.getpid(), signal.SIGINT)
-        time.sleep(0.05)  # a delivered SIGINT would raise here
-        reached = True
+    try:
+        with pytest.raises(KeyboardInterrupt), _sigint_held():
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)  # a delivered SIGINT would raise here
+            reached = True
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert reached
