@@ -24,7 +24,7 @@ from __future__ import annotations
 from .bounds import Bounds, relative_errors_percent
 from .bridge import LoopOptimizer
 from .errors import ConfigError, OptimizerContractError, PluginError, VpidBenchError
-from .fileio import write_text_atomic
+from .fileio import file_sha256, write_text_atomic
 from .optimizer import GenerationalOptimizer, Optimizer, OptimizerParams, check_compatible
 from .params import added_setting
 from .plugins import registered_optimizer
@@ -57,5 +57,6 @@ __all__ = [
     "offers_residuals",
     "registered_optimizer",
     "relative_errors_percent",
+    "file_sha256",
     "write_text_atomic",
 ]

@@ -13,6 +13,7 @@ are made by :func:`own_folder`, which never follows a link planted in their plac
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import stat
@@ -22,6 +23,16 @@ from pathlib import Path
 
 #: The largest results file read back (a run record with a long trace is a few MB).
 MAX_READ_BYTES = 64 * 1024 * 1024
+
+
+def file_sha256(path: Path) -> str:
+    """The SHA-256 of a file's bytes, hex, read in 1 MB blocks: how a plugin checks a data file
+    it ships or is pointed to against the checksum its docs state."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 def loads_json(text: str) -> object:

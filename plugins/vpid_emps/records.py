@@ -16,12 +16,11 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import hashlib
 from pathlib import Path
 
 import numpy as np
 
-from vpid_bench import VpidBenchError
+from vpid_bench import VpidBenchError, file_sha256
 
 DATA = Path(__file__).parent / "data"
 #: The files this plugin reads and their SHA-256: the one list of them.
@@ -58,15 +57,6 @@ class EmpsRecord:
         return self.kv * (self.kp * (self.qg - q) - dq)
 
 
-def sha256(path: Path) -> str:
-    """The SHA-256 of a file's bytes, hex."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def verified(name: str, folder: Path = DATA) -> Path:
     """The path of data file ``name`` after checking its SHA-256; one-line error otherwise."""
     expected = SHA256[name]
@@ -74,7 +64,7 @@ def verified(name: str, folder: Path = DATA) -> Path:
     if not path.is_file():
         raise VpidBenchError(f"the EMPS data file {path} is missing (expected SHA-256 "
                              f"{expected}); reinstall vpid-bench")
-    found = sha256(path)
+    found = file_sha256(path)
     if found != expected:
         raise VpidBenchError(f"the EMPS data file {path} has SHA-256 {found}, expected "
                              f"{expected}: it is not the file of the data set")

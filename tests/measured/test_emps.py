@@ -18,7 +18,7 @@ from vpid_emps.problem import PUBLISHED, VMAX, EmpsConfig, EmpsProblem
 sys.path.insert(0, str(Path(__file__).parents[1] / "sweeps"))
 from sweep_helpers import run_cli  # noqa: E402
 
-from vpid_bench import ConfigError, VpidBenchError
+from vpid_bench import ConfigError, VpidBenchError, file_sha256
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +29,7 @@ def emps():
 # --- the shipped files --------------------------------------------------------------------
 def test_the_shipped_records_have_their_published_checksums():
     for name, expected in records.SHA256.items():
-        assert records.sha256(records.verified(name)) == expected
+        assert file_sha256(records.verified(name)) == expected
     assert (records.DATA / "LICENSE").read_text().startswith(" " * 33 + "Apache License")
 
 

@@ -11,7 +11,7 @@ import pytest
 import yaml
 from vpid_vehicle.ride import bayesrace, racecar, third_party
 
-from vpid_bench import ConfigError
+from vpid_bench import ConfigError, file_sha256
 
 #: A folder holding upstream copies (``bayesrace/`` and ``racecar/``), when one is named.
 UPSTREAM = Path(os.environ.get("VPID_MEASURED_DATA", "/nonexistent"))
@@ -27,7 +27,7 @@ def installed() -> Path:
 def test_the_installed_records_have_their_published_checksums(installed):
     for name, expected in third_party.SHA256.items():
         path = third_party.verified(name, None)
-        assert path.parent == installed and third_party._sha256(path) == expected
+        assert path.parent == installed and file_sha256(path) == expected
     assert (installed / "LICENSE").read_text().lstrip().startswith("GNU GENERAL PUBLIC LICENSE")
 
 

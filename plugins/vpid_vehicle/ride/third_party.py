@@ -14,13 +14,12 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import hashlib
 import importlib.resources
 from pathlib import Path
 
 import numpy as np
 
-from vpid_bench import ConfigError
+from vpid_bench import ConfigError, file_sha256
 
 #: The files read and their SHA-256: the one list of them.
 SHA256 = {
@@ -43,17 +42,9 @@ def installed_folder() -> Path | None:
         return None
 
 
-def _sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 @functools.lru_cache(maxsize=16)
 def _digest(path: str, size: int, mtime_ns: int) -> str:
-    return _sha256(Path(path))
+    return file_sha256(Path(path))
 
 
 def verified(name: str, data_dir: str | None) -> Path:
