@@ -3,6 +3,8 @@ beside the kernel-only time of the same evaluations, side by side in one run.
 
     MPLBACKEND=Agg .venv/bin/python benchmarks/archive_cost.py --suite vpid1 --runs 1 \\
         --full-runs 15 --target 1e-8 [--problems a,b] [--optimizers x,y] [--sweep DIR]
+    MPLBACKEND=Agg .venv/bin/python benchmarks/archive_cost.py \\
+        --built outputs/archive-vpid1 [--wall-s SECONDS]   # a finished build, nothing run
 
 1. **The build** of the slice: :func:`build_archive.build` (the command a user runs, every
    stage, pack included, into a fresh folder), its wall time per stage.
@@ -123,13 +125,49 @@ def table(title: str, key: str, jobs: list[dict[str, Any]], us: dict[str, float]
               f"{wall:.0f} | {100 * wall / max(total, 1e-9):.1f} % |")
 
 
+def built_report(runs_dir: Path, wall_s: float | None, kernel_seconds: float) -> None:
+    """A finished build (every job of ``runs_dir``) beside the kernel-only time of its
+    evaluations: the runs' own time against the kernel's, and the build's wall time when
+    given. A build done in several sittings on a shared machine has no single CPU figure,
+    so the ratio of the runs' own time (each record's ``timing.run_time_s``) is the one
+    that another program's load moves least."""
+    jobs = read_jobs(runs_dir)
+    if not jobs:
+        raise SystemExit(f"error: no job.json below {runs_dir}")
+    members = sorted({j["problem"] for j in jobs})
+    us = {m: kernel_us(m, kernel_seconds)[0] for m in members}
+    workers = available_cores()
+    evals = sum(e for j in jobs for e, _, _ in j["runs"])
+    kernel_1 = sum(e * us[j["problem"]] for j in jobs for e, _, _ in j["runs"]) * 1e-6
+    run_s = sum(t for j in jobs for _, t, _ in j["runs"])
+    print(f"build: {sum(len(j['runs']) for j in jobs)} runs in {len(jobs)} jobs, "
+          f"{evals:,} evaluations")
+    print(f"kernel only, the same evaluations: {kernel_1:.1f} s on one core, "
+          f"{kernel_1 / workers:.1f} s on {workers} cores")
+    print(f"runs' own time (the optimizers and their evaluations, summed over runs): "
+          f"{run_s:.1f} s, {run_s / max(kernel_1, 1e-9):.2f}x the kernel's")
+    if wall_s is not None:
+        print(f"build wall {wall_s:.0f} s / kernel only on {workers} cores: "
+              f"{wall_s / max(kernel_1 / workers, 1e-9):.2f}x")
+    table("Per member", "problem", jobs, us, 1.0, workers)
+    table("Per optimizer", "optimizer", jobs, us, 1.0, workers)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--full-runs", type=int, default=15,
                     help="the instances of the full build, for the extrapolation")
     ap.add_argument("--kernel-seconds", type=float, default=1.0,
                     help="timing per member for its kernel's microseconds per candidate")
+    ap.add_argument("--built", type=Path, default=None,
+                    help="a finished build's sweep folder (its runs/): no build, its runs "
+                         "set beside the kernel-only time of their evaluations")
+    ap.add_argument("--wall-s", type=float, default=None,
+                    help="with --built: the build's wall time as measured (s), for the ratio")
     own, rest = ap.parse_known_args()
+    if own.built is not None:
+        built_report(own.built / "runs", own.wall_s, own.kernel_seconds)
+        return
     args = parse_args(rest)
     if args.out is None:
         raise SystemExit("error: --out is required (a slice is never packed into archive/)")
