@@ -18,7 +18,9 @@ figure ``<out>/ecdf_families.png``:
 * **Where methods are not separated**: in each group, the leader (highest score) and every
   optimizer whose score difference to it has a 95 % paired bootstrap interval that contains
   0 (per-run AUC differences paired by problem and instance; scipy's percentile bootstrap,
-  10,000 resamples, seed 0): the tests do not separate them, so the advice names them all.
+  10,000 resamples, seed 0): the tests do not separate them, so the advice names them all;
+  the same among the black-box optimizers alone (those whose class does not set
+  ``wants_residuals``), for a problem that offers no residuals.
 * **The protocol's caveats**, with the archive's own facts (instances, budgets, target,
   objective, the commit that made it).
 """
@@ -87,14 +89,16 @@ def run_aucs(data: Any, contexts: Sequence[str]) -> dict[str, dict[tuple[str, st
 
 
 def not_separated(aucs: dict[str, dict[tuple[str, str], float]],
-                  score_rows: Sequence[Sequence[Any]], group: str
+                  score_rows: Sequence[Sequence[Any]], group: str,
+                  leave_out: frozenset[str] = frozenset()
                   ) -> tuple[str, list[tuple[str, float, float]]]:
     """The group's leader and, for every other optimizer scored in it, the 95 % paired
     bootstrap interval of (leader - it) in per-run AUC over the (problem, instance) pairs
-    both ran; the leader first."""
+    both ran; the leader first. Optimizers in ``leave_out`` take no part (the black-box
+    comparison leaves out those that use the residuals)."""
     from scipy.stats import bootstrap
 
-    scored = [r for r in score_rows if r[1] == group]
+    scored = [r for r in score_rows if r[1] == group and r[2] not in leave_out]
     if not scored:
         return "", []
     leader = scored[0][2]  # score_rows are best first within each group
@@ -119,9 +123,32 @@ def _fmt(v: float) -> str:
     return "–" if not math.isfinite(v) else f"{v:.2f}"
 
 
+def _names(names: frozenset[str]) -> str:
+    return ", ".join(f"`{n}`" for n in sorted(names)) or "none"
+
+
+def residual_users(names: Sequence[str]) -> frozenset[str]:
+    """The optimizers among ``names`` whose installed class sets ``wants_residuals`` (they
+    need a problem that offers residuals; one not installed here counts as black-box)."""
+    from vpid_bench.errors import VpidBenchError
+    from vpid_bench.plugins import Registry
+
+    registry, out = Registry(), set()
+    for name in names:
+        try:
+            if getattr(registry.optimizer(name), "wants_residuals", False):
+                out.add(name)
+        except VpidBenchError:
+            continue
+    return frozenset(out)
+
+
 def markdown(folder: Path, manifest: dict[str, Any], ladder: list[list[Any]],
              scores: list[list[Any]], separated: dict[str, tuple[str, list]],
-             caveats: list[str], figure: str) -> list[str]:
+             caveats: list[str], figure: str,
+             black_box: dict[str, tuple[str, list]] | None = None,
+             users: frozenset[str] = frozenset()) -> list[str]:
+    black_box = black_box or {}
     rungs = [k for k in ss.LADDER
              if any(math.isfinite(r[3 + ss.LADDER.index(k)]) for r in ladder)]
     lines = [f"Made from `{folder}` (nothing run) by "
@@ -149,7 +176,15 @@ def markdown(folder: Path, manifest: dict[str, Any], ladder: list[list[Any]],
         tied = [name for name, lo, _ in others if not (lo > 0)]
         lines += ["", f"Not separated from the leader `{leader}` (the 95 % paired interval "
                   "of the difference in per-run AUC contains 0): "
-                  + (", ".join(f"`{t}`" for t in tied) if tied else "none") + ".", ""]
+                  + (", ".join(f"`{t}`" for t in tied) if tied else "none") + "."]
+        box_leader, box_others = black_box.get(group, ("", []))
+        if box_leader and box_leader != leader:
+            box_tied = [name for name, lo, _ in box_others if not (lo > 0)]
+            lines += ["", f"Without residuals (leaving out {_names(users)}): the "
+                      f"leader is `{box_leader}`; not separated from it: "
+                      + (", ".join(f"`{t}`" for t in box_tied) if box_tied else "none")
+                      + "."]
+        lines += [""]
     lines += [f"![ECDFs per family]({figure})", "", "Caveats:", ""]
     lines += [f"- {c}" for c in caveats] + [""]
     return lines
@@ -211,8 +246,10 @@ def main() -> None:
     scores, _ = ss.score_rows(data.hits, facts)
     ladder = rung_rows(data.hits, facts)
     groups = {g.name: g.contexts for g in ss.groups(facts) if g.kind != "dimension"}
-    separated = {name: not_separated(run_aucs(data, contexts), scores, name)
-                 for name, contexts in groups.items()}
+    users = residual_users(sorted({r[2] for r in scores}))
+    aucs = {name: run_aucs(data, contexts) for name, contexts in groups.items()}
+    separated = {name: not_separated(aucs[name], scores, name) for name in groups}
+    black_box = {name: not_separated(aucs[name], scores, name, users) for name in groups}
     fig = ss.figure(data.hits, facts, out / "ecdf_families.png")
     for name, headers, rows in (
             ("ladder.csv", ["group", "problems", "algorithm",
@@ -222,7 +259,8 @@ def main() -> None:
             csv.writer(fh).writerows([headers, *rows])
     lines = markdown(args.archive, dict(arch.manifest), ladder, scores, separated,
                      caveats(dict(arch.manifest), arch.records),
-                     Path(fig).name if isinstance(fig, Path) else str(fig))
+                     Path(fig).name if isinstance(fig, Path) else str(fig),
+                     black_box, users)
     (out / "advice.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
     print("\n".join(lines))
     print(json.dumps({"written": [str(out / n) for n in ("advice.md", "ladder.csv",

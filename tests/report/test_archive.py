@@ -394,3 +394,34 @@ def test_the_advice_section_is_written_from_an_archive_alone(made, tmp_path):
         scores = list(csv.DictReader(fh))
     assert all(float(r["score_lo"]) <= float(r["score_auc"]) <= float(r["score_hi"])
                for r in scores)
+
+
+def test_the_advice_names_the_black_box_leader_apart_from_the_residual_users():
+    """A problem without residuals cannot use ``lsq`` or ``de_lsq``: the advice also names the
+    leader among the optimizers whose class does not set ``wants_residuals``, and who is not
+    separated from it; an optimizer not installed here counts as black-box."""
+    import importlib.util
+
+    root = Path(__file__).resolve().parents[2]
+    sys.path.insert(0, str(root / "benchmarks"))
+    try:
+        spec = importlib.util.spec_from_file_location(
+            "archive_advice", root / "benchmarks" / "archive_advice.py")
+        advice = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(advice)
+    finally:
+        sys.path.remove(str(root / "benchmarks"))
+    users = advice.residual_users(["lsq", "de_lsq", "de4", "cmaes", "not_installed_here"])
+    assert users == {"lsq", "de_lsq"}
+    # per-run AUC on (problem, instance): lsq best, cmaes and de4 apart by a clear margin
+    pairs = [("p", str(i)) for i in range(12)]
+    rng = np.random.default_rng(0)
+    aucs = {"lsq": {k: 0.9 for k in pairs},
+            "cmaes": {k: 0.5 + 0.01 * rng.standard_normal() for k in pairs},
+            "de4": {k: 0.3 + 0.01 * rng.standard_normal() for k in pairs}}
+    rows = [["all", "all", name] for name in ("lsq", "cmaes", "de4")]  # best first
+    leader, others = advice.not_separated(aucs, rows, "all")
+    assert leader == "lsq" and [o[0] for o in others] == ["cmaes", "de4"]
+    box_leader, box_others = advice.not_separated(aucs, rows, "all", users)
+    assert box_leader == "cmaes" and [o[0] for o in box_others] == ["de4"]
+    assert box_others[0][1] > 0  # separated: the interval of cmaes - de4 lies above 0

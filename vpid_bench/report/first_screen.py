@@ -226,7 +226,11 @@ def _marked_verdict(v: Verdict) -> str:
         text = (f"{head}a description, not a recommendation ({why}). "
                 f"{_ends(v, _name(v.pick))} over {v.runs} run(s)")
     elif v.kind == verdicts.NONE:
-        text = (f"{head}no method identifies this model from this record{_unidentified(v)}. "
+        # Only the bound says that nothing can identify the model; tests that separate no
+        # method from the references say only that none is shown to be worth choosing.
+        lead = ("no method identifies this model from this record" if v.over_bound else
+                "no recommendation, since nothing here is shown to beat the references")
+        text = (f"{head}{lead}{_unidentified(v)}. "
                 f"The lowest median {_name(v.metric)}: {_ends(v, _name(v.pick))}")
     else:
         text = (f"{head}use {_name(v.pick)} ({_why(v)}{_effect(v)}{_missing(v)}). "
@@ -251,13 +255,12 @@ def _unidentified(v: Verdict) -> str:
                      f"{verdicts.BOUND_LIMIT:g} %: even an efficient estimator would miss the "
                      "parameters by more than their own size")
     refs = [_ref(r) for r in v.not_beaten]
+    tests = f"by the Holm-corrected pairwise tests at {v.runs} runs each"
     if refs:
-        parts.append(f"no optimizer is separated from {' or '.join(refs)} by the "
-                     "Holm-corrected pairwise tests")
+        parts.append(f"no optimizer is separated from {' or '.join(refs)} {tests}")
     elif not v.over_bound:
         parts.append("no optimizer is separated from each of "
-                     + " and ".join(_ref(r) for r in v.references)
-                     + " by the Holm-corrected pairwise tests")
+                     + " and ".join(_ref(r) for r in v.references) + f" {tests}")
     return ": " + "; and ".join(parts) if parts else ""
 
 
