@@ -425,3 +425,25 @@ def test_the_advice_names_the_black_box_leader_apart_from_the_residual_users():
     box_leader, box_others = advice.not_separated(aucs, rows, "all", users)
     assert box_leader == "cmaes" and [o[0] for o in box_others] == ["de4"]
     assert box_others[0][1] > 0  # separated: the interval of cmaes - de4 lies above 0
+
+
+def test_the_committed_vpid1_advice_is_what_the_archive_gives(tmp_path):
+    """docs/study/vpid1-advice (quoted by docs/study.md and the README) is regenerated from
+    archive/vpid1 alone, byte for byte: the advice and its tables come from the shipped
+    archive, and a rebuilt archive that changed them would fail here until the docs follow."""
+    import os
+    import subprocess
+
+    root = Path(__file__).resolve().parents[2]
+    if not (root / "archive" / "vpid1" / "manifest.json").is_file():
+        pytest.skip("archive/vpid1 is not in this checkout")
+    out = tmp_path / "advice"
+    done = subprocess.run(
+        [sys.executable, str(root / "benchmarks" / "archive_advice.py"), "archive/vpid1",
+         "-o", str(out)], cwd=root, capture_output=True, text=True, timeout=600,
+        env={**os.environ, "MPLBACKEND": "Agg"})
+    assert done.returncode == 0, done.stderr[-2000:]
+    committed = root / "docs" / "study" / "vpid1-advice"
+    for name in ("advice.md", "ladder.csv", "scores.csv"):
+        assert (out / name).read_text(encoding="utf-8") == \
+            (committed / name).read_text(encoding="utf-8"), name
