@@ -366,8 +366,8 @@ def test_the_shipped_paper_optima_belong_to_this_codes_records(registry):
 
 
 def test_the_advice_section_is_written_from_an_archive_alone(made, tmp_path):
-    """benchmarks/archive_advice.py (the advice per family and budget of docs/study.md, to be
-    regenerated when archive/vpid1 is built) reads only the archive: per group the share
+    """benchmarks/archive_advice.py (the advice per family and budget of docs/study.md,
+    regenerated from archive/vpid1) reads only the archive: per group the share
     solved at each rung the runs reached, the score table with intervals, who is not
     separated from the leader (a paired bootstrap over problem and instance), the caveats
     with the archive's own numbers."""
