@@ -169,16 +169,17 @@ def test_a_hostile_name_is_shown_as_text(browser, site):
 
 
 @pytest.mark.slow
-def test_the_archive_report_is_browsable(browser, tmp_path):
-    """``vpid-bench-report archive/smoke -o DIR`` (about 1.5 min): an index that names every
+@pytest.mark.parametrize("suite", ["smoke", "vpid1"])
+def test_the_archive_report_is_browsable(browser, tmp_path, suite):
+    """``vpid-bench-report archive/<suite> -o DIR`` (1-2 min each): an index that names every
     archived problem and optimizer, each with its page, every page clean in the browser,
     every link and image resolving, only local files requested."""
     import gzip
 
     from vpid_bench.report.cli import main as report_main
 
-    archive = Path(__file__).parents[2] / "archive" / "smoke"
-    out = tmp_path / "smoke"
+    archive = Path(__file__).parents[2] / "archive" / suite
+    out = tmp_path / suite
     assert report_main([str(archive), "-o", str(out)]) == 0
     with gzip.open(archive / "records.jsonl.gz", "rt") as fh:
         records = [json.loads(line) for line in fh]
