@@ -97,9 +97,10 @@ def test_the_metric_leaders_that_search_worse_lose_to_the_best_searcher():
 @pytest.mark.parametrize("beaten", [(), ("random",), ("centre",)])
 def test_no_use_where_no_method_is_separated_from_random_search_or_the_box_centre(beaten):
     """smoke_lateral_mf's case: the tests separate no optimizer from random search (or the
-    box centre): no recommendation, and the verdict says why; only a bound above 100 % says
-    that no method identifies the model (smoke_lateral_mf has both), since a floor of a few
-    percent that random search also nearly reaches is identification all the same."""
+    box centre): no method is shown to identify the model from this record, and the verdict
+    says why, with the runs the tests had; only a bound above 100 % says flatly that no method
+    identifies it (smoke_lateral_mf has both): on vpid1_l_civic_sine fifteen optimizers reach
+    a 2.8 % floor that the tests at 15 runs do not separate from random search."""
     methods = [Method("de_lsq", 30, 36.0, "ab", _search(26, 1e-12, "a", 205.0)),
                Method("lsq", 30, 39.2, "ab", _search(28, 1e-12, "a", 100.0)), *REFS]
     pairs = [_pair("de_lsq", "lsq"), *_refs_beaten(["de_lsq", "lsq"], beaten)]
@@ -108,8 +109,9 @@ def test_no_use_where_no_method_is_separated_from_random_search_or_the_box_centr
     missing = {"random", "centre"} - set(beaten)
     assert set(v.not_beaten) == missing
     text = verdict_text(v)
-    assert " use " not in text and "no recommendation" in text
-    assert "no method identifies" not in text and "pairwise tests at 30 runs each" in text
+    assert " use " not in text
+    assert "no method is shown to identify this model from this record" in text
+    assert "pairwise tests at 30 runs each" in text
     assert all(f"({name})" in text.split(". The lowest")[0] for name in missing)
 
 

@@ -227,9 +227,9 @@ def _marked_verdict(v: Verdict) -> str:
                 f"{_ends(v, _name(v.pick))} over {v.runs} run(s)")
     elif v.kind == verdicts.NONE:
         # Only the bound says that nothing can identify the model; tests that separate no
-        # method from the references say only that none is shown to be worth choosing.
+        # method from the references say only that none is shown to (more runs may tell).
         lead = ("no method identifies this model from this record" if v.over_bound else
-                "no recommendation, since nothing here is shown to beat the references")
+                "no method is shown to identify this model from this record")
         text = (f"{head}{lead}{_unidentified(v)}. "
                 f"The lowest median {_name(v.metric)}: {_ends(v, _name(v.pick))}")
     else:
