@@ -168,23 +168,9 @@ def test_a_hostile_name_is_shown_as_text(browser, site):
 
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("suite", ["smoke", "vpid1"])
-def test_the_archive_report_is_browsable(browser, tmp_path, suite):
-    """``vpid-bench-report archive/<suite> -o DIR`` (1-2 min each): an index that names every
-    archived problem and optimizer, each with its page, every page clean in the browser,
-    every link and image resolving, only local files requested."""
-    import gzip
-
-    from vpid_bench.report.cli import main as report_main
-
-    archive = Path(__file__).parents[2] / "archive" / suite
-    out = tmp_path / suite
-    assert report_main([str(archive), "-o", str(out)]) == 0
-    with gzip.open(archive / "records.jsonl.gz", "rt") as fh:
-        records = [json.loads(line) for line in fh]
-    problems = {r["problem"]["name"] for r in records}
-    optimizers = {r["optimizer"]["name"] for r in records}
+def _check_site(browser, out: Path, problems: set[str], optimizers: set[str]) -> None:
+    """An index that names every problem and optimizer, each with its page; every page clean
+    in the browser, every link and image resolving, not blank; only local files requested."""
     index = (out / "index.html").read_text(encoding="utf-8")
     for name in problems | optimizers:
         assert f">{name}</a>" in index, name
@@ -202,3 +188,39 @@ def test_the_archive_report_is_browsable(browser, tmp_path, suite):
     assert all(u.startswith("file://") for u in _requests(browser))
     assert len(list(out.glob("problem-*.html"))) == len(problems)
     assert len(list(out.glob("optimizer-*.html"))) == len(optimizers)
+
+
+def test_the_readme_sweep_is_browsable(browser, tmp_path):
+    """Issue 34's Done-when, as a user runs it: ``vpid-bench -m optimizer=de1,de4,ga
+    problem.ps=20,30`` at its defaults (6 jobs x 30 runs, about 20 s) writes an index.html
+    that Chromium renders with every problem and optimizer, working links, no network
+    request and non-blank pages."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).parents[1] / "sweeps"))
+    from sweep_helpers import run_cli
+
+    done = run_cli(["-m", "optimizer=de1,de4,ga", "problem.ps=20,30", "progress=false",
+                    f"hydra.sweep.dir={tmp_path / 's'}"], tmp_path, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    out = tmp_path / "s" / "report"
+    assert f"html: {out / 'index.html'}" in done.stdout
+    _check_site(browser, out, {"vehicle"}, {"de1", "de4", "ga"})
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("suite", ["smoke", "vpid1"])
+def test_the_archive_report_is_browsable(browser, tmp_path, suite):
+    """``vpid-bench-report archive/<suite> -o DIR`` (1-2 min each): every archived problem
+    and optimizer on a clean, linked, local, non-blank site."""
+    import gzip
+
+    from vpid_bench.report.cli import main as report_main
+
+    archive = Path(__file__).parents[2] / "archive" / suite
+    out = tmp_path / suite
+    assert report_main([str(archive), "-o", str(out)]) == 0
+    with gzip.open(archive / "records.jsonl.gz", "rt") as fh:
+        records = [json.loads(line) for line in fh]
+    _check_site(browser, out, {r["problem"]["name"] for r in records},
+                {r["optimizer"]["name"] for r in records})
