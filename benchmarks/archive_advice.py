@@ -39,7 +39,7 @@ import numpy as np
 
 from vpid_bench.report import suite_scores as ss
 from vpid_bench.report.anytime import RunHits, auc
-from vpid_bench.report.archive import read_archive
+from vpid_bench.report.archive import ArchiveError, read_archive
 from vpid_bench.report.compute import compute
 
 RESAMPLES = 10_000
@@ -123,8 +123,9 @@ def _fmt(v: float) -> str:
     return "–" if not math.isfinite(v) else f"{v:.2f}"
 
 
-def _names(names: frozenset[str]) -> str:
-    return ", ".join(f"`{n}`" for n in sorted(names)) or "none"
+def _names(names: Sequence[str]) -> str:
+    """``"`a`, `b`"``, in the order given, or ``"none"``."""
+    return ", ".join(f"`{n}`" for n in names) or "none"
 
 
 def residual_users(names: Sequence[str]) -> frozenset[str]:
@@ -175,15 +176,12 @@ def markdown(folder: Path, manifest: dict[str, Any], ladder: list[list[Any]],
         leader, others = separated.get(group, ("", []))
         tied = [name for name, lo, _ in others if not (lo > 0)]
         lines += ["", f"Not separated from the leader `{leader}` (the 95 % paired interval "
-                  "of the difference in per-run AUC contains 0): "
-                  + (", ".join(f"`{t}`" for t in tied) if tied else "none") + "."]
+                  f"of the difference in per-run AUC contains 0): {_names(tied)}."]
         box_leader, box_others = black_box.get(group, ("", []))
         if box_leader and box_leader != leader:
             box_tied = [name for name, lo, _ in box_others if not (lo > 0)]
-            lines += ["", f"Without residuals (leaving out {_names(users)}): the "
-                      f"leader is `{box_leader}`; not separated from it: "
-                      + (", ".join(f"`{t}`" for t in box_tied) if box_tied else "none")
-                      + "."]
+            lines += ["", f"Without residuals (leaving out {_names(sorted(users))}): the "
+                      f"leader is `{box_leader}`; not separated from it: {_names(box_tied)}."]
         lines += [""]
     lines += [f"![ECDFs per family]({figure})", "", "Caveats:", ""]
     lines += [f"- {c}" for c in caveats] + [""]
@@ -234,7 +232,10 @@ def main() -> None:
                     help="folder for advice.md, the tables and the figure "
                          "(default: docs/study/<suite>-advice)")
     args = ap.parse_args()
-    arch = read_archive(args.archive)
+    try:
+        arch = read_archive(args.archive)
+    except ArchiveError as exc:  # one line, as vpid-bench-report says it
+        raise SystemExit(f"error: {exc}") from None
     out = args.out or Path(__file__).resolve().parents[1] / "docs" / "study" / \
         f"{arch.suite}-advice"
     out.mkdir(parents=True, exist_ok=True)

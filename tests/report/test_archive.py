@@ -447,3 +447,18 @@ def test_the_committed_vpid1_advice_is_what_the_archive_gives(tmp_path):
     for name in ("advice.md", "ladder.csv", "scores.csv"):
         assert (out / name).read_text(encoding="utf-8") == \
             (committed / name).read_text(encoding="utf-8"), name
+
+
+def test_the_advice_script_refuses_a_bad_archive_in_one_line(tmp_path):
+    """No archive there: one ``error:`` line naming the folder and the file, no traceback."""
+    import os
+    import subprocess
+
+    root = Path(__file__).resolve().parents[2]
+    done = subprocess.run(
+        [sys.executable, str(root / "benchmarks" / "archive_advice.py"), str(tmp_path / "none")],
+        capture_output=True, text=True, timeout=120, env={**os.environ, "MPLBACKEND": "Agg"})
+    assert done.returncode == 1 and "Traceback" not in done.stderr
+    assert done.stderr.strip().splitlines() == [
+        f"error: archive {tmp_path / 'none'}: manifest.json is not readable JSON "
+        "(FileNotFoundError)"]
