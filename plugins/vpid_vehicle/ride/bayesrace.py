@@ -61,6 +61,7 @@ from vpid_bench import (
 )
 
 from . import third_party
+from .dynamic_rows import DYNAMIC_ROWS
 
 #: The simulator's coefficients, ``deep_dynamics.yaml`` of the records' repository (its
 #: PARAMETERS and VEHICLE_SPECS): value, Min, Max. A test reads the shipped file against them.
@@ -113,8 +114,6 @@ class TrackRecord:
     """One record and the continuous-time model's simulation of it."""
 
     def __init__(self, record: third_party.SimulatorRecord, substeps: int) -> None:
-        from .kernel import DYNAMIC_ROWS  # here, not at import: the kernel loads numba
-
         self.record = record
         self.substeps = substeps
         self.full = np.array([SIMULATOR[k][0] for k in DYNAMIC_ROWS])
@@ -227,8 +226,6 @@ class BayesraceProblem(Problem):
         return out
 
     def describe(self) -> dict[str, Any]:
-        from .kernel import DYNAMIC_ROWS  # here, not at import: the kernel loads numba
-
         fixed = {k: SIMULATOR[k][0] for k in DYNAMIC_ROWS if k not in IDENTIFIED}
         return {
             "samples": int(self.measured.shape[1]),

@@ -291,11 +291,6 @@ def run_table_loops(T, w0, u, y):  # pragma: no cover - compiled
                     y[j, k, j0 + lane] = blk[st + (s + j) * LANES + lane]
 
 
-#: Rows of the parameter block of :func:`dynamic_single_track`: each axle's Magic Formula
-#: (``B, C, D, E`` and the horizontal and vertical shifts ``Sh``, ``Sv``), the drive
-#: (``Cm1, Cm2``), the resistance (``Cr0, Cr2``) and the yaw inertia.
-DYNAMIC_ROWS = ("Bf", "Cf", "Df", "Ef", "Shf", "Svf", "Br", "Cr", "Dr", "Er", "Shr", "Svr",
-                "Cm1", "Cm2", "Cr0", "Cr2", "Iz")
 
 
 @numba.njit(inline="always", error_model="numpy")
@@ -324,9 +319,10 @@ def _dynamic_rates(vx, vy, r, d, sd, cd, delta, P, i, m, lf, lr):  # pragma: no 
 @numba.njit(**_OPTS)
 def dynamic_single_track(P, drive, steer, dt, sub, m, lf, lr, x0, y):  # pragma: no cover
     """The dynamic single-track model (forward speed a state) for the candidates ``P``
-    (``(17, n)``, rows :data:`DYNAMIC_ROWS`), driven by the drive command ``drive`` and the
-    steer angle ``steer`` (rad), each ``(N - 1,)`` and held over its sampling interval (as a
-    zero-order hold), by classical RK4 at ``dt / sub``; from the state ``x0 = (vx, vy, r)``.
+    (``(17, n)``, rows :data:`.dynamic_rows.DYNAMIC_ROWS`), driven by the drive command
+    ``drive`` and the steer angle ``steer`` (rad), each ``(N - 1,)`` and held over its sampling
+    interval (as a zero-order hold), by classical RK4 at ``dt / sub``; from the state
+    ``x0 = (vx, vy, r)``.
     Writes ``y[k, :, i] = (vx, vy, r)`` at the ``N`` samples (m/s, m/s, rad/s)."""
     n, N = P.shape[1], y.shape[0]
     vx, vy, r = np.full(n, x0[0]), np.full(n, x0[1]), np.full(n, x0[2])
