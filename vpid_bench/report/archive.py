@@ -401,10 +401,24 @@ def _refusal(arch: Archive, problem: str, why: str) -> str:
             "(re-run the built-ins, docs/protocol.md, or set archive=false)")
 
 
+def _budgets_per_dim(records: Sequence[Mapping[str, Any]]) -> str:
+    """The budgets per parameter of ``records`` (``1,000·D``), for a note."""
+    per_dim = set()
+    for r in records:
+        true = (r.get("parameters") or {}).get("true")
+        dim = len(true) if isinstance(true, list) and true else 1
+        budget = r.get("budget")
+        if isinstance(budget, (int, float)) and math.isfinite(budget):
+            per_dim.add(round(budget / dim))
+    return ", ".join(f"{b:,}·D" for b in sorted(per_dim)) or "no stated budget"
+
+
 def _check_problem(arch: Archive, problem: str, mine: Sequence[Mapping[str, Any]]
-                   ) -> tuple[list[dict[str, Any]], str | None]:
+                   ) -> tuple[list[dict[str, Any]], str | None, str | None]:
     """The archived records that may stand beside ``mine`` (the report's records of
-    ``problem``), or a refusal line."""
+    ``problem``), a refusal line, and a note for when no archive holds runs with the
+    report's settings (another budget or config: not a refusal, since another archive of the
+    same problem may hold them)."""
     theirs = [r for r in arch.records if r["problem"]["name"] == problem]
     settings = {_setting(r) for r in mine}
     match = [r for r in theirs if _setting(r) in settings]
@@ -413,19 +427,20 @@ def _check_problem(arch: Archive, problem: str, mine: Sequence[Mapping[str, Any]
         their_plugin = ((theirs[0].get("problem") or {}).get("plugin") or {})
         if [mine_plugin.get(k) for k in ("distribution", "version")] != \
                 [their_plugin.get(k) for k in ("distribution", "version")]:
-            return [], _refusal(arch, problem, "its plugin version differs")
-        return [], (f"archive {arch.suite}: no archived runs of {problem} with these settings "
-                    "(the archive holds its defaults at the default budget)")
+            return [], _refusal(arch, problem, "its plugin version differs"), None
+        return [], None, (f"archive {arch.suite}: no archived runs of {problem} with these "
+                          f"settings (it holds the problem's defaults at "
+                          f"{_budgets_per_dim(theirs)})")
     by_instance = {(_setting(r), _instance(r)): r for r in mine if _instance(r)}
     for r in match:
         other = by_instance.get((_setting(r), _instance(r)))
         why = None if other is None else _same_instance(other, r)
         if why:
-            return [], _refusal(arch, problem, f"instance {_plain(_instance(r))}: {why}")
+            return [], _refusal(arch, problem, f"instance {_plain(_instance(r))}: {why}"), None
     names = {r["optimizer"]["name"] for r in mine}
     wanted = {key for key in by_instance}
     return [r for r in match if r["optimizer"]["name"] not in names
-            and (_setting(r), _instance(r)) in wanted], None
+            and (_setting(r), _instance(r)) in wanted], None, None
 
 
 def merge(records: Sequence[Mapping[str, Any]], archives: Iterable[Archive]) -> Merged:
@@ -435,14 +450,20 @@ def merge(records: Sequence[Mapping[str, Any]], archives: Iterable[Archive]) -> 
     for r in records:
         if "_archive" not in r:
             by_problem.setdefault(r["problem"]["name"], []).append(r)
+    other_settings: dict[str, list[str]] = {}
+    matched: set[str] = set()
     for arch in archives:
         for problem in sorted(set(by_problem) & arch.problems):
             if not problem.isidentifier():  # a registered name is one; never print another
                 continue
-            added, refusal = _check_problem(arch, problem, by_problem[problem])
+            added, refusal, other = _check_problem(arch, problem, by_problem[problem])
             if refusal:
                 out.refused.append(refusal)
                 continue
+            if other:
+                other_settings.setdefault(problem, []).append(other)
+                continue
+            matched.add(problem)
             if not added:
                 continue
             out.records += added
@@ -453,6 +474,9 @@ def merge(records: Sequence[Mapping[str, Any]], archives: Iterable[Archive]) -> 
                             "report's instances, not run again"
                             + (f"; {arch.skipped} bad archive line(s) skipped: "
                                + first_reasons(arch.bad) if arch.bad else "") + ")")
+    for problem, notes in other_settings.items():
+        if problem not in matched:  # say so only when no archive holds these settings
+            out.refused += notes
     return out
 
 
