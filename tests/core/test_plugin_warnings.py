@@ -50,3 +50,20 @@ def test_warnings_from_plugin_code_are_one_line_per_group(caplog):
     assert "random on overflowing, runs 0-2" in lines[0]
     assert "RuntimeWarning: overflow encountered" in lines[0]
     assert "test_plugin_warnings.py" in lines[0]
+
+
+def test_the_warm_up_raises_no_raw_warning():
+    """The untimed warm-up run (compilation) meets the same warnings as the runs; they are
+    the runs' to report, so none leaves the warm-up (nevergrad's CMA once printed eight raw
+    lines of cma's InjectionWarning per job of the archive build)."""
+    from vpid_bench.job_runs import warm_up
+
+    job = Job(JobSpec(runs=3, progress=False, report=False), "overflowing", Overflowing,
+              ProblemConfig(ps=4, iterations=5), "random", Random,
+              OptimizerParams(ps=4, iterations=5, budget=24), 24)
+    problem = ProblemCache().get(job)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        warm_up(job, problem, lockstep=True)
+        problem.evaluate(np.zeros((1, 2)))  # the same call outside the warm-up does warn
+    assert [str(w.message) for w in caught] == ["overflow encountered in multiply"]
