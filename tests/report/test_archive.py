@@ -427,23 +427,25 @@ def test_the_advice_names_the_black_box_leader_apart_from_the_residual_users():
     assert box_others[0][1] > 0  # separated: the interval of cmaes - de4 lies above 0
 
 
-def test_the_committed_vpid1_advice_is_what_the_archive_gives(tmp_path):
-    """docs/study/vpid1-advice (quoted by docs/study.md and the README) is regenerated from
-    archive/vpid1 alone, byte for byte: the advice and its tables come from the shipped
-    archive, and a rebuilt archive that changed them would fail here until the docs follow."""
+@pytest.mark.parametrize("suite", ["vpid1", "vpid1_10k"])
+def test_the_committed_vpid1_advice_is_what_the_archive_gives(tmp_path, suite):
+    """docs/study/<archive>-advice (quoted by docs/study.md and the README) is regenerated
+    from archive/vpid1 (and archive/vpid1_10k, its 10,000·D rung) alone, byte for byte: the
+    advice and its tables come from the shipped archive, and a rebuilt archive that changed
+    them would fail here until the docs follow."""
     import os
     import subprocess
 
     root = Path(__file__).resolve().parents[2]
-    if not (root / "archive" / "vpid1" / "manifest.json").is_file():
-        pytest.skip("archive/vpid1 is not in this checkout")
+    if not (root / "archive" / suite / "manifest.json").is_file():
+        pytest.skip(f"archive/{suite} is not in this checkout")
     out = tmp_path / "advice"
     done = subprocess.run(
-        [sys.executable, str(root / "benchmarks" / "archive_advice.py"), "archive/vpid1",
+        [sys.executable, str(root / "benchmarks" / "archive_advice.py"), f"archive/{suite}",
          "-o", str(out)], cwd=root, capture_output=True, text=True, timeout=600,
         env={**os.environ, "MPLBACKEND": "Agg"})
     assert done.returncode == 0, done.stderr[-2000:]
-    committed = root / "docs" / "study" / "vpid1-advice"
+    committed = root / "docs" / "study" / f"{suite}-advice"
     for name in ("advice.md", "ladder.csv", "scores.csv"):
         assert (out / name).read_text(encoding="utf-8") == \
             (committed / name).read_text(encoding="utf-8"), name
@@ -462,3 +464,30 @@ def test_the_advice_script_refuses_a_bad_archive_in_one_line(tmp_path):
     assert done.stderr.strip().splitlines() == [
         f"error: archive {tmp_path / 'none'}: manifest.json is not readable JSON "
         "(FileNotFoundError)"]
+
+
+def test_the_10000_d_rung_holds_every_four_parameter_member():
+    """archive/vpid1_10k is the archive's 10,000·D rung on the members whose evaluation is
+    cheap (the 4-parameter ones: quarter and longitudinal cars, the cheapest kernels): every
+    one of them × every built-in × 15 instances, each run to 10,000·D (40,000 evaluations)
+    with stop at the final target. Read from the manifests (archive/vpid1's budgets are
+    1,000·D, so they give each member's D); the reader checks a manifest against its files
+    (tests above)."""
+    import json
+
+    from vpid_bench.plugins import Registry
+
+    root = Path(__file__).resolve().parents[2]
+    if not (root / "archive" / "vpid1_10k" / "manifest.json").is_file():
+        pytest.skip("archive/vpid1_10k is not in this checkout")
+    full, rung = (json.loads((root / "archive" / name / "manifest.json").read_text())
+                  for name in ("vpid1", "vpid1_10k"))
+    members = {m for m, p in full["problems"].items() if p["budget"] == 4_000}
+    registry = Registry()
+    builtins = sorted(n for n in registry.optimizers
+                      if registry.provenance("optimizer", n).get("distribution") == "vpid-bench")
+    assert len(members) >= 8 and set(rung["problems"]) == members
+    assert rung["optimizers"] == builtins
+    assert rung["runs"] == len(members) * len(builtins) * 15
+    assert {p["budget"] for p in rung["problems"].values()} == {40_000}
+    assert "target=1e-08" in rung["command"] and "budget_per_dim=10000" in rung["command"]
