@@ -145,6 +145,10 @@ def with_problem_results(job: Job, problem: Problem, outcome: RunOutcome) -> Run
     return dataclasses.replace(outcome, outcome=error)
 
 
+#: The most of a plugin warning's text quoted in the log line of its group (characters).
+WARNING_CHARS = 160
+
+
 def _say_warnings(job: Job, group: Sequence[int], caught: Sequence[warnings.WarningMessage]
                   ) -> None:
     """One log line for the warnings plugin code raised in a group of runs (numpy's overflow
@@ -153,9 +157,11 @@ def _say_warnings(job: Job, group: Sequence[int], caught: Sequence[warnings.Warn
         return
     first = caught[0]
     runs = f"run {group[0]}" if len(group) == 1 else f"runs {group[0]}-{group[-1]}"
+    text = " ".join(str(first.message).split())  # one line (cma's advice runs to six)
+    text = text if len(text) <= WARNING_CHARS else text[:WARNING_CHARS - 3] + "..."
     log.warning("%s on %s, %s: %d warning(s) from plugin code (first: %s: %s, %s:%d); the "
                 "runs are recorded", job.optimizer_name, job.problem_name, runs, len(caught),
-                first.category.__name__, first.message, Path(first.filename).name, first.lineno)
+                first.category.__name__, text, Path(first.filename).name, first.lineno)
 
 
 def _intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None:

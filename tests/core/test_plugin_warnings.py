@@ -67,3 +67,31 @@ def test_the_warm_up_raises_no_raw_warning():
         warm_up(job, problem, lockstep=True)
         problem.evaluate(np.zeros((1, 2)))  # the same call outside the warm-up does warn
     assert [str(w.message) for w in caught] == ["overflow encountered in multiply"]
+
+
+class Quiet(Overflowing):
+    def evaluate(self, X: np.ndarray) -> np.ndarray:
+        return np.sum(X**2, axis=1)
+
+
+class Chatty(Random):
+    def tell(self, X: np.ndarray, f: np.ndarray) -> None:
+        warnings.warn("first line\n    second line, indented\n" + "x" * 400, UserWarning,
+                      stacklevel=1)
+
+
+def test_a_long_warning_is_quoted_on_one_short_line(caplog):
+    """cma's InjectionWarning is six indented lines: its group's log line quotes it on one
+    line, cut to ``WARNING_CHARS``."""
+    from vpid_bench.job_runs import WARNING_CHARS
+
+    job = Job(JobSpec(runs=2, progress=False, report=False), "quiet", Quiet,
+              ProblemConfig(ps=4, iterations=5), "chatty", Chatty,
+              OptimizerParams(ps=4, iterations=5, budget=8), 8)
+    problem = ProblemCache().get(job)
+    with caplog.at_level(logging.WARNING, logger="vpid_bench.job_runs"):
+        list(run_outcomes(job, problem, [0, 1], lockstep=True))
+    (line,) = [r.getMessage() for r in caplog.records if "from plugin code" in r.getMessage()]
+    assert "\n" not in line
+    assert "UserWarning: first line second line, indented xxx" in line
+    assert "x" * (WARNING_CHARS - 3) not in line and "...," in line
