@@ -209,7 +209,7 @@ def test_the_readme_sweep_is_browsable(browser, tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("suite", ["smoke", "vpid1"])
+@pytest.mark.parametrize("suite", ["smoke", "vpid1", "vpid1_10k"])
 def test_the_archive_report_is_browsable(browser, tmp_path, suite):
     """``vpid-bench-report archive/<suite> -o DIR`` (1-2 min each): every archived problem
     and optimizer on a clean, linked, local, non-blank site."""
