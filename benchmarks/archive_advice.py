@@ -39,7 +39,7 @@ import numpy as np
 
 from vpid_bench.report import suite_scores as ss
 from vpid_bench.report.anytime import RunHits, auc
-from vpid_bench.report.archive import ArchiveError, read_archive
+from vpid_bench.report.archive import ArchiveError, budgets_per_dim, read_archive
 from vpid_bench.report.compute import compute
 
 RESAMPLES = 10_000
@@ -191,24 +191,23 @@ def markdown(folder: Path, manifest: dict[str, Any], ladder: list[list[Any]],
 def caveats(manifest: dict[str, Any], records: list[dict[str, Any]]) -> list[str]:
     """The protocol's caveats, with the archive's own numbers."""
     per_cell: dict[tuple[str, str], int] = {}
-    objectives, per_dim, stops = set(), set(), 0
+    objectives, stops = set(), 0
     for r in records:
         key = (r["problem"]["name"], r["optimizer"]["name"])
         per_cell[key] = per_cell.get(key, 0) + 1
         cfg = r["problem"].get("config") or {}
         objectives.add(str(cfg.get("objective", "the problem's own")))
-        dim = len((r.get("parameters") or {}).get("names") or []) or 1
-        per_dim.add(round(float(r.get("budget") or 0) / dim))
         stops += (r.get("result") or {}).get("stopped_by") == "target"
     n = sorted(set(per_cell.values()))
     return [
         f"{'-'.join(map(str, n[:1] + n[-1:] if len(n) > 1 else n))} instance(s) per problem and "
         "optimizer (truth, road and noise drawn per instance, shared by every optimizer): a "
         "small sample; the intervals say how small.",
-        f"Budgets: {', '.join(f'{b:,}·D' for b in sorted(per_dim))} per run; the rungs are read "
-        "off the same runs, so a rung says how far each run had got by then, not what a run "
-        "given that budget would have done (a method that adapts to its budget, such as the "
-        "paper's DE with a fixed number of generations, is not re-run at each rung).",
+        f"Budgets: {', '.join(f'{b:,}·D' for b in budgets_per_dim(records))} per run; the "
+        "rungs are read off the same runs, so a rung says how far each run had got by then, "
+        "not what a run given that budget would have done (a method that adapts to its "
+        "budget, such as the paper's DE with a fixed number of generations, is not re-run "
+        "at each rung).",
         f"{stops} of {len(records)} runs stopped at the final target (`target=`, "
         "docs/protocol.md): their fixed-target results are those of the whole run; their "
         "fixed-budget columns are those at the stop.",

@@ -14,7 +14,7 @@ def _record(optimizer: str, budget: int, instance: str = "i0") -> dict:
     return {"problem": {"name": "vpid1_q_golden_hump", "config": {"seed": 1},
                         "plugin": {"distribution": "vpid-bench", "version": "1"},
                         "info": {"f_at_true": 0.5}},
-            "parameters": {"true": [1.0, 2.0, 3.0, 4.0]},
+            "parameters": {"names": ["ms", "mu", "ks", "cs"], "true": [1.0, 2.0, 3.0, 4.0]},
             "instance": {"id": instance}, "budget": budget,
             "optimizer": {"name": optimizer}}
 

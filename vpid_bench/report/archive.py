@@ -401,16 +401,21 @@ def _refusal(arch: Archive, problem: str, why: str) -> str:
             "(re-run the built-ins, docs/protocol.md, or set archive=false)")
 
 
-def _budgets_per_dim(records: Sequence[Mapping[str, Any]]) -> str:
-    """The budgets per parameter of ``records`` (``1,000·D``), for a note."""
+def budgets_per_dim(records: Iterable[Mapping[str, Any]]) -> list[int]:
+    """The distinct budgets per parameter of ``records`` (1,000 for 4,000 evaluations on four
+    parameters; the dimension is the length of ``parameters.names``), sorted."""
     per_dim = set()
     for r in records:
-        true = (r.get("parameters") or {}).get("true")
-        dim = len(true) if isinstance(true, list) and true else 1
+        dim = len((r.get("parameters") or {}).get("names") or ()) or 1
         budget = r.get("budget")
         if isinstance(budget, (int, float)) and math.isfinite(budget):
             per_dim.add(round(budget / dim))
-    return ", ".join(f"{b:,}·D" for b in sorted(per_dim)) or "no stated budget"
+    return sorted(per_dim)
+
+
+def _budgets_text(records: Sequence[Mapping[str, Any]]) -> str:
+    """The budgets per parameter of ``records`` (``1,000·D``), for a note."""
+    return ", ".join(f"{b:,}·D" for b in budgets_per_dim(records)) or "no stated budget"
 
 
 def _check_problem(arch: Archive, problem: str, mine: Sequence[Mapping[str, Any]]
@@ -430,7 +435,7 @@ def _check_problem(arch: Archive, problem: str, mine: Sequence[Mapping[str, Any]
             return [], _refusal(arch, problem, "its plugin version differs"), None
         return [], None, (f"archive {arch.suite}: no archived runs of {problem} with these "
                           f"settings (it holds the problem's defaults at "
-                          f"{_budgets_per_dim(theirs)})")
+                          f"{_budgets_text(theirs)})")
     by_instance = {(_setting(r), _instance(r)): r for r in mine if _instance(r)}
     for r in match:
         other = by_instance.get((_setting(r), _instance(r)))
