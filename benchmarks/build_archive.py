@@ -41,6 +41,7 @@ import sys
 import time
 from pathlib import Path
 
+from vpid_bench.analysis.job import SHARED_DIR
 from vpid_bench.plugins import Registry
 from vpid_bench.report.archive import ARCHIVE_DIR_ENV
 from vpid_bench.report.load import load_records
@@ -95,18 +96,20 @@ def clean(folder: Path, exit_ok: bool) -> bool:
 
 
 def seed_optima(certify: Path, runs_dir: Path) -> None:
-    """Copy the certify sweep's optimum files into the runs sweep's ``optima/`` folder (only
-    files it does not have; the same file names, since they are keyed by the record's data,
-    not by the optimizer or the budget), so its jobs start from them instead of polishing
-    each truth again."""
-    source = certify / "optima"
-    if not source.is_dir():
-        return
-    target = runs_dir / "optima"
-    target.mkdir(parents=True, exist_ok=True)
-    for f in sorted(source.glob("*.json")):
-        if not (target / f.name).exists():
-            shutil.copyfile(f, target / f.name)
+    """Copy the certify sweep's optimum files and per-problem files (bounds, floors per
+    estimator) into the runs sweep's ``optima/`` folder (only files it does not have; the
+    same file names, since they are keyed by the record's data and the runs, not by the
+    optimizer or the budget), so its jobs start from them instead of polishing each truth
+    and each floor again."""
+    for sub in (Path("."), Path(SHARED_DIR)):
+        source = certify / "optima" / sub
+        if not source.is_dir():
+            continue
+        target = runs_dir / "optima" / sub
+        target.mkdir(parents=True, exist_ok=True)
+        for f in sorted(source.glob("*.json")):
+            if f.is_file() and not f.is_symlink() and not (target / f.name).exists():
+                shutil.copyfile(f, target / f.name)
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:

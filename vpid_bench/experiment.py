@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from . import records as rec
-from .analysis.job import analyse_job, job_score
+from .analysis.job import analyse_job, job_score, polish_share
 from .artifacts import best_of, write_best_signals
 from .build import ProblemCache
 from .errors import PluginError, VpidBenchError
@@ -45,7 +45,7 @@ from .facts import ProblemFacts, problem_facts
 from .job_runs import RunOutcome, joins_lockstep, now_utc, run_outcomes, warm_up
 from .machine import available_cores, one_blas_thread
 from .plugins import Registry
-from .problem import kept_instance
+from .problem import kept_instance, offers_residuals
 from .runner import RunTimeoutError, time_limit
 from .spec import Job, parse_job
 from .targets import with_stops
@@ -261,9 +261,15 @@ def _write_artifacts(job: Job, problem: Any, job_dir: Path) -> list[Any]:
 
 
 def _analyse(job: Job, problem: Any, job_dir: Path, optima_dir: Path,
-             records: list[dict[str, Any]]) -> dict[int, float]:
+             records: list[dict[str, Any]], polished: Any) -> dict[int, float]:
     with time_limit(analysis_limit_s(job)), one_blas_thread():
-        return analyse_job(job, problem, job_dir, optima_dir, records)
+        return analyse_job(job, problem, job_dir, optima_dir, records, polished)
+
+
+def _polish_share(job: Job, problem: Any, job_dir: Path, optima_dir: Path,
+                  records: list[dict[str, Any]], indices: list[int] | None) -> Any:
+    with time_limit(analysis_limit_s(job)), one_blas_thread():
+        return polish_share(job, problem, job_dir, optima_dir, records, indices)
 
 
 def _signals(job: Job, problem: Any, job_dir: Path, index: int, x: Any,
@@ -321,9 +327,10 @@ def _run_job(job: Job, job_dir: Path, registry: Registry | None, calls: Any,
         _run_missing(job, calls, facts, job_dir, _job_key(job, registry, facts), provenance,
                      summary, pool, failure)
     records = _read_records(summary.record_paths)  # once, for all that follows
+    optima_dir = Path(optima_dir or job_dir / "optima")
+    polished = _polish_at_once(job, pool, facts, job_dir, optima_dir, records)
     gaps = _after_runs(job, calls, "the optimum / identifiability analysis", _analyse, job_dir,
-                       Path(optima_dir or job_dir / "optima"), records,
-                       what="its gaps to the optimum are not",
+                       optima_dir, records, polished, what="its gaps to the optimum are not",
                        limit=_limit(analysis_limit_s(job))) or {}
     summary.score = job_score(gaps, records)
     summary.wall_time_s = time.perf_counter() - start
@@ -343,12 +350,52 @@ def _after_runs(job: Job, calls: Any, name: str, fn: Any, *args: Any, what: str,
     try:
         return calls.call(job, fn, *args, what=name, limit=limit)
     except Exception as exc:  # noqa: BLE001 - the runs are recorded; say what failed
-        kind = getattr(exc, "remote_type", type(exc).__name__)
-        text = " ".join(str(exc).split())[:300]
-        log.warning("%s failed: %s: %s", name, kind, text)
-        print(f"warning: {job.optimizer_name} on {job.problem_name}: {name} failed ({kind}: "
-              f"{text}); the runs are recorded, {what}", file=sys.stderr, flush=True)
+        _warn_failed(job, name, exc, what)
         return None
+
+
+def _warn_failed(job: Job, name: str, exc: BaseException, what: str) -> None:
+    """One warning line (and a log record): ``name`` failed with ``exc``; ``what`` is
+    missing because of it."""
+    kind = getattr(exc, "remote_type", type(exc).__name__)
+    text = " ".join(str(exc).split())[:300]
+    log.warning("%s failed: %s: %s", name, kind, text)
+    print(f"warning: {job.optimizer_name} on {job.problem_name}: {name} failed ({kind}: "
+          f"{text}); the runs are recorded, {what}", file=sys.stderr, flush=True)
+
+
+def _polish_at_once(job: Job, pool: Workers | None, facts: ProblemFacts, job_dir: Path,
+                    optima_dir: Path, records: list[dict[str, Any]]
+                    ) -> dict[str | None, dict[str, Any]] | None:
+    """The job's optimum polishes (each instance's, and the per-problem files') shared out
+    to the job's workers at once (:func:`~vpid_bench.analysis.job.polish_share`, one task per
+    instance): the instance optima by instance id. ``None`` where the analysis polishes
+    alone: in this process, on one worker, or for a problem without residuals. They were
+    a quarter of the vpid1 build's wall time in one worker while the other waited."""
+    if pool is None or not offers_residuals(job.problem_cls):
+        return None
+    groups: dict[str | None, list[int]] = {}
+    for i in range(job.spec.runs):
+        groups.setdefault(facts.instance(i).id, []).append(i)
+    workers = min(job.spec.workers or pool.size, pool.cap, len(groups) + 1)
+    if workers < 2:
+        return None
+    tasks = [(_polish_share, (job_dir, optima_dir, [], None))]
+    tasks += [(_polish_share, (job_dir, optima_dir,
+                               [r for r in records if r.get("run_index") in indices], indices))
+              for indices in groups.values()]
+    polished: dict[str | None, dict[str, Any]] = {}
+    name = "the optimum / identifiability analysis"
+    results = pool.calls(job, tasks, what=name, workers=workers,
+                         limit=_limit(analysis_limit_s(job)))
+    for value, error in results:
+        if error is None and isinstance(value, dict):
+            polished.update(value)
+    errors = [error for _, error in results if error is not None]
+    if errors:  # one line for all: a fault in the problem's residuals fails every task
+        _warn_failed(job, name, errors[0], f"its gaps to the optimum are not where it failed "
+                     f"({len(errors)} of its {len(tasks)} tasks)")
+    return polished
 
 
 #: Where records made under another run id (another plugin version, data file or setting)

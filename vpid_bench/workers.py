@@ -194,6 +194,16 @@ class _Busy:
     phase: str | None = None
 
 
+@dataclasses.dataclass
+class _Call:
+    """A call (:meth:`Workers.calls`) a worker is busy with: the task's place in the list,
+    when it is killed (``None``: never), and whether the worker said its problem is built."""
+    index: int
+    worker: _Worker
+    deadline: float | None
+    built: bool = False
+
+
 class Workers:
     """A supervised set of worker processes, reused by every job given to it (see module).
     ``size``: how many run a job's runs at once unless the job's ``workers`` key says."""
@@ -359,51 +369,86 @@ class Workers:
         or :class:`WorkerDiedError` / :class:`WorkerKilledError` naming ``what`` when it
         ended its worker or did not return. :data:`START_S` to build the problem, then
         ``limit`` seconds (``None``: no limit)."""
+        [(value, error)] = self.calls(job, [(fn, args)], what=what, limit=limit, workers=1)
+        if error is not None:
+            raise error
+        return value
+
+    def calls(self, job: Job, tasks: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]],
+              what: str, limit: float | None, workers: int) -> list[tuple[Any, Any]]:
+        """Each ``(fn, args)`` of ``tasks`` run as :meth:`call` runs it, on up to ``workers``
+        workers at once (the job's optimum polishes, one task per instance, keep both cores
+        busy): ``(value, None)`` or ``(None, the exception)`` per task, in the order of
+        ``tasks``. Each task has its own ``limit``; a task that ends or hangs its worker
+        costs that task only. Interrupted, the busy workers are ended (their state is
+        unknown)."""
+        results: list[tuple[Any, Any]] = [(None, None)] * len(tasks)
+        pending = deque(range(len(tasks)))
+        busy: dict[Connection, _Call] = {}
+        try:
+            while pending or busy:
+                while pending and len(busy) < max(1, workers):
+                    index = pending.popleft()
+                    call = self._send_call(job, index, tasks[index], what, limit)
+                    if isinstance(call, BaseException):
+                        results[index] = (None, call)
+                    else:
+                        busy[call.worker.conn] = call
+                for call, outcome in self._call_events(busy, what, limit):
+                    del busy[call.worker.conn]
+                    results[call.index] = outcome
+        except BaseException:
+            for call in busy.values():  # interrupted: their state is unknown
+                self._end(call.worker)
+            raise
+        return results
+
+    def _send_call(self, job: Job, index: int,
+                   task: tuple[Callable[..., Any], tuple[Any, ...]], what: str,
+                   limit: float | None) -> _Call | BaseException:
         worker = self._take()
         try:
-            return self._call(worker, job, fn, args, what, limit)
-        except KeyboardInterrupt:  # its state is unknown
-            self._end(worker)
-            raise
-
-    def _call(self, worker: _Worker, job: Job, fn: Callable[..., Any], args: tuple[Any, ...],
-              what: str, limit: float | None) -> Any:
-        try:
-            worker.conn.send(("call", job, (fn, args)))
+            worker.conn.send(("call", job, task))
         except OSError:
-            raise WorkerDiedError(f"its worker process ended ({self._end(worker)}) before "
-                                  f"{what}") from None
-        built = False
-        deadline = None if limit is None else time.monotonic() + START_S
-        while True:
-            left = None if deadline is None else max(0.0, deadline - time.monotonic())
-            if not self._events([worker], left):
-                self._end(worker)
-                raise WorkerKilledError(
-                    f"{what} did not return within {limit:.0f} s (run_timeout_s + "
-                    f"{GRACE_S:.0f} s; blocked in C or ignoring SIGALRM): its worker process "
-                    "was killed" if built else f"building the problem took more than "
-                    f"{START_S:.0f} s: its worker process was killed")
+            return WorkerDiedError(f"its worker process ended ({self._end(worker)}) before "
+                                   f"{what}")
+        return _Call(index, worker, None if limit is None else time.monotonic() + START_S)
+
+    def _call_events(self, busy: dict[Connection, _Call], what: str, limit: float | None
+                     ) -> Iterator[tuple[_Call, tuple[Any, Any]]]:
+        """The calls among ``busy`` that ended, each with its ``(value, error)``, after one
+        wait (a call that announces its problem is built gets ``limit`` from then)."""
+        deadlines = [c.deadline for c in busy.values() if c.deadline is not None]
+        left = max(0.0, min(deadlines) - time.monotonic()) if deadlines else None
+        for worker in self._events([c.worker for c in busy.values()], left):
+            call = busy[worker.conn]
             msg, ended = self._receive(worker)
             if ended is not None:
-                raise WorkerDiedError(f"{what} ended its worker process ({ended})" if built
-                                      else f"its worker process ended ({ended}) while it "
-                                      "built the problem")
-            if _aside(msg):
+                yield call, (None, WorkerDiedError(
+                    f"{what} ended its worker process ({ended})" if call.built
+                    else f"its worker process ended ({ended}) while it built the problem"))
+            elif _aside(msg):
                 continue
-            if msg[0] == "phase":
-                built = True
-                deadline = None if limit is None else time.monotonic() + limit
+            elif msg[0] == "phase":
+                call.built = True
+                call.deadline = None if limit is None else time.monotonic() + limit
             elif msg[0] == "end":
                 _, error, value, strays = msg
                 self._release(worker, strays, what)
-                if error is not None:
-                    raise error
-                return value
+                yield call, (value, error)
             else:
                 self._end(worker)
-                raise WorkerDiedError(f"{what}: its worker process sent {msg[0]!r}, not an "
-                                      "answer; it was ended")
+                yield call, (None, WorkerDiedError(f"{what}: its worker process sent "
+                                                   f"{msg[0]!r}, not an answer; it was ended"))
+        now = time.monotonic()
+        for call in list(busy.values()):
+            if call.deadline is not None and now > call.deadline:
+                self._end(call.worker)
+                yield call, (None, WorkerKilledError(
+                    f"{what} did not return within {limit:.0f} s (run_timeout_s + "
+                    f"{GRACE_S:.0f} s; blocked in C or ignoring SIGALRM): its worker process "
+                    "was killed" if call.built else f"building the problem took more than "
+                    f"{START_S:.0f} s: its worker process was killed"))
 
     def probe(self, job: Job) -> None:
         """Build one optimizer of ``job`` in a worker; raise what its constructor raised."""

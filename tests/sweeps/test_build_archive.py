@@ -64,6 +64,12 @@ def test_the_build_certifies_runs_with_the_stop_and_packs(first):
         assert final["f_opt"] <= cert["f_opt"]
         assert all(r["result"]["f_best"] >= final["f_opt"] for r in records
                    if r["instance"]["id"] == cert["instance"])
+    # and from its per-problem files (bounds, floors per estimator), under the same keys
+    shared = sorted((tmp / "b" / "certify" / "optima" / "per-problem").glob("*.json"))
+    assert shared
+    for path in shared:
+        seeded = tmp / "b" / "runs" / "optima" / "per-problem" / path.name
+        assert seeded.read_bytes() == path.read_bytes()
 
 @pytest.mark.slow  # three builds: a few minutes on a shared machine
 def test_run_again_it_runs_nothing_and_packs_the_same_records(first, tmp_path):

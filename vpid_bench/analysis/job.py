@@ -4,7 +4,7 @@ optimum, and the job's search score."""
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +17,9 @@ from ..spec import Job
 
 
 def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
-                records: list[dict[str, Any]]) -> dict[int, float]:
+                records: list[dict[str, Any]],
+                polished: Mapping[str | None, dict[str, Any]] | None = None
+                ) -> dict[int, float]:
     """For a problem with residuals: each instance's optimum (``optima_dir/<key>.json``,
     shared by the jobs of a sweep; see :mod:`.optimum`), and with a known truth the
     Cramér–Rao bounds of its design (``job_dir/identifiability.json``: instance 0's, and
@@ -27,37 +29,81 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
     optimum where they run in reasonable time (``job_dir/profile.json``, :mod:`.estimates`).
     Any problem's fixed comparison rows go to ``job_dir/comparisons.json``. Returns each
     run's relative gap ``(f_best - f*) / f*`` to its instance's optimum (the absolute gap
-    where ``f* <= 0``)."""
+    where ``f* <= 0``).
+
+    ``polished``: the instance optima already made by :func:`polish_share` tasks (keyed by
+    instance id), with the per-problem files: nothing is polished here then, and an
+    instance without one (its task failed) has no gaps."""
     from .estimates import write_comparisons
 
     write_comparisons(problem, job_dir)  # first: cheap, and wanted whatever follows
     if not offers_residuals(type(problem)):
         return {}
-    return _residual_analysis(job, problem, job_dir, optima_dir, records)
+    return _residual_analysis(job, problem, job_dir, optima_dir, records, polished)
 
 
-def _residual_analysis(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
-                       records: list[dict[str, Any]]) -> dict[int, float]:
-    """:func:`analyse_job` for a problem with residuals."""
-    from .estimates import write_profile
-    from .optimum import update_instance_optimum
-
-    truth = problem.x_true is not None
-    if truth:
-        _per_problem_files(job, problem, job_dir, Path(optima_dir))
+def polish_share(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
+                 records: list[dict[str, Any]], indices: list[int] | None
+                 ) -> dict[str | None, dict[str, Any]]:
+    """One worker's share of a job's optimum polishes, so that a job's workers polish at
+    once: the optimum of each instance of runs ``indices`` (from ``records``, those runs'
+    records), keyed by instance id; or, with ``indices=None``, the per-problem files (the
+    bounds and the floors per estimator, which polish optima of their own) and ``{}``."""
+    if not offers_residuals(type(problem)):
+        return {}
+    if indices is None:
+        if problem.x_true is not None:
+            _per_problem_files(job, problem, job_dir, optima_dir)
+        return {}
     bests = _run_bests(records)
+    return {inst.instance_id(): optimum
+            for inst, runs, _ in _instances(problem, indices, bests)
+            if (optimum := _instance_optimum(job, inst, optima_dir, runs)) is not None}
+
+
+def _instances(problem: Problem, indices: Iterable[int],
+               bests: Mapping[int, list[tuple[np.ndarray, float]]]
+               ) -> list[tuple[Problem, list[tuple[np.ndarray, float]], list[int]]]:
+    """The instances of runs ``indices``, each once: ``(instance, its runs' bests, its run
+    indices)``."""
     by_instance: dict[str | None, tuple[Problem, list, list[int]]] = {}
-    for i in range(job.spec.runs):
+    for i in indices:
         inst = kept_instance(problem, i)
         entry = by_instance.setdefault(inst.instance_id(), (inst, [], []))
         entry[1].extend(bests.get(i, []))
         entry[2].append(i)
+    return list(by_instance.values())
+
+
+def _instance_optimum(job: Job, inst: Problem, optima_dir: Path,
+                      runs: list[tuple[np.ndarray, float]]) -> dict[str, Any] | None:
+    """The instance's optimum, polished as far as ``runs`` ask (:mod:`.optimum`); ``None``
+    without a truth and without a run to start from."""
+    from .optimum import update_instance_optimum
+
+    if inst.x_true is None and not runs:
+        return None  # nothing to start a polish from
+    return update_instance_optimum(inst, job.problem_settings(), optima_dir, runs)
+
+
+def _residual_analysis(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
+                       records: list[dict[str, Any]],
+                       polished: Mapping[str | None, dict[str, Any]] | None
+                       ) -> dict[int, float]:
+    """:func:`analyse_job` for a problem with residuals."""
+    from .estimates import write_profile
+
+    truth = problem.x_true is not None
+    if truth and polished is None:
+        _per_problem_files(job, problem, job_dir, Path(optima_dir))
+    bests = _run_bests(records)
     gaps: dict[int, float] = {}
     optima = []
-    for inst, runs, indices in by_instance.values():
-        if not truth and not runs:
-            continue  # nothing to start a polish from
-        optimum = update_instance_optimum(inst, job.problem_settings(), optima_dir, runs)
+    for inst, runs, indices in _instances(problem, range(job.spec.runs), bests):
+        optimum = (_instance_optimum(job, inst, Path(optima_dir), runs) if polished is None
+                   else polished.get(inst.instance_id()))
+        if optimum is None:
+            continue
         optima.append((inst, optimum))
         f_opt = optimum["f_opt"]
         for i in indices:
