@@ -78,6 +78,15 @@ def plugin_only() -> None:
     _Watch.installed, _Watch.signalled = True, False
 
 
+def seen() -> bool:
+    """Whether the command's handler has seen the user's Ctrl-C. An error raised since may be
+    its consequence: the ``KeyboardInterrupt`` can land inside a library's clean-up (an
+    omegaconf flag restored in a ``finally`` while Hydra composed a job's config raised
+    ``ConfigKeyError`` over it, and the command printed Hydra's traceback and exit 1), so
+    the command treats such an error as the interrupt."""
+    return _Watch.installed and _Watch.signalled
+
+
 def from_user() -> bool:
     """Whether a ``KeyboardInterrupt`` being handled now is the user's (or cannot be told)."""
     return not _Watch.installed or _Watch.signalled

@@ -4,6 +4,7 @@ status 130, no traceback (issue 24: 23 of 31 early tries printed a 35-54-line tr
 
 from __future__ import annotations
 
+import os
 import signal
 import subprocess
 import sys
@@ -115,3 +116,91 @@ def test_a_ctrl_c_during_a_plugins_import_is_not_swallowed(site, tmp_path):
     assert "Traceback" not in err
     assert err.strip().splitlines()[-1].startswith("interrupted:")
     assert not (tmp_path / "sweep").exists()
+
+
+# ---- a Ctrl-C that a library turns into its own error while Hydra composes a job ----
+
+
+def _entry_raising(exc, signalled, seen_env):
+    """A stand-in for Hydra's run: notes HYDRA_FULL_ERROR, then raises ``exc`` as if a Ctrl-C
+    (``signalled``) had landed inside omegaconf's clean-up while Hydra composed a config."""
+    from vpid_bench import interrupts
+
+    def entry(args, task):
+        seen_env.append(os.environ.get("HYDRA_FULL_ERROR"))
+        interrupts._Watch.installed, interrupts._Watch.signalled = True, signalled
+        raise exc
+
+    return entry
+
+
+@pytest.mark.parametrize("signalled", [True, False])
+def test_an_error_over_the_users_ctrl_c_is_the_interrupt_and_any_other_a_refusal(
+        monkeypatch, capsys, signalled):
+    """Hydra is made to raise its errors (HYDRA_FULL_ERROR, the user's value restored after),
+    so a ConfigKeyError raised over a Ctrl-C once pressed (it once printed Hydra's traceback
+    and exited 1) becomes the interrupt (status 130 at the command's top), and the same error
+    without a Ctrl-C stays one refusal line, status 2."""
+    from omegaconf.errors import ConfigKeyError
+
+    from vpid_bench import interrupts
+    from vpid_bench.shell import main as shell
+
+    monkeypatch.setattr(interrupts._Watch, "installed", False)
+    monkeypatch.setattr(interrupts._Watch, "signalled", False)
+    monkeypatch.setenv("HYDRA_FULL_ERROR", "0")
+    monkeypatch.delenv("VPID_BENCH_DEBUG", raising=False)
+    seen_env: list = []
+    monkeypatch.setattr(shell, "_hydra_entry", _entry_raising(
+        ConfigKeyError("Key 'sweep' is not in struct"), signalled, seen_env))
+    if signalled:
+        with pytest.raises(KeyboardInterrupt):
+            shell._run_hydra(["x=1"], None)
+    else:
+        with pytest.raises(SystemExit) as info:
+            shell._run_hydra(["x=1"], None)
+        assert info.value.code == 2
+        err = capsys.readouterr().err
+        assert err.startswith("error: ") and err.count("\n") == 1 and "Traceback" not in err
+    assert seen_env == ["1"] and os.environ["HYDRA_FULL_ERROR"] == "0"
+
+
+def test_an_error_over_the_users_ctrl_c_before_hydra_ends_the_command_with_130(
+        monkeypatch, capsys):
+    """The same in the command's own code (the pre-flight composes configs too): an error
+    raised once the user's Ctrl-C was seen ends the command as the Ctrl-C does."""
+    from vpid_bench import interrupts
+    from vpid_bench.shell import main as shell
+
+    def preflight_hit(argv):
+        interrupts._Watch.installed, interrupts._Watch.signalled = True, True
+        raise KeyError("a library's error over the Ctrl-C")
+
+    monkeypatch.setattr(interrupts._Watch, "installed", False)
+    monkeypatch.setattr(interrupts._Watch, "signalled", False)
+    monkeypatch.setattr(shell, "_main", preflight_hit)
+    with pytest.raises(SystemExit) as info:
+        shell.main(["-m", "optimizer=de1"])
+    assert info.value.code == 130
+    assert capsys.readouterr().err.startswith("interrupted:")
+
+
+def test_a_hydra_error_reaches_the_command_as_one_line(tmp_path, monkeypatch, capsys):
+    """Real Hydra, with an override its composition refuses (the pre-flight is not run
+    here): Hydra raises instead of printing (HYDRA_FULL_ERROR), the command says one line."""
+    from vpid_bench.plugins import Registry
+    from vpid_bench.shell import main as shell
+    from vpid_bench.shell.config_store import register_configs
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("HYDRA_FULL_ERROR", raising=False)
+    monkeypatch.delenv("VPID_BENCH_DEBUG", raising=False)
+    registry = Registry()
+    register_configs(registry)
+    with pytest.raises(SystemExit) as info:
+        shell._run_hydra(["no_such_key=1"], shell.JobTask(registry))
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and "no_such_key" in err, err
+    assert "Traceback" not in err and err.count("\n") == 1
+    assert "HYDRA_FULL_ERROR" not in os.environ

@@ -17,13 +17,14 @@ why); 2 refused before anything ran; 130 interrupted (every completed run is kep
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import sys
 import threading
 import time
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -308,12 +309,22 @@ def main(argv: Sequence[str] | None = None) -> None:
         from .. import interrupts
 
         interrupts.defer()
+    from ..interrupts import seen
+
     try:
         _main(argv)
     except KeyboardInterrupt:
-        print("interrupted: no job was started or every completed run is recorded; run the "
-              "same command with --resume to continue", file=sys.stderr)
-        sys.exit(130)
+        _interrupted()
+    except Exception:  # a library's error over the user's Ctrl-C (interrupts.seen) is it
+        if seen():
+            _interrupted()
+        raise
+
+
+def _interrupted() -> NoReturn:
+    print("interrupted: no job was started or every completed run is recorded; run the "
+          "same command with --resume to continue", file=sys.stderr)
+    sys.exit(130)
 
 
 def _main(argv: Sequence[str] | None) -> None:
@@ -427,20 +438,51 @@ def _thread_exception(args: Any) -> None:
 
 
 def _run_hydra(args: list[str], task: Any) -> None:
-    """Hydra's run; its own refusals (it prints them and exits 1) become one line, exit 2."""
-    from ..interrupts import raise_if_swallowed
+    """Hydra's run; its own refusals become one line, exit 2. Hydra is asked to raise its
+    errors (``HYDRA_FULL_ERROR``) instead of printing them with their traceback and exiting
+    1, so that an error a Ctrl-C caused inside Hydra's composition is told from a refusal
+    (:func:`~vpid_bench.interrupts.seen`) and ends the command as the Ctrl-C does."""
+    from ..interrupts import raise_if_swallowed, seen
 
     try:
-        _hydra_entry(args, task)
+        with _hydra_raises():
+            _hydra_entry(args, task)
         raise_if_swallowed()  # a Ctrl-C a C callback dropped during the last job
     except SystemExit as exc:
         if exc.code not in (0, None):
+            if seen():
+                raise KeyboardInterrupt from None
             sys.exit(2)
         raise
     except KeyboardInterrupt:
         raise
     except Exception as exc:  # noqa: BLE001 - a Hydra error outside any job
-        _refuse(exc)
+        if seen():
+            raise KeyboardInterrupt from None
+        _refuse(_with_cause(exc))
+
+
+@contextlib.contextmanager
+def _hydra_raises() -> Iterator[None]:
+    """``HYDRA_FULL_ERROR=1`` while Hydra runs (Hydra reads it when an error reaches it), the
+    user's own value restored after."""
+    saved = os.environ.get("HYDRA_FULL_ERROR")
+    os.environ["HYDRA_FULL_ERROR"] = "1"
+    try:
+        yield
+    finally:
+        if saved is None:
+            os.environ.pop("HYDRA_FULL_ERROR", None)
+        else:
+            os.environ["HYDRA_FULL_ERROR"] = saved
+
+
+def _with_cause(exc: Exception) -> Exception:
+    """A Hydra error with the omegaconf error under it in one message, as Hydra says them."""
+    cause = exc.__cause__
+    if cause is None or str(cause) in str(exc):
+        return exc
+    return VpidBenchError(f"{one_line(exc)}: {one_line(cause)}")
 
 
 if __name__ == "__main__":  # pragma: no cover
