@@ -92,7 +92,8 @@ def certified_optima(job: Job, problem: Problem, root: Path | None = None) -> di
     from .report.archive import load_all
     from .report.optima import OptimaIndex, matching_optima
 
-    archives, _ = load_all(root, {job.problem_name})  # an unusable archive certifies nothing
+    # an unusable archive certifies nothing; its runs are not needed
+    archives, _ = load_all(root, {job.problem_name}, optima_only=True)
     optima = [o for a in archives for o in a.optima if o.problem == job.problem_name]
     index = OptimaIndex(optima, [])
     names = [""] * problem.bounds.dim
