@@ -178,3 +178,23 @@ def test_14_the_preflight_builds_problems_in_a_supervised_worker(fault):
     job = dataclasses.replace(job, spec=dataclasses.replace(job.spec, budget_per_dim=PS))
     assert check_sized_jobs([job]) is None
     assert os.getcwd() == here
+
+
+def test_14_each_problem_is_checked_once_whatever_its_optimizers(monkeypatch, compose_config,
+                                                                 registry):
+    """The check depends on the problem, its runs, budget and target, not on the optimizer:
+    the 19 optimizers of an archive build's member were checked 19 times (323 checks, 37 s of
+    the build's pre-flight, one after another). Another budget is another check."""
+    from vpid_bench import targets
+    from vpid_bench.shell.preflight import check_sized_jobs
+    from vpid_bench.spec import parse_job
+
+    checked = []
+    monkeypatch.setattr(targets, "check_sized",
+                        lambda job, problem: checked.append((job.optimizer_name,
+                                                             job.spec.budget_per_dim)))
+    jobs = [parse_job(compose_config([f"problem={PROBLEM}", f"optimizer={opt}", "runs=2",
+                                      f"budget_per_dim={per}", "isolation=none"]), registry)
+            for per in (10, 20) for opt in ("random", "de1", "centre")]
+    assert check_sized_jobs(jobs) is not None  # checked here (isolation=none)
+    assert checked == [("random", 10), ("random", 20)]
