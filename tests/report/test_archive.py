@@ -154,18 +154,6 @@ def test_a_changed_records_file_is_refused(made, tmp_path):
     assert "does not match the SHA-256" in line
 
 
-def test_an_archive_ships_the_optima_without_the_sweeps_working_minima(made):
-    from vpid_bench.analysis.optimum import MINIMA
-
-    kept = [json.loads(p.read_text()) for p in (made["base"] / "optima").glob("*.json")]
-    assert kept and all(MINIMA in o for o in kept)
-    shipped = [json.loads(line) for line in
-               (made["archives"] / "smoke" / arch.OPTIMA).read_text().splitlines()]
-    assert shipped and not any(MINIMA in o for o in shipped)
-    assert {o["instance"]: o["f_opt"] for o in shipped} == {o["instance"]: o["f_opt"]
-                                                           for o in kept}
-
-
 def test_the_optima_alone_are_read_without_the_records_and_checked_the_same(
         made, tmp_path, monkeypatch):
     """What ``target=`` reads (``optima_only``): the same optima as the whole archive, no

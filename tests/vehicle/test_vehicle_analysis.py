@@ -127,40 +127,6 @@ def test_a_run_at_the_optimums_own_point_is_not_polished_again(tmp_path, monkeyp
     below = update_instance_optimum(inst, settings, tmp_path, [(near, out["f_opt"] * 0.999)])
     assert len(calls) == 2 and below["f_opt"] <= out["f_opt"] * 0.999
 
-def test_a_run_in_a_basin_polished_before_is_not_polished_again(tmp_path, monkeypatch):
-    """Runs that stall at the same local minimum (not the optimum) were each polished (185
-    polishes of the vpid1 build's Magic Formula member, none lowering an optimum): the
-    optimum file now keeps where polishes ended (``minima``), and a run best within
-    SAME_POINT of one of them, not below it, is not polished again. One farther away, or
-    below it, is. A malformed list (the file is untrusted) only costs polishes."""
-    from vpid_bench.analysis import optimum as opt_mod
-
-    inst = VehicleProblem(build_dataclass(VehicleConfig, {}, prefix="problem")).instance(2)
-    inst.name = "vehicle"
-    settings = {"ps": 20}
-    first = update_instance_optimum(inst, settings, tmp_path, [])  # the truth's polish
-    x_star, f_star = np.asarray(first["x_opt"]), first["f_opt"]
-    width = inst.bounds.width
-    x_m, f_m = x_star + 5 * opt_mod.SAME_POINT * width, f_star * 1.001  # another basin
-    calls = []
-    monkeypatch.setattr(opt_mod, "polish", lambda p, x, **k: calls.append(x) or (x_m, f_m))
-    stalled = x_m + 0.5 * opt_mod.SAME_POINT * width
-    out = update_instance_optimum(inst, settings, tmp_path, [(stalled, f_m * 1.0001)])
-    assert len(calls) == 1 and out["f_opt"] == f_star
-    assert out[opt_mod.MINIMA] == [{"x": list(x_m), "f": f_m}]
-    again = update_instance_optimum(inst, settings, tmp_path, [(stalled, f_m * 1.0001)])
-    assert len(calls) == 1 and again["starts"] == out["starts"]  # the same basin: no polish
-    farther = x_m + 2 * opt_mod.SAME_POINT * width
-    update_instance_optimum(inst, settings, tmp_path, [(farther, f_m * 1.0001),
-                                                       (stalled, f_m * 0.9999)])
-    assert len(calls) == 3
-    path = next(tmp_path.glob("*.json"))
-    for bad in ([{"x": [1.0], "f": 1.0}], [{"x": list(x_m), "f": "NaN"}], "minima", [None]):
-        path.write_text(json.dumps({**json.loads(path.read_text()), opt_mod.MINIMA: bad}))
-        update_instance_optimum(inst, settings, tmp_path, [(stalled, f_m * 1.0001)])
-    assert len(calls) == 3 + 4  # each malformed list ignored: the stalled run polished again
-
-
 def test_untrusted_optimum_files_are_skipped(sweep, tmp_path):
     root, jobs = sweep
     record = _records(jobs["de4"])[1]

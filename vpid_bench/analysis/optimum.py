@@ -14,9 +14,9 @@ worse than where it started.
 :func:`update_instance_optimum` keeps one JSON file per instance in an ``optima`` folder
 shared by the jobs of a sweep: the polish from the truth is done once, and again from the best
 vector of any run that ends below the optimum known so far or near it (within 1 %: it may sit
-in another basin, whose minimum is lower; not from a run best at the optimum's own point nor
-at a point an earlier polish ended at, :data:`SAME_POINT`, :data:`MINIMA`), keeping the lowest.
-So ``f*`` is never above the best of any run analysed with it.
+in another basin, whose minimum is lower; not from a run best at the optimum's own point,
+:data:`SAME_POINT`), keeping the lowest. So ``f*`` is never above the
+best of any run analysed with it.
 """
 
 from __future__ import annotations
@@ -50,14 +50,6 @@ SAME_POINT = 1e-3
 #: far below the relative gap of 1e-6 at which a run counts as having reached the optimum.
 INNER_TOL = 1e-10
 SCHEMA = "vpid-bench/instance-optimum/1"
-#: The key of an optimum file that lists where the sweep's polishes ended (``{"x", "f"}``, the
-#: last :data:`MAX_MINIMA`): a run best within :data:`SAME_POINT` of one of them, and not
-#: below it, sits in a basin polished before, and a polish from it ends there again. Without
-#: it, runs of the archive build that stall at the same local minimum were each polished
-#: (809 polishes in the vpid1 build's runs stage, 185 on the Magic Formula member, none of
-#: them lowering an optimum). Working state of a sweep: an archive leaves it out.
-MINIMA = "minima"
-MAX_MINIMA = 32
 #: An optimum file larger than this is not read (one of 1000 parameters is about 50 kB).
 MAX_BYTES = 1_000_000
 
@@ -270,17 +262,6 @@ def _locked(path: Path) -> Iterator[None]:
         os.close(fd)
 
 
-def _minima(known: Mapping[str, Any], dim: int) -> list[tuple[np.ndarray, float]]:
-    """The local minima a sweep's polishes ended at so far (:data:`MINIMA`), those that are
-    well formed (the file is untrusted: anything else is left out, and only costs polishes)."""
-    out = []
-    for m in known.get(MINIMA) or []:
-        x, f = (m.get("x"), m.get("f")) if isinstance(m, dict) else (None, None)
-        if _number(f) and isinstance(x, list) and len(x) == dim and all(map(_number, x)):
-            out.append((np.asarray(x, dtype=float), float(f)))
-    return out[-MAX_MINIMA:]
-
-
 def _update(problem: Problem, settings: Mapping[str, Any], path: Path, x_start: np.ndarray,
             run_bests: Iterable[tuple[np.ndarray, float]]) -> dict[str, Any]:
     known = read_optimum(path)
@@ -291,17 +272,15 @@ def _update(problem: Problem, settings: Mapping[str, Any], path: Path, x_start: 
         x_opt, f_opt = np.asarray(known["x_opt"], dtype=float), float(known["f_opt"])
     starts = int(known.get("starts", 1))
     changed = "schema" not in known
-    minima = _minima(known, problem.bounds.dim)
     width = problem.bounds.width
     for x, f in run_bests:
         x = np.asarray(x, dtype=float)
         if not (np.all(np.isfinite(x)) and math.isfinite(f)) or f > POLISH_NEAR * f_opt:
             continue
-        if any(f >= f_m and x.shape == x_m.shape and np.all(np.abs(x - x_m) <= SAME_POINT * width)
-               for x_m, f_m in [(x_opt, f_opt), *minima]):
-            continue  # in the optimum's basin or another polished before (see SAME_POINT)
+        if f >= f_opt and x.shape == x_opt.shape and np.all(
+                np.abs(x - x_opt) <= SAME_POINT * width):
+            continue  # in the optimum's basin (see SAME_POINT)
         x_new, f_new = polish(problem, x)
-        minima = [*minima, (x_new, f_new)][-MAX_MINIMA:]
         starts += 1
         changed = True
         if f < f_opt:  # the run's own value (a batched evaluation may differ by an ulp)
@@ -318,7 +297,6 @@ def _update(problem: Problem, settings: Mapping[str, Any], path: Path, x_start: 
         "starts": starts,
         "metrics": ({str(k): float(v) for k, v in (metrics(x_opt) or {}).items()}
                     if metrics is not None else {}),
-        MINIMA: [{"x": [float(v) for v in x_m], "f": float(f_m)} for x_m, f_m in minima],
     }
     if changed:
         write_json_atomic(path, out)

@@ -105,7 +105,7 @@ def pack(sweep_dir: Path, suite: str, out: Path, *, command: str, commit: str | 
     for o in sorted(optima, key=lambda o: (o.problem, str(o.instance), o.f_opt)):
         lowest.setdefault(optimum_instance(o), o)
     (out / OPTIMA).write_text("".join(
-        json.dumps(_shipped_optimum(o.path), sort_keys=True) + "\n"
+        json.dumps(loads_json(o.path.read_text(encoding="utf-8")), sort_keys=True) + "\n"
         for o in lowest.values()), encoding="utf-8")
     job_files = [] if optima_only else _copy_job_files(found, out)
     _write_summary(out / SUMMARY, [] if optima_only else data.rows)
@@ -153,16 +153,6 @@ def _copy_job_files(records: Sequence[Mapping[str, Any]], out: Path) -> list[str
             shutil.copyfile(job / f, out / JOBS / problem / f)
             names.append(f"{JOBS}/{problem}/{f}")
     return names
-
-
-def _shipped_optimum(path: Path) -> dict[str, Any]:
-    """An optimum file as an archive ships it: without the sweep's working list of the
-    local minima its polishes ended at (:data:`~vpid_bench.analysis.optimum.MINIMA`)."""
-    from ..analysis.optimum import MINIMA
-
-    data = loads_json(path.read_text(encoding="utf-8"))
-    data.pop(MINIMA, None)
-    return data
 
 
 SUMMARY_HEADERS = ["problem", "optimizer", "runs", "ok", "metric", "median_metric",
