@@ -9,8 +9,9 @@ beside the kernel-only time of the same evaluations, side by side in one run.
 1. **The build** of the slice: :func:`build_archive.build` (the command a user runs, every
    stage, pack included, into a fresh folder), its wall time per stage.
 2. **Kernel only** (the yardstick): per member, its kernel's microseconds per candidate on one
-   thread in batches of 20 random candidates (the median of 5 timings), measured here after
-   the build; times the evaluations the build's runs used on that member. On ``C`` cores the
+   thread in batches of 20 random candidates (the median of 5 timings), measured here before
+   and after the build (their mean; the machine's speed moves during a build); times the
+   evaluations the build's runs used on that member. On ``C`` cores the
    kernel alone would take that sum over ``C``. The ratio build / kernel-only is what the
    machinery around the evaluations costs (target: at most 2). The same ratio in CPU
    seconds (the build's process tree against the kernel's own CPU time) is printed too: on a
@@ -78,6 +79,18 @@ def kernel_us(name: str, seconds: float = 1.0) -> tuple[float, float]:
         wall.append((time.perf_counter() - t0) / reps / 20 * 1e6)
         cpu.append((time.process_time() - c0) / reps / 20 * 1e6)
     return statistics.median(wall), statistics.median(cpu)
+
+
+def yardstick(args: argparse.Namespace, seconds: float) -> dict[str, tuple[float, float]]:
+    """:func:`kernel_us` of every member the build will sweep, timed before it starts: the
+    machine's speed moves during a half-hour build (the same yardstick timed after three
+    builds gave 2,016, 1,852 and 1,738 s), so the ratio uses the mean of a timing before
+    and one after."""
+    from vpid_bench.plugins import Registry
+
+    names = (args.problems.split(",") if args.problems
+             else sorted(Registry().suites().get(args.suite, ())))
+    return {m: kernel_us(m, seconds) for m in names}
 
 
 def read_jobs(runs_dir: Path) -> list[dict[str, Any]]:
@@ -171,6 +184,7 @@ def main() -> None:
     args = parse_args(rest)
     if args.out is None:
         raise SystemExit("error: --out is required (a slice is never packed into archive/)")
+    before = yardstick(args, own.kernel_seconds)
     t0, c0 = time.perf_counter(), cpu_seconds()
     built = build(args)
     wall, cpu = time.perf_counter() - t0, cpu_seconds() - c0
@@ -178,7 +192,9 @@ def main() -> None:
         raise SystemExit("error: the build did not end clean")
     jobs = read_jobs(built.runs_dir)
     members = sorted({j["problem"] for j in jobs})
-    measured = {m: kernel_us(m, own.kernel_seconds) for m in members}
+    after = {m: kernel_us(m, own.kernel_seconds) for m in members}
+    measured = {m: tuple((a + b) / 2 for a, b in zip(after[m], before.get(m, after[m])))
+                for m in members}
     us = {m: w for m, (w, _) in measured.items()}
     cpu_us = {m: c for m, (_, c) in measured.items()}
     workers = available_cores()
@@ -190,7 +206,11 @@ def main() -> None:
           f"{sum(len(j['runs']) for j in jobs)} runs in {len(jobs)} jobs, "
           f"{sum(evals.values()):,} evaluations")
     print(f"kernel only, the same evaluations: {kernel_1:.1f} s on one core, "
-          f"{kernel_1 / workers:.1f} s on {workers} cores")
+          f"{kernel_1 / workers:.1f} s on {workers} cores (the mean of its timings before "
+          "and after the build; " + ", ".join(
+              f"{when} {sum(evals[m] * t[m][0] for m in members) * 1e-6:.1f} s"
+              for when, t in (("before", before), ("after", after)) if set(t) >= set(members))
+          + " on one core)")
     print(f"build / kernel only on {workers} cores: {wall / max(kernel_1 / workers, 1e-9):.2f}x"
           f" (the runs stage alone: {built.seconds['runs'] / max(kernel_1 / workers, 1e-9):.2f}x)")
     kernel_cpu = sum(evals[m] * cpu_us[m] for m in members) * 1e-6
