@@ -4,7 +4,8 @@ With ``isolation=process`` (the command's default) every call into plugin code r
 long-lived worker processes: the optimizer's (its constructor, ``ask``, ``tell``, ``close``)
 and the problem's (its constructor, evaluations, ``describe()`` and the other facts a record
 holds, :mod:`vpid_bench.facts`; ``metrics()``; the analysis after the runs and its optimum
-polish; the best run's signals), through :meth:`Workers.outcomes` (runs) and
+polish; the best run's signals), through :meth:`Workers.outcomes` (runs),
+:meth:`Workers.calls` (a job's optimum polishes, on every worker at once) and
 :meth:`Workers.call` (everything else). The sweep's own process never builds a problem: it
 hands out tasks, receives their outcomes and writes every record, job status and report. A
 worker is started once and reused by every job of the sweep (imports and compiled kernels are
