@@ -377,7 +377,7 @@ def _polish_at_once(job: Job, pool: Workers | None, facts: ProblemFacts, job_dir
     groups: dict[str | None, list[int]] = {}
     for i in range(job.spec.runs):
         groups.setdefault(facts.instance(i).id, []).append(i)
-    workers = min(job.spec.workers or pool.size, pool.cap, len(groups) + 1)
+    workers = pool.how_many(job.spec.workers or pool.size, len(groups) + 1)
     if workers < 2:
         return None
     tasks = [(_polish_share, (job_dir, optima_dir, [], None))]

@@ -215,7 +215,7 @@ class Workers:
         #: The most workers at once (:func:`worker_cap`) and why.
         self.cap, self._cap_why = worker_cap()
         self.size = min(size, self.cap)
-        self._said: set[tuple[int, int]] = set()
+        self._said: set[int] = set()
         self._ctx = get_context("spawn")
         self._idle: list[_Worker] = []
         self._all: list[_Worker] = []
@@ -252,10 +252,10 @@ class Workers:
     def how_many(self, requested: int, tasks: int) -> int:
         """How many workers run a job's ``tasks`` at once when ``requested`` (its ``workers``
         key, or the set's size): never more than its tasks nor than :attr:`cap`. When that is
-        fewer than requested because of the cap, one line says so (once per pair)."""
+        fewer than requested because of the cap, one line says so (once per requested value)."""
         count = max(1, min(requested, tasks, self.cap))
-        if requested > self.cap and (requested, count) not in self._said:
-            self._said.add((requested, count))
+        if requested > self.cap and requested not in self._said:  # the job's runs, polishes
+            self._said.add(requested)
             print(f"note: workers={requested}: at most {self.cap} worker processes on this "
                   f"machine ({self._cap_why}); a job also never starts more than it has "
                   f"runs to give them", file=sys.stderr, flush=True)
