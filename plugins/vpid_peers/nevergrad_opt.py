@@ -18,9 +18,10 @@
 * **Failures**: nevergrad is built on the first ``ask``, not in the constructor, so a method
   that fails (at construction, e.g. one that cannot run ``ps`` workers, or during the run)
   raises inside the run loop, and the job records that run as failed and goes on.
-* **Speed**: nevergrad's CMA (the default) re-checks its bounds at every candidate; the
-  optimizer built here skips the repeats (:mod:`vpid_peers.nevergrad_cma`: the same
-  candidates; 8 runs on ``vpid1_q_golden_hump``: 0.83 ms per evaluation instead of 1.41).
+* **Speed**: nevergrad's CMA (the default) re-checks its bounds at every candidate, and the
+  registry's ``CMA`` wraps the optimizer it selects; the optimizer built here skips the
+  repeats and asks the selected one directly (:mod:`vpid_peers.nevergrad_cma`: the same
+  candidates; ``benchmarks/bench_nevergrad_cma.py`` prints the time per candidate of each).
 * **Cost**: ``import nevergrad`` takes about 3 s; it happens when the parameters are checked
   (the registry is needed to check the name), never when the plugin is registered.
 """
@@ -35,7 +36,7 @@ import numpy as np
 
 from vpid_bench import Bounds, ConfigError, Optimizer, OptimizerParams
 
-from .nevergrad_cma import skip_repeated_bounds_check
+from .nevergrad_cma import driven, skip_repeated_bounds_check
 from .unit_box import to_physical
 
 #: The default method: CMA, the method NGOpt (nevergrad's own recommendation) picks at the
@@ -117,8 +118,9 @@ class NevergradOptimizer(Optimizer):
         parametrization = ng.p.Array(init=self._x0, lower=0.0, upper=1.0)
         parametrization.random_state = np.random.RandomState(self._seed)
         cls = ng.optimizers.registry[self.params.method]
-        return skip_repeated_bounds_check(cls(parametrization=parametrization, budget=self.budget,
-                                              num_workers=self.params.workers))
+        return driven(skip_repeated_bounds_check(cls(parametrization=parametrization,
+                                                     budget=self.budget,
+                                                     num_workers=self.params.workers)))
 
     def ask(self) -> np.ndarray:
         if self._ng is None:
