@@ -1,14 +1,15 @@
-"""nevergrad's CMA per candidate as it is, reusing its running strategy, and also asking the
-optimizer the registry's ``CMA`` selects directly (:mod:`vpid_peers.nevergrad_cma`: what
-``optimizer=nevergrad`` does), side by side in one run: what ``optimizer=nevergrad`` (default
-``CMA``, one candidate per ask) costs of its own on a cheap function in the unit cube.
+"""nevergrad's CMA per candidate as it is, reusing its running strategy, also asking the
+optimizer the registry's ``CMA`` selects directly (:mod:`vpid_peers.nevergrad_cma`), and
+replicated on cma (:mod:`vpid_peers.nevergrad_replica`: what ``optimizer=nevergrad`` runs),
+side by side in one run: what ``optimizer=nevergrad`` (default ``CMA``, one candidate per
+ask) costs of its own on a cheap function in the unit cube.
 
     .venv/bin/python benchmarks/bench_nevergrad_cma.py [--dim 4 9] [--evaluations 3000] [--repeat 3]
 
 Prints, per dimension, the median over ``--repeat`` timings of ask and tell per candidate
-(µs) for nevergrad as it is, with the reuse, and with the reuse driving the selected optimizer,
-the ratio of the first to the last, and whether the candidates were identical (they must be:
-neither changes the search).
+(µs) for nevergrad as it is, with the reuse, with the reuse driving the selected optimizer and
+replicated, the ratio of the first to the last, and whether the candidates were identical
+(they must be: none of them changes the search).
 """
 
 from __future__ import annotations
@@ -21,12 +22,14 @@ import warnings
 import numpy as np
 
 
-def timed(dim: int, evaluations: int, reuse: bool, seed: int,
-          direct: bool = False) -> tuple[float, np.ndarray]:
+def timed(dim: int, evaluations: int, reuse: bool, seed: int, direct: bool = False,
+          replica: bool = False) -> tuple[float, np.ndarray]:
     """µs per candidate of nevergrad's CMA on a sphere in [0, 1]^dim, and its candidates
-    (``direct``: asking the optimizer the registry's ``CMA`` selects, as the plugin does)."""
+    (``direct``: asking the optimizer the registry's ``CMA`` selects; ``replica``: that one
+    replicated on cma, as the plugin does)."""
     import nevergrad as ng
     from vpid_peers.nevergrad_cma import driven, skip_repeated_bounds_check
+    from vpid_peers.nevergrad_replica import replicated
 
     parametrization = ng.p.Array(init=np.full(dim, 0.3), lower=0.0, upper=1.0)
     parametrization.random_state = np.random.RandomState(seed)
@@ -36,6 +39,8 @@ def timed(dim: int, evaluations: int, reuse: bool, seed: int,
         skip_repeated_bounds_check(optimizer)
     if direct:
         optimizer = driven(optimizer)
+    if replica:
+        optimizer = replicated(optimizer)
     asked = np.empty((evaluations, dim))
     t0 = time.perf_counter()
     for i in range(evaluations):
@@ -54,21 +59,23 @@ def main(argv: list[str] | None = None) -> None:
     warnings.simplefilter("ignore")  # cma's and nevergrad's advice, once per candidate
     timed(2, 50, False, 0)  # imports
     print("| dim | nevergrad as it is (µs/candidate) | reusing the strategy | and asking the "
-          "selected optimizer (the plugin) | ratio | same candidates |")
-    print("| --- | --- | --- | --- | --- | --- |")
+          "selected optimizer | replicated on cma (the plugin) | ratio | same candidates |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    ways = [{"reuse": False}, {"reuse": True}, {"reuse": True, "direct": True},
+            {"reuse": True, "direct": True, "replica": True}]
     for dim in args.dim:
-        plain, reused, direct, same = [], [], [], True
+        times: list[list[float]] = [[] for _ in ways]
+        same = True
         for r in range(args.repeat):
-            us_plain, x_plain = timed(dim, args.evaluations, False, r)
-            us_reused, x_reused = timed(dim, args.evaluations, True, r)
-            us_direct, x_direct = timed(dim, args.evaluations, True, r, direct=True)
-            plain.append(us_plain)
-            reused.append(us_reused)
-            direct.append(us_direct)
-            same &= bool(np.array_equal(x_plain, x_reused) and np.array_equal(x_plain, x_direct))
-        a, b, c = (statistics.median(t) for t in (plain, reused, direct))
-        print(f"| {dim} | {a:.0f} | {b:.0f} | {c:.0f} | {a / c:.2f}x | "
-              f"{'yes' if same else 'NO'} |")
+            asked = []
+            for way, spent in zip(ways, times):
+                us, x = timed(dim, args.evaluations, seed=r, **way)
+                spent.append(us)
+                asked.append(x)
+            same &= all(np.array_equal(asked[0], x) for x in asked[1:])
+        medians = [statistics.median(t) for t in times]
+        print(f"| {dim} | " + " | ".join(f"{m:.0f}" for m in medians)
+              + f" | {medians[0] / medians[-1]:.1f}x | {'yes' if same else 'NO'} |")
 
 
 if __name__ == "__main__":

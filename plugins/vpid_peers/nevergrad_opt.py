@@ -37,6 +37,7 @@ import numpy as np
 from vpid_bench import Bounds, ConfigError, Optimizer, OptimizerParams
 
 from .nevergrad_cma import driven, skip_repeated_bounds_check
+from .nevergrad_replica import replicated
 from .unit_box import to_physical
 
 #: The default method: CMA, the method NGOpt (nevergrad's own recommendation) picks at the
@@ -118,9 +119,9 @@ class NevergradOptimizer(Optimizer):
         parametrization = ng.p.Array(init=self._x0, lower=0.0, upper=1.0)
         parametrization.random_state = np.random.RandomState(self._seed)
         cls = ng.optimizers.registry[self.params.method]
-        return driven(skip_repeated_bounds_check(cls(parametrization=parametrization,
-                                                     budget=self.budget,
-                                                     num_workers=self.params.workers)))
+        built = cls(parametrization=parametrization, budget=self.budget,
+                    num_workers=self.params.workers)
+        return replicated(driven(skip_repeated_bounds_check(built)))
 
     def ask(self) -> np.ndarray:
         if self._ng is None:
