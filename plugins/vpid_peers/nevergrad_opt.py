@@ -135,7 +135,7 @@ class NevergradOptimizer(Optimizer):
         if self._pending is None or len(X) != len(self._pending):
             raise ValueError("tell() must follow ask() with the whole population it returned")
         for candidate, value in zip(self._pending, np.asarray(f, dtype=float).reshape(-1)):
-            self._ng.tell(candidate, float(value))  # nevergrad clips inf (with a warning)
+            self._ng.tell(candidate, float(value))  # inf and nan are clipped at 5e20
         self._told += len(self._pending)
         self._pending = None
 
