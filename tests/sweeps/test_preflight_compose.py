@@ -1,5 +1,5 @@
 """The pre-flight composes a sweep over problems and optimizers of the shipped config once per
-problem and once per optimizer (``shell/preflight.py``: ``_Composer``), and gets exactly the
+problem and once per optimizer (``shell/compose.py``: ``Composer``), and gets exactly the
 jobs that composing every point gets; a user's own config is composed point by point. About
 10 s."""
 
@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from vpid_bench.shell import compose as composition
 from vpid_bench.shell import preflight
 from vpid_bench.shell.argv import SHIPPED_CONFIGS, ConfigSource
 from vpid_bench.shell.config_store import register_configs
@@ -23,13 +24,13 @@ def counted(monkeypatch, registry):
     """How many times Hydra composed a config."""
     register_configs(registry)
     calls = []
-    real = preflight._compose
+    real = composition._compose
 
-    def compose(overrides, hydra, source=preflight.SHIPPED):
+    def compose(overrides, hydra, source=composition.SHIPPED):
         calls.append(list(overrides))
         return real(overrides, hydra, source)
 
-    monkeypatch.setattr(preflight, "_compose", compose)
+    monkeypatch.setattr(composition, "_compose", compose)
     return calls
 
 
@@ -51,7 +52,7 @@ def test_each_problem_and_optimizer_composed_once_with_the_same_jobs(registry, c
     assert len(counted) == len(PROBLEMS) + len(OPTIMIZERS) - 1
     assert full is not None and "hydra" in full
     counted.clear()
-    monkeypatch.setattr(preflight._Composer, "_separable", lambda self, structural: False)
+    monkeypatch.setattr(composition.Composer, "_separable", lambda self, structural: False)
     every, _ = preflight.check_points(points, registry)
     assert len(counted) == len(PROBLEMS) * len(OPTIMIZERS)  # each point, whole
     assert jobs == every

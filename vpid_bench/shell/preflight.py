@@ -9,8 +9,10 @@ Any bad value anywhere stops the command with one line naming the key, the value
 allowed (exit 2), before any folder is written.
 
 Composition costs a fraction of a second, so points that differ only in plain ``key=value``
-settings share one composition per combination of config-group choices; their values are then
-set on a copy as Hydra would set them (struct mode: an unknown key is refused).
+settings share one composition per combination of config-group choices (and, for the shipped
+config, each problem and each optimizer is composed once: :class:`.compose.Composer`); their
+values are then set on a copy as Hydra would set them (struct mode: an unknown key is
+refused).
 
 The pre-flight also fixes the output folder: it resolves ``hydra.sweep.dir`` (or
 ``hydra.run.dir``) once and hands the concrete folder to Hydra, so the command knows where its
@@ -35,11 +37,9 @@ from ..plugins import Registry
 from ..problem import FILLED_PARAMS
 from ..spec import TOP_LEVEL_KEYS, Job, parse_job
 from .argv import CommandLine, ConfigSource
+from .compose import GROUPS, SHIPPED, Composer, hydra_error, initialize
 from .resume import check_reuse
 
-GROUPS = ("problem", "optimizer")
-#: The shipped config (no -cp, -cn, -cd).
-SHIPPED = ConfigSource()
 #: The most jobs one command may start (a typo in a range() should not plan a million).
 MAX_JOBS = 10_000
 #: The folders the command keeps in its output folder: the instance optima and the report.
@@ -250,91 +250,6 @@ def _unknown_key(cfg: Any, key: str, value: Any) -> ConfigError:
     return ConfigError(key, value, "a key of the config")
 
 
-def _yaml_error(exc: BaseException) -> ConfigError | None:
-    """A config file that is not YAML, as one line naming the file and the place (None:
-    ``exc`` is not such an error)."""
-    import yaml
-
-    cause: BaseException | None = exc
-    while cause is not None and not isinstance(cause, yaml.MarkedYAMLError):
-        cause = cause.__cause__ or cause.__context__
-    if cause is None:
-        return None
-    mark = cause.problem_mark or cause.context_mark
-    where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-    return ConfigError("config file", getattr(mark, "name", "?"),
-                       f"YAML ({cause.problem or cause.context}{where})")
-
-
-def _hydra_error(exc: BaseException) -> ConfigError:
-    """A Hydra or OmegaConf composition error as one ConfigError line (the innermost cause
-    that names a key is used)."""
-    from hydra.errors import MissingConfigException
-
-    if isinstance(exc, MissingConfigException):
-        missing = str(getattr(exc, "missing_cfg_file", "") or "")
-        group, _, name = missing.rpartition("/")
-        options = sorted(getattr(exc, "options", None) or [])
-        if "Cannot find primary config" in str(exc):
-            return ConfigError("--config-name", missing, "the name of a .yaml file (without "
-                               ".yaml) in the -cp or -cd folder")
-        if group and options:
-            return ConfigError(group, name, "one of " + ", ".join(options))
-    yaml_error = _yaml_error(exc)
-    if yaml_error is not None:
-        return yaml_error
-    cause: BaseException | None = exc
-    while cause is not None:
-        key = getattr(cause, "full_key", None)
-        if key:
-            msg = " ".join(str(getattr(cause, "msg", cause)).split()).split(" full_key:")[0]
-            return ConfigError(str(key), getattr(cause, "value", None), msg)
-        cause = cause.__cause__ or cause.__context__
-    text = " ".join(str(exc).split())
-    if text.startswith("Could not override '"):
-        key = text.split("'")[1]
-        return ConfigError(key, "", "a key of the selected config (this one does not exist "
-                           "there; Hydra's own settings: vpid-bench --hydra-help)")
-    return ConfigError("override", "", text)
-
-
-def _compose(overrides: list[str], hydra: bool, source: ConfigSource = SHIPPED) -> Any:
-    from hydra import compose
-    from hydra.errors import HydraException
-    from omegaconf.errors import OmegaConfBaseException
-
-    overrides = [*overrides, *source.search_override()]  # as on Hydra's command line
-    try:
-        return compose(config_name=source.name or "config", overrides=overrides,
-                       return_hydra_config=hydra)
-    except (HydraException, OmegaConfBaseException) as exc:
-        raise _hydra_error(exc) from None
-
-
-def _initialize(source: ConfigSource) -> Any:
-    """Hydra's compose API set up as ``hydra.main`` sets itself up for this command: the
-    shipped ``pkg://vpid_bench.conf`` or the folder (or package) of the user's config."""
-    from hydra import initialize_config_dir, initialize_config_module
-
-    if source.path is None:
-        return initialize_config_module(version_base="1.3", config_module="vpid_bench.conf")
-    if source.path.startswith("pkg://"):
-        return initialize_config_module(version_base="1.3",
-                                        config_module=source.path[len("pkg://"):])
-    return initialize_config_dir(version_base="1.3", config_dir=source.path)
-
-
-def _check_has_spec(full: Any, source: ConfigSource) -> None:
-    """A user's config must list ``vpid_bench_spec`` in its defaults: it brings every
-    top-level key's default, the report and the job folders' names."""
-    if source == SHIPPED or all(k in full for k in TOP_LEVEL_KEYS):
-        return
-    raise ConfigError("--config-name", source.name or "config",
-                      "a config whose defaults list starts with vpid_bench_spec (e.g. "
-                      "defaults: [vpid_bench_spec, {problem: functions}, {optimizer: random}, "
-                      "_self_]; docs/sweeps.md)")
-
-
 def check_points(points: list[list[str]], registry: Registry,
                  source: ConfigSource = SHIPPED) -> tuple[list[Job], Any]:
     """Compose and parse every point (from the config ``source``: the shipped one by
@@ -344,9 +259,9 @@ def check_points(points: list[list[str]], registry: Registry,
     from omegaconf.errors import OmegaConfBaseException
 
     parser = _parser()
-    composer = _Composer(source)
+    composer = Composer(source)
     jobs = []
-    with _initialize(source):
+    with initialize(source):
         for point in points:
             parsed = parser.parse_overrides(point)
             cfg = composer.task([o for o in parsed if _is_structural(o)]).copy()
@@ -356,83 +271,11 @@ def check_points(points: list[list[str]], registry: Registry,
                     if not _is_structural(o):
                         _apply(cfg, o)
             except OmegaConfBaseException as exc:
-                raise _hydra_error(exc) from None
+                raise hydra_error(exc) from None
             with open_dict(cfg):
                 cfg.pop("hydra", None)
             jobs.append(parse_job(cfg, registry))
     return jobs, composer.first_full
-
-
-class _Composer:
-    """Hydra's composition of each distinct set of structural overrides of a sweep (its
-    config-group choices and Hydra settings), made once, without the ``hydra`` node.
-
-    For the shipped config, a sweep over problems and optimizers composes each problem once
-    and each optimizer once: the task config of (problem P, optimizer O) is P's composition
-    with O's ``optimizer`` node. That is what Hydra composes, because the shipped config keeps
-    the two groups apart (its defaults list names each once, its own keys set neither, and a
-    registered plugin's node or a shipped preset extends only its own group;
-    ``tests/sweeps/test_preflight_compose.py`` compares both ways). Composing every point
-    took 28 s of the vpid1 archive build's pre-flight (323 points, about 0.09 s each); a
-    user's own config (``-cp``/``-cd``, a ``hydra.searchpath``) or an override with a
-    package or of another group is composed whole, point by point."""
-
-    def __init__(self, source: ConfigSource) -> None:
-        self.source = source
-        #: the first point's full config, ``hydra`` node included (the output folder's)
-        self.first_full: Any = None
-        self._tasks: dict[tuple[str, ...], Any] = {}
-        self._by_rest: dict[tuple[str, ...], Any] = {}  # all but the optimizer choice
-        self._optimizers: dict[str, Any] = {}  # an optimizer choice's node
-
-    def task(self, structural: list[Any]) -> Any:
-        """The task config (no ``hydra`` node) of a point whose structural overrides are
-        ``structural`` (parsed); the caller copies it before changing it."""
-        import copy
-
-        from omegaconf import open_dict
-
-        lines = tuple(o.input_line for o in structural)
-        if lines in self._tasks:
-            return self._tasks[lines]
-        choice = next((o.input_line for o in structural if o.key_or_group == "optimizer"), "")
-        rest = tuple(o.input_line for o in structural if o.key_or_group != "optimizer")
-        separable = self._separable(structural)
-        if separable and rest in self._by_rest and choice in self._optimizers:
-            task = copy.deepcopy(self._by_rest[rest])
-            with open_dict(task):
-                task.optimizer = copy.deepcopy(self._optimizers[choice])
-        else:
-            task = self._compose(list(lines))
-            if separable:
-                self._by_rest.setdefault(rest, task)
-                self._optimizers.setdefault(choice, task.optimizer)
-        self._tasks[lines] = task
-        return task
-
-    def _compose(self, overrides: list[str]) -> Any:
-        from omegaconf import OmegaConf
-
-        full = _compose(overrides, hydra=True, source=self.source)
-        _check_has_spec(full, self.source)
-        if self.first_full is None:
-            self.first_full = full
-        return OmegaConf.masked_copy(full, [k for k in full if k != "hydra"])
-
-    def _separable(self, structural: list[Any]) -> bool:
-        """Whether the point's optimizer node can come from another composition (see the
-        class docstring)."""
-        if self.source != SHIPPED:
-            return False
-        for o in structural:
-            key = o.key_or_group
-            if o.package is not None or o.is_delete() or o.is_add() or o.is_force_add():
-                return False
-            if key in GROUPS:
-                continue
-            if not key.startswith("hydra.") or key.startswith("hydra.searchpath"):
-                return False
-        return True
 
 
 def _quote(path: str) -> str:
@@ -540,7 +383,7 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
     except VpidBenchError:
         raise
     except Exception as exc:  # noqa: BLE001 - anything else Hydra raises: one line too
-        raise _hydra_error(exc) from None
+        raise hydra_error(exc) from None
     if custom_sweeper:
         refuse_test_instances(jobs)
     problems = check_sized_jobs(jobs)
