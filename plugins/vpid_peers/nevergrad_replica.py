@@ -26,10 +26,11 @@ computed as nevergrad 1.0.12 computes it:
   error of cma's ``tell`` is ignored, as nevergrad ignores it.
 
 It is used only where it is known to be exact: nevergrad's selected optimizer is the class
-``_CMA`` with ``CMAbounded``'s settings (no ``fcmaes``, no random start, no extra cma options,
-two or more parameters), on the plugin's own parametrization (an ``ng.p.Array`` in
-``[0, 1]``), with a nevergrad version this module was checked against
-(:data:`CHECKED_VERSIONS`); anywhere else nevergrad itself runs. ``tests/peers/
+``_CMA`` without ``fcmaes``, a random start or extra cma options, for two or more parameters
+(``CMAbounded``, and the registry's other CMA variants, whose settings are read from it: the
+test checks ``CMA``, ``OldCMA``, ``SDiagonalCMA`` and ``CMApara``), on the plugin's own
+parametrization (an ``ng.p.Array`` in ``[0, 1]``), with a nevergrad version this module was
+checked against (:data:`CHECKED_VERSIONS`); anywhere else nevergrad itself runs. ``tests/peers/
 test_nevergrad_cma.py`` checks the candidates bit-identical to nevergrad's own, restarts,
 infinite losses and batches of a population included, and fails when nevergrad's version moves
 past the checked ones, so that the next one is checked too.

@@ -98,6 +98,8 @@ def _awkward(x, i):
     ("CMA", 20, 1, _awkward),   # 18 parameters or more: nevergrad's smaller first step
     ("CMA", 4, 6, _awkward),    # batch=ps: a population per ask and tell
     ("OldCMA", 3, 1, _sphere),  # another CMA of nevergrad's, not diagonal nor elitist
+    ("SDiagonalCMA", 5, 1, _awkward),  # its step divided by 1000 (nevergrad's ``zero``)
+    ("CMApara", 5, 1, _awkward),  # a population 8 ln(D) + 4
 ])
 def test_the_replica_asks_what_nevergrad_asks(method, dim, batch, loss):
     evaluations = 2500 if dim == 2 else 600
