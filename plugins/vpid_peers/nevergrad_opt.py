@@ -18,10 +18,12 @@
 * **Failures**: nevergrad is built on the first ``ask``, not in the constructor, so a method
   that fails (at construction, e.g. one that cannot run ``ps`` workers, or during the run)
   raises inside the run loop, and the job records that run as failed and goes on.
-* **Speed**: nevergrad's CMA (the default) re-checks its bounds at every candidate, and the
-  registry's ``CMA`` wraps the optimizer it selects; the optimizer built here skips the
-  repeats and asks the selected one directly (:mod:`vpid_peers.nevergrad_cma`: the same
-  candidates; ``benchmarks/bench_nevergrad_cma.py`` prints the time per candidate of each).
+* **Speed**: nevergrad's CMA (the default) spends most of its time per candidate in
+  nevergrad's parameter machinery, not in cma. In the unit box the optimizer built here runs
+  nevergrad's selected CMA replicated on cma (:mod:`vpid_peers.nevergrad_replica`: the same
+  candidates, bit for bit, where it was checked), else nevergrad itself with two repeats
+  skipped (:mod:`vpid_peers.nevergrad_cma`); ``benchmarks/bench_nevergrad_cma.py`` prints
+  the time per candidate of each way.
 * **Cost**: ``import nevergrad`` takes about 3 s; it happens when the parameters are checked
   (the registry is needed to check the name), never when the plugin is registered.
 """
