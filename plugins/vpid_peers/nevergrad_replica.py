@@ -66,8 +66,9 @@ class Candidate:
 
 
 class ReplicatedCMA:
-    """nevergrad's ``_CMA`` with ``CMAbounded``'s settings, asked and told as nevergrad does
-    (see the module docstring); built from that nevergrad optimizer before its first ask."""
+    """nevergrad's ``_CMA`` (``CMAbounded`` or another of its CMA variants, its settings read
+    from it), asked and told as nevergrad does (see the module docstring); built from that
+    nevergrad optimizer before its first ask."""
 
     def __init__(self, inner: Any) -> None:
         parametrization = inner.parametrization
@@ -113,6 +114,8 @@ class ReplicatedCMA:
         if not loss < LOSS_CLIP:
             loss = LOSS_CLIP
         self._to_tell.append((candidate.told, loss))
+        # nevergrad reads its strategy here and again to tell it: each read asks cma whether
+        # it stopped (and starts a new one if so), so both reads are kept
         if len(self._to_tell) >= self._strategy().popsize:
             xs = [told for told, _ in self._to_tell]
             ys = [f for _, f in self._to_tell]
