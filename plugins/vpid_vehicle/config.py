@@ -10,10 +10,14 @@ it, so a bad override fails in one line before any simulation starts.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
-from vpid_bench import ConfigError, ProblemConfig, estimators
+from vpid_bench import ConfigError, ProblemConfig, added_setting, estimators
+
+from . import knowns
 
 #: The unknowns of Eq. (4), in order, with their units.
 PARAM_NAMES: tuple[str, ...] = ("m", "I", "m1", "m2", "k1", "k2", "c1", "c2", "a1")
@@ -119,14 +123,46 @@ class ReferenceConfig:
     dt: float | None = None
     sampling: str | None = None
     file: str | None = None
+    #: The problem's names mapped to the record's columns, and record columns left unused on
+    #: purpose (docs/own-record.md); the input is the bump, part of the problem's design.
+    columns: dict[str, str] = added_setting(default_factory=dict, open_keys=True)
+    ignore: tuple[str, ...] = added_setting(default=())
+
+    def __post_init__(self) -> None:
+        knowns.freeze_fields(self, "columns")
+
+    def mapping(self) -> Any:
+        """The record reader's view of the mapping keys."""
+        from .record_file import ColumnMap
+
+        return ColumnMap(dict(self.columns), tuple(self.ignore), "record")
 
 
 @dataclass(frozen=True)
 class BoundsConfig:
-    """The search box is ``[lower_factor, upper_factor] x`` the true values."""
+    """The search box is ``[lower_factor, upper_factor] x`` the true values; a parameter's
+    own box ``problem.bounds.<name>=[lo,hi]`` (SI units) replaces its row."""
 
     lower_factor: float = 0.5
     upper_factor: float = 1.5
+    m: tuple[float, ...] | None = added_setting(None)
+    I: tuple[float, ...] | None = added_setting(None)  # noqa: E741 - the paper's name
+    m1: tuple[float, ...] | None = added_setting(None)
+    m2: tuple[float, ...] | None = added_setting(None)
+    k1: tuple[float, ...] | None = added_setting(None)
+    k2: tuple[float, ...] | None = added_setting(None)
+    c1: tuple[float, ...] | None = added_setting(None)
+    c2: tuple[float, ...] | None = added_setting(None)
+    a1: tuple[float, ...] | None = added_setting(None)
+
+
+#: ``problem.known.<name>`` of ``problem=vehicle``: the config key each one sets.
+KNOWN_KEYS = {"L": ("vehicle", "L"), "kt1": ("vehicle", "kt1"), "kt2": ("vehicle", "kt2"),
+              "V": ("bump", "V"), "h": ("bump", "h"), "w": ("bump", "w")}
+#: Units and meaning of the stated quantities of ``problem=vehicle``.
+KNOWN_WHAT = {"L": ("m", "wheelbase"), "kt1": ("N/m", "front tyre stiffness"),
+              "kt2": ("N/m", "rear tyre stiffness"), "V": ("km/h", "bump speed"),
+              "h": ("m", "bump height"), "w": ("m", "bump width")}
 
 
 @dataclass(frozen=True)
@@ -152,11 +188,67 @@ class VehicleConfig(ProblemConfig):
     record: RecordConfig = field(default_factory=RecordConfig)
     noise: NoiseConfig = field(default_factory=NoiseConfig)
     reference: ReferenceConfig = field(default_factory=ReferenceConfig)
-    bounds: BoundsConfig = field(default_factory=BoundsConfig)
+    bounds: BoundsConfig = field(default_factory=BoundsConfig,
+                                 metadata={"vpid_bench_open_keys": True})
     objective: str = "eq3"
+    #: Stated quantities by name (``known.kt1=170000``): each sets its ``vehicle.`` or
+    #: ``bump.`` key (:data:`KNOWN_KEYS`).
+    known: dict[str, Any] = added_setting(default_factory=dict, open_keys=True)
 
     def __post_init__(self) -> None:
+        knowns.freeze_fields(self, "known")
+        _apply_known(self)
         validate(self)  # at build time, so the pre-flight refuses a bad value before any job
+
+
+def _apply_known(config: VehicleConfig) -> None:
+    """Set the ``vehicle.``/``bump.`` key of each ``known.<name>`` (refusing a name that is
+    not a stated quantity, or ``free``: this problem identifies a fixed set)."""
+    for name, value in config.known.items():
+        key = f"problem.known.{name}"
+        if name not in KNOWN_KEYS:
+            raise ConfigError(key, value, "one of " + ", ".join(KNOWN_KEYS) + " (the stated "
+                              "quantities of problem=vehicle; fixing or freeing a parameter "
+                              "is offered by problem=ride_half, the same half car)")
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(key, value, f"a number in {KNOWN_WHAT[name][0]}")
+        part, field_name = KNOWN_KEYS[name]
+        object.__setattr__(config, part, dataclasses.replace(getattr(config, part),
+                                                             **{field_name: float(value)}))
+
+
+def known_list(config: VehicleConfig) -> list[dict[str, Any]]:
+    """``problem.info.known`` of ``problem=vehicle``: each stated quantity with its value,
+    unit and source."""
+    out = []
+    for name, (part, field_name) in KNOWN_KEYS.items():
+        value = getattr(getattr(config, part), field_name)
+        default = getattr(type(getattr(config, part))(), field_name)
+        source = (f"set by you (problem.known.{name})" if name in config.known else
+                  f"set by you (problem.{part}.{field_name})" if value != default else
+                  "the paper's vehicle and test (Gökdağ 2014)")
+        unit, what = KNOWN_WHAT[name]
+        out.append({"name": name, "value": float(value), "unit": unit, "source": source,
+                    "what": what})
+    return out
+
+
+def own_boxes(config: VehicleConfig) -> dict[str, tuple[float, float]]:
+    """The parameters' own boxes (``problem.bounds.<name>``), checked."""
+    out = {}
+    for name in PARAM_NAMES:
+        value = getattr(config.bounds, name)
+        if value is None:
+            continue
+        if len(value) != 2 or not all(math.isfinite(v) for v in value) \
+                or not 0 < value[0] < value[1]:
+            raise ConfigError(f"problem.bounds.{name}", list(value),
+                              "[lo, hi] with 0 < lo < hi, finite (SI units)")
+        if name == "a1" and value[1] >= config.vehicle.L:
+            raise ConfigError("problem.bounds.a1", list(value),
+                              f"[lo, hi] with hi < L = {config.vehicle.L:g} m")
+        out[name] = (float(value[0]), float(value[1]))
+    return out
 
 
 def _finite(key: str, value: float, allowed: str) -> None:
@@ -265,7 +357,8 @@ def _validate_bounds(config: VehicleConfig) -> None:
             "problem.bounds.upper_factor", b.upper_factor,
             f"a factor > problem.bounds.lower_factor = {b.lower_factor:g}",
         )
-    if b.upper_factor * p.a1 >= p.L:
+    own_boxes(config)
+    if b.upper_factor * p.a1 >= p.L and b.a1 is None:
         raise ConfigError(
             "problem.bounds.upper_factor", b.upper_factor,
             f"a factor with upper_factor * a1 < L, i.e. < {p.L / p.a1:.4g} (a2 = L - a1 > 0)",
@@ -326,6 +419,6 @@ def check_reference_file(config: VehicleConfig) -> float:
     from .record_file import check_span
     from .reference_io import read_measured
 
-    record = read_measured(config.reference.file)
+    record = read_measured(config.reference.file, config.reference.mapping())
     check_span(record, config.dt, MAX_SAMPLES)
     return record.span

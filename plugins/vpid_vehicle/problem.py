@@ -20,7 +20,15 @@ import numpy as np
 
 from vpid_bench import Bounds, Problem, estimators, relative_errors_percent
 
-from .config import PARAM_NAMES, PARAM_UNITS, VehicleConfig, validate, window
+from .config import (
+    PARAM_NAMES,
+    PARAM_UNITS,
+    VehicleConfig,
+    known_list,
+    own_boxes,
+    validate,
+    window,
+)
 from .model import KnownConstants, physical
 from .objective import add_noise, noise_summary
 from .record_file import Sampler
@@ -47,19 +55,19 @@ class VehicleProblem(Problem):
         self.T = window(config)
         self._x_true = np.array([getattr(p, n) for n in PARAM_NAMES], dtype=float)
         self._x_true.setflags(write=False)
-        self._bounds = Bounds(
-            config.bounds.lower_factor * self._x_true,
-            config.bounds.upper_factor * self._x_true,
-            PARAM_NAMES,
-            PARAM_UNITS,
-        )
+        lower = config.bounds.lower_factor * self._x_true
+        upper = config.bounds.upper_factor * self._x_true
+        for name, (lo, hi) in own_boxes(config).items():
+            j = PARAM_NAMES.index(name)
+            lower[j], upper[j] = lo, hi
+        self._bounds = Bounds(lower, upper, PARAM_NAMES, PARAM_UNITS)
         nm = config.newmark
         ref = config.reference
         #: How the model meets a measured record's times (None: a synthetic record, on the
         #: model's own grid).
         self.sampler: Sampler | None = None
         if ref.file is not None:
-            record = read_measured(ref.file)
+            record = read_measured(ref.file, ref.mapping())
             self.sampler = Sampler(record.t, config.dt)
             self.T = float(self.sampler.steps[-1])
             self.record_info = self.sampler.describe(record)
@@ -310,6 +318,8 @@ class VehicleProblem(Problem):
             "bump_edges_s": [float(e) for e in self.bump.edges],
             "rear_excited_s": float(rear_in),
             "reference": {"source": self.reference_source},
+            "known": known_list(cfg),
+            "box": self._box_info(),
         }
         if self.reference_source != "file":
             info.update(f_at_true=self._f_at_true(), metric_units={"NoRE": "%"})
@@ -335,6 +345,16 @@ class VehicleProblem(Problem):
                 **noise_summary(self.reference_clean, self.reference),
             }
         return info
+
+    def _box_info(self) -> list[dict[str, Any]]:
+        """``problem.info.box``: each parameter's box with its source."""
+        b, own = self.config.bounds, own_boxes(self.config)
+        return [{"name": n, "lower": float(lo), "upper": float(hi), "unit": u,
+                 "source": (f"set by you (problem.bounds.{n})" if n in own else
+                            f"[{b.lower_factor:g}, {b.upper_factor:g}] x the configured "
+                            "vehicle (problem.bounds.lower_factor, upper_factor)")}
+                for n, u, lo, hi in zip(PARAM_NAMES, PARAM_UNITS, self._bounds.lower,
+                                        self._bounds.upper, strict=True)]
 
     def write_artifacts(self, directory: Path) -> list[Path]:
         """``reference.csv``: the clean and noisy record of *this* problem, i.e. instance 0

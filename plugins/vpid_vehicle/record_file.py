@@ -32,6 +32,7 @@ import math
 import re
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -173,12 +174,107 @@ def _pick(path: Path, header: dict[str, tuple[int, str | None]], col: Column
     return None
 
 
+@dataclasses.dataclass(frozen=True)
+class ColumnMap:
+    """How a record's columns meet the problem's names (``problem.reference``):
+    ``columns`` maps a problem name to the record's column (``{"h": "road [mm]"}``, a unit
+    in brackets optional), ``ignore`` lists record columns left unused on purpose, and
+    ``input`` is ``record`` (the inputs come from the record) or ``config`` (the configured
+    input; the record must not carry one)."""
+
+    columns: dict[str, str] = dataclasses.field(default_factory=dict)
+    ignore: tuple[str, ...] = ()
+    input: str = "record"
+
+
+#: ``problem.reference.input`` values.
+INPUT_MODES = ("record", "config")
+
+
+def _mapped(path: Path, header: dict[str, tuple[int, str | None]], col: Column,
+            target: str) -> tuple[str, int, float]:
+    """The column a mapping names for ``col`` (its unit from the mapping or the header)."""
+    m = _HEADER.fullmatch(target)
+    name, unit = (m.group(1), m.group(2)) if m else (target.strip(), None)
+    if name not in header:
+        raise ConfigError(f"problem.reference.columns.{col.name}", target,
+                          f"a column of {path.name}; {_found(list(header))}")
+    index, stated = header[name]
+    if unit and stated and unit != stated:
+        raise ConfigError(f"problem.reference.columns.{col.name}", target,
+                          f"the unit the header states for {name} ([{stated[:20]}]) or none")
+    return name, index, _factor(path, name, unit or stated, col.unit)
+
+
+def _find(path: Path, header: dict[str, tuple[int, str | None]], col: Column,
+          mapping: ColumnMap) -> tuple[str, int, float] | None:
+    if col.name in mapping.columns:
+        return _mapped(path, header, col, mapping.columns[col.name])
+    return _pick(path, header, col)
+
+
+def _check_mapping(mapping: ColumnMap, names: list[str], header: dict[str, Any]) -> None:
+    for key in mapping.columns:
+        if key not in names:
+            raise ConfigError(f"problem.reference.columns.{key}", mapping.columns[key],
+                              "a mapping from the problem's names, one of " + ", ".join(names))
+    for name in mapping.ignore:
+        if name not in header:
+            raise ConfigError("problem.reference.ignore", list(mapping.ignore),
+                              f"columns of the record; {name!r} is not one ("
+                              f"{_found(list(header))})")
+    if mapping.input not in INPUT_MODES:
+        raise ConfigError("problem.reference.input", mapping.input, "one of record (the "
+                          "record carries the inputs), config (the configured input)")
+
+
+def _inputs(path: Path, header: dict[str, Any], inputs: Sequence[Column],
+            inputs_required: str | None, mapping: ColumnMap, first_row: list[str]
+            ) -> list[tuple[str, int, float]]:
+    """The input columns used: all of ``inputs`` (the record's) or none (the configured
+    input, ``input=config``, which must be said); a partial set is refused."""
+    if not inputs:
+        return []
+    if mapping.input == "config":
+        if inputs_required:
+            raise ConfigError("problem.reference.input", "config",
+                              f"record here: {inputs_required}")
+        return []
+    got = [(_find(path, header, c, mapping), c) for c in inputs]
+    absent = [c.name for p, c in got if p is None]
+    if absent:
+        names = ", ".join(c.name for c in inputs)
+        why = inputs_required or (
+            "the inputs the model is driven by: map a column with problem.reference.columns="
+            f"{{{absent[0]}:<column>}}, or fit the configured input with "
+            "problem.reference.input=config")
+        raise _fail(path, f"input columns {names} ({why}); column {absent[0]} is missing; "
+                    f"{_found(first_row)}")
+    return [p for p, _ in got if p is not None]
+
+
+def _unused(path: Path, header: dict[str, Any], used: list[tuple[str, int, float]],
+            mapping: ColumnMap, expected: list[str], extra_ok: Sequence[str]) -> None:
+    names = {u[0] for u in used}
+    for name in header:
+        if name not in names and name not in mapping.ignore and name not in extra_ok:
+            raise ConfigError("problem.reference.file", str(path),
+                              f"only the columns the problem uses, {', '.join(expected)}; "
+                              f"column {name[:40]!r} is not used (map it with "
+                              "problem.reference.columns, or list it in "
+                              "problem.reference.ignore)")
+
+
 def read_record(path: str | Path, outputs: Sequence[Column], inputs: Sequence[Column] = (),
-                inputs_required: str | None = None) -> Record:
+                inputs_required: str | None = None, mapping: ColumnMap | None = None,
+                extra_ok: Sequence[str] = ()) -> Record:
     """Read and check a record (see the module). ``outputs``: the measured channels, all
-    required; ``inputs``: input columns, all or none; ``inputs_required``: why the problem
-    needs them (then their absence is refused with that reason), or ``None``."""
+    required; ``inputs``: input columns, all required unless ``mapping.input`` is
+    ``config``; ``inputs_required``: why the problem cannot use a configured input, or
+    ``None``; ``mapping``: the user's column names and ignored columns; ``extra_ok``: columns
+    a record vpid-bench wrote may carry and the problem never uses (left unread)."""
     path = Path(path)
+    mapping = mapping or ColumnMap()
     need = ", ".join(["t", *(c.name for c in outputs)])
     if not path.is_file():
         raise _fail(path, f"an existing CSV file (columns {need})")
@@ -186,23 +282,20 @@ def read_record(path: str | Path, outputs: Sequence[Column], inputs: Sequence[Co
     if not rows:
         raise _fail(path, f"a CSV with a header row {need} (file is empty)")
     header = _parse_header(path, rows[0])
-    time = _pick(path, header, Column("t", "s", ("time",)))
-    used = [(_pick(path, header, c), c) for c in outputs]
+    time_col = Column("t", "s", ("time",))
+    _check_mapping(mapping, [c.name for c in (time_col, *outputs, *inputs)], header)
+    time = _find(path, header, time_col, mapping)
+    used = [(_find(path, header, c, mapping), c) for c in outputs]
     missing = [c.name for (p, c) in used if p is None]
     if time is None or missing:
         what = "t" if time is None else missing[0]
         raise _fail(path, f"a header with columns {need} (units optional, e.g. t [s]); "
-                    f"column {what} is missing; {_found(rows[0])}")
-    got_inputs = [(_pick(path, header, c), c) for c in inputs]
-    present = [c.name for p, c in got_inputs if p is not None]
-    if inputs and (present or inputs_required):
-        absent = [c.name for p, c in got_inputs if p is None]
-        if absent:
-            why = (inputs_required if not present else
-                   f"all of {', '.join(c.name for c in inputs)} or none")
-            raise _fail(path, f"input columns {', '.join(c.name for c in inputs)} ({why}); "
-                        f"column {absent[0]} is missing; {_found(rows[0])}")
-    cols = [time, *(p for p, _ in used), *(p for p, _ in got_inputs if p is not None)]
+                    f"column {what} is missing; {_found(rows[0])} (name one with "
+                    f"problem.reference.columns={{{what}:<column>}})")
+    got_inputs = _inputs(path, header, inputs, inputs_required, mapping, rows[0])
+    cols = [time, *(p for p, _ in used), *got_inputs]
+    expected = [need, *(c.name for c in inputs if mapping.input == "record")]
+    _unused(path, header, cols, mapping, expected, extra_ok)
     body = [(k + 2, r) for k, r in enumerate(rows[1:]) if any(c.strip() for c in r)]
     if len(rows) > MAX_ROWS + 1:
         raise _fail(path, f"at most {MAX_ROWS} rows of samples; found more")
@@ -217,12 +310,24 @@ def read_record(path: str | Path, outputs: Sequence[Column], inputs: Sequence[Co
                     f"has t = {t[k + 1]:.9g} s after {t[k]:.9g} s")
     p = len(outputs)
     out = np.ascontiguousarray(data[:, 1:1 + p].T)
-    if not np.any(out):
-        raise _fail(path, "a record with some nonzero measured value (every "
-                    f"{', '.join(c.name for c in outputs)} value is 0: nothing to fit)")
-    inp = np.ascontiguousarray(data[:, 1 + p:]) if present else None
-    return Record(str(path), t.copy(), out, inp, tuple(c.name for c in inputs) if present
+    check_channels(path, out, [u[0] for u in cols[1:1 + p]], body)
+    inp = np.ascontiguousarray(data[:, 1 + p:]) if got_inputs else None
+    return Record(str(path), t.copy(), out, inp, tuple(c.name for c in inputs) if got_inputs
                   else ())
+
+
+#: A number as a record cell may write it: ASCII digits, an optional sign, point and
+#: exponent (no ``1_000``, no full-width or other Unicode digits, which ``float`` accepts).
+NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+#: Largest magnitude of a value in SI units: beyond it a channel's norm (a sum of squares)
+#: overflows, so the fit would ignore the channel.
+MAX_MAGNITUDE = 1e100
+#: Smallest largest magnitude of a measured channel: below it (zero or denormal) the
+#: channel's weight ``1 / ||channel||`` is not a finite number.
+MIN_MAGNITUDE = 1e-100
+#: A channel in which one sample holds more than this fraction of the sum of squares is
+#: refused, naming the sample (a logger's spike, not a vehicle's response).
+MAX_SHARE = 0.5
 
 
 def _numbers(path: Path, body: list[tuple[int, list[str]]],
@@ -231,21 +336,53 @@ def _numbers(path: Path, body: list[tuple[int, list[str]]],
     data = np.empty((len(body), len(cols)))
     for k, (line, row) in enumerate(body):
         for j, (name, index, factor) in enumerate(cols):
-            try:
-                value = float(row[index])
-            except (ValueError, IndexError):
+            cell = row[index].strip() if index < len(row) else ""
+            if not NUMBER.fullmatch(cell):
+                if cell.lower().lstrip("+-") in ("nan", "inf", "infinity"):
+                    raise _fail(path, f"finite numbers; row {line} column {name} is "
+                                f"{cell[:12]}")
                 raise _fail(path, f"a number in column {name} of every row; row {line} has "
-                            "none") from None
-            if not math.isfinite(value):
-                raise _fail(path, f"finite numbers; row {line} column {name} is {value}")
-            data[k, j] = value * factor
+                            "none (ASCII digits, e.g. 1000.5 or -2e-3)")
+            value = float(cell) * factor
+            if not abs(value) <= MAX_MAGNITUDE:
+                raise _fail(path, f"values of magnitude at most {MAX_MAGNITUDE:g} in SI "
+                            f"units; row {line} column {name} is {float(cell):.6g}"
+                            + (f" (x {factor:g} in SI units)" if factor != 1 else ""))
+            data[k, j] = value
     return data
+
+
+def check_channels(path: str | Path, out: np.ndarray, names: Sequence[str],
+                   body: Sequence[tuple[int, list[str]]]) -> None:
+    """Refuse a measured channel that is zero or denormal throughout (nothing to fit, its
+    weight not finite) or in which one sample dominates the norm (a spike), naming it."""
+    path = Path(path)
+    for c, name in enumerate(names):
+        y = out[c]
+        peak = float(np.max(np.abs(y)))
+        if peak < MIN_MAGNITUDE:
+            raise _fail(path, f"a record in which every measured channel moves (column "
+                        f"{name} is {'zero' if peak == 0 else 'denormal'} throughout: its "
+                        f"largest value is {peak:.3g})")
+        share = (y / peak) ** 2
+        k = int(np.argmax(share))
+        total = float(np.sum(share))
+        if share[k] > MAX_SHARE * total:
+            raise _fail(path, f"no single sample making up most of a channel; row "
+                        f"{body[k][0]} column {name} ({y[k]:.6g}) makes up "
+                        f"{100 * share[k] / total:.0f} % of its sum of squares (a logger's "
+                        "spike? remove the row)")
 
 
 def check_span(record: Record, dt: float, max_steps: int) -> None:
     """Refuse a record whose span needs more than ``max_steps`` model steps of ``dt`` s (a
     time column in ms read as s once asked for hours of simulation), naming the span."""
     steps = record.span / dt + 1
+    if steps < MIN_ROWS:
+        raise _fail(Path(record.path), f"a record spanning at least {MIN_ROWS} model steps "
+                    f"(this one: t = {record.t[0]:.9g} ... {record.t[-1]:.9g} s spans "
+                    f"{record.span:.3g} s, {steps:.3g} steps of dt = {dt:g} s; a time in "
+                    "other units is written e.g. t [ms])")
     if steps > max_steps:
         raise _fail(Path(record.path), f"a record spanning at most {max_steps} model steps "
                     f"(this one: t = {record.t[0]:.6g} ... {record.t[-1]:.6g} s, "

@@ -22,7 +22,7 @@ import numpy as np
 
 from vpid_bench import write_text_atomic
 
-from .record_file import Column, Record, read_record
+from .record_file import Column, ColumnMap, Record, read_record
 
 HEADER = ("t", "z1dd_clean", "z2dd_clean", "z1dd_noisy", "z2dd_noisy")
 #: The measured channels a record must carry, in m/s^2.
@@ -47,8 +47,14 @@ def write_reference(
     return write_text_atomic(Path(path), buffer.getvalue())
 
 
-def read_measured(path: str | Path) -> Record:
+#: Columns a written ``reference.csv`` carries that a fit never reads (empty for a measured
+#: record): accepted without ``problem.reference.ignore``.
+WRITTEN_ONLY = ("z1dd_clean", "z2dd_clean")
+
+
+def read_measured(path: str | Path, mapping: ColumnMap | None = None) -> Record:
     """The measured z1'', z2'' (``outputs``, ``(2, N)``, m/s^2) at the record's times;
     :class:`~vpid_bench.api.ConfigError` naming the column, row or time problem of a file
-    that does not fit (:func:`.record_file.read_record`)."""
-    return read_record(path, CHANNELS)
+    that does not fit (:func:`.record_file.read_record`). The input is the configured bump
+    (part of the problem's design): a record carries no input column."""
+    return read_record(path, CHANNELS, mapping=mapping, extra_ok=WRITTEN_ONLY)

@@ -145,7 +145,8 @@ def test_refused_in_one_line_before_any_work(case, argv, line, in_tmp, capsys):
 
 # (case, file, the key's message fragment)
 CSV_REFUSED = [
-    ("13", "zero", "a record with some nonzero measured value"),
+    ("13", "zero", "a record in which every measured channel moves (column z1dd is zero "
+     "throughout"),
     ("14", "nan", "finite numbers; row 9 column z1dd is nan"),
     ("14", "inf", "finite numbers; row 11 column z2dd is -inf"),
     ("14", "binary", "a text CSV file in UTF-8"),
@@ -187,15 +188,17 @@ RIDE_REFUSED = [
      "step); column h_FL is missing"),
     ("half the road columns", ["problem=ride_half"], "t,z1dd,z2dd,h1",
      lambda k, t: f"{t},1,1,0\n",
-     "input columns h1, h2 (all of h1, h2 or none); column h2 is missing"),
+     "input columns h1, h2 (the inputs the model is driven by: map a column with "
+     "problem.reference.columns={h2:<column>}, or fit the configured input with "
+     "problem.reference.input=config); column h2 is missing"),
     ("a channel of the sensor set missing", ["problem=ride_quarter"], "t,zsdd",
      lambda k, t: f"{t},1\n", "column zudd is missing"),
-    ("t in ms read as s", ["problem=ride_quarter"], "t,zsdd,zudd",
+    ("t in ms read as s", ["problem=ride_quarter", "problem.reference.input=config"],
+     "t,zsdd,zudd",
      lambda k, t: f"{1e4 * t},1,1\n", "a record spanning at most 200000 model steps (this one: "
      "t = 0 ... 980 s, 980 s at dt = 0.001 s is 9.8e+05 steps; a time in ms is written t [ms])"),
     ("steer without speed", ["problem=lateral"], "t,r,ay,delta [deg]",
-     lambda k, t: f"{t},1,1,1\n", "input columns delta, vx (all of delta, vx or none); column "
-     "vx is missing"),
+     lambda k, t: f"{t},1,1,1\n", "input columns delta, vx (the inputs the model is driven by"),
     ("a speed that varies", ["problem=lateral_mf"], "t,r,ay,delta,vx [km/h]",
      lambda k, t: f"{t},1,1,0.01,{72 + (10 if k == 30 else 0)}\n",
      "a column vx (m/s) > 0 held within 2 % of its mean"),

@@ -167,7 +167,7 @@ def test_the_noise_model_of_a_users_record_is_never_assumed(tmp_path):
 
     src = RideQuarterProblem(RideQuarterConfig(dt=0.002))
     path = _write(tmp_path / "q.csv", "t,zsdd,zudd", [src.t, src.measured[0], src.measured[1]])
-    ref = RecordFileConfig(str(path))
+    ref = RecordFileConfig(str(path), input="config")  # the configured hump, said
     with pytest.raises(ConfigError, match="no noise level is stated for this record"):
         RideQuarterConfig(objective="ml", reference=ref)
     vpath = _write(tmp_path / "v.csv", "t,z1dd,z2dd", [src.t, src.measured[0], src.measured[1]])
@@ -211,7 +211,7 @@ def test_the_paper_problem_and_a_ride_member_fit_a_500_hz_record_from_12_3_s(tmp
     src = RideQuarterProblem(RideQuarterConfig(dt=0.002))
     qpath = _write(tmp_path / "quarter.csv", "t [s],zsdd,zudd",
                    [12.3 + src.t, src.measured[0], src.measured[1]])
-    qcfg = RideQuarterConfig(reference=RecordFileConfig(str(qpath)))
+    qcfg = RideQuarterConfig(reference=RecordFileConfig(str(qpath), input="config"))
     folders = [_run(tmp_path, VehicleProblem, vcfg, "vehicle"),
                _run(tmp_path, RideQuarterProblem, qcfg, "ride_quarter")]
     for folder, truth in zip(folders, (v._x_true, src.x_true), strict=True):

@@ -49,7 +49,16 @@ from vpid_bench import (
     relative_errors_percent,
 )
 
-from ..record_file import Column, Record, Sampler, check_span, column_name, read_record
+from .. import knowns
+from ..record_file import (
+    Column,
+    ColumnMap,
+    Record,
+    Sampler,
+    check_span,
+    column_name,
+    read_record,
+)
 from . import linear, roads
 
 log = logging.getLogger(__name__)
@@ -103,9 +112,22 @@ class RecordFileConfig:
     """``file``: a CSV record of one's own vehicle fitted instead of the simulated one (any
     rate and start time, the measured channels by name, units optional, the inputs as
     columns where the configuration does not define them; docs/own-record.md). The problem
-    then has no truth and no noise is added."""
+    then has no truth and no noise is added. ``columns``: the problem's names mapped to
+    the record's (``{h: road, zsdd: "body_acc [g]"}``); ``ignore``: record columns left
+    unused on purpose (any other unused column is refused); ``input``: ``record`` (the
+    record carries the inputs) or ``config`` (the configured road or manoeuvre)."""
 
     file: str | None = None
+    columns: dict[str, str] = added_setting(default_factory=dict, open_keys=True)
+    ignore: tuple[str, ...] = added_setting(default=())
+    input: str = added_setting(default="record")
+
+    def __post_init__(self) -> None:
+        knowns.freeze_fields(self, "columns")
+
+    def mapping(self) -> ColumnMap:
+        """The record reader's view of the mapping keys."""
+        return ColumnMap(dict(self.columns), tuple(self.ignore), self.input)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -130,8 +152,13 @@ class SuiteConfig(ProblemConfig):
     record_substeps: int = 10
     objective: str = "eq3"
     reference: RecordFileConfig = added_setting(default_factory=RecordFileConfig)
+    #: Stated quantities and boxes (:mod:`..knowns`): ``known.kt=210000``, ``known.ms=250``
+    #: (fixed), ``known.kt=free``; ``bounds.ks=[lo, hi]``.
+    known: dict[str, Any] = added_setting(default_factory=dict, open_keys=True)
+    bounds: dict[str, Any] = added_setting(default_factory=dict, open_keys=True)
 
     def __post_init__(self) -> None:
+        knowns.freeze_fields(self, "known", "bounds")
         # a user's record states no noise level (noise_level is what simulated records add)
         estimators.check_objective(self.objective, self.noise_level
                                    if self.reference.file is None else None)
@@ -249,7 +276,9 @@ class RideModel:
 
 def check_record_file(config: Any, model: RideModel) -> None:
     """Read ``reference.file`` once when a config is built, so a file that does not fit
-    fails the command's pre-flight (exit 2, one line) rather than the job."""
+    fails the command's pre-flight (exit 2, one line) rather than the job; check the stated
+    quantities and boxes (:func:`..knowns.check_config`) there too."""
+    knowns.check_config(config, model)
     if config.reference.file is not None:
         read_ride_record(model, config)
 
@@ -263,7 +292,7 @@ def read_ride_record(model: RideModel, config: Any) -> Record:
     channels = tuple(Column(column_name(c), unit, (c,)) for c, unit in
                      model.sensors[config.sensors])
     record = read_record(config.reference.file, channels, model.record_columns(),
-                         model.needs_record_inputs(config))
+                         model.needs_record_inputs(config), config.reference.mapping())
     model.check_record(record)
     check_span(record, config.dt, MAX_STEPS)
     return record
@@ -306,6 +335,7 @@ class RideProblem(Problem):
     def __init__(self, config: RideConfig, index: int = 0) -> None:
         self.config = config
         self._index = index
+        self.model = knowns.stated_model(self.model, config, type(self).name)
         published = self.model.sets[config.parameter_set]
         self.nominal = np.array([published[k] for k in self.model.names])
         self.known = {k: v for k, v in published.items() if k not in self.model.names}
@@ -345,6 +375,8 @@ class RideProblem(Problem):
         from the record's columns or the configuration (docs/own-record.md)."""
         record = read_ride_record(self.model, config)
         self.sampler = sampler = Sampler(record.t, config.dt)
+        self.input_source = knowns.input_text(config, record.input_names,
+                                              config.reference.columns)
         if record.inputs is not None:
             self.u = self.model.inputs_from_record(record, sampler)
         else:  # the configured input (a hump, a bump, a step, a manoeuvre) over the steps
@@ -484,7 +516,7 @@ class RideProblem(Problem):
     def describe(self) -> dict[str, Any]:
         cfg = self.config
         if self.sampler is not None:
-            return {"samples": int(self.t.size), "known": dict(self.known),
+            return {"samples": int(self.t.size), **knowns.info(self),
                     "record": {"source": "file", "file": str(cfg.reference.file),
                                "info": self.record_info},
                     "fitted_model": {"solver": "Newmark average acceleration",
@@ -492,7 +524,7 @@ class RideProblem(Problem):
         exact = cfg.record == "exact"
         info = {
             "samples": int(self.t.size),
-            "known": dict(self.known),
+            **knowns.info(self),
             "record": {"solver": "exact first-order hold" if exact
                        else "Newmark (the fitted model: inverse crime)",
                        "dt_s": cfg.dt / (cfg.record_substeps if exact else 1)},

@@ -1,0 +1,386 @@
+"""Known quantities and boxes: what a vehicle problem states rather than identifies.
+
+Every vehicle problem identifies some quantities and states the others (a tyre's stiffness,
+a wheelbase, a weighed mass). The answer depends on the stated ones: the ride models are
+unchanged when every mass, stiffness and damping is scaled by one factor, so a tyre stated
+25 % too soft makes every identified value 25 % too small with no worse fit. This module
+makes them explicit and settable:
+
+* ``problem.known.<name>=value`` states a quantity (SI units, as :data:`QUANTITIES` and the
+  model's ``units`` give them): a known one of the parameter set (``problem.known.kt=210000``)
+  or an identified one, which is then fixed and left out of the search
+  (``problem.known.ms=250``); ``problem.known.<name>=free`` identifies a known one instead
+  (``problem.known.kt=free``), allowed only where the problem stays identifiable: some
+  quantity of the scaling group (:func:`scale_group`) must remain stated, and geometry is
+  never freed;
+* ``problem.bounds.<name>=[lo,hi]`` sets the search box of an identified quantity (by default
+  the model's, ``[0.5, 1.5] x`` the parameter set's value).
+
+:func:`plan` checks a config's keys (one ``ConfigError`` line naming the key and the allowed
+names or values) and returns a :class:`Plan`; :class:`StatedModel` presents a ride model
+under that plan (identified names, merged values, box) to :class:`.ride.problem.RideProblem`,
+which needs no other change. :meth:`Plan.known_list` and :meth:`Plan.box_list` are what the
+run record keeps (``problem.info.known``, ``problem.info.box``; docs/architecture.md) and the
+report lists as "Assumed".
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from vpid_bench import ConfigError
+
+#: The value of ``problem.known.<name>`` that identifies a known quantity instead.
+FREE = "free"
+
+#: Known quantities of the vehicle models: unit (SI), kind and what they are. ``scale``: a
+#: mass, inertia, stiffness, damping or force (all of them times one factor leave a ride or
+#: single-track record unchanged); ``geometry``: a length or a shape factor (never freed).
+QUANTITIES: dict[str, tuple[str, str, str]] = {
+    "kt": ("N/m", "scale", "tyre stiffness"),
+    "ct": ("N s/m", "scale", "tyre damping"),
+    "kt1": ("N/m", "scale", "front tyre stiffness"),
+    "kt2": ("N/m", "scale", "rear tyre stiffness"),
+    "kR": ("N m/rad", "scale", "front anti-roll bar"),
+    "m": ("kg", "scale", "vehicle mass (weighed)"),
+    "L": ("m", "geometry", "wheelbase"),
+    "a1": ("m", "geometry", "centre of gravity to the front axle"),
+    "a2": ("m", "geometry", "centre of gravity to the rear axle"),
+    "yL": ("m", "geometry", "centre of gravity to the left wheels"),
+    "yR": ("m", "geometry", "centre of gravity to the right wheels"),
+    "lf": ("m", "geometry", "centre of gravity to the front axle"),
+    "E": ("1", "geometry", "tyre curvature factor (Magic Formula)"),
+}
+#: Units of quantities that scale together (every other unit is geometry or a shape).
+SCALE_UNITS = frozenset({"kg", "kg m²", "kg m^2", "N/m", "N s/m", "N/rad", "N", "N m/rad"})
+#: Units of quantities that may be zero (a damping, an anti-roll bar, a curvature factor).
+MAY_BE_ZERO = frozenset({"N s/m", "N m/rad", "1"})
+
+
+def _freeze(value: Any) -> Any:
+    if isinstance(value, Mapping):
+        return FrozenMap(value)
+    if isinstance(value, (list, tuple)) or (hasattr(value, "__iter__")
+                                            and not isinstance(value, (str, bytes))):
+        return tuple(_freeze(v) for v in value)
+    return value
+
+
+class FrozenMap(dict):
+    """A read-only mapping that hashes, for a config field (a problem is cached by its
+    config): its values frozen too (a list becomes a tuple)."""
+
+    def __init__(self, items: Any = ()) -> None:
+        super().__init__({str(k): _freeze(v) for k, v in dict(items).items()})
+
+    def __hash__(self) -> int:  # type: ignore[override]
+        return hash(tuple(sorted(self.items())))
+
+    def __reduce__(self) -> Any:
+        return (FrozenMap, (dict(self),))
+
+    def _read_only(self, *args: Any, **kwargs: Any) -> Any:
+        raise TypeError("a config mapping is read-only")
+
+    __setitem__ = __delitem__ = update = pop = popitem = clear = setdefault = _read_only  # type: ignore[assignment]
+
+
+def freeze_fields(config: Any, *names: str) -> None:
+    """Make the mapping fields ``names`` of a frozen config :class:`FrozenMap` (a mapping
+    from the command line arrives as a dict)."""
+    for name in names:
+        value = getattr(config, name)
+        if value is None:
+            value = {}
+        if not isinstance(value, Mapping):
+            raise ConfigError(f"problem.{name}", value, f"a mapping of names, e.g. "
+                              f"problem.{name}.<name>=...")
+        object.__setattr__(config, name, FrozenMap(value))
+
+
+def _kind(name: str, unit: str) -> str:
+    if name in QUANTITIES:
+        return QUANTITIES[name][1]
+    return "scale" if unit in SCALE_UNITS else "geometry"
+
+
+@dataclasses.dataclass(frozen=True)
+class Plan:
+    """What a problem identifies and states under a config: ``identified`` names (the
+    model's not fixed, then freed known ones) with ``units``; ``values`` of every quantity
+    (the parameter set's with the user's); ``sources`` of each stated one; the user's
+    ``boxes``; ``model_names`` the model's own identified names, in order."""
+
+    parameter_set: str
+    model_names: tuple[str, ...]
+    identified: tuple[str, ...]
+    units: dict[str, str]
+    values: dict[str, float]
+    sources: dict[str, str]
+    boxes: dict[str, tuple[float, float]]
+
+    @property
+    def reparametrised(self) -> bool:
+        """Whether the identified names differ from the model's (a quantity fixed or
+        freed)."""
+        return self.identified != self.model_names
+
+    @property
+    def freed(self) -> tuple[str, ...]:
+        return tuple(n for n in self.identified if n not in self.model_names)
+
+    def known_list(self) -> list[dict[str, Any]]:
+        """The stated quantities as the run record keeps them (``problem.info.known``):
+        ``{"name", "value", "unit", "source", "what"}`` each."""
+        return [{"name": n, "value": float(self.values[n]), "unit": self.units[n],
+                 "source": self.sources[n],
+                 "what": QUANTITIES[n][2] if n in QUANTITIES else "fixed by you"}
+                for n in self.values if n not in self.identified]
+
+    def box_list(self, lower: Sequence[float], upper: Sequence[float]) -> list[dict[str, Any]]:
+        """The box of each identified quantity with its source (``problem.info.box``)."""
+        return [{"name": n, "lower": float(lo), "upper": float(hi), "unit": self.units[n],
+                 "source": (f"set by you (problem.bounds.{n})" if n in self.boxes else
+                            f"[0.5, 1.5] x parameter set {self.parameter_set}")}
+                for n, lo, hi in zip(self.identified, lower, upper, strict=True)]
+
+
+def _mapping(value: Any, key: str) -> dict[str, Any]:
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping):
+        raise ConfigError(key, value, "a mapping of names to values, e.g. "
+                          f"{key}.kt=210000")
+    return {str(k): v for k, v in value.items()}
+
+
+def _number(value: Any) -> float | None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def _check_value(name: str, value: Any, unit: str, geometry_of: dict[str, float]) -> float:
+    key = f"problem.known.{name}"
+    x = _number(value)
+    zero_ok = unit in MAY_BE_ZERO
+    if x is None or x < 0 or (x == 0 and not zero_ok):
+        raise ConfigError(key, value, f"a finite value {'>= 0' if zero_ok else '> 0'} "
+                          f"({unit}), or {FREE} to identify it")
+    if name in ("a1", "lf") and "L" in geometry_of and not x < geometry_of["L"]:
+        raise ConfigError(key, value, f"a length < the wheelbase L = {geometry_of['L']:g} m")
+    return x
+
+
+def scale_group(names: Sequence[str], units: Mapping[str, str]) -> list[str]:
+    """The quantities of ``names`` that scale together (masses, inertias, stiffnesses,
+    dampings, forces)."""
+    return [n for n in names if _kind(n, units[n]) == "scale"]
+
+
+def _check_identifiable(problem: str, identified: Sequence[str], values: Mapping[str, float],
+                        units: Mapping[str, str], freed: Sequence[str]) -> None:
+    group = scale_group(list(values), units)
+    stated = [n for n in group if n not in identified and values[n] != 0]
+    if freed and not stated:
+        name = freed[0]
+        others = ", ".join(n for n in group if n != name and values[n] != 0)
+        raise ConfigError(f"problem.known.{name}", FREE,
+                          f"a stated value: freeing it leaves {problem} unidentifiable by "
+                          "scaling (every mass, stiffness and damping times one factor gives "
+                          f"the same record); state one of {others} with problem.known.<name>"
+                          "=value first")
+    if not identified:
+        raise ConfigError("problem.known", dict(values), "at least one quantity left to "
+                          "identify")
+
+
+def _plain(value: Any) -> Any:
+    return list(value) if isinstance(value, tuple) else value
+
+
+def _boxes(raw: Mapping[str, Any], identified: Sequence[str]) -> dict[str, tuple[float, float]]:
+    out = {}
+    for name, value in raw.items():
+        key = f"problem.bounds.{name}"
+        if name not in identified:
+            raise ConfigError(key, _plain(value), "the name of an identified quantity, one of "
+                              + ", ".join(identified))
+        pair = list(value) if isinstance(value, Sequence) and not isinstance(value, str) \
+            else None
+        nums = [_number(v) for v in pair] if pair is not None else []
+        if len(nums) != 2 or None in nums or not 0 < nums[0] < nums[1]:
+            raise ConfigError(key, _plain(value), "[lo, hi] with 0 < lo < hi, finite (the box of "
+                              f"{name} in SI units)")
+        out[name] = (float(nums[0]), float(nums[1]))
+    return out
+
+
+def plan(config: Any, model: Any, problem: str = "this problem") -> Plan:
+    """Check ``config.known`` and ``config.bounds`` against ``model`` (a ride model: its
+    ``names``, ``units`` and ``sets``) and return the :class:`Plan`; :class:`ConfigError`
+    naming the key and the allowed names or values."""
+    pset = config.parameter_set
+    published = dict(model.sets[pset])
+    units = dict(zip(model.names, model.units, strict=True))
+    units.update({n: QUANTITIES[n][0] if n in QUANTITIES else "" for n in published
+                  if n not in units})
+    raw = _mapping(getattr(config, "known", None), "problem.known")
+    values, sources = dict(published), {n: f"parameter set {pset}" for n in published}
+    fixed, freed = [], []
+    for name, value in raw.items():
+        if name not in published:
+            raise ConfigError(f"problem.known.{name}", value, "one of "
+                              + ", ".join(published) + f" (the quantities of {problem})")
+        if value == FREE:
+            if name in model.names:
+                continue  # identified already
+            if _kind(name, units[name]) != "scale":
+                raise ConfigError(f"problem.known.{name}", value, f"a value ({units[name]}):"
+                                  f" {name} is geometry {problem} states and cannot identify")
+            freed.append(name)
+            continue
+        values[name] = _check_value(name, value, units[name], values)
+        sources[name] = f"set by you (problem.known.{name})"
+        if name in model.names:
+            fixed.append(name)
+    identified = tuple([n for n in model.names if n not in fixed] + freed)
+    _check_identifiable(problem, identified, values, units, freed)
+    boxes = _boxes(_mapping(getattr(config, "bounds", None), "problem.bounds"), identified)
+    for name in freed:
+        if values[name] == 0 and name not in boxes:
+            raise ConfigError(f"problem.known.{name}", FREE, f"a box for it too: its value in "
+                              f"parameter set {pset} is 0, so give problem.bounds.{name}="
+                              "[lo,hi]")
+    return Plan(pset, tuple(model.names), identified, units, values, sources, boxes)
+
+
+def is_default(config: Any) -> bool:
+    """Whether ``config`` states nothing beyond its parameter set (no known, no bounds)."""
+    return not getattr(config, "known", None) and not getattr(config, "bounds", None)
+
+
+class StatedModel:
+    """A ride model under a :class:`Plan`: its ``names`` and ``units`` are the identified
+    ones, its parameter set the plan's values, its ``box`` the model's with the user's boxes;
+    ``simulate``, ``system`` and ``physical`` take rows of the identified quantities and
+    call the model with its own rows and known values. Everything else is the model's."""
+
+    def __init__(self, base: Any, plan: Plan) -> None:
+        self.base = base
+        self.plan = plan
+        self.names = plan.identified
+        self.units = tuple(plan.units[n] for n in plan.identified)
+        self.sets = {plan.parameter_set: dict(plan.values)}
+        self._col = {n: j for j, n in enumerate(plan.identified)}
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.__dict__["base"], name)
+
+    def _model_rows(self, X: np.ndarray, known: Mapping[str, float]
+                    ) -> list[tuple[np.ndarray, dict[str, float]]]:
+        """Groups of the model's own rows with their known values: one group, or one per
+        row where a known quantity is identified (it differs from row to row)."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        if not self.plan.reparametrised:
+            return [(X, dict(known))]
+        full = np.empty((X.shape[0], len(self.plan.model_names)))
+        for j, name in enumerate(self.plan.model_names):
+            full[:, j] = X[:, self._col[name]] if name in self._col else known[name]
+        base_known = {k: v for k, v in known.items() if k not in self.plan.model_names}
+        if not self.plan.freed:
+            return [(full, base_known)]
+        return [(full[i:i + 1], {**base_known, **{n: float(X[i, self._col[n]])
+                                                  for n in self.plan.freed}})
+                for i in range(X.shape[0])]
+
+    def box(self, nominal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The model's box around the plan's values, each freed quantity's ``[0.5, 1.5] x``
+        its value, then the user's boxes."""
+        v = self.plan.values
+        lo, hi = self.base.box(np.array([v[n] for n in self.plan.model_names]))
+        lower = {n: lo[j] for j, n in enumerate(self.plan.model_names)}
+        upper = {n: hi[j] for j, n in enumerate(self.plan.model_names)}
+        for n in self.plan.freed:
+            lower[n], upper[n] = 0.5 * v[n], 1.5 * v[n]
+        for n, (a, b) in self.plan.boxes.items():
+            lower[n], upper[n] = a, b
+        return (np.array([lower[n] for n in self.names], dtype=float),
+                np.array([upper[n] for n in self.names], dtype=float))
+
+    def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
+        ok = [self.base.physical(rows, k) for rows, k in self._model_rows(X, known)]
+        out = np.concatenate(ok)
+        if self.plan.freed:
+            F = np.atleast_2d(X)[:, [self._col[n] for n in self.plan.freed]]
+            out &= np.all(np.isfinite(F) & (F >= 0), axis=1)
+        return out
+
+    def system(self, X: np.ndarray, known: dict[str, float], sensors: str, *args: Any) -> Any:
+        groups = self._model_rows(X, known)
+        if len(groups) != 1:
+            raise NotImplementedError("one system per row where a known quantity is freed")
+        rows, k = groups[0]
+        return self.base.system(rows, k, sensors, *args)
+
+    def simulate(self, X: np.ndarray, known: dict[str, float], sensors: str, u: np.ndarray,
+                 dt: float, solver: str) -> np.ndarray:
+        return np.concatenate([self.base.simulate(rows, k, sensors, u, dt, solver)
+                               for rows, k in self._model_rows(X, known)])
+
+
+def stated_model(base: Any, config: Any, problem: str) -> Any:
+    """``base`` itself when the config states nothing beyond its parameter set, else the
+    :class:`StatedModel` of its :func:`plan`."""
+    if is_default(config):
+        return base
+    return StatedModel(base, plan(config, base, problem))
+
+
+def check_config(config: Any, model: Any) -> Plan:
+    """:func:`plan` of a ride config, when it is built (so the pre-flight refuses a bad key
+    before any job); a quantity fixed or freed is refused for a simulated record made by a
+    richer model (it is made from the model's own parameter vector)."""
+    p = plan(config, model)
+    richer = getattr(config, "record_model", "linear")
+    if p.reparametrised and config.reference.file is None and richer != "linear":
+        name = next(n for n in (*p.model_names, *p.freed) if n not in p.identified
+                    or n in p.freed)
+        raise ConfigError(f"problem.known.{name}", config.known.get(name),
+                          f"no fixed or freed quantity with record_model={richer} (a "
+                          "simulated record of a richer model); state values only, or fit "
+                          "a record of your own (problem.reference.file)")
+    return p
+
+
+def input_text(config: Any, input_names: Sequence[str], columns: Mapping[str, str]) -> str:
+    """Which input a fit of a user's record used, in words (``problem.info.input``)."""
+    if input_names:
+        named = [n if columns.get(n, n) == n else f"{n} (column {columns[n]})"
+                 for n in input_names]
+        return "the record's " + ", ".join(named)
+    what = []
+    for key in ("road", "road_class", "manoeuvre", "steer_deg", "speed_kmh"):
+        if hasattr(config, key):
+            what.append(f"{key}={getattr(config, key)}")
+    return "the configured input (problem.reference.input=config: " + ", ".join(what) + ")"
+
+
+def info(problem: Any) -> dict[str, Any]:
+    """What a ride problem's ``describe()`` adds: ``known`` (:meth:`Plan.known_list`),
+    ``box`` (:meth:`Plan.box_list`) and, for a user's record, ``input`` (which input the fit
+    used)."""
+    model, config = problem.model, problem.config
+    p = model.plan if isinstance(model, StatedModel) else plan(config, model)
+    lower, upper = model.box(problem.nominal)
+    out: dict[str, Any] = {"known": p.known_list(), "box": p.box_list(lower, upper)}
+    source = getattr(problem, "input_source", None)
+    if source:
+        out["input"] = source
+    return out
