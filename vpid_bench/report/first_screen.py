@@ -24,7 +24,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from ..estimators import DESCRIPTION
-from . import anytime, verdicts
+from . import anytime, assumed, verdicts
 from .body import verdict_short
 from .render import fmt, markdown, para, terminal
 from .safe import clean, escape
@@ -52,6 +52,8 @@ class ContextResult:
     truth: bool = True  # False: the problem has no truth (a measured record)
     identified: Any = None  # without a truth: .estimates.Identified, the values and intervals
     comparisons: list[dict[str, Any]] = dataclasses.field(default_factory=list)
+    #: the stated quantities, boxes and input the answer depends on (:mod:`.assumed`)
+    assumed: list[Any] = dataclasses.field(default_factory=list)
 
     def value(self, x: float) -> str:
         """A metric value with its unit."""
@@ -129,7 +131,8 @@ def context_result(data: Any, context: str) -> ContextResult:
     verdict = verdicts.decide(evidence(data, context))
     return ContextResult(context, metric, unit, headers, body, verdict.floor, verdict.bound,
                          verdict_text(verdict), mgroups is not None, verdict, verdict.truth,
-                         data.identified.get(context), data.comparisons.get(context, []))
+                         data.identified.get(context), data.comparisons.get(context, []),
+                         assumed.blocks(data, context))
 
 
 def evidence(data: Any, context: str) -> verdicts.Evidence:
@@ -489,10 +492,11 @@ def markdown_lines(items: Sequence[ContextResult]) -> list[str]:
 
 
 def extra_blocks(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
-    """What every renderer shows below a context's ranking: for a context without a truth,
-    the identified values with their intervals and the problem's comparison rows, as
-    ``(Markdown text, headers, rows)`` (empty headers: text only); nothing otherwise."""
-    return [] if r.truth else _no_truth_lines(r)
+    """What every renderer shows below a context's ranking: what the answer assumes (stated
+    quantities, boxes, input, estimates on a bound: :mod:`.assumed`) and, for a context
+    without a truth, the identified values with their intervals and the problem's comparison
+    rows, as ``(Markdown text, headers, rows)`` (empty headers: text only)."""
+    return list(r.assumed) + ([] if r.truth else _no_truth_lines(r))
 
 
 def terminal_width() -> int:

@@ -70,7 +70,8 @@ def _index(model: Any, pages: Pages, colour_of: Mapping[str, str]) -> dict[str, 
     verdicts = []
     for p in data.problems:
         items = [{"verdict": r.verdict, "context": r.context, "anchor": _anchor(r.context),
-                  "n": len(r.rows), "decision": decision(getattr(r, "decision", None), pages)}
+                  "n": len(r.rows), "decision": decision(getattr(r, "decision", None), pages),
+                  "assumed": [text for text, _, _ in getattr(r, "assumed", [])]}
                  for r in model.results if of.get(r.context) == p]
         verdicts.append({"name": p, "href": pages.problem(p), "contexts": items})
     n_ok = sum(r["status"] == "ok" for r in data.loaded.records)
