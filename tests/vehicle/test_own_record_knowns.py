@@ -22,10 +22,10 @@ G = 9.80665
 #: The car that makes the record: its quarter (kg, kg, N/m, N s/m) and tyre (N/m).
 TRUTH = {"ms": 300.0, "mu": 40.0, "ks": 29500.0, "cs": 1700.0}
 KT = 210000.0
-#: Its spring is progressive (``ks d (1 + PROGRESSION (d / 0.05 m)^2)``: 50 % stiffer at a
-#: 5 cm stroke) and its damper 2:1 in rebound against compression (``cs (1 +- ASYMMETRY)``);
+#: Its spring is progressive (``ks d (1 + PROGRESSION (d / 0.05 m)^2)``: 20 % stiffer at a
+#: 5 cm stroke) and its damper 1.5:1 in rebound against compression (``cs (1 +- ASYMMETRY)``);
 #: the fitted model's are linear.
-PROGRESSION, ASYMMETRY = 0.5, 1 / 3
+PROGRESSION, ASYMMETRY = 0.2, 0.2
 
 
 def _rates(s: np.ndarray, h: float, hd: float) -> np.ndarray:
