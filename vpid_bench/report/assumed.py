@@ -40,12 +40,25 @@ def _num(value: Any) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
-def _grouped(items: list[tuple[str, str]]) -> str:
-    """``(source, text)`` pairs as "source: text, text; source: text" (sources in order)."""
-    by: dict[str, list[str]] = {}
-    for source, text in items:
-        by.setdefault(source, []).append(text)
-    return "; ".join(f"{escape(src)}: {', '.join(texts)}" for src, texts in by.items())
+#: A group of more boxes than this from one source that is not the user's is named, not
+#: listed (the paper's nine: "m, I, m1, ... (9)"; the numbers are in the records).
+MAX_LISTED = 4
+
+
+def _grouped(items: list[tuple[str, str, str]], short: bool = False) -> str:
+    """``(source, name, text)`` items as "source: text, text; source: text" (sources in
+    order); with ``short``, a large group not set by the user gives its names only."""
+    by: dict[str, list[tuple[str, str]]] = {}
+    for source, name, text in items:
+        by.setdefault(source, []).append((name, text))
+    parts = []
+    for src, entries in by.items():
+        if short and len(entries) > MAX_LISTED and not src.startswith("set by you"):
+            body = ", ".join(escape(n) for n, _ in entries) + f" ({len(entries)})"
+        else:
+            body = ", ".join(t for _, t in entries)
+        parts.append(f"{escape(src)}: {body}")
+    return "; ".join(parts)
 
 
 def _known_text(known: Any) -> str:
@@ -58,7 +71,8 @@ def _known_text(known: Any) -> str:
         if name is None or value is None or source is None:
             continue
         what = _text(k.get("what"))
-        items.append((source, f"{escape(name)} = {fmt(value, 6)} {escape(unit or '')}".rstrip()
+        items.append((source, name,
+                      f"{escape(name)} = {fmt(value, 6)} {escape(unit or '')}".rstrip()
                       + (f" ({escape(what)})" if what else "")))
     return _grouped(items)
 
@@ -73,8 +87,9 @@ def _box_text(box: Any) -> str:
         if name is None or lo is None or hi is None or source is None:
             continue
         unit = escape(_text(b.get("unit")) or "")
-        items.append((source, f"{escape(name)} [{fmt(lo, 6)}, {fmt(hi, 6)}] {unit}".rstrip()))
-    return _grouped(items)
+        items.append((source, name,
+                      f"{escape(name)} [{fmt(lo, 6)}, {fmt(hi, 6)}] {unit}".rstrip()))
+    return _grouped(items, short=True)
 
 
 def _context_records(data: Any, context: str) -> list[Mapping[str, Any]]:
