@@ -129,7 +129,7 @@ class ReferenceConfig:
     ignore: tuple[str, ...] = added_setting(default=())
 
     def __post_init__(self) -> None:
-        knowns.freeze_fields(self, "columns")
+        knowns.freeze_fields(self, "columns", prefix="problem.reference.")
 
     def mapping(self) -> Any:
         """The record reader's view of the mapping keys."""

@@ -90,16 +90,16 @@ class FrozenMap(dict):
     __setitem__ = __delitem__ = update = pop = popitem = clear = setdefault = _read_only  # type: ignore[assignment]
 
 
-def freeze_fields(config: Any, *names: str) -> None:
+def freeze_fields(config: Any, *names: str, prefix: str = "problem.") -> None:
     """Make the mapping fields ``names`` of a frozen config :class:`FrozenMap` (a mapping
-    from the command line arrives as a dict)."""
+    from the command line arrives as a dict); ``prefix`` names the key in an error."""
     for name in names:
         value = getattr(config, name)
         if value is None:
             value = {}
         if not isinstance(value, Mapping):
-            raise ConfigError(f"problem.{name}", value, f"a mapping of names, e.g. "
-                              f"problem.{name}.<name>=...")
+            raise ConfigError(f"{prefix}{name}", value, "a mapping of names, e.g. "
+                              f"{prefix}{name}.<name>=...")
         object.__setattr__(config, name, FrozenMap(value))
 
 

@@ -6,7 +6,11 @@ follow its name in square brackets, ``z1dd [m/s^2]``; a name without one is read
 unit the problem states (so a ``reference.csv`` that vpid-bench wrote is read back as is).
 Units of another size are converted (:data:`UNITS`: ``ms``, ``g``, ``mm``, ``cm``,
 ``km/h``, ``deg``, ``deg/s`` ...); a unit of another quantity, or one not in the table, is
-refused. Columns the problem does not ask for are ignored; the same name twice is refused.
+refused. The same name twice is refused, and so is a column the problem does not use
+(unless ``problem.reference.ignore`` lists it: a record is read whole or not at all).
+
+**Mapping** (``problem.reference.columns``, :class:`ColumnMap`): a problem's name read from
+another column, ``{h: road}``, its unit from the mapping (``'road [mm]'``) or the header.
 
 **Time.** ``t`` (s) must increase from row to row; its rate and start are free (a record at
 500 Hz from t = 12.3 s is read as it is). The record's first row is the model's time 0 (the
@@ -17,11 +21,17 @@ interpolation between the two steps around each (:class:`Sampler`).
 
 **Inputs** (the road under each wheel, the steer angle and speed): columns sampled at the
 record's times, interpolated linearly onto the model's steps (:meth:`Sampler.onto_steps`).
+A record without them is refused unless ``problem.reference.input=config`` says the
+configured input is meant (never a silent fallback).
 
 **Refused**, each with one line naming the column, row or time: no such file, not UTF-8
-text, not CSV, no header, a required column missing, a column twice, an unknown unit or one
-of another quantity, a row without a number in a used column, a non-finite value, a time
-that does not increase, fewer than :data:`MIN_ROWS` rows, more than :data:`MAX_ROWS`.
+text, not CSV, no header, a required column missing, an unused column, a column twice, an
+unknown unit or one of another quantity, a row without an ASCII number (:data:`NUMBER`) in a
+used column, a non-finite value or one beyond :data:`MAX_MAGNITUDE` in SI units, a time
+that does not increase, fewer than :data:`MIN_ROWS` rows, more than :data:`MAX_ROWS`, a
+measured channel zero or denormal throughout or dominated by one sample
+(:func:`check_channels`), a span of fewer than :data:`MIN_ROWS` model steps
+(:func:`check_span`).
 """
 
 from __future__ import annotations
@@ -214,7 +224,10 @@ def _find(path: Path, header: dict[str, tuple[int, str | None]], col: Column,
 
 
 def _check_mapping(mapping: ColumnMap, names: list[str], header: dict[str, Any]) -> None:
-    for key in mapping.columns:
+    for key, value in mapping.columns.items():
+        if not isinstance(value, str) or not value.strip():
+            raise ConfigError(f"problem.reference.columns.{key}", value, "a column name of "
+                              "the record (a unit in brackets optional: 'road [mm]')")
         if key not in names:
             raise ConfigError(f"problem.reference.columns.{key}", mapping.columns[key],
                               "a mapping from the problem's names, one of " + ", ".join(names))

@@ -286,6 +286,11 @@ def test_columns_map_units_and_ignore(tmp_path, logger_record):
     with pytest.raises(ConfigError, match=r"problem.reference.columns.road='h' is not allowed: "
                        r"a mapping from the problem's names, one of t, zsdd, zudd, h"):
         RideQuarterConfig(reference=RecordFileConfig(str(logger_record), columns={"road": "h"}))
+    with pytest.raises(ConfigError, match="problem.reference.columns='road' is not allowed"):
+        RecordFileConfig(str(logger_record), columns="road")
+    with pytest.raises(ConfigError, match="problem.reference.columns.h=5 is not allowed: a "
+                       "column name"):
+        RideQuarterConfig(reference=RecordFileConfig(str(logger_record), columns={"h": 5}))
     with pytest.raises(ConfigError, match="problem.reference.columns.h='street' is not allowed: "
                        "a column of my_car.csv; found columns time, body_acc, wheel_acc, road"):
         RideQuarterConfig(reference=RecordFileConfig(str(logger_record),

@@ -123,7 +123,7 @@ class RecordFileConfig:
     input: str = added_setting(default="record")
 
     def __post_init__(self) -> None:
-        knowns.freeze_fields(self, "columns")
+        knowns.freeze_fields(self, "columns", prefix="problem.reference.")
 
     def mapping(self) -> ColumnMap:
         """The record reader's view of the mapping keys."""
