@@ -319,3 +319,27 @@ def test_the_configured_input_is_used_only_when_said(tmp_path, logger_record):
                                                      input="config"))
     with pytest.raises(ConfigError, match="problem.reference.input='both' is not allowed"):
         RideQuarterConfig(reference=RecordFileConfig(str(logger_record), input="both"))
+
+
+def test_the_paper_problem_reads_a_loggers_names_and_its_written_reference(tmp_path):
+    """``problem=vehicle``: its channels from a logger's columns by the mapping, a column
+    listed in ``ignore`` left unread, another unused one refused; the bump is its input (no
+    input column, no ``input`` key); a written reference.csv keeps its clean columns."""
+    from vehicle_helpers import make
+
+    src = make(**{"noise.level": 0.0})
+    y = src.responses(src._x_true[None])[0]
+    path = tmp_path / "paper.csv"
+    path.write_text("time,front [g],rear,speed\n" + "".join(
+        f"{float(12.3 + t)!r},{float(a / G)!r},{float(b)!r},20.0\n"
+        for t, a, b in zip(src.t, *y, strict=True)))
+    cols = {"t": "time", "z1dd": "front", "z2dd": "rear"}
+    p = make(**{"reference.file": str(path), "reference.columns": cols,
+                "reference.ignore": ("speed",)})
+    np.testing.assert_allclose(p.reference, y, rtol=1e-12)
+    assert p.evaluate(src._x_true[None])[0] < 1e-9
+    with pytest.raises(ConfigError, match="column 'speed' is not used"):
+        make(**{"reference.file": str(path), "reference.columns": cols})
+    written = src.write_artifacts(tmp_path)[0]
+    assert "z1dd_clean" in written.read_text().splitlines()[0]
+    make(**{"reference.file": str(written)})  # read back as it is
