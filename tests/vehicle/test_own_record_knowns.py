@@ -144,6 +144,8 @@ def test_a_richer_cars_record_with_the_tyre_stated_gives_ms_mu_ks_within_2_perce
     screen = (folder / "report" / "report.md").read_text()
     assert "kt = 210000 N/m (tyre stiffness)" in screen and "problem.known.kt" in screen
     assert "ks [15000, 45000] N/m" in screen and "Input used: the record's h" in screen
+    overview = (folder / "report" / "index.html").read_text()
+    assert "kt = 210000 N/m (tyre stiffness)" in overview  # the HTML overview too
 
 
 def test_the_parameter_sets_tyre_scales_every_estimate(logger_record):
