@@ -145,17 +145,37 @@ def build_dataclass(cls: type[T], mapping: Mapping[str, Any] | None, prefix: str
 
 #: Field metadata of :func:`added_setting`.
 ADDED_SETTING = "vpid_bench_added_setting"
+#: Field metadata of a mapping whose keys the user names (``open_keys=True``).
+OPEN_KEYS = "vpid_bench_open_keys"
 
 
 def added_setting(default: Any = dataclasses.MISSING,
-                  default_factory: Any = dataclasses.MISSING) -> Any:
+                  default_factory: Any = dataclasses.MISSING, open_keys: bool = False) -> Any:
     """A config field added after runs and archives were recorded, whose default reproduces
     the problem as it was (``reference: RecordFileConfig = added_setting(default_factory=
     RecordFileConfig)``). At its default it is left out of a job's settings
     (:func:`settings_of`): records, run ids and instance optima made before the key existed
-    stay valid, and so do archives; any other value is recorded as usual."""
+    stay valid, and so do archives; any other value is recorded as usual.
+
+    ``open_keys=True``: a mapping whose keys the user names on the command line
+    (``problem.known.kt=210000`` without Hydra's ``+``); its Hydra node is left open
+    (:func:`open_key_paths`), and the problem checks the names itself, listing the allowed
+    ones."""
     return dataclasses.field(default=default, default_factory=default_factory,
-                             metadata={ADDED_SETTING: True})
+                             metadata={ADDED_SETTING: True, OPEN_KEYS: open_keys})
+
+
+def open_key_paths(cls: type, prefix: str = "") -> list[str]:
+    """The dotted paths of the ``open_keys`` fields of the dataclass ``cls`` (at any depth)."""
+    out: list[str] = []
+    hints = typing.get_type_hints(cls)
+    for f in dataclasses.fields(cls):
+        path = f"{prefix}{f.name}"
+        if f.metadata.get(OPEN_KEYS):
+            out.append(path)
+        elif _is_dataclass_type(hints.get(f.name)):
+            out.extend(open_key_paths(hints[f.name], path + "."))
+    return out
 
 
 def settings_of(obj: Any) -> Any:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import importlib.resources
 from typing import Any
 
-from ..params import dataclass_defaults, hydra_node
+from ..params import dataclass_defaults, hydra_node, open_key_paths
 from ..plugins import Registry
 from ..problem import FILLED_PARAMS
 from ..spec import JobSpec
@@ -52,8 +52,24 @@ def register_configs(registry: Registry) -> None:
                  node=hydra_node(cls.Params, name, exclude=FILLED_PARAMS),
                  provider=registry.owner("optimizer", name))
     for name, cls in sorted(registry.problems.items()):
-        cs.store(group="problem", name=name, node=hydra_node(cls.Config, name),
+        cs.store(group="problem", name=name, node=problem_node(cls.Config, name),
                  provider=registry.owner("problem", name))
+
+
+def problem_node(config: type, name: str) -> Any:
+    """A problem's node: :func:`~vpid_bench.params.hydra_node`, with the mappings whose keys
+    the user names (``added_setting(open_keys=True)``: ``problem.known.kt=210000``) left open
+    to new keys; the problem checks those names itself."""
+    node = hydra_node(config, name)
+    paths = open_key_paths(config)
+    if not paths:
+        return node
+    from omegaconf import OmegaConf
+
+    out = OmegaConf.create(node)
+    for path in paths:
+        OmegaConf.set_struct(OmegaConf.select(out, path), False)
+    return out
 
 
 def spec_node() -> dict[str, Any]:

@@ -219,9 +219,19 @@ def _apply(cfg: Any, o: Any) -> None:
         with open_dict(cfg):
             OmegaConf.update(cfg, key, value, merge=True, force_add=True)
         return
-    if not exists:
+    if not exists and not _open_parent(cfg, key):
         raise _unknown_key(cfg, key, value)
     OmegaConf.update(cfg, key, value, merge=True)
+
+
+def _open_parent(cfg: Any, key: str) -> bool:
+    """Whether ``key`` is a new key of a mapping left open to new keys (a plugin's
+    ``added_setting(open_keys=True)``, e.g. ``problem.known``); the plugin checks the name."""
+    from omegaconf import DictConfig, OmegaConf
+
+    parent = key.rpartition(".")[0]
+    node = OmegaConf.select(cfg, parent, default=None) if parent else None
+    return isinstance(node, DictConfig) and not OmegaConf.is_struct(node)
 
 
 def _unknown_key(cfg: Any, key: str, value: Any) -> ConfigError:
