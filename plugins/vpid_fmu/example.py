@@ -23,6 +23,8 @@ import tempfile
 import zipfile
 from pathlib import Path
 
+import numpy as np
+
 SOURCE = Path(__file__).with_name("sources") / "quarter_car.c"
 GUID = "{8c4e810f-3df3-4a00-8276-176fa3c9f000}"
 IDENTIFIER = "quarter_car"
@@ -172,13 +174,63 @@ def build(out: str | Path, fmi: int = 2, kinds: tuple[str, ...] = ("cs", "me"),
     return out
 
 
+def road(t: np.ndarray, seed: int = 0, rms: float = 0.02) -> np.ndarray:
+    """A random road height (m) at the times ``t``: 40 sines from 0.5 to 25 Hz with random
+    phases and amplitudes falling as ``1/f`` (a rough road met at speed), eased in from 0 over
+    the first 0.5 s, scaled to ``rms``."""
+    rng = np.random.default_rng(seed)
+    f = np.geomspace(0.5, 25.0, 40)
+    phase = rng.uniform(0, 2 * np.pi, f.size)
+    h = np.sum(np.sin(2 * np.pi * f[:, None] * t[None] + phase[:, None]) / f[:, None], axis=0)
+    ramp = np.clip(t / 0.5, 0.0, 1.0)  # from rest: the road eased in over 0.5 s
+    h *= ramp * ramp * (3 - 2 * ramp)
+    return rms * h / np.sqrt(np.mean(h**2))
+
+
+def write_record(fmu: str | Path, out: str | Path, truth: dict[str, float] | None = None,
+                 duration: float = 4.0, rate: float = 500.0, noise: float = 0.03,
+                 seed: int = 0, fine_step: float = 1e-4) -> Path:
+    """A record of the example FMU at ``rate`` Hz written to ``out`` (CSV: ``t, h, zsdd,
+    zudd``), made independently of vpid-bench's importer: fmpy's ``simulate_fmu``
+    (co-simulation) at ``fine_step`` s with the road given at the record's samples (fmpy
+    interpolates it linearly and holds it over each fine step, at the step's middle), the
+    outputs kept at the record's samples, plus white Gaussian noise of ``noise`` times each
+    channel's rms."""
+    from fmpy import simulate_fmu
+
+    n = int(round(duration * rate))
+    t = np.arange(n) / rate
+    h = road(t, seed)
+    signal = np.zeros(n, dtype=[("time", float), ("h", float)])
+    # fmpy holds the input over each fine step at its value at the step's start: the times
+    # moved half a step earlier make that the value at the step's middle (no lag)
+    signal["time"], signal["h"] = t - 0.5 * fine_step, h
+    every = int(round(1.0 / (rate * fine_step)))
+    result = simulate_fmu(str(fmu), fmi_type="CoSimulation", start_values=dict(truth or {}),
+                          input=signal, step_size=fine_step, output_interval=fine_step,
+                          stop_time=t[-1], output=["zsdd", "zudd"])
+    rng = np.random.default_rng([seed, 1])
+    columns = [t, h]
+    for name in ("zsdd", "zudd"):
+        y = np.asarray(result[name])[::every][:n]
+        columns.append(y + noise * np.sqrt(np.mean(y**2)) * rng.standard_normal(n))
+    out = Path(out)
+    np.savetxt(out, np.column_stack(columns), delimiter=",", header="t,h,zsdd,zudd",
+               comments="", fmt="%.17g")
+    return out
+
+
 def main(argv: list[str] | None = None) -> None:
-    """``python -m vpid_fmu.example OUT.fmu [--fmi 2|3]``."""
+    """``python -m vpid_fmu.example OUT.fmu [--fmi 2|3] [--record OUT.csv]``."""
     ap = argparse.ArgumentParser(description="Build the example quarter-car FMU (gcc).")
     ap.add_argument("out")
     ap.add_argument("--fmi", type=int, choices=(2, 3), default=2)
+    ap.add_argument("--record", help="also write a 4 s record at 500 Hz with 3 %% noise, made "
+                    "by the FMU at its start values (CSV)")
     args = ap.parse_args(argv)
     print(build(args.out, fmi=args.fmi, kinds=("cs",) if args.fmi == 3 else ("cs", "me")))
+    if args.record:
+        print(write_record(args.out, args.record))
 
 
 if __name__ == "__main__":
