@@ -10,9 +10,10 @@ import pytest
 
 pytest.importorskip("fmpy")
 
-from vpid_bench.params import build_dataclass  # noqa: E402
 from vpid_fmu import example  # noqa: E402
 from vpid_fmu.problem import FmuConfig, FmuProblem  # noqa: E402
+
+from vpid_bench.params import build_dataclass  # noqa: E402
 
 TRUTH = {"ms": 280.0, "mu": 33.0, "ks": 17000.0, "cs": 1300.0}
 X_TRUE = np.array(list(TRUTH.values()))
