@@ -43,30 +43,32 @@ _E = _B - np.array([5179 / 57600, 0.0, 7571 / 16695, 393 / 640, -92097 / 339200,
 def cs2_derivatives(do_step, set_real, set_der, get_real, c, t, u, vr_in, vr_out, order, y):
     """FMI 2.0 co-simulation with the input's slope over each step
     (``fmi2SetRealInputDerivatives``, order 1): the FMU sees the input linear between
-    samples, as the record has it."""
+    samples, as the record has it. (Addresses are computed once: ``u`` and ``y`` are
+    C-contiguous, a row ``8 r`` and ``8 p`` bytes apart.)"""
     n, r = u.shape
+    p = vr_out.size
     du = np.empty(r)
-    buf = np.empty(vr_out.size)
+    pu, py, pdu = u.ctypes.data, y.ctypes.data, du.ctypes.data
+    pin, pout, pord = vr_in.ctypes.data, vr_out.ctypes.data, order.ctypes.data
     for k in range(n - 1):
         h = t[k + 1] - t[k]
         for j in range(r):
             du[j] = (u[k + 1, j] - u[k, j]) / h
-        s = set_real(c, vr_in.ctypes.data, r, u[k].ctypes.data)
+        s = set_real(c, pin, r, pu + 8 * r * k)
         if s > 1:
             return s, k
-        s = set_der(c, vr_in.ctypes.data, r, order.ctypes.data, du.ctypes.data)
+        s = set_der(c, pin, r, pord, pdu)
         if s > 1:
             return s, k
         s = do_step(c, t[k], h, 1)
         if s > 1:
             return s, k
-        s = set_real(c, vr_in.ctypes.data, r, u[k + 1].ctypes.data)
+        s = set_real(c, pin, r, pu + 8 * r * (k + 1))
         if s > 1:
             return s, k
-        s = get_real(c, vr_out.ctypes.data, vr_out.size, buf.ctypes.data)
+        s = get_real(c, pout, p, py + 8 * p * (k + 1))
         if s > 1:
             return s, k
-        y[k + 1] = buf
     return 0, n
 
 
@@ -76,27 +78,28 @@ def cs2_hold(do_step, set_real, get_real, c, t, u, substeps, vr_in, vr_out, y):
     per sample, set at each sub-step's start from the record's linear interpolation; the
     sample's own value is set before its outputs are read."""
     n, r = u.shape
+    p = vr_out.size
     v = np.empty(r)
-    buf = np.empty(vr_out.size)
+    pu, py, pv = u.ctypes.data, y.ctypes.data, v.ctypes.data
+    pin, pout = vr_in.ctypes.data, vr_out.ctypes.data
     for k in range(n - 1):
         h = (t[k + 1] - t[k]) / substeps
         for i in range(substeps):
             w = i / substeps
             for j in range(r):
                 v[j] = u[k, j] + w * (u[k + 1, j] - u[k, j])
-            s = set_real(c, vr_in.ctypes.data, r, v.ctypes.data)
+            s = set_real(c, pin, r, pv)
             if s > 1:
                 return s, k
             s = do_step(c, t[k] + i * h, h, 1)
             if s > 1:
                 return s, k
-        s = set_real(c, vr_in.ctypes.data, r, u[k + 1].ctypes.data)
+        s = set_real(c, pin, r, pu + 8 * r * (k + 1))
         if s > 1:
             return s, k
-        s = get_real(c, vr_out.ctypes.data, vr_out.size, buf.ctypes.data)
+        s = get_real(c, pout, p, py + 8 * p * (k + 1))
         if s > 1:
             return s, k
-        y[k + 1] = buf
     return 0, n
 
 
@@ -106,8 +109,10 @@ def cs3_hold(do_step, set_real, get_real, c, t, u, substeps, vr_in, vr_out, y, f
     no input derivatives). ``flags``: 4 bytes for ``fmi3DoStep``'s booleans and a float64
     for its last successful time (``flags[0:4]``, ``flags[8:16]``)."""
     n, r = u.shape
+    p = vr_out.size
     v = np.empty(r)
-    buf = np.empty(vr_out.size)
+    pu, py, pv = u.ctypes.data, y.ctypes.data, v.ctypes.data
+    pin, pout = vr_in.ctypes.data, vr_out.ctypes.data
     base = flags.ctypes.data
     for k in range(n - 1):
         h = (t[k + 1] - t[k]) / substeps
@@ -115,7 +120,7 @@ def cs3_hold(do_step, set_real, get_real, c, t, u, substeps, vr_in, vr_out, y, f
             w = i / substeps
             for j in range(r):
                 v[j] = u[k, j] + w * (u[k + 1, j] - u[k, j])
-            s = set_real(c, vr_in.ctypes.data, r, v.ctypes.data, r)
+            s = set_real(c, pin, r, pv, r)
             if s > 1:
                 return s, k
             s = do_step(c, t[k] + i * h, h, True, base, base + 1, base + 2, base + 8)
@@ -123,13 +128,12 @@ def cs3_hold(do_step, set_real, get_real, c, t, u, substeps, vr_in, vr_out, y, f
                 return s, k
             if flags[1] != 0:  # terminateSimulation
                 return 3, k
-        s = set_real(c, vr_in.ctypes.data, r, u[k + 1].ctypes.data, r)
+        s = set_real(c, pin, r, pu + 8 * r * (k + 1), r)
         if s > 1:
             return s, k
-        s = get_real(c, vr_out.ctypes.data, vr_out.size, buf.ctypes.data, vr_out.size)
+        s = get_real(c, pout, p, py + 8 * p * (k + 1), p)
         if s > 1:
             return s, k
-        y[k + 1] = buf
     return 0, n
 
 
