@@ -47,10 +47,10 @@ def main() -> None:
     ap.add_argument("--samples", type=int, default=5000)
     args = ap.parse_args()
     import fmpy
-
-    from vpid_bench.params import build_dataclass
     from vpid_fmu import example
     from vpid_fmu.problem import FmuConfig, FmuProblem
+
+    from vpid_bench.params import build_dataclass
 
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
