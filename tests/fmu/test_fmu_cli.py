@@ -15,8 +15,9 @@ import pytest
 
 pytest.importorskip("fmpy")
 
-from vpid_bench.spec import parse_job  # noqa: E402
 from vpid_fmu import example  # noqa: E402
+
+from vpid_bench.spec import parse_job  # noqa: E402
 
 TRUTH = {"ms": 280.0, "mu": 33.0, "ks": 17000.0, "cs": 1300.0}
 
