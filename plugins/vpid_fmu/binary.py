@@ -215,6 +215,8 @@ class Simulator:
             return None, failed
         status, k = self._loop(t, u, vr_in, vr_out, y, how)
         if status > 1:
+            if status == 4:  # fatal: the instance may not even be reset; a new one next time
+                self.close()
             return None, f"{STATUS[min(status, 6)]} at t = {t[min(k, t.size - 1)]:.6g} s"
         return y, None
 
@@ -254,7 +256,7 @@ class Simulator:
                                 int(how["substeps"]), vr_in, vr_out, y)
 
 
-_SIMULATORS: dict[tuple[str, str], Simulator] = {}
+_SIMULATORS: dict[tuple[int, str], Simulator] = {}
 
 
 def simulator(fmu: Any, kind: str) -> Simulator:
@@ -263,7 +265,7 @@ def simulator(fmu: Any, kind: str) -> Simulator:
     instance per worker, reset between simulations)."""
     from .archive import extracted
 
-    key = (fmu.path, kind)
+    key = (id(fmu), kind)  # fmu is cached per file state and kept alive by its simulator
     if key not in _SIMULATORS:
         sim = Simulator(fmu, extracted(fmu.path), kind)
         sim.instantiate()
