@@ -326,6 +326,15 @@ class FmuProblem(Problem):
             out[f"{name}:fitted"] = fitted[c]
         return out
 
+    def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any]:
+        """For the fit diagnostics (where the framework has them): the measured outputs over
+        their norms (the units of :meth:`fisher_residuals`), their names, and each FMU input
+        at the record's samples (for the residuals' cross-correlation with it)."""
+        return {"measured": (self.measured / self.scale[:, None]).reshape(-1),
+                "names": list(self.record.output_names),
+                "inputs": {v.name: self.record.inputs[:, j].copy()
+                           for j, v in enumerate(self.plan.inputs)}}
+
     def describe(self) -> dict[str, Any]:
         md = self.fmu.description
         cfg = self.config
@@ -333,6 +342,10 @@ class FmuProblem(Problem):
                    or "(none: the FMU has no inputs)")
         return {
             "samples": int(self.t.size),
+            "objective": {"unit": "1", "what": estimators.DESCRIPTION[cfg.objective]
+                          + " of the compared outputs, each over its norm"
+                          if cfg.objective == "eq3" else estimators.DESCRIPTION[cfg.objective]
+                          + " of the outputs over the record's norm"},
             "known": self.plan.known_list(),
             "box": self.plan.box_list(),
             "input": f"the record's columns {columns}; {self.mode_info}",
