@@ -163,3 +163,26 @@ def test_a_crashing_and_a_hanging_fmu_cost_their_runs_not_the_sweep(example_fmu,
         assert [r["status"] for r in records] == ["failed", "failed"], name
         assert all(why in r["error"]["message"] for r in records), records[0]["error"]
     assert CLI  # the command is the subject: run as a user runs it
+
+
+def test_members_over_the_size_limits_are_refused(example_fmu, record, monkeypatch):
+    """The declared sizes are checked before anything is read (the limits made small here:
+    the binary is some 16 KiB)."""
+    from vpid_fmu import archive, problem
+
+    problem._setup.cache_clear()  # a config checked before is not read again
+    monkeypatch.setattr(problem, "_setup", problem._setup.__wrapped__)
+    monkeypatch.setattr(archive, "MAX_MEMBER_BYTES", 1024)
+    archive._inspect.cache_clear()
+    with pytest.raises(ConfigError, match="members of at most"):
+        _config(example_fmu("fmi2"), record)
+    monkeypatch.setattr(archive, "MAX_MEMBER_BYTES", 512 * 1024**2)
+    monkeypatch.setattr(archive, "MAX_TOTAL_BYTES", 2048)
+    archive._inspect.cache_clear()
+    with pytest.raises(ConfigError, match="unpacked"):
+        _config(example_fmu("fmi2"), record)
+    monkeypatch.setattr(archive, "MAX_MEMBERS", 2)
+    archive._inspect.cache_clear()
+    with pytest.raises(ConfigError, match="at most 2 members"):
+        _config(example_fmu("fmi2"), record)
+    archive._inspect.cache_clear()
