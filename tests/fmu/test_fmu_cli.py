@@ -46,6 +46,15 @@ def test_problem_fmu_composes_parses_and_builds(example_fmu, record, compose_con
                               "source": "set by you (problem.known)"}]
     assert info["box"][0]["source"] == "set by you (problem.bounds)"
     assert "road" in info["input"]
+    # the tyre freed: named in problem.parameters with a box from the command line
+    cfg = compose_config(["problem=fmu", f"problem.fmu={example_fmu('fmi2')}",
+                          f"problem.reference.file={record}", "problem.parameters=[ms,kt]",
+                          "problem.bounds.kt=[1e5,3e5]", "problem.interface=me",
+                          "optimizer=random"])
+    job = parse_job(cfg, registry)
+    problem = job.problem_cls(job.problem_config)
+    assert problem.bounds.names == ("ms", "kt") and problem.kind == "me"
+    assert [k["name"] for k in problem.describe()["known"]] == ["mu", "ks", "cs"]
 
 
 @pytest.mark.slow
