@@ -14,7 +14,7 @@ $(BIN)/python:
 
 # records-gpl/: third-party records under GPL-3.0, a separate data distribution (docs/measured.md)
 $(VENV)/.installed: $(BIN)/python pyproject.toml records-gpl/pyproject.toml
-	$(BIN)/python -m pip install -e ".[test,ioh,joblib,submitit,peers,tune]"
+	$(BIN)/python -m pip install -e ".[test,ioh,joblib,submitit,peers,tune,fmu]"
 	$(BIN)/python -m pip install ./records-gpl
 	touch $@
 

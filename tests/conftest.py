@@ -58,3 +58,30 @@ def compose_config(registry) -> Iterator:
 
     yield _compose
     GlobalHydra.instance().clear()
+
+
+@pytest.fixture(scope="session")
+def example_fmu(tmp_path_factory):
+    """``example_fmu(name)``: the example quarter-car FMU (plugins/vpid_fmu/sources) built
+    once per test session with gcc, as variant ``name`` (``fmi2``: FMI 2.0 co-simulation and
+    model exchange; ``fmi3``; ``nointerp``; ``crash``; ``hang``; ``nobinary``; ``guid``: a
+    binary that accepts another token). Skips with the reason where gcc or fmpy is missing."""
+    pytest.importorskip("fmpy", reason="problem=fmu needs fmpy (pip install .[fmu])")
+    from vpid_fmu import example
+
+    if example.compiler() is None:
+        pytest.skip("no C compiler (gcc) to build the test FMUs")
+    folder = tmp_path_factory.mktemp("fmus")
+    variants = {
+        "fmi2": {}, "fmi3": {"fmi": 3, "kinds": ("cs",)}, "nointerp": {"interpolate": False},
+        "crash": {"variant": "crash"}, "hang": {"variant": "hang"}, "nobinary": {"binary": False},
+        "guid": {"binary_guid": "{00000000-0000-0000-0000-000000000000}"},
+    }
+    built: dict[str, object] = {}
+
+    def get(name: str):
+        if name not in built:
+            built[name] = example.build(folder / f"{name}.fmu", **variants[name])
+        return built[name]
+
+    return get
