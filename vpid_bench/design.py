@@ -139,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
             results.append((label, measure(build(registry, args.problem, settings),
                                            args.floor, args.profile)))
     except VpidBenchError as exc:
-        print(f"vpid-bench-design: {exc}", file=sys.stderr)
+        print(f"error: {exc}", file=sys.stderr)
         return 2
     _print(args, results)
     return 0

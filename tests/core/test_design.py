@@ -73,7 +73,7 @@ def test_an_undetermined_parameter_is_named(capsys):
 def test_bad_input_is_refused_in_one_line(capsys, args, words):
     assert main(args) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err[-1].startswith("vpid-bench-design: ")
+    assert err[-1].startswith("error: ")
     assert all(w in err[-1] for w in words), err[-1]
 
 

@@ -31,7 +31,9 @@ VALUES = ["", "0", "1", "-1", "2.0", "2.5", "1e3", "1e308", "-1e308", "inf", "-i
           "glob(zz*)", "${oc.env:HOME}", "${now:%H}", "${oc.decode:'1'}", "[1,2]", "{a:1}",
           "null", "true", "random", "de1", "de6", "ga", "functions", "vehicle", "../x",
           "/dev/null", "/etc/passwd", "'clip',reflect", "sphere", "basic", "joblib", "nosuch",
-          "1e-11", "100000", "\\", "%", "'", "ü", "a=b", "=", ",", "process", "none", "auto",
+          "1e-11", "100000", "de1,choice(-1,1)", "1,range(0,2)", "a,glob(x*)",
+          "1,interval(0,1)", "[1,choice(2,3)]",
+          "\\", "%", "'", "ü", "a=b", "=", ",", "process", "none", "auto",
           "thread", "1025", "1e10", "1e-8", "smoke", "smoke_quarter", "0.5"]
 PREFIX = st.sampled_from(["", "", "", "+", "++", "~"])
 override = st.one_of(

@@ -114,6 +114,19 @@ def _sweep_size(override: Any) -> int | None:
     return None
 
 
+def _refuse_nested_sweep(o: Any, value: Any) -> None:
+    """A sweep function inside a list sweep (``a,choice(b,c)``, ``a,range(1,3)``,
+    ``a,glob(x*)``) is one ConfigError line: Hydra cannot expand it (omegaconf raised a
+    20-line ``ValidationError`` on ``a,choice(-1,1)``, round five's N19)."""
+    from hydra.core.override_parser.types import Glob, Sweep
+
+    for item in getattr(value, "list", None) or ():
+        if isinstance(item, (Sweep, Glob)):
+            raise ConfigError(o.key_or_group, _raw_value(o),
+                              "a list of plain values (a,b,c) or one sweep function "
+                              "(choice(), range(), glob()) alone, not one inside a list")
+
+
 def _axis(o: Any, multirun: bool, registry: Registry, custom_sweeper: bool,
           folders: Sequence[str] = ()) -> list[str] | None:
     """The override strings one override contributes to the sweep (``None``: none, an
@@ -139,6 +152,7 @@ def _axis(o: Any, multirun: bool, registry: Registry, custom_sweeper: bool,
             raise ConfigError(o.key_or_group, _raw_value(o), "a pattern matching one of "
                               + ", ".join(choices))
         return [f"{key}={n}" for n in names]
+    _refuse_nested_sweep(o, value)
     size = _sweep_size(o)
     if size is None:
         raise ConfigError(o.key_or_group, _raw_value(o), "a list of values (a,b,c, "
