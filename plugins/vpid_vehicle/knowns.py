@@ -281,7 +281,10 @@ class StatedModel:
         self._col = {n: j for j, n in enumerate(plan.identified)}
 
     def __getattr__(self, name: str) -> Any:
-        return getattr(self.__dict__["base"], name)
+        base = self.__dict__.get("base")
+        if base is None or name.startswith("__"):  # copy and pickle probe before __init__
+            raise AttributeError(name)
+        return getattr(base, name)
 
     def _model_rows(self, X: np.ndarray, known: Mapping[str, float]
                     ) -> list[tuple[np.ndarray, dict[str, float]]]:

@@ -213,6 +213,11 @@ def test_a_fixed_parameter_leaves_the_search_and_a_freed_tyre_joins_it():
     assert moved.evaluate(moved.x_true[None])[0] == pytest.approx(
         plain.evaluate(x[None])[0], rel=1e-9)  # the same record, fitted the same
     assert {k["name"] for k in moved.describe()["known"]} == {"ms", "ct"}
+    import copy
+    import pickle
+
+    for again in (pickle.loads(pickle.dumps(moved)), copy.deepcopy(moved)):
+        np.testing.assert_array_equal(again.responses(X), ours)
 
 
 def test_the_default_problem_is_unchanged_by_the_new_keys():

@@ -132,7 +132,7 @@ def context_result(data: Any, context: str) -> ContextResult:
     return ContextResult(context, metric, unit, headers, body, verdict.floor, verdict.bound,
                          verdict_text(verdict), mgroups is not None, verdict, verdict.truth,
                          data.identified.get(context), data.comparisons.get(context, []),
-                         assumed.blocks(data, context))
+                         assumed=assumed.blocks(data, context))
 
 
 def evidence(data: Any, context: str) -> verdicts.Evidence:
