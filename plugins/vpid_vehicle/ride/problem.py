@@ -35,7 +35,7 @@ import dataclasses
 import logging
 import types
 import zlib
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 
@@ -153,11 +153,15 @@ class SuiteConfig(ProblemConfig):
 @dataclasses.dataclass(frozen=True)
 class RideConfig(SuiteConfig):
     """The road of a ride problem: ``road`` is ``hump`` (3.7 m x 0.1 m), ``bump`` (0.1 m x
-    0.04 m), ``step`` (0.1 m) or ``iso8608`` (class ``road_class``), met at ``speed_kmh``."""
+    0.04 m), ``step`` (0.1 m) or ``iso8608`` (class ``road_class``), met at ``speed_kmh``.
+    ``spring`` (``linear`` or ``cubic``) and ``damper`` (``linear`` or ``bilinear``): the
+    suspension structure, per axle (:mod:`.structures`)."""
 
     road: str = "hump"
     road_class: str = "C"
     speed_kmh: float = 30.0
+    spring: Literal["linear", "cubic"] = added_setting("linear")
+    damper: Literal["linear", "bilinear"] = added_setting("linear")
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -166,7 +170,13 @@ class RideConfig(SuiteConfig):
              "one of hump, bump, step, iso8608"),
             ("road_class", self.road_class in roads.ISO8608_GD0, "one of A, B, ..., H"),
             ("speed_kmh", 0 < self.speed_kmh <= 200, "a speed in (0, 200] km/h"),
+            ("spring", self.spring in ("linear", "cubic"), "one of linear, cubic"),
+            ("damper", self.damper in ("linear", "bilinear"), "one of linear, bilinear"),
         ], self)
+        if (self.spring, self.damper) != ("linear", "linear"):  # the structure makes its record
+            _check([("record_model", getattr(self, "record_model", "linear") == "linear",
+                     "linear when problem.spring or problem.damper is not linear (a richer "
+                     "structure's record is its own)")], self)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -304,8 +314,12 @@ class RideProblem(Problem):
     rows_independent = True
 
     def __init__(self, config: RideConfig, index: int = 0) -> None:
+        from .structures import structured
+
         self.config = config
         self._index = index
+        #: The model in the configured suspension structure (the class's for the linear one).
+        self.model = structured(self.model, config)
         published = self.model.sets[config.parameter_set]
         self.nominal = np.array([published[k] for k in self.model.names])
         self.known = {k: v for k, v in published.items() if k not in self.model.names}
