@@ -16,6 +16,7 @@ from .ride.magic import LateralMFProblem
 from .ride.quarter import RideQuarterProblem
 from .ride.racecar import RacecarProblem
 from .ride.suites import MEMBERS
+from .structure_report import structure_sections
 
 
 @hookimpl
@@ -35,3 +36,6 @@ def vpid_bench_register_problems(register):
 @hookimpl
 def vpid_bench_register_report_sections(register):
     register("vehicle", vehicle_sections)
+    for problem in (RideQuarterProblem, RideHalfProblem, RideFullProblem, *MEMBERS):
+        if issubclass(problem, (RideQuarterProblem, RideHalfProblem, RideFullProblem)):
+            register(problem.name, structure_sections)

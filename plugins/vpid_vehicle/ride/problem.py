@@ -495,14 +495,17 @@ class RideProblem(Problem):
             out[f"{name}:fitted"] = fitted[c]
         return out
 
+    def _fitted_solver(self) -> str:
+        """The fitted model's solver, in words (a richer structure's: :mod:`.structures`)."""
+        return getattr(self.model, "fitted_solver", "Newmark average acceleration")
+
     def describe(self) -> dict[str, Any]:
         cfg = self.config
         if self.sampler is not None:
             return {"samples": int(self.t.size), "known": dict(self.known),
                     "record": {"source": "file", "file": str(cfg.reference.file),
                                "info": self.record_info},
-                    "fitted_model": {"solver": "Newmark average acceleration",
-                                     "dt_s": cfg.dt}}
+                    "fitted_model": {"solver": self._fitted_solver(), "dt_s": cfg.dt}}
         exact = cfg.record == "exact"
         info = {
             "samples": int(self.t.size),
@@ -510,7 +513,7 @@ class RideProblem(Problem):
             "record": {"solver": "exact first-order hold" if exact
                        else "Newmark (the fitted model: inverse crime)",
                        "dt_s": cfg.dt / (cfg.record_substeps if exact else 1)},
-            "fitted_model": {"solver": "Newmark average acceleration", "dt_s": cfg.dt},
+            "fitted_model": {"solver": self._fitted_solver(), "dt_s": cfg.dt},
             "noise": {"model": "additive Gaussian", "sigma": self.sigma.tolist(),
                       "channels": [c for c, _ in self.channels]},
             "truth": self._x_true.tolist(),

@@ -100,6 +100,9 @@ def suspension_of(model: RideModel) -> Suspension | None:
 class StructuredModel(RideModel):
     """A ride model with a cubic spring and/or a bilinear damper per axle (the module)."""
 
+    #: What the problem's ``describe()`` names as the fitted model's solver.
+    fitted_solver = "RK4 (the suspension structure's nonlinear forces)"
+
     def __init__(self, base: RideModel, spring: str, damper: str) -> None:
         suspension = suspension_of(base)
         if suspension is None:
