@@ -10,11 +10,11 @@ import math
 
 import numpy as np
 import pytest
-
-from vpid_bench.analysis import structures as st
 from vpid_vehicle.record_file import column_name
 from vpid_vehicle.ride.quarter import RideQuarterConfig, RideQuarterProblem
 from vpid_vehicle.structure_report import compare_record, record_groups
+
+from vpid_bench.analysis import structures as st
 
 #: The record: a rough road (class D at 60 km/h) long enough that the validation third holds
 #: the car's response to more road; body and wheel accelerations.
