@@ -3,9 +3,10 @@
 When a report holds runs of one ride record under two or more suspension structures (a sweep
 ``problem.spring=linear,cubic problem.damper=linear,bilinear``), each structure is refitted on
 the record's first two thirds from its best run and compared on the rest
-(:mod:`vpid_bench.analysis.structures`: held-out error, AIC, BIC, Ljung-Box whiteness,
-identified values with 95 % intervals). Runs of one record are those whose problem settings
-differ only in ``spring`` and ``damper`` (and the protocol: ``ps``, ``iterations``).
+(``vpid_bench.fit_structure`` and ``structure_summary``: held-out error, AIC, BIC,
+Ljung-Box whiteness, identified values with 95 % intervals). Runs of one record are those
+whose problem settings differ only in ``spring`` and ``damper`` (and the protocol: ``ps``,
+``iterations``).
 """
 
 from __future__ import annotations
@@ -43,17 +44,18 @@ def record_groups(records: Sequence[Mapping[str, Any]]
 
 def _problem(rec: Mapping[str, Any]) -> Any:
     """The record's problem instance, rebuilt from its settings."""
-    from vpid_bench.params import build_dataclass
-
     from .ride.full import RideFullProblem
     from .ride.half import RideHalfProblem
+    from .ride.problem import RecordFileConfig
     from .ride.quarter import RideQuarterProblem
     from .ride.suites import MEMBERS
 
     classes = {c.name: c for c in (RideQuarterProblem, RideHalfProblem, RideFullProblem,
                                    *MEMBERS)}
     cls = classes[rec["problem"]["name"]]
-    config = build_dataclass(cls.Config, rec["problem"]["config"], prefix="problem")
+    settings = dict(rec["problem"]["config"])
+    reference = RecordFileConfig(**settings.pop("reference", {}))
+    config = cls.Config(**settings, reference=reference)
     index = int((rec.get("instance") or {}).get("index", 0))
     return cls(config).instance(index)
 
@@ -63,7 +65,7 @@ def compare_record(runs: Mapping[tuple[str, str], Sequence[Mapping[str, Any]]]) 
     the best of its runs."""
     import numpy as np
 
-    from vpid_bench.analysis.structures import fit_structure
+    from vpid_bench import fit_structure
 
     fits = []
     for (spring, damper), recs in sorted(runs.items()):
@@ -75,34 +77,25 @@ def compare_record(runs: Mapping[tuple[str, str], Sequence[Mapping[str, Any]]]) 
 
 def structure_sections(ctx: ReportContext) -> Contribution | None:
     """The section (see the module); ``None`` when no record has two structures."""
-    from vpid_bench.analysis import structures as S  # noqa: N812
+    from vpid_bench import structure_summary
 
     groups = record_groups(ctx.records)
     if not groups:
         return None
-    parts, files = [], []
+    parts, files, method = [], [], ""
     for n, runs in enumerate(groups.values(), start=1):
-        fits = compare_record(runs)
+        summary = structure_summary(compare_record(runs), ctx.alpha)
+        method = summary.method
         first = next(iter(runs.values()))[0]
-        where = first["problem"]["config"].get("reference", {}).get("file") or (
+        where = (first["problem"]["config"].get("reference") or {}).get("file") or (
             f"{first['problem']['name']}, instance "
             f"{(first.get('instance') or {}).get('index', 0)}")
-        rows = S.table_rows(fits)
-        values = S.value_rows(fits)
-        files += ctx.write_table(f"structures_{n}", S.TABLE_HEADERS, rows)
-        files += ctx.write_table(f"structure_values_{n}", S.VALUE_HEADERS, values)
+        files += ctx.write_table(f"structures_{n}", *summary.table)
+        files += ctx.write_table(f"structure_values_{n}", *summary.values)
         parts.append("\n\n".join([
-            f"Record: {ctx.escape(where)}.",
-            ctx.para(S.verdict(fits, ctx.alpha)),
-            ctx.markdown_table(S.TABLE_HEADERS, rows),
-            ctx.markdown_table(S.VALUE_HEADERS, values)]))
-    text = "\n\n".join([ctx.para(
-        "Each structure refitted (least squares) on each channel's first "
-        f"{S.FIT_FRACTION:.3g} of samples from its best run, and judged on the rest: held-out "
-        "error (Eq. 3 on the samples no fit saw), ΔAIC and ΔBIC from the best (each channel's "
-        f"variance profiled out), the Ljung-Box whiteness p-value ({S.LAGS} lags, Bonferroni "
-        "over channels; white when at least the report's alpha), the identified values with "
-        "95 % Gauss-Newton intervals (none, nan, for a parameter left on a bound of the box). "
-        "docs/own-record.md, \"Which structure does my record support?\"."), *parts])
+            f"Record: {ctx.escape(where)}.", ctx.para(summary.verdict),
+            ctx.markdown_table(*summary.table), ctx.markdown_table(*summary.values)]))
+    text = "\n\n".join([ctx.para(method + " docs/own-record.md, \"Which structure does my "
+                                 "record support?\"."), *parts])
     return Contribution(sections=(Section("Which structure does the record support?", text,
                                           tuple(files)),))

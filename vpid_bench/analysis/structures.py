@@ -12,7 +12,7 @@ Works through the core problem interface only (:meth:`fisher_residuals`, :meth:`
 * **Fit.** Least squares on the fit segment (each channel over its norm on the record, as
   the Cramér-Rao residuals), from ``x0`` inside the box (scipy's ``least_squares``, ``trf``).
 * **Held-out error**: ``sum_c ||measured_c - computed_c||`` over the validation samples over
-  ``||measured_c||`` over the record (the paper's Eq. 3 on the samples no fit saw).
+  ``||measured_c||`` over the record (the sum of channel norms, on the samples no fit saw).
 * **AIC, BIC**: Gaussian likelihood with each channel's variance profiled out,
   ``-2 log L = sum_c n_c log(RSS_c / n_c)`` (constants dropped), plus ``2 k`` (AIC) or
   ``k log n`` (BIC); ``k`` the structure's parameters, ``n`` the fit samples.
@@ -200,3 +200,31 @@ def value_rows(fits: Sequence[StructureFit]) -> list[list[Any]]:
 
 
 VALUE_HEADERS = ["structure", "parameter", "unit", "value", "95 % low", "95 % high"]
+
+
+#: How the comparison is made, in one paragraph (the report section's opening).
+METHOD = ("Each structure refitted (least squares) on each channel's first "
+          f"{FIT_FRACTION:.3g} of samples from its best run, and judged on the rest: held-out "
+          "error (sum over channels of the misfit's norm on the samples no fit saw, each over "
+          "the channel's norm on the record), ΔAIC and ΔBIC from the best (each channel's "
+          f"variance profiled out), the Ljung-Box whiteness p-value ({LAGS} lags, Bonferroni "
+          "over channels; white when at least the report's alpha), the identified values with "
+          "95 % Gauss-Newton intervals (none, nan, for a parameter left on a bound of the box).")
+
+
+@dataclasses.dataclass(frozen=True)
+class StructureSummary:
+    """What a report shows of one record's structures: the method, the verdict, the ranking
+    table and the values table (headers and rows each)."""
+
+    method: str
+    verdict: str
+    table: tuple[list[str], list[list[Any]]]
+    values: tuple[list[str], list[list[Any]]]
+
+
+def structure_summary(fits: Sequence[StructureFit], alpha: float = 0.05
+                      ) -> StructureSummary:
+    """The :class:`StructureSummary` of fitted structures of one record."""
+    return StructureSummary(METHOD, verdict(fits, alpha), (TABLE_HEADERS, table_rows(fits)),
+                            (VALUE_HEADERS, value_rows(fits)))
