@@ -180,7 +180,9 @@ def _model_error(data: Any, context: str) -> str:
         me = info.get("model_error") if isinstance(info, Mapping) else None
         what = me.get("what") if isinstance(me, Mapping) else None
         if isinstance(what, str) and what:
-            return what[:300]
+            fit = me.get("fit_with")  # the richer fitted structure, where the problem has one
+            return (what[:300] + (f"; fitted with it by {fit[:200]}" if isinstance(fit, str)
+                                  and fit else ""))
     return ""
 
 

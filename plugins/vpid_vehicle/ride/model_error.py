@@ -64,8 +64,15 @@ def members_with_model_error() -> list[type]:
             and getattr(m.Config(), "record_model", "linear") != "linear"]
 
 
+#: Instances whose at-fit ratio the command prints (each has its own truth).
+INSTANCES = 5
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Print each member's model error (instance 0; all model-error members by default)."""
+    """Print each member's model error (instance 0 in full, the at-fit ratio of instances
+    0 to :data:`INSTANCES` - 1, the richer structure the suite fits it with; all
+    model-error members by default)."""
+    from .richer import FIT_WITH
     from .suites import MEMBERS
 
     names = list(sys.argv[1:] if argv is None else argv)
@@ -77,13 +84,18 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     members = [by_name[n] for n in names] if names else members_with_model_error()
     print("member | record model | noise level | model error / noise (at the fit) | "
-          "at the truth | NoRE of the noise-free fit (%)")
+          "at the truth | NoRE of the noise-free fit (%) | at the fit, instances 0-"
+          f"{INSTANCES - 1} | fitted with it by")
     for cls in members:
         p = cls(cls.Config())
         out = model_error(p)
-        print(f"{cls.name} | {getattr(p.config, 'record_model', 'linear')} | "
+        ratios = [out["ratio"]] + [model_error(p.instance(i))["ratio"]
+                                   for i in range(1, INSTANCES)]
+        record_model = getattr(p.config, "record_model", "linear")
+        print(f"{cls.name} | {record_model} | "
               f"{out['noise_level']:g} | {out['ratio']:.3g} | {out['ratio_at_truth']:.3g} | "
-              f"{out['bias_nore']:.3g}")
+              f"{out['bias_nore']:.3g} | {', '.join(f'{r:.3g}' for r in ratios)} | "
+              f"{FIT_WITH.get(record_model) or 'none in the suite'}")
     return 0
 
 

@@ -522,7 +522,8 @@ class RideProblem(Problem):
         }
         richer = getattr(cfg, "record_model", "linear")
         if richer != "linear":  # the report explains a floor below the bound by it
-            from .richer import DESCRIPTIONS
+            from .richer import DESCRIPTIONS, FIT_WITH
 
-            info["model_error"] = {"record_model": richer, "what": DESCRIPTIONS[richer]}
+            info["model_error"] = {"record_model": richer, "what": DESCRIPTIONS[richer],
+                                   "fit_with": FIT_WITH[richer]}
         return info
