@@ -29,7 +29,7 @@ def test_an_optimum_farther_than_the_references_is_not_identification():
     assert v.kind == vd.NONE and v.pick == "lsq"
     assert dict(v.cannot_identify) == {"random": 51.9, "centre": 44.7}
     text = verdict_text(v)
-    assert "the fitted model cannot identify this vehicle" in text
+    assert "the fitted model cannot identify the true system" in text
     assert "a richer fitted structure is needed" in text
     assert "use lsq" not in text and "stopped short" not in text
 

@@ -228,7 +228,7 @@ def _marked_verdict(v: Verdict) -> str:
         text = (f"{head}a description, not a recommendation ({why}). "
                 f"{_ends(v, _name(v.pick))} over {v.runs} run(s)")
     elif v.kind == verdicts.NONE and v.cannot_identify:  # rule 5
-        text = (f"{head}the fitted model cannot identify this vehicle from this record (a "
+        text = (f"{head}the fitted model cannot identify the true system from this record (a "
                 f"richer model made it). The lowest median {_name(v.metric)}: "
                 f"{_ends(v, _name(v.pick))}")
     elif v.kind == verdicts.NONE:
@@ -397,9 +397,9 @@ def _allowed(v: Verdict) -> str:
 
 
 def _cannot_identify(v: Verdict) -> str:
-    """Rule 5 in words: the fitted model cannot identify this vehicle (model error)."""
+    """Rule 5 in words: the fitted model cannot identify the true system (model error)."""
     refs = ", ".join(f"{_name(n)} ends at {_value(m, v.unit)}" for n, m in v.cannot_identify)
-    return (f". The fitted model cannot identify this vehicle: the record's own optimum lies "
+    return (f". The fitted model cannot identify the true system: the record's own optimum lies "
             f"farther from the truth than a reference ({refs}), because a richer model made "
             f"the record ({_name(v.model_error)}). Reaching that optimum is search, not "
             "identification, and no optimizer is credited for it here; a richer fitted "

@@ -29,7 +29,7 @@ The rules (each in docs/report.md, "Verdicts", with a test in tests/report/test_
 5. **Search is not identification under model error** (:func:`cannot_identify`): where a
    richer model than the fitted one made the record and the record's optimum (the floor,
    median over the instances) lies farther from the truth than a reference ends (the box
-   centre, random search), the fitted model cannot identify this vehicle: reaching that
+   centre, random search), the fitted model cannot identify the true system: reaching that
    optimum is search, never identification, and a richer fitted structure is needed.
 """
 
@@ -214,7 +214,7 @@ class Verdict:
     model_error: str = ""
     on_edge: tuple[int, int] = (0, 0)
     #: rule 5: the record's optimum lies farther from the truth than these references end
-    #: (name, median metric), under model error: the fitted model cannot identify the vehicle
+    #: (name, median metric), under model error: the fitted model cannot identify the true system
     cannot_identify: tuple[tuple[str, float], ...] = ()
 
 
