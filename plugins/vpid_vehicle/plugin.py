@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from vpid_bench import hookimpl
 
+from .model_error_report import model_error_sections
 from .problem import VehicleProblem
 from .report import vehicle_sections
 from .ride.bayesrace import BayesraceProblem
@@ -39,3 +40,6 @@ def vpid_bench_register_report_sections(register):
     for problem in (RideQuarterProblem, RideHalfProblem, RideFullProblem, *MEMBERS):
         if issubclass(problem, (RideQuarterProblem, RideHalfProblem, RideFullProblem)):
             register(problem.name, structure_sections)
+    for member in MEMBERS:  # the section itself says nothing where a member has no entry
+        if getattr(member.Config(), "record_model", "linear") != "linear":
+            register(member.name, model_error_sections)
