@@ -50,6 +50,8 @@ _LAZY = {
     "Section": ".report.sections",
     "BestSignals": ".artifacts",
     "read_best_signals": ".artifacts",
+    "fit_structure": ".analysis.structures",
+    "structure_summary": ".analysis.structures",
 }
 
 __all__ = [

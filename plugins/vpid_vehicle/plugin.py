@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from vpid_bench import hookimpl
 
+from .model_error_report import model_error_sections
 from .problem import VehicleProblem
 from .report import vehicle_sections
 from .ride.bayesrace import BayesraceProblem
@@ -16,6 +17,7 @@ from .ride.magic import LateralMFProblem
 from .ride.quarter import RideQuarterProblem
 from .ride.racecar import RacecarProblem
 from .ride.suites import MEMBERS
+from .structure_report import structure_sections
 
 
 @hookimpl
@@ -35,3 +37,9 @@ def vpid_bench_register_problems(register):
 @hookimpl
 def vpid_bench_register_report_sections(register):
     register("vehicle", vehicle_sections)
+    for problem in (RideQuarterProblem, RideHalfProblem, RideFullProblem, *MEMBERS):
+        if issubclass(problem, (RideQuarterProblem, RideHalfProblem, RideFullProblem)):
+            register(problem.name, structure_sections)
+    for member in MEMBERS:  # the section itself says nothing where a member has no entry
+        if getattr(member.Config(), "record_model", "linear") != "linear":
+            register(member.name, model_error_sections)

@@ -36,7 +36,7 @@ def test_suite_becomes_a_problem_sweep(registry):
 
 
 @pytest.mark.parametrize("argv, fragment", [
-    (["-m", "suite=nosuch"], "suite='nosuch' is not allowed: one of smoke, vpid1"),
+    (["-m", "suite=nosuch"], "suite='nosuch' is not allowed: one of smoke, structures, vpid1"),
     (["suite=smoke"], "a sweep of its problems: add -m"),
     (["-m", "suite=smoke", "problem=vehicle"], "either suite= or problem=, not both"),
 ])

@@ -183,7 +183,9 @@ def _model_error(data: Any, context: str) -> str:
         me = info.get("model_error") if isinstance(info, Mapping) else None
         what = me.get("what") if isinstance(me, Mapping) else None
         if isinstance(what, str) and what:
-            return what[:300]
+            fit = me.get("fit_with")  # the richer fitted structure, where the problem has one
+            return (what[:300] + (f"; fitted with it by {fit[:200]}" if isinstance(fit, str)
+                                  and fit else ""))
     return ""
 
 
@@ -228,6 +230,10 @@ def _marked_verdict(v: Verdict) -> str:
                "no tests were run (a single job's report)")
         text = (f"{head}a description, not a recommendation ({why}). "
                 f"{_ends(v, _name(v.pick))} over {v.runs} run(s)")
+    elif v.kind == verdicts.NONE and v.cannot_identify:  # rule 5
+        text = (f"{head}the fitted model cannot identify the true system from this record (a "
+                f"richer model made it). The lowest median {_name(v.metric)}: "
+                f"{_ends(v, _name(v.pick))}")
     elif v.kind == verdicts.NONE:
         # Only the bound says that nothing can identify the model; tests that separate no
         # method from the references say only that none is shown to (more runs may tell).
@@ -345,16 +351,9 @@ def _limits(v: Verdict) -> str:
     data; the estimator named as the bottleneck whenever its floor is far above the bound."""
     if not v.truth:
         return _limits_without_truth(v)
-    parts = []
-    if math.isfinite(v.floor):
-        parts.append(f"; the records allow {_value(v.floor, v.unit)} under {_estimator(v)} "
-                     "(floor: its own optimum's error, median over the instances)")
-    if math.isfinite(v.bound):
-        lo, hi = v.bound_range
-        spread = (f", median of each instance's own, {fmt(lo, 3)} to {fmt(hi, 3)}"
-                  if hi > lo * (1 + 1e-6) else "")
-        parts.append(f", an efficient estimator {_value(v.bound, v.unit)} (Cramér–Rao bound "
-                     f"norm{spread})")
+    parts = [_allowed(v)]
+    if v.cannot_identify:  # rule 5: no reading of search as identification follows
+        return parts[0] + _cannot_identify(v)
     if v.below_bound:
         parts.append(_below_bound(v))
     if v.limit == verdicts.LIMIT_BELOW:
@@ -383,6 +382,31 @@ def _limits(v: Verdict) -> str:
     if v.advice is not None:
         parts.append(_advice(v, v.advice))
     return "".join(parts)
+
+
+def _allowed(v: Verdict) -> str:
+    """The floor and the bound of a context with a truth, in words."""
+    parts = []
+    if math.isfinite(v.floor):
+        parts.append(f"; the records allow {_value(v.floor, v.unit)} under {_estimator(v)} "
+                     "(floor: its own optimum's error, median over the instances)")
+    if math.isfinite(v.bound):
+        lo, hi = v.bound_range
+        spread = (f", median of each instance's own, {fmt(lo, 3)} to {fmt(hi, 3)}"
+                  if hi > lo * (1 + 1e-6) else "")
+        parts.append(f", an efficient estimator {_value(v.bound, v.unit)} (Cramér–Rao bound "
+                     f"norm{spread})")
+    return "".join(parts)
+
+
+def _cannot_identify(v: Verdict) -> str:
+    """Rule 5 in words: the fitted model cannot identify the true system (model error)."""
+    refs = ", ".join(f"{_name(n)} ends at {_value(m, v.unit)}" for n, m in v.cannot_identify)
+    return (f". The fitted model cannot identify the true system: the record's own optimum lies "
+            f"farther from the truth than a reference ({refs}), because a richer model made "
+            f"the record ({_name(v.model_error)}). Reaching that optimum is search, not "
+            "identification, and no optimizer is credited for it here; a richer fitted "
+            "structure is needed")
 
 
 def _below_bound(v: Verdict) -> str:

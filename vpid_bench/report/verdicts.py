@@ -26,6 +26,11 @@ The rules (each in docs/report.md, "Verdicts", with a test in tests/report/test_
    estimator of the fitted model removes, may set the floor. Below :data:`BELOW_BOUND` the
    record's optimum is biased (the bound holds for unbiased estimators): by model error or
    the box, when known.
+5. **Search is not identification under model error** (:func:`cannot_identify`): where a
+   richer model than the fitted one made the record and the record's optimum (the floor,
+   median over the instances) lies farther from the truth than a reference ends (the box
+   centre, random search), the fitted model cannot identify the true system: reaching that
+   optimum is search, never identification, and a richer fitted structure is needed.
 """
 
 from __future__ import annotations
@@ -208,6 +213,9 @@ class Verdict:
     below_bound: bool = False
     model_error: str = ""
     on_edge: tuple[int, int] = (0, 0)
+    #: rule 5: the record's optimum lies farther from the truth than these references end
+    #: (name, median metric), under model error: the fitted model cannot identify the true system
+    cannot_identify: tuple[tuple[str, float], ...] = ()
 
 
 def _median(values: Sequence[float]) -> float:
@@ -334,6 +342,15 @@ def estimator_advice(chosen: str | None, ratio: float,
     return EstimatorAdvice(chosen, ratio, best[0], best[1], mine, int(floors["instances"]))
 
 
+def cannot_identify(ev: Evidence, floor: float) -> tuple[tuple[str, float], ...]:
+    """Rule 5: the references (name, median metric) that end nearer the truth than the
+    record's optimum (``floor``) where a richer model made the record; empty otherwise."""
+    if not ev.model_error or not math.isfinite(floor):
+        return ()
+    return tuple((m.name, m.median) for m in ev.methods
+                 if m.name in ev.references and math.isfinite(m.median) and m.median < floor)
+
+
 def decide(ev: Evidence) -> Verdict:
     """The verdict of one context (the rules of the module)."""
     base = {"context": ev.context, "metric": ev.metric, "unit": ev.unit, "tested": ev.tested,
@@ -352,7 +369,8 @@ def decide(ev: Evidence) -> Verdict:
              "advice": None if ev.model_error else estimator_advice(
                  ev.estimator, ratio, ev.estimator_floors),
              "below_bound": math.isfinite(ratio) and ratio < BELOW_BOUND,
-             "model_error": ev.model_error, "on_edge": ev.on_edge}
+             "model_error": ev.model_error, "on_edge": ev.on_edge,
+             "cannot_identify": cannot_identify(ev, floor)}
     candidates = [m for m in ev.methods if m.name not in ev.references]
     if not ev.tested or len(ev.methods) < 2 or not candidates:
         lead = (candidates or list(ev.methods))[0]
@@ -365,7 +383,7 @@ def decide(ev: Evidence) -> Verdict:
     not_beaten = tuple(r for r in ev.references
                        if not any(beats(ev.pairs, m.name, r) for m in candidates))
     over = math.isfinite(bound) and bound > BOUND_LIMIT
-    if over or not eligible:
+    if over or not eligible or base["cannot_identify"]:  # rule 5: no one is recommended
         lead = candidates[0]
         limit, gain = _limit(lead, floor, ratio, ev.model_error)
         return Verdict(kind=NONE, pick=lead.name, runs=lead.runs, median=lead.median,

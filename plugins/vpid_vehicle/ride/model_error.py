@@ -21,7 +21,9 @@ of its discretisation error (``record=exact`` against Newmark), far below 1.
 
 from __future__ import annotations
 
+import json
 import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -64,11 +66,53 @@ def members_with_model_error() -> list[type]:
             and getattr(m.Config(), "record_model", "linear") != "linear"]
 
 
+#: Instances whose at-fit ratio the command prints (each has its own truth).
+INSTANCES = 5
+#: The at-fit ratio of every archived instance of each model-error member, written by
+#: ``python -m vpid_vehicle.ride.model_error --write`` (the report's model-error section reads
+#: it, so a report computes nothing of it).
+RATIOS_FILE = Path(__file__).with_name("model_error_ratios.json")
+#: Instances of the file (the vpid1 archive's).
+FILE_INSTANCES = 15
+
+
+def ratios(instances: int = FILE_INSTANCES) -> dict[str, Any]:
+    """Per model-error member at its defaults: the at-fit and at-truth ratios of instances
+    ``0 .. instances - 1``, its seed and the structure the suite fits it with."""
+    from .richer import FIT_WITH
+
+    out: dict[str, Any] = {}
+    for cls in members_with_model_error():
+        p = cls(cls.Config())
+        fits = [model_error(p.instance(i)) for i in range(instances)]
+        out[cls.name] = {"seed": int(p.config.seed),
+                         "record_model": p.config.record_model,
+                         "fit_with": FIT_WITH.get(p.config.record_model),
+                         "ratio_at_fit": [round(f["ratio"], 4) for f in fits],
+                         "ratio_at_truth": [round(f["ratio_at_truth"], 4) for f in fits]}
+    return out
+
+
+def read_ratios() -> dict[str, Any]:
+    """The shipped :data:`RATIOS_FILE` (empty when absent)."""
+    if not RATIOS_FILE.is_file():
+        return {}
+    return json.loads(RATIOS_FILE.read_text(encoding="utf-8"))
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Print each member's model error (instance 0; all model-error members by default)."""
+    """Print each member's model error (instance 0 in full, the at-fit ratio of instances
+    0 to :data:`INSTANCES` - 1, the richer structure the suite fits it with; all
+    model-error members by default)."""
+    from .richer import FIT_WITH
     from .suites import MEMBERS
 
     names = list(sys.argv[1:] if argv is None else argv)
+    if names == ["--write"]:
+        RATIOS_FILE.write_text(json.dumps(ratios(), indent=1, sort_keys=True) + "\n",
+                               encoding="utf-8")
+        print(f"wrote {RATIOS_FILE}")
+        return 0
     by_name = {m.name: m for m in MEMBERS}
     unknown = [n for n in names if n not in by_name]
     if unknown:
@@ -77,13 +121,18 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     members = [by_name[n] for n in names] if names else members_with_model_error()
     print("member | record model | noise level | model error / noise (at the fit) | "
-          "at the truth | NoRE of the noise-free fit (%)")
+          "at the truth | NoRE of the noise-free fit (%) | at the fit, instances 0-"
+          f"{INSTANCES - 1} | fitted with it by")
     for cls in members:
         p = cls(cls.Config())
         out = model_error(p)
-        print(f"{cls.name} | {getattr(p.config, 'record_model', 'linear')} | "
+        per = [out["ratio"]] + [model_error(p.instance(i))["ratio"]
+                                for i in range(1, INSTANCES)]
+        record_model = getattr(p.config, "record_model", "linear")
+        print(f"{cls.name} | {record_model} | "
               f"{out['noise_level']:g} | {out['ratio']:.3g} | {out['ratio_at_truth']:.3g} | "
-              f"{out['bias_nore']:.3g}")
+              f"{out['bias_nore']:.3g} | {', '.join(f'{r:.3g}' for r in per)} | "
+              f"{FIT_WITH.get(record_model) or 'none in the suite'}")
     return 0
 
 

@@ -35,7 +35,7 @@ import dataclasses
 import logging
 import types
 import zlib
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 
@@ -180,11 +180,15 @@ class SuiteConfig(ProblemConfig):
 @dataclasses.dataclass(frozen=True)
 class RideConfig(SuiteConfig):
     """The road of a ride problem: ``road`` is ``hump`` (3.7 m x 0.1 m), ``bump`` (0.1 m x
-    0.04 m), ``step`` (0.1 m) or ``iso8608`` (class ``road_class``), met at ``speed_kmh``."""
+    0.04 m), ``step`` (0.1 m) or ``iso8608`` (class ``road_class``), met at ``speed_kmh``.
+    ``spring`` (``linear`` or ``cubic``) and ``damper`` (``linear`` or ``bilinear``): the
+    suspension structure, per axle (:mod:`.structures`)."""
 
     road: str = "hump"
     road_class: str = "C"
     speed_kmh: float = 30.0
+    spring: Literal["linear", "cubic"] = added_setting("linear")
+    damper: Literal["linear", "bilinear"] = added_setting("linear")
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -193,7 +197,13 @@ class RideConfig(SuiteConfig):
              "one of hump, bump, step, iso8608"),
             ("road_class", self.road_class in roads.ISO8608_GD0, "one of A, B, ..., H"),
             ("speed_kmh", 0 < self.speed_kmh <= 200, "a speed in (0, 200] km/h"),
+            ("spring", self.spring in ("linear", "cubic"), "one of linear, cubic"),
+            ("damper", self.damper in ("linear", "bilinear"), "one of linear, bilinear"),
         ], self)
+        if (self.spring, self.damper) != ("linear", "linear"):  # the structure makes its record
+            _check([("record_model", getattr(self, "record_model", "linear") == "linear",
+                     "linear when problem.spring or problem.damper is not linear (a richer "
+                     "structure's record is its own)")], self)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -333,8 +343,13 @@ class RideProblem(Problem):
     rows_independent = True
 
     def __init__(self, config: RideConfig, index: int = 0) -> None:
+        from .structures import structured
+
         self.config = config
         self._index = index
+        #: The model in the configured suspension structure (the class's for the linear one),
+        #: then with the quantities the user stated fixed or freed (knowns.py).
+        self.model = structured(self.model, config)
         self.model = knowns.stated_model(self.model, config, type(self).name)
         published = self.model.sets[config.parameter_set]
         self.nominal = np.array([published[k] for k in self.model.names])
@@ -513,14 +528,17 @@ class RideProblem(Problem):
             out[f"{name}:fitted"] = fitted[c]
         return out
 
+    def _fitted_solver(self) -> str:
+        """The fitted model's solver, in words (a richer structure's: :mod:`.structures`)."""
+        return getattr(self.model, "fitted_solver", "Newmark average acceleration")
+
     def describe(self) -> dict[str, Any]:
         cfg = self.config
         if self.sampler is not None:
             return {"samples": int(self.t.size), **knowns.info(self),
                     "record": {"source": "file", "file": str(cfg.reference.file),
                                "info": self.record_info},
-                    "fitted_model": {"solver": "Newmark average acceleration",
-                                     "dt_s": cfg.dt}}
+                    "fitted_model": {"solver": self._fitted_solver(), "dt_s": cfg.dt}}
         exact = cfg.record == "exact"
         info = {
             "samples": int(self.t.size),
@@ -528,7 +546,7 @@ class RideProblem(Problem):
             "record": {"solver": "exact first-order hold" if exact
                        else "Newmark (the fitted model: inverse crime)",
                        "dt_s": cfg.dt / (cfg.record_substeps if exact else 1)},
-            "fitted_model": {"solver": "Newmark average acceleration", "dt_s": cfg.dt},
+            "fitted_model": {"solver": self._fitted_solver(), "dt_s": cfg.dt},
             "noise": {"model": "additive Gaussian", "sigma": self.sigma.tolist(),
                       "channels": [c for c, _ in self.channels]},
             "truth": self._x_true.tolist(),
@@ -537,7 +555,8 @@ class RideProblem(Problem):
         }
         richer = getattr(cfg, "record_model", "linear")
         if richer != "linear":  # the report explains a floor below the bound by it
-            from .richer import DESCRIPTIONS
+            from .richer import DESCRIPTIONS, FIT_WITH
 
-            info["model_error"] = {"record_model": richer, "what": DESCRIPTIONS[richer]}
+            info["model_error"] = {"record_model": richer, "what": DESCRIPTIONS[richer],
+                                   "fit_with": FIT_WITH[richer]}
         return info

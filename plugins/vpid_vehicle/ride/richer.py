@@ -124,6 +124,16 @@ DESCRIPTIONS = {
 }
 
 
+#: The richer fitted structure the suite has for each record model (issue 43): what fits the
+#: record's dynamics; ``None`` where the suite has none (the seat's fifth degree of freedom).
+FIT_WITH = {
+    "bilinear_damper": "problem.damper=bilinear (bump and rebound coefficients, "
+                       "vpid_vehicle.ride.structures)",
+    "seat": None,
+    "magic_formula": "problem=lateral_mf (the Magic Formula single-track model)",
+}
+
+
 #: Columns of :func:`bilinear_quarter`'s full output, by sensor name.
 QUARTER_CHANNELS = {"zs''": 0, "zu''": 1, "zs": 2, "zu": 3, "zs-zu": 4}
 

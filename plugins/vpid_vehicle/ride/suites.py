@@ -4,6 +4,10 @@ suite it belongs to, so ``vpid-bench -m suite=smoke optimizer=...`` sweeps them.
 
 * ``smoke``: every family once, short records and a small protocol (``iterations=10``), for a
   first look in minutes;
+* ``structures``: one member per ride family fitting a richer suspension structure
+  (:mod:`.structures`: the bilinear damper) to the record it made, so the
+  richer structure's recovery of the truth can be set beside the linear model's misfit
+  (``vpid1_q_golden_bilinear``); not archived;
 * ``vpid1``: the suite proper, 17 problems over the four families (quarter, half and full car,
   single-track lateral), dimensions 4 to 9, three road inputs and two manoeuvres, every sensor
   set, three problems whose record comes from a richer model than the fitted one (a bilinear
@@ -110,4 +114,13 @@ MEMBERS: tuple[type, ...] = (
     member(LateralProblem, "vpid1_l_civic_model_error", ("vpid1",), record_model="magic_formula",
            steer_deg=4.0),
     member(LateralMFProblem, "vpid1_mf_civic_sine", ("vpid1",)),
+    # the richer suspension structures (issue 43) fitted to records they made: the richer
+    # structure recovering the truth of records the linear model misfits (a suite of its own,
+    # not in vpid1's archive)
+    member(RideQuarterProblem, "structures_q_golden_bilinear", ("structures",),
+           damper="bilinear"),
+    member(RideHalfProblem, "structures_h_gokdag_bilinear", ("structures",),
+           damper="bilinear", sensors="body_wheel"),
+    member(RideFullProblem, "structures_f_jazar_bilinear", ("structures",),
+           damper="bilinear", sensors="body_wheel"),
 )

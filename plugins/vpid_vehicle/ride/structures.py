@@ -1,0 +1,330 @@
+"""Richer suspension structures of the ride models, nested with the linear one:
+``problem.spring=linear|cubic`` and ``problem.damper=linear|bilinear`` (issue 43, item 1).
+
+Each suspension element (a quarter car's one, a half car's front and rear, a full car's four
+corners) has an elongation ``e = J q`` (the body point above the wheel minus the wheel, m) and
+its rate ``e'``. The linear model's element force is ``k e + c e'``; the structures add, per
+axle (the two corners of a full-car axle share their values):
+
+* ``spring=cubic``: a progressive spring ``k e + k3 e^3``; parameter ``<k>_cubic`` (N/m³),
+  box ``[0, 2] x`` :data:`CUBIC_PER_K` ``x k`` of the published set (``k3 = 0`` is the linear
+  spring, so the linear structure lies inside the cubic one's box). The reference value
+  :data:`CUBIC_PER_K` = 100 m⁻² makes the cubic term 25 % of the linear force at 50 mm of
+  travel: a stated choice for a progressive coil or a bump-stop-assisted spring, whose rate
+  rises by tens of percent over the working travel (Dixon, *The Shock Absorber Handbook*,
+  2nd ed., 2007, ch. 1; Reimpell et al., *The Automotive Chassis*, 2001, sec. 5.3);
+* ``damper=bilinear``: bump (compression, ``e' < 0``) and rebound (extension, ``e' > 0``)
+  coefficients ``<c>_bump`` and ``<c>_rebound`` (N s/m) in place of ``<c>``; boxes
+  :data:`BUMP_BOX` and :data:`REBOUND_BOX` ``x c`` of the published set, which hold the
+  symmetric damper (``bump = rebound``) and passenger-car rebound/compression ratios from 1:1
+  to 4:1 and beyond (Dixon 2007, ch. 5: 2:1 to 4:1 usual; :mod:`.richer`'s record damper is
+  3:1).
+
+Every other parameter keeps its name, unit and box. The linear structure is the model itself
+(its Newmark kernel, unchanged); a richer structure is simulated by the classical Runge-Kutta
+method (RK4) at the fitted model's ``dt`` with the road linear between samples, and its
+record at ``dt / record_substeps`` (so the record is still not made at the fitted step).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from typing import Any
+
+import numba
+import numpy as np
+
+from . import linear
+from .problem import RideModel
+
+SPRINGS = ("linear", "cubic")
+DAMPERS = ("linear", "bilinear")
+#: The cubic coefficient's reference per unit of the linear rate (m⁻²): 25 % at 50 mm.
+CUBIC_PER_K = 0.25 / 0.05**2
+#: Box of the cubic coefficient as multiples of ``CUBIC_PER_K x k`` (published k).
+CUBIC_BOX = (0.0, 2.0)
+#: Boxes of the bump and rebound coefficients as multiples of the published ``c``.
+BUMP_BOX = (0.25, 1.5)
+REBOUND_BOX = (0.5, 3.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class Suspension:
+    """A family's suspension elements: ``axles`` (the linear model's spring and damper
+    parameter of each axle), ``axle_of`` (each element's axle) and ``elongations(X, known)``,
+    the rows ``J`` ``(n, elements, dof)`` with ``e = J q`` for the linear rows ``X``."""
+
+    axles: tuple[tuple[str, str], ...]
+    axle_of: tuple[int, ...]
+    elongations: Callable[[np.ndarray, dict[str, float]], np.ndarray]
+
+
+def _quarter_rows(X: np.ndarray, known: dict[str, float]) -> np.ndarray:
+    return np.broadcast_to(np.array([[1.0, -1.0]]), (X.shape[0], 1, 2)).copy()
+
+
+def _half_rows(X: np.ndarray, known: dict[str, float]) -> np.ndarray:
+    a1 = X[:, 8]
+    J = np.zeros((X.shape[0], 2, 4))
+    J[:, 0, 0], J[:, 0, 1], J[:, 0, 2] = 1.0, -a1, -1.0
+    J[:, 1, 0], J[:, 1, 1], J[:, 1, 3] = 1.0, known["L"] - a1, -1.0
+    return J
+
+
+def _full_rows(X: np.ndarray, known: dict[str, float]) -> np.ndarray:
+    from .full import _geometry
+
+    xs, ys = _geometry(known)
+    J = np.zeros((X.shape[0], 4, 7))
+    for i in range(4):
+        J[:, i, 0], J[:, i, 1], J[:, i, 2], J[:, i, 3 + i] = 1.0, ys[i], -xs[i], -1.0
+    return J
+
+
+def suspension_of(model: RideModel) -> Suspension | None:
+    """The suspension of a ride model (quarter, half or full car), else ``None``."""
+    from .full import FullCar
+    from .half import HalfCar
+    from .quarter import QuarterCar
+
+    if isinstance(model, QuarterCar):
+        return Suspension((("ks", "cs"),), (0,), _quarter_rows)
+    if isinstance(model, HalfCar):
+        return Suspension((("k1", "c1"), ("k2", "c2")), (0, 1), _half_rows)
+    if isinstance(model, FullCar):
+        return Suspension((("kf", "cf"), ("kr", "cr")), (0, 0, 1, 1), _full_rows)
+    return None
+
+
+class StructuredModel(RideModel):
+    """A ride model with a cubic spring and/or a bilinear damper per axle (the module)."""
+
+    #: What the problem's ``describe()`` names as the fitted model's solver.
+    fitted_solver = "RK4 (the suspension structure's nonlinear forces)"
+
+    def __init__(self, base: RideModel, spring: str, damper: str) -> None:
+        suspension = suspension_of(base)
+        if suspension is None:
+            raise TypeError(f"{type(base).__name__} has no suspension structures")
+        self.base, self.spring, self.damper, self.suspension = base, spring, damper, suspension
+        springs = {k for k, _ in suspension.axles}
+        dampers = {c for _, c in suspension.axles}
+        names: list[str] = []
+        units: list[str] = []
+        for name, unit in zip(base.names, base.units, strict=True):
+            if name in dampers and damper == "bilinear":
+                names += [f"{name}_bump", f"{name}_rebound"]
+                units += [unit, unit]
+            else:
+                names.append(name)
+                units.append(unit)
+            if name in springs and spring == "cubic":
+                names.append(f"{name}_cubic")
+                units.append("N/m³")
+        self.names = tuple(names)
+        self.units = tuple(units)
+        self.sets = {key: self._set(published) for key, published in base.sets.items()}
+        self.sensors = base.sensors
+        self.wheel_names = base.wheel_names
+
+    def _set(self, published: dict[str, float]) -> dict[str, float]:
+        """A published set in this structure: the symmetric damper, the reference cubic."""
+        out = dict(published)
+        for k, c in self.suspension.axles:
+            if self.spring == "cubic":
+                out[f"{k}_cubic"] = CUBIC_PER_K * published[k]
+            if self.damper == "bilinear":
+                out[f"{c}_bump"] = out[f"{c}_rebound"] = out.pop(c)
+        return out
+
+    # --- the base model's input side ----------------------------------------------------
+    def wheels(self, known: dict[str, float], speed: float) -> Any:
+        return self.base.wheels(known, speed)
+
+    def record_columns(self) -> Any:
+        return self.base.record_columns()
+
+    def needs_record_inputs(self, config: Any) -> str | None:
+        return self.base.needs_record_inputs(config)
+
+    def check_record(self, record: Any) -> None:
+        self.base.check_record(record)
+
+    def inputs(self, config: Any, known: dict[str, float], dt: float,
+               rng: np.random.Generator) -> np.ndarray:
+        return self.base.inputs(config, known, dt, rng)
+
+    def inputs_from_record(self, record: Any, sampler: Any) -> np.ndarray:
+        return self.base.inputs_from_record(record, sampler)
+
+    # --- parameters -----------------------------------------------------------------------
+    def split(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The linear model's rows (the damper at its bump value), each axle's cubic
+        coefficient ``(n, axles)`` (N/m³) and rebound minus bump ``(n, axles)`` (N s/m)."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        col = {name: X[:, i] for i, name in enumerate(self.names)}
+        lin = np.stack([col.get(name, col.get(f"{name}_bump")) for name in self.base.names],
+                       axis=1)
+        n, axles = X.shape[0], len(self.suspension.axles)
+        k3, dc = np.zeros((n, axles)), np.zeros((n, axles))
+        for a, (k, c) in enumerate(self.suspension.axles):
+            if self.spring == "cubic":
+                k3[:, a] = col[f"{k}_cubic"]
+            if self.damper == "bilinear":
+                dc[:, a] = col[f"{c}_rebound"] - col[f"{c}_bump"]
+        return lin, k3, dc
+
+    def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
+        """The linear rows a vehicle, every cubic coefficient finite and ``>= 0``, every
+        damper coefficient ``> 0``."""
+        lin, k3, dc = self.split(X)
+        return (self.base.physical(lin, known) & np.all(np.isfinite(k3) & (k3 >= 0), axis=1)
+                & np.all(np.isfinite(dc) & (lin[:, [self.base.names.index(c) for _, c in
+                                                    self.suspension.axles]] + dc > 0), axis=1))
+
+    def box(self, nominal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The base model's box for its parameters; the module's boxes for the new ones."""
+        lin, _, _ = self.split(nominal[None])
+        b_lo, b_hi = self.base.box(lin[0])
+        lo, hi = np.empty(len(self.names)), np.empty(len(self.names))
+        base_at = {name: i for i, name in enumerate(self.base.names)}
+        for i, name in enumerate(self.names):
+            stem, _, kind = name.rpartition("_")
+            if kind == "cubic":
+                ref = CUBIC_PER_K * lin[0, base_at[stem]]
+                lo[i], hi[i] = CUBIC_BOX[0] * ref, CUBIC_BOX[1] * ref
+            elif kind in ("bump", "rebound") and stem in base_at:
+                ref = lin[0, base_at[stem]]
+                box = BUMP_BOX if kind == "bump" else REBOUND_BOX
+                lo[i], hi[i] = box[0] * ref, box[1] * ref
+            else:
+                lo[i], hi[i] = b_lo[base_at[name]], b_hi[base_at[name]]
+        return lo, hi
+
+    # --- simulation -----------------------------------------------------------------------
+    def system(self, X: np.ndarray, known: dict[str, float], sensors: str
+               ) -> linear.LinearSystem:
+        """The linear part (the cubic term dropped, the damper at its bump value)."""
+        return self.base.system(self.split(X)[0], known, sensors)
+
+    def simulate(self, X: np.ndarray, known: dict[str, float], sensors: str, u: np.ndarray,
+                 dt: float, solver: str) -> np.ndarray:
+        """The ``sensors`` channels ``(n, N, p)`` by RK4 at ``dt`` from rest (either
+        ``solver``: the record passes its fine step, the fitted model its ``dt``)."""
+        lin, k3, dc = self.split(X)
+        return simulate_structured(self.base.system(lin, known, sensors),
+                                   self.suspension.elongations(lin, known),
+                                   np.asarray(self.suspension.axle_of, dtype=np.int64),
+                                   k3, dc, u, dt)
+
+
+def structured(base: RideModel, config: Any) -> RideModel:
+    """``base`` itself for the linear structure (its own kernel), else its
+    :class:`StructuredModel` for ``config.spring`` and ``config.damper``."""
+    spring = getattr(config, "spring", "linear")
+    damper = getattr(config, "damper", "linear")
+    if spring == "linear" and damper == "linear":
+        return base
+    return StructuredModel(base, spring, damper)
+
+
+def _full(a: np.ndarray | None, n: int, shape: tuple[int, ...]) -> np.ndarray:
+    """``a`` broadcast to ``(n, *shape)`` float64 (None: zeros)."""
+    if a is None:
+        return np.zeros((n, *shape))
+    return np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), (n, *shape)))
+
+
+def simulate_structured(system: linear.LinearSystem, J: np.ndarray, axle_of: np.ndarray,
+                        k3: np.ndarray, dc: np.ndarray, u: np.ndarray, dt: float
+                        ) -> np.ndarray:
+    """``M q'' + C q' + K q + J^T g(J q, J q') = F u`` with ``g = k3 e^3 + dc max(e', 0)``
+    per element (its axle's values), from rest, by RK4 at ``dt`` with ``u`` linear between
+    samples; outputs ``y = Pa q'' + Pv q' + Pq q + Pu u``, ``(n, N, p)``."""
+    n, d = system.M.shape[0], system.dof
+    r, p = system.F.shape[-1], system.Pq.shape[-2]
+    Minv = np.linalg.inv(system.M)
+    # q'' = G u - A q - B v - H g: the linear part and the elements' forces through M^-1
+    A = Minv @ _full(system.K, n, (d, d))
+    B = Minv @ _full(system.C, n, (d, d))
+    G = Minv @ _full(system.F, n, (d, r))
+    H = Minv @ np.swapaxes(J, 1, 2)
+    u = np.ascontiguousarray(u, dtype=float)
+    y = np.empty((n, u.shape[0], p))
+    _rk4(np.ascontiguousarray(A), np.ascontiguousarray(B), np.ascontiguousarray(G),
+         np.ascontiguousarray(H), np.ascontiguousarray(J, dtype=float),
+         _full(system.Pa, n, (p, d)), _full(system.Pv, n, (p, d)),
+         _full(system.Pq, n, (p, d)), _full(system.Pu, n, (p, r)), axle_of,
+         np.ascontiguousarray(k3, dtype=float), np.ascontiguousarray(dc, dtype=float),
+         u, float(dt), y)
+    return y
+
+
+@numba.njit(cache=True, inline="always")
+def _accel(c, q, v, u, k, w, A, B, G, H, J, axle_of, k3, dc, out):  # pragma: no cover
+    """``out = q''`` of candidate ``c`` at the input ``(1 - w) u[k] + w u[k + 1]``."""
+    d, r = A.shape[1], G.shape[2]
+    for i in range(d):
+        s = 0.0
+        for j in range(r):
+            uj = u[k, j] if w == 0.0 else (1.0 - w) * u[k, j] + w * u[k + 1, j]
+            s += G[c, i, j] * uj
+        for j in range(d):
+            s -= A[c, i, j] * q[j] + B[c, i, j] * v[j]
+        out[i] = s
+    for e in range(J.shape[1]):
+        el, rate = 0.0, 0.0
+        for j in range(d):
+            el += J[c, e, j] * q[j]
+            rate += J[c, e, j] * v[j]
+        a = axle_of[e]
+        g = k3[c, a] * el * el * el
+        if rate > 0.0:
+            g += dc[c, a] * rate
+        if g != 0.0:
+            for i in range(d):
+                out[i] -= H[c, i, e] * g
+
+
+@numba.njit(cache=True)
+def _rk4(A, B, G, H, J, Pa, Pv, Pq, Pu, axle_of, k3, dc, u, dt, y):  # pragma: no cover
+    n, d = A.shape[0], A.shape[1]
+    N, r = u.shape
+    p = Pa.shape[1]
+    q, v, qt, vt = np.zeros(d), np.zeros(d), np.empty(d), np.empty(d)
+    a1, a2, a3, a4 = np.empty(d), np.empty(d), np.empty(d), np.empty(d)
+    v2, v3 = np.empty(d), np.empty(d)
+    h = 0.5 * dt
+    for c in range(n):
+        q[:] = 0.0
+        v[:] = 0.0
+        for k in range(N):
+            _accel(c, q, v, u, k, 0.0, A, B, G, H, J, axle_of, k3, dc, a1)
+            for o in range(p):
+                s = 0.0
+                for j in range(d):
+                    s += Pa[c, o, j] * a1[j] + Pv[c, o, j] * v[j] + Pq[c, o, j] * q[j]
+                for j in range(r):
+                    s += Pu[c, o, j] * u[k, j]
+                y[c, k, o] = s
+            if k + 1 == N:
+                break
+            # stage 1: (q, v) -> (v, a1); stage 2 at the midpoint from stage 1's rates
+            for j in range(d):
+                qt[j] = q[j] + h * v[j]
+                vt[j] = v[j] + h * a1[j]
+            _accel(c, qt, vt, u, k, 0.5, A, B, G, H, J, axle_of, k3, dc, a2)
+            v2[:] = vt
+            for j in range(d):
+                qt[j] = q[j] + h * v2[j]
+                vt[j] = v[j] + h * a2[j]
+            _accel(c, qt, vt, u, k, 0.5, A, B, G, H, J, axle_of, k3, dc, a3)
+            v3[:] = vt
+            for j in range(d):
+                qt[j] = q[j] + dt * v3[j]
+                vt[j] = v[j] + dt * a3[j]
+            _accel(c, qt, vt, u, k, 1.0, A, B, G, H, J, axle_of, k3, dc, a4)
+            for j in range(d):
+                q[j] += dt / 6.0 * (v[j] + 2.0 * v2[j] + 2.0 * v3[j] + vt[j])
+                v[j] += dt / 6.0 * (a1[j] + 2.0 * a2[j] + 2.0 * a3[j] + a4[j])
