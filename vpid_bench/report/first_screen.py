@@ -52,6 +52,9 @@ class ContextResult:
     truth: bool = True  # False: the problem has no truth (a measured record)
     identified: Any = None  # without a truth: .estimates.Identified, the values and intervals
     comparisons: list[dict[str, Any]] = dataclasses.field(default_factory=list)
+    #: the fit diagnostics at the context's optimum (:mod:`.diagnostics`), or None
+    diagnostics: Any = None
+    model_error: str = ""  # what the richer model that made the record adds, or ""
 
     def value(self, x: float) -> str:
         """A metric value with its unit."""
@@ -129,7 +132,9 @@ def context_result(data: Any, context: str) -> ContextResult:
     verdict = verdicts.decide(evidence(data, context))
     return ContextResult(context, metric, unit, headers, body, verdict.floor, verdict.bound,
                          verdict_text(verdict), mgroups is not None, verdict, verdict.truth,
-                         data.identified.get(context), data.comparisons.get(context, []))
+                         data.identified.get(context), data.comparisons.get(context, []),
+                         getattr(data, "diagnostics", {}).get(context),
+                         verdict.model_error)
 
 
 def evidence(data: Any, context: str) -> verdicts.Evidence:
@@ -448,9 +453,14 @@ def _no_truth_lines(r: ContextResult) -> list[tuple[str, list[str], list[list[An
     if ident is not None:
         sigma = ", ".join(fmt(s, 3) for s in ident.sigma)
         text = (f"Identified values: the best run ({escape(ident.run)}, objective "
-                f"{fmt(ident.f, 4)}), with 95 % intervals from the Jacobian of its residuals "
+                f"{_objective(ident)}), with 95 % intervals from the Jacobian of its residuals "
                 f"under Gaussian noise of σ estimated from them per residual group ({sigma}, "
-                "in the residuals' units); model error counts as noise there. ")
+                "in the residuals' units); model error counts as noise there, and they "
+                "assume white residuals"
+                + ("; the robust (HAC) interval, in the fit diagnostics below, does not. " if
+                   ident.robust_lower is not None else ". "))
+        if ident.caveat:
+            text += escape(ident.caveat) + " "
         text += ("The profile likelihood drops the linearisation: its interval is around the "
                  "likelihood's own estimate (Gaussian noise, σ per group as above), which "
                  "differs from the best run where the objective is not that likelihood."
@@ -468,6 +478,17 @@ def _no_truth_lines(r: ContextResult) -> list[tuple[str, list[str], list[list[An
         out.append(("Fixed rows the problem gives for comparison (a published estimate, a "
                     "predictor a model must beat): never a truth.", headers, rows))
     return out
+
+
+def _objective(ident: Any) -> str:
+    """The best run's objective value with the unit and meaning the problem states, e.g.
+    ``2.591 µm² (the mean square position error over the estimation record)``."""
+    text = fmt(ident.f, 4)
+    if getattr(ident, "objective_unit", ""):
+        text += f" {escape(ident.objective_unit)}"
+    if getattr(ident, "objective_what", ""):
+        text += f", {escape(ident.objective_what)}"
+    return text
 
 
 def markdown_lines(items: Sequence[ContextResult]) -> list[str]:
@@ -490,9 +511,18 @@ def markdown_lines(items: Sequence[ContextResult]) -> list[str]:
 
 def extra_blocks(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
     """What every renderer shows below a context's ranking: for a context without a truth,
-    the identified values with their intervals and the problem's comparison rows, as
-    ``(Markdown text, headers, rows)`` (empty headers: text only); nothing otherwise."""
-    return [] if r.truth else _no_truth_lines(r)
+    the identified values with their intervals and the problem's comparison rows; for every
+    context with a job's ``diagnostics.json``, its fit diagnostics; as ``(Markdown text,
+    headers, rows)`` (empty headers: text only)."""
+    return ([] if r.truth else _no_truth_lines(r)) + _diagnostic_blocks(r)
+
+
+def _diagnostic_blocks(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
+    """The fit diagnostics of a context (truth or not): one plain line where the model does
+    not explain the record, the channel table, the intervals and which one is trusted."""
+    from .diagnostics import blocks
+
+    return blocks(r.diagnostics, r.model_error)
 
 
 def terminal_width() -> int:
