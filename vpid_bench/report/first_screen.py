@@ -116,7 +116,8 @@ def context_result(data: Any, context: str) -> ContextResult:
         headers.append(f"beats {data.baseline}?")
     body = []
     for s in mrows:
-        row: list[Any] = [s["rank"], s["algorithm"], s["n_runs"], s.get("median"),
+        row: list[Any] = [s.get("rank_shown", s["rank"]), s["algorithm"], s["n_runs"],
+                          s.get("median"),
                           f"[{fmt(s.get('q1'))}, {fmt(s.get('q3'))}]"]
         if mgroups is not None:
             row.insert(1, mgroups.get(s["algorithm"], "—"))
@@ -202,12 +203,7 @@ def _edge(data: Any, context: str) -> tuple[int, int]:
 def _costs(hits: Sequence[Any], context: str) -> dict[str, tuple[float, float]]:
     """Per optimizer of ``context``: its ERT to the final target (each instance's optimum),
     in evaluations and in seconds."""
-    by: dict[str, list[Any]] = {}
-    for h in hits:
-        if h.context == context:
-            by.setdefault(h.algorithm, []).append(h)
-    last = len(anytime.TARGETS) - 1
-    return {a: (anytime.ert(g, last), anytime.ert(g, last, "seconds")) for a, g in by.items()}
+    return {a: v for (c, a), v in anytime.costs_to_optimum(hits).items() if c == context}
 
 
 def results(data: Any) -> list[ContextResult]:
@@ -514,7 +510,27 @@ def extra_blocks(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]
     the identified values with their intervals and the problem's comparison rows; for every
     context with a job's ``diagnostics.json``, its fit diagnostics; as ``(Markdown text,
     headers, rows)`` (empty headers: text only)."""
-    return ([] if r.truth else _no_truth_lines(r)) + _diagnostic_blocks(r)
+    return (_row_one_note(r) + ([] if r.truth else _no_truth_lines(r))
+            + _diagnostic_blocks(r))
+
+
+def _row_one_note(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
+    """Why row 1 of the ranking is not the verdict's choice, when it is not (a reference,
+    not shown to beat the references, or behind the pick by search quality)."""
+    v = r.decision
+    first = r.rows[0][r.headers.index("optimizer")] if r.rows and "optimizer" in r.headers \
+        else None
+    if v is None or v.kind != verdicts.USE or first is None or first == v.pick:
+        return []
+    if first in v.references:
+        why = "it is a reference (random search or the box centre), never recommended"
+    elif v.tied and first in v.tied:
+        why = ("the tests do not separate the two by the metric, and the verdict goes by "
+               "search quality, then cost")
+    else:
+        why = "it is not shown to beat every reference that was run"
+    # no record text here: the terminal wraps these blocks without keeping names whole
+    return [(f"Row 1 of the ranking is not the verdict's choice: {why}.", [], [])]
 
 
 def _diagnostic_blocks(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
