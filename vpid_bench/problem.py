@@ -178,18 +178,6 @@ class Problem(abc.ABC):
         objective: the bound belongs to the data, not to the estimator."""
         return None
 
-    def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any] | None:
-        """Optional, for the fit diagnostics (:mod:`vpid_bench.analysis.diagnostics`) at an
-        identified ``x``: what the residuals are compared with. A dict with any of
-        ``measured`` (``(m,)``: the measured values in the units of
-        :meth:`fisher_residuals`, so a residual's rms can be set against its signal's),
-        ``names`` (each group's channel name), ``inputs`` (``{name: (T,)}``: each input the
-        model is driven by, sampled as the ``T`` entries of a group, for the
-        cross-correlation with the residuals) and ``held_out`` (``{"error": e, "naive":
-        e0}``: the error of ``x`` on a validation segment beside a naive predictor's, same
-        units). Default ``None``: the diagnostics use the residuals alone."""
-        return None
-
     def instance(self, index: int) -> Problem:
         """Instance ``index`` of this problem (as COCO and IOHprofiler have them): run ``i`` of
         every optimizer in a comparison fits instance ``i``, so runs pair by instance across

@@ -103,7 +103,7 @@ def test_one_plain_line_on_every_screen_and_the_robust_interval_trusted(rich):
     assert line.startswith("The residuals are correlated (lag-1 0.9")
     assert "the model misses dynamics the record holds" in line
     flat = " ".join(results.split())
-    assert line in flat and "robust (HAC" in flat and "not the vehicle" in flat
+    assert line in flat and "robust (HAC" in flat and "not the system that made it" in flat
     assert " ".join(report.headline.split()).count("The residuals are correlated") == 1
     html = (root / "report" / "index.html").read_text()
     assert "The residuals are correlated" in " ".join(html.split())

@@ -217,10 +217,17 @@ def problem_diagnostics(problem: Any, x: Any) -> dict[str, Any]:
     """The fit diagnostics of ``problem`` (one with residuals) at ``x``: its
     :meth:`~vpid_bench.api.Problem.fisher_residuals` grouped by
     :meth:`~vpid_bench.api.Problem.fisher_groups`, the noise sigma it states
-    (:meth:`~vpid_bench.api.Problem.residual_sigma`, per group) and what its
-    :meth:`~vpid_bench.api.Problem.diagnostic_signals` gives; with ``x``, ``f`` (the
-    objective at ``x``) and ``intervals`` (:func:`.intervals.jacobian_intervals`: the
-    white-noise and the robust HAC interval)."""
+    (:meth:`~vpid_bench.api.Problem.residual_sigma`, per group) and what its optional
+    ``diagnostic_signals(x)`` gives, where it has one; with ``x``, ``f`` (the objective at
+    ``x``) and ``intervals`` (:func:`.intervals.jacobian_intervals`: the white-noise and
+    the robust HAC interval).
+
+    ``diagnostic_signals(x)`` (a method a problem with residuals may define; not yet a
+    member of the contract) returns a dict with any of ``measured`` (``(m,)``: the measured
+    values in the units of ``fisher_residuals``), ``names`` (each group's channel name),
+    ``inputs`` (``{name: (T,)}``: each input the model is driven by, sampled as the ``T``
+    entries of a group) and ``held_out`` (``{"error": e, "naive": e0}``: the error of ``x``
+    on a validation record beside a naive predictor's, same units)."""
     from .intervals import jacobian_intervals
 
     x = np.asarray(x, dtype=float).reshape(-1)
@@ -230,7 +237,8 @@ def problem_diagnostics(problem: Any, x: Any) -> dict[str, Any]:
     sigma = None if sigma is None else np.asarray(sigma, dtype=float).reshape(-1)
     if sigma is not None and groups.size and sigma.size != int(groups.max()) + 1:
         sigma = None  # given per entry: estimated per group instead
-    extra = problem.diagnostic_signals(x) or {}
+    given = getattr(problem, "diagnostic_signals", None)
+    extra = (given(x) if callable(given) else None) or {}
     out = fit_diagnostics(r, groups, measured=extra.get("measured"), sigma=sigma,
                           inputs=extra.get("inputs"), names=extra.get("names"),
                           held_out=extra.get("held_out"))

@@ -12,7 +12,8 @@ intervals there) and gives, per context, below the ranking on the first screen, 
 * per channel the residual rms against the signal's and the noise's, the lag-1
   autocorrelation, the whiteness test and the largest cross-correlation with an input;
 * per parameter the white-noise and the robust half-widths, and which one the report trusts
-  and why (with model error: the interval describes the fitted model, not the vehicle).
+  and why (with model error: the interval describes the fitted model, not the system that
+  made the record).
 
 The residual figure (autocorrelation and cross-correlations with their 99 % bands) is a core
 report section (:func:`section`). Everything read from a results folder is untrusted: a
@@ -168,7 +169,7 @@ def plain_line(diag: Mapping[str, Any]) -> str:
 
 def trust_text(diag: Mapping[str, Any], model_error: str = "") -> str:
     """Which interval the report trusts, and why; with model error (known, or shown by the
-    residuals), that it describes the fitted model, not the vehicle."""
+    residuals), that it describes the fitted model, not the system that made the record."""
     iv = diag.get("intervals")
     if iv is None:
         return ""
@@ -188,8 +189,8 @@ def trust_text(diag: Mapping[str, Any], model_error: str = "") -> str:
         why = (f"the record was made by a richer model ({escape(model_error)})" if model_error
                else "the residuals show model error")
         text += (f" With model error ({why}), an interval describes the fitted model's "
-                 "best fit to this record, not the vehicle: the true values may lie outside "
-                 "both.")
+                 "best fit to this record, not the system that made it: its true values may "
+                 "lie outside both.")
     return text
 
 
