@@ -276,7 +276,8 @@ class EmpsProblem(Problem):
         return {"measured": rec.qm * (UM / np.sqrt(self._m)), "names": ["q"],
                 "inputs": {"qg": rec.qg.copy()},
                 "held_out": {"error": self.metrics(x)["val_rms_um"],
-                             "naive": float(UM * np.sqrt(np.mean((val.qm - val.qg) ** 2)))}}
+                             "naive": float(UM * np.sqrt(np.mean((val.qm - val.qg) ** 2))),
+                             "unit": "µm"}}
 
     def content_digest(self) -> str | None:
         return "+".join(records.SHA256[n][:16] for n in (ESTIMATION, VALIDATION))

@@ -119,7 +119,7 @@ def test_groups_are_diagnosed_apart_and_held_out_error_beside_the_naive_one():
                           held_out={"error": 1.0, "naive": 4.0})
     assert [g["name"] for g in out["groups"]] == ["a", "b"]
     assert not out["groups"][0]["correlated"] and out["groups"][1]["correlated"]
-    assert out["held_out"] == {"error": 1.0, "naive": 4.0, "ratio": 0.25}
+    assert out["held_out"] == {"error": 1.0, "naive": 4.0, "ratio": 0.25, "unit": ""}
     with pytest.raises(ValueError, match="shape"):
         fit_diagnostics(r, np.zeros(3, int))
 

@@ -175,10 +175,10 @@ def fit_diagnostics(residuals: np.ndarray, groups: np.ndarray,
     non-positive entry: estimated); ``inputs``: ``{name: (T,)}`` each input sampled as the
     entries of a group of ``T`` entries (a group of another length is not cross-correlated);
     ``names``: each group's channel name; ``held_out``: ``{"error": e, "naive": e0}`` (same
-    units) where a validation segment exists.
+    units; optionally their ``unit``) where a validation segment exists.
 
     Returns ``{"schema", "groups": [per group: "group", "name", and
-    :func:`group_diagnostics`' keys], "held_out": {"error", "naive", "ratio"} or None,
+    :func:`group_diagnostics`' keys], "held_out": {"error", "naive", "ratio", "unit"} or None,
     "explained"}``; a group with fewer than :data:`MIN_SAMPLES` entries or a non-finite
     residual is left out. Raises :class:`ValueError` when the shapes differ."""
     r = np.asarray(residuals, dtype=float).reshape(-1)
@@ -204,7 +204,8 @@ def fit_diagnostics(residuals: np.ndarray, groups: np.ndarray,
     if held_out and all(isinstance(held_out.get(key), (int, float))
                         and math.isfinite(held_out[key]) for key in ("error", "naive")):
         e, e0 = float(held_out["error"]), float(held_out["naive"])
-        held = {"error": e, "naive": e0, "ratio": _num(e / e0) if e0 > 0 else None}
+        held = {"error": e, "naive": e0, "ratio": _num(e / e0) if e0 > 0 else None,
+                "unit": str(held_out.get("unit", ""))[:16]}
     return {"schema": SCHEMA, "groups": out, "held_out": held,
             "explained": not any(e["correlated"] or e["input_correlated"] for e in out)}
 

@@ -249,8 +249,10 @@ def blocks(diag: Mapping[str, Any] | None, model_error: str = ""
                  ": a misfit beyond the noise.")
     held = diag.get("held_out")
     if held:
-        head += (f" Held out: error {fmt(held['error'], 3)} against {fmt(held['naive'], 3)} for "
-                 "a naive predictor.")
+        unit = held.get("unit")
+        unit = f" {escape(unit[:16])}" if isinstance(unit, str) and unit else ""
+        head += (f" Held out: error {fmt(held['error'], 3)}{unit} against "
+                 f"{fmt(held['naive'], 3)}{unit} for a naive predictor.")
     out = [(f"Fit diagnostics at the optimum: {head}", *channel_rows(diag))]
     trust = trust_text(diag, model_error)
     if trust:
