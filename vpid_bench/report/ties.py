@@ -27,6 +27,10 @@ from typing import Any, TypeVar
 OBJECTIVE_RTOL = 1e-8
 #: Two costs (evaluations or seconds to the optimum) within this relative difference tie.
 COST_TIE = 0.10
+#: Two medians within this relative distance are not called different in words (a
+#: disagreement between the two rankings, a floor undercut): a looser tolerance than
+#: :data:`OBJECTIVE_RTOL`, for sentences only, never for a rank, a test or a pick.
+WORDS_RTOL = 1e-3
 
 T = TypeVar("T")
 
