@@ -95,6 +95,12 @@ def check_data() -> None:
         _checked(name, stat.st_size, stat.st_mtime_ns)
 
 
+#: What the first screen says of the intervals of a fit to this rig (docs/measured.md).
+CAVEAT = ("The published Fv and Fc lie outside the white-noise 95 % intervals, and fitting "
+          "the other record moves the estimate 4 to 10 of their half-widths "
+          "(docs/measured.md): read the identified values as good to a few percent.")
+
+
 @dataclasses.dataclass(frozen=True)
 class EmpsConfig(ProblemConfig):
     """``controller_delay``: samples between the controller's output and the plant, 0 (as the
@@ -255,7 +261,23 @@ class EmpsProblem(Problem):
                       "channels": ["q"]},
             "metric_units": {"val_rms_um": "µm", "val_unexplained_pct": "%",
                              "val_voltage_rms_V": "V"},
+            "objective": {"unit": "µm²",
+                          "what": "the mean square position error over the estimation record"},
+            "caveat": CAVEAT,
         }
+
+    def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any]:
+        """For the fit diagnostics: the measured position in the residuals' units (µm over
+        ``sqrt(N)``), the reference position ``qg`` as the loop's input, and the validation
+        record's rms error beside the naive predictor's "the position is its reference"
+        (``qm = qg``), µm."""
+        rec = self.estimation.record
+        val = self.validation.record
+        return {"measured": rec.qm * (UM / np.sqrt(self._m)), "names": ["q"],
+                "inputs": {"qg": rec.qg.copy()},
+                "held_out": {"error": self.metrics(x)["val_rms_um"],
+                             "naive": float(UM * np.sqrt(np.mean((val.qm - val.qg) ** 2))),
+                             "unit": "µm"}}
 
     def content_digest(self) -> str | None:
         return "+".join(records.SHA256[n][:16] for n in (ESTIMATION, VALIDATION))

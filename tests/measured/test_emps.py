@@ -260,3 +260,23 @@ def test_a_bad_key_is_refused_before_any_job(in_tmp):
     lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
     assert proc.returncode == 2 and len(lines) == 1
     assert lines[0].startswith("error: problem.controller_delay=3")
+
+
+def test_the_fit_diagnostics_flag_the_rigs_correlated_residuals(emps):
+    """At the published estimate: one channel ``q``, residuals far from white (lag 1 near 1),
+    the reference position as the loop's input, the held-out error far below the naive
+    predictor's (the position equal to its reference), and the robust interval several times
+    the white one; the first screen's objective has a unit and the caveat of
+    docs/measured.md."""
+    from vpid_bench.analysis.diagnostics import problem_diagnostics
+
+    d = problem_diagnostics(emps, PUBLISHED)
+    (g,) = d["groups"]
+    assert g["name"] == "q" and g["correlated"] and g["lag1"] > 0.99
+    assert set(g["cross"]) == {"qg"} and g["rms_over_signal"] < 1e-3
+    held = d["held_out"]
+    assert held["unit"] == "µm" and held["error"] < 0.01 * held["naive"]
+    ratio = np.array(d["intervals"]["robust"]["se"]) / np.array(d["intervals"]["se"])
+    assert np.all(ratio > 3)
+    info = emps.describe()
+    assert info["objective"]["unit"] == "µm²" and "docs/measured.md" in info["caveat"]

@@ -20,6 +20,19 @@ objective; by default the residuals) grouped by channel (:meth:`Problem.fisher_g
 For a model linear in ``θ`` with one group this is the ordinary least-squares confidence
 interval (tested against the closed form). The profile likelihood
 (:func:`.profile.profile_intervals` with ``sigma`` from here) drops the linearisation.
+
+That interval **assumes white residuals**: it counts every sample as independent. Where the
+model misses dynamics the record holds (model error), the residuals are correlated over many
+samples and it is too narrow. Beside it, ``robust`` is the sandwich (Huber–White) covariance
+with a heteroscedasticity-and-autocorrelation-consistent (HAC, Newey–West) estimate of the
+scores' long-run covariance (:func:`hac_covariance`): ``A⁻¹ B A⁻¹`` with ``A = Jᵀ W J`` and
+``B = Σ_{|l|≤L} (1 − |l|/(L+1)) Σ_t s_t s_{t−l}ᵀ``, where ``s_t`` sums the whitened scores
+``J_i r_i / σ̂_i²`` of the entries at time position ``t`` (each group's entries are in time
+order; position ``t`` is an entry's place within its group) and ``L`` is Andrews' (1991)
+automatic bandwidth for the Bartlett kernel from the residuals' lag-1 autocorrelation ``ρ``
+(``L = 1.1447 (α T)^{1/3}``, ``α = 4ρ² / ((1−ρ)² (1+ρ)²)``, at most ``T/4``). With white
+residuals ``B ≈ A`` and it equals the Jacobian interval; it needs no refit (why this and not
+a block bootstrap: docs/estimators.md).
 """
 
 from __future__ import annotations
@@ -73,27 +86,81 @@ def jacobian_intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None
     J = jacobian(problem, x)
     if not np.all(np.isfinite(J)):
         return None
-    Jw = J[kept] / per[kept][:, None]
     scale = np.where(x != 0, np.abs(x), 1.0)
-    u, s, vt = np.linalg.svd(Jw * scale[None], full_matrices=False)
+    Jw = J[kept] / per[kept][:, None] * scale[None]  # whitened, relative parameters
+    e = r[kept] / per[kept]
+    u, s, vt = np.linalg.svd(Jw, full_matrices=False)
     se = np.full(x.size, math.inf)
+    se_hac = np.full(x.size, math.inf)
+    lags = 0
     if s.size and s[0] > 0:
         good = s > UNDETERMINED_RATIO * s[0]
         # covariance in relative coordinates from the determined directions only
-        cov_rel = (vt[good].T / s[good] ** 2) @ vt[good]
-        se_rel = np.sqrt(np.maximum(np.diag(cov_rel), 0.0))
+        a_inv = (vt[good].T / s[good] ** 2) @ vt[good]
+        se_rel = np.sqrt(np.maximum(np.diag(a_inv), 0.0))
         blind = np.any(np.abs(vt[~good]) > 1e-3, axis=0) if np.any(~good) else \
             np.zeros(x.size, bool)
         se = np.where(blind, math.inf, se_rel * scale)
+        meat, lags = hac_covariance(Jw * e[:, None], groups[kept])
+        hac = a_inv @ meat @ a_inv
+        se_hac = np.where(blind, math.inf, np.sqrt(np.maximum(np.diag(hac), 0.0)) * scale)
     return {
         "method": "jacobian",
+        "assumes": "white residuals",
         "level": 0.95,
         "lower": _finite_or_none(x - Z95 * se),
         "upper": _finite_or_none(x + Z95 * se),
         "se": _finite_or_none(se),
         "sigma": sigma.tolist(),
         "dof": int(r.size - x.size),
+        "robust": {"method": "hac", "kernel": "bartlett", "lags": int(lags), "level": 0.95,
+                   "lower": _finite_or_none(x - Z95 * se_hac),
+                   "upper": _finite_or_none(x + Z95 * se_hac),
+                   "se": _finite_or_none(se_hac)},
     }
+
+
+def time_positions(groups: np.ndarray) -> np.ndarray:
+    """Each entry's place within its group (its time position: a group's entries are in
+    time order), ``(m,)`` ints."""
+    groups = np.asarray(groups, dtype=int).reshape(-1)
+    pos = np.empty(groups.size, dtype=int)
+    for g in np.unique(groups):
+        mine = groups == g
+        pos[mine] = np.arange(int(np.sum(mine)))
+    return pos
+
+
+def andrews_lags(rho: float, t: int) -> int:
+    """Andrews' (1991) automatic Bartlett bandwidth for an AR(1) with lag-1 autocorrelation
+    ``rho`` over ``t`` time points, ``1.1447 (α t)^{1/3}``, ``α = 4ρ²/((1−ρ)²(1+ρ)²)``
+    (``|ρ|`` capped at 0.99), between 1 and ``t // 4``."""
+    rho = float(np.clip(rho, -0.99, 0.99)) if math.isfinite(rho) else 0.0
+    alpha = 4 * rho**2 / ((1 - rho) ** 2 * (1 + rho) ** 2)
+    return int(max(1, min(max(t // 4, 1), math.ceil(1.1447 * (alpha * t) ** (1 / 3)))))
+
+
+def hac_covariance(scores: np.ndarray, groups: np.ndarray, lags: int | None = None
+                   ) -> tuple[np.ndarray, int]:
+    """The Newey–West (Bartlett kernel) long-run covariance ``B`` of ``scores`` ``(m, d)``
+    (one row per residual entry), the entries at the same time position
+    (:func:`time_positions`) summed first; ``lags=None``: :func:`andrews_lags` from the
+    pooled lag-1 autocorrelation of the summed scores' components. Returns ``(B, lags)``."""
+    from scipy.signal import fftconvolve
+
+    scores = np.asarray(scores, dtype=float)
+    pos = time_positions(groups)
+    t = int(pos.max()) + 1 if pos.size else 0
+    S = np.zeros((t, scores.shape[1]))
+    np.add.at(S, pos, scores)
+    if lags is None:
+        num = float(np.sum(S[1:] * S[:-1]))
+        den = float(np.sum(S * S))
+        lags = andrews_lags(num / den if den > 0 else 0.0, t)
+    w = 1.0 - np.abs(np.arange(-lags, lags + 1)) / (lags + 1)
+    KS = fftconvolve(S, w[:, None], mode="same", axes=0)
+    B = S.T @ KS
+    return (B + B.T) / 2, lags
 
 
 def _finite_or_none(a: np.ndarray) -> list[float | None]:

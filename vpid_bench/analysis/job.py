@@ -26,7 +26,9 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
     under ``instances`` each instance's, :func:`.identifiability.per_instance`) and the
     floors of each estimator where the problem offers the choice (``job_dir/estimators.json``,
     :mod:`.estimator_floors`); without a truth, the profile-likelihood intervals at the
-    optimum where they run in reasonable time (``job_dir/profile.json``, :mod:`.estimates`).
+    optimum where they run in reasonable time (``job_dir/profile.json``, :mod:`.estimates`);
+    truth or not, the fit diagnostics and both intervals (white-noise and HAC) at the optimum
+    (``job_dir/diagnostics.json``, :func:`.diagnostics.write_diagnostics`).
     Any problem's fixed comparison rows go to ``job_dir/comparisons.json``. Returns each
     run's relative gap ``(f_best - f*) / f*`` to its instance's optimum (the absolute gap
     where ``f* <= 0``).
@@ -112,6 +114,11 @@ def _residual_analysis(job: Job, problem: Problem, job_dir: Path, optima_dir: Pa
     if not truth and optima:
         inst, optimum = min(optima, key=lambda o: o[1]["f_opt"])
         write_profile(inst, optimum, job_dir)
+    if optima:  # truth or not: the first instance's optimum (no truth: the lowest)
+        from .diagnostics import write_diagnostics
+
+        inst, optimum = optima[0] if truth else min(optima, key=lambda o: o[1]["f_opt"])
+        write_diagnostics(inst, optimum["x_opt"], job_dir)
     return gaps
 
 

@@ -208,3 +208,13 @@ def ecdf_figure(runs: Sequence[RunHits], context: str, path: Path) -> Path | str
     ax.legend(fontsize=8, loc="upper left")
     ax.grid(True, which="major", alpha=0.3)
     return save(fig, path)
+
+
+def costs_to_optimum(hits: Sequence[Any]) -> dict[tuple[str, str], tuple[float, float]]:
+    """Per (context, algorithm): the ERT to the final target (each instance's optimum), in
+    evaluations and in seconds (``inf``: no run reached it)."""
+    by: dict[tuple[str, str], list[Any]] = {}
+    for h in hits:
+        by.setdefault((h.context, h.algorithm), []).append(h)
+    last = len(TARGETS) - 1
+    return {k: (ert(g, last), ert(g, last, "seconds")) for k, g in by.items()}

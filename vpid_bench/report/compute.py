@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from . import anytime, estimates, estimator_floors, rankings, tables
+from . import anytime, diagnostics, estimates, estimator_floors, rankings, tables, ties
 from .identifiability import crb_norm_by_context, crb_norms_by_instance
 from .load import LoadedRecords, NoRecordsError, load_records, reason, run_rows
 from .optima import add_optimum_columns, load_optima, opt_column_names
@@ -62,6 +62,8 @@ class ReportData:
     comparisons: dict[str, list[dict[str, Any]]] = dataclasses.field(default_factory=dict)
     #: per context: each instance's own bound norm (%), keyed as the rows' ``instance``
     instance_bounds: dict[str, dict[Any, float]] = dataclasses.field(default_factory=dict)
+    #: per context: the fit diagnostics at its optimum (:mod:`.diagnostics`)
+    diagnostics: dict[str, dict[str, Any]] = dataclasses.field(default_factory=dict)
 
     @property
     def contexts(self) -> list[str]:
@@ -146,9 +148,11 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
     optima.optima += given_optima + extra_optima
     optima_errors = [f"bad optimum file {p}: {why}" for p, why in optima.skipped]
     optima_errors += add_optimum_columns(rows, loaded.records, optima)
+    ties.snap_ties(rows, loaded.records)  # runs at one optimum: one metric value
     summary = tables.summarize(rows)
     search = rankings.search_summary(rows)
     hits = anytime.run_hits(loaded.records, rows)
+    ties.rank_with_ties(summary, anytime.costs_to_optimum(hits))
     aucs = anytime.auc_table(hits)
     for s in search:
         s["auc"] = aucs.get((s["context"], s["algorithm"]), math.nan)
@@ -167,7 +171,8 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
                       estimator_floors.by_context(loaded.records, rows), notes, truthless,
                       estimates.identified_by_context(loaded.records, rows, truthless),
                       estimates.comparisons_by_context(loaded.records, rows),
-                      crb_norms_by_instance(loaded.records, rows))
+                      crb_norms_by_instance(loaded.records, rows),
+                      diagnostics.by_context(loaded.records, rows))
 
 
 def _load(paths: Sequence[Path]) -> tuple[LoadedRecords, list[Any]]:

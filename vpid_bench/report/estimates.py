@@ -46,11 +46,19 @@ class Identified:
     sigma: list[float]  # σ estimated per residual group
     profile: dict[str, Any] | None = None  # profile.json (status ok), or None
     profile_note: str = ""  # why there is no profile, when there is none
+    #: the robust (HAC) interval beside the Jacobian one (None: not in the record); the
+    #: first screen shows it with the fit diagnostics (:mod:`.diagnostics`)
+    robust_lower: list[float | None] | None = None
+    robust_upper: list[float | None] | None = None
+    objective_unit: str = ""  # the objective's unit the problem states (its info), or ""
+    objective_what: str = ""  # what the objective is, in words, or ""
+    caveat: str = ""  # what the problem says of its intervals (its info), or ""
 
     def rows(self) -> tuple[list[str], list[list[Any]]]:
         """A table: parameter, unit, value, its Jacobian interval, the half-width in % of
         the value, and the profile interval where one was computed."""
-        headers = ["parameter", "unit", "value", "95 % interval (Jacobian)", "± %"]
+        headers = ["parameter", "unit", "value", "95 % interval (Jacobian)",
+                   "± %"]
         prof = self.profile
         if prof is not None:
             headers += ["likelihood's estimate", "95 % interval (profile)"]
@@ -197,9 +205,24 @@ def _identified(row: Mapping[str, Any], rec: Mapping[str, Any]) -> Identified | 
     iv = check_intervals(res.get("intervals"), d)
     if iv is None:
         return None
+    robust = iv.get("robust")
+    robust = robust if isinstance(robust, Mapping) and _ends(robust.get("lower"), d) \
+        and _ends(robust.get("upper"), d) else {}
+    info = (rec.get("problem") or {}).get("info")
+    info = info if isinstance(info, Mapping) else {}
+    objective = info.get("objective") if isinstance(info.get("objective"), Mapping) else {}
     return Identified(f"{row['algorithm']}, run {row['run_index']}", _key(res.get("f_best")),
                       names, list(params.get("units") or []), [float(v) for v in x],
-                      iv["lower"], iv["upper"], [float(s) for s in iv["sigma"]])
+                      iv["lower"], iv["upper"], [float(s) for s in iv["sigma"]],
+                      robust_lower=robust.get("lower"), robust_upper=robust.get("upper"),
+                      objective_unit=_text(objective.get("unit"), 20),
+                      objective_what=_text(objective.get("what"), 120),
+                      caveat=_text(info.get("caveat"), 400))
+
+
+def _text(v: Any, most: int) -> str:
+    """A short text from a record (``""`` when it is not a string)."""
+    return " ".join(v.split())[:most] if isinstance(v, str) else ""
 
 
 def _best_profile(records: Sequence[Mapping[str, Any]], d: int

@@ -54,6 +54,9 @@ class ContextResult:
     comparisons: list[dict[str, Any]] = dataclasses.field(default_factory=list)
     #: the stated quantities, boxes and input the answer depends on (:mod:`.assumed`)
     assumed: list[Any] = dataclasses.field(default_factory=list)
+    #: the fit diagnostics at the context's optimum (:mod:`.diagnostics`), or None
+    diagnostics: Any = None
+    model_error: str = ""  # what the richer model that made the record adds, or ""
 
     def value(self, x: float) -> str:
         """A metric value with its unit."""
@@ -115,7 +118,8 @@ def context_result(data: Any, context: str) -> ContextResult:
         headers.append(f"beats {data.baseline}?")
     body = []
     for s in mrows:
-        row: list[Any] = [s["rank"], s["algorithm"], s["n_runs"], s.get("median"),
+        row: list[Any] = [s.get("rank_shown", s["rank"]), s["algorithm"], s["n_runs"],
+                          s.get("median"),
                           f"[{fmt(s.get('q1'))}, {fmt(s.get('q3'))}]"]
         if mgroups is not None:
             row.insert(1, mgroups.get(s["algorithm"], "—"))
@@ -132,7 +136,8 @@ def context_result(data: Any, context: str) -> ContextResult:
     return ContextResult(context, metric, unit, headers, body, verdict.floor, verdict.bound,
                          verdict_text(verdict), mgroups is not None, verdict, verdict.truth,
                          data.identified.get(context), data.comparisons.get(context, []),
-                         assumed=assumed.blocks(data, context))
+                         getattr(data, "diagnostics", {}).get(context),
+                         verdict.model_error, assumed=assumed.blocks(data, context))
 
 
 def evidence(data: Any, context: str) -> verdicts.Evidence:
@@ -202,12 +207,7 @@ def _edge(data: Any, context: str) -> tuple[int, int]:
 def _costs(hits: Sequence[Any], context: str) -> dict[str, tuple[float, float]]:
     """Per optimizer of ``context``: its ERT to the final target (each instance's optimum),
     in evaluations and in seconds."""
-    by: dict[str, list[Any]] = {}
-    for h in hits:
-        if h.context == context:
-            by.setdefault(h.algorithm, []).append(h)
-    last = len(anytime.TARGETS) - 1
-    return {a: (anytime.ert(g, last), anytime.ert(g, last, "seconds")) for a, g in by.items()}
+    return {a: v for (c, a), v in anytime.costs_to_optimum(hits).items() if c == context}
 
 
 def results(data: Any) -> list[ContextResult]:
@@ -475,9 +475,14 @@ def _no_truth_lines(r: ContextResult) -> list[tuple[str, list[str], list[list[An
     if ident is not None:
         sigma = ", ".join(fmt(s, 3) for s in ident.sigma)
         text = (f"Identified values: the best run ({escape(ident.run)}, objective "
-                f"{fmt(ident.f, 4)}), with 95 % intervals from the Jacobian of its residuals "
+                f"{_objective(ident)}), with 95 % intervals from the Jacobian of its residuals "
                 f"under Gaussian noise of σ estimated from them per residual group ({sigma}, "
-                "in the residuals' units); model error counts as noise there. ")
+                "in the residuals' units); model error counts as noise there, and they "
+                "assume white residuals"
+                + ("; the robust (HAC) interval, in the fit diagnostics below, does not. " if
+                   ident.robust_lower is not None else ". "))
+        if ident.caveat:
+            text += escape(ident.caveat) + " "
         text += ("The profile likelihood drops the linearisation: its interval is around the "
                  "likelihood's own estimate (Gaussian noise, σ per group as above), which "
                  "differs from the best run where the objective is not that likelihood."
@@ -495,6 +500,17 @@ def _no_truth_lines(r: ContextResult) -> list[tuple[str, list[str], list[list[An
         out.append(("Fixed rows the problem gives for comparison (a published estimate, a "
                     "predictor a model must beat): never a truth.", headers, rows))
     return out
+
+
+def _objective(ident: Any) -> str:
+    """The best run's objective value with the unit and meaning the problem states, e.g.
+    ``2.591 µm² (the mean square position error over the estimation record)``."""
+    text = fmt(ident.f, 4)
+    if getattr(ident, "objective_unit", ""):
+        text += f" {escape(ident.objective_unit)}"
+    if getattr(ident, "objective_what", ""):
+        text += f", {escape(ident.objective_what)}"
+    return text
 
 
 def markdown_lines(items: Sequence[ContextResult]) -> list[str]:
@@ -516,11 +532,41 @@ def markdown_lines(items: Sequence[ContextResult]) -> list[str]:
 
 
 def extra_blocks(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
-    """What every renderer shows below a context's ranking: what the answer assumes (stated
-    quantities, boxes, input, estimates on a bound: :mod:`.assumed`) and, for a context
-    without a truth, the identified values with their intervals and the problem's comparison
-    rows, as ``(Markdown text, headers, rows)`` (empty headers: text only)."""
-    return list(r.assumed) + ([] if r.truth else _no_truth_lines(r))
+    """What every renderer shows below a context's ranking: why row 1 is not the verdict's
+    choice (where it is not), what the answer assumes (stated quantities, boxes, input,
+    estimates on a bound: :mod:`.assumed`), for a context without a truth the identified
+    values with their intervals and the problem's comparison rows, and for every context with
+    a job's ``diagnostics.json`` its fit diagnostics; as ``(Markdown text, headers, rows)``
+    (empty headers: text only)."""
+    return (_row_one_note(r) + list(r.assumed) + ([] if r.truth else _no_truth_lines(r))
+            + _diagnostic_blocks(r))
+
+
+def _row_one_note(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
+    """Why row 1 of the ranking is not the verdict's choice, when it is not (a reference,
+    not shown to beat the references, or behind the pick by search quality)."""
+    v = r.decision
+    first = r.rows[0][r.headers.index("optimizer")] if r.rows and "optimizer" in r.headers \
+        else None
+    if v is None or v.kind != verdicts.USE or first is None or first == v.pick:
+        return []
+    if first in v.references:
+        why = "it is a reference (random search or the box centre), never recommended"
+    elif v.tied and first in v.tied:
+        why = ("the tests do not separate the two by the metric, and the verdict goes by "
+               "search quality, then cost")
+    else:
+        why = "it is not shown to beat every reference that was run"
+    # no record text here: the terminal wraps these blocks without keeping names whole
+    return [(f"Row 1 of the ranking is not the verdict's choice: {why}.", [], [])]
+
+
+def _diagnostic_blocks(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
+    """The fit diagnostics of a context (truth or not): one plain line where the model does
+    not explain the record, the channel table, the intervals and which one is trusted."""
+    from .diagnostics import blocks
+
+    return blocks(r.diagnostics, r.model_error)
 
 
 def terminal_width() -> int:

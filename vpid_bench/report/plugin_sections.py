@@ -24,7 +24,7 @@ def plugin_sections(registry: Any, data: Any, out_dir: Path, claim: Callable[[Pa
     (identifiability, measured-vs-fitted signals), then the plugins'. Returns the sections
     (each with its problem and plugin), the headline columns they add, and one line per
     failure."""
-    from . import identifiability, signals
+    from . import diagnostics, identifiability, signals
 
     if registry is None:
         from ..plugins import Registry
@@ -36,6 +36,7 @@ def plugin_sections(registry: Any, data: Any, out_dir: Path, claim: Callable[[Pa
     errors: list[str] = []
     for problem in data.problems:
         funcs = [("vpid-bench", identifiability.section), ("vpid-bench", signals.section),
+                 ("vpid-bench", diagnostics.section),
                  *getattr(registry, "report_sections", {}).get(problem, [])]
         prows = tuple(r for r in data.rows if r["problem"] == problem)
         ctx = ReportContext(problem=problem, rows=prows,

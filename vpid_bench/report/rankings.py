@@ -25,11 +25,13 @@ import numpy as np
 from .optima import REACHED, opt_column_names
 from .render import fmt, markdown, para
 from .safe import escape
+from .ties import WORDS_RTOL
 
 #: A box whose centre lies within this relative distance of every true value is "centred".
 CENTRED = 0.05
-#: Two medians within this relative distance are tied (never a disagreement to explain).
-TIE_RTOL = 1e-3
+#: Two medians within this relative distance are tied (never a disagreement to explain):
+#: :data:`.ties.WORDS_RTOL`, where every tie tolerance of the report is kept.
+TIE_RTOL = WORDS_RTOL
 
 
 def search_summary(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:

@@ -64,6 +64,14 @@ def _links(pages: Pages) -> dict[str, Any]:
             "problem": pages.problem}
 
 
+def fit_line(diag: Any) -> str:
+    """The fit diagnostics' one plain line of a context (Markdown), ``""`` when the model
+    explains the record or no diagnostics were written (:func:`.diagnostics.plain_line`)."""
+    from .diagnostics import plain_line
+
+    return plain_line(diag) if diag else ""
+
+
 def _index(model: Any, pages: Pages, colour_of: Mapping[str, str]) -> dict[str, Any]:
     data = model.data
     of = model.problem_of()
@@ -71,7 +79,8 @@ def _index(model: Any, pages: Pages, colour_of: Mapping[str, str]) -> dict[str, 
     for p in data.problems:
         items = [{"verdict": r.verdict, "context": r.context, "anchor": _anchor(r.context),
                   "n": len(r.rows), "decision": decision(getattr(r, "decision", None), pages),
-                  "assumed": [text for text, _, _ in getattr(r, "assumed", [])]}
+                  "assumed": [text for text, _, _ in getattr(r, "assumed", [])],
+                  "fit": fit_line(getattr(r, "diagnostics", None))}
                  for r in model.results if of.get(r.context) == p]
         verdicts.append({"name": p, "href": pages.problem(p), "contexts": items})
     n_ok = sum(r["status"] == "ok" for r in data.loaded.records)

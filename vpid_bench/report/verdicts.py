@@ -15,7 +15,7 @@ The rules (each in docs/report.md, "Verdicts", with a test in tests/report/test_
    metric (optimizers sharing the first one's rank-group letter: the tests separate none of
    them from another). A tie there is broken by search quality (the best search group), then by
    cost: the expected evaluations to each instance's optimum (ERT at the final target), then
-   its seconds; costs within :data:`COST_TIE` of each other are a tie. Where the metric's
+   its seconds; costs within :data:`.ties.COST_TIE` of each other are a tie. Where the metric's
    leaders search worse than others, the best searcher is named (it gets closest to each
    record's own optimum; a lower metric from runs that stop short is not better search).
 4. **Floor against bound, per instance**: the median over the instances of
@@ -43,6 +43,7 @@ from typing import Any
 
 from .optima import REACHED
 from .rankings import TIE_RTOL
+from .ties import cheapest
 
 #: A bound (norm of the Cramér–Rao bounds, %) above this: no estimator determines the
 #: parameters from such a record (one standard deviation is larger than the values).
@@ -60,8 +61,6 @@ AT_FLOOR = 1.1
 #: Methods the tests do not separate whose medians differ by more than this (relative) are
 #: not called equivalent: the verdict says more runs would tell.
 EQUIVALENCE_MARGIN = 0.10
-#: Two costs (evaluations or seconds to the optimum) within this relative difference tie.
-COST_TIE = 0.10
 #: The optimizers a recommended method must beat, when they were run: random search and the
 #: centre of the box (names of the built-in baselines).
 REFERENCES: tuple[str, ...] = ("random", "centre")
@@ -263,21 +262,12 @@ def _lead(items: Sequence[Method], group: Any) -> list[Method]:
 
 
 def _by_cost(items: Sequence[Method]) -> tuple[Method, str]:
-    """The cheapest of ``items`` to reach the optimum: fewest evaluations (ERT), then fewest
-    seconds, a difference within :data:`COST_TIE` counting as none; ``(items[0], "")`` when
-    cost does not decide."""
-    pool = list(items)
-    for key in ("evaluations", "seconds"):
-        values = {m.name: getattr(m.search, key) if m.search else math.nan for m in pool}
-        finite = [v for v in values.values() if math.isfinite(v)]
-        if not finite:
-            break
-        best = min(finite)
-        pool = [m for m in pool if math.isfinite(values[m.name])
-                and values[m.name] <= best * (1 + COST_TIE)]
-        if len(pool) == 1:
-            return pool[0], key
-    return pool[0], ""
+    """The cheapest of ``items`` to reach the optimum (:func:`.ties.cheapest`, the rule the
+    rank column breaks its ties by too): fewest evaluations (ERT), then fewest seconds, a
+    difference within :data:`.ties.COST_TIE` counting as none; ``(items[0], "")`` when cost does
+    not decide."""
+    return cheapest(items, lambda m: (m.search.evaluations, m.search.seconds) if m.search
+                    else (math.nan, math.nan))
 
 
 def _choose(ev: Evidence, eligible: list[Method]) -> tuple[Method, str, list[Method],
@@ -352,43 +342,70 @@ def cannot_identify(ev: Evidence, floor: float) -> tuple[tuple[str, float], ...]
 
 
 def decide(ev: Evidence) -> Verdict:
-    """The verdict of one context (the rules of the module)."""
-    base = {"context": ev.context, "metric": ev.metric, "unit": ev.unit, "tested": ev.tested,
-            "references": ev.references, "missing": ev.missing, "centred": ev.centred,
-            "estimator": ev.estimator, "truth": ev.truth}
+    """The verdict of one context (the rules of the module, one function each)."""
+    base = _base(ev)
     if not ev.methods:
         return Verdict(kind=EMPTY, **base)
-    floor = _median(list(ev.floors.values()))
-    bound = _median(list(ev.bounds.values()))
-    ratio = floor_over_bound(ev.floors, ev.bounds)
-    finite = [b for b in ev.bounds.values() if math.isfinite(b)]
-    base |= {"floor": floor, "bound": bound, "ratio": ratio,
-             "bound_range": (min(finite), max(finite)) if finite else (math.nan, math.nan),
-             # a floor far above the bound from a richer model's record: model error, which
-             # no estimator of the fitted model removes, not the estimator
-             "advice": None if ev.model_error else estimator_advice(
-                 ev.estimator, ratio, ev.estimator_floors),
-             "below_bound": math.isfinite(ratio) and ratio < BELOW_BOUND,
-             "model_error": ev.model_error, "on_edge": ev.on_edge,
-             "cannot_identify": cannot_identify(ev, floor)}
     candidates = [m for m in ev.methods if m.name not in ev.references]
     if not ev.tested or len(ev.methods) < 2 or not candidates:
-        lead = (candidates or list(ev.methods))[0]
-        limit, gain = _limit(lead, floor, ratio, ev.model_error)
-        return Verdict(kind=DESCRIBE, pick=lead.name, runs=lead.runs, median=lead.median,
-                       single=len(ev.methods) < 2, limit=limit, gain=gain,
-                       search=lead.search, **base)
+        return _describe(ev, candidates, base)
     eligible = [m for m in candidates
                 if all(beats(ev.pairs, m.name, r) for r in ev.references)]
+    over = math.isfinite(base["bound"]) and base["bound"] > BOUND_LIMIT
+    if over or not eligible or base["cannot_identify"]:  # rule 5: no one is recommended
+        return _no_method(ev, candidates, over, base)
+    return _use(ev, eligible, base)
+
+
+def _base(ev: Evidence) -> dict[str, Any]:
+    """What every verdict of ``ev`` carries: its names and, from the floors and bounds per
+    instance, rule 4's levels (floor, bound, their ratio, the estimator's advice, bias)."""
+    base: dict[str, Any] = {
+        "context": ev.context, "metric": ev.metric, "unit": ev.unit, "tested": ev.tested,
+        "references": ev.references, "missing": ev.missing, "centred": ev.centred,
+        "estimator": ev.estimator, "truth": ev.truth}
+    if not ev.methods:
+        return base
+    ratio = floor_over_bound(ev.floors, ev.bounds)
+    finite = [b for b in ev.bounds.values() if math.isfinite(b)]
+    return base | {
+        "floor": _median(list(ev.floors.values())), "bound": _median(list(ev.bounds.values())),
+        "ratio": ratio,
+        "bound_range": (min(finite), max(finite)) if finite else (math.nan, math.nan),
+        # a floor far above the bound from a richer model's record: model error, which
+        # no estimator of the fitted model removes, not the estimator
+        "advice": None if ev.model_error else estimator_advice(
+            ev.estimator, ratio, ev.estimator_floors),
+        "below_bound": math.isfinite(ratio) and ratio < BELOW_BOUND,
+        "model_error": ev.model_error, "on_edge": ev.on_edge,
+        "cannot_identify": cannot_identify(ev, _median(list(ev.floors.values())))}
+
+
+def _describe(ev: Evidence, candidates: list[Method], base: dict[str, Any]) -> Verdict:
+    """Rule 1: a description of the leader, not a recommendation."""
+    lead = (candidates or list(ev.methods))[0]
+    limit, gain = _limit(lead, base["floor"], base["ratio"], ev.model_error)
+    return Verdict(kind=DESCRIBE, pick=lead.name, runs=lead.runs, median=lead.median,
+                   single=len(ev.methods) < 2, limit=limit, gain=gain,
+                   search=lead.search, **base)
+
+
+def _no_method(ev: Evidence, candidates: list[Method], over: bool,
+               base: dict[str, Any]) -> Verdict:
+    """Rule 2: no method identifies the model (the bound) or none is shown to beat the
+    references."""
     not_beaten = tuple(r for r in ev.references
                        if not any(beats(ev.pairs, m.name, r) for m in candidates))
-    over = math.isfinite(bound) and bound > BOUND_LIMIT
-    if over or not eligible or base["cannot_identify"]:  # rule 5: no one is recommended
-        lead = candidates[0]
-        limit, gain = _limit(lead, floor, ratio, ev.model_error)
-        return Verdict(kind=NONE, pick=lead.name, runs=lead.runs, median=lead.median,
-                       over_bound=over, not_beaten=not_beaten, limit=limit, gain=gain,
-                       search=lead.search, **base)
+    lead = candidates[0]
+    limit, gain = _limit(lead, base["floor"], base["ratio"], ev.model_error)
+    return Verdict(kind=NONE, pick=lead.name, runs=lead.runs, median=lead.median,
+                   over_bound=over, not_beaten=not_beaten, limit=limit, gain=gain,
+                   search=lead.search, **base)
+
+
+def _use(ev: Evidence, eligible: list[Method], base: dict[str, Any]) -> Verdict:
+    """Rule 3: whom to use among the eligible (:func:`_choose`), with those the tests do not
+    separate from it, their spread and costs, and the next optimizer's pair."""
     pick, basis, mlead, pool, leaders = _choose(ev, eligible)
     # those the metric's tests do not separate from the pick: its rank group, or, where the
     # pick is not in the metric's best group, each eligible method without a significant pair
@@ -402,7 +419,7 @@ def decide(ev: Evidence) -> Verdict:
     costs = tuple(Cost(m.name, m.search.evaluations, m.search.seconds)
                   for m in [pick] + [m for m in pool if m.name != pick.name] if m.search)
     nxt = next((m.name for m in ev.methods if m.name != pick.name), None)
-    limit, gain = _limit(pick, floor, ratio, ev.model_error)
+    limit, gain = _limit(pick, base["floor"], base["ratio"], ev.model_error)
     return Verdict(kind=USE, pick=pick.name, runs=pick.runs, median=pick.median, basis=basis,
                    tied=tuple(m.name for m in tied_with), spread=spread,
                    leaders=tuple(m.name for m in leaders),

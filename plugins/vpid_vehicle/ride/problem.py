@@ -531,6 +531,19 @@ class RideProblem(Problem):
     def _fitted_solver(self) -> str:
         """The fitted model's solver, in words (a richer structure's: :mod:`.structures`)."""
         return getattr(self.model, "fitted_solver", "Newmark average acceleration")
+    def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any]:
+        """The measured channels over their norms (the units of :meth:`fisher_residuals`),
+        the channels' names and the model's inputs at the record's samples (each wheel's
+        road height ``h`` and its rate ``h'``, as the model is driven)."""
+        u = np.asarray(self.u, dtype=float)
+        u = u.T if self.sampler is None else self.sampler.at_record(u.T[None])[0]
+        wheels = self.model.wheel_names
+        names = ([n for w in wheels for n in (w, f"{w}'")] if u.shape[0] == 2 * len(wheels)
+                 else [f"u{j}" for j in range(u.shape[0])])
+        return {"measured": (self.measured / self.scale[:, None]).reshape(-1),
+                "names": [name for name, _ in self.channels],
+                "inputs": {n: u[j] for j, n in enumerate(names)
+                           if u.shape[1] == self.t.size}}
 
     def describe(self) -> dict[str, Any]:
         cfg = self.config
