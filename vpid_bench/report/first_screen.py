@@ -136,8 +136,9 @@ def context_result(data: Any, context: str) -> ContextResult:
     return ContextResult(context, metric, unit, headers, body, verdict.floor, verdict.bound,
                          verdict_text(verdict), mgroups is not None, verdict, verdict.truth,
                          data.identified.get(context), data.comparisons.get(context, []),
-                         getattr(data, "diagnostics", {}).get(context),
-                         verdict.model_error, assumed=assumed.blocks(data, context))
+                         diagnostics=getattr(data, "diagnostics", {}).get(context),
+                         model_error=verdict.model_error,
+                         assumed=assumed.blocks(data, context))
 
 
 def evidence(data: Any, context: str) -> verdicts.Evidence:

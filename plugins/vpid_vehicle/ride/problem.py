@@ -531,6 +531,7 @@ class RideProblem(Problem):
     def _fitted_solver(self) -> str:
         """The fitted model's solver, in words (a richer structure's: :mod:`.structures`)."""
         return getattr(self.model, "fitted_solver", "Newmark average acceleration")
+
     def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any]:
         """The measured channels over their norms (the units of :meth:`fisher_residuals`),
         the channels' names and the model's inputs at the record's samples (each wheel's
