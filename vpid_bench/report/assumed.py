@@ -41,7 +41,7 @@ def _num(value: Any) -> float | None:
 
 
 #: A group of more boxes than this from one source that is not the user's is named, not
-#: listed (the paper's nine: "m, I, m1, ... (9)"; the numbers are in the records).
+#: listed (nine factor boxes: "m, I, m1, ... (9)"; the numbers are in the records).
 MAX_LISTED = 4
 
 
