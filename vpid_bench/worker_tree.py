@@ -1,0 +1,281 @@
+"""A worker process and every process its plugins start, held so that ending them never
+signals anything else (issue 44: N1, N3, N4).
+
+Round five's attack found three ways the tree kill failed:
+
+* N1: it signalled the worker's bare process id (``os.killpg``) after the worker had died and
+  been reaped while idle: once the number was handed out again, ``close()`` SIGKILLed an
+  unrelated process. Now every signal goes through what this process still holds: a pidfd
+  (Linux >= 5.3) opened while the worker was its unreaped child, or opened on a process found
+  and checked to be the same one (its start time) before it is signalled. The worker's process
+  group is signalled through its pidfd (Linux >= 6.9), or by number only while the worker is
+  not reaped (the number cannot be handed out again then). Without pidfds (macOS, older
+  Linux) psutil's handles are used: they check the start time before each signal.
+* N3: a daemon (double fork, ``setsid``) whose worker then exited went to init, out of
+  reach; it also held multiprocessing's resource-tracker pipe, so the tracker (which holds
+  the command's standard output) never ended and ``vpid-bench ... | tail`` hung (the worker
+  now closes its copy of that pipe before any plugin code: :mod:`vpid_bench.worker_loop`).
+* N4: a process that keeps forking and calling ``setsid`` while its worker lives slipped
+  between the listing of the worker's descendants and their kill.
+
+So each worker is started
+
+* in a cgroup of its own where this process may make one (:mod:`vpid_bench.cgroups`):
+  ending the worker ends every process in its cgroup at once (the kernel's guarantee, forks
+  in flight included);
+* with a mark in its environment (:data:`MARK`, a token of that worker only), which every
+  process it forks, or execs without clearing its environment, carries: those processes are
+  found wherever they went (adopted by init included), stopped (``SIGSTOP``: a stopped
+  process forks no more) round after round until a round finds no new one, then killed.
+
+What still runs after that (a process that cleared its environment *and* left the cgroup, or
+where there is no cgroup) is returned by :meth:`Tree.end` and named by the supervisor in one
+``warning:`` line. docs/sweeps.md (crash isolation) says what is guaranteed where.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import itertools
+import os
+import secrets
+import select
+import signal
+import time
+from collections.abc import Iterator
+from typing import Any
+
+from .cgroups import Cgroup
+
+#: The environment variable that marks a worker's processes (its value: the worker's token).
+MARK = "VPID_BENCH_TREE"
+#: ``pidfd_send_signal`` flag: the target's process group (Linux >= 6.9).
+PIDFD_SIGNAL_PROCESS_GROUP = 1 << 2
+#: Rounds of the stop-then-look-again search (each stops every new process it finds).
+ROUNDS = 50
+#: Seconds to wait for killed processes to end before naming them as left.
+WAIT_S = 5.0
+
+_count = itertools.count()
+
+
+def new_token() -> str:
+    """A token naming one worker's tree (this process's id, a count, a random part)."""
+    return f"{os.getpid()}-{next(_count)}-{secrets.token_hex(4)}"
+
+
+def pidfd(pid: int) -> int | None:
+    """A pidfd of process ``pid`` (Linux >= 5.3), or ``None``."""
+    try:
+        return os.pidfd_open(pid)
+    except (AttributeError, OSError):
+        return None
+
+
+@contextlib.contextmanager
+def marked(token: str) -> Iterator[None]:
+    """Inside: this process's environment carries :data:`MARK` = ``token``, so a process it
+    starts (a spawned worker) inherits it. multiprocessing's resource tracker is started first,
+    without the mark (it is the command's, not the worker's: it must not be ended with it)."""
+    from multiprocessing import resource_tracker
+
+    with contextlib.suppress(Exception):
+        resource_tracker.ensure_running()
+    saved = os.environ.get(MARK)
+    os.environ[MARK] = token
+    try:
+        yield
+    finally:
+        if saved is None:
+            os.environ.pop(MARK, None)
+        else:
+            os.environ[MARK] = saved
+
+
+@dataclasses.dataclass
+class _Held:
+    """One process found and held: its pidfd (``None`` without pidfds: then its psutil
+    handle, which checks the start time before a signal), its id and name."""
+
+    pid: int
+    fd: int | None
+    proc: Any
+    name: str
+
+    def signal(self, sig: int) -> None:
+        if self.fd is not None:
+            with contextlib.suppress(OSError):
+                signal.pidfd_send_signal(self.fd, sig)
+            return
+        import psutil
+
+        with contextlib.suppress(psutil.Error):
+            self.proc.send_signal(sig)
+
+    def alive(self) -> bool:
+        """Whether it still runs (a zombie does not)."""
+        import psutil
+
+        if self.fd is not None and _readable(self.fd):  # a pidfd is readable once it exits
+            return False
+        try:
+            return self.proc.is_running() and self.proc.status() != psutil.STATUS_ZOMBIE
+        except psutil.Error:
+            return False
+
+    def close(self) -> None:
+        if self.fd is not None:
+            with contextlib.suppress(OSError):
+                os.close(self.fd)
+            self.fd = None
+
+
+def _hold(proc: Any) -> _Held | None:
+    """``proc`` (a :class:`psutil.Process` just found) held by a pidfd, checked to be the same
+    process (its start time) once the pidfd is open; ``None`` if it is gone or a zombie."""
+    import psutil
+
+    fd = pidfd(proc.pid)
+    try:
+        same = psutil.Process(proc.pid)
+        if same.create_time() != proc.create_time() or same.status() == psutil.STATUS_ZOMBIE:
+            raise psutil.NoSuchProcess(proc.pid)
+        return _Held(proc.pid, fd, same, same.name())
+    except psutil.Error:
+        if fd is not None:
+            os.close(fd)
+        return None
+
+
+def _readable(fd: int) -> bool:
+    with contextlib.suppress(OSError, ValueError):
+        return bool(select.select([fd], [], [], 0)[0])
+    return True
+
+
+class Tree:
+    """A worker process just started (a :class:`multiprocessing.Process`, not yet reaped:
+    this is called right after ``start()``), with its ``token`` (:func:`marked`) and its
+    ``cgroup`` (``None``: none could be made), held (see module)."""
+
+    def __init__(self, process: Any, token: str, cgroup: Cgroup | None) -> None:
+        import psutil
+
+        self.process, self.pid, self.token = process, process.pid, token
+        #: The worker's pidfd, readable once it ended (``None``: no pidfds here).
+        self.fd = pidfd(self.pid)
+        try:
+            self.handle: Any = psutil.Process(self.pid)
+        except psutil.Error:
+            self.handle = None
+        self.cgroup = cgroup if cgroup is not None and cgroup.add(self.pid) else None
+
+    def ended(self) -> bool:
+        """Whether the worker has ended (without reaping it)."""
+        if self.fd is not None:
+            try:
+                return os.waitid(os.P_PIDFD, self.fd,
+                                 os.WEXITED | os.WNOHANG | os.WNOWAIT) is not None
+            except ChildProcessError:  # already reaped
+                return True
+        if not self._unreaped():
+            return True
+        from .process_tree import exited
+
+        return exited(self.pid)  # not reaped: the number is still the worker's
+
+    def _unreaped(self) -> bool:
+        """Whether the worker is not reaped yet (its number is still its own)."""
+        if self.fd is not None:
+            try:
+                os.waitid(os.P_PIDFD, self.fd, os.WEXITED | os.WNOHANG | os.WNOWAIT)
+            except ChildProcessError:
+                return False
+            return True
+        return getattr(getattr(self.process, "_popen", None), "returncode", 0) is None
+
+    def _signal_worker(self, sig: int) -> None:
+        if self.fd is not None:
+            with contextlib.suppress(OSError):
+                signal.pidfd_send_signal(self.fd, sig)
+        elif self.handle is not None:
+            import psutil
+
+            with contextlib.suppress(psutil.Error):
+                self.handle.send_signal(sig)
+
+    def _signal_group(self, sig: int) -> None:
+        """Signal the worker's process group (it leads one): through its pidfd, or by number
+        only while the worker is not reaped."""
+        if self.fd is not None:
+            try:
+                signal.pidfd_send_signal(self.fd, sig, None, PIDFD_SIGNAL_PROCESS_GROUP)
+                return
+            except ProcessLookupError:  # no process left in the group
+                return
+            except OSError:  # the flag is unknown to this kernel (< 6.9)
+                pass
+        if self._unreaped():
+            with contextlib.suppress(OSError):
+                os.killpg(self.pid, sig)
+
+    def _find(self, held: dict[int, _Held]) -> list[_Held]:
+        """The processes of the tree not held yet: the worker's descendants while it lives,
+        and every process that carries the worker's mark."""
+        import psutil
+
+        from .process_tree import strays
+
+        skip = {self.pid, os.getpid(), *held}
+        found = [p for p in (strays(self.handle) if self.handle is not None else [])
+                 if p.pid not in skip]
+        skip.update(p.pid for p in found)
+        for proc in psutil.process_iter():
+            if proc.pid in skip:
+                continue
+            with contextlib.suppress(psutil.Error):
+                if proc.environ().get(MARK) == self.token:
+                    found.append(proc)
+        return [h for h in map(_hold, found) if h is not None]
+
+    def end(self) -> list[str]:
+        """Kill the worker and every process of its tree (see module); ``"<pid> (<name>)"`` of
+        each process still running afterwards. Nothing but what it holds is signalled."""
+        if self.cgroup is not None:
+            self.cgroup.kill(WAIT_S)
+        self._signal_worker(signal.SIGSTOP)  # it starts no more; its orphans stay its own
+        held: dict[int, _Held] = {}
+        for _ in range(ROUNDS):
+            new = self._find(held)
+            if not new:
+                break
+            for h in new:
+                h.signal(signal.SIGSTOP)
+                held[h.pid] = h
+        self._signal_worker(signal.SIGKILL)
+        self._signal_group(signal.SIGKILL)
+        for h in held.values():
+            h.signal(signal.SIGKILL)
+        end = time.monotonic() + WAIT_S
+        while any(h.alive() for h in held.values()) and time.monotonic() < end:
+            time.sleep(0.01)
+        left = {h.pid: h.name for h in held.values() if h.alive()}
+        for h in held.values():
+            h.close()
+        if self.cgroup is not None:
+            for pid in self.cgroup.pids():  # still there after its kill: said, never signalled
+                left.setdefault(pid, f"in cgroup {self.cgroup.path.name}")
+            left.pop(self.pid, None)
+            self.cgroup.remove()
+        return [f"{pid} ({name})" for pid, name in sorted(left.items())]
+
+    def close(self) -> None:
+        """Let go of the worker's pidfd (once it is reaped)."""
+        if self.fd is not None:
+            with contextlib.suppress(OSError):
+                os.close(self.fd)
+            self.fd = None
+
+
+__all__ = ["MARK", "Tree", "marked", "new_token", "pidfd"]
