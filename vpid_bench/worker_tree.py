@@ -24,9 +24,15 @@ So each worker is started
   ending the worker ends every process in its cgroup at once (the kernel's guarantee, forks
   in flight included);
 * with a mark in its environment (:data:`MARK`, a token of that worker only), which every
-  process it forks, or execs without clearing its environment, carries: those processes are
-  found wherever they went (adopted by init included), stopped (``SIGSTOP``: a stopped
-  process forks no more) round after round until a round finds no new one, then killed.
+  process it forks, or execs without clearing its environment, carries.
+
+and ended (:meth:`Tree.end`) in this order: its cgroup killed; the worker stopped
+(``SIGSTOP``: it is the child subreaper of its tree, so every orphan of it keeps coming to
+it); then round after round, until two rounds running find nothing new, its descendants
+(read from the kernel's own lists of children, fast enough to see the one living process of
+a chain that forks every millisecond) and the processes carrying its mark (wherever they
+went, init included) are held and stopped (a stopped process forks no more); then all of
+them and the worker are killed.
 
 What still runs after that (a process that cleared its environment *and* left the cgroup, or
 where there is no cgroup) is returned by :meth:`Tree.end` and named by the supervisor in one
@@ -43,7 +49,7 @@ import secrets
 import select
 import signal
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from .cgroups import Cgroup
@@ -52,8 +58,8 @@ from .cgroups import Cgroup
 MARK = "VPID_BENCH_TREE"
 #: ``pidfd_send_signal`` flag: the target's process group (Linux >= 6.9).
 PIDFD_SIGNAL_PROCESS_GROUP = 1 << 2
-#: Rounds of the stop-then-look-again search (each stops every new process it finds).
-ROUNDS = 50
+#: Rounds of the stop-then-look-again search at most (each stops every new process found).
+ROUNDS = 500
 #: Seconds to wait for killed processes to end before naming them as left.
 WAIT_S = 5.0
 
@@ -131,21 +137,47 @@ class _Held:
             self.fd = None
 
 
-def _hold(proc: Any) -> _Held | None:
-    """``proc`` (a :class:`psutil.Process` just found) held by a pidfd, checked to be the same
-    process (its start time) once the pidfd is open; ``None`` if it is gone or a zombie."""
+def _hold(pid: int, belongs: Callable[[Any], bool]) -> _Held | None:
+    """Process ``pid`` held by a pidfd, once the process the pidfd names is checked to be
+    one of the tree's (``belongs``, asked of its :class:`psutil.Process`: its parent is in
+    the tree, or it carries the mark), so that a number handed out again in between is never
+    held; ``None`` if it is gone, a zombie or not the tree's."""
     import psutil
 
-    fd = pidfd(proc.pid)
+    fd = pidfd(pid)
     try:
-        same = psutil.Process(proc.pid)
-        if same.create_time() != proc.create_time() or same.status() == psutil.STATUS_ZOMBIE:
-            raise psutil.NoSuchProcess(proc.pid)
-        return _Held(proc.pid, fd, same, same.name())
+        proc = psutil.Process(pid)
+        if proc.status() == psutil.STATUS_ZOMBIE or not belongs(proc):
+            raise psutil.NoSuchProcess(pid)
+        return _Held(pid, fd, proc, proc.name())
     except psutil.Error:
         if fd is not None:
             os.close(fd)
         return None
+
+
+def _children(pid: int) -> list[int]:
+    """The children of process ``pid`` (zombies included), read from the kernel's own list
+    (``/proc/<pid>/task/<tid>/children``, one read: fast enough to see the one living process
+    of a chain that forks every millisecond), or from psutil where there is none."""
+    try:
+        tids = os.listdir(f"/proc/{pid}/task")
+    except OSError:
+        tids = []
+    found: list[int] = []
+    for tid in tids:
+        try:
+            with open(f"/proc/{pid}/task/{tid}/children") as f:
+                found += [int(c) for c in f.read().split()]
+        except (OSError, ValueError):
+            continue
+    if tids or not os.path.isdir("/proc"):
+        return found
+    import psutil
+
+    with contextlib.suppress(psutil.Error):
+        return [c.pid for c in psutil.Process(pid).children()]
+    return []
 
 
 def _readable(fd: int) -> bool:
@@ -220,24 +252,59 @@ class Tree:
             with contextlib.suppress(OSError):
                 os.killpg(self.pid, sig)
 
-    def _find(self, held: dict[int, _Held]) -> list[_Held]:
-        """The processes of the tree not held yet: the worker's descendants while it lives,
-        and every process that carries the worker's mark."""
+    def _descendants(self, held: dict[int, _Held]) -> list[_Held]:
+        """The worker's descendants not held yet (the worker is stopped, not dead: as the
+        child subreaper of its tree, it adopts every orphan of it)."""
+        tree = {self.pid, *held}
+        new: list[_Held] = []
+        stack = [self.pid, *held]
+        while stack:
+            for child in _children(stack.pop()):
+                if child in tree:
+                    continue
+                h = _hold(child, lambda p: p.ppid() in tree)
+                if h is not None:
+                    tree.add(child)
+                    new.append(h)
+                    stack.append(child)
+        return new
+
+    def _marked(self, held: dict[int, _Held], checked: set[int]) -> list[_Held]:
+        """The processes carrying the worker's mark not held yet (wherever they went: adopted
+        by init included); ``checked``: the numbers already read (only new ones are read, so
+        a round after the first is fast)."""
         import psutil
 
-        from .process_tree import strays
+        def marked(proc: Any) -> bool:
+            return proc.environ().get(MARK) == self.token
 
-        skip = {self.pid, os.getpid(), *held}
-        found = [p for p in (strays(self.handle) if self.handle is not None else [])
-                 if p.pid not in skip]
-        skip.update(p.pid for p in found)
-        for proc in psutil.process_iter():
-            if proc.pid in skip:
+        new: list[_Held] = []
+        for pid in psutil.pids():
+            if pid in checked or pid in held or pid in (self.pid, os.getpid()):
                 continue
+            checked.add(pid)
             with contextlib.suppress(psutil.Error):
-                if proc.environ().get(MARK) == self.token:
-                    found.append(proc)
-        return [h for h in map(_hold, found) if h is not None]
+                if marked(psutil.Process(pid)):
+                    h = _hold(pid, marked)
+                    if h is not None:
+                        new.append(h)
+        return new
+
+    def _stop_all(self) -> dict[int, _Held]:
+        """Find and stop (``SIGSTOP``) every process of the tree (see module), round after
+        round until two rounds running find none new."""
+        held: dict[int, _Held] = {}
+        checked: set[int] = set()
+        quiet = 0
+        for _ in range(ROUNDS):
+            new = self._descendants(held) + self._marked(held, checked)
+            for h in new:
+                h.signal(signal.SIGSTOP)
+                held[h.pid] = h
+            quiet = 0 if new else quiet + 1
+            if quiet >= 2:
+                break
+        return held
 
     def end(self) -> list[str]:
         """Kill the worker and every process of its tree (see module); ``"<pid> (<name>)"`` of
@@ -245,14 +312,7 @@ class Tree:
         if self.cgroup is not None:
             self.cgroup.kill(WAIT_S)
         self._signal_worker(signal.SIGSTOP)  # it starts no more; its orphans stay its own
-        held: dict[int, _Held] = {}
-        for _ in range(ROUNDS):
-            new = self._find(held)
-            if not new:
-                break
-            for h in new:
-                h.signal(signal.SIGSTOP)
-                held[h.pid] = h
+        held = self._stop_all()
         self._signal_worker(signal.SIGKILL)
         self._signal_group(signal.SIGKILL)
         for h in held.values():
