@@ -233,6 +233,7 @@ def test_N2_sighup_and_sigterm_take_the_handler_of_sigint(monkeypatch):
 
     monkeypatch.setattr(interrupts._Watch, "installed", False)
     monkeypatch.setattr(interrupts._Watch, "signalled", False)
+    monkeypatch.setattr(interrupts._Watch, "signum", int(signal.SIGINT))
     saved = {sig: signal.getsignal(sig) for sig in interrupts.SIGNALS}
     try:
         interrupts.install()
