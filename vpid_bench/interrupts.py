@@ -17,6 +17,8 @@ every completed run is kept, the same ``interrupted:`` line, every process ended
 
 from __future__ import annotations
 
+import contextlib
+import os
 import signal
 import threading
 from typing import Any
@@ -95,10 +97,31 @@ def install() -> None:
 
 def plugin_only() -> None:
     """In a worker process (:mod:`vpid_bench.workers`): SIGINT is ignored, the user's Ctrl-C
-    is the supervisor's to handle, so every ``KeyboardInterrupt`` seen here is a plugin's."""
+    is the supervisor's to handle, so every ``KeyboardInterrupt`` seen here is a plugin's.
+    SIGTERM and SIGHUP are the supervisor's too (a batch system's SIGTERM to every process of
+    a job once ended the workers first, and their runs were recorded as failed by the signal):
+    the worker takes them with a handler that does nothing, and a process it forks gets their
+    default back at once (a plugin's pool must still end its children with SIGTERM; a process
+    it execs gets the default anyway)."""
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
+        for sig in SIGNALS:
+            if sig != signal.SIGINT:
+                signal.signal(sig, _ignore)
+        os.register_at_fork(after_in_child=_defaults)
     _Watch.installed, _Watch.signalled = True, False
+
+
+def _ignore(signum: int, frame: Any) -> None:
+    """A worker's SIGTERM and SIGHUP handler: nothing (see :func:`plugin_only`)."""
+
+
+def _defaults() -> None:
+    """In a process forked from a worker: SIGTERM and SIGHUP back to their default."""
+    for sig in SIGNALS:
+        if sig != signal.SIGINT and signal.getsignal(sig) is _ignore:
+            with contextlib.suppress(ValueError):  # not the main thread: left as it is
+                signal.signal(sig, signal.SIG_DFL)
 
 
 def exit_status() -> int:

@@ -79,15 +79,22 @@ def pidfd(pid: int) -> int | None:
         return None
 
 
-@contextlib.contextmanager
-def marked(token: str) -> Iterator[None]:
-    """Inside: this process's environment carries :data:`MARK` = ``token``, so a process it
-    starts (a spawned worker) inherits it. multiprocessing's resource tracker is started first,
-    without the mark (it is the command's, not the worker's: it must not be ended with it)."""
+def start_tracker() -> None:
+    """Start multiprocessing's resource tracker now, if it is not running: before a worker is
+    marked (the tracker is the command's, not the worker's: it must not carry the mark and be
+    ended with it), and before SIGINT, SIGTERM and SIGHUP are held for a worker's start
+    (starting the tracker unblocks SIGINT and SIGTERM, so the first worker once started with
+    them unblocked, and a SIGTERM then ended it)."""
     from multiprocessing import resource_tracker
 
     with contextlib.suppress(Exception):
         resource_tracker.ensure_running()
+
+
+@contextlib.contextmanager
+def marked(token: str) -> Iterator[None]:
+    """Inside: this process's environment carries :data:`MARK` = ``token``, so a process it
+    starts (a spawned worker) inherits it (call :func:`start_tracker` first)."""
     saved = os.environ.get(MARK)
     os.environ[MARK] = token
     try:
@@ -338,4 +345,4 @@ class Tree:
             self.fd = None
 
 
-__all__ = ["MARK", "Tree", "marked", "new_token", "pidfd"]
+__all__ = ["MARK", "Tree", "marked", "new_token", "pidfd", "start_tracker"]

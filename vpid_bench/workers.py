@@ -67,7 +67,7 @@ from .process_tree import Output
 from .runner import RunTimeoutError
 from .spec import Job
 from .worker_loop import LOST_PIPE_EXIT, RemoteError, portable, probe, serve
-from .worker_tree import Tree, marked, new_token
+from .worker_tree import Tree, marked, new_token, start_tracker
 
 log = logging.getLogger(__name__)
 
@@ -245,6 +245,7 @@ class Workers:
         standard output and error come through this process (:class:`~.process_tree.Output`)."""
         token = new_token()
         cgroup = Cgroup.create(f"vpid-bench-{token}")  # None where none can be made
+        start_tracker()  # not inside the block: it unblocks SIGINT and SIGTERM
         with _sigint_held():
             ours, theirs = self._ctx.Pipe(duplex=True)
             output = Output()

@@ -68,6 +68,23 @@ class Chain(Base):
             chain()
 
 
+def fork_dispositions(job, problem) -> tuple[bool, bool]:
+    """A call for a worker (:meth:`vpid_bench.workers.Workers.call`): whether SIGTERM and
+    SIGHUP have their default action in this worker, and in a child it forks (which ends
+    before the call returns)."""
+    import signal
+
+    def default() -> bool:
+        return all(signal.getsignal(s) == signal.SIG_DFL for s in (signal.SIGTERM,
+                                                                   signal.SIGHUP))
+
+    pid = os.fork()
+    if pid == 0:
+        os._exit(0 if default() else 1)
+    _, status = os.waitpid(pid, 0)
+    return default(), os.waitstatus_to_exitcode(status) == 0
+
+
 OPTIMIZERS = (Sleeper, DaemonExit, Chain)
 
 

@@ -260,6 +260,31 @@ def test_N2_sighup_and_sigterm_take_the_handler_of_sigint(monkeypatch):
             signal.signal(sig, handler)
 
 
+def test_N2_a_worker_leaves_sigterm_to_the_command_and_its_children_get_the_default():
+    """N2: a batch system's SIGTERM to every process of a job once ended the workers before
+    the command, and their runs were recorded as failed by the signal. A worker now takes
+    SIGTERM and SIGHUP with a handler that does nothing (the command ends it), also while it
+    starts (they are held until then: starting multiprocessing's resource tracker once
+    released them for the first worker), and a process it forks has their default again (a
+    plugin's pool still ends its children with SIGTERM)."""
+    from round5_plugins import Sleeper, fork_dispositions
+
+    from vpid_bench.workers import Workers
+
+    pool = Workers(1)
+    try:
+        pool.prestart(1)  # signalled while it starts (held until its handlers are set)
+        (worker,) = pool._all
+        for sig in (signal.SIGTERM, signal.SIGHUP):
+            signal.pidfd_send_signal(worker.tree.fd, sig)
+        in_worker, in_child = pool.call(_job(Sleeper), fork_dispositions, what="a fork",
+                                        limit=None)
+        assert pool._all == [worker] and not worker.ended(), "SIGTERM or SIGHUP ended it"
+        assert not in_worker and in_child
+    finally:
+        pool.close()
+
+
 # ---- N3: a daemon whose worker exits ----
 
 
