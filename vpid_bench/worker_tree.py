@@ -259,14 +259,19 @@ class Tree:
             with contextlib.suppress(OSError):
                 os.killpg(self.pid, sig)
 
-    def _descendants(self, held: dict[int, _Held]) -> list[_Held]:
+    def _descendants(self, held: dict[int, _Held], seen: set[int]) -> tuple[list[_Held], bool]:
         """The worker's descendants not held yet (the worker is stopped, not dead: as the
-        child subreaper of its tree, it adopts every orphan of it)."""
+        child subreaper of its tree, it adopts every orphan of it), and whether any number
+        not ``seen`` before was listed (held or not: a process that ended as it was held
+        still shows that the tree is forking)."""
         tree = {self.pid, *held}
         new: list[_Held] = []
+        fresh = False
         stack = [self.pid, *held]
         while stack:
             for child in _children(stack.pop()):
+                fresh = fresh or child not in seen
+                seen.add(child)
                 if child in tree:
                     continue
                 h = _hold(child, lambda p: p.ppid() in tree)
@@ -274,7 +279,7 @@ class Tree:
                     tree.add(child)
                     new.append(h)
                     stack.append(child)
-        return new
+        return new, fresh
 
     def _marked(self, held: dict[int, _Held], checked: set[int]) -> list[_Held]:
         """The processes carrying the worker's mark not held yet (wherever they went: adopted
@@ -299,17 +304,21 @@ class Tree:
 
     def _stop_all(self) -> dict[int, _Held]:
         """Find and stop (``SIGSTOP``) every process of the tree (see module), round after
-        round until two rounds running find none new."""
+        round until two rounds running find none new and list no new child (at most
+        :data:`ROUNDS` rounds and :data:`WAIT_S` seconds)."""
         held: dict[int, _Held] = {}
         checked: set[int] = set()
+        seen: set[int] = set()
         quiet = 0
+        end = time.monotonic() + WAIT_S
         for _ in range(ROUNDS):
-            new = self._descendants(held) + self._marked(held, checked)
+            found, fresh = self._descendants(held, seen)
+            new = found + self._marked(held, checked)
             for h in new:
                 h.signal(signal.SIGSTOP)
                 held[h.pid] = h
-            quiet = 0 if new else quiet + 1
-            if quiet >= 2:
+            quiet = 0 if new or fresh else quiet + 1
+            if quiet >= 2 or time.monotonic() > end:
                 break
         return held
 
