@@ -23,10 +23,13 @@ What a worker can no longer take down:
   live and die with the worker;
 * processes a plugin starts (a fork whose copies both go on, a child left sleeping, a daemon):
   the supervisor watches each worker's process, not only its pipe (a child holding the pipe
-  open once hid its worker's death), and each worker leads its own session, ended whole
-  when its task fails or leaves a process running (:mod:`vpid_bench.process_tree`); no
-  descendant holds the command's standard streams (a worker's output comes through the
-  supervisor);
+  open once hid its worker's death), and each worker's whole tree (its cgroup where one can
+  be made, every process carrying its mark, its descendants) is ended when its task fails
+  or leaves a process running, and nothing but that tree is ever signalled
+  (:mod:`vpid_bench.worker_tree`); no descendant holds the command's standard streams (a
+  worker's output comes through the supervisor; :mod:`vpid_bench.process_tree`);
+* SIGTERM and SIGHUP sent to a worker (a batch system's, to every process of the job): the
+  worker leaves them to the supervisor, which ends the sweep as on Ctrl-C;
 * a plugin that closes the worker's pipe: the worker ends quietly and the run fails with that
   reason (:mod:`vpid_bench.worker_loop`).
 
