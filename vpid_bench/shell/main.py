@@ -327,7 +327,8 @@ def _interrupted(what: str = "no job was started or every completed run is recor
     """One ``interrupted:`` line and the status of the signal (SIGINT, SIGTERM, SIGHUP)."""
     from ..interrupts import exit_status
 
-    print(f"interrupted: {what}", file=sys.stderr)
+    with contextlib.suppress(OSError):  # SIGHUP: the terminal may be gone
+        print(f"interrupted: {what}", file=sys.stderr)
     sys.exit(exit_status())
 
 
