@@ -264,10 +264,14 @@ class Tree:
         child subreaper of its tree, it adopts every orphan of it), and whether any number
         not ``seen`` before was listed (held or not: a process that ended as it was held
         still shows that the tree is forking)."""
+        # only numbers still held: the worker's while it is not reaped, the others' while
+        # their pidfd says they run (a number handed out again is never walked)
+        roots = [pid for pid, h in held.items() if h.alive()]
+        roots += [self.pid] if self._unreaped() else []
         tree = {self.pid, *held}
         new: list[_Held] = []
         fresh = False
-        stack = [self.pid, *held]
+        stack = list(roots)
         while stack:
             for child in _children(stack.pop()):
                 fresh = fresh or child not in seen

@@ -144,14 +144,21 @@ worker.process.join(timeout=60)
 multiprocessing.active_children()  # reaped while idle
 with open("/proc/sys/kernel/ns_last_pid", "w") as f:
     f.write(str(pid - 1))
-foreign = subprocess.Popen(["sleep", "60"], start_new_session=True)  # a group leader
+# a group leader with a child of its own
+foreign = subprocess.Popen(["sh", "-c", "sleep 60 & wait"], start_new_session=True)
 if foreign.pid != pid:
     foreign.kill()
     print(json.dumps({"reused": False, "pid": pid, "foreign": foreign.pid}))
     sys.exit(0)
+import psutil
+end = time.monotonic() + 30
+while not psutil.Process(pid).children() and time.monotonic() < end:
+    time.sleep(0.01)
+(child,) = psutil.Process(pid).children()
 pool.close()
 time.sleep(0.3)
-alive = foreign.poll() is None
+alive = foreign.poll() is None and child.status() not in ("zombie", "stopped")
+child.kill()
 foreign.kill()
 print(json.dumps({"reused": True, "alive": alive, "code": foreign.wait()}))
 """
@@ -160,8 +167,8 @@ print(json.dumps({"reused": True, "alive": alive, "code": foreign.wait()}))
 def test_N1_a_reused_process_id_is_never_signalled(tmp_path):
     """N1, with a forced reuse: in a PID namespace of its own (``unshare``, as root), a worker
     dies and is reaped, the kernel is told to hand its number to the next process
-    (``ns_last_pid``), a foreign ``sleep`` leading its own group gets it; ``close()`` once
-    SIGKILLed that ``sleep`` (exit -9); it lives on."""
+    (``ns_last_pid``), a foreign shell leading its own group, with a child, gets it;
+    ``close()`` once SIGKILLed that group; the shell and its child live on, not stopped."""
     unshare = shutil.which("unshare")
     if unshare is None or sys.platform != "linux":
         pytest.skip("needs Linux's unshare to force a PID reuse")
