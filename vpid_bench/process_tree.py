@@ -8,17 +8,16 @@ the child ended; an orphan kept the command's standard output open, so ``vpid-be
 tail`` waited for it after the command had exited. So each worker
 
 * starts its own session (:func:`detach`): it and every process it starts form one process
-  group, ended together (:func:`end_tree`); on Linux it is also a *child subreaper*, so a
-  grandchild its parent left (a daemon's double fork, even one that started a session of its
-  own) becomes the worker's child rather than init's and is still found among its
-  descendants (:func:`strays`);
+  group; on Linux it is also a *child subreaper*, so a grandchild its parent left (a daemon's
+  double fork, even one that started a session of its own) becomes the worker's child rather
+  than init's and is still found among its descendants (:func:`strays`);
+* closes its copy of the command's multiprocessing resource-tracker pipe (:func:`drop_tracker`);
 * writes its standard output and error into pipes that the supervisor reads and copies to its
   own (:class:`Output`): no process a plugin starts holds the command's streams, whatever it
   does.
 
-Where this ends: a process that left the worker's session *and* outlived its worker (whose
-descendants then go to init) is not found. Ending is ``SIGKILL``: nothing in the tree can
-defer or ignore it.
+Ending the whole tree, and never anything else, is :mod:`vpid_bench.worker_tree`'s job (a
+cgroup per worker, a mark in the environment, pidfds).
 """
 
 from __future__ import annotations
@@ -26,7 +25,6 @@ from __future__ import annotations
 import codecs
 import contextlib
 import os
-import signal
 import sys
 from multiprocessing.connection import Connection
 from typing import Any
@@ -50,6 +48,22 @@ def detach() -> None:
             ctypes.CDLL(None, use_errno=True).prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0)
 
 
+def drop_tracker() -> None:
+    """In a new worker process, before any plugin code: close its copy of the write end of
+    the command's multiprocessing resource tracker pipe. The tracker ends when every copy is
+    closed, and it holds the command's standard output and error: a daemon a plugin started
+    kept the copy it inherited, and ``vpid-bench ... | tail`` waited for it (issue 44, N3).
+    Should a plugin need a tracker, the worker starts its own (its child, ended with it)."""
+    from multiprocessing import resource_tracker
+
+    tracker = resource_tracker._resource_tracker
+    fd = getattr(tracker, "_fd", None)
+    if fd is not None:
+        with contextlib.suppress(OSError):
+            os.close(fd)
+        tracker._fd, tracker._pid = None, None
+
+
 def strays(process: Any) -> list[Any]:
     """The living descendants of ``process`` (a :class:`psutil.Process` or a process id;
     zombies, already ended, left out), as :class:`psutil.Process` objects; empty when it is
@@ -69,47 +83,9 @@ def strays(process: Any) -> list[Any]:
     return alive
 
 
-def handle(pid: int) -> Any:
-    """A :class:`psutil.Process` of a process just started (it tells the process from a later
-    one given the same number: psutil checks its start time)."""
-    import psutil
-
-    try:
-        return psutil.Process(pid)
-    except psutil.Error:
-        return None
-
-
-def end_tree(process: Any, pid: int) -> None:
-    """Kill the worker process ``pid`` (``process``: its :func:`handle`), its process group
-    (it leads one: :func:`detach`) and every descendant still found. ``SIGKILL``: nothing in
-    the tree can defer or ignore it. Safe once the worker is reaped: only a process that is
-    still the same one is killed by its handle."""
-    import psutil
-
-    found = strays(process) if process is not None else []
-    with contextlib.suppress(OSError):  # the group exists while one of its members does
-        os.killpg(pid, signal.SIGKILL)
-    for member in [process, *found]:  # and those that left the group
-        with contextlib.suppress(psutil.Error, AttributeError):
-            member.kill()
-
-
-def watch(pid: int) -> int | None:
-    """A descriptor that becomes readable when process ``pid`` (a child of this process) ends,
-    whoever else holds its pipes (Linux ``pidfd_open``); ``None`` where there is none: then
-    :func:`exited` is asked in turns. Not a pipe the child could pass on: a process a plugin
-    forks in a worker inherits the worker's pipes, and its multiprocessing sentinel too, so
-    they stay open after the worker's death."""
-    try:
-        return os.pidfd_open(pid)
-    except (AttributeError, OSError):
-        return None
-
-
 def exited(pid: int) -> bool:
     """Whether the child process ``pid`` has ended, without reaping it (its number stays its
-    own until it is reaped: see :func:`end_tree`)."""
+    own until it is reaped: see :mod:`vpid_bench.worker_tree`)."""
     try:
         return os.waitid(os.P_PID, pid, os.WEXITED | os.WNOHANG | os.WNOWAIT) is not None
     except ChildProcessError:  # already reaped
@@ -201,4 +177,4 @@ def redirect(out: Connection, err: Connection) -> None:
             stream.reconfigure(line_buffering=True)
 
 
-__all__ = ["Output", "detach", "end_tree", "exited", "handle", "redirect", "strays", "watch"]
+__all__ = ["Output", "detach", "drop_tracker", "exited", "redirect", "strays"]

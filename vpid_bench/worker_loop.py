@@ -37,7 +37,7 @@ from . import interrupts
 from .errors import VpidBenchError
 from .job_runs import RunOutcome, run_outcomes, warm_up
 from .machine import one_blas_thread
-from .process_tree import detach, redirect, strays
+from .process_tree import detach, drop_tracker, redirect, strays
 from .runner import RunTimeoutError, keep_cwd, time_limit
 from .spec import Job
 
@@ -123,10 +123,11 @@ def serve(conn: Connection, out: Connection, err: Connection) -> None:
     from .build import ProblemCache
 
     detach()
+    drop_tracker()
     redirect(out, err)
     interrupts.plugin_only()  # the user's Ctrl-C is the supervisor's to handle
     if hasattr(signal, "pthread_sigmask"):  # held by the supervisor while it started us
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, set(interrupts.SIGNALS))
     send = _sender(conn)
     root = logging.getLogger()
     root.handlers[:] = [_PipeLog(send)]

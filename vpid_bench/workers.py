@@ -23,10 +23,13 @@ What a worker can no longer take down:
   live and die with the worker;
 * processes a plugin starts (a fork whose copies both go on, a child left sleeping, a daemon):
   the supervisor watches each worker's process, not only its pipe (a child holding the pipe
-  open once hid its worker's death), and each worker leads its own session, ended whole
-  when its task fails or leaves a process running (:mod:`vpid_bench.process_tree`); no
-  descendant holds the command's standard streams (a worker's output comes through the
-  supervisor);
+  open once hid its worker's death), and each worker's whole tree (its cgroup where one can
+  be made, every process carrying its mark, its descendants) is ended when its task fails
+  or leaves a process running, and nothing but that tree is ever signalled
+  (:mod:`vpid_bench.worker_tree`); no descendant holds the command's standard streams (a
+  worker's output comes through the supervisor; :mod:`vpid_bench.process_tree`);
+* SIGTERM and SIGHUP sent to a worker (a batch system's, to every process of the job): the
+  worker leaves them to the supervisor, which ends the sweep as on Ctrl-C;
 * a plugin that closes the worker's pipe: the worker ends quietly and the run fails with that
   reason (:mod:`vpid_bench.worker_loop`).
 
@@ -47,7 +50,6 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import logging
-import os
 import pickle
 import signal
 import sys
@@ -60,11 +62,15 @@ from multiprocessing import get_context
 from multiprocessing.connection import Connection, wait
 from typing import Any
 
+from . import interrupts
+from .cgroups import Cgroup
+from .interrupts import SIGNALS
 from .job_runs import RunOutcome, now_utc
-from .process_tree import Output, end_tree, exited, handle, watch
+from .process_tree import Output
 from .runner import RunTimeoutError
 from .spec import Job
 from .worker_loop import LOST_PIPE_EXIT, RemoteError, portable, probe, serve
+from .worker_tree import Tree, marked, new_token, start_tracker
 
 log = logging.getLogger(__name__)
 
@@ -148,26 +154,32 @@ def can_send(job: Job) -> str | None:
 
 
 @contextlib.contextmanager
-def _sigint_held() -> Iterator[None]:
-    """A Ctrl-C inside the block is noted and delivered (to the handler in place before) when
-    the block ends. SIGINT is also blocked for this thread, so a process started inside
-    inherits it blocked (released by :func:`~.worker_loop.serve`). Main thread only
-    (elsewhere a no-op: Python runs signal handlers on the main thread)."""
+def _sigint_held(deliver: bool = True) -> Iterator[None]:
+    """A Ctrl-C (or SIGTERM, SIGHUP: :data:`~.interrupts.SIGNALS`) inside the block is noted
+    and delivered (to the handler in place before) when the block ends (with ``deliver``;
+    without, only noted as the command's interrupt). They are also blocked
+    for this thread, so a process started inside inherits them blocked (released by
+    :func:`~.worker_loop.serve`). Main thread only (elsewhere a no-op: Python runs signal
+    handlers on the main thread)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     noted: list[int] = []
-    before = signal.signal(signal.SIGINT, lambda signum, frame: noted.append(signum))
-    mask = (signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    before = {sig: signal.signal(sig, lambda signum, frame: noted.append(signum))
+              for sig in SIGNALS}
+    mask = (signal.pthread_sigmask(signal.SIG_BLOCK, set(SIGNALS))
             if hasattr(signal, "pthread_sigmask") else None)
     try:
         yield
     finally:
         if mask is not None:
             signal.pthread_sigmask(signal.SIG_SETMASK, mask)
-        signal.signal(signal.SIGINT, before)
-        if noted:
-            signal.raise_signal(signal.SIGINT)
+        for sig, handler in before.items():
+            signal.signal(sig, handler)
+        if noted and deliver:
+            signal.raise_signal(noted[0])
+        elif noted:
+            interrupts.note(noted[0])
 
 
 @dataclasses.dataclass(eq=False)
@@ -175,14 +187,18 @@ class _Worker:
     process: Any
     conn: Connection
     output: Output
-    tree: Any  # process_tree.handle of the process
-    #: Readable once the process ended (process_tree.watch), or None: ask ended() in turns.
-    watch: int | None
+    #: The process and everything it starts, held (:class:`~.worker_tree.Tree`).
+    tree: Tree
     jobs: set[str] = dataclasses.field(default_factory=set)
+
+    @property
+    def watch(self) -> int | None:
+        """Readable once the process ended (its pidfd), or ``None``: ask :meth:`ended`."""
+        return self.tree.fd
 
     def ended(self) -> bool:
         """Whether the process has ended (without reaping it: see :meth:`Workers._end`)."""
-        return exited(self.process.pid)
+        return self.tree.ended()
 
 
 @dataclasses.dataclass
@@ -230,15 +246,19 @@ class Workers:
         raised as soon as the worker is started and tracked). The child inherits the held
         SIGINT and releases it once it ignores SIGINT (:func:`~.worker_loop.serve`). Its
         standard output and error come through this process (:class:`~.process_tree.Output`)."""
+        token = new_token()
+        cgroup = Cgroup.create(f"vpid-bench-{token}")  # None where none can be made
+        start_tracker()  # not inside the block: it unblocks SIGINT and SIGTERM
         with _sigint_held():
             ours, theirs = self._ctx.Pipe(duplex=True)
             output = Output()
             process = self._ctx.Process(target=serve, args=(theirs, *output.child_ends()),
                                         name="vpid-bench-worker")
-            process.start()
+            with marked(token):
+                process.start()
             theirs.close()
             output.started()
-            worker = _Worker(process, ours, output, handle(process.pid), watch(process.pid))
+            worker = _Worker(process, ours, output, Tree(process, token, cgroup))
             self._all.append(worker)
         return worker
 
@@ -270,21 +290,24 @@ class Workers:
         return self._start()
 
     def _end(self, worker: _Worker) -> str:
-        """End ``worker`` and every process it started (:func:`~.process_tree.end_tree`),
-        copy what it printed, close its pipes and forget it; how it ended, for a record."""
-        end_tree(worker.tree, worker.process.pid)  # before reaping it (join): see end_tree
+        """End ``worker`` and every process it started (:meth:`~.worker_tree.Tree.end`),
+        copy what it printed, close its pipes and forget it; how it ended, for a record.
+        What could not be ended is named in one ``warning:`` line."""
+        left = worker.tree.end()  # before reaping it (join): see worker_tree
         end = time.monotonic() + 5.0
         while not worker.ended() and time.monotonic() < end:
             time.sleep(0.02)
         if worker.ended():  # reaped (its exit code read) only once it has ended
             worker.process.join()
+        worker.tree.close()
         worker.output.close()
         with contextlib.suppress(Exception):
             worker.conn.close()
-        if worker.watch is not None:
-            with contextlib.suppress(OSError):
-                os.close(worker.watch)
-            worker.watch = None
+        if left:
+            print(f"warning: {len(left)} process(es) started in worker process "
+                  f"{worker.process.pid} could not be ended and are left running (they left "
+                  f"its cgroup or session and cleared their environment): pid "
+                  f"{', pid '.join(left)}", file=sys.stderr, flush=True)
         if worker in self._all:
             self._all.remove(worker)
         if worker in self._idle:
@@ -303,10 +326,13 @@ class Workers:
             self._idle.append(worker)
 
     def close(self) -> None:
-        """End every worker and every process they started."""
-        for worker in list(self._all):
-            self._end(worker)
-        self._idle.clear()
+        """End every worker and every process they started. A second interrupt meanwhile
+        (SIGTERM, Ctrl-C) does not cut it short: it is delivered once all are ended, or only
+        noted when the command is already ending from one."""
+        with _sigint_held(deliver=not interrupts.seen()):
+            for worker in list(self._all):
+                self._end(worker)
+            self._idle.clear()
 
     # --- waiting
 
@@ -603,8 +629,9 @@ def _end_all(workers: list[_Worker]) -> None:
     """At exit: every worker left and what it started, ended."""
     for worker in list(workers):
         with contextlib.suppress(Exception):
-            end_tree(worker.tree, worker.process.pid)
+            worker.tree.end()
             worker.process.join(timeout=2)
+            worker.tree.close()
 
 
 def outcomes_isolated(pool: Workers, job: Job, indices: Sequence[int], lockstep: bool

@@ -11,7 +11,8 @@
    files, so it is right whatever process ran the jobs.
 
 Exit status: 0 all runs ok; 1 some run, job or report failed (records and ``job.json`` say
-why); 2 refused before anything ran; 130 interrupted (every completed run is kept).
+why); 2 refused before anything ran; 130 interrupted by SIGINT (Ctrl-C), 143 by SIGTERM, 129 by
+SIGHUP (the same for all three: every completed run is kept, every worker process ended).
 ``VPID_BENCH_DEBUG=1`` shows tracebacks.
 """
 
@@ -321,10 +322,14 @@ def main(argv: Sequence[str] | None = None) -> None:
         raise
 
 
-def _interrupted() -> NoReturn:
-    print("interrupted: no job was started or every completed run is recorded; run the "
-          "same command with --resume to continue", file=sys.stderr)
-    sys.exit(130)
+def _interrupted(what: str = "no job was started or every completed run is recorded; run "
+                 "the same command with --resume to continue") -> NoReturn:
+    """One ``interrupted:`` line and the status of the signal (SIGINT, SIGTERM, SIGHUP)."""
+    from ..interrupts import exit_status
+
+    with contextlib.suppress(OSError):  # SIGHUP: the terminal may be gone
+        print(f"interrupted: {what}", file=sys.stderr)
+    sys.exit(exit_status())
 
 
 def _main(argv: Sequence[str] | None) -> None:
@@ -376,9 +381,8 @@ def _main(argv: Sequence[str] | None) -> None:
     try:
         _run_hydra(plan.hydra_args, task)
     except KeyboardInterrupt:
-        print("interrupted: every completed run is recorded; run the same command with "
-              "--resume to continue (only missing runs are run)", file=sys.stderr)
-        sys.exit(130)
+        _interrupted("every completed run is recorded; run the same command with --resume "
+                     "to continue (only missing runs are run)")
     finally:
         task.close()
         lock.release()

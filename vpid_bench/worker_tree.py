@@ -1,0 +1,361 @@
+"""A worker process and every process its plugins start, held so that ending them never
+signals anything else (issue 44: N1, N3, N4).
+
+Round five's attack found three ways the tree kill failed:
+
+* N1: it signalled the worker's bare process id (``os.killpg``) after the worker had died and
+  been reaped while idle: once the number was handed out again, ``close()`` SIGKILLed an
+  unrelated process. Now every signal goes through what this process still holds: a pidfd
+  (Linux >= 5.3) opened while the worker was its unreaped child, or opened on a process found
+  and checked to be the same one (its start time) before it is signalled. The worker's process
+  group is signalled through its pidfd (Linux >= 6.9), or by number only while the worker is
+  not reaped (the number cannot be handed out again then). Without pidfds (macOS, older
+  Linux) psutil's handles are used: they check the start time before each signal.
+* N3: a daemon (double fork, ``setsid``) whose worker then exited went to init, out of
+  reach; it also held multiprocessing's resource-tracker pipe, so the tracker (which holds
+  the command's standard output) never ended and ``vpid-bench ... | tail`` hung (the worker
+  now closes its copy of that pipe before any plugin code: :mod:`vpid_bench.worker_loop`).
+* N4: a process that keeps forking and calling ``setsid`` while its worker lives slipped
+  between the listing of the worker's descendants and their kill.
+
+So each worker is started
+
+* in a cgroup of its own where this process may make one (:mod:`vpid_bench.cgroups`):
+  ending the worker ends every process in its cgroup at once (the kernel's guarantee, forks
+  in flight included);
+* with a mark in its environment (:data:`MARK`, a token of that worker only), which every
+  process it forks, or execs without clearing its environment, carries.
+
+and ended (:meth:`Tree.end`) in this order: its cgroup killed; the worker stopped
+(``SIGSTOP``: it is the child subreaper of its tree, so every orphan of it keeps coming to
+it); then round after round, until two rounds running find nothing new, its descendants
+(read from the kernel's own lists of children, fast enough to see the one living process of
+a chain that forks every millisecond) and the processes carrying its mark (wherever they
+went, init included) are held and stopped (a stopped process forks no more); then all of
+them and the worker are killed.
+
+What still runs after that (a process that cleared its environment *and* left the cgroup, or
+where there is no cgroup) is returned by :meth:`Tree.end` and named by the supervisor in one
+``warning:`` line. docs/sweeps.md (crash isolation) says what is guaranteed where.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import itertools
+import os
+import secrets
+import select
+import signal
+import time
+from collections.abc import Callable, Iterator
+from typing import Any
+
+from .cgroups import Cgroup
+
+#: The environment variable that marks a worker's processes (its value: the worker's token).
+MARK = "VPID_BENCH_TREE"
+#: ``pidfd_send_signal`` flag: the target's process group (Linux >= 6.9).
+PIDFD_SIGNAL_PROCESS_GROUP = 1 << 2
+#: Rounds of the stop-then-look-again search at most (each stops every new process found).
+ROUNDS = 500
+#: Seconds to wait for killed processes to end before naming them as left.
+WAIT_S = 5.0
+
+_count = itertools.count()
+
+
+def new_token() -> str:
+    """A token naming one worker's tree (this process's id, a count, a random part)."""
+    return f"{os.getpid()}-{next(_count)}-{secrets.token_hex(4)}"
+
+
+def pidfd(pid: int) -> int | None:
+    """A pidfd of process ``pid`` (Linux >= 5.3), or ``None``."""
+    try:
+        return os.pidfd_open(pid)
+    except (AttributeError, OSError):
+        return None
+
+
+def start_tracker() -> None:
+    """Start multiprocessing's resource tracker now, if it is not running: before a worker is
+    marked (the tracker is the command's, not the worker's: it must not carry the mark and be
+    ended with it), and before SIGINT, SIGTERM and SIGHUP are held for a worker's start
+    (starting the tracker unblocks SIGINT and SIGTERM, so the first worker once started with
+    them unblocked, and a SIGTERM then ended it)."""
+    from multiprocessing import resource_tracker
+
+    with contextlib.suppress(Exception):
+        resource_tracker.ensure_running()
+
+
+@contextlib.contextmanager
+def marked(token: str) -> Iterator[None]:
+    """Inside: this process's environment carries :data:`MARK` = ``token``, so a process it
+    starts (a spawned worker) inherits it (call :func:`start_tracker` first)."""
+    saved = os.environ.get(MARK)
+    os.environ[MARK] = token
+    try:
+        yield
+    finally:
+        if saved is None:
+            os.environ.pop(MARK, None)
+        else:
+            os.environ[MARK] = saved
+
+
+@dataclasses.dataclass
+class _Held:
+    """One process found and held: its pidfd (``None`` without pidfds: then its psutil
+    handle, which checks the start time before a signal), its id and name."""
+
+    pid: int
+    fd: int | None
+    proc: Any
+    name: str
+
+    def signal(self, sig: int) -> None:
+        if self.fd is not None:
+            with contextlib.suppress(OSError):
+                signal.pidfd_send_signal(self.fd, sig)
+            return
+        import psutil
+
+        with contextlib.suppress(psutil.Error):
+            self.proc.send_signal(sig)
+
+    def alive(self) -> bool:
+        """Whether it still runs (a zombie does not)."""
+        import psutil
+
+        if self.fd is not None and _readable(self.fd):  # a pidfd is readable once it exits
+            return False
+        try:
+            return self.proc.is_running() and self.proc.status() != psutil.STATUS_ZOMBIE
+        except psutil.Error:
+            return False
+
+    def close(self) -> None:
+        if self.fd is not None:
+            with contextlib.suppress(OSError):
+                os.close(self.fd)
+            self.fd = None
+
+
+def _hold(pid: int, belongs: Callable[[Any], bool]) -> _Held | None:
+    """Process ``pid`` held by a pidfd, once the process the pidfd names is checked to be
+    one of the tree's (``belongs``, asked of its :class:`psutil.Process`: its parent is in
+    the tree, or it carries the mark), so that a number handed out again in between is never
+    held; ``None`` if it is gone, a zombie or not the tree's."""
+    import psutil
+
+    fd = pidfd(pid)
+    try:
+        proc = psutil.Process(pid)
+        if proc.status() == psutil.STATUS_ZOMBIE or not belongs(proc):
+            raise psutil.NoSuchProcess(pid)
+        return _Held(pid, fd, proc, proc.name())
+    except psutil.Error:
+        if fd is not None:
+            os.close(fd)
+        return None
+
+
+def _children(pid: int) -> list[int]:
+    """The children of process ``pid`` (zombies included), read from the kernel's own list
+    (``/proc/<pid>/task/<tid>/children``, one read: fast enough to see the one living process
+    of a chain that forks every millisecond), or from psutil where there is none."""
+    try:
+        tids = os.listdir(f"/proc/{pid}/task")
+    except OSError:
+        tids = []
+    found: list[int] = []
+    for tid in tids:
+        try:
+            with open(f"/proc/{pid}/task/{tid}/children") as f:
+                found += [int(c) for c in f.read().split()]
+        except (OSError, ValueError):
+            continue
+    if tids or not os.path.isdir("/proc"):
+        return found
+    import psutil
+
+    with contextlib.suppress(psutil.Error):
+        return [c.pid for c in psutil.Process(pid).children()]
+    return []
+
+
+def _readable(fd: int) -> bool:
+    with contextlib.suppress(OSError, ValueError):
+        return bool(select.select([fd], [], [], 0)[0])
+    return True
+
+
+class Tree:
+    """A worker process just started (a :class:`multiprocessing.Process`, not yet reaped:
+    this is called right after ``start()``), with its ``token`` (:func:`marked`) and its
+    ``cgroup`` (``None``: none could be made), held (see module)."""
+
+    def __init__(self, process: Any, token: str, cgroup: Cgroup | None) -> None:
+        import psutil
+
+        self.process, self.pid, self.token = process, process.pid, token
+        #: The worker's pidfd, readable once it ended (``None``: no pidfds here).
+        self.fd = pidfd(self.pid)
+        try:
+            self.handle: Any = psutil.Process(self.pid)
+        except psutil.Error:
+            self.handle = None
+        self.cgroup = cgroup if cgroup is not None and cgroup.add(self.pid) else None
+
+    def ended(self) -> bool:
+        """Whether the worker has ended (without reaping it)."""
+        if self.fd is not None:
+            try:
+                return os.waitid(os.P_PIDFD, self.fd,
+                                 os.WEXITED | os.WNOHANG | os.WNOWAIT) is not None
+            except ChildProcessError:  # already reaped
+                return True
+        if not self._unreaped():
+            return True
+        from .process_tree import exited
+
+        return exited(self.pid)  # not reaped: the number is still the worker's
+
+    def _unreaped(self) -> bool:
+        """Whether the worker is not reaped yet (its number is still its own)."""
+        if self.fd is not None:
+            try:
+                os.waitid(os.P_PIDFD, self.fd, os.WEXITED | os.WNOHANG | os.WNOWAIT)
+            except ChildProcessError:
+                return False
+            return True
+        return getattr(getattr(self.process, "_popen", None), "returncode", 0) is None
+
+    def _signal_worker(self, sig: int) -> None:
+        if self.fd is not None:
+            with contextlib.suppress(OSError):
+                signal.pidfd_send_signal(self.fd, sig)
+        elif self.handle is not None:
+            import psutil
+
+            with contextlib.suppress(psutil.Error):
+                self.handle.send_signal(sig)
+
+    def _signal_group(self, sig: int) -> None:
+        """Signal the worker's process group (it leads one): through its pidfd, or by number
+        only while the worker is not reaped."""
+        if self.fd is not None:
+            try:
+                signal.pidfd_send_signal(self.fd, sig, None, PIDFD_SIGNAL_PROCESS_GROUP)
+                return
+            except ProcessLookupError:  # no process left in the group
+                return
+            except OSError:  # the flag is unknown to this kernel (< 6.9)
+                pass
+        if self._unreaped():
+            with contextlib.suppress(OSError):
+                os.killpg(self.pid, sig)
+
+    def _descendants(self, held: dict[int, _Held], seen: set[int]) -> tuple[list[_Held], bool]:
+        """The worker's descendants not held yet (the worker is stopped, not dead: as the
+        child subreaper of its tree, it adopts every orphan of it), and whether any number
+        not ``seen`` before was listed (held or not: a process that ended as it was held
+        still shows that the tree is forking)."""
+        # only numbers still held: the worker's while it is not reaped, the others' while
+        # their pidfd says they run (a number handed out again is never walked)
+        roots = [pid for pid, h in held.items() if h.alive()]
+        roots += [self.pid] if self._unreaped() else []
+        tree = {self.pid, *held}
+        new: list[_Held] = []
+        fresh = False
+        stack = list(roots)
+        while stack:
+            for child in _children(stack.pop()):
+                fresh = fresh or child not in seen
+                seen.add(child)
+                if child in tree:
+                    continue
+                h = _hold(child, lambda p: p.ppid() in tree)
+                if h is not None:
+                    tree.add(child)
+                    new.append(h)
+                    stack.append(child)
+        return new, fresh
+
+    def _marked(self, held: dict[int, _Held], checked: set[int]) -> list[_Held]:
+        """The processes carrying the worker's mark not held yet (wherever they went: adopted
+        by init included); ``checked``: the numbers already read (only new ones are read, so
+        a round after the first is fast)."""
+        import psutil
+
+        def marked(proc: Any) -> bool:
+            return proc.environ().get(MARK) == self.token
+
+        new: list[_Held] = []
+        for pid in psutil.pids():
+            if pid in checked or pid in held or pid in (self.pid, os.getpid()):
+                continue
+            checked.add(pid)
+            with contextlib.suppress(psutil.Error):
+                if marked(psutil.Process(pid)):
+                    h = _hold(pid, marked)
+                    if h is not None:
+                        new.append(h)
+        return new
+
+    def _stop_all(self) -> dict[int, _Held]:
+        """Find and stop (``SIGSTOP``) every process of the tree (see module), round after
+        round until two rounds running find none new and list no new child (at most
+        :data:`ROUNDS` rounds and :data:`WAIT_S` seconds)."""
+        held: dict[int, _Held] = {}
+        checked: set[int] = set()
+        seen: set[int] = set()
+        quiet = 0
+        end = time.monotonic() + WAIT_S
+        for _ in range(ROUNDS):
+            found, fresh = self._descendants(held, seen)
+            new = found + self._marked(held, checked)
+            for h in new:
+                h.signal(signal.SIGSTOP)
+                held[h.pid] = h
+            quiet = 0 if new or fresh else quiet + 1
+            if quiet >= 2 or time.monotonic() > end:
+                break
+        return held
+
+    def end(self) -> list[str]:
+        """Kill the worker and every process of its tree (see module); ``"<pid> (<name>)"`` of
+        each process still running afterwards. Nothing but what it holds is signalled."""
+        if self.cgroup is not None:
+            self.cgroup.kill(WAIT_S)
+        self._signal_worker(signal.SIGSTOP)  # it starts no more; its orphans stay its own
+        held = self._stop_all()
+        self._signal_worker(signal.SIGKILL)
+        self._signal_group(signal.SIGKILL)
+        for h in held.values():
+            h.signal(signal.SIGKILL)
+        end = time.monotonic() + WAIT_S
+        while any(h.alive() for h in held.values()) and time.monotonic() < end:
+            time.sleep(0.01)
+        left = {h.pid: h.name for h in held.values() if h.alive()}
+        for h in held.values():
+            h.close()
+        if self.cgroup is not None:
+            for pid in self.cgroup.pids():  # still there after its kill: said, never signalled
+                left.setdefault(pid, f"in cgroup {self.cgroup.path.name}")
+            left.pop(self.pid, None)
+            self.cgroup.remove()
+        return [f"{pid} ({name})" for pid, name in sorted(left.items())]
+
+    def close(self) -> None:
+        """Let go of the worker's pidfd (once it is reaped)."""
+        if self.fd is not None:
+            with contextlib.suppress(OSError):
+                os.close(self.fd)
+            self.fd = None
+
+
+__all__ = ["MARK", "Tree", "marked", "new_token", "pidfd", "start_tracker"]
