@@ -15,8 +15,8 @@ PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 COMMAND = re.compile(r"^(?:\.venv/bin/)?vpid-bench ([^#\\]*?)\s*(?:#.*)?$")
 #: Commands shown on purpose as refused, or needing what a test run has not (a user's file,
 #: the example third-party plugin installed on its own), or only printing help.
-NOT_CHECKED = ("--help", "--resume", "my_record.csv", "problem.noise=-1", "quarter_car",
-               "one_plus_one")
+NOT_CHECKED = ("--help", "--resume", "my_record.csv", "my.csv", "model.fmu",
+               "problem.noise=-1", "quarter_car", "one_plus_one")
 
 
 def _commands() -> list[tuple[str, str]]:
