@@ -13,7 +13,7 @@ line naming what is missing.
 capability     members                                                                anchor
 =============  =====================================================================  =========
 core           Config, bounds, evaluate; optional: x_true, metrics, describe, name,    (always)
-               rows_independent, suites, family, comparisons
+               rows_independent, suites, family, comparisons, fits_a_record
 residuals      residuals, residual_groups, evaluate_with_residuals, fisher_residuals,
                fisher_groups, residual_sigma                                          residuals
 instances      instance, instance_id, evaluate_instances                              instance
@@ -58,7 +58,8 @@ class Capability:
 
 CAPABILITIES: tuple[Capability, ...] = (
     Capability("core", ("Config", "name", "bounds", "evaluate", "x_true", "metrics",
-                        "describe", "rows_independent", "suites", "family", "comparisons"),
+                        "describe", "rows_independent", "suites", "family", "comparisons",
+                        "fits_a_record"),
                None, what="the box, the objective, and optionally the truth, accuracy "
                           "metrics and fixed comparison rows"),
     Capability("residuals", ("residuals", "residual_groups", "evaluate_with_residuals",

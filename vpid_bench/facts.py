@@ -67,6 +67,8 @@ def problem_facts(problem: Problem, runs: int) -> ProblemFacts:
         if not isinstance(info, dict):
             raise PluginError(f"problem {name!r}: describe() of instance {i} returned "
                               f"{type(info).__name__}, not a dict")
+        if getattr(inst, "fits_a_record", True) is False:
+            info = {**info, "fits_a_record": False}
         x_true = read(f"x_true of instance {i}", lambda inst=inst: inst.x_true)
         instances.append(InstanceFacts(
             id=read(f"instance_id() of instance {i}", inst.instance_id),

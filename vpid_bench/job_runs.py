@@ -128,7 +128,8 @@ def with_problem_results(job: Job, problem: Problem, outcome: RunOutcome) -> Run
         with time_limit(job.spec.run_timeout_s):
             derived: dict[str, Any] = {"metrics": {str(k): float(v) for k, v in
                                                    (inst.metrics(x) or {}).items()}}
-            if inst.x_true is None and offers_residuals(inst):
+            if (inst.x_true is None and offers_residuals(inst)
+                    and getattr(inst, "fits_a_record", True)):
                 derived["intervals"] = _intervals(inst, x)
     except KeyboardInterrupt:
         if interrupts.from_user():

@@ -192,6 +192,14 @@ class Problem(abc.ABC):
     #: a problem must say so (a noisy objective drawing from its own generator must not).
     rows_independent: ClassVar[bool] = False
 
+    #: True when the objective fits a model to a record (measured or simulated): without a
+    #: truth, its best vector is an identified value with intervals, a profile and fit
+    #: diagnostics. False for an objective that is no fit, e.g. a test function whose
+    #: minimiser is offered as no truth: then none of those is computed, and the report says
+    #: the problem gives no truth instead of calling it a measured record (round five's N16).
+    #: The job writes ``problem.info.fits_a_record: false`` into its records then.
+    fits_a_record: ClassVar[bool] = True
+
     #: The named suites this problem belongs to: ``vpid-bench -m suite=<name>`` sweeps every
     #: registered problem whose class lists ``<name>`` here (with each one's defaults).
     suites: ClassVar[tuple[str, ...]] = ()

@@ -89,6 +89,7 @@ class FunctionsProblem(Problem):
 
     Config = FunctionsConfig
     rows_independent = True  # row-wise numpy: a row's value ignores the rest of the batch
+    fits_a_record = False  # residuals serve least squares; there is no record to identify
 
     def __init__(self, config: FunctionsConfig) -> None:
         super().__init__(config)

@@ -111,6 +111,8 @@ def _residual_analysis(job: Job, problem: Problem, job_dir: Path, optima_dir: Pa
         for i in indices:
             for _, f in bests.get(i, []):
                 gaps[i] = (f - f_opt) / f_opt if f_opt > 0 else f - f_opt
+    if not getattr(problem, "fits_a_record", True):
+        return gaps  # no record: no identified value, profile or fit diagnostics
     if not truth and optima:
         inst, optimum = min(optima, key=lambda o: o[1]["f_opt"])
         write_profile(inst, optimum, job_dir)

@@ -103,6 +103,13 @@ def _info(rec: Mapping[str, Any]) -> Mapping[str, Any]:
     return info if isinstance(info, Mapping) else {}
 
 
+def fits_a_record(data: Any, context: str) -> bool:
+    """False where a record of ``context`` says its problem fits no record
+    (``problem.info.fits_a_record`` false: a test function), else True."""
+    return all(_info(r).get("fits_a_record", True) is not False
+               for r in _context_records(data, context))
+
+
 def _best(records: Sequence[Mapping[str, Any]]) -> Mapping[str, Any] | None:
     best, f_best = None, math.inf
     for rec in records:

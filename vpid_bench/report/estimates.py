@@ -30,6 +30,10 @@ MAX_BYTES = 1_000_000
 #: The words every no-truth context starts with (the first screen and the body).
 NO_TRUTH = ("No truth: the parameters that made this record are not known (a measured "
             "record), so no error against any nominal value is computed")
+#: The same for a problem that fits no record (``problem.info.fits_a_record`` false, e.g. a
+#: test function whose minimiser has a zero coordinate, where relative errors are undefined).
+NO_TRUTH_NO_RECORD = ("No truth is offered by this problem (it fits no record), so no error "
+                      "against a true value is computed")
 
 
 @dataclasses.dataclass

@@ -57,6 +57,8 @@ class ContextResult:
     #: the fit diagnostics at the context's optimum (:mod:`.diagnostics`), or None
     diagnostics: Any = None
     model_error: str = ""  # what the richer model that made the record adds, or ""
+    #: False where the context's records say their problem fits no record (N16)
+    fits_a_record: bool = True
 
     def value(self, x: float) -> str:
         """A metric value with its unit."""
@@ -138,7 +140,8 @@ def context_result(data: Any, context: str) -> ContextResult:
                          data.identified.get(context), data.comparisons.get(context, []),
                          diagnostics=getattr(data, "diagnostics", {}).get(context),
                          model_error=verdict.model_error,
-                         assumed=assumed.blocks(data, context))
+                         assumed=assumed.blocks(data, context),
+                         fits_a_record=assumed.fits_a_record(data, context))
 
 
 def evidence(data: Any, context: str) -> verdicts.Evidence:
@@ -466,12 +469,13 @@ def _limits_without_truth(v: Verdict) -> str:
 def _no_truth_lines(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
     """The paragraphs and tables a context without a truth adds below its ranking:
     ``(text, headers, rows)`` (empty headers: text only)."""
-    from .estimates import NO_TRUTH
+    from .estimates import NO_TRUTH, NO_TRUTH_NO_RECORD
 
     out: list[tuple[str, list[str], list[list[Any]]]] = []
     ranked = ("the objective" if r.metric == "f_best" else
               f"{escape(r.metric)} (held out) and, in the search columns, by the objective")
-    out.append((f"{NO_TRUTH}; ranked by {ranked}.", [], []))
+    out.append((f"{NO_TRUTH if r.fits_a_record else NO_TRUTH_NO_RECORD}; ranked by {ranked}.",
+                [], []))
     ident = r.identified
     if ident is not None:
         sigma = ", ".join(fmt(s, 3) for s in ident.sigma)
