@@ -143,6 +143,25 @@ def test_a_method_that_raises_is_a_failed_run(compose_config, tmp_path, monkeypa
     assert "broken inside nevergrad" in records[0]["error"]["message"]
 
 
+def test_a_record_names_nevergrad_and_its_version(compose_config, tmp_path):
+    summary, records = _job(compose_config, tmp_path, "CMA", runs=1)
+    assert records[0]["status"] == "ok"
+    assert records[0]["optimizer"]["plugin"]["library"] == {"name": "nevergrad",
+                                                             "version": ng.__version__}
+
+
+def test_runs_nevergrad_itself(registry):
+    """The optimizer asked and told is the registry's own class (the CMA wrapper), nothing
+    replaced or bypassed."""
+    from vpid_bench.build import optimizer_params, run_rng
+
+    problem = _problem(registry, dim=3)
+    cls, params = optimizer_params(registry, {"name": "nevergrad", "budget": 50})
+    optimizer = cls(params, problem.bounds, run_rng(1, 0))
+    optimizer.ask()
+    assert type(optimizer._ng) is ng.optimizers.registry["CMA"]
+
+
 def test_ngopt_at_a_small_budget_never_crashes_the_job(compose_config, tmp_path):
     """NGOpt with 4 parameters and 120 evaluations raises a TypeError inside nevergrad 1.0.12's
     metamodel on numpy 2.x. Whatever nevergrad does here, every run ends with a record: ok, or
