@@ -24,3 +24,21 @@ def needs(module: str, extra: str) -> pytest.MarkDecorator:
     """A skip mark for a test that needs ``module``, naming the extra that installs it."""
     return pytest.mark.skipif(not installed(module),
                               reason=f"{module} not installed (extra {extra!r})")
+
+
+def limit(seconds: float) -> float:
+    """A subprocess time limit of ``seconds`` on a quiet machine, scaled for this one: by
+    ``VPID_TEST_TIME_FACTOR`` when set, else by the load per core (the 1-minute load average
+    over the cores, at least 1, at most 8). The limits catch a hang, not slowness: on a
+    2-core machine that other work loads to 9, a 120 s limit becomes 540 s, so a test fails
+    only when something is wrong."""
+    import os
+
+    factor = os.environ.get("VPID_TEST_TIME_FACTOR")
+    if factor:
+        return seconds * max(1.0, float(factor))
+    try:
+        load = os.getloadavg()[0] / (os.cpu_count() or 1)
+    except OSError:  # no load average on this platform
+        load = 1.0
+    return seconds * min(8.0, max(1.0, load))

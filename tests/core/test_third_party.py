@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from extras import limit
 
 from vpid_bench.api import ConfigError, OptimizerParams
 from vpid_bench.runner import run
@@ -76,7 +77,7 @@ def _run(site: Path, args: list[str], cwd: Path) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYTHONPATH": str(site), "MPLBACKEND": "Agg",
            "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
     return subprocess.run([str(BIN / "vpid-bench"), *args], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=300)
+                          capture_output=True, text=True, timeout=limit(300))
 
 
 def _records(folder: Path) -> list[dict]:
@@ -159,7 +160,7 @@ def test_on_a_vpid1_member_at_its_defaults_it_is_ranked_among_an_archive_build(s
          "--problems", "vpid1_q_golden_hump", "--optimizers", "random,de1", "--runs", "2",
          "--target", "1e-8", "--sweep", str(tmp_path / "build"), "--out",
          str(archives / "vpid1"), "--", "progress=false"],
-        cwd=ROOT, capture_output=True, text=True, timeout=900,
+        cwd=ROOT, capture_output=True, text=True, timeout=limit(900),
         env={**os.environ, "MPLBACKEND": "Agg"})
     assert build.returncode == 0, build.stderr[-3000:]
     env_dir = {"VPID_BENCH_ARCHIVE_DIR": str(archives)}
@@ -167,7 +168,7 @@ def test_on_a_vpid1_member_at_its_defaults_it_is_ranked_among_an_archive_build(s
         [str(BIN / "vpid-bench"), "-m", "problem=vpid1_q_golden_hump", "optimizer=one_plus_one",
          "runs=2", "progress=false", f"hydra.sweep.dir={tmp_path}/sweep"], cwd=tmp_path,
         env={**os.environ, "PYTHONPATH": str(site), "MPLBACKEND": "Agg", **env_dir},
-        capture_output=True, text=True, timeout=600)
+        capture_output=True, text=True, timeout=limit(600))
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "from the archive of suite vpid1" in proc.stderr
     assert {r["optimizer"]["name"] for r in _records(tmp_path / "sweep")} == {"one_plus_one"}

@@ -21,6 +21,7 @@ import subprocess
 from pathlib import Path
 
 import pytest
+from extras import limit
 from hostile_helpers import REPORT_CLI, TINY, cli_env, error_lines
 
 from vpid_bench.experiment import run_from_config
@@ -88,7 +89,7 @@ def _report_cli(args: list[str], cwd: Path) -> subprocess.CompletedProcess:
         resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
 
     return subprocess.run([*REPORT_CLI, *args], cwd=cwd, env=cli_env(), capture_output=True,
-                          text=True, timeout=120, check=False, preexec_fn=cap)
+                          text=True, timeout=limit(120), check=False, preexec_fn=cap)
 
 
 @pytest.mark.parametrize("unit", [b"\n", b"{}\n"], ids=["newlines", "empty-objects"])

@@ -10,6 +10,7 @@ import sys
 
 import numpy as np
 import pytest
+from extras import limit
 from peers_helpers import run_optimizer
 from scipy.stats import mannwhitneyu
 
@@ -45,7 +46,7 @@ def test_registering_imports_neither_library():
             "assert {'cmaes', 'nevergrad'} <= set(r.optimizers); "
             "print(sorted(m for m in ('nevergrad', 'cma') if m in sys.modules))")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          env={**os.environ, "MPLBACKEND": "Agg"}, timeout=120)
+                          env={**os.environ, "MPLBACKEND": "Agg"}, timeout=limit(120))
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == "[]"
 

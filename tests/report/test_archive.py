@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from extras import limit
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "sweeps"))
 from sweep_helpers import run_cli  # noqa: E402
@@ -414,7 +415,7 @@ def test_the_advice_section_is_written_from_an_archive_alone(made, tmp_path):
     done = subprocess.run(
         [sys.executable, str(root / "benchmarks" / "archive_advice.py"),
          str(made["archives"] / "smoke"), "-o", str(out)],
-        capture_output=True, text=True, timeout=300, env={**os.environ, "MPLBACKEND": "Agg"})
+        capture_output=True, text=True, timeout=limit(300), env={**os.environ, "MPLBACKEND": "Agg"})
     assert done.returncode == 0, done.stderr[-2000:]
     md = (out / "advice.md").read_text(encoding="utf-8")
     assert "| optimizer | 10·D | score [95 % interval] |" in md  # 100·D: never reached
@@ -476,7 +477,7 @@ def test_the_committed_vpid1_advice_is_what_the_archive_gives(tmp_path, suite):
     out = tmp_path / "advice"
     done = subprocess.run(
         [sys.executable, str(root / "benchmarks" / "archive_advice.py"), f"archive/{suite}",
-         "-o", str(out)], cwd=root, capture_output=True, text=True, timeout=600,
+         "-o", str(out)], cwd=root, capture_output=True, text=True, timeout=limit(600),
         env={**os.environ, "MPLBACKEND": "Agg"})
     assert done.returncode == 0, done.stderr[-2000:]
     committed = root / "docs" / "study" / f"{suite}-advice"
@@ -493,7 +494,7 @@ def test_the_advice_script_refuses_a_bad_archive_in_one_line(tmp_path):
     root = Path(__file__).resolve().parents[2]
     done = subprocess.run(
         [sys.executable, str(root / "benchmarks" / "archive_advice.py"), str(tmp_path / "none")],
-        capture_output=True, text=True, timeout=120, env={**os.environ, "MPLBACKEND": "Agg"})
+        capture_output=True, text=True, timeout=limit(120), env={**os.environ, "MPLBACKEND": "Agg"})
     assert done.returncode == 1 and "Traceback" not in done.stderr
     assert done.stderr.strip().splitlines() == [
         f"error: archive {tmp_path / 'none'}: manifest.json is not readable JSON "

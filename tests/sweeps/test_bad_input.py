@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from extras import needs
+from extras import limit, needs
 from sweep_helpers import run_cli
 
 from vpid_bench import Optimizer, OptimizerParams, hookimpl
@@ -380,7 +380,7 @@ def test_the_report_names_a_corrupt_record_and_reports_the_rest(compose_config, 
     done = subprocess.run(
         [sys.executable, "-c", "from vpid_bench.report.cli import main; main()",
          str(tmp_path / "sweep"), "-o", str(tmp_path / "report")],
-        capture_output=True, text=True, check=False, timeout=120,
+        capture_output=True, text=True, check=False, timeout=limit(120),
     )
     assert "Traceback" not in done.stderr
     warnings = [line for line in done.stderr.splitlines() if str(torn.name) in line]

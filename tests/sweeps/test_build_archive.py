@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from extras import limit
 from sweep_helpers import cli_env, fingerprints
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -30,7 +31,8 @@ def build(tmp: Path, *extra: str, timeout: float = 600,
         [python, str(ROOT / "benchmarks" / "build_archive.py"), *SLICE,
          "--sweep", str(tmp / "b"), "--out", str(tmp / "archive"), "--", "progress=false",
          *extra],
-        cwd=ROOT, env=cli_env(), capture_output=True, text=True, timeout=timeout, check=False)
+        cwd=ROOT, env=cli_env(), capture_output=True, text=True, timeout=limit(timeout),
+        check=False)
 
 
 def archived(folder: Path) -> list[dict]:
