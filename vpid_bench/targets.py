@@ -49,7 +49,7 @@ def _close(a: float, b: float) -> bool:
 def _refused(job: Job, run: int, instance: Problem, why: str) -> ConfigError:
     return ConfigError("target", job.spec.target, f"optima the installed problem confirms: "
                        f"{job.problem_name} run {run} (instance {instance.instance_id()}): "
-                       f"{why}; rebuild the archive (benchmarks/build_archive.py, "
+                       f"{why}; rebuild the archive (tools/build_archive.py, "
                        "docs/protocol.md) or leave target= out")
 
 

@@ -359,7 +359,7 @@ def test_the_shipped_archive_holds_every_builtin_on_every_smoke_member(shipped, 
 def test_the_shipped_archive_was_made_by_this_code(shipped, registry):
     """Each member's instances, built by the installed code, hold the archived data (true
     parameters and objective at the truth, to 1e-9): a change to a problem that moves its
-    data fails here, and the archive must be rebuilt (benchmarks/build_archive.py)."""
+    data fails here, and the archive must be rebuilt (tools/build_archive.py)."""
     from vpid_bench.params import build_dataclass
 
     seen = set()
@@ -401,7 +401,7 @@ def test_the_shipped_paper_optima_belong_to_this_codes_records(registry):
 
 
 def test_the_advice_section_is_written_from_an_archive_alone(made, tmp_path):
-    """benchmarks/archive_advice.py (the advice per family and budget of docs/study.md,
+    """tools/archive_advice.py (the advice per family and budget of docs/study.md,
     regenerated from archive/vpid1) reads only the archive: per group the share
     solved at each rung the runs reached, the score table with intervals, who is not
     separated from the leader (a paired bootstrap over problem and instance), the caveats
@@ -413,7 +413,7 @@ def test_the_advice_section_is_written_from_an_archive_alone(made, tmp_path):
     root = Path(__file__).resolve().parents[2]
     out = tmp_path / "advice"
     done = subprocess.run(
-        [sys.executable, str(root / "benchmarks" / "archive_advice.py"),
+        [sys.executable, str(root / "tools" / "archive_advice.py"),
          str(made["archives"] / "smoke"), "-o", str(out)],
         capture_output=True, text=True, timeout=limit(300), env={**os.environ, "MPLBACKEND": "Agg"})
     assert done.returncode == 0, done.stderr[-2000:]
@@ -438,14 +438,14 @@ def test_the_advice_names_the_black_box_leader_apart_from_the_residual_users():
     import importlib.util
 
     root = Path(__file__).resolve().parents[2]
-    sys.path.insert(0, str(root / "benchmarks"))
+    sys.path.insert(0, str(root / "tools"))
     try:
         spec = importlib.util.spec_from_file_location(
-            "archive_advice", root / "benchmarks" / "archive_advice.py")
+            "archive_advice", root / "tools" / "archive_advice.py")
         advice = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(advice)
     finally:
-        sys.path.remove(str(root / "benchmarks"))
+        sys.path.remove(str(root / "tools"))
     users = advice.residual_users(["lsq", "de_lsq", "de4", "cmaes", "not_installed_here"])
     assert users == {"lsq", "de_lsq"}
     # per-run AUC on (problem, instance): lsq best, cmaes and de4 apart by a clear margin
@@ -476,7 +476,7 @@ def test_the_committed_vpid1_advice_is_what_the_archive_gives(tmp_path, suite):
         pytest.skip(f"archive/{suite} is not in this checkout")
     out = tmp_path / "advice"
     done = subprocess.run(
-        [sys.executable, str(root / "benchmarks" / "archive_advice.py"), f"archive/{suite}",
+        [sys.executable, str(root / "tools" / "archive_advice.py"), f"archive/{suite}",
          "-o", str(out)], cwd=root, capture_output=True, text=True, timeout=limit(600),
         env={**os.environ, "MPLBACKEND": "Agg"})
     assert done.returncode == 0, done.stderr[-2000:]
@@ -493,7 +493,7 @@ def test_the_advice_script_refuses_a_bad_archive_in_one_line(tmp_path):
 
     root = Path(__file__).resolve().parents[2]
     done = subprocess.run(
-        [sys.executable, str(root / "benchmarks" / "archive_advice.py"), str(tmp_path / "none")],
+        [sys.executable, str(root / "tools" / "archive_advice.py"), str(tmp_path / "none")],
         capture_output=True, text=True, timeout=limit(120), env={**os.environ, "MPLBACKEND": "Agg"})
     assert done.returncode == 1 and "Traceback" not in done.stderr
     assert done.stderr.strip().splitlines() == [

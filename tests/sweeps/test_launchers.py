@@ -5,7 +5,7 @@ the command exit non-zero and is named in the sweep summary.
 Beyond one process (marker ``scaleout``, excluded by default; ``make test-scaleout`` runs them
 in their own environment with the ``ray`` extra): Hydra's Ray launcher on a local Ray instance
 and submitit's launcher on its local executor write the same records as the basic launcher,
-and so does the archive build (``benchmarks/build_archive.py``, a slice) run unchanged through
+and so does the archive build (``tools/build_archive.py``, a slice) run unchanged through
 them."""
 
 from __future__ import annotations

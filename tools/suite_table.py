@@ -1,6 +1,6 @@
 """The table of docs/suite.md: every member of a named suite at its defaults, instance 0.
 
-    .venv/bin/python benchmarks/suite_table.py [--suite vpid1] [--starts 100] [--seed 0]
+    .venv/bin/python tools/suite_table.py [--suite vpid1] [--starts 100] [--seed 0]
 
 Per problem: the model, the parameter set, the dimension, the input, the sensors, the noise,
 the record length, the Cramér–Rao bound's norm (%, under the problem's objective and noise

@@ -1,7 +1,7 @@
 """Two archives' runs side by side, run by run (problem, optimizer, run index): whether a
 rebuild (another commit, launcher or machine) made the same runs.
 
-    .venv/bin/python benchmarks/compare_archives.py archive/vpid1 /tmp/vpid1-archive
+    .venv/bin/python tools/compare_archives.py archive/vpid1 /tmp/vpid1-archive
 
 Prints the runs both hold, how many have the same evaluations and the same reason to stop,
 how many best values are bit-identical, and the largest relative differences of the others.

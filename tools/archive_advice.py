@@ -1,7 +1,7 @@
 """The advice per family and per budget that an archive supports, as a Markdown section for
 docs/study.md, regenerated from the archive alone (nothing is run).
 
-    MPLBACKEND=Agg .venv/bin/python benchmarks/archive_advice.py archive/vpid1 \\
+    MPLBACKEND=Agg .venv/bin/python tools/archive_advice.py archive/vpid1 \\
         [-o docs/study/vpid1-advice] [--alpha 0.05]
 
 Writes ``<out>/advice.md`` (and prints it), ``<out>/ladder.csv``, ``<out>/scores.csv`` and the
@@ -153,7 +153,7 @@ def markdown(folder: Path, manifest: dict[str, Any], ladder: list[list[Any]],
     rungs = [k for k in ss.LADDER
              if any(math.isfinite(r[3 + ss.LADDER.index(k)]) for r in ladder)]
     lines = [f"Made from `{folder}` (nothing run) by "
-             f"`python benchmarks/archive_advice.py {folder}`; the archive was made by "
+             f"`python tools/archive_advice.py {folder}`; the archive was made by "
              f"vpid-bench {manifest.get('vpid_bench_version')}, commit "
              f"{str(manifest.get('commit'))[:12]}, {manifest.get('made_at')}.", ""]
     for group in dict.fromkeys(r[0] for r in ladder):

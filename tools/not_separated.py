@@ -1,7 +1,7 @@
 """The table of docs/study.md: per problem, which optimizers the tests do not separate.
 
     .venv/bin/vpid-bench-report archive/smoke -o outputs/smoke-archive-report
-    .venv/bin/python benchmarks/not_separated.py outputs/smoke-archive-report
+    .venv/bin/python tools/not_separated.py outputs/smoke-archive-report
 
 Reads a full report's tables (``headline.csv``, ``pairwise.csv``, ``suite_scores.csv`` and
 ``runs.csv``; nothing is recomputed) and prints, per context, in Markdown:

@@ -1,9 +1,9 @@
 """What an archive build costs, per member and per optimizer, measured on a slice of it and set
 beside the kernel-only time of the same evaluations, side by side in one run.
 
-    MPLBACKEND=Agg .venv/bin/python benchmarks/archive_cost.py --suite vpid1 --runs 1 \\
+    MPLBACKEND=Agg .venv/bin/python tools/archive_cost.py --suite vpid1 --runs 1 \\
         --full-runs 15 --target 1e-8 [--problems a,b] [--optimizers x,y] [--sweep DIR]
-    MPLBACKEND=Agg .venv/bin/python benchmarks/archive_cost.py \\
+    MPLBACKEND=Agg .venv/bin/python tools/archive_cost.py \\
         --built outputs/archive-vpid1 [--wall-s SECONDS]   # a finished build, nothing run
 
 1. **The build** of the slice: :func:`build_archive.build` (the command a user runs, every

@@ -1,7 +1,7 @@
 """Make (or remake) the committed archive of a suite: every built-in optimizer on every member.
 
-    .venv/bin/python benchmarks/build_archive.py --suite vpid1 --runs 15 --target 1e-8
-    .venv/bin/python benchmarks/build_archive.py --suite smoke --runs 30
+    .venv/bin/python tools/build_archive.py --suite vpid1 --runs 15 --target 1e-8
+    .venv/bin/python tools/build_archive.py --suite smoke --runs 30
 
 One command, resumable: run the same command again after an interruption and only what is
 missing runs (every stage is a ``vpid-bench`` sweep into a fixed folder, which skips the runs
@@ -21,7 +21,7 @@ it has recorded). Its stages:
 Anything after ``--`` is handed to both sweeps unchanged, so the same build runs through a
 Hydra launcher on a cluster::
 
-    .venv/bin/python benchmarks/build_archive.py --suite vpid1 --runs 15 --target 1e-8 \\
+    .venv/bin/python tools/build_archive.py --suite vpid1 --runs 15 --target 1e-8 \\
         --sweep /shared/vpid1 -- hydra/launcher=slurm_cluster hydra.launcher.partition=short
 
 Commit the archive folder together with the code that made it: the manifest names the commit
