@@ -42,3 +42,8 @@ def limit(seconds: float) -> float:
     except OSError:  # no load average on this platform
         load = 1.0
     return seconds * min(8.0, max(1.0, load))
+
+
+#: The shipped archives' runs (archive-runs/, installed by ``make install``): tests that read
+#: them are skipped without it, with the reason.
+needs_archive_runs = needs("vpid_archive_runs", "make install: pip install -e ./archive-runs")

@@ -16,7 +16,9 @@ it has recorded). Its stages:
    ``VPID_BENCH_ARCHIVE_DIR=<sweep>/certified`` so that ``target=`` finds the optima of stage
    1; its ``optima/`` folder starts from them (the truth's polish is not done twice).
 3. **pack** (refused when a job or run failed): ``archive/<suite>/`` (manifest, records,
-   optima, summary, IOH zip, per-job files) and the size of each file.
+   optima, summary, IOH zip, per-job files) and the size of each file; the records and the
+   IOH zip of a shipped archive then move to ``archive-runs/vpid_archive_runs/<suite>/``,
+   the data distribution that ships them apart from the wheel.
 
 Anything after ``--`` is handed to both sweeps unchanged, so the same build runs through a
 Hydra launcher on a cluster::
@@ -46,6 +48,7 @@ from vpid_bench.plugins import Registry
 from vpid_bench.report.archive import ARCHIVE_DIR_ENV
 from vpid_bench.report.load import load_records
 from vpid_bench.report.pack import pack
+from vpid_bench.store.archive import RUN_FILES
 
 ROOT = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
@@ -193,6 +196,12 @@ def build(args: argparse.Namespace) -> Built:
         print(f"{out / name}: {f['bytes']:,} bytes, sha256 {f['sha256'][:16]}...")
     print(f"archive {out}: {manifest['runs']} runs of {len(manifest['optimizers'])} "
           f"optimizers on {len(manifest['problems'])} problems, {total:,} bytes")
+    if Path(out).resolve().parent == (ROOT / "archive").resolve():
+        home = ROOT / "archive-runs" / "vpid_archive_runs" / args.suite
+        home.mkdir(parents=True, exist_ok=True)
+        for name in RUN_FILES:  # the runs ship apart from the wheel (docs/sweeps.md)
+            (Path(out) / name).replace(home / name)
+        print(f"its runs ({', '.join(RUN_FILES)}) moved to {home}")
     return Built(True, runs_dir, seconds, manifest)
 
 

@@ -89,12 +89,12 @@ def certified_optima(job: Job, problem: Problem, root: Path | None = None) -> di
     optimum file (problem, instance id, data settings, dimension) and confirmed by the
     installed problem (:func:`_certify`; :class:`ConfigError` when it is not); runs without
     one are left out."""
-    from .report.archive import load_all
-    from .report.optima import OptimaIndex, matching_optima
+    from .store.archive import archive_optima
+    from .store.optimum import OptimaIndex, matching_optima
 
     # an unusable archive certifies nothing; its runs are not needed
-    archives, _ = load_all(root, {job.problem_name}, optima_only=True)
-    optima = [o for a in archives for o in a.optima if o.problem == job.problem_name]
+    found_optima, _ = archive_optima(root, {job.problem_name})
+    optima = [o for o in found_optima if o.problem == job.problem_name]
     index = OptimaIndex(optima, [])
     names = [""] * problem.bounds.dim
     found = {}

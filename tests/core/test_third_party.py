@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from extras import limit
+from extras import limit, needs_archive_runs
 
 from vpid_bench.api import ConfigError, OptimizerParams
 from vpid_bench.runner import run
@@ -118,6 +118,7 @@ def test_quarter_car_runs_with_installed_optimizers_and_a_report(site, tmp_path)
     assert (tmp_path / "sweep" / "report" / "report.md").is_file()
 
 
+@needs_archive_runs
 @pytest.mark.parametrize("selection", [
     pytest.param("problem=smoke_quarter", id="one-member"),
     pytest.param("suite=smoke", id="suite", marks=pytest.mark.slow),  # 5 min on 2 cores
