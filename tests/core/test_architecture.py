@@ -253,3 +253,19 @@ def test_the_store_names_the_job_files_the_rooms_write():
     from vpid_bench.store.archive import JOB_FILES
 
     assert set(JOB_FILES) == {IDENTIFIABILITY, ESTIMATORS}
+
+
+def test_the_report_is_served_by_name_only_through_the_plugin_api():
+    """An import by name (``importlib.import_module(".report....")``) is a deferred import
+    too: outside report/ and shell/ only the package's facade holds one (``vpid_bench``
+    serves ``ReportContext``, ``Section``, ... to report-section plugins on first use, so
+    that plugins keep their one import line)."""
+    holders = []
+    for p in _files(CORE):
+        if p.relative_to(CORE).parts[0] in ("report", "shell"):
+            continue
+        for node in ast.walk(ast.parse(p.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and \
+                    re.fullmatch(r"(vpid_bench)?\.report(\.\w+)*", node.value):
+                holders.append(str(p.relative_to(CORE)))
+    assert sorted(set(holders)) == ["__init__.py"]
