@@ -13,9 +13,12 @@ $(BIN)/python:
 	$(BIN)/python -m pip install --upgrade "pip>=23.1"
 
 # records-gpl/: third-party records under GPL-3.0, a separate data distribution (docs/measured.md)
-$(VENV)/.installed: $(BIN)/python pyproject.toml records-gpl/pyproject.toml
+# archive-runs/: the shipped archives' runs, a data distribution apart from the wheel
+# (docs/sweeps.md), editable so that a rebuilt archive needs no reinstall
+$(VENV)/.installed: $(BIN)/python pyproject.toml records-gpl/pyproject.toml archive-runs/pyproject.toml
 	$(BIN)/python -m pip install -e ".[test,ioh,joblib,submitit,peers,tune,fmu]"
 	$(BIN)/python -m pip install ./records-gpl
+	$(BIN)/python -m pip install -e ./archive-runs
 	touch $@
 
 install: $(VENV)/.installed
@@ -40,7 +43,7 @@ browser:
 
 test: install browser
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest -n auto
+	$(BIN)/python -m pytest -n auto --durations=15
 
 # Launchers beyond one process (Ray on a local instance, submitit's local executor): their
 # own environment, every extra in ONE pip run (the Ray launcher pins cloudpickle<3), so the

@@ -17,7 +17,7 @@ side with the runs they report on.
   times as large (each run copied to N instances, its values scaled by a factor in
   [1, 1.05) drawn per copy, so the copies are not tied; each instance's optimum copied
   alike): the size of a full build, measured from a slice of it
-  (``benchmarks/archive_cost.py``). Prints the time of each and their ratio.
+  (``tools/archive_cost.py``). Prints the time of each and their ratio.
 
 Timings on a shared machine are noisy; compare the columns of one run, not across runs.
 """

@@ -1,4 +1,4 @@
-"""Speed of ``problem=vehicle``: microseconds per candidate of four ways to compute Eq. (3).
+"""Speed of ``problem=vehicle``: microseconds per candidate of three ways to compute Eq. (3).
 
 Run as a script (prints tables, ratios and the command)::
 
@@ -11,8 +11,6 @@ Compared side by side, in one process, at PS = 20 and 600 (dt = 1 ms, the paper'
 
 * ``numpy``: a straightforward numpy Newmark loop over time, vectorised over the population
   (kept here so the ratio cannot drift when the package changes);
-* ``previous``: the previous compiled kernel (one candidate at a time, scalar Newmark),
-  copied unchanged into ``benchmarks/previous_kernel.py``;
 * ``soa-1``: the package's structure-of-arrays kernel, one thread;
 * ``soa-all``: the same with every core this process may use.
 
@@ -39,9 +37,6 @@ from vpid_vehicle import kernel
 from vpid_vehicle.config import VehicleConfig
 from vpid_vehicle.model import matrices, response_rows, tyre_input
 from vpid_vehicle.problem import VehicleProblem
-
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import previous_kernel  # noqa: E402  (the baseline beside this script)
 
 
 def baseline_newmark(problem: VehicleProblem, X: np.ndarray) -> np.ndarray:
@@ -72,15 +67,12 @@ def baseline_newmark(problem: VehicleProblem, X: np.ndarray) -> np.ndarray:
 
 
 def variants(problem: VehicleProblem, X: np.ndarray) -> dict[str, Callable[[], np.ndarray]]:
-    """The four ways to compute Eq. (3) for ``X``, as calls without arguments."""
-    cfg, k = problem.config, problem.known
-    y, ref = problem.model.y, problem.reference
+    """The three ways to compute Eq. (3) for ``X``, as calls without arguments."""
+    ref = problem.reference
     setup = problem.model._kernel_setup()
     everyone = kernel.available_threads()
     return {
         "numpy": lambda: baseline_newmark(problem, X),
-        "previous": lambda: previous_kernel.evaluate(X, k.L, k.kt1, k.kt2, y, cfg.dt,
-                                                     cfg.newmark.gamma, cfg.newmark.beta, ref),
         "soa-1": lambda: setup.objective(X, ref, 1),
         "soa-all": lambda: setup.objective(X, ref, everyone),
     }
@@ -134,12 +126,12 @@ def report(ps: int, res: dict[str, dict[str, np.ndarray]]) -> None:
     wall, cpu = res["wall"], res["cpu"]
     print(f"\nPS = {ps} (us per candidate; {len(wall['numpy'])} interleaved rounds)")
     print(f"{'variant':>9} {'wall min':>9} {'wall med':>9} {'cpu min':>8} "
-          f"{'previous/this (wall med)':>25} {'(cpu med)':>10}")
+          f"{'numpy/this (wall med)':>25} {'(cpu med)':>10}")
     for name in wall:
         single = name != "soa-all"
         cpu_min = f"{cpu[name].min():8.2f}" if single else f"{'-':>8}"
-        r_wall = np.median(wall["previous"] / wall[name])
-        r_cpu = f"{np.median(cpu['previous'] / cpu[name]):10.2f}" if single else f"{'-':>10}"
+        r_wall = np.median(wall["numpy"] / wall[name])
+        r_cpu = f"{np.median(cpu['numpy'] / cpu[name]):10.2f}" if single else f"{'-':>10}"
         print(f"{name:>9} {wall[name].min():9.2f} {np.median(wall[name]):9.2f} {cpu_min} "
               f"{r_wall:25.2f} {r_cpu}")
     print(f"numpy / soa-1 (wall med): {np.median(wall['numpy'] / wall['soa-1']):.0f}x; "
@@ -202,14 +194,6 @@ def test_fast_evaluate(benchmark):
     X = problem.bounds.sample(np.random.default_rng(0), 20)
     problem.evaluate(X)
     benchmark(problem.evaluate, X)
-
-
-def test_previous_kernel(benchmark):
-    problem = VehicleProblem(VehicleConfig())
-    X = problem.bounds.sample(np.random.default_rng(0), 20)
-    fn = variants(problem, X)["previous"]
-    fn()
-    benchmark(fn)
 
 
 def test_baseline_newmark(benchmark):

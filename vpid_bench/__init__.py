@@ -14,29 +14,8 @@ import importlib
 from typing import Any
 
 from . import estimators
-from .api import (
-    FILLED_PARAMS,
-    PROTOCOL_KEYS,
-    Bounds,
-    ConfigError,
-    GenerationalOptimizer,
-    LoopOptimizer,
-    Optimizer,
-    OptimizerContractError,
-    OptimizerParams,
-    PluginError,
-    Problem,
-    ProblemConfig,
-    VpidBenchError,
-    added_setting,
-    check_compatible,
-    default_budget,
-    file_sha256,
-    offers_residuals,
-    registered_optimizer,
-    relative_errors_percent,
-    write_text_atomic,
-)
+from .api import *  # noqa: F403  (the plugin API: its names and __all__ are api.py's)
+from .api import __all__ as _api_names
 from .hookspecs import hookimpl
 
 __version__ = "0.1.0"
@@ -54,33 +33,9 @@ _LAZY = {
     "structure_summary": ".analysis.structures",
 }
 
-__all__ = [
-    "FILLED_PARAMS",
-    "PROTOCOL_KEYS",
-    "Bounds",
-    "ConfigError",
-    "GenerationalOptimizer",
-    "LoopOptimizer",
-    "Optimizer",
-    "OptimizerContractError",
-    "OptimizerParams",
-    "PluginError",
-    "Problem",
-    "ProblemConfig",
-    "VpidBenchError",
-    "added_setting",
-    "check_compatible",
-    "default_budget",
-    "estimators",
-    "hookimpl",
-    "offers_residuals",
-    "registered_optimizer",
-    "relative_errors_percent",
-    "file_sha256",
-    "write_text_atomic",
-    "__version__",
-    *_LAZY,
-]
+#: api.py's names (written once, there), the estimators module, the hook marker, the version
+#: and the names served on first use.
+__all__ = [*_api_names, "estimators", "hookimpl", "__version__", *_LAZY]
 
 
 def __getattr__(name: str) -> Any:

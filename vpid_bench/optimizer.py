@@ -55,6 +55,10 @@ class Optimizer(abc.ABC):
     _done: bool = False  # what ``self.done = ...`` stored (class default: not done)
     #: True: ``tell`` receives ``residuals=R`` beside ``f`` (the problem must have residuals).
     wants_residuals: ClassVar[bool] = False
+    #: The distribution name of the third-party library that runs the search (``"cma"``,
+    #: ``"nevergrad"``, ``"scipy"``), or ``None`` for an optimizer written here: its installed
+    #: version is in every record (``optimizer.plugin.library``), so a record names what ran.
+    library: ClassVar[str | None] = None
     #: Set by the run loop when ``wants_residuals``: the group of each residual entry, ``(m,)``.
     residual_groups: np.ndarray | None = None
 

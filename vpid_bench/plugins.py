@@ -24,7 +24,7 @@ from . import hookspecs
 from .errors import ConfigError, PluginError
 from .optimizer import Optimizer, OptimizerParams
 from .problem import Problem, ProblemConfig
-from .records.provenance import code_digest, distribution_provenance
+from .records.provenance import code_digest, distribution_provenance, library_provenance
 
 ENTRY_POINT_GROUP = "vpid_bench"
 BLOCK_ENV = "VPID_BENCH_BLOCK_PLUGINS"
@@ -209,7 +209,8 @@ class Registry:
 
     def provenance(self, kind: str, name: str) -> dict[str, Any]:
         """Where ``kind`` ``name`` comes from: ``{"plugin", "distribution", "version",
-        "requires", "code"}`` (distribution, version and requires empty for a plugin no
+        "requires", "code"}`` and, for an optimizer that runs a library (``Optimizer.library``),
+        ``"library": {"name", "version"}`` (distribution, version and requires empty for a plugin no
         distribution ships; ``code`` the digest of its installed source,
         :func:`~vpid_bench.records.provenance.code_digest`, so a plugin changed under the
         same version is told apart)."""
@@ -217,7 +218,11 @@ class Registry:
         info = getattr(self.pm, "vpid_bench_info", None)
         source = info.sources.get(plugin, {}) if info is not None else {}
         cls = (self.problems if kind == "problem" else self.optimizers)[name]
-        return {"plugin": plugin, **source, "code": code_digest(cls)}
+        out = {"plugin": plugin, **source, "code": code_digest(cls)}
+        library = getattr(cls, "library", None) if kind == "optimizer" else None
+        if isinstance(library, str):
+            out["library"] = library_provenance(library)
+        return out
 
     def optimizer(self, name: str) -> type[Optimizer]:
         """The optimizer class registered as ``name``; a clear error lists the known names."""

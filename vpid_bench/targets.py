@@ -49,7 +49,7 @@ def _close(a: float, b: float) -> bool:
 def _refused(job: Job, run: int, instance: Problem, why: str) -> ConfigError:
     return ConfigError("target", job.spec.target, f"optima the installed problem confirms: "
                        f"{job.problem_name} run {run} (instance {instance.instance_id()}): "
-                       f"{why}; rebuild the archive (benchmarks/build_archive.py, "
+                       f"{why}; rebuild the archive (tools/build_archive.py, "
                        "docs/protocol.md) or leave target= out")
 
 
@@ -89,12 +89,12 @@ def certified_optima(job: Job, problem: Problem, root: Path | None = None) -> di
     optimum file (problem, instance id, data settings, dimension) and confirmed by the
     installed problem (:func:`_certify`; :class:`ConfigError` when it is not); runs without
     one are left out."""
-    from .report.archive import load_all
-    from .report.optima import OptimaIndex, matching_optima
+    from .store.archive import archive_optima
+    from .store.optimum import OptimaIndex, matching_optima
 
     # an unusable archive certifies nothing; its runs are not needed
-    archives, _ = load_all(root, {job.problem_name}, optima_only=True)
-    optima = [o for a in archives for o in a.optima if o.problem == job.problem_name]
+    found_optima, _ = archive_optima(root, {job.problem_name})
+    optima = [o for o in found_optima if o.problem == job.problem_name]
     index = OptimaIndex(optima, [])
     names = [""] * problem.bounds.dim
     found = {}

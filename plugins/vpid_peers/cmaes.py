@@ -76,6 +76,7 @@ class CMAES(Optimizer):
     """CMA-ES (``cma.CMAEvolutionStrategy``) driven by the run loop's ask/tell."""
 
     Params = CMAESParams
+    library = "cma"
 
     def __init__(self, params: CMAESParams, bounds: Bounds, rng: np.random.Generator) -> None:
         super().__init__(params, bounds, rng)

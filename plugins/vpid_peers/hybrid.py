@@ -50,6 +50,7 @@ class DELeastSquares(LoopOptimizer):
     """DE4 first, least squares from its best vector next."""
 
     Params = DELSQParams
+    library = "scipy"  # least_squares (the DE stage is vpid-bench's de4)
     wants_residuals = True
 
     def __init__(self, params: DELSQParams, bounds: Bounds, rng: np.random.Generator) -> None:

@@ -81,6 +81,7 @@ class LeastSquares(LoopOptimizer):
     """Multistart IRLS trust-region least squares on the problem's residuals."""
 
     Params = LSQParams
+    library = "scipy"
     wants_residuals = True
 
     def __init__(self, params: LSQParams, bounds: Bounds, rng: np.random.Generator) -> None:

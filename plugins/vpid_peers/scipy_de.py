@@ -64,6 +64,7 @@ class ScipyDE(LoopOptimizer):
     """scipy's differential evolution, one generation per batch."""
 
     Params = ScipyDEParams
+    library = "scipy"
 
     def minimize(self, evaluate: Callable[[np.ndarray], Any]) -> Any:
         from scipy.optimize import differential_evolution

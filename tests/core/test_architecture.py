@@ -201,3 +201,71 @@ def test_no_complexity_exception_under_the_core():
     assert 'max-complexity = 15' in pyproject
     ignores = pyproject.split("[tool.ruff.lint.per-file-ignores]", 1)[1].split("\n[", 1)[0]
     assert not re.search(r'^"vpid_bench', ignores, re.M), ignores
+
+
+def _importers_of(prefix: str, allowed: tuple[str, ...]) -> list[str]:
+    """Files of vpid_bench/ outside the folders ``allowed`` that import a module starting
+    with ``prefix`` (imports inside functions counted: :func:`_imports` walks the whole
+    file)."""
+    return [f"{p.relative_to(ROOT)} -> {m}" for p in _files(CORE)
+            if p.relative_to(CORE).parts[0] not in allowed
+            for m in sorted(_imports(p)) if m == prefix or m.startswith(prefix + ".")]
+
+
+def test_nothing_but_the_report_and_the_shell_imports_the_report():
+    """docs/architecture.md: the core never imports the report, not even inside a function
+    (``targets.py`` once read archives through it; it reads them through ``store/`` now)."""
+    assert _importers_of("vpid_bench.report", ("report", "shell")) == []
+    control = [m for m in _imports(CORE / "shell" / "main.py") if m.startswith("vpid_bench.")]
+    assert control  # the reader sees the shell's imports of the rooms below it
+
+
+def test_nothing_but_the_shell_imports_the_shell():
+    assert _importers_of("vpid_bench.shell", ("shell",)) == []
+
+
+def test_the_store_sits_below_analysis_targets_and_the_report():
+    """store/ (one module per file format) imports only the core's base modules and
+    records/, never a room that reads through it."""
+    above = ("vpid_bench.analysis", "vpid_bench.report", "vpid_bench.shell",
+             "vpid_bench.targets", "vpid_bench.experiment", "vpid_bench.build",
+             "vpid_bench.spec", "vpid_bench.workers", "vpid_bench.job_runs")
+    bad = [f"{p.name} -> {m}" for p in _files(CORE / "store") for m in _imports(p)
+           if m.startswith(above)]
+    assert bad == []
+
+
+def test_one_schema_string_per_file_format():
+    """Each format's schema string is written once, in its module under store/ (the optimum
+    file's was once in analysis/optimum.py and report/optima.py)."""
+    from vpid_bench.store import archive, optimum
+
+    for schema, home in ((optimum.SCHEMA, "store/optimum.py"),
+                         (archive.SCHEMA, "store/archive.py")):
+        holders = [str(p.relative_to(CORE)) for p in _files(CORE)
+                   if f'"{schema}"' in p.read_text(encoding="utf-8")]
+        assert holders == [home], (schema, holders)
+
+
+def test_the_store_names_the_job_files_the_rooms_write():
+    from vpid_bench.analysis.estimator_floors import FILE as ESTIMATORS
+    from vpid_bench.report.identifiability import FILE as IDENTIFIABILITY
+    from vpid_bench.store.archive import JOB_FILES
+
+    assert set(JOB_FILES) == {IDENTIFIABILITY, ESTIMATORS}
+
+
+def test_the_report_is_served_by_name_only_through_the_plugin_api():
+    """An import by name (``importlib.import_module(".report....")``) is a deferred import
+    too: outside report/ and shell/ only the package's facade holds one (``vpid_bench``
+    serves ``ReportContext``, ``Section``, ... to report-section plugins on first use, so
+    that plugins keep their one import line)."""
+    holders = []
+    for p in _files(CORE):
+        if p.relative_to(CORE).parts[0] in ("report", "shell"):
+            continue
+        for node in ast.walk(ast.parse(p.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and \
+                    re.fullmatch(r"(vpid_bench)?\.report(\.\w+)*", node.value):
+                holders.append(str(p.relative_to(CORE)))
+    assert sorted(set(holders)) == ["__init__.py"]

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from extras import limit
 
 SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_overhead.py"
 
@@ -18,7 +19,7 @@ SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_overhead.py
 ])
 def test_a_mistyped_name_is_one_line_naming_it_and_the_allowed_ones(args, names):
     out = subprocess.run([sys.executable, str(SCRIPT), "--repeat", "1", *args],
-                         capture_output=True, text=True, timeout=120,
+                         capture_output=True, text=True, timeout=limit(120),
                          env={"MPLBACKEND": "Agg", "PATH": "/usr/bin:/bin"})
     assert out.returncode == 2, out.stderr
     lines = out.stderr.strip().splitlines()

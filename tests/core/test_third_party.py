@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from extras import limit, needs_archive_runs
 
 from vpid_bench.api import ConfigError, OptimizerParams
 from vpid_bench.runner import run
@@ -76,7 +77,7 @@ def _run(site: Path, args: list[str], cwd: Path) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYTHONPATH": str(site), "MPLBACKEND": "Agg",
            "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
     return subprocess.run([str(BIN / "vpid-bench"), *args], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=300)
+                          capture_output=True, text=True, timeout=limit(300))
 
 
 def _records(folder: Path) -> list[dict]:
@@ -117,20 +118,27 @@ def test_quarter_car_runs_with_installed_optimizers_and_a_report(site, tmp_path)
     assert (tmp_path / "sweep" / "report" / "report.md").is_file()
 
 
-def test_on_the_smoke_suite_it_is_ranked_among_the_archived_builtins(site, tmp_path):
+@needs_archive_runs
+@pytest.mark.parametrize("selection", [
+    pytest.param("problem=smoke_quarter", id="one-member"),
+    pytest.param("suite=smoke", id="suite", marks=pytest.mark.slow),  # 5 min on 2 cores
+])
+def test_on_the_smoke_suite_it_is_ranked_among_the_archived_builtins(site, tmp_path, selection):
     """The archive's promise: a newcomer's optimizer, installed from outside the repository
-    and run alone on ``suite=smoke``, is ranked beside every built-in optimizer from the
-    archive shipped with vpid-bench, and nothing but its own jobs runs."""
+    and run alone on ``suite=smoke`` (or one of its members: the default run's fast twin of
+    the same path), is ranked beside every built-in optimizer from the archive shipped with
+    vpid-bench, and nothing but its own jobs runs."""
     from vpid_bench.report.archive import default_root, read_archive
 
     shipped = read_archive(default_root() / "smoke")
     builtins = set(shipped.manifest["optimizers"])
-    proc = _run(site, ["-m", "suite=smoke", "optimizer=one_plus_one", "runs=3",
+    proc = _run(site, ["-m", selection, "optimizer=one_plus_one", "runs=3",
                        "progress=false", f"hydra.sweep.dir={tmp_path}/sweep"], tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     sweep = tmp_path / "sweep"
     assert {r["optimizer"]["name"] for r in _records(sweep)} == {"one_plus_one"}
-    members = sorted(shipped.problems)
+    members = sorted(shipped.problems) if selection.startswith("suite") \
+        else [selection.split("=")[1]]
     assert len([j for j in sweep.iterdir() if (j / "job.json").is_file()]) == len(members)
     for member in members:
         assert f"{member}: " in proc.stderr and "from the archive of suite smoke" in proc.stderr
@@ -150,16 +158,16 @@ def test_on_the_smoke_suite_it_is_ranked_among_the_archived_builtins(site, tmp_p
 @pytest.mark.slow  # an archive build, then the newcomer's sweep: a few minutes
 def test_on_a_vpid1_member_at_its_defaults_it_is_ranked_among_an_archive_build(site, tmp_path):
     """``vpid-bench -m suite=vpid1 optimizer=mine`` needs nothing but the member's defaults to
-    meet ``archive/vpid1``: an archive built by benchmarks/build_archive.py (a slice: one
+    meet ``archive/vpid1``: an archive built by tools/build_archive.py (a slice: one
     member, two built-ins, with stop at the final target) ranks the newcomer's runs at the
     member's default budget (1,000·D) beside its built-ins, and only the newcomer runs."""
     archives = tmp_path / "archives"
     build = subprocess.run(
-        [sys.executable, str(ROOT / "benchmarks" / "build_archive.py"), "--suite", "vpid1",
+        [sys.executable, str(ROOT / "tools" / "build_archive.py"), "--suite", "vpid1",
          "--problems", "vpid1_q_golden_hump", "--optimizers", "random,de1", "--runs", "2",
          "--target", "1e-8", "--sweep", str(tmp_path / "build"), "--out",
          str(archives / "vpid1"), "--", "progress=false"],
-        cwd=ROOT, capture_output=True, text=True, timeout=900,
+        cwd=ROOT, capture_output=True, text=True, timeout=limit(900),
         env={**os.environ, "MPLBACKEND": "Agg"})
     assert build.returncode == 0, build.stderr[-3000:]
     env_dir = {"VPID_BENCH_ARCHIVE_DIR": str(archives)}
@@ -167,7 +175,7 @@ def test_on_a_vpid1_member_at_its_defaults_it_is_ranked_among_an_archive_build(s
         [str(BIN / "vpid-bench"), "-m", "problem=vpid1_q_golden_hump", "optimizer=one_plus_one",
          "runs=2", "progress=false", f"hydra.sweep.dir={tmp_path}/sweep"], cwd=tmp_path,
         env={**os.environ, "PYTHONPATH": str(site), "MPLBACKEND": "Agg", **env_dir},
-        capture_output=True, text=True, timeout=600)
+        capture_output=True, text=True, timeout=limit(600))
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "from the archive of suite vpid1" in proc.stderr
     assert {r["optimizer"]["name"] for r in _records(tmp_path / "sweep")} == {"one_plus_one"}

@@ -12,6 +12,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 
 import pytest
+from extras import limit
 
 CLI = [sys.executable, "-c", "from vpid_bench.shell.main import main; main()"]
 REPORT_CLI = [sys.executable, "-c", "from vpid_bench.report.cli import main; main()"]
@@ -32,7 +33,7 @@ def run_cli(args: Sequence[str], cwd: Path, env: Mapping[str, str] | None = None
             timeout: float = 120, report: bool = False) -> subprocess.CompletedProcess:
     """``vpid-bench <args>`` (or ``vpid-bench-report``) in ``cwd``, text output."""
     return subprocess.run([*(REPORT_CLI if report else CLI), *args], cwd=cwd,
-                          env=cli_env(env), capture_output=True, text=True, timeout=timeout,
+                          env=cli_env(env), capture_output=True, text=True, timeout=limit(timeout),
                           check=False)
 
 

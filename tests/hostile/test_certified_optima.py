@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hostile_helpers import error_lines, run_cli
+from hostile_helpers import error_lines, main_in_process, run_cli
 
 from vpid_bench.report import archive as arch
 
@@ -79,10 +79,24 @@ def _job(tmp_path: Path, root: Path, *extra: str):
                    tmp_path, env={arch.ARCHIVE_DIR_ENV: str(root)})
 
 
-def _refused(done, *words: str) -> str:
-    assert done.returncode == 2, done.stderr[-2000:]
-    (line,) = done.stderr.splitlines()
-    assert line == error_lines(done.stderr)[0]
+def _refusal(in_tmp, capsys, monkeypatch, root: Path, *argv: str) -> tuple[int, str]:
+    """The command in this process (a refusal happens in the pre-flight, before any job: the
+    command line itself is proved by the control above and test_hostile_refusals.py), with
+    ``root`` as the archives: (exit code, stderr)."""
+    monkeypatch.setenv(arch.ARCHIVE_DIR_ENV, str(root))
+    return main_in_process(list(argv), capsys)
+
+
+def _job_refused(in_tmp, capsys, monkeypatch, root: Path, *words: str) -> str:
+    code, err = _refusal(in_tmp, capsys, monkeypatch, root, *JOB, "target=1e-8",
+                         f"hydra.run.dir={in_tmp / 'job'}")
+    return _refused(code, err, *words)
+
+
+def _refused(code: int, err: str, *words: str) -> str:
+    assert code == 2, err[-2000:]
+    (line,) = err.splitlines()
+    assert line == error_lines(err)[0]
     assert line.startswith("error: target=1e-08 is not allowed: optima the installed problem "
                            f"confirms: {PROBLEM} run 0 (instance seed=0/0): ")
     for w in words:
@@ -100,42 +114,42 @@ def test_10_a_genuine_archive_is_confirmed_and_its_runs_stop(tmp_path, optima):
     assert len(records) == 2 and all("target" in r for r in records)
 
 
-def test_10_a_forged_f_opt_is_refused_before_any_run(tmp_path, optima):
+def test_10_a_forged_f_opt_is_refused_before_any_run(in_tmp, optima, capsys, monkeypatch):
     """f_opt raised tenfold: every run would stop at once (after one batch), recorded ok."""
     optima[0]["f_opt"] *= 10
-    root = tmp_path / "archives"
+    root = in_tmp / "archives"
     _archive(root / "smoke", optima)
-    done = _job(tmp_path, root)
-    _refused(done, "the archive gives f_opt", "the installed problem", "there",
-             "rebuild the archive")
-    assert not list(tmp_path.rglob("records/run-*.json"))  # nothing ran
+    _job_refused(in_tmp, capsys, monkeypatch, root, "the archive gives f_opt",
+                 "the installed problem", "there", "rebuild the archive")
+    assert not list(in_tmp.rglob("records/run-*.json"))  # nothing ran
 
 
-def test_10_a_consistent_forgery_above_the_truth_is_refused(tmp_path, optima):
+def test_10_a_consistent_forgery_above_the_truth_is_refused(in_tmp, optima, capsys,
+                                                              monkeypatch):
     """A forger who evaluates the problem: a point 10 % off the truth with its true value.
     The value checks out there, but it lies above the objective at the truth: no optimum."""
     inst = _instance(0)
     x = np.clip(np.asarray(inst.x_true) * 1.1, inst.bounds.lower, inst.bounds.upper)
     optima[0].update(x_opt=x.tolist(), f_opt=float(inst.evaluate(x[None, :])[0]))
-    root = tmp_path / "archives"
+    root = in_tmp / "archives"
     _archive(root / "smoke", optima)
-    _refused(_job(tmp_path, root), "lies above the objective at the truth")
+    _job_refused(in_tmp, capsys, monkeypatch, root, "lies above the objective at the truth")
 
 
-def test_10_a_point_outside_the_box_is_refused(tmp_path, optima):
+def test_10_a_point_outside_the_box_is_refused(in_tmp, optima, capsys, monkeypatch):
     optima[0]["x_opt"][0] = 1e6
-    root = tmp_path / "archives"
+    root = in_tmp / "archives"
     _archive(root / "smoke", optima)
-    _refused(_job(tmp_path, root), "lies outside the search box")
+    _job_refused(in_tmp, capsys, monkeypatch, root, "lies outside the search box")
 
 
-def test_10_archives_that_disagree_are_refused(tmp_path, genuine, optima):
+def test_10_archives_that_disagree_are_refused(in_tmp, genuine, optima, capsys, monkeypatch):
     """Two archives certify instance 0 with different values; the lower one once won."""
     optima[0]["f_opt"] *= 1 - 1e-3
-    root = tmp_path / "archives"
+    root = in_tmp / "archives"
     _archive(root / "a", genuine)
     _archive(root / "b", optima)
-    line = _refused(_job(tmp_path, root), "the archives disagree on its optimum")
+    line = _job_refused(in_tmp, capsys, monkeypatch, root, "the archives disagree on its optimum")
     assert str(root / "a") in line and str(root / "b") in line
 
 
@@ -149,16 +163,17 @@ def test_10_archives_that_disagree_are_refused(tmp_path, genuine, optima):
      "target=1e-08 is not allowed: runs whose instance optimum is certified in advance: "
      "functions run 0"),
 ], ids=["budget_per_dim", "target", "target-in-a-sweep"])
-def test_14_the_preflight_refuses_what_only_the_built_problem_tells(args, words, tmp_path,
-                                                                     genuine):
-    root = tmp_path / "archives"  # certifies smoke_quarter's runs: only functions lacks one
+def test_14_the_preflight_refuses_what_only_the_built_problem_tells(args, words, in_tmp,
+                                                                     genuine, capsys,
+                                                                     monkeypatch):
+    root = in_tmp / "archives"  # certifies smoke_quarter's runs: only functions lacks one
     _archive(root / "smoke", genuine)
-    done = run_cli([*args, *JOB[1:]], tmp_path, env={arch.ARCHIVE_DIR_ENV: str(root)})
-    assert done.returncode == 2, done.stderr[-2000:]
-    (line,) = done.stderr.splitlines()
+    code, err = _refusal(in_tmp, capsys, monkeypatch, root, *args, *JOB[1:])
+    assert code == 2, err[-2000:]
+    (line,) = err.splitlines()
     assert line.startswith(f"error: {words}"), line
-    assert not (tmp_path / "outputs").exists()  # refused before any folder was written
-    assert not list(tmp_path.rglob("records"))
+    assert not (in_tmp / "outputs").exists()  # refused before any folder was written
+    assert not list(in_tmp.rglob("records"))
 
 
 @pytest.mark.parametrize("fault", ["abort", "exit", "raise"])

@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 import pytest
+from extras import limit
 
 BIN = Path(sys.executable).parent
 
@@ -47,7 +48,7 @@ def test_an_early_ctrl_c_is_one_line_and_130(tmp_path, delay):
     wait_for_the_commands_code(proc)
     time.sleep(delay)
     proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=60)
+    _, err = proc.communicate(timeout=limit(60))
     assert proc.returncode == 130, err[-2000:]
     assert "Traceback" not in err, err[-3000:]
     assert err.strip().splitlines()[-1].startswith("interrupted:")
@@ -111,7 +112,7 @@ def test_a_ctrl_c_during_a_plugins_import_is_not_swallowed(site, tmp_path):
         cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     time.sleep(2.5)  # inside the plugin's 4 s import
     proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=60)
+    _, err = proc.communicate(timeout=limit(60))
     assert proc.returncode == 130, err[-2000:]
     assert "Traceback" not in err
     assert err.strip().splitlines()[-1].startswith("interrupted:")

@@ -12,6 +12,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from extras import limit
 
 BIN = Path(sys.executable).parent
 
@@ -80,7 +81,7 @@ def test_half_a_capability_is_one_error_line_before_any_job(site, tmp_path):
     out = subprocess.run([str(BIN / "vpid-bench"), "-m", "problem=half_instances",
                           "optimizer=random,de1", "runs=2", "progress=false",
                           "hydra.sweep.dir=sweep"], cwd=tmp_path, env=env,
-                         capture_output=True, text=True, timeout=120)
+                         capture_output=True, text=True, timeout=limit(120))
     assert out.returncode == 2, out.stderr
     lines = [line for line in out.stderr.splitlines() if line.strip()]
     assert len(lines) == 1 and lines[0].startswith("error: problem='half_instances'"), lines

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from extras import limit
 from hostile_helpers import CLI, TINY, cli_env, run_cli
 
 from vpid_bench import hookimpl
@@ -94,7 +95,7 @@ def test_16_a_second_command_in_the_same_folder_is_refused(tmp_path):
         second = run_cli(args, tmp_path)
         assert first.poll() is None, "the first command should still be running"
     finally:
-        _, err = first.communicate(timeout=120)
+        _, err = first.communicate(timeout=limit(120))
     assert second.returncode == 2
     assert second.stderr.splitlines() == [
         "error: hydra.sweep.dir='shared' is not allowed: a folder no other running vpid-bench "

@@ -3,19 +3,16 @@ with exit status 2 (in-process ``vpid-bench``: the pre-flight, no job runs)."""
 
 from __future__ import annotations
 
-import importlib.util
-
 import numpy as np
 import pytest
+from extras import needs
 from hostile_helpers import TINY, main_in_process, plan_of
 
 from vpid_bench.api import ConfigError
 
 #: The joblib launcher comes with an extra (installed by ``make install``); without it the
 #: cases that name it are skipped, not failed.
-NEEDS_JOBLIB = pytest.mark.skipif(
-    importlib.util.find_spec("hydra_plugins.hydra_joblib_launcher") is None,
-    reason="the joblib extra (hydra-joblib-launcher) is not installed")
+NEEDS_JOBLIB = needs("hydra_plugins.hydra_joblib_launcher", "joblib")
 
 
 FUNCTIONS = ["problem=functions", "runs=1", "problem.iterations=2", "progress=false",

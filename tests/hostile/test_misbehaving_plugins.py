@@ -13,6 +13,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from extras import limit
 
 BIN = Path(sys.executable).parent
 
@@ -175,7 +176,7 @@ def _sweep(site: Path, cwd: Path, optimizer: str, *extra: str, timeout: float = 
     return subprocess.run([str(BIN / "vpid-bench"), "-m", f"optimizer={optimizer},random",
                            "runs=2", "problem.iterations=2", "progress=false", "report=false",
                            "hydra.sweep.dir=sweep", *extra], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=timeout)
+                          capture_output=True, text=True, timeout=limit(timeout))
 
 
 def _records(cwd: Path, optimizer: str) -> list[Path]:

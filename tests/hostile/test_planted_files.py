@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 
 import pytest
+from extras import limit
 
 from vpid_bench.experiment import run_from_config
 from vpid_bench.fileio import read_text_limited
@@ -43,7 +44,7 @@ def test_a_fifo_among_the_records_is_skipped_not_waited_for(tmp_path, registry):
     out = subprocess.run(
         [sys.executable, "-c", "from vpid_bench.report.cli import main; main()",
          str(tmp_path / "job"), "-o", str(tmp_path / "report")],
-        capture_output=True, text=True, timeout=120, check=False,
+        capture_output=True, text=True, timeout=limit(120), check=False,
         env={**os.environ, "MPLBACKEND": "Agg"})
     assert out.returncode in (0, 1), out.stderr[-2000:]  # 1: it names what it skipped
     assert (tmp_path / "report" / "report.md").is_file()

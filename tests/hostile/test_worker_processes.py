@@ -15,6 +15,7 @@ from pathlib import Path
 
 import psutil
 import pytest
+from extras import limit
 from hostile_helpers import CLI, cli_env, error_lines
 from process_plugins import CHILD_S, PIDS_ENV, Base, Crashy, left_running
 
@@ -66,7 +67,7 @@ def piped(site, tmp_path_factory):
                           "runs=2", *BASE])
     done = subprocess.run(["bash", "-c", f"{command} 2>&1 | tail -n 30; exit "
                            "${PIPESTATUS[0]}"], cwd=cwd, env=_env(site, pids),
-                          capture_output=True, text=True, timeout=300, check=False)
+                          capture_output=True, text=True, timeout=limit(300), check=False)
     return cwd, pids, done.returncode, done.stdout, time.time()
 
 
@@ -115,7 +116,7 @@ def forked(site, tmp_path_factory):
     pids = cwd.parent / f"{cwd.name}-pids"
     done = subprocess.run([*CLI, "-m", "optimizer=random,forkboth,closepipe",
                            "problem=functions", "runs=4", "workers=1000", *BASE], cwd=cwd,
-                          env=_env(site, pids), capture_output=True, text=True, timeout=300,
+                          env=_env(site, pids), capture_output=True, text=True, timeout=limit(300),
                           check=False)
     return cwd, pids, done
 
@@ -169,9 +170,9 @@ def crashed(site, tmp_path_factory):
             "signals", "optimizer=random", "runs=2", *BASE]
     env = _env(site, pids)
     first = subprocess.run(args, cwd=cwd, env=env, capture_output=True, text=True,
-                           timeout=300, check=False)
+                           timeout=limit(300), check=False)
     again = subprocess.run([*args, "--resume"], cwd=cwd, env=env, capture_output=True,
-                           text=True, timeout=300, check=False)
+                           text=True, timeout=limit(300), check=False)
     return cwd, first, again
 
 
@@ -228,7 +229,7 @@ def test_a_sweep_whose_every_run_times_out_records_each_run_failed(site, tmp_pat
     done = subprocess.run([*CLI, "-m", "optimizer=slowbuild", "problem=functions", "runs=2",
                            "run_timeout_s=1", "progress=false", "hydra.sweep.dir=sweep"],
                           cwd=tmp_path, env=_env(site, tmp_path.parent / f"{tmp_path.name}-p"),
-                          capture_output=True, text=True, timeout=300, check=False)
+                          capture_output=True, text=True, timeout=limit(300), check=False)
     assert time.monotonic() - t0 < 120  # bounded: one constructor stopped after 1 s
     assert done.returncode == 1, done.stderr[-3000:]
     records = _records(tmp_path, "optimizer=slowbuild,*")

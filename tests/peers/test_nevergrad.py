@@ -10,6 +10,7 @@ import sys
 
 import numpy as np
 import pytest
+from extras import limit
 from peers_helpers import run_optimizer
 from scipy.stats import mannwhitneyu
 
@@ -45,7 +46,7 @@ def test_registering_imports_neither_library():
             "assert {'cmaes', 'nevergrad'} <= set(r.optimizers); "
             "print(sorted(m for m in ('nevergrad', 'cma') if m in sys.modules))")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          env={**os.environ, "MPLBACKEND": "Agg"}, timeout=120)
+                          env={**os.environ, "MPLBACKEND": "Agg"}, timeout=limit(120))
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == "[]"
 
@@ -141,6 +142,25 @@ def test_a_method_that_raises_is_a_failed_run(compose_config, tmp_path, monkeypa
     assert [r["status"] for r in records] == ["failed", "failed"]
     assert records[0]["error"]["type"] == "RuntimeError"
     assert "broken inside nevergrad" in records[0]["error"]["message"]
+
+
+def test_a_record_names_nevergrad_and_its_version(compose_config, tmp_path):
+    summary, records = _job(compose_config, tmp_path, "CMA", runs=1)
+    assert records[0]["status"] == "ok"
+    assert records[0]["optimizer"]["plugin"]["library"] == {"name": "nevergrad",
+                                                             "version": ng.__version__}
+
+
+def test_runs_nevergrad_itself(registry):
+    """The optimizer asked and told is the registry's own class (the CMA wrapper), nothing
+    replaced or bypassed."""
+    from vpid_bench.build import optimizer_params, run_rng
+
+    problem = _problem(registry, dim=3)
+    cls, params = optimizer_params(registry, {"name": "nevergrad", "budget": 50})
+    optimizer = cls(params, problem.bounds, run_rng(1, 0))
+    optimizer.ask()
+    assert type(optimizer._ng) is ng.optimizers.registry["CMA"]
 
 
 def test_ngopt_at_a_small_budget_never_crashes_the_job(compose_config, tmp_path):

@@ -105,3 +105,32 @@ def test_log_scaling_refused_on_a_box_through_zero(registry):
     cls, params = optimizer_params(registry, {"name": "lsq", "scaling": "log"})
     with pytest.raises(ConfigError, match="optimizer.scaling"):
         cls(params, problem.bounds, np.random.default_rng(0))
+
+
+def test_every_peer_names_the_library_and_version_that_ran(registry):
+    """Each peer's provenance (copied into every record's ``optimizer.plugin``) names the
+    library that runs its search and that library's installed version."""
+    import importlib.metadata
+
+    libraries = {"scipy_de": "scipy", "lsq": "scipy", "de_lsq": "scipy", "cmaes": "cma",
+                 "nevergrad": "nevergrad"}
+    for name, dist in libraries.items():
+        if name not in registry.optimizers:  # cmaes, nevergrad: the peers extra
+            continue
+        assert registry.provenance("optimizer", name)["library"] == {
+            "name": dist, "version": importlib.metadata.version(dist)}
+    assert "library" not in registry.provenance("optimizer", "de4")  # written here
+
+
+def test_no_peer_reaches_into_a_library_s_internals():
+    """Peers run as their users run them: no module of the plugins imports a private module
+    or name of nevergrad or cma (``nevergrad.optimization``, ``optimizerlib``, ``_CMA``)."""
+    from pathlib import Path
+
+    import vpid_peers
+
+    root = Path(vpid_peers.__file__).parent
+    for path in root.rglob("*.py"):
+        text = path.read_text()
+        for private in ("nevergrad.optimization", "optimizerlib", "_CMA", "cma.evolution_"):
+            assert private not in text, f"{path.name} uses {private}"

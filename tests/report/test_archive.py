@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from extras import limit, needs_archive_runs
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "sweeps"))
 from sweep_helpers import run_cli  # noqa: E402
@@ -206,7 +207,7 @@ def test_a_damaged_archive_is_named_and_skipped(made, tmp_path, damage, fragment
 
 
 def test_a_records_file_that_inflates_past_the_limit_is_refused(made, tmp_path, monkeypatch):
-    monkeypatch.setattr(arch, "MAX_RECORDS_BYTES", 1000)
+    monkeypatch.setattr("vpid_bench.store.archive.MAX_RECORDS_BYTES", 1000)  # its one home
     report = _report(made, tmp_path, made["archives"])
     assert any("holds more than 1000 bytes" in n for n in report.failures)
 
@@ -341,6 +342,7 @@ def shipped():
     return arch.read_archive(arch.default_root() / "smoke")
 
 
+@needs_archive_runs
 def test_the_shipped_archive_holds_every_builtin_on_every_smoke_member(shipped, registry):
     builtins = {n for n in registry.optimizers
                 if registry.provenance("optimizer", n).get("distribution") == "vpid-bench"}
@@ -355,10 +357,11 @@ def test_the_shipped_archive_holds_every_builtin_on_every_smoke_member(shipped, 
     assert instances <= {(o.problem, o.instance) for o in shipped.optima}
 
 
+@needs_archive_runs
 def test_the_shipped_archive_was_made_by_this_code(shipped, registry):
     """Each member's instances, built by the installed code, hold the archived data (true
     parameters and objective at the truth, to 1e-9): a change to a problem that moves its
-    data fails here, and the archive must be rebuilt (benchmarks/build_archive.py)."""
+    data fails here, and the archive must be rebuilt (tools/build_archive.py)."""
     from vpid_bench.params import build_dataclass
 
     seen = set()
@@ -376,6 +379,7 @@ def test_the_shipped_archive_was_made_by_this_code(shipped, registry):
     assert len(seen) == 2 * len(shipped.problems)
 
 
+@needs_archive_runs
 def test_the_shipped_paper_optima_belong_to_this_codes_records(registry):
     """archive/paper certifies the optima that target= stops at on both designs of the
     paper's problem: 30 instances each, and the installed code's objective at each archived
@@ -400,7 +404,7 @@ def test_the_shipped_paper_optima_belong_to_this_codes_records(registry):
 
 
 def test_the_advice_section_is_written_from_an_archive_alone(made, tmp_path):
-    """benchmarks/archive_advice.py (the advice per family and budget of docs/study.md,
+    """tools/archive_advice.py (the advice per family and budget of docs/study.md,
     regenerated from archive/vpid1) reads only the archive: per group the share
     solved at each rung the runs reached, the score table with intervals, who is not
     separated from the leader (a paired bootstrap over problem and instance), the caveats
@@ -412,9 +416,9 @@ def test_the_advice_section_is_written_from_an_archive_alone(made, tmp_path):
     root = Path(__file__).resolve().parents[2]
     out = tmp_path / "advice"
     done = subprocess.run(
-        [sys.executable, str(root / "benchmarks" / "archive_advice.py"),
+        [sys.executable, str(root / "tools" / "archive_advice.py"),
          str(made["archives"] / "smoke"), "-o", str(out)],
-        capture_output=True, text=True, timeout=300, env={**os.environ, "MPLBACKEND": "Agg"})
+        capture_output=True, text=True, timeout=limit(300), env={**os.environ, "MPLBACKEND": "Agg"})
     assert done.returncode == 0, done.stderr[-2000:]
     md = (out / "advice.md").read_text(encoding="utf-8")
     assert "| optimizer | 10·D | score [95 % interval] |" in md  # 100·D: never reached
@@ -437,14 +441,14 @@ def test_the_advice_names_the_black_box_leader_apart_from_the_residual_users():
     import importlib.util
 
     root = Path(__file__).resolve().parents[2]
-    sys.path.insert(0, str(root / "benchmarks"))
+    sys.path.insert(0, str(root / "tools"))
     try:
         spec = importlib.util.spec_from_file_location(
-            "archive_advice", root / "benchmarks" / "archive_advice.py")
+            "archive_advice", root / "tools" / "archive_advice.py")
         advice = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(advice)
     finally:
-        sys.path.remove(str(root / "benchmarks"))
+        sys.path.remove(str(root / "tools"))
     users = advice.residual_users(["lsq", "de_lsq", "de4", "cmaes", "not_installed_here"])
     assert users == {"lsq", "de_lsq"}
     # per-run AUC on (problem, instance): lsq best, cmaes and de4 apart by a clear margin
@@ -461,6 +465,7 @@ def test_the_advice_names_the_black_box_leader_apart_from_the_residual_users():
     assert box_others[0][1] > 0  # separated: the interval of cmaes - de4 lies above 0
 
 
+@needs_archive_runs
 @pytest.mark.parametrize("suite", ["vpid1", "vpid1_10k"])
 def test_the_committed_vpid1_advice_is_what_the_archive_gives(tmp_path, suite):
     """docs/study/<archive>-advice (quoted by docs/study.md and the README) is regenerated
@@ -475,8 +480,8 @@ def test_the_committed_vpid1_advice_is_what_the_archive_gives(tmp_path, suite):
         pytest.skip(f"archive/{suite} is not in this checkout")
     out = tmp_path / "advice"
     done = subprocess.run(
-        [sys.executable, str(root / "benchmarks" / "archive_advice.py"), f"archive/{suite}",
-         "-o", str(out)], cwd=root, capture_output=True, text=True, timeout=600,
+        [sys.executable, str(root / "tools" / "archive_advice.py"), f"archive/{suite}",
+         "-o", str(out)], cwd=root, capture_output=True, text=True, timeout=limit(600),
         env={**os.environ, "MPLBACKEND": "Agg"})
     assert done.returncode == 0, done.stderr[-2000:]
     committed = root / "docs" / "study" / f"{suite}-advice"
@@ -492,8 +497,8 @@ def test_the_advice_script_refuses_a_bad_archive_in_one_line(tmp_path):
 
     root = Path(__file__).resolve().parents[2]
     done = subprocess.run(
-        [sys.executable, str(root / "benchmarks" / "archive_advice.py"), str(tmp_path / "none")],
-        capture_output=True, text=True, timeout=120, env={**os.environ, "MPLBACKEND": "Agg"})
+        [sys.executable, str(root / "tools" / "archive_advice.py"), str(tmp_path / "none")],
+        capture_output=True, text=True, timeout=limit(120), env={**os.environ, "MPLBACKEND": "Agg"})
     assert done.returncode == 1 and "Traceback" not in done.stderr
     assert done.stderr.strip().splitlines() == [
         f"error: archive {tmp_path / 'none'}: manifest.json is not readable JSON "
@@ -526,3 +531,39 @@ def test_the_10000_d_rung_holds_every_member_whose_evaluation_is_cheap():
     for name, p in rung["problems"].items():  # archive/vpid1's budgets are 1,000·D
         assert p["budget"] == 10 * full["problems"][name]["budget"], name
     assert "target=1e-08" in rung["command"] and "budget_per_dim=10000" in rung["command"]
+
+
+@needs_archive_runs
+def test_the_wheel_alone_certifies_and_the_report_says_what_to_install(tmp_path, monkeypatch):
+    """The shipped archives' runs are a data distribution apart from the wheel: without it
+    (``$VPID_BENCH_ARCHIVE_RUNS_DIR`` naming an empty folder) ``target=`` still finds every
+    optimum, and reading the runs fails in one line that names the command to install them;
+    with it (this environment: ``make install``) the runs are read from there."""
+    from vpid_bench.store.archive import RECORDS, RUNS_DIR_ENV, archive_optima, located
+
+    smoke = arch.default_root() / "smoke"
+    assert not (smoke / RECORDS).exists()  # not in the code package
+    assert located(smoke, RECORDS).is_file()  # in the installed data distribution
+    with_runs, bad = archive_optima(None, {"smoke_quarter"})
+    assert bad == [] and with_runs
+    monkeypatch.setenv(RUNS_DIR_ENV, str(tmp_path))
+    alone, bad = archive_optima(None, {"smoke_quarter"})
+    assert bad == [] and alone == with_runs
+    with pytest.raises(arch.ArchiveError, match=r"records.jsonl.gz is missing .*make install"):
+        arch.read_archive(smoke)
+
+
+def test_the_wheel_ships_no_archived_runs():
+    """pyproject's package data of ``vpid_bench.archive`` lists no run file (they are in
+    archive-runs/, whose own pyproject ships them)."""
+    root = Path(__file__).parents[2]
+
+    def package_data(pyproject: Path, package: str) -> str:
+        lines = pyproject.read_text(encoding="utf-8").splitlines()
+        return next(line for line in lines if line.startswith(f'"{package}" = ['))
+
+    shipped = package_data(root / "pyproject.toml", "vpid_bench.archive")
+    assert "manifest.json" in shipped and "optima.jsonl" in shipped
+    assert "records" not in shipped and "ioh" not in shipped
+    runs = package_data(root / "archive-runs" / "pyproject.toml", "vpid_archive_runs")
+    assert "records.jsonl.gz" in runs and "ioh.zip" in runs

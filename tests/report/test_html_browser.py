@@ -13,6 +13,7 @@ from urllib.parse import unquote, urlparse
 
 import numpy as np
 import pytest
+from extras import needs_archive_runs
 from report_synth import EVIL, html_sweep
 
 CHROMIUM = os.environ.get("VPID_BENCH_CHROMIUM", "/usr/bin/chromium")
@@ -209,6 +210,7 @@ def test_the_readme_sweep_is_browsable(browser, tmp_path):
 
 
 @pytest.mark.slow
+@needs_archive_runs
 @pytest.mark.parametrize("suite", ["smoke", "vpid1", "vpid1_10k"])
 def test_the_archive_report_is_browsable(browser, tmp_path, suite):
     """``vpid-bench-report archive/<suite> -o DIR`` (1-2 min each): every archived problem
@@ -220,7 +222,9 @@ def test_the_archive_report_is_browsable(browser, tmp_path, suite):
     archive = Path(__file__).parents[2] / "archive" / suite
     out = tmp_path / suite
     assert report_main([str(archive), "-o", str(out)]) == 0
-    with gzip.open(archive / "records.jsonl.gz", "rt") as fh:
+    from vpid_bench.store.archive import RECORDS, located
+
+    with gzip.open(located(archive, RECORDS), "rt") as fh:  # the runs' data distribution
         records = [json.loads(line) for line in fh]
     _check_site(browser, out, {r["problem"]["name"] for r in records},
                 {r["optimizer"]["name"] for r in records})

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from extras import limit
 from report_synth import OV, PAPER_NAMES, objective_job, record, write_job
 
 from vpid_bench.api import Bounds, Problem, ProblemConfig
@@ -243,7 +244,7 @@ def test_real_sweep_ends_with_a_report(tmp_path):
     out = subprocess.run(
         [str(exe), "-m", "problem=functions", "optimizer=random,de1", "runs=3",
          "problem.iterations=3", "problem.dim=3", "progress=false", f"hydra.sweep.dir={sweep}"],
-        capture_output=True, text=True, timeout=300,
+        capture_output=True, text=True, timeout=limit(300),
     )
     assert out.returncode == 0, out.stderr[-2000:]
     assert (sweep / "report" / "report.md").is_file()

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from extras import limit
 from report_synth import objective_job, record, write_job
 
 from vpid_bench import hookimpl
@@ -159,7 +160,7 @@ def test_short_mode_imports_nothing_heavy(tmp_path):
         f"print('RESULT', ok, sorted(m for m in {HEAVY!r} if m in sys.modules))\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True, timeout=120)
+                         check=True, timeout=limit(120))
     # Written (False only because the report lists the synthetic failed run), nothing heavy:
     assert "RESULT False []" in out.stdout, out.stdout + out.stderr
     assert (job / "report" / "report.md").is_file()

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from extras import limit
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "sweeps"))
 from sweep_helpers import run_cli  # noqa: E402
@@ -26,7 +27,7 @@ def _console(args: list[str], cwd: Path, env: dict | None = None):
 
     exe = Path(sys.executable).with_name("vpid-bench")
     return subprocess.run([str(exe), *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=120, env={**os.environ, **(env or {})})
+                          timeout=limit(120), env={**os.environ, **(env or {})})
 
 
 def test_shell_completion_can_be_installed_and_queried(tmp_path):

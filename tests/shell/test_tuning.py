@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import sys
 from pathlib import Path
@@ -11,6 +10,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "sweeps"))
+from extras import needs  # noqa: E402
 from sweep_helpers import run_cli  # noqa: E402
 
 from vpid_bench.analysis.optimum import find_optimum, load_optima  # noqa: E402
@@ -41,8 +41,7 @@ def test_without_an_optimum_the_score_is_the_median_best_objective(compose_confi
     assert summary.score == pytest.approx(float(np.median(f_best)))
 
 
-@pytest.mark.skipif(importlib.util.find_spec("hydra_plugins.hydra_optuna_sweeper") is None,
-                    reason="the tune extra (hydra-optuna-sweeper) is not installed")
+@needs("hydra_plugins.hydra_optuna_sweeper", "tune")
 def test_optuna_tunes_a_de_on_the_returned_score(tmp_path):
     done = run_cli(["-m", "hydra/sweeper=optuna", "hydra.sweeper.n_trials=2",
                     "problem=functions", "problem.dim=3", "optimizer=de1",

@@ -8,6 +8,8 @@ import sys
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+from extras import limit
+
 from vpid_bench import records as rec
 
 CLI = [sys.executable, "-c", "from vpid_bench.shell.main import main; main()"]
@@ -27,7 +29,7 @@ def run_cli(
     """``vpid-bench <args>`` in ``cwd``; returns the completed process (text output)."""
     return subprocess.run(
         [*CLI, *args], cwd=cwd, env=cli_env(env), capture_output=True, text=True,
-        timeout=timeout, check=False,
+        timeout=limit(timeout), check=False,
     )
 
 

@@ -9,12 +9,12 @@ problem that misbehaves: that run's record says ``failed``, the rest goes on).
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
+from extras import limit, needs
 from sweep_helpers import run_cli
 
 from vpid_bench import Optimizer, OptimizerParams, hookimpl
@@ -25,9 +25,7 @@ from vpid_bench.plugins import Registry
 
 #: The joblib launcher comes with an extra (installed by ``make install``); without it the
 #: cases that name it are skipped, not failed.
-NEEDS_JOBLIB = pytest.mark.skipif(
-    importlib.util.find_spec("hydra_plugins.hydra_joblib_launcher") is None,
-    reason="the joblib extra (hydra-joblib-launcher) is not installed")
+NEEDS_JOBLIB = needs("hydra_plugins.hydra_joblib_launcher", "joblib")
 
 
 FUNCTIONS = ["problem=functions", "optimizer=random", "progress=false", "report=false"]
@@ -382,7 +380,7 @@ def test_the_report_names_a_corrupt_record_and_reports_the_rest(compose_config, 
     done = subprocess.run(
         [sys.executable, "-c", "from vpid_bench.report.cli import main; main()",
          str(tmp_path / "sweep"), "-o", str(tmp_path / "report")],
-        capture_output=True, text=True, check=False, timeout=120,
+        capture_output=True, text=True, check=False, timeout=limit(120),
     )
     assert "Traceback" not in done.stderr
     warnings = [line for line in done.stderr.splitlines() if str(torn.name) in line]

@@ -1,4 +1,4 @@
-"""The archive build (``benchmarks/build_archive.py``): one command, resumable, that certifies
+"""The archive build (``tools/build_archive.py``): one command, resumable, that certifies
 each instance's optimum, runs every optimizer with stop at the final target and packs the
 archive; run again, it runs nothing that is recorded and packs the same records.
 
@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from extras import limit
 from sweep_helpers import cli_env, fingerprints
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -27,10 +28,11 @@ def build(tmp: Path, *extra: str, timeout: float = 600,
     """``build_archive.py`` on :data:`SLICE` into ``tmp`` (sweep ``tmp/b``, archive
     ``tmp/archive``); ``extra``: overrides for its sweeps (e.g. a launcher)."""
     return subprocess.run(
-        [python, str(ROOT / "benchmarks" / "build_archive.py"), *SLICE,
+        [python, str(ROOT / "tools" / "build_archive.py"), *SLICE,
          "--sweep", str(tmp / "b"), "--out", str(tmp / "archive"), "--", "progress=false",
          *extra],
-        cwd=ROOT, env=cli_env(), capture_output=True, text=True, timeout=timeout, check=False)
+        cwd=ROOT, env=cli_env(), capture_output=True, text=True, timeout=limit(timeout),
+        check=False)
 
 
 def archived(folder: Path) -> list[dict]:

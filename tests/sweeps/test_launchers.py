@@ -5,14 +5,13 @@ the command exit non-zero and is named in the sweep summary.
 Beyond one process (marker ``scaleout``, excluded by default; ``make test-scaleout`` runs them
 in their own environment with the ``ray`` extra): Hydra's Ray launcher on a local Ray instance
 and submitit's launcher on its local executor write the same records as the basic launcher,
-and so does the archive build (``benchmarks/build_archive.py``, a slice) run unchanged through
+and so does the archive build (``tools/build_archive.py``, a slice) run unchanged through
 them."""
 
 from __future__ import annotations
 
-import importlib.util
-
 import pytest
+from extras import installed, needs
 from sweep_helpers import fingerprints, planned_job_dirs, run_cli
 from test_build_archive import build
 
@@ -25,9 +24,7 @@ OK_JOBS = 3
 
 #: The joblib launcher comes with an extra (installed by ``make install``); without it the
 #: cases that name it are skipped, not failed.
-NEEDS_JOBLIB = pytest.mark.skipif(
-    importlib.util.find_spec("hydra_plugins.hydra_joblib_launcher") is None,
-    reason="the joblib extra (hydra-joblib-launcher) is not installed")
+NEEDS_JOBLIB = needs("hydra_plugins.hydra_joblib_launcher", "joblib")
 
 
 def _run(cwd, *extra, **kwargs):
@@ -70,8 +67,7 @@ def test_joblib_records_are_bit_identical_to_basic(basic, tmp_path):
 
 
 @pytest.mark.scaleout
-@pytest.mark.skipif(importlib.util.find_spec("hydra_plugins.hydra_submitit_launcher") is None,
-                    reason="hydra-submitit-launcher not installed (extra 'submitit')")
+@needs("hydra_plugins.hydra_submitit_launcher", "submitit")
 def test_submitit_local_records_match_basic(basic, tmp_path):
     cwd, _ = basic
     done = _run(tmp_path, "hydra/launcher=submitit_local", timeout=300)
@@ -82,7 +78,7 @@ def test_submitit_local_records_match_basic(basic, tmp_path):
 @pytest.mark.scaleout
 def test_ray_local_records_match_basic(basic, tmp_path):
     pytest.importorskip("ray", reason="Ray not installed (extra 'ray': make test-scaleout)")
-    if importlib.util.find_spec("hydra_plugins.hydra_ray_launcher") is None:
+    if not installed("hydra_plugins.hydra_ray_launcher"):
         pytest.skip("hydra-ray-launcher not installed (extra 'ray': make test-scaleout)")
     cwd, _ = basic
     done = _run(tmp_path, "hydra/launcher=ray", "+hydra.launcher.ray.init.num_cpus=2",
@@ -115,7 +111,7 @@ def test_the_archive_build_runs_unchanged_through_a_launcher(basic_build, tmp_pa
     if launcher == RAY:
         pytest.importorskip("ray", reason="Ray not installed (make test-scaleout)")
     name = "hydra_submitit_launcher" if launcher != RAY else "hydra_ray_launcher"
-    if importlib.util.find_spec(f"hydra_plugins.{name}") is None:
+    if not installed(f"hydra_plugins.{name}"):
         pytest.skip(f"{name} not installed (make test-scaleout)")
     done = build(tmp_path, *launcher, timeout=900)
     assert done.returncode == 0, done.stderr[-3000:]

@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 import pytest
+from extras import limit
 from sweep_helpers import CLI, cli_env, fingerprints, run_cli
 
 from vpid_bench import records as rec
@@ -52,7 +53,7 @@ def test_a_stopped_sweep_resumes_to_the_uninterrupted_records(tmp_path, referenc
             time.sleep(0.005)
         os.killpg(proc.pid, sig)
     finally:
-        _, stderr = proc.communicate(timeout=30)  # bounded: a stopped sweep ends
+        _, stderr = proc.communicate(timeout=limit(30))  # bounded: a stopped sweep ends
     if sig == signal.SIGINT:  # Ctrl-C: the command says how to resume, exit 130
         assert proc.returncode == 130, stderr
         assert "run the same command with --resume" in stderr and "Traceback" not in stderr

@@ -3,13 +3,10 @@ into submitit's SLURM launcher with its edits applied and overridable."""
 
 from __future__ import annotations
 
-import importlib.util
-
-import pytest
+from extras import needs
 
 
-@pytest.mark.skipif(importlib.util.find_spec("hydra_plugins.hydra_submitit_launcher") is None,
-                    reason="hydra-submitit-launcher not installed (extra 'submitit')")
+@needs("hydra_plugins.hydra_submitit_launcher", "submitit")
 def test_slurm_cluster_config_composes_on_submitit_slurm(registry):
     from hydra import compose, initialize_config_module
     from hydra.core.global_hydra import GlobalHydra

@@ -30,9 +30,10 @@ from typing import Any
 
 import numpy as np
 
-from ..fileio import loads_json, own_folder
+from ..fileio import own_folder
 from ..problem import PROTOCOL_KEYS, Problem
 from ..records.io import stable_hash, write_json_atomic
+from ..store.optimum import SCHEMA, read_optimum_data
 
 #: A run whose best is within this factor of the known optimum is polished too: it may sit in
 #: another basin whose minimum is lower.
@@ -49,9 +50,6 @@ SAME_POINT = 1e-3
 #: truths of 30 instances of the default problem (``benchmarks/bench_polish_tolerance.py``):
 #: far below the relative gap of 1e-6 at which a run counts as having reached the optimum.
 INNER_TOL = 1e-10
-SCHEMA = "vpid-bench/instance-optimum/1"
-#: An optimum file larger than this is not read (one of 1000 parameters is about 50 kB).
-MAX_BYTES = 1_000_000
 
 
 def _f_of(problem: Problem, x: np.ndarray) -> float:
@@ -151,34 +149,10 @@ def instance_key(problem: Problem, settings: Mapping[str, Any]) -> str:
 
 
 def read_optimum(path: Path) -> dict[str, Any] | None:
-    """An optimum file, checked; ``None`` when missing or not a valid optimum file (untrusted
+    """An optimum file, checked (:func:`vpid_bench.store.optimum.read_optimum_data`, the
+    format's one reader); ``None`` when missing or not a valid optimum file (untrusted
     input: it is recomputed then)."""
-    try:
-        path = Path(path)
-        if path.is_symlink() or path.stat().st_size > MAX_BYTES:
-            return None
-        data = loads_json(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError):
-        return None
-    if not isinstance(data, dict) or data.get("schema") != SCHEMA:
-        return None
-    f, x = data.get("f_opt"), data.get("x_opt")
-    if not (_number(f) and isinstance(x, list) and x and all(_number(v) for v in x)):
-        return None
-    if not (data.get("data") is None or isinstance(data.get("data"), str)):
-        return None
-    if not (data.get("instance") is None or isinstance(data.get("instance"), str)):
-        return None
-    metrics = data.get("metrics", {})
-    if not (isinstance(metrics, dict)
-            and all(isinstance(k, str) and (v is None or _number(v))
-                    for k, v in metrics.items())):
-        return None
-    return data
-
-
-def _number(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+    return read_optimum_data(Path(path))[0]
 
 
 def load_optima(folders: Iterable[Path]) -> dict[str, dict[str, Any]]:

@@ -81,6 +81,16 @@ def distribution_provenance(dist: importlib.metadata.Distribution | None) -> dic
     return {"distribution": name, "version": version, "requires": dict(requires)}
 
 
+def library_provenance(dist: str) -> dict[str, str]:
+    """``{"name", "version"}`` of the library distribution ``dist`` an optimizer runs
+    (``Optimizer.library``); the version ``"not installed"`` when no such distribution is."""
+    try:
+        version = importlib.metadata.version(dist)
+    except importlib.metadata.PackageNotFoundError:
+        version = "not installed"
+    return {"name": dist, "version": version}
+
+
 #: Source bytes read for a plugin's code digest; past it, the remaining files count by path,
 #: size and modification time (a plugin package is a few hundred kB; a class defined inside
 #: a large library should not cost a read of all of it).

@@ -27,100 +27,27 @@ is named in one line.
 
 from __future__ import annotations
 
-import dataclasses
-import json
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..fileio import loads_json
-from ..problem import PROTOCOL_KEYS
+from ..store.optimum import (  # noqa: F401  (the file format's home; names kept here)
+    MAX_BYTES,
+    SCHEMA,
+    OptimaIndex,
+    Optimum,
+    _data_settings,
+    _finite,
+    check_optimum,
+    match_optimum,
+    matching_optima,
+    optimum_from_data,
+    read_optimum_file,
+)
 
-#: The schema string of an optimum file (written by vpid_bench.analysis.optimum).
-SCHEMA = "vpid-bench/instance-optimum/1"
-#: A larger optimum file is not read (bytes): a real one holds a few vectors.
-MAX_BYTES = 1_000_000
 #: A run "reaches" its instance's optimum when its relative gap is at most this.
 REACHED = 1e-6
-
-
-@dataclasses.dataclass(frozen=True)
-class Optimum:
-    """One checked optimum file."""
-
-    path: Path
-    problem: str
-    instance: str | None
-    settings: Mapping[str, Any] | None
-    x_opt: tuple[float, ...]
-    f_opt: float
-    f_true: float | None
-    metrics: Mapping[str, float]
-    starts: int
-
-
-def _finite(v: Any) -> bool:
-    return (isinstance(v, (int, float)) and not isinstance(v, bool)
-            and math.isfinite(float(v)))
-
-
-def check_optimum(data: Any) -> str | None:
-    """The first bad field of a parsed optimum file as ``"<field>: expected ..."``, or
-    ``None`` when every field the report reads is well-typed."""
-    if not isinstance(data, Mapping):
-        return "the file: expected a JSON object"
-    checks: list[tuple[str, bool, str]] = [
-        ("schema", data.get("schema") == SCHEMA, repr(SCHEMA)),
-        ("problem", isinstance(data.get("problem"), str) and bool(data.get("problem")),
-         "a text"),
-        ("instance", data.get("instance") is None or isinstance(data.get("instance"), str),
-         "a text or null"),
-        ("settings", data.get("settings") is None or isinstance(data.get("settings"), Mapping),
-         "a mapping or absent"),
-        ("x_opt", isinstance(data.get("x_opt"), list) and len(data["x_opt"]) > 0
-         and all(_finite(v) for v in data["x_opt"]), "a non-empty list of finite numbers"),
-        ("f_opt", _finite(data.get("f_opt")), "a finite number"),
-        ("f_true", data.get("f_true") is None or _finite(data.get("f_true")),
-         "a finite number or null"),
-        ("metrics", isinstance(data.get("metrics") or {}, Mapping)
-         and all(isinstance(k, str) and _finite(v)
-                 for k, v in (data.get("metrics") or {}).items()),
-         "a mapping of names to finite numbers"),
-        ("starts", isinstance(data.get("starts"), int) and not isinstance(data["starts"], bool)
-         and data["starts"] >= 1, "a positive integer"),
-    ]
-    for name, ok, expected in checks:
-        if not ok:
-            return f"{name}: expected {expected}"
-    return None
-
-
-def read_optimum_file(path: Path) -> tuple[Optimum | None, str | None]:
-    """``(optimum, None)`` for a good file, ``(None, why)`` for a bad one."""
-    try:
-        if path.is_symlink() or not path.is_file():
-            return None, "not a regular file"
-        if path.stat().st_size > MAX_BYTES:
-            return None, f"larger than {MAX_BYTES} bytes"
-        data = loads_json(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
-        return None, f"unreadable: {type(exc).__name__}"
-    return optimum_from_data(data, path)
-
-
-def optimum_from_data(data: Any, path: Path) -> tuple[Optimum | None, str | None]:
-    """``(optimum, None)`` for parsed optimum data that passes :func:`check_optimum` (from a
-    file, or a line of the archive named by ``path``), ``(None, why)`` otherwise."""
-    bad = check_optimum(data)
-    if bad:
-        return None, f"field {bad}"
-    return Optimum(path=path, problem=data["problem"], instance=data.get("instance"),
-                   settings=data.get("settings"),
-                   x_opt=tuple(float(v) for v in data["x_opt"]), f_opt=float(data["f_opt"]),
-                   f_true=None if data.get("f_true") is None else float(data["f_true"]),
-                   metrics={k: float(v) for k, v in (data.get("metrics") or {}).items()},
-                   starts=int(data["starts"])), None
 
 
 def optima_folders(paths: Iterable[Path], records: Sequence[Mapping[str, Any]]) -> list[Path]:
@@ -140,14 +67,6 @@ def optima_folders(paths: Iterable[Path], records: Sequence[Mapping[str, Any]]) 
     return found
 
 
-@dataclasses.dataclass
-class OptimaIndex:
-    """The checked optimum files found for a report, and the files skipped (with why)."""
-
-    optima: list[Optimum]
-    skipped: list[tuple[Path, str]]
-
-
 def load_optima(paths: Iterable[Path], records: Sequence[Mapping[str, Any]]) -> OptimaIndex:
     """Read and check every ``optima/*.json`` in :func:`optima_folders`."""
     optima, skipped = [], []
@@ -159,45 +78,6 @@ def load_optima(paths: Iterable[Path], records: Sequence[Mapping[str, Any]]) -> 
             else:
                 optima.append(opt)
     return OptimaIndex(optima, skipped)
-
-
-def _data_settings(settings: Mapping[str, Any] | None) -> str | None:
-    """The settings that define an instance's data (protocol keys left out), canonical."""
-    if settings is None:
-        return None
-    return json.dumps({k: v for k, v in settings.items() if k not in PROTOCOL_KEYS},
-                      sort_keys=True, default=str)
-
-
-def matching_optima(record: Mapping[str, Any], index: OptimaIndex) -> list[Optimum]:
-    """Every optimum of a record's instance: files with the record's problem, instance id,
-    data settings (the protocol keys ``ps``/``iterations`` do not change a record's data) and
-    dimension. A file without settings matches only by a non-null instance id (the id names
-    the data)."""
-    problem = record["problem"]["name"]
-    inst = (record.get("instance") or {}).get("id") if isinstance(
-        record.get("instance"), Mapping) else None
-    inst = inst if isinstance(inst, str) else None
-    settings = _data_settings(record["problem"].get("config") or {})
-    dim = len((record.get("parameters") or {}).get("names") or [])
-    found = []
-    for o in index.optima:
-        if o.problem != problem or o.instance != inst or len(o.x_opt) != dim:
-            continue
-        if o.settings is None:
-            if inst is None:
-                continue
-        elif _data_settings(o.settings) != settings:
-            continue
-        found.append(o)
-    return found
-
-
-def match_optimum(record: Mapping[str, Any], index: OptimaIndex) -> Optimum | None:
-    """The optimum of a record's instance (:func:`matching_optima`). Several files (e.g. one
-    per population size of a sweep on the same record) hold optima of the same instance: the
-    lowest is the best known."""
-    return min(matching_optima(record, index), key=lambda o: o.f_opt, default=None)
 
 
 def column_stem(metrics: Mapping[str, float], record_metrics: Sequence[str]) -> str:

@@ -1,0 +1,215 @@
+"""Make (or remake) the committed archive of a suite: every built-in optimizer on every member.
+
+    .venv/bin/python tools/build_archive.py --suite vpid1 --runs 15 --target 1e-8
+    .venv/bin/python tools/build_archive.py --suite smoke --runs 30
+
+One command, resumable: run the same command again after an interruption and only what is
+missing runs (every stage is a ``vpid-bench`` sweep into a fixed folder, which skips the runs
+it has recorded). Its stages:
+
+1. **certify** (only with ``--target``): the instance optima that ``target=`` stops at must be
+   known before the runs. ``vpid-bench -m <members> optimizer=lsq budget_per_dim=100`` (the
+   job polishes each instance's optimum from its truth and from every run's best) into
+   ``<sweep>/certify``, packed as an optima-only archive into ``<sweep>/certified/<suite>``.
+2. **runs**: ``vpid-bench -m <members> optimizer=<every built-in> runs=<runs>
+   [target=<target>] archive=false report=false`` into ``<sweep>/runs``, with
+   ``VPID_BENCH_ARCHIVE_DIR=<sweep>/certified`` so that ``target=`` finds the optima of stage
+   1; its ``optima/`` folder starts from them (the truth's polish is not done twice).
+3. **pack** (refused when a job or run failed): ``archive/<suite>/`` (manifest, records,
+   optima, summary, IOH zip, per-job files) and the size of each file; the records and the
+   IOH zip of a shipped archive then move to ``archive-runs/vpid_archive_runs/<suite>/``,
+   the data distribution that ships them apart from the wheel.
+
+Anything after ``--`` is handed to both sweeps unchanged, so the same build runs through a
+Hydra launcher on a cluster::
+
+    .venv/bin/python tools/build_archive.py --suite vpid1 --runs 15 --target 1e-8 \\
+        --sweep /shared/vpid1 -- hydra/launcher=slurm_cluster hydra.launcher.partition=short
+
+Commit the archive folder together with the code that made it: the manifest names the commit
+(``-dirty`` when the work tree had changes) and the command.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import datetime
+import os
+import shlex
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from vpid_bench.analysis.job import SHARED_DIR
+from vpid_bench.plugins import Registry
+from vpid_bench.report.archive import ARCHIVE_DIR_ENV
+from vpid_bench.report.load import load_records
+from vpid_bench.report.pack import pack
+from vpid_bench.store.archive import RUN_FILES
+
+ROOT = Path(__file__).resolve().parents[1]
+BIN = Path(sys.executable).parent
+#: The optimizer and budget of the certify stage: ``lsq`` reaches every member's optimum
+#: well within 100·D on the smoke suite's ladder (docs/protocol.md), and the job's polish
+#: from the truth and from each run's best does the rest.
+CERTIFY = ("lsq", 100)
+
+
+def builtin_optimizers() -> list[str]:
+    """The optimizers registered by the vpid-bench distribution itself."""
+    registry = Registry()
+    return sorted(n for n in registry.optimizers
+                  if registry.provenance("optimizer", n).get("distribution") == "vpid-bench")
+
+
+def commit() -> str | None:
+    try:
+        sha = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True,
+                             text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                               cwd=ROOT, capture_output=True, text=True, check=True).stdout
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    return sha + ("-dirty" if dirty.strip() else "")
+
+
+def quoted(argv: list[str]) -> str:
+    return " ".join(shlex.quote(a) for a in argv)
+
+
+def sweep(argv: list[str], env: dict[str, str] | None = None) -> bool:
+    """Run ``vpid-bench <argv>`` (printed first); whether it ended clean (exit 0)."""
+    print("vpid-bench " + quoted(argv), flush=True)
+    return subprocess.run([str(BIN / "vpid-bench"), *argv], cwd=ROOT,
+                          env=env).returncode == 0
+
+
+def clean(folder: Path, exit_ok: bool) -> bool:
+    """Whether the sweep in ``folder`` ended clean (else one line on stderr says why)."""
+    loaded = load_records([folder])
+    if exit_ok and not loaded.failures:
+        return True
+    print(f"not packed: the sweep {folder} did not end clean; "
+          + ("; ".join(loaded.failures[:5]) or "its command failed (see above)"),
+          file=sys.stderr)
+    return False
+
+
+def seed_optima(certify: Path, runs_dir: Path) -> None:
+    """Copy the certify sweep's optimum files and per-problem files (bounds, floors per
+    estimator) into the runs sweep's ``optima/`` folder (only files it does not have; the
+    same file names, since they are keyed by the record's data and the runs, not by the
+    optimizer or the budget), so its jobs start from them instead of polishing each truth
+    and each floor again."""
+    for sub in (Path("."), Path(SHARED_DIR)):
+        source = certify / "optima" / sub
+        if not source.is_dir():
+            continue
+        target = runs_dir / "optima" / sub
+        target.mkdir(parents=True, exist_ok=True)
+        for f in sorted(source.glob("*.json")):
+            if f.is_file() and not f.is_symlink() and not (target / f.name).exists():
+                shutil.copyfile(f, target / f.name)
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 epilog="Arguments after -- go to both sweeps (e.g. a launcher).")
+    ap.add_argument("--suite", default="smoke",
+                    help="the suite swept (or, with --problems, the archive's name)")
+    ap.add_argument("--problems", default=None,
+                    help="problems to sweep instead of the whole suite (comma-separated)")
+    ap.add_argument("--optimizers", default=None,
+                    help="optimizers to run (default: every built-in one)")
+    ap.add_argument("--optima-only", action="store_true",
+                    help="ship the instance optima alone (what target= stops at), no runs")
+    ap.add_argument("--runs", type=int, default=10)
+    ap.add_argument("--target", type=float, default=None,
+                    help="stop each run at this final target (certifies the optima first)")
+    ap.add_argument("--budget-per-dim", type=int, default=None,
+                    help="budget per parameter instead of each member's default (raises "
+                         "problem.iterations so that the budget alone ends every run)")
+    ap.add_argument("--sweep", type=Path, default=None,
+                    help="the build's folder (default: outputs/archive-<suite>)")
+    ap.add_argument("--out", type=Path, default=None,
+                    help="archive folder (default: archive/<suite> in the repository)")
+    ap.add_argument("--no-pack", action="store_true", help="run the sweeps, do not pack")
+    ap.add_argument("extra", nargs="*", help="overrides for both sweeps (after --)")
+    return ap.parse_args(argv)
+
+
+@dataclasses.dataclass
+class Built:
+    """What :func:`build` did: whether it ended clean, the runs' sweep folder, the wall time
+    of each stage (s) and the manifest it packed (``None`` when not packed)."""
+
+    ok: bool
+    runs_dir: Path
+    seconds: dict[str, float]
+    manifest: dict | None = None
+
+
+def build(args: argparse.Namespace) -> Built:
+    """The stages of the module docstring; each prints its command first."""
+    base = (args.sweep or ROOT / "outputs" / f"archive-{args.suite}").resolve()
+    out = args.out or ROOT / "archive" / args.suite
+    which = f"problem={args.problems}" if args.problems else f"suite={args.suite}"
+    budget = ([f"budget_per_dim={args.budget_per_dim}", "problem.iterations=1000000"]
+              if args.budget_per_dim else [])
+    made_by = commit()  # before the sweeps: the code that runs them
+    env = None
+    seconds: dict[str, float] = {}
+    runs_dir = base / "runs" if args.target is not None else base
+    t0 = time.perf_counter()
+    if args.target is not None:
+        certify, certified = base / "certify", base / "certified"
+        opt, per_dim = CERTIFY
+        ok = sweep(["-m", which, f"optimizer={opt}", f"runs={args.runs}",
+                    f"budget_per_dim={per_dim}", "archive=false", "report=false",
+                    f"hydra.sweep.dir={certify}", *args.extra])
+        if not clean(certify, ok):
+            return Built(False, runs_dir, seconds)
+        pack(certify, args.suite, certified / args.suite, command="(certify stage)",
+             commit=made_by, made_at="", optima_only=True)
+        env = {**os.environ, ARCHIVE_DIR_ENV: str(certified)}
+        seed_optima(certify, runs_dir)
+        seconds["certify"] = time.perf_counter() - t0
+    argv = ["-m", which, "optimizer=" + (args.optimizers or ",".join(builtin_optimizers())),
+            f"runs={args.runs}", *budget,
+            *([f"target={args.target!r}"] if args.target is not None else []),
+            "archive=false", "report=false", f"hydra.sweep.dir={runs_dir}", *args.extra]
+    t1 = time.perf_counter()
+    ok = sweep(argv, env)
+    seconds["runs"] = time.perf_counter() - t1
+    if args.no_pack or not clean(runs_dir, ok):
+        return Built(ok and args.no_pack, runs_dir, seconds)
+    t2 = time.perf_counter()
+    made_at = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    manifest = pack(runs_dir, args.suite, out, command="vpid-bench " + quoted(argv),
+                    commit=made_by, made_at=made_at, optima_only=args.optima_only)
+    seconds["pack"] = time.perf_counter() - t2
+    total = sum(f["bytes"] for f in manifest["files"].values())
+    for name, f in manifest["files"].items():
+        print(f"{out / name}: {f['bytes']:,} bytes, sha256 {f['sha256'][:16]}...")
+    print(f"archive {out}: {manifest['runs']} runs of {len(manifest['optimizers'])} "
+          f"optimizers on {len(manifest['problems'])} problems, {total:,} bytes")
+    if Path(out).resolve().parent == (ROOT / "archive").resolve():
+        home = ROOT / "archive-runs" / "vpid_archive_runs" / args.suite
+        home.mkdir(parents=True, exist_ok=True)
+        for name in RUN_FILES:  # the runs ship apart from the wheel (docs/sweeps.md)
+            (Path(out) / name).replace(home / name)
+        print(f"its runs ({', '.join(RUN_FILES)}) moved to {home}")
+    return Built(True, runs_dir, seconds, manifest)
+
+
+def main(argv: list[str] | None = None) -> int:
+    built = build(parse_args(argv))
+    print("stages: " + ", ".join(f"{k} {v:.1f} s" for k, v in built.seconds.items()))
+    return 0 if built.ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
