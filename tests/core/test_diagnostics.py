@@ -201,3 +201,19 @@ def test_the_robust_interval_covers_with_ar1_errors_where_the_white_one_does_not
     assert robust / runs >= 0.8 and white / runs <= 0.6, (robust, white)
     assert np.median(widths) >= 2.5
     assert Z95 > 1.95
+
+
+def test_the_hac_convolution_is_scipys_same_mode_convolution():
+    """The Bartlett-weighted sum of the HAC estimate by numpy's FFT equals scipy's
+    ``fftconvolve(mode="same")`` (to 1e-12), for short and long records and any bandwidth."""
+    from scipy.signal import fftconvolve
+
+    from vpid_bench.analysis.intervals import _convolve_same
+
+    rng = np.random.default_rng(3)
+    for t, lags in [(2, 1), (5, 1), (100, 7), (1001, 40), (4096, 250)]:
+        S = rng.normal(size=(t, 3))
+        w = 1.0 - np.abs(np.arange(-lags, lags + 1)) / (lags + 1)
+        np.testing.assert_allclose(_convolve_same(S, w),
+                                   fftconvolve(S, w[:, None], mode="same", axes=0),
+                                   rtol=0, atol=1e-12 * max(1.0, float(np.abs(S).sum())))

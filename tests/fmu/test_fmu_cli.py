@@ -82,3 +82,7 @@ def test_lsq_and_cmaes_recover_every_parameter_within_its_interval(example_fmu, 
              "value": 163250.0}]
     report = (tmp_path / "sweep" / "report" / "report.md").read_text()
     assert "ms" in report and "95 % interval" in report
+    flat = " ".join(report.split())  # report.md wraps its paragraphs
+    # the known quantity and the fit diagnostics of the own-record work, on the FMU too
+    assert "kt = 163250 N/m" in flat and "the FMU's start value" in flat
+    assert "Fit diagnostics at the optimum" in flat and "whiteness test" in flat
