@@ -158,9 +158,10 @@ while not psutil.Process(pid).children() and time.monotonic() < end:
 pool.close()
 time.sleep(0.3)
 alive = foreign.poll() is None and child.status() not in ("zombie", "stopped")
+foreign.kill()  # first: with its child killed first, its `wait` returns and it exits 0
+code = foreign.wait()
 child.kill()
-foreign.kill()
-print(json.dumps({"reused": True, "alive": alive, "code": foreign.wait()}))
+print(json.dumps({"reused": True, "alive": alive, "code": code}))
 """
 
 

@@ -57,6 +57,9 @@ def test_a_stopped_sweep_resumes_to_the_uninterrupted_records(tmp_path, referenc
     if sig == signal.SIGINT:  # Ctrl-C: the command says how to resume, exit 130
         assert proc.returncode == 130, stderr
         assert "run the same command with --resume" in stderr and "Traceback" not in stderr
+    elif sig == signal.SIGTERM:  # ends as Ctrl-C does (round five's N2), status 128 + 15
+        assert proc.returncode == 143, stderr
+        assert "Traceback" not in stderr and "--resume" in stderr, stderr
     else:
         assert proc.returncode == -sig
     killed_with = _count_records(tmp_path)
