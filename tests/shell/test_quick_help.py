@@ -70,3 +70,16 @@ def test_a_near_miss_key_suggests_the_key(registry):
 def test_did_you_mean_is_empty_without_a_close_name():
     assert preflight.did_you_mean("de44", ["de4", "ga"]) == " (did you mean de4?)"
     assert preflight.did_you_mean("qqq", ["de4", "ga"]) == ""
+
+
+def test_the_resume_command_repeats_every_override_and_the_folder():
+    from pathlib import Path
+
+    from vpid_bench.shell.resume import resume_command
+
+    given = ["-m", "optimizer=de1,ga", "runs=5", "hydra.sweep.dir=my sweep"]
+    assert resume_command(given, Path("my sweep"), "hydra.sweep.dir") == (
+        "vpid-bench -m optimizer=de1,ga runs=5 'hydra.sweep.dir=my sweep' --resume")
+    assert resume_command(["-m", "runs=5", "--resume"], Path("outputs/multirun/x"),
+                          "hydra.sweep.dir") == (
+        "vpid-bench -m runs=5 --resume=outputs/multirun/x")

@@ -332,7 +332,7 @@ def _main(argv: Sequence[str] | None) -> None:
     from .argv import parse_command_line
     from .callbacks import ensure_job_dir_resolver
     from .config_store import register_configs
-    from .resume import FolderLock, new_invocation
+    from .resume import FolderLock, new_invocation, resume_command
     from .suites import expand_suites
 
     threading.excepthook = _thread_exception
@@ -376,8 +376,8 @@ def _main(argv: Sequence[str] | None) -> None:
     try:
         _run_hydra(plan.hydra_args, task)
     except KeyboardInterrupt:
-        print("interrupted: every completed run is recorded; run the same command with "
-              "--resume to continue (only missing runs are run)", file=sys.stderr)
+        print("interrupted: every completed run is recorded; to continue (only missing runs "
+              f"are run): {resume_command(argv, plan.output_dir, key)}", file=sys.stderr)
         sys.exit(130)
     finally:
         task.close()
