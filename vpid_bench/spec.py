@@ -30,6 +30,7 @@ from .contract import check_problem_class
 from .errors import ConfigError
 from .optimizer import Optimizer, OptimizerParams, check_compatible
 from .params import build_dataclass, settings_of, to_plain
+from .params_binding import check_params_bound
 from .plugins import Registry
 from .problem import FILLED_PARAMS, PROTOCOL_KEYS, Problem, ProblemConfig, default_budget
 
@@ -229,6 +230,7 @@ def parse_job(cfg: Any, registry: Registry) -> Job:
     filled = {**{k: getattr(problem_config, k) for k in PROTOCOL_KEYS}, "budget": budget}
     params = build_dataclass(optimizer_cls.Params, {**optimizer_cfg, **filled},
                              prefix="optimizer")
+    check_params_bound(optimizer_cls, optimizer_name)
     optimizer_cls.check(params)
     check_compatible(problem_cls, optimizer_cls, optimizer_name, problem_name)
     return Job(spec, problem_name, problem_cls, problem_config, optimizer_name, optimizer_cls,

@@ -127,6 +127,6 @@ def test_every_member_of_the_contract_is_in_the_readme_table_and_in_a_capability
     public = {name for name in vars(Problem) if not name.startswith("_")} | {"Config"}
     public -= {"has_residuals"}  # derived from residuals(), not a member a plugin defines
     assert public == members, public ^ members
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    text = (ROOT / "docs" / "plugins.md").read_text(encoding="utf-8")
     table = set(re.findall(r"^\| `([a-z_A-Z]+)(?:\(|`)", text, re.M))
     assert members <= table, members - table

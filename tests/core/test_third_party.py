@@ -32,7 +32,7 @@ FILES = ("pyproject.toml", "vpid_example_plugins/one_plus_one.py",
 
 def readme_example_blocks() -> dict[str, str]:
     """The README's code blocks marked ``<!-- example: <path under the example package> -->``."""
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    text = (ROOT / "docs" / "plugins.md").read_text(encoding="utf-8")
     pattern = re.compile(r"<!-- example: (\S+) -->\s*```\w*\n(.*?)```", re.S)
     return dict(pattern.findall(text))
 

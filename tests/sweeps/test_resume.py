@@ -5,6 +5,7 @@ timing), in bounded time."""
 from __future__ import annotations
 
 import os
+import shlex
 import signal
 import subprocess
 import time
@@ -56,7 +57,11 @@ def test_a_stopped_sweep_resumes_to_the_uninterrupted_records(tmp_path, referenc
         _, stderr = proc.communicate(timeout=limit(30))  # bounded: a stopped sweep ends
     if sig == signal.SIGINT:  # Ctrl-C: the command says how to resume, exit 130
         assert proc.returncode == 130, stderr
-        assert "run the same command with --resume" in stderr and "Traceback" not in stderr
+        assert "Traceback" not in stderr
+        hint = [line for line in stderr.splitlines() if line.startswith("interrupted:")]
+        assert len(hint) == 1 and ": vpid-bench " in hint[0], stderr
+        printed = shlex.split(hint[0].split(": vpid-bench ", 1)[1])  # the exact command
+        assert printed[:len(SWEEP)] == SWEEP and printed[-1].startswith("--resume=outputs/")
     elif sig == signal.SIGTERM:  # ends as Ctrl-C does (round five's N2), status 128 + 15
         assert proc.returncode == 143, stderr
         assert "Traceback" not in stderr and "--resume" in stderr, stderr
@@ -70,7 +75,7 @@ def test_a_stopped_sweep_resumes_to_the_uninterrupted_records(tmp_path, referenc
     for path in rec.iter_record_files([sweeps[0]]):
         rec.read_record(path)
 
-    again = run_cli(["--resume", *SWEEP], tmp_path)
+    again = run_cli(printed if sig == signal.SIGINT else ["--resume", *SWEEP], tmp_path)
     assert again.returncode == 0, again.stderr
     assert f"resume: continuing {Path('outputs/multirun') / sweeps[0].name}" in again.stderr
     assert "already recorded" in again.stderr

@@ -337,7 +337,7 @@ def _main(argv: Sequence[str] | None) -> None:
     from .argv import parse_command_line
     from .callbacks import ensure_job_dir_resolver
     from .config_store import register_configs
-    from .resume import FolderLock, new_invocation
+    from .resume import FolderLock, new_invocation, resume_command
     from .suites import expand_suites
 
     threading.excepthook = _thread_exception
@@ -362,7 +362,7 @@ def _main(argv: Sequence[str] | None) -> None:
     ensure_job_dir_resolver()
     task = JobTask(registry)
     if cmd.info in ("--help", "--hydra-help", "--shell-completion"):
-        _run_hydra(cmd.hydra_args, task)  # Hydra's information
+        _quick_help(cmd, registry) or _run_hydra(cmd.hydra_args, task)  # the information
         sys.exit(1 if task.not_ok else 0)
     try:
         plan = preflight.plan(cmd, registry)
@@ -381,14 +381,32 @@ def _main(argv: Sequence[str] | None) -> None:
     try:
         _run_hydra(plan.hydra_args, task)
     except KeyboardInterrupt:
-        _interrupted("every completed run is recorded; run the same command with --resume "
-                     "to continue (only missing runs are run)")
+        _interrupted("every completed run is recorded; to continue (only missing runs are "
+                     f"run): {resume_command(argv, plan.output_dir, key)}")
     finally:
         task.close()
         lock.release()
     _leave(1 if _failures(plan.output_dir, plan.multirun, plan.job_dirs,
                           report_expected=bool(plan.jobs) and plan.jobs[0].spec.report)
            else 0, before, watch=console)
+
+
+def _quick_help(cmd: Any, registry: Any) -> bool:
+    """Print the help page without Hydra's help machinery (:mod:`.quick_help`); False when
+    Hydra must build it (or the flag is not ``--help``). A refusal of the overrides is one
+    line, exit 2, as for a run."""
+    from .quick_help import help_text
+
+    if cmd.info != "--help":
+        return False
+    try:
+        text = help_text(cmd, registry)
+    except VpidBenchError as exc:
+        _refuse(exc)
+    if text is None:
+        return False
+    print(text, end="" if text.endswith("\n") else "\n")
+    return True
 
 
 def _sweep_progress(plan: Any) -> Any:

@@ -196,11 +196,21 @@ def _check_choice(group: str, name: str, registry: Registry, folders: Sequence[s
     if name.strip("'\"") in names:
         return
     allowed = "one of " + ", ".join(names) if names else "none is registered"
+    allowed += did_you_mean(name.strip("'\""), names)
     info = getattr(registry.pm, "vpid_bench_info", None)
     if info is not None and info.failed:
         allowed += " (plugins that failed to load: " + ", ".join(
             f"{n}: {why}" for n, why in sorted(info.failed.items())) + ")"
     raise ConfigError(group, name, allowed)
+
+
+def did_you_mean(given: str, known: Sequence[str]) -> str:
+    """`` (did you mean de4?)`` for a near miss of one of ``known`` (difflib's ratio at
+    least 0.6), else ``""``."""
+    import difflib
+
+    close = difflib.get_close_matches(given, list(known), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]}?)" if close else ""
 
 
 def _is_structural(o: Any) -> bool:
@@ -258,10 +268,11 @@ def _unknown_key(cfg: Any, key: str, value: Any) -> ConfigError:
         node = OmegaConf.select(cfg, parent) if parent else cfg
         if isinstance(node, DictConfig):
             keys = sorted(str(k) for k in node if str(k) != "name")
+            hint = did_you_mean(parts[depth], keys) if depth < len(parts) else ""
             if not parent:
                 return ConfigError(key, value, "known top-level keys are problem, optimizer, "
                                    + ", ".join(TOP_LEVEL_KEYS) + "; problem.<key> and "
-                                   "optimizer.<key> set a plugin's parameters")
+                                   "optimizer.<key> set a plugin's parameters" + hint)
             if parent == "optimizer" and parts[1] in FILLED_PARAMS:
                 where = "budget" if parts[1] == "budget" else f"problem.{parts[1]}"
                 return ConfigError(key, value, "not settable on the optimizer: the job fills "
@@ -270,7 +281,7 @@ def _unknown_key(cfg: Any, key: str, value: Any) -> ConfigError:
             name = OmegaConf.select(cfg, f"{owner}.name")
             who = f"{owner} {name!r}" if owner in GROUPS and name else parent
             return ConfigError(key, value, f"{who} has no such key; keys under {parent} are "
-                               + (", ".join(keys) or "(none)"))
+                               + (", ".join(keys) or "(none)") + hint)
     return ConfigError(key, value, "a key of the config")
 
 

@@ -188,3 +188,16 @@ def collect_job_statuses(sweep_dir: Path, invocation: str | None) -> list[dict[s
             continue
         out.append({**status, "job_dir": str(path.parent)})
     return out
+
+
+def resume_command(argv: Sequence[str], output_dir: Path, key: str) -> str:
+    """The exact command that continues an interrupted command ``argv`` (without the program
+    name): every override as given, and the folder: ``--resume`` alone when ``key``
+    (``hydra.sweep.dir`` or ``hydra.run.dir``) is on the command line (that folder is the
+    one continued), else ``--resume=<output_dir>``. Quoted for a POSIX shell."""
+    import shlex
+
+    args = [a for a in argv if a != "--resume" and not a.startswith("--resume=")]
+    named = any(a.lstrip("+").startswith(key + "=") for a in args)
+    args.append("--resume" if named else f"--resume={output_dir}")
+    return shlex.join(["vpid-bench", *args])

@@ -1,0 +1,79 @@
+"""How fast ``vpid-bench`` answers: ``--help``, ``--version`` and one-line refusals (issue 46).
+
+Each command is run ``--repeat`` times in a fresh process; the median wall time (s) and the
+median CPU time of the child (user + system, s) are printed beside two references measured
+in the same run: ``python -c pass`` and the ``--help`` of a minimal ``@hydra.main`` app
+(written to a temporary file). The goal: ``--help`` and a refusal within 1.5x the minimal
+Hydra app's ``--help``.
+
+    .venv/bin/python benchmarks/bench_latency.py [--repeat 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+MINIMAL_APP = '''import hydra
+
+
+@hydra.main(version_base="1.3", config_path=None)
+def app(cfg):
+    pass
+
+
+if __name__ == "__main__":
+    app()
+'''
+
+
+def _time(cmd: list[str]) -> tuple[float, float]:
+    """Wall and CPU time (s) of one run of ``cmd`` (its exit status is not checked:
+    refusals exit 2)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False,
+                   env={**os.environ, "MPLBACKEND": "Agg"})
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeat", type=int, default=5)
+    args = parser.parse_args()
+    bench = str(Path(sys.executable).with_name("vpid-bench"))
+    with tempfile.TemporaryDirectory() as tmp:
+        app = Path(tmp, "minimal_hydra_app.py")
+        app.write_text(MINIMAL_APP)
+        commands = {
+            "python -c pass": [sys.executable, "-c", "pass"],
+            "minimal @hydra.main app --help": [sys.executable, str(app), "--help"],
+            "vpid-bench --help": [bench, "--help"],
+            "vpid-bench --version": [bench, "--version"],
+            "vpid-bench optimizer=de44 (refused)": [bench, "optimizer=de44"],
+            "vpid-bench runz=3 (refused)": [bench, "runz=3"],
+        }
+        rows = {}
+        for name, cmd in commands.items():
+            times = [_time(cmd) for _ in range(args.repeat)]
+            rows[name] = (statistics.median(t[0] for t in times),
+                          statistics.median(t[1] for t in times))
+    hydra_wall, hydra_cpu = rows["minimal @hydra.main app --help"]
+    print(f"median of {args.repeat} runs each; ratio: to the minimal Hydra app's --help")
+    print(f"{'command':40s} {'wall s':>7s} {'cpu s':>7s} {'wall x':>7s} {'cpu x':>7s}")
+    for name, (wall, cpu) in rows.items():
+        print(f"{name:40s} {wall:7.2f} {cpu:7.2f} {wall / hydra_wall:7.2f} "
+              f"{cpu / hydra_cpu:7.2f}")
+
+
+if __name__ == "__main__":
+    main()
