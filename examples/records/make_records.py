@@ -96,7 +96,7 @@ def _rates(s: np.ndarray, h: float) -> np.ndarray:
 
 
 def logger_quarter(rng: np.random.Generator) -> None:
-    from vpid_vehicle.ride.problem import Wheel, wheel_inputs
+    from vpid_vehicle.ride.model import Wheel, wheel_inputs
     from vpid_vehicle.ride.quarter import RideQuarterConfig
 
     fine, sub = 0.0002, 10

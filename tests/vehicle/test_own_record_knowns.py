@@ -13,7 +13,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from vpid_vehicle.ride.problem import RecordFileConfig, Wheel, wheel_inputs
+from vpid_vehicle.ride.model import Wheel, wheel_inputs
+from vpid_vehicle.ride.problem import RecordFileConfig
 from vpid_vehicle.ride.quarter import RideQuarterConfig, RideQuarterProblem
 
 from vpid_bench import ConfigError

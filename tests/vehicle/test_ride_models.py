@@ -10,7 +10,7 @@ import pytest
 from vpid_vehicle.ride import linear
 from vpid_vehicle.ride.full import FullCar, RideFullConfig, RideFullProblem, full_car_matrices
 from vpid_vehicle.ride.half import HalfCar, RideHalfConfig, RideHalfProblem
-from vpid_vehicle.ride.problem import wheel_inputs
+from vpid_vehicle.ride.model import wheel_inputs
 from vpid_vehicle.ride.quarter import RideQuarterConfig, RideQuarterProblem
 
 SYM = FullCar.sets["jazar_symmetric"]

@@ -51,7 +51,7 @@ def test_the_elements_are_where_the_linear_stiffness_puts_them(family):
     derivative of ``K`` in the axle's linear rate (exact: K is linear in it)."""
     p = family(family.Config(duration_s=0.5))
     base = p.model
-    susp = structures.suspension_of(base)
+    susp = type(base).suspension
     x = p.x_true
     J = susp.elongations(x[None], p.known)[0]
     for a, (k, _) in enumerate(susp.axles):

@@ -24,7 +24,8 @@ from typing import Literal
 import numpy as np
 
 from . import linear
-from .problem import RideConfig, RideModel, RideProblem, Wheel, check_record_file
+from .model import RideModel, Suspension, Wheel
+from .problem import RideConfig, RideProblem, check_record_file
 
 #: Wheel order of the degrees of freedom 3..6 and of the inputs.
 WHEELS = ("FL", "FR", "RL", "RR")
@@ -65,7 +66,17 @@ def full_car_matrices(X: np.ndarray, known: dict[str, float]
     return M, C, K, F
 
 
+def _suspension_rows(X: np.ndarray, known: dict[str, float]) -> np.ndarray:
+    """The four suspensions' elongation rows ``(n, 4, 7)`` (FL, FR, RL, RR)."""
+    xs, ys = _geometry(known)
+    J = np.zeros((X.shape[0], 4, 7))
+    for i in range(4):
+        J[:, i, 0], J[:, i, 1], J[:, i, 2], J[:, i, 3 + i] = 1.0, ys[i], -xs[i], -1.0
+    return J
+
+
 class FullCar(RideModel):
+    suspension = Suspension((("kf", "cf"), ("kr", "cr")), (0, 0, 1, 1), _suspension_rows)
     wheel_names = ("h_FL", "h_FR", "h_RL", "h_RR")
     names = ("m", "Ix", "Iy", "mf", "mr", "kf", "kr", "cf", "cr")
     units = ("kg", "kg m²", "kg m²", "kg", "kg", "N/m", "N/m", "N s/m", "N s/m")

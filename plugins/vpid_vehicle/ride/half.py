@@ -27,10 +27,21 @@ from vpid_bench import added_setting
 
 from ..model import KnownConstants, matrices, tyre_input
 from . import linear
-from .problem import RideConfig, RideModel, RideProblem, Wheel, check_record_file
+from .model import RideModel, Suspension, Wheel
+from .problem import RideConfig, RideProblem, check_record_file
+
+
+def _suspension_rows(X: np.ndarray, known: dict[str, float]) -> np.ndarray:
+    """The two suspensions' elongation rows ``(n, 2, 4)`` (front, rear) of the rows ``X``."""
+    a1 = X[:, 8]
+    J = np.zeros((X.shape[0], 2, 4))
+    J[:, 0, 0], J[:, 0, 1], J[:, 0, 2] = 1.0, -a1, -1.0
+    J[:, 1, 0], J[:, 1, 1], J[:, 1, 3] = 1.0, known["L"] - a1, -1.0
+    return J
 
 
 class HalfCar(RideModel):
+    suspension = Suspension((("k1", "c1"), ("k2", "c2")), (0, 1), _suspension_rows)
     wheel_names = ("h1", "h2")
     names = ("m", "I", "m1", "m2", "k1", "k2", "c1", "c2", "a1")
     units = ("kg", "kg m²", "kg", "kg", "N/m", "N/m", "N s/m", "N s/m", "m")

@@ -33,7 +33,8 @@ import numpy as np
 
 from . import linear
 from .magic import CURVATURE, MU, SHAPE, MagicSingleTrack
-from .problem import RideModel, RideProblem, SuiteConfig, _check, check_record_file
+from .model import RideModel
+from .problem import RideProblem, SuiteConfig, _check, check_record_file
 from .steering import SENSORS, SteeredRecord, steer_input
 
 

@@ -29,7 +29,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .problem import RideModel, RideProblem, SuiteConfig, _check, check_record_file
+from .model import RideModel
+from .problem import RideProblem, SuiteConfig, _check, check_record_file
 from .steering import SENSORS, SteeredRecord, steer_input
 
 G = 9.81  # m/s^2

@@ -26,10 +26,17 @@ import numpy as np
 from vpid_bench import added_setting
 
 from . import linear
-from .problem import RideConfig, RideModel, RideProblem, Wheel, check_record_file
+from .model import RideModel, Suspension, Wheel
+from .problem import RideConfig, RideProblem, check_record_file
+
+
+def _suspension_rows(X: np.ndarray, known: dict[str, float]) -> np.ndarray:
+    """The suspension's elongation row ``(n, 1, 2)``: body minus wheel."""
+    return np.broadcast_to(np.array([[1.0, -1.0]]), (X.shape[0], 1, 2)).copy()
 
 
 class QuarterCar(RideModel):
+    suspension = Suspension((("ks", "cs"),), (0,), _suspension_rows)
     wheel_names = ("h",)
     names = ("ms", "mu", "ks", "cs")
     units = ("kg", "kg", "N/m", "N s/m")

@@ -28,15 +28,13 @@ record at ``dt / record_substeps`` (so the record is still not made at the fitte
 
 from __future__ import annotations
 
-import dataclasses
-from collections.abc import Callable
 from typing import Any
 
 import numba
 import numpy as np
 
 from . import linear
-from .problem import RideModel
+from .model import RideModel
 
 SPRINGS = ("linear", "cubic")
 DAMPERS = ("linear", "bilinear")
@@ -49,54 +47,6 @@ BUMP_BOX = (0.25, 1.5)
 REBOUND_BOX = (0.5, 3.0)
 
 
-@dataclasses.dataclass(frozen=True)
-class Suspension:
-    """A family's suspension elements: ``axles`` (the linear model's spring and damper
-    parameter of each axle), ``axle_of`` (each element's axle) and ``elongations(X, known)``,
-    the rows ``J`` ``(n, elements, dof)`` with ``e = J q`` for the linear rows ``X``."""
-
-    axles: tuple[tuple[str, str], ...]
-    axle_of: tuple[int, ...]
-    elongations: Callable[[np.ndarray, dict[str, float]], np.ndarray]
-
-
-def _quarter_rows(X: np.ndarray, known: dict[str, float]) -> np.ndarray:
-    return np.broadcast_to(np.array([[1.0, -1.0]]), (X.shape[0], 1, 2)).copy()
-
-
-def _half_rows(X: np.ndarray, known: dict[str, float]) -> np.ndarray:
-    a1 = X[:, 8]
-    J = np.zeros((X.shape[0], 2, 4))
-    J[:, 0, 0], J[:, 0, 1], J[:, 0, 2] = 1.0, -a1, -1.0
-    J[:, 1, 0], J[:, 1, 1], J[:, 1, 3] = 1.0, known["L"] - a1, -1.0
-    return J
-
-
-def _full_rows(X: np.ndarray, known: dict[str, float]) -> np.ndarray:
-    from .full import _geometry
-
-    xs, ys = _geometry(known)
-    J = np.zeros((X.shape[0], 4, 7))
-    for i in range(4):
-        J[:, i, 0], J[:, i, 1], J[:, i, 2], J[:, i, 3 + i] = 1.0, ys[i], -xs[i], -1.0
-    return J
-
-
-def suspension_of(model: RideModel) -> Suspension | None:
-    """The suspension of a ride model (quarter, half or full car), else ``None``."""
-    from .full import FullCar
-    from .half import HalfCar
-    from .quarter import QuarterCar
-
-    if isinstance(model, QuarterCar):
-        return Suspension((("ks", "cs"),), (0,), _quarter_rows)
-    if isinstance(model, HalfCar):
-        return Suspension((("k1", "c1"), ("k2", "c2")), (0, 1), _half_rows)
-    if isinstance(model, FullCar):
-        return Suspension((("kf", "cf"), ("kr", "cr")), (0, 0, 1, 1), _full_rows)
-    return None
-
-
 class StructuredModel(RideModel):
     """A ride model with a cubic spring and/or a bilinear damper per axle (the module)."""
 
@@ -104,7 +54,7 @@ class StructuredModel(RideModel):
     fitted_solver = "RK4 (the suspension structure's nonlinear forces)"
 
     def __init__(self, base: RideModel, spring: str, damper: str) -> None:
-        suspension = suspension_of(base)
+        suspension = type(base).suspension
         if suspension is None:
             raise TypeError(f"{type(base).__name__} has no suspension structures")
         self.base, self.spring, self.damper, self.suspension = base, spring, damper, suspension

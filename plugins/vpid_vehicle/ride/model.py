@@ -1,0 +1,140 @@
+"""What a ride model is and how its wheels meet the road: :class:`RideModel` (the
+identified parameters, the published sets, the sensors, the wheels, the matrices; each family
+of :mod:`.quarter`, :mod:`.half`, :mod:`.full`, :mod:`.lateral` and :mod:`.magic` fills it in),
+:class:`Wheel`, the :class:`Suspension` a richer structure replaces (:mod:`.structures`), and
+the road under each wheel (:func:`wheel_inputs`).
+
+Its own module, below both :mod:`.problem` (which builds a problem around a model) and
+:mod:`.structures` (which makes a model richer), so neither imports the other's users.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ..record_file import Column, Record, Sampler
+from . import linear, roads
+
+
+@dataclasses.dataclass(frozen=True)
+class Suspension:
+    """A family's suspension elements: ``axles`` (the linear model's spring and damper
+    parameter of each axle), ``axle_of`` (each element's axle) and ``elongations(X, known)``,
+    the rows ``J`` ``(n, elements, dof)`` with ``e = J q`` for the linear rows ``X``."""
+
+    axles: tuple[tuple[str, str], ...]
+    axle_of: tuple[int, ...]
+    elongations: Callable[[np.ndarray, dict[str, float]], np.ndarray]
+
+
+@dataclasses.dataclass(frozen=True)
+class Wheel:
+    """Where a wheel meets the road: its track (0 left, 1 right) and its delay behind the
+    front axle (s)."""
+
+    track: int
+    delay_s: float
+
+
+class RideModel:
+    """A linear ride model: the identified parameters, the published sets (identified and
+    known values), the sensor sets, the wheels and the matrices. Subclasses fill it in."""
+
+    names: ClassVar[tuple[str, ...]] = ()
+    units: ClassVar[tuple[str, ...]] = ()
+    sets: ClassVar[dict[str, dict[str, float]]] = {}
+    sensors: ClassVar[dict[str, tuple[tuple[str, str], ...]]] = {}
+    #: The suspension's springs and dampers, for the richer structures
+    #: (:mod:`.structures`); ``None``: the model has none to make richer.
+    suspension: ClassVar[Suspension | None] = None
+
+    def wheels(self, known: dict[str, float], speed: float) -> tuple[Wheel, ...]:
+        """The wheels of the model at ``speed`` m/s."""
+        raise NotImplementedError
+
+    #: The record columns of each wheel's road height (m), in the order of :meth:`wheels`.
+    wheel_names: ClassVar[tuple[str, ...]] = ()
+
+    def record_columns(self) -> tuple[Column, ...]:
+        """The input columns a user's record may carry: each wheel's road height (m)."""
+        return tuple(Column(n, "m") for n in self.wheel_names)
+
+    def needs_record_inputs(self, config: Any) -> str | None:
+        """Why a user's record must carry its inputs, or ``None`` when the configuration
+        defines them (a hump, a bump, a step)."""
+        if getattr(config, "road", None) == "iso8608":
+            return ("road=iso8608 is a random road, which a record must carry: the road "
+                    "height under each wheel; or set problem.road to hump, bump or step")
+        return None
+
+    def check_record(self, record: Record) -> None:
+        """Refuse a record this model cannot use beyond its columns (default: none)."""
+
+    def inputs_from_record(self, record: Record, sampler: Sampler) -> np.ndarray:
+        """The model's input channels ``(steps, r)`` from a record's input columns: each
+        wheel's height interpolated linearly onto the model's steps, its rate by central
+        differences there (as :func:`wheel_inputs`)."""
+        h = sampler.onto_steps(record.t, record.inputs)
+        return np.concatenate([h, np.gradient(h, sampler.dt, axis=0)], axis=1)
+
+    def inputs(self, config: Any, known: dict[str, float], dt: float,
+               rng: np.random.Generator) -> np.ndarray:
+        """The input channels ``(N, r)`` sampled every ``dt`` s over the record (default:
+        each wheel's road height, then their rates)."""
+        return wheel_inputs(config, self.wheels(known, config.speed_kmh / 3.6), dt, rng)
+
+    def system(self, X: np.ndarray, known: dict[str, float], sensors: str
+               ) -> linear.LinearSystem:
+        """The batch of linear systems of the rows ``X``; inputs ``[h_1..h_w, h'_1..h'_w]``
+        (each wheel's road height and its rate), outputs the ``sensors`` channels."""
+        raise NotImplementedError
+
+    def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
+        """Rows that describe a vehicle (default: every parameter finite and > 0)."""
+        return np.all(np.isfinite(X) & (X > 0), axis=1)
+
+    def box(self, nominal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The search box around the published set (default ``[0.5, 1.5] x`` it)."""
+        return 0.5 * nominal, 1.5 * nominal
+
+    def simulate(self, X: np.ndarray, known: dict[str, float], sensors: str, u: np.ndarray,
+                 dt: float, solver: str) -> np.ndarray:
+        """The ``sensors`` channels ``(n, N, p)`` of the rows ``X`` driven by ``u`` sampled
+        every ``dt``, from rest; ``solver`` is ``exact`` (the record's) or ``newmark`` (the
+        fitted model's). Default: the linear core (Newmark compiled end to end)."""
+        system = self.system(X, known, sensors)
+        if solver == "exact":
+            return linear.simulate(linear.exact_foh(system, dt), u)
+        return linear.newmark_outputs(system, dt, u)
+
+
+def track_profile(cfg: Any, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """The road height (m) of one track at distances ``x`` (m); the event starts where the
+    front wheels are 0.2 s into the record."""
+    start = 0.2 * cfg.speed_kmh / 3.6
+    if cfg.road == "hump":
+        return roads.hump(x, start)
+    if cfg.road == "bump":
+        return roads.bump(x, start)
+    if cfg.road == "step":
+        return roads.step(x, start)
+    return roads.iso8608(x, cfg.road_class, rng)
+
+
+def wheel_inputs(cfg: Any, wheels: tuple[Wheel, ...], dt: float,
+                 rng: np.random.Generator) -> np.ndarray:
+    """``[h_1..h_w, h'_1..h'_w]`` (m, m/s) sampled every ``dt`` s over the record,
+    ``(N, 2 w)``."""
+    v = cfg.speed_kmh / 3.6
+    t = np.arange(round(cfg.duration_s / dt)) * dt
+    tracks = 1 + max(w.track for w in wheels)
+    lead = max(w.delay_s for w in wheels)
+    x_track = np.arange(-lead * v - 1.0, v * t[-1] + 1.0, min(roads.ISO8608_DX, v * dt))
+    profiles = [track_profile(cfg, np.maximum(x_track, 0.0), rng) for _ in range(tracks)]
+    h = np.stack([np.interp(v * (t - w.delay_s), x_track, profiles[w.track]) for w in wheels],
+                 axis=1)
+    return np.concatenate([h, np.gradient(h, dt, axis=0)], axis=1)
