@@ -78,9 +78,9 @@ def scaled_archive(archive: Path, instances: int, tmp: Path) -> Path:
     import numpy as np
 
     from vpid_bench.analysis.optimum import optimum_key, record_settings
-    from vpid_bench.records.io import stable_hash, write_json_atomic
     from vpid_bench.report.archive import JOBS, MANIFEST, OPTIMA, RECORDS
     from vpid_bench.report.pack import pack
+    from vpid_bench.store.records import stable_hash, write_json_atomic
 
     sweep = tmp / "scaled-sweep"
     rng = np.random.default_rng(0)

@@ -27,7 +27,7 @@ def sweep(args: list[str], cwd: Path) -> float:
 
 
 def fingerprints(folder: Path) -> tuple[dict[str, str], int]:
-    from vpid_bench import records as rec
+    from vpid_bench.store import records as rec
 
     out, evaluations = {}, 0
     for p in rec.iter_record_files([folder]):

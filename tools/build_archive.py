@@ -43,7 +43,7 @@ import sys
 import time
 from pathlib import Path
 
-from vpid_bench.analysis.job import SHARED_DIR
+from vpid_bench.job_analysis import SHARED_DIR
 from vpid_bench.plugins import Registry
 from vpid_bench.report.archive import ARCHIVE_DIR_ENV
 from vpid_bench.report.load import load_records

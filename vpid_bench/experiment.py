@@ -9,8 +9,8 @@ the command's shell (:mod:`vpid_bench.shell`) calls it once per job. The rooms o
 * the runs themselves, alone or in lockstep, through the one run loop:
   :mod:`vpid_bench.job_runs`;
 * one record per run: :func:`vpid_bench.records.make_record`;
-* what the records allow (bounds, optima, the job's score): :mod:`vpid_bench.analysis.job`;
-* the best run's signals: :func:`vpid_bench.artifacts.write_best_signals`.
+* what the records allow (bounds, optima, the job's score): :mod:`vpid_bench.job_analysis`;
+* the best run's signals: :func:`vpid_bench.store.artifacts.write_best_signals`.
 
 Resume: a run whose complete record (status ``ok``, same run id) exists in the job folder is
 skipped; missing, corrupt and failed runs are run again. The run id hashes everything that
@@ -36,18 +36,20 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
-from . import records as rec
-from .analysis.job import analyse_job, job_score, polish_share
-from .artifacts import best_of, write_best_signals
+from .assemble import make_record
 from .build import ProblemCache
 from .errors import PluginError, VpidBenchError
 from .facts import ProblemFacts, problem_facts
+from .job_analysis import analyse_job, job_score, polish_share
 from .job_runs import RunOutcome, joins_lockstep, now_utc, run_outcomes, warm_up
 from .machine import available_cores, one_blas_thread
 from .plugins import Registry
 from .problem import kept_instance, offers_residuals
 from .runner import RunTimeoutError, time_limit
 from .spec import Job, parse_job
+from .store import records as rec
+from .store.artifacts import best_of, write_best_signals
+from .store.record_check import check_record
 from .targets import with_stops
 from .worker_loop import probe
 from .workers import GRACE_S, Workers, can_send, is_timeout, outcomes_isolated
@@ -69,7 +71,7 @@ class JobSummary:
     record_paths: list[Path]
     wall_time_s: float
     warmup_s: float = 0.0
-    #: The job's search score (:func:`vpid_bench.analysis.job.job_score`), lower is better.
+    #: The job's search score (:func:`vpid_bench.job_analysis.job_score`), lower is better.
     score: float | None = None
 
 
@@ -90,7 +92,7 @@ def _existing_ok(path: Path, rid: str) -> bool:
     except rec.CorruptRecordError as exc:
         _set_aside(path, str(exc).removeprefix(f"{path}: "))
         return False
-    bad = rec.check_record(record)
+    bad = check_record(record)
     if bad is not None:
         _set_aside(path, f"field {bad}")
         return False
@@ -140,7 +142,7 @@ def _read_records(paths: list[Path]) -> list[dict[str, Any]]:
             record = rec.read_record(path)
         except rec.CorruptRecordError:
             continue
-        if rec.check_record(record) is None:
+        if check_record(record) is None:
             records.append(record)
     return records
 
@@ -171,7 +173,7 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
             problems: ProblemCache | None = None, optima_dir: Path | None = None,
             pool: Workers | None = None) -> JobSummary:
     """Run every run of ``job`` and write one record per run into ``job_dir/records``; then
-    write what the records allow (:func:`~vpid_bench.analysis.job.analyse_job`) into
+    write what the records allow (:func:`~vpid_bench.job_analysis.analyse_job`) into
     ``optima_dir`` (default ``job_dir/optima``). ``pool``: the sweep's worker processes
     (``isolation=auto`` uses them when given; ``process`` starts its own without)."""
     pool, own_pool = _choose_workers(job, pool)
@@ -368,7 +370,7 @@ def _polish_at_once(job: Job, pool: Workers | None, facts: ProblemFacts, job_dir
                     optima_dir: Path, records: list[dict[str, Any]]
                     ) -> dict[str | None, dict[str, Any]] | None:
     """The job's optimum polishes (each instance's, and the per-problem files') shared out
-    to the job's workers at once (:func:`~vpid_bench.analysis.job.polish_share`, one task per
+    to the job's workers at once (:func:`~vpid_bench.job_analysis.polish_share`, one task per
     instance): the instance optima by instance id. ``None`` where the analysis polishes
     alone: in this process, on one worker, or for a problem without residuals. They were
     a quarter of the vpid1 build's wall time in one worker while the other waited."""
@@ -433,7 +435,7 @@ def set_aside_superseded(job_dir: Path, key: Mapping[str, Any],
 def _what_changed(paths: list[Path], provenance: Mapping[str, Mapping[str, Any]]) -> str:
     """What made the records at ``paths`` another job's, as far as they record it: another
     release of a plugin, or its code changed under the same version (the digest of its
-    installed source, :func:`~vpid_bench.records.provenance.code_digest`); else the
+    installed source, :func:`~vpid_bench.store.provenance.code_digest`); else the
     general words."""
     found: set[str] = set()
     for path in paths[:20]:  # a few tell; a job folder may hold thousands
@@ -489,7 +491,7 @@ def _run_missing(job: Job, calls: Any, facts: ProblemFacts, job_dir: Path,
         set_aside_superseded(job_dir, key, provenance)
         for run in _outcomes(job, calls, facts, list(todo), summary, pool, failure):
             rid, path = todo[run.index]
-            record = rec.make_record(job, run, rid, facts.instance(run.index), provenance)
+            record = make_record(job, run, rid, facts.instance(run.index), provenance)
             _refuse_swapped(job_dir, path.parent)
             if not job_dir.is_dir():  # moved away: writing would re-create it, half empty
                 raise VpidBenchError(f"{job_dir} was moved, renamed or removed while the job "

@@ -24,7 +24,7 @@ from . import hookspecs
 from .errors import ConfigError, PluginError
 from .optimizer import Optimizer, OptimizerParams
 from .problem import Problem, ProblemConfig
-from .records.provenance import code_digest, distribution_provenance, library_provenance
+from .store.provenance import code_digest, distribution_provenance, library_provenance
 
 ENTRY_POINT_GROUP = "vpid_bench"
 BLOCK_ENV = "VPID_BENCH_BLOCK_PLUGINS"
@@ -212,7 +212,7 @@ class Registry:
         "requires", "code"}`` and, for an optimizer that runs a library (``Optimizer.library``),
         ``"library": {"name", "version"}`` (distribution, version and requires empty for a plugin no
         distribution ships; ``code`` the digest of its installed source,
-        :func:`~vpid_bench.records.provenance.code_digest`, so a plugin changed under the
+        :func:`~vpid_bench.store.provenance.code_digest`, so a plugin changed under the
         same version is told apart)."""
         plugin = self._owner[(kind, name)]
         info = getattr(self.pm, "vpid_bench_info", None)

@@ -89,7 +89,7 @@ class Problem(abc.ABC):
         one pair per measured channel (e.g. ``z1'':measured``), or ``None`` when the problem
         has no signals (the default). Every array has the length of ``t``. At the end of a job
         the signals of its best run are written to ``best_signals.csv``
-        (:func:`vpid_bench.artifacts.write_best_signals`), which report sections plot.
+        (:func:`vpid_bench.store.artifacts.write_best_signals`), which report sections plot.
         """
         return None
 

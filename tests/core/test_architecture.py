@@ -225,11 +225,14 @@ def test_nothing_but_the_shell_imports_the_shell():
 
 
 def test_the_store_sits_below_analysis_targets_and_the_report():
-    """store/ (one module per file format) imports only the core's base modules and
-    records/, never a room that reads through it."""
+    """store/ (one module per file format) imports only the core's base modules, never a
+    room that reads or writes through it (the job's side: assemble, job_analysis,
+    experiment; the runner; the plugin registry)."""
     above = ("vpid_bench.analysis", "vpid_bench.report", "vpid_bench.shell",
              "vpid_bench.targets", "vpid_bench.experiment", "vpid_bench.build",
-             "vpid_bench.spec", "vpid_bench.workers", "vpid_bench.job_runs")
+             "vpid_bench.spec", "vpid_bench.workers", "vpid_bench.job_runs",
+             "vpid_bench.assemble", "vpid_bench.job_analysis", "vpid_bench.runner",
+             "vpid_bench.plugins", "vpid_bench.worker_loop")
     bad = [f"{p.name} -> {m}" for p in _files(CORE / "store") for m in _imports(p)
            if m.startswith(above)]
     assert bad == []
@@ -238,10 +241,11 @@ def test_the_store_sits_below_analysis_targets_and_the_report():
 def test_one_schema_string_per_file_format():
     """Each format's schema string is written once, in its module under store/ (the optimum
     file's was once in analysis/optimum.py and report/optima.py)."""
-    from vpid_bench.store import archive, optimum
+    from vpid_bench.store import archive, optimum, records
 
     for schema, home in ((optimum.SCHEMA, "store/optimum.py"),
-                         (archive.SCHEMA, "store/archive.py")):
+                         (archive.SCHEMA, "store/archive.py"),
+                         (records.SCHEMA, "store/records.py")):
         holders = [str(p.relative_to(CORE)) for p in _files(CORE)
                    if f'"{schema}"' in p.read_text(encoding="utf-8")]
         assert holders == [home], (schema, holders)

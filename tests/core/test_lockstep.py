@@ -8,13 +8,13 @@ import time
 import numpy as np
 import pytest
 
-from vpid_bench import records as rec
 from vpid_bench.api import Bounds, Optimizer, Problem
 from vpid_bench.build import ProblemCache, run_rng
 from vpid_bench.experiment import run_job
 from vpid_bench.job_runs import joins_lockstep
 from vpid_bench.runner import Lane, RunResult, RunTimeoutError, run, run_many
 from vpid_bench.spec import parse_job
+from vpid_bench.store import records as rec
 
 FAST_VEHICLE = ["problem=vehicle", "problem.iterations=3", "progress=false", "report=false"]
 

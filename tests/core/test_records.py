@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vpid_bench import records as rec
 from vpid_bench.build import run_rng
 from vpid_bench.experiment import run_from_config
-from vpid_bench.records import _umask
+from vpid_bench.fileio import _umask
+from vpid_bench.store import records as rec
 
 FAST = ["problem=functions", "optimizer=random", "runs=3", "problem.iterations=4",
         "progress=false"]
@@ -157,7 +157,7 @@ def test_records_hold_strict_json_with_the_sign_of_infinities(tmp_path, value, e
 
 
 def test_a_record_name_parses_back_to_its_index_and_id(tmp_path):
-    from vpid_bench.records import parse_record_name, record_path
+    from vpid_bench.store.records import parse_record_name, record_path
 
     assert parse_record_name(record_path(tmp_path, 7, "ab12cd").name) == (7, "ab12cd")
     assert parse_record_name("run-7.json") is None and parse_record_name("x.json") is None

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import pytest
 
-from vpid_bench import records as rec
 from vpid_bench.experiment import run_job
 from vpid_bench.spec import parse_job
+from vpid_bench.store import records as rec
 from vpid_bench.workers import RemoteError, Workers, describe_exit, portable
 
 FAST_VEHICLE = ["problem=vehicle", "problem.iterations=3", "progress=false", "report=false"]

@@ -10,8 +10,9 @@ import json
 import pytest
 from hostile_helpers import TINY, run_cli
 
-from vpid_bench import records as rec
 from vpid_bench.experiment import run_from_config
+from vpid_bench.store import records as rec
+from vpid_bench.store.record_check import check_record
 
 EDITS = {
     "f_best-text": (lambda d: d["result"].update(f_best="small"), "result.f_best"),
@@ -65,4 +66,4 @@ def test_12_the_command_resumes_past_it_with_exit_0(tmp_path):
         assert done.returncode == 0, done.stderr
         assert "error:" not in done.stderr and "Traceback" not in done.stderr
     assert len(list((tmp_path / "job" / "records" / "bad").iterdir())) == 1
-    assert rec.check_record(rec.read_record(path)) is None
+    assert check_record(rec.read_record(path)) is None

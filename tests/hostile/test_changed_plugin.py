@@ -1,7 +1,7 @@
 """Issue 35, failure 16: a plugin whose code changed, reinstalled under the same version (as one
 does while developing it), was served its old records without a word, though the README
 promises a changed plugin is never silently reused. Each run's id now holds a digest of the
-plugin's installed source (:func:`vpid_bench.records.provenance.code_digest`): the old
+plugin's installed source (:func:`vpid_bench.store.provenance.code_digest`): the old
 records are set aside with one line saying the plugin's code changed, and the runs are run
 again. The same code keeps its records."""
 

@@ -15,9 +15,9 @@ import pytest
 from hostile_helpers import TINY, error_lines, main_in_process, plan_of, read_only, run_cli
 
 from vpid_bench import Optimizer, OptimizerParams, hookimpl
-from vpid_bench import records as rec
 from vpid_bench.experiment import run_from_config
 from vpid_bench.plugins import Registry
+from vpid_bench.store import records as rec
 
 SWEEP = ["-m", "problem=functions", "optimizer=random,de1,de4", "runs=2",
          "problem.iterations=2", "progress=false", "report=false"]

@@ -13,10 +13,10 @@ from pathlib import Path
 import pytest
 from hostile_helpers import TINY, plan_of, run_cli
 
-from vpid_bench import records as rec
 from vpid_bench.api import Problem
 from vpid_bench.experiment import run_from_config
 from vpid_bench.shell.callbacks import MAX_JOB_DIR, job_dir_name
+from vpid_bench.store import records as rec
 
 
 def _records(tmp_path: Path, compose_config, registry, runs: int = 3) -> list[Path]:
@@ -153,7 +153,7 @@ def test_4_editing_the_reference_file_runs_the_job_again(tmp_path, registry):
 
 def test_5_a_planted_link_is_replaced_never_followed(tmp_path, registry):
     from vpid_bench.build import build_problem
-    from vpid_bench.records import write_job_status
+    from vpid_bench.store.job_status import write_job_status
 
     outside = tmp_path / "outside"
     outside.mkdir()

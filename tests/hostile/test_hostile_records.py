@@ -16,9 +16,9 @@ from extras import limit
 from hostile_helpers import CLI, TINY, cli_env, run_cli
 
 from vpid_bench import hookimpl
-from vpid_bench import records as rec
 from vpid_bench.api import Bounds, Problem, ProblemConfig
 from vpid_bench.experiment import run_from_config
+from vpid_bench.store import records as rec
 
 
 @pytest.fixture(scope="module")
@@ -148,8 +148,8 @@ def test_17_minus_inf_from_a_problem_fails_its_run_and_the_report_says_so(tmp_pa
 
 
 def test_17_old_records_with_null_still_read_as_inf():
-    from vpid_bench.records.io import decode_numbers
     from vpid_bench.report.load import _num
+    from vpid_bench.store.records import decode_numbers
 
     assert _num(None) == math.inf and _num("-inf") == -math.inf and math.isnan(_num("nan"))
     assert decode_numbers({"result": {"f_best": "nan", "x_best": ["inf", 1.0],
@@ -163,7 +163,7 @@ def test_json_nested_past_the_recursion_limit_is_a_corrupt_record(tmp_path):
     import json as _json
 
     from vpid_bench.fileio import loads_json
-    from vpid_bench.records import CorruptRecordError, read_record
+    from vpid_bench.store.records import CorruptRecordError, read_record
 
     deep = "[" * 100_000 + "]" * 100_000
     with pytest.raises(_json.JSONDecodeError, match="nested too deeply"):

@@ -77,7 +77,7 @@ def test_15_the_report_folder_of_a_sweep_is_never_a_link(tmp_path, compose_confi
 def test_15_the_per_problem_files_of_a_sweep_are_never_written_through_a_link(
         tmp_path, compose_config, registry, capsys):
     """The bounds and floors a sweep makes once per problem live in ``optima/per-problem``
-    (``vpid_bench.analysis.job.shared_file``): a link planted there between two jobs is
+    (``vpid_bench.job_analysis.shared_file``): a link planted there between two jobs is
     removed like one named ``optima``, and the second job still gets its files."""
     sweep, outside = tmp_path / "sweep", tmp_path / "outside"
     run_from_config(compose_config([*SMALL, "optimizer=random"]), sweep / "a", registry,

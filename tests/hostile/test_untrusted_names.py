@@ -13,9 +13,9 @@ from pathlib import Path
 import pytest
 from hostile_helpers import TINY, run_cli
 
-from vpid_bench import records as rec
 from vpid_bench.experiment import run_from_config
 from vpid_bench.report.safe import clean, escape, escape_html
+from vpid_bench.store import records as rec
 
 #: A name that sets the window title, rings, colours, reverses the text and forges a row.
 HOSTILE = "evil\x1b]0;pwned\x07\x1b[31m\u202e\r\n| forged | row |\x9b2J"

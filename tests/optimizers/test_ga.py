@@ -302,7 +302,7 @@ def test_runner_trace_spends_ps_per_generation():
 
 def test_records_show_ps_times_iterations_plus_one(compose_config, tmp_path):
     from vpid_bench.experiment import run_from_config
-    from vpid_bench.records import read_record
+    from vpid_bench.store.records import read_record
 
     for ps, iterations in ((20, 3), (30, 2)):
         cfg = compose_config(["problem=functions", "optimizer=ga", f"problem.ps={ps}",

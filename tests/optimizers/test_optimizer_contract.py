@@ -139,7 +139,7 @@ def test_compose_variant_parameters(compose_config):
 
 def test_run_from_config_ga_and_de(compose_config, tmp_path):
     from vpid_bench.experiment import run_from_config
-    from vpid_bench.records import read_record
+    from vpid_bench.store.records import read_record
 
     for name, expected in (("de8", [10, 10, 10, 10]), ("ga", [10, 10, 10, 10]),
                            ("ga", [20, 20, 20, 20])):

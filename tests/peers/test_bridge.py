@@ -148,7 +148,7 @@ class FailingPlugin:
 def test_the_job_records_a_library_failure_and_goes_on(tmp_path):
     from vpid_bench.experiment import run_from_config
     from vpid_bench.plugins import Registry, get_plugin_manager
-    from vpid_bench.records import read_record
+    from vpid_bench.store.records import read_record
 
     registry = Registry(get_plugin_manager(extra_plugins=[("toys", FailingPlugin())]))
     base = {"seed": 0, "runs": 2, "progress": False, "report": False,

@@ -18,7 +18,7 @@ from vpid_bench.api import ConfigError
 from vpid_bench.build import build_problem
 from vpid_bench.experiment import run_from_config
 from vpid_bench.params import build_dataclass
-from vpid_bench.records import read_record
+from vpid_bench.store.records import read_record
 
 ng = pytest.importorskip("nevergrad")
 

@@ -8,7 +8,8 @@ from typing import Any
 import numpy as np
 
 from vpid_bench.api import relative_errors_percent
-from vpid_bench.records import SCHEMA, record_path, stable_hash, write_job_status, write_record
+from vpid_bench.store.job_status import write_job_status
+from vpid_bench.store.records import SCHEMA, record_path, stable_hash, write_record
 
 PAPER_NAMES = ["m", "I", "m1", "m2", "k1", "k2", "c1", "c2", "a1"]
 OV = np.array([505.10, 651.00, 28.58, 54.30, 15000, 15000, 1828.00, 1828.00, 1.468])

@@ -15,8 +15,8 @@ sys.path.insert(0, str(Path(__file__).parents[1] / "sweeps"))
 from sweep_helpers import run_cli  # noqa: E402
 
 from vpid_bench.machine import machine_facts  # noqa: E402
-from vpid_bench.records import fingerprint  # noqa: E402
 from vpid_bench.report.anytime import RunHits, ert, run_hits  # noqa: E402
+from vpid_bench.store.records import fingerprint
 
 
 def _record(rid, ev, best, secs):

@@ -14,10 +14,10 @@ from extras import limit
 from report_synth import OV, PAPER_NAMES, objective_job, record, write_job
 
 from vpid_bench.api import Bounds, Problem, ProblemConfig
-from vpid_bench.artifacts import best_vector, write_best_signals
 from vpid_bench.report.build import NoRecordsError, build_report
 from vpid_bench.report.cli import main as report_main
 from vpid_bench.report.load import load_records, run_rows
+from vpid_bench.store.artifacts import best_vector, write_best_signals
 
 
 @dataclasses.dataclass(frozen=True)

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from extras import limit
 
-from vpid_bench import records as rec
+from vpid_bench.store import records as rec
 
 CLI = [sys.executable, "-c", "from vpid_bench.shell.main import main; main()"]
 

@@ -18,10 +18,10 @@ from extras import limit, needs
 from sweep_helpers import run_cli
 
 from vpid_bench import Optimizer, OptimizerParams, hookimpl
-from vpid_bench import records as rec
 from vpid_bench.api import ConfigError
 from vpid_bench.experiment import run_from_config
 from vpid_bench.plugins import Registry
+from vpid_bench.store import records as rec
 
 #: The joblib launcher comes with an extra (installed by ``make install``); without it the
 #: cases that name it are skipped, not failed.
@@ -354,7 +354,7 @@ def test_broken_and_colliding_plugins(tmp_path):
 
 
 def test_corrupt_job_status_and_record_are_reported_not_fatal(tmp_path):
-    from vpid_bench.records import read_job_status
+    from vpid_bench.store.job_status import read_job_status
 
     (tmp_path / "job.json").write_text("{not json")
     assert read_job_status(tmp_path) is None

@@ -15,7 +15,7 @@ import pytest
 from extras import limit
 from sweep_helpers import CLI, cli_env, fingerprints, run_cli
 
-from vpid_bench import records as rec
+from vpid_bench.store import records as rec
 
 # Two jobs of 8 runs; each run is a few hundred generations, so the sweep takes seconds
 # and a kill lands part-way.

@@ -254,7 +254,7 @@ def write_diagnostics(problem: Any, x: Any, job_dir: Any) -> Any:
     problem's code fails there, the file with ``status`` ``failed`` and why."""
     from pathlib import Path
 
-    from ..records.io import write_json_atomic
+    from ..store.records import write_json_atomic
 
     try:
         data = {"status": "ok", **problem_diagnostics(problem, x)}

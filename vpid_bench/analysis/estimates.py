@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..problem import Problem
-from ..records.io import write_json_atomic
+from ..store.records import write_json_atomic
 
 PROFILE_FILE = "profile.json"
 COMPARISONS_FILE = "comparisons.json"

@@ -32,8 +32,8 @@ import numpy as np
 
 from ..fileio import own_folder
 from ..problem import PROTOCOL_KEYS, Problem
-from ..records.io import stable_hash, write_json_atomic
 from ..store.optimum import SCHEMA, read_optimum_data
+from ..store.records import stable_hash, write_json_atomic
 
 #: A run whose best is within this factor of the known optimum is polished too: it may sit in
 #: another basin whose minimum is lower.

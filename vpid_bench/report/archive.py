@@ -33,7 +33,6 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..records import CorruptRecordError, canonical_json, parse_record
 from ..store.archive import (  # noqa: F401  (the format's home; names kept here)
     ARCHIVE_DIR_ENV,
     IOH,
@@ -68,6 +67,7 @@ from ..store.archive import (  # noqa: F401  (the format's home; names kept here
     optimum_instance,
     runs_installed,
 )
+from ..store.records import CorruptRecordError, canonical_json, parse_record
 from .load import check_record
 from .optima import Optimum, _data_settings
 from .plausible import first_reasons, implausible

@@ -34,7 +34,7 @@ from ..analysis.identifiability import ROUNDING
 from ..analysis.optimum import find_optimum, load_optima, record_settings
 from ..analysis.profile import STRUCTURAL_RATIO
 from ..fileio import loads_json
-from ..records.io import stable_hash
+from ..store.records import stable_hash
 from .estimator_floors import read_estimator_floors
 from .estimator_floors import sentence as estimator_sentence
 from .load import first_file_by_context

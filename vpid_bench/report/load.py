@@ -28,14 +28,9 @@ import numpy as np
 
 from ..errors import VpidBenchError
 from ..problem import FILLED_PARAMS
-from ..records import (
-    CorruptRecordError,
-    check_record,
-    iter_record_files,
-    read_job_status,
-    read_record,
-)
-from ..records.io import decode_number
+from ..store.job_status import read_job_status
+from ..store.record_check import check_record
+from ..store.records import CorruptRecordError, decode_number, iter_record_files, read_record
 from .safe import clean
 
 #: Problem-config keys that never define a context of their own (ps is taken from the optimizer).

@@ -86,7 +86,7 @@ def pack(sweep_dir: Path, suite: str, out: Path, *, command: str, commit: str | 
     and return its manifest. The records and the instance optima are the sweep's own.
     ``optima_only``: ship the instance optima alone (no runs to rank beside a report's, the
     optima that ``target=`` stops at)."""
-    from ..records import _jsonable
+    from ..store.records import _jsonable
     from .compute import compute
 
     data = compute([sweep_dir], True, 0.05, "random", archive=False)

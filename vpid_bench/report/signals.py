@@ -2,7 +2,7 @@
 the ``signals`` capability (:meth:`~vpid_bench.api.Problem.signals`).
 
 Each job writes the signals of its best run (``best_signals.csv``,
-:mod:`vpid_bench.artifacts`); this section draws the file of the best job of each problem (the
+:mod:`vpid_bench.store.artifacts`); this section draws the file of the best job of each problem (the
 problem is never rebuilt from a record): per channel the measured and the fitted signal and,
 under it, the residual measured − fitted. A problem without signals gets no section.
 """
@@ -14,7 +14,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from ..artifacts import BEST_SIGNALS, BadArtifactError, read_best_signals
+from ..store.artifacts import BEST_SIGNALS, BadArtifactError, read_best_signals
 from .sections import Contribution, ReportContext, Section
 
 TITLE = "Measured vs fitted signals of the best run"

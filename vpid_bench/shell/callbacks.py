@@ -24,7 +24,7 @@ from typing import Any
 from hydra.experimental.callback import Callback
 
 from ..fileio import own_folder
-from ..records import write_json_atomic
+from ..store.records import write_json_atomic
 
 log = logging.getLogger(__name__)
 REPORT_SUBDIR = "report"

@@ -174,7 +174,7 @@ def _basic_launcher(hydra_cfg: Any) -> bool:
 def _write_status(job_dir: Path, status: str, detail: Any) -> None:
     """``job.json``, or one line on stderr (and a note for the summary) when it cannot be
     written (a read-only folder, a full disk): the sweep goes on."""
-    from ..records import write_job_status
+    from ..store.job_status import write_job_status
 
     try:
         write_job_status(job_dir, status, detail)

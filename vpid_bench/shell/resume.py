@@ -23,8 +23,8 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError
-from ..records import JOB_STATUS_FILE, read_job_status
 from ..spec import OPERATIONAL_KEYS
+from ..store.job_status import JOB_STATUS_FILE, read_job_status
 from .callbacks import INVOCATION_ENV
 
 LOCK_FILE = ".vpid-bench.lock"

@@ -1,7 +1,15 @@
-"""The store: one module per file format that more than one room reads, each holding its
-schema string, its size caps, its reader and its checks (:mod:`.optimum`: the instance-optimum
-file; :mod:`.archive`: an archive folder's manifest, checked files and optima).
+"""The store: one module per file format, each holding its schema string, its size caps, its
+reader, its writer and its checks:
 
-It sits below ``analysis/``, ``targets.py`` and ``report/`` (docs/architecture.md): it
-imports only the core's base modules (``errors``, ``fileio``, ``problem``, ``records``).
+* :mod:`.records`: a run's record (``records/run-<index>-<run_id>.json``), with
+  :mod:`.record_check` (the field rules every reader applies) and :mod:`.provenance` (which
+  versions of what produced it);
+* :mod:`.job_status`: a job folder's ``job.json``;
+* :mod:`.artifacts`: the files a job leaves for the report (the best run's signals);
+* :mod:`.optimum`: the instance-optimum file;
+* :mod:`.archive`: an archive folder's manifest, checked files and optima.
+
+It sits below the job (``experiment.py``, ``assemble.py``, ``job_analysis.py``), ``analysis/``,
+``targets.py`` and ``report/`` (docs/architecture.md), and imports only the core's base modules
+(``errors``, ``fileio``, ``problem``).
 """

@@ -27,8 +27,8 @@ from typing import Any
 
 from ..errors import VpidBenchError
 from ..fileio import loads_json, read_text_limited
-from ..records import canonical_json
 from .optimum import Optimum, optimum_from_data
+from .records import canonical_json
 
 SCHEMA = "vpid-bench/archive/1"
 MANIFEST = "manifest.json"

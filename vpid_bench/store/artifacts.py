@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from .fileio import read_text_limited
+from ..fileio import read_text_limited
 
 BEST_SIGNALS = "best_signals.csv"
 MAGIC = "# vpid-bench best signals 1"

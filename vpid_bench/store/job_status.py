@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ..fileio import loads_json, read_text_limited
-from .io import _jsonable, write_record
+from .records import _jsonable, write_record
 
 JOB_STATUS_FILE = "job.json"
 

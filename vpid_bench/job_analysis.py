@@ -10,10 +10,10 @@ from typing import Any
 
 import numpy as np
 
-from ..fileio import loads_json, own_folder, read_text_limited
-from ..problem import Problem, kept_instance, offers_residuals
-from ..records.io import write_json_atomic
-from ..spec import Job
+from .fileio import loads_json, own_folder, read_text_limited
+from .problem import Problem, kept_instance, offers_residuals
+from .spec import Job
+from .store.records import write_json_atomic
 
 
 def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
@@ -36,7 +36,7 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
     ``polished``: the instance optima already made by :func:`polish_share` tasks (keyed by
     instance id), with the per-problem files: nothing is polished here then, and an
     instance without one (its task failed) has no gaps."""
-    from .estimates import write_comparisons
+    from .analysis.estimates import write_comparisons
 
     write_comparisons(problem, job_dir)  # first: cheap, and wanted whatever follows
     if not offers_residuals(type(problem)):
@@ -81,7 +81,7 @@ def _instance_optimum(job: Job, inst: Problem, optima_dir: Path,
                       runs: list[tuple[np.ndarray, float]]) -> dict[str, Any] | None:
     """The instance's optimum, polished as far as ``runs`` ask (:mod:`.optimum`); ``None``
     without a truth and without a run to start from."""
-    from .optimum import update_instance_optimum
+    from .analysis.optimum import update_instance_optimum
 
     if inst.x_true is None and not runs:
         return None  # nothing to start a polish from
@@ -93,7 +93,7 @@ def _residual_analysis(job: Job, problem: Problem, job_dir: Path, optima_dir: Pa
                        polished: Mapping[str | None, dict[str, Any]] | None
                        ) -> dict[int, float]:
     """:func:`analyse_job` for a problem with residuals."""
-    from .estimates import write_profile
+    from .analysis.estimates import write_profile
 
     truth = problem.x_true is not None
     if truth and polished is None:
@@ -117,7 +117,7 @@ def _residual_analysis(job: Job, problem: Problem, job_dir: Path, optima_dir: Pa
         inst, optimum = min(optima, key=lambda o: o[1]["f_opt"])
         write_profile(inst, optimum, job_dir)
     if optima:  # truth or not: the first instance's optimum (no truth: the lowest)
-        from .diagnostics import write_diagnostics
+        from .analysis.diagnostics import write_diagnostics
 
         inst, optimum = optima[0] if truth else min(optima, key=lambda o: o[1]["f_opt"])
         write_diagnostics(inst, optimum["x_opt"], job_dir)
@@ -128,10 +128,10 @@ def _per_problem_files(job: Job, problem: Problem, job_dir: Path, optima_dir: Pa
     """The job's ``identifiability.json`` (instance 0's bounds, and each instance's under
     ``instances``) and ``estimators.json`` (the floors per estimator), each made once per
     sweep (:func:`shared_file`): they depend on the problem's data and the runs only."""
-    from .estimator_floors import FILE as FLOORS_FILE
-    from .estimator_floors import INSTANCES as FLOORS_INSTANCES
-    from .estimator_floors import estimator_floors
-    from .identifiability import cramer_rao, per_instance
+    from .analysis.estimator_floors import FILE as FLOORS_FILE
+    from .analysis.estimator_floors import INSTANCES as FLOORS_INSTANCES
+    from .analysis.estimator_floors import estimator_floors
+    from .analysis.identifiability import cramer_rao, per_instance
 
     def bounds() -> dict[str, Any] | None:
         crb = cramer_rao(problem)
@@ -161,7 +161,7 @@ def shared_file(optima_dir: Path, name: str, problem: Problem, settings: Mapping
     hash of the problem's name, record settings, data digest and ``more``, and copied by
     every later job of the same problem (a vpid1 build has 19 jobs per problem; the floors
     polish 15 optima each). A kept file that is not a JSON object is made again."""
-    from .optimum import _locked, optimum_key
+    from .analysis.optimum import _locked, optimum_key
 
     key = optimum_key(problem.name, settings, problem.content_digest(), str(more))
     path = own_folder(own_folder(optima_dir) / SHARED_DIR) / f"{Path(name).stem}-{key}.json"

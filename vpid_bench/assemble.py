@@ -27,16 +27,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..bounds import relative_errors_percent
-from ..machine import machine_facts
-from ..runner import RunResult
-from .io import SCHEMA
-from .provenance import package_versions
+from .bounds import relative_errors_percent
+from .machine import machine_facts
+from .runner import RunResult
+from .store.provenance import package_versions
+from .store.records import SCHEMA
 
 if TYPE_CHECKING:  # the job's types; records sit below the job in the layers
-    from ..facts import InstanceFacts
-    from ..job_runs import RunOutcome
-    from ..spec import Job
+    from .facts import InstanceFacts
+    from .job_runs import RunOutcome
+    from .spec import Job
 
 
 def result_section(result: RunResult, derived: Mapping[str, Any],
