@@ -10,10 +10,10 @@ from typing import Any
 
 import numpy as np
 
-from .fileio import loads_json, own_folder, read_text_limited
+from .fileio import own_folder
 from .problem import Problem, kept_instance, offers_residuals
 from .spec import Job
-from .store.records import write_json_atomic
+from .store.job_files import IDENTIFIABILITY, read_job_json, write_job_json
 
 
 def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
@@ -142,12 +142,12 @@ def _per_problem_files(job: Job, problem: Problem, job_dir: Path, optima_dir: Pa
     settings = job.problem_settings()
     n_floors = max(1, min(FLOORS_INSTANCES, job.spec.runs))  # what the floors depend on
     for name, make, more in (
-            ("identifiability.json", bounds, job.spec.runs),
+            (IDENTIFIABILITY, bounds, job.spec.runs),
             (FLOORS_FILE, lambda: estimator_floors(problem, job.spec.runs), n_floors)):
         if not (job_dir / name).is_file():
             data = shared_file(optima_dir, name, problem, settings, more, make)
             if data is not None:
-                write_json_atomic(job_dir / name, data)
+                write_job_json(job_dir / name, data)
 
 
 #: Where :func:`shared_file` keeps a sweep's per-problem files, inside its optima folder.
@@ -166,21 +166,13 @@ def shared_file(optima_dir: Path, name: str, problem: Problem, settings: Mapping
     key = optimum_key(problem.name, settings, problem.content_digest(), str(more))
     path = own_folder(own_folder(optima_dir) / SHARED_DIR) / f"{Path(name).stem}-{key}.json"
     with _locked(path):  # launcher workers share the folder
-        try:
-            kept = loads_json(read_text_limited(path, MAX_SHARED_BYTES)) if path.is_file() \
-                else None
-        except (OSError, UnicodeDecodeError, ValueError):
-            kept = None
+        kept = read_job_json(path)[0]
         if isinstance(kept, dict):
             return kept
         data = make()
         if data is not None:
-            write_json_atomic(path, data)
+            write_job_json(path, data)
         return data
-
-
-#: The largest per-problem file read back (bytes).
-MAX_SHARED_BYTES = 1_000_000
 
 
 def _run_bests(records: list[dict[str, Any]]) -> dict[int, list[tuple[np.ndarray, float]]]:

@@ -273,3 +273,13 @@ def test_the_report_is_served_by_name_only_through_the_plugin_api():
                     re.fullmatch(r"(vpid_bench)?\.report(\.\w+)*", node.value):
                 holders.append(str(p.relative_to(CORE)))
     assert sorted(set(holders)) == ["__init__.py"]
+
+
+def test_json_files_are_parsed_only_in_the_store():
+    """One reader per file format: outside store/ (and fileio's safe parser) nothing in the
+    core parses a JSON file of its own; the shell reads back only the report status it wrote."""
+    parses = re.compile(r"\b(loads_json|json\.loads?)\(")
+    bad = [str(p.relative_to(ROOT)) for p in _files(CORE)
+           if p.relative_to(CORE).parts[0] not in ("store", "fileio.py")
+           and parses.search(p.read_text(encoding="utf-8"))]
+    assert bad == ["vpid_bench/shell/main.py"], bad

@@ -17,6 +17,7 @@ from vpid_bench.experiment import run_from_config
 from vpid_bench.params import hydra_node
 from vpid_bench.report.build import build_report
 from vpid_bench.report.identifiability import UNDETERMINED_PERCENT, reference_levels
+from vpid_bench.store.job_files import MAX_BYTES
 
 RUNS = 3
 SHORT, LONG = "vehicle record.extra=0", "vehicle record.extra=0.5"  # the designs' labels
@@ -171,7 +172,7 @@ def test_bad_identifiability_files_are_skipped_with_one_line(sweep, tmp_path, re
     elif bad == "CRB_NAN":
         text = json.dumps({**good, "crb_percent": good["crb_percent"][:-1] + ["x"]})
     elif bad == "BIG":
-        text = json.dumps({**good, "pad": "x" * 1_100_000})
+        text = json.dumps({**good, "pad": "x" * (MAX_BYTES + 100_000)})
     elif bad == "INSTANCE_RUNS":
         text = json.dumps({**good, "instances": [{**good["instances"][0], "runs": [-1]}]})
     elif bad == "INSTANCE_BOUNDS":

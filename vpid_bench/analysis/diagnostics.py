@@ -41,6 +41,8 @@ from typing import Any
 
 import numpy as np
 
+from ..store.job_files import DIAGNOSTICS
+
 SCHEMA = "vpid-bench/diagnostics/1"
 #: The two-sided 99 % normal quantile (scipy.stats.norm.ppf(0.995)).
 Z99 = 2.5758293035489004
@@ -211,7 +213,7 @@ def fit_diagnostics(residuals: np.ndarray, groups: np.ndarray,
 
 
 #: The file a job writes (:func:`write_diagnostics`).
-FILE = "diagnostics.json"
+FILE = DIAGNOSTICS
 
 
 def problem_diagnostics(problem: Any, x: Any) -> dict[str, Any]:
@@ -254,11 +256,11 @@ def write_diagnostics(problem: Any, x: Any, job_dir: Any) -> Any:
     problem's code fails there, the file with ``status`` ``failed`` and why."""
     from pathlib import Path
 
-    from ..store.records import write_json_atomic
+    from ..store.job_files import write_job_json
 
     try:
         data = {"status": "ok", **problem_diagnostics(problem, x)}
     except (ValueError, FloatingPointError, np.linalg.LinAlgError, TypeError) as exc:
         data = {"schema": SCHEMA, "status": "failed",
                 "reason": " ".join(f"{type(exc).__name__}: {exc}".split())[:200]}
-    return write_json_atomic(Path(job_dir) / FILE, data)
+    return write_job_json(Path(job_dir) / FILE, data)

@@ -23,10 +23,10 @@ from typing import Any
 import numpy as np
 
 from ..problem import Problem
-from ..store.records import write_json_atomic
+from ..store.job_files import COMPARISONS, PROFILE, write_job_json
 
-PROFILE_FILE = "profile.json"
-COMPARISONS_FILE = "comparisons.json"
+PROFILE_FILE = PROFILE
+COMPARISONS_FILE = COMPARISONS
 PROFILE_SCHEMA = "vpid-bench/profile/1"
 COMPARISONS_SCHEMA = "vpid-bench/comparisons/1"
 #: Longest a profile may take (s), judged from its first fit before it starts (a job's
@@ -62,7 +62,7 @@ def write_profile(problem: Problem, optimum: dict[str, Any], job_dir: Path,
     except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:
         out.update(status="failed", reason=" ".join(f"{type(exc).__name__}: {exc}".split())[:200])
     out["seconds"] = time.perf_counter() - began
-    return write_json_atomic(Path(job_dir) / PROFILE_FILE, out)
+    return write_job_json(Path(job_dir) / PROFILE_FILE, out)
 
 
 def comparison_rows(problem: Problem) -> list[dict[str, Any]]:
@@ -96,6 +96,6 @@ def write_comparisons(problem: Problem, job_dir: Path) -> Path | None:
     rows = comparison_rows(problem)
     if not rows:
         return None
-    return write_json_atomic(Path(job_dir) / COMPARISONS_FILE,
+    return write_job_json(Path(job_dir) / COMPARISONS_FILE,
                              {"schema": COMPARISONS_SCHEMA, "problem": problem.name,
                               "rows": rows})

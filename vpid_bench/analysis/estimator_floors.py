@@ -18,11 +18,12 @@ from typing import Any
 from ..errors import VpidBenchError
 from ..estimators import OBJECTIVES
 from ..problem import Problem, kept_instance
+from ..store.job_files import ESTIMATORS
 
 #: The instances each objective's optimum is polished on (0 .. INSTANCES - 1, at most the
 #: job's runs): a few polishes per objective keep the job's analysis short.
 INSTANCES = 5
-FILE = "estimators.json"
+FILE = ESTIMATORS
 
 
 def offers_objectives(problem: Problem) -> bool:

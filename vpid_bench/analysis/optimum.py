@@ -32,8 +32,8 @@ import numpy as np
 
 from ..fileio import own_folder
 from ..problem import PROTOCOL_KEYS, Problem
-from ..store.optimum import SCHEMA, read_optimum_data
-from ..store.records import stable_hash, write_json_atomic
+from ..store.optimum import SCHEMA, read_optimum_data, write_optimum_file
+from ..store.records import stable_hash
 
 #: A run whose best is within this factor of the known optimum is polished too: it may sit in
 #: another basin whose minimum is lower.
@@ -273,5 +273,5 @@ def _update(problem: Problem, settings: Mapping[str, Any], path: Path, x_start: 
                     if metrics is not None else {}),
     }
     if changed:
-        write_json_atomic(path, out)
+        write_optimum_file(path, out)
     return out

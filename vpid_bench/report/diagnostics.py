@@ -27,14 +27,12 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..analysis.diagnostics import FILE, MISFIT, SCHEMA
+from ..analysis.diagnostics import MISFIT, SCHEMA
 from ..analysis.intervals import Z95
-from ..fileio import loads_json
+from ..store.job_files import DIAGNOSTICS, read_job_json
 from .render import fmt
 from .safe import escape
 
-#: Larger files are not read (a file has ~2 kB per channel and input).
-MAX_BYTES = 2_000_000
 #: Most channels, inputs per channel and lags read.
 MAX_GROUPS, MAX_INPUTS, MAX_LAGS = 64, 16, 200
 TITLE = "Fit diagnostics: residual autocorrelation and cross-correlation"
@@ -90,12 +88,7 @@ def _intervals(iv: Any, d: int) -> dict[str, Any] | None:
 
 def read_diagnostics(path: Path) -> dict[str, Any] | None:
     """A job's ``diagnostics.json``, checked; ``None`` when missing, failed or malformed."""
-    try:
-        if path.is_symlink() or not path.is_file() or path.stat().st_size > MAX_BYTES:
-            return None
-        data = loads_json(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError):
-        return None
+    data = read_job_json(path)[0]
     if not isinstance(data, dict) or data.get("schema") != SCHEMA or data.get("status") != "ok":
         return None
     groups = data.get("groups")
@@ -126,7 +119,7 @@ def by_context(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str,
         rec = by_id.get(row["run_id"])
         if rec is None:
             continue
-        path = Path(str(rec.get("_job_dir", "."))) / FILE
+        path = Path(str(rec.get("_job_dir", "."))) / DIAGNOSTICS
         if path in tried:
             continue
         tried.add(path)

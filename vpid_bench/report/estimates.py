@@ -22,11 +22,9 @@ from ..analysis.estimates import (
     PROFILE_FILE,
     PROFILE_SCHEMA,
 )
-from ..fileio import loads_json
+from ..store.job_files import read_job_json
 from .load import first_file_by_context
 
-#: Larger files are not read (a profile of 1000 parameters is about 100 kB).
-MAX_BYTES = 1_000_000
 #: The words every no-truth context starts with (the first screen and the body).
 NO_TRUTH = ("No truth: the parameters that made this record are not known (a measured "
             "record), so no error against any nominal value is computed")
@@ -135,12 +133,7 @@ def read_profile(path: Path, d: int) -> dict[str, Any] | None:
 
 
 def _read(path: Path) -> Any:
-    try:
-        if path.is_symlink() or not path.is_file() or path.stat().st_size > MAX_BYTES:
-            return None
-        return loads_json(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError):
-        return None
+    return read_job_json(path)[0]
 
 
 def read_comparisons(path: Path, record: Mapping[str, Any]) -> list[dict[str, Any]] | None:

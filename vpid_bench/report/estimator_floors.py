@@ -8,14 +8,10 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..analysis.estimator_floors import FILE
 from ..estimators import DESCRIPTION, OBJECTIVES
-from ..fileio import loads_json
+from ..store.job_files import ESTIMATORS, read_job_json
 from .load import first_file_by_context
 from .safe import escape
-
-#: Larger files are not read (three objectives of 1000 instances are ~60 kB).
-MAX_BYTES = 200_000
 
 
 def _number(v: Any) -> bool:
@@ -26,14 +22,9 @@ def _number(v: Any) -> bool:
 def read_estimator_floors(path: Path) -> tuple[dict[str, Any] | None, str]:
     """A job's ``estimators.json``: ``(data, "")`` or ``(None, why)`` for a file that is
     missing, too large, not JSON or has a field of the wrong type or value."""
-    try:
-        if path.is_symlink() or not path.is_file():
-            return None, "not a regular file"
-        if path.stat().st_size > MAX_BYTES:
-            return None, f"more than {MAX_BYTES} bytes"
-        data = loads_json(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        return None, f"unreadable ({type(exc).__name__})"
+    data, why = read_job_json(path)
+    if why:
+        return None, why
     if not isinstance(data, dict):
         return None, "not a JSON object"
     n = data.get("instances")
@@ -59,7 +50,7 @@ def read_estimator_floors(path: Path) -> tuple[dict[str, Any] | None, str]:
 def by_context(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
                ) -> dict[str, dict[str, Any]]:
     """Per context, the first readable ``estimators.json`` of its jobs."""
-    return first_file_by_context(records, rows, FILE,
+    return first_file_by_context(records, rows, ESTIMATORS,
                                  lambda path, _rec: read_estimator_floors(path)[0])
 
 

@@ -29,11 +29,10 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..analysis.estimator_floors import FILE as FLOORS_FILE
 from ..analysis.identifiability import ROUNDING
 from ..analysis.optimum import find_optimum, load_optima, record_settings
 from ..analysis.profile import STRUCTURAL_RATIO
-from ..fileio import loads_json
+from ..store.job_files import ESTIMATORS, IDENTIFIABILITY, read_job_json
 from ..store.records import stable_hash
 from .estimator_floors import read_estimator_floors
 from .estimator_floors import sentence as estimator_sentence
@@ -46,9 +45,7 @@ from .sections import Contribution, ReportContext, Section
 #: percent is "not determined" by the design: even an efficient estimator would miss it by
 #: more than 10 % in one run of three, and a 95 % interval would span more than ±20 %.
 UNDETERMINED_PERCENT = 10.0
-#: Larger files are not read (an identifiability file of 1000 parameters is ~100 kB).
-MAX_BYTES = 1_000_000
-FILE = "identifiability.json"
+FILE = IDENTIFIABILITY
 #: Instances (and runs of one instance) an identifiability file may list.
 MAX_INSTANCES = 100_000
 #: The noise convention, in words (each problem gives σ per residual group or per sample
@@ -77,15 +74,9 @@ def read_identifiability(path: Path, names: Sequence[str]) -> tuple[dict[str, An
     ``(data, "")``, or ``(None, why)`` for a file that is missing, too large, not JSON or
     has a field of the wrong type, size or value."""
     d = len(names)
-    try:
-        if path.is_symlink() or not path.is_file():
-            return None, "not a regular file"
-        size = path.stat().st_size
-        if size > MAX_BYTES:
-            return None, f"{size} bytes, more than {MAX_BYTES}"
-        data = loads_json(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        return None, f"unreadable ({type(exc).__name__})"
+    data, why = read_job_json(path)
+    if why:
+        return None, why
     if not isinstance(data, dict):
         return None, "not a JSON object"
     checks = (
@@ -334,7 +325,7 @@ def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
         metric = d["rows"][0].get("metric_name")
         floors, errors = _floors(d, names, metric, optima)
         per_estimator = next((data for job in d["jobs"] for data in
-                              [read_estimator_floors(job / FLOORS_FILE)[0]] if data), None)
+                              [read_estimator_floors(job / ESTIMATORS)[0]] if data), None)
         out.append({
             "label": _design_label(d["contexts"]), "contexts": sorted(d["contexts"]),
             "names": names, "true": params.get("true"), "crb": crb, "metric": metric,

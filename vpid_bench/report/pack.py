@@ -18,7 +18,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..fileio import loads_json
+from ..errors import VpidBenchError
+from ..store.optimum import read_optimum_data
 from .archive import (
     DROPPED,
     IOH,
@@ -105,7 +106,7 @@ def pack(sweep_dir: Path, suite: str, out: Path, *, command: str, commit: str | 
     for o in sorted(optima, key=lambda o: (o.problem, str(o.instance), o.f_opt)):
         lowest.setdefault(optimum_instance(o), o)
     (out / OPTIMA).write_text("".join(
-        json.dumps(loads_json(o.path.read_text(encoding="utf-8")), sort_keys=True) + "\n"
+        json.dumps(_optimum_data(o.path), sort_keys=True) + "\n"
         for o in lowest.values()), encoding="utf-8")
     job_files = [] if optima_only else _copy_job_files(found, out)
     _write_summary(out / SUMMARY, [] if optima_only else data.rows)
@@ -208,3 +209,12 @@ def _write_ioh(path: Path, data: Any, empty: bool = False) -> None:
                 info = zipfile.ZipInfo(str(f.relative_to(root)), date_time=(2026, 1, 1, 0, 0, 0))
                 info.compress_type = zipfile.ZIP_DEFLATED
                 zf.writestr(info, f.read_bytes())
+
+
+def _optimum_data(path: Path) -> dict[str, Any]:
+    """The optimum file ``path`` as its one reader takes it (it was read once already: a file
+    changed since is refused, not copied)."""
+    data, why = read_optimum_data(path)
+    if data is None:
+        raise VpidBenchError(f"optimum file {path}: {why}")
+    return data

@@ -27,6 +27,7 @@ from typing import Any
 
 from ..errors import VpidBenchError
 from ..fileio import loads_json, read_text_limited
+from .job_files import ESTIMATORS, IDENTIFIABILITY
 from .optimum import Optimum, optimum_from_data
 from .records import canonical_json
 
@@ -44,7 +45,7 @@ IOH = "ioh.zip"
 
 #: Per problem, the files a job writes once for all its runs (the report's bounds and floors
 #: per estimator), shipped as ``jobs/<problem>/<name>``.
-JOB_FILES = ("identifiability.json", "estimators.json")
+JOB_FILES = (IDENTIFIABILITY, ESTIMATORS)
 JOBS = "jobs"
 
 

@@ -19,6 +19,7 @@ from typing import Any
 
 from ..fileio import loads_json
 from ..problem import PROTOCOL_KEYS
+from .records import write_json_atomic
 
 #: The schema string of an optimum file (written by vpid_bench.analysis.optimum).
 SCHEMA = "vpid-bench/instance-optimum/1"
@@ -94,6 +95,16 @@ def read_optimum_data(path: Path) -> tuple[dict[str, Any] | None, str | None]:
         return None, f"unreadable: {type(exc).__name__}"
     bad = check_optimum(data)
     return (None, f"field {bad}") if bad else (data, None)
+
+
+def write_optimum_file(path: Path, data: Mapping[str, Any]) -> Path:
+    """Write the optimum ``data`` to ``path`` atomically, after the checks its reader applies
+    (:func:`check_optimum`): a file this writes is always one the reader takes. The one writer
+    of the format."""
+    bad = check_optimum(data)
+    if bad:
+        raise ValueError(f"not an optimum file: field {bad}")
+    return write_json_atomic(path, data)
 
 
 def read_optimum_file(path: Path) -> tuple[Optimum | None, str | None]:
