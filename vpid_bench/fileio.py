@@ -35,14 +35,54 @@ def file_sha256(path: Path) -> str:
     return digest.hexdigest()
 
 
+#: The deepest nesting of JSON read from a results folder or an archive (arrays and objects
+#: in one another). What vpid-bench writes nests 6 levels deep (a record's problem config
+#: a few more); a value 900 deep parsed, then ran every recursive reader (the canonical form
+#: of a record, a copy) past Python's recursion limit: a ``RecursionError`` traceback.
+MAX_JSON_DEPTH = 64
+
+
+def json_depth(value: object, limit: int = MAX_JSON_DEPTH) -> int:
+    """How deep ``value`` (parsed JSON) nests lists and dicts (a scalar: 0), counted without
+    recursion and only up to ``limit + 1`` (enough to know it is too deep)."""
+    deepest = 0
+    stack = [(value, 1)]
+    while stack:
+        node, depth = stack.pop()
+        if type(node) is dict:
+            children = node.values()
+        elif type(node) is list:
+            children = node
+        else:
+            continue
+        deepest = max(deepest, depth)
+        if depth > limit:
+            break
+        stack += [(c, depth + 1) for c in children if type(c) is dict or type(c) is list]
+    return deepest
+
+
 def loads_json(text: str) -> object:
-    """``json.loads`` for untrusted text: JSON nested past Python's recursion limit (a planted
-    ``[[[[...]]]]``) is a ``json.JSONDecodeError`` like any other bad JSON, not a
-    ``RecursionError`` that escapes every reader's ``except ValueError``."""
+    """``json.loads`` for untrusted text, the one way vpid-bench parses JSON it did not just
+    make: JSON nested more than :data:`MAX_JSON_DEPTH` levels (a planted ``[[[[...]]]]``)
+    is a ``json.JSONDecodeError`` like any other bad JSON (every reader catches
+    ``ValueError``), never a ``RecursionError`` in the parser or in whatever reads it next."""
     try:
-        return json.loads(text)
+        value = json.loads(text)
     except RecursionError:
-        raise json.JSONDecodeError("nested too deeply", text[:80], 0) from None
+        value = None
+    else:  # a text with fewer brackets than the limit cannot nest deeper (most files)
+        if text.count("[") + text.count("{") <= MAX_JSON_DEPTH \
+                or json_depth(value) <= MAX_JSON_DEPTH:
+            return value
+    raise json.JSONDecodeError(f"nested too deeply (more than {MAX_JSON_DEPTH} levels)",
+                               text[:80], 0) from None
+
+
+def json_fault(exc: Exception) -> str:
+    """What is wrong with a text :func:`loads_json` refused, for a reader's one line: the
+    parser's words (``nested too deeply (more than 64 levels)``), else the kind of fault."""
+    return exc.msg if isinstance(exc, json.JSONDecodeError) else type(exc).__name__
 
 
 def read_text_limited(path: Path, max_bytes: int = MAX_READ_BYTES) -> str:
@@ -63,6 +103,14 @@ def read_text_limited(path: Path, max_bytes: int = MAX_READ_BYTES) -> str:
     if len(data) > max_bytes:
         raise OSError(f"{path}: more than {max_bytes} bytes")
     return data.decode("utf-8")
+
+
+def _remove_planted_link(path: Path) -> None:
+    """Remove the symbolic link at ``path`` (the link only, never what it points to) with one
+    ``warning:`` line: a link planted where vpid-bench keeps a file or folder of its own."""
+    path.unlink(missing_ok=True)  # another process may have removed it first
+    print(f"warning: {path} was a symbolic link; removed (the link only) so that nothing "
+          "is written outside the output folder", file=sys.stderr, flush=True)
 
 
 def own_folder(path: Path) -> Path:
