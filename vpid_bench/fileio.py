@@ -20,6 +20,7 @@ import stat
 import sys
 import tempfile
 from pathlib import Path
+from typing import TextIO
 
 #: The largest results file read back (a run record with a long trace is a few MB).
 MAX_READ_BYTES = 64 * 1024 * 1024
@@ -120,11 +121,40 @@ def own_folder(path: Path) -> Path:
     and a folder made in its place. Nothing is ever written through such a link."""
     path = Path(path)
     if path.is_symlink():
-        path.unlink(missing_ok=True)  # another process may have removed it first
-        print(f"warning: {path} was a symbolic link; removed (the link only) so that nothing "
-              "is written outside the output folder", file=sys.stderr, flush=True)
+        _remove_planted_link(path)
     path.mkdir(parents=True, exist_ok=True)
     return path
+
+
+#: How :func:`open_append` opens: never through a link at the last component, never
+#: blocking on a FIFO, not inherited by a plugin's processes.
+_APPEND_FLAGS = (os.O_WRONLY | os.O_APPEND | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0)
+                 | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+
+
+def open_append(path: Path) -> TextIO:
+    """``path`` opened to append UTF-8 text (created if missing): a file vpid-bench keeps
+    adding to (a job's log), which :func:`write_text_atomic` cannot write. A symbolic link
+    planted there is removed (the link only) with one ``warning:`` line, as
+    :func:`own_folder` does, and a file made in its place: a link to a file outside (a job
+    folder's ``vpid_bench.log`` pointing elsewhere) was once appended to on every resume.
+    Anything but a regular file (a FIFO, a device, a folder) is an ``OSError``, at once."""
+    path = Path(path)
+    try:
+        fd = os.open(path, _APPEND_FLAGS, 0o666)
+    except OSError:
+        if not path.is_symlink():
+            raise
+        _remove_planted_link(path)
+        fd = os.open(path, _APPEND_FLAGS, 0o666)  # a link planted again: OSError (ELOOP)
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise OSError(f"{path}: not a regular file")
+        os.set_blocking(fd, True)
+        return os.fdopen(fd, "a", encoding="utf-8")
+    except BaseException:
+        os.close(fd)
+        raise
 
 
 def write_text_atomic(path: Path, text: str) -> Path:
