@@ -92,7 +92,7 @@ def _existing_ok(path: Path, rid: str) -> bool:
     except rec.CorruptRecordError as exc:
         _set_aside(path, str(exc).removeprefix(f"{path}: "))
         return False
-    bad = check_record(record)
+    bad = check_record(record, path.name)
     if bad is not None:
         _set_aside(path, f"field {bad}")
         return False
@@ -142,7 +142,7 @@ def _read_records(paths: list[Path]) -> list[dict[str, Any]]:
             record = rec.read_record(path)
         except rec.CorruptRecordError:
             continue
-        if check_record(record) is None:
+        if check_record(record, path.name) is None:
             records.append(record)
     return records
 

@@ -20,6 +20,7 @@ import stat
 import sys
 import tempfile
 from pathlib import Path
+from typing import TextIO
 
 #: The largest results file read back (a run record with a long trace is a few MB).
 MAX_READ_BYTES = 64 * 1024 * 1024
@@ -35,14 +36,54 @@ def file_sha256(path: Path) -> str:
     return digest.hexdigest()
 
 
+#: The deepest nesting of JSON read from a results folder or an archive (arrays and objects
+#: in one another). What vpid-bench writes nests 6 levels deep (a record's problem config
+#: a few more); a value 900 deep parsed, then ran every recursive reader (the canonical form
+#: of a record, a copy) past Python's recursion limit: a ``RecursionError`` traceback.
+MAX_JSON_DEPTH = 64
+
+
+def json_depth(value: object, limit: int = MAX_JSON_DEPTH) -> int:
+    """How deep ``value`` (parsed JSON) nests lists and dicts (a scalar: 0), counted without
+    recursion and only up to ``limit + 1`` (enough to know it is too deep)."""
+    deepest = 0
+    stack = [(value, 1)]
+    while stack:
+        node, depth = stack.pop()
+        if type(node) is dict:
+            children = node.values()
+        elif type(node) is list:
+            children = node
+        else:
+            continue
+        deepest = max(deepest, depth)
+        if depth > limit:
+            break
+        stack += [(c, depth + 1) for c in children if type(c) is dict or type(c) is list]
+    return deepest
+
+
 def loads_json(text: str) -> object:
-    """``json.loads`` for untrusted text: JSON nested past Python's recursion limit (a planted
-    ``[[[[...]]]]``) is a ``json.JSONDecodeError`` like any other bad JSON, not a
-    ``RecursionError`` that escapes every reader's ``except ValueError``."""
+    """``json.loads`` for untrusted text, the one way vpid-bench parses JSON it did not just
+    make: JSON nested more than :data:`MAX_JSON_DEPTH` levels (a planted ``[[[[...]]]]``)
+    is a ``json.JSONDecodeError`` like any other bad JSON (every reader catches
+    ``ValueError``), never a ``RecursionError`` in the parser or in whatever reads it next."""
     try:
-        return json.loads(text)
+        value = json.loads(text)
     except RecursionError:
-        raise json.JSONDecodeError("nested too deeply", text[:80], 0) from None
+        value = None
+    else:  # a text with fewer brackets than the limit cannot nest deeper (most files)
+        if text.count("[") + text.count("{") <= MAX_JSON_DEPTH \
+                or json_depth(value) <= MAX_JSON_DEPTH:
+            return value
+    raise json.JSONDecodeError(f"nested too deeply (more than {MAX_JSON_DEPTH} levels)",
+                               text[:80], 0) from None
+
+
+def json_fault(exc: Exception) -> str:
+    """What is wrong with a text :func:`loads_json` refused, for a reader's one line: the
+    parser's words (``nested too deeply (more than 64 levels)``), else the kind of fault."""
+    return exc.msg if isinstance(exc, json.JSONDecodeError) else type(exc).__name__
 
 
 def read_text_limited(path: Path, max_bytes: int = MAX_READ_BYTES) -> str:
@@ -65,6 +106,14 @@ def read_text_limited(path: Path, max_bytes: int = MAX_READ_BYTES) -> str:
     return data.decode("utf-8")
 
 
+def _remove_planted_link(path: Path) -> None:
+    """Remove the symbolic link at ``path`` (the link only, never what it points to) with one
+    ``warning:`` line: a link planted where vpid-bench keeps a file or folder of its own."""
+    path.unlink(missing_ok=True)  # another process may have removed it first
+    print(f"warning: {path} was a symbolic link; removed (the link only) so that nothing "
+          "is written outside the output folder", file=sys.stderr, flush=True)
+
+
 def own_folder(path: Path) -> Path:
     """``path`` as a real folder of vpid-bench's own (created if needed): a symbolic link
     planted there (a sweep's ``optima`` or ``report`` pointing outside it: the files were
@@ -72,11 +121,40 @@ def own_folder(path: Path) -> Path:
     and a folder made in its place. Nothing is ever written through such a link."""
     path = Path(path)
     if path.is_symlink():
-        path.unlink(missing_ok=True)  # another process may have removed it first
-        print(f"warning: {path} was a symbolic link; removed (the link only) so that nothing "
-              "is written outside the output folder", file=sys.stderr, flush=True)
+        _remove_planted_link(path)
     path.mkdir(parents=True, exist_ok=True)
     return path
+
+
+#: How :func:`open_append` opens: never through a link at the last component, never
+#: blocking on a FIFO, not inherited by a plugin's processes.
+_APPEND_FLAGS = (os.O_WRONLY | os.O_APPEND | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0)
+                 | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+
+
+def open_append(path: Path) -> TextIO:
+    """``path`` opened to append UTF-8 text (created if missing): a file vpid-bench keeps
+    adding to (a job's log), which :func:`write_text_atomic` cannot write. A symbolic link
+    planted there is removed (the link only) with one ``warning:`` line, as
+    :func:`own_folder` does, and a file made in its place: a link to a file outside (a job
+    folder's ``vpid_bench.log`` pointing elsewhere) was once appended to on every resume.
+    Anything but a regular file (a FIFO, a device, a folder) is an ``OSError``, at once."""
+    path = Path(path)
+    try:
+        fd = os.open(path, _APPEND_FLAGS, 0o666)
+    except OSError:
+        if not path.is_symlink():
+            raise
+        _remove_planted_link(path)
+        fd = os.open(path, _APPEND_FLAGS, 0o666)  # a link planted again: OSError (ELOOP)
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise OSError(f"{path}: not a regular file")
+        os.set_blocking(fd, True)
+        return os.fdopen(fd, "a", encoding="utf-8")
+    except BaseException:
+        os.close(fd)
+        raise
 
 
 def write_text_atomic(path: Path, text: str) -> Path:

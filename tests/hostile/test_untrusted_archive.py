@@ -185,7 +185,7 @@ FORGED = [
     ("result.f_best+trace.best.-1", 0.0, "expected a value not below its instance's optimum"),
     ("result.f_best", 0.0, "trace.best ends at"),  # a forger who left the trace
     ("result.x_best.0", 1e9, "result.x_best[0] = 1000000000.0: expected a value inside"),
-    ("result.evaluations", -3, "result.evaluations = -3"),
+    ("result.evaluations", -3, "result.evaluations: expected an integer from 0"),  # a count
     ("result.evaluations", 10**9, "result.evaluations = 1000000000"),
     ("timing.wall_time_s", -1.0, "timing.wall_time_s = -1.0"),
     ("trace.best.0", "nan", "trace.best[0] = nan"),

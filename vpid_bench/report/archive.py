@@ -140,7 +140,10 @@ def _read_records(folder: Path, manifest: Mapping[str, Any], optima: Sequence[Op
     records: list[dict[str, Any]] = []
     seen: dict[str, int] = {}
     data = _checked_file(folder, manifest, RECORDS, MAX_GZ_BYTES)
-    for n, obj in _lines(_gz_lines(data, folder), folder / RECORDS):
+    for n, obj, unreadable in _lines(_gz_lines(data, folder), folder / RECORDS):
+        if unreadable:
+            bad.add(RECORDS, n, unreadable)
+            continue
         try:
             rec = parse_record(obj, "")
         except CorruptRecordError as exc:

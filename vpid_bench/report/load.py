@@ -119,7 +119,7 @@ def load_records(paths: Iterable[str | Path]) -> LoadedRecords:
         except CorruptRecordError as exc:
             skipped.append((path, str(exc)))
             continue
-        bad = check_record(record)
+        bad = check_record(record, path.name)
         if bad:
             skipped.append((path, f"field {bad}"))
             continue

@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from ..errors import VpidBenchError
-from ..fileio import loads_json, read_text_limited
+from ..fileio import loads_json, open_append, read_text_limited
 
 DEBUG_ENV = "VPID_BENCH_DEBUG"
 log = logging.getLogger("vpid_bench")
@@ -183,12 +183,21 @@ def _write_status(job_dir: Path, status: str, detail: Any) -> None:
               flush=True)
 
 
+class _JobLogHandler(logging.FileHandler):
+    """Logging's file handler, opening through :func:`~vpid_bench.fileio.open_append`: a
+    link planted at the job's log (on a resume) is replaced, never followed, as every other
+    file of a job folder is."""
+
+    def _open(self) -> Any:
+        return open_append(Path(self.baseFilename))
+
+
 def _open_job_log(job_dir: Path) -> logging.Handler | None:
     """The job's log file ``vpid_bench.log`` (what Hydra's default file handler wrote), added
     here so that a folder that cannot be written fails its job, not the whole sweep (Hydra
     configures its handlers before the task runs, outside any ``try``)."""
     try:
-        handler = logging.FileHandler(job_dir / JOB_LOG, encoding="utf-8")
+        handler = _JobLogHandler(job_dir / JOB_LOG, encoding="utf-8")
     except OSError:
         return None  # the job will meet the same fault and say so in one line
     handler.setFormatter(logging.Formatter("[%(asctime)s][%(name)s][%(levelname)s] - "

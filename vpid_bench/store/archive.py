@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import VpidBenchError
-from ..fileio import loads_json, read_text_limited
+from ..fileio import json_fault, loads_json, read_text_limited
 from .job_files import ESTIMATORS, IDENTIFIABILITY
 from .optimum import Optimum, optimum_from_data
 from .records import canonical_json
@@ -165,7 +165,7 @@ def _manifest(folder: Path) -> dict[str, Any]:
         data = loads_json(read_text_limited(folder / MANIFEST, MAX_TEXT_BYTES))
     except (OSError, UnicodeDecodeError, ValueError) as exc:
         raise ArchiveError(f"archive {folder}: {MANIFEST} is not readable JSON "
-                           f"({type(exc).__name__})") from None
+                           f"({json_fault(exc)})") from None
     if not isinstance(data, dict) or data.get("schema") != SCHEMA:
         raise ArchiveError(f"archive {folder}: {MANIFEST} is not a vpid-bench archive "
                            f"(schema != {SCHEMA!r})")
@@ -206,9 +206,11 @@ def _gz_lines(data: bytes, folder: Path) -> Iterator[bytes]:
                            f"({type(exc).__name__})") from None
 
 
-def _lines(lines: Iterable[bytes], where: Path) -> Iterator[tuple[int, Any]]:
-    """``(line number, parsed JSON or None)`` of each non-blank line, within
-    :data:`MAX_LINES` and :data:`MAX_LINE_BYTES` (``where``: the file, for the error)."""
+def _lines(lines: Iterable[bytes], where: Path) -> Iterator[tuple[int, Any, str | None]]:
+    """``(line number, parsed JSON, None)`` of each non-blank line, or ``(line number, None,
+    why)`` for one that is not JSON (:func:`~vpid_bench.fileio.loads_json`: nested too deeply
+    too), within :data:`MAX_LINES` and :data:`MAX_LINE_BYTES` (``where``: the file, for the
+    error)."""
     for n, line in enumerate(lines, 1):
         if n > MAX_LINES:
             raise ArchiveError(f"archive {where.parent}: {where.name} holds more than "
@@ -219,9 +221,9 @@ def _lines(lines: Iterable[bytes], where: Path) -> Iterator[tuple[int, Any]]:
         text = line.decode("utf-8", errors="replace")
         if text.strip():
             try:
-                yield n, loads_json(text)
-            except ValueError:
-                yield n, None
+                yield n, loads_json(text), None
+            except ValueError as exc:
+                yield n, None, f"not readable JSON ({json_fault(exc)})"
 
 
 def _check_job_files(folder: Path, manifest: Mapping[str, Any]) -> None:
@@ -255,8 +257,8 @@ def _read_optima(folder: Path, manifest: Mapping[str, Any], bad: _Bad) -> list[O
     the archive: which of two optima counts is not the archive's to leave open."""
     optima, seen = [], {}
     data = _checked_file(folder, manifest, OPTIMA, MAX_TEXT_BYTES)
-    for n, obj in _lines(data.splitlines(keepends=True), folder / OPTIMA):
-        opt, why = optimum_from_data(obj, Path(f"{folder / OPTIMA}:{n}"))
+    for n, obj, why in _lines(data.splitlines(keepends=True), folder / OPTIMA):
+        opt, why = (None, why) if why else optimum_from_data(obj, Path(f"{folder / OPTIMA}:{n}"))
         if opt is None:
             bad.add(OPTIMA, n, why or "not an optimum")
             continue

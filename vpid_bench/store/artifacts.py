@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from ..fileio import read_text_limited
+from ..fileio import loads_json, read_text_limited
 
 BEST_SIGNALS = "best_signals.csv"
 MAGIC = "# vpid-bench best signals 1"
@@ -174,7 +174,7 @@ def read_best_signals(path: Path, max_bytes: int = MAX_BYTES) -> BestSignals:
     for line, key in ((lines[1], "source"), (lines[2], "units")):
         prefix = f"# {key}: "
         try:
-            value = json.loads(line[len(prefix):]) if line.startswith(prefix) else None
+            value = loads_json(line[len(prefix):]) if line.startswith(prefix) else None
         except json.JSONDecodeError:
             value = None
         if not isinstance(value, dict):

@@ -17,7 +17,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from ..fileio import loads_json
+from ..fileio import json_fault, loads_json
 from ..problem import PROTOCOL_KEYS
 from .records import write_json_atomic
 
@@ -91,8 +91,8 @@ def read_optimum_data(path: Path) -> tuple[dict[str, Any] | None, str | None]:
         if path.stat().st_size > MAX_BYTES:
             return None, f"larger than {MAX_BYTES} bytes"
         data = loads_json(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
-        return None, f"unreadable: {type(exc).__name__}"
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        return None, f"unreadable: {json_fault(exc)}"
     bad = check_optimum(data)
     return (None, f"field {bad}") if bad else (data, None)
 
