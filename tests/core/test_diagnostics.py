@@ -131,10 +131,40 @@ def test_hac_covariance_is_statsmodels_newey_west():
     rng = np.random.default_rng(8)
     n = 600
     scores = np.c_[_ar1(rng, n, 0.7), _ar1(rng, n, 0.3)]
-    B, lags = hac_covariance(scores, np.zeros(n, int), lags=9)
+    B, lags = hac_covariance(scores, np.zeros(n, int), lags=9, prewhiten=False)
     ref = sw.S_hac_simple(scores, nlags=9)
     assert lags == 9
     np.testing.assert_allclose(B, ref, rtol=1e-9)
+
+
+@pytest.mark.parametrize("rho", [0.0, 0.5, 0.9, 0.95])
+def test_the_prewhitened_hac_recovers_an_ar1s_long_run_variance(rho):
+    """The long-run variance of an AR(1) of unit variance is ``(1 + rho) / (1 - rho)`` per
+    point: the prewhitened estimate (VAR(1), then Bartlett with Andrews' bandwidth,
+    recoloured) recovers it within 8 % on average over 20 series of 10,000 points; the
+    plain Bartlett estimate falls short as the persistence grows (at rho = 0.95 by more than
+    8 %: its kernel downweights the lags that carry it)."""
+    rng = np.random.default_rng(11)
+    n, truth = 10_000, (1 + rho) / (1 - rho)
+    pre, plain = [], []
+    for _ in range(20):
+        s = _ar1(rng, n, rho)[:, None]
+        pre.append(hac_covariance(s, np.zeros(n, int))[0][0, 0] / n)
+        plain.append(hac_covariance(s, np.zeros(n, int), prewhiten=False)[0][0, 0] / n)
+    assert np.mean(pre) / truth == pytest.approx(1.0, abs=0.08)
+    if rho >= 0.95:
+        assert np.mean(plain) / truth < 0.92
+
+
+def test_the_prewhitening_caps_the_persistence():
+    """A random walk (rho = 1) would make ``(I - Phi)^-1`` infinite: the VAR(1)'s singular
+    values are capped at MAX_AR, so the estimate is finite."""
+    from vpid_bench.analysis.intervals import MAX_AR, var1
+
+    walk = np.cumsum(np.random.default_rng(12).standard_normal((5000, 2)), axis=0)
+    assert np.linalg.svd(var1(walk), compute_uv=False).max() <= MAX_AR + 1e-12
+    B, _ = hac_covariance(walk, np.zeros(5000, int))
+    assert np.all(np.isfinite(B))
 
 
 def test_andrews_lags_grow_with_the_correlation():

@@ -24,15 +24,28 @@ interval (tested against the closed form). The profile likelihood
 That interval **assumes white residuals**: it counts every sample as independent. Where the
 model misses dynamics the record holds (model error), the residuals are correlated over many
 samples and it is too narrow. Beside it, ``robust`` is the sandwich (Huber–White) covariance
-with a heteroscedasticity-and-autocorrelation-consistent (HAC, Newey–West) estimate of the
-scores' long-run covariance (:func:`hac_covariance`): ``A⁻¹ B A⁻¹`` with ``A = Jᵀ W J`` and
-``B = Σ_{|l|≤L} (1 − |l|/(L+1)) Σ_t s_t s_{t−l}ᵀ``, where ``s_t`` sums the whitened scores
-``J_i r_i / σ̂_i²`` of the entries at time position ``t`` (each group's entries are in time
-order; position ``t`` is an entry's place within its group) and ``L`` is Andrews' (1991)
-automatic bandwidth for the Bartlett kernel from the residuals' lag-1 autocorrelation ``ρ``
-(``L = 1.1447 (α T)^{1/3}``, ``α = 4ρ² / ((1−ρ)² (1+ρ)²)``, at most ``T/4``). With white
-residuals ``B ≈ A`` and it equals the Jacobian interval; it needs no refit (why this and not
-a block bootstrap: docs/estimators.md).
+``A⁻¹ B A⁻¹`` (``A = Jᵀ W J``) with a heteroscedasticity-and-autocorrelation-consistent (HAC)
+estimate ``B`` of the scores' long-run covariance (:func:`hac_covariance`). The scores
+``s_t`` sum the whitened scores ``J_i r_i / σ̂_i²`` of the entries at time position ``t``
+(each group's entries are in time order; position ``t`` is an entry's place within its group).
+
+``B`` is Andrews and Monahan's (1992) *prewhitened* Newey–West estimate: a VAR(1)
+``s_t = Φ s_{t−1} + u_t`` is fitted by least squares (its singular values capped at
+:data:`MAX_AR`, their rule, so ``I − Φ`` stays invertible), the Bartlett-kernel estimate
+``B_u = Σ_{|l|≤L} (1 − |l|/(L+1)) Σ_t u_t u_{t−l}ᵀ`` of the innovations is taken, and then
+recoloured, ``B = (I − Φ)⁻¹ B_u (I − Φ)⁻ᵀ``. ``L`` is Andrews' (1991) automatic bandwidth
+for the Bartlett kernel from the innovations' lag-1 autocorrelation ``ρ`` (``L = 1.1447 (α
+T)^{1/3}``, ``α = 4ρ² / ((1−ρ)² (1+ρ)²)``, at most ``T/4``).
+
+Why prewhitened: model error leaves residuals whose lag-1 autocorrelation is 0.9 to 0.99 at
+the rates records are taken at. The plain Bartlett estimate with Andrews' bandwidth is known
+to fall far short there (its kernel downweights the very lags that carry the persistence:
+for an AR(1) with ρ = 0.95 over 10,000 points it recovers about a third of the long-run
+variance, tested), so its interval was only 2 to 3 times the white one where the true ratio
+is about ``sqrt((1+ρ)/(1−ρ)) ≈ 6``. The VAR(1) takes up the persistence in closed form and
+the kernel only the remainder (recovered to within a few per cent, tested). With white
+residuals ``Φ ≈ 0`` and ``B ≈ A``: the robust interval equals the Jacobian one. It needs no
+refit (why this and not a block bootstrap: docs/estimators.md).
 """
 
 from __future__ import annotations
@@ -46,6 +59,9 @@ from ..problem import Problem
 
 #: The two-sided 95 % normal quantile (scipy.stats.norm.ppf(0.975)).
 Z95 = 1.959963984540054
+#: The largest singular value of the prewhitening VAR(1) (Andrews and Monahan 1992): a
+#: persistence past it is taken as this, so that the recolouring ``(I − Φ)⁻¹`` stays finite.
+MAX_AR = 0.97
 #: A singular value of the whitened Jacobian (in relative parameter changes) below this
 #: fraction of the largest is a direction the record does not determine.
 UNDETERMINED_RATIO = 1e-9
@@ -113,7 +129,8 @@ def jacobian_intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None
         "se": _finite_or_none(se),
         "sigma": sigma.tolist(),
         "dof": int(r.size - x.size),
-        "robust": {"method": "hac", "kernel": "bartlett", "lags": int(lags), "level": 0.95,
+        "robust": {"method": "hac", "kernel": "bartlett", "prewhitened": "var1",
+                   "lags": int(lags), "level": 0.95,
                    "lower": _finite_or_none(x - Z95 * se_hac),
                    "upper": _finite_or_none(x + Z95 * se_hac),
                    "se": _finite_or_none(se_hac)},
@@ -140,25 +157,44 @@ def andrews_lags(rho: float, t: int) -> int:
     return int(max(1, min(max(t // 4, 1), math.ceil(1.1447 * (alpha * t) ** (1 / 3)))))
 
 
-def hac_covariance(scores: np.ndarray, groups: np.ndarray, lags: int | None = None
-                   ) -> tuple[np.ndarray, int]:
-    """The Newey–West (Bartlett kernel) long-run covariance ``B`` of ``scores`` ``(m, d)``
-    (one row per residual entry), the entries at the same time position
-    (:func:`time_positions`) summed first; ``lags=None``: :func:`andrews_lags` from the
-    pooled lag-1 autocorrelation of the summed scores' components. Returns ``(B, lags)``."""
+def hac_covariance(scores: np.ndarray, groups: np.ndarray, lags: int | None = None,
+                   prewhiten: bool = True) -> tuple[np.ndarray, int]:
+    """The long-run covariance ``B`` of ``scores`` ``(m, d)`` (one row per residual entry), the
+    entries at the same time position (:func:`time_positions`) summed first: Newey–West
+    (Bartlett kernel) over the innovations of a VAR(1), recoloured (``prewhiten``, see the
+    module), or over the summed scores themselves (``prewhiten=False``: statsmodels'
+    ``S_hac_simple``). ``lags=None``: :func:`andrews_lags` from the pooled lag-1
+    autocorrelation of what the kernel sums. Returns ``(B, lags)``."""
     scores = np.asarray(scores, dtype=float)
     pos = time_positions(groups)
     t = int(pos.max()) + 1 if pos.size else 0
     S = np.zeros((t, scores.shape[1]))
     np.add.at(S, pos, scores)
+    colour = None
+    if prewhiten and t > 3:
+        phi = var1(S)
+        S = S[1:] - S[:-1] @ phi.T
+        colour = np.linalg.inv(np.eye(phi.shape[0]) - phi)
     if lags is None:
         num = float(np.sum(S[1:] * S[:-1]))
         den = float(np.sum(S * S))
-        lags = andrews_lags(num / den if den > 0 else 0.0, t)
+        lags = andrews_lags(num / den if den > 0 else 0.0, S.shape[0])
     w = 1.0 - np.abs(np.arange(-lags, lags + 1)) / (lags + 1)
-    KS = _convolve_same(S, w)
-    B = S.T @ KS
+    B = S.T @ _convolve_same(S, w)
+    if colour is not None:
+        B = colour @ B @ colour.T
     return (B + B.T) / 2, lags
+
+
+def var1(S: np.ndarray) -> np.ndarray:
+    """The least-squares VAR(1) coefficient ``Φ`` ``(d, d)`` of the rows ``s_t = Φ s_{t−1} +
+    u_t`` of ``S`` ``(t, d)``, its singular values capped at :data:`MAX_AR` (Andrews and
+    Monahan 1992); columns that never move (undetermined directions) get none."""
+    coef = np.linalg.lstsq(S[:-1], S[1:], rcond=None)[0].T
+    if not np.all(np.isfinite(coef)):
+        return np.zeros_like(coef)
+    u, sv, vt = np.linalg.svd(coef)
+    return (u * np.minimum(sv, MAX_AR)) @ vt
 
 
 def _convolve_same(S: np.ndarray, w: np.ndarray) -> np.ndarray:

@@ -175,7 +175,7 @@ def trust_text(diag: Mapping[str, Any], model_error: str = "") -> str:
         text = ("Intervals: the white-noise (Jacobian) interval is trusted: the residuals pass "
                 f"the whiteness test, and the robust (HAC{lags}) interval agrees{spread}.")
     else:
-        text = ("Intervals: the robust (HAC, Newey–West sandwich"
+        text = ("Intervals: the robust (HAC, prewhitened Newey–West sandwich"
                 f"{lags}) interval is trusted{spread}; the white-noise (Jacobian) interval "
                 "counts every sample as independent, which correlated residuals are not.")
     if model_error or not diag["explained"]:
