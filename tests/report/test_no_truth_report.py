@@ -66,6 +66,11 @@ class Decay(Problem):
         return {"published estimate": {"x": [2.1, 1.4, 0.31], "note": "from a paper"},
                 "naive predictor": {"metrics": {"val_rms": 0.9}, "note": "the mean held"}}
 
+    def describe(self):
+        """A stated quantity (the report's Assumed block; docs/architecture.md)."""
+        return {"known": [{"name": "t_end", "value": 3.0, "unit": "s",
+                           "source": "the record's length", "what": "record length"}]}
+
 
 def _job(optimizer: str, runs: int = 3) -> Job:
     reg = Registry()
@@ -76,13 +81,18 @@ def _job(optimizer: str, runs: int = 3) -> Job:
                Decay, config, optimizer, cls, params, 60)
 
 
-@pytest.fixture(scope="module")
-def sweep(tmp_path_factory) -> Path:
-    root = tmp_path_factory.mktemp("no_truth")
+def no_truth_sweep(root: Path) -> Path:
+    """lsq and random search on the decay record (3 runs each) and the sweep's report in
+    ``root/report``; returns ``root`` (the browser tests open its overview too)."""
     for name in ("lsq", "random"):
         run_job(_job(name), root / f"optimizer={name}", optima_dir=root / "optima")
     build_report([root], root / "report")
     return root
+
+
+@pytest.fixture(scope="module")
+def sweep(tmp_path_factory) -> Path:
+    return no_truth_sweep(tmp_path_factory.mktemp("no_truth"))
 
 
 def _records(folder: Path) -> list[dict]:
