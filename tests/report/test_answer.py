@@ -131,7 +131,7 @@ def test_report_md_opens_with_the_answer(suite):
     flat = " ".join(suite.report_md.read_text(encoding="utf-8").split())
     assert ("- **Per problem**: the verdicts at the runs' budget (10·D): use `lsq` on both "
             "problems.") in flat
-    assert "| vehicle ps=9 | use lsq (1 not separated) | the records | 21.2 | |" in flat
+    assert "| vehicle | use lsq (1 not separated) | 21.2 | | the records |" in flat
     assert "[Results](#results)" in flat
     assert flat.index("## The answer") < flat.index("## Results") < flat.index(
         "Verdict for vehicle ps=9: use lsq")
@@ -145,5 +145,21 @@ def test_the_terminal_opens_with_the_same_answer(suite):
     first = "\n".join(lines[:15])
     assert "Which optimizer, by budget: with residuals, lsq by 10·D (100 %); without" in first
     assert "Per problem: the verdicts at the runs' budget (10·D): use lsq on both" in first
-    assert "vehicle ps=9    use lsq (1 not separated)  the records  21.2" in first
+    assert "vehicle    use lsq (1 not separated)  21.2          the records" in first
     assert suite.headline.index("The answer") < suite.headline.index("Verdict for vehicle")
+
+
+def test_the_overview_opens_with_the_answer_and_readable_score_tables(suite):
+    """index.html: the answer block first (before the verdicts, which sit one click away in
+    a details element each); the scores and the ladder under readable headers, no raw
+    column name, no empty rung."""
+    html = (suite.out_dir / "index.html").read_text(encoding="utf-8")
+    answer_at = html.index('<section id="answer"')
+    assert answer_at < html.index('id="verdicts"') < html.index('id="suite"')
+    assert "<strong>Which optimizer, by budget</strong>" in html[answer_at:]
+    verdicts = html[html.index('id="verdicts"'):html.index('id="suite"')]
+    assert verdicts.count("<details") == 2 and "Verdict for vehicle ps=9: use lsq" in verdicts
+    for raw in ("group_kind", "score_auc", "score_lo", "solved_at_"):
+        assert raw not in html, raw
+    assert "score (mean AUC, 0 to 1)" in html and "solved by 10·D (%)" in html
+    assert "100·D" not in html.split('id="ladder"')[1].split("</table>")[0]

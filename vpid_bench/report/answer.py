@@ -46,15 +46,15 @@ LIMITS = {"search": "more search would still gain",
           "records": "the records set the floor: more search will not help",
           "truth": "the records allow the truth itself: only search limits it"}
 #: The same in the answer's table, in fewer words.
-LIMITED_BY = {"search": "search: more would gain",
-              "below_floor": "search: runs stop short of the optimum",
+LIMITED_BY = {"search": "search (more would gain)",
+              "below_floor": "search (runs stop short)",
               "estimator": "the estimator",
               "model": "model error",
               "records": "the records",
-              "truth": "search (the records allow the truth)"}
+              "truth": "search (to the truth)"}
 #: Without a truth: whether the leader reaches the record's optimum.
-LIMITS_NO_TRUTH = {True: "the record (its optimum is reached)",
-                   False: "search: more would move it"}
+LIMITS_NO_TRUTH = {True: "the record (optimum reached)",
+                   False: "search (more would move it)"}
 #: Readers' names of the references.
 REFERENCE_WORDS = {"random": "random search", "centre": "the box centre"}
 
@@ -264,11 +264,10 @@ def _words(v: Any) -> str:
     if v.kind == verdicts.DESCRIBE:
         return f"{v.pick} described (nothing compared)"
     if v.cannot_identify:
-        return "none: model error, the fitted model cannot identify the system"
+        return "none: model error"
     if v.over_bound:
-        return f"none: the bound exceeds {verdicts.BOUND_LIMIT:g} %"
-    refs = " or ".join(REFERENCE_WORDS.get(r, r) for r in v.not_beaten)
-    return f"none: no optimizer shown to beat {refs}" if refs else "none recommended"
+        return f"none: bound over {verdicts.BOUND_LIMIT:g} %"
+    return f"none beats {' or '.join(v.not_beaten)}" if v.not_beaten else "none recommended"
 
 
 def _limit(v: Any) -> str:
@@ -280,23 +279,39 @@ def _limit(v: Any) -> str:
     return LIMITED_BY.get(v.limit, "")
 
 
+def table_note(a: Answer) -> str:
+    """What the compact table's columns mean (no word of a truth where there is none)."""
+    limited = ("limited by: what keeps the verdict's optimizer from doing better (search, "
+               "the estimator, model error, the records)")
+    if not a.truth:
+        return ("Per problem, the verdict in a few words; " + limited.replace(
+            "(search, the estimator, model error, the records)",
+            "(search, or the record itself once its optimum is reached)") + ".")
+    return ("Per problem, the verdict in a few words; floor: the error of each record's own "
+            "optimum (median over the instances), below which no search goes; bound: the "
+            "Cramér–Rao bound's norm, what an efficient estimator could reach; " + limited + ".")
+
+
 def _value(x: float, unit: str) -> str:
     return "" if not math.isfinite(x) else (f"{fmt(x, 3)} {unit}".rstrip())
 
 
-def table(results: Sequence[Any]) -> tuple[list[str], list[list[Any]]]:
-    """The compact table: per context (:class:`.first_screen.ContextResult`), the verdict
-    in a few words, what limits it, the floor and the bound (with their units); without any
-    truth, no floor or bound columns."""
+def table(results: Sequence[Any], labels: Mapping[str, str] | None = None
+          ) -> tuple[list[str], list[list[Any]]]:
+    """The compact table: per context (:class:`.first_screen.ContextResult`; shown as
+    ``labels[context]``, e.g. its problem where each problem has one context), the verdict in
+    a few words, the floor and the bound (with their units) and what limits it; without any
+    truth, no floor or bound columns. Record text raw: each renderer makes it safe."""
     truth = any(r.truth for r in results)
-    headers = ["problem", "verdict", "limited by"] + (["floor", "bound"] if truth else [])
+    labels = labels or {}
+    headers = ["problem", "verdict"] + (["floor", "bound"] if truth else []) + ["limited by"]
     rows = []
     for r in results:
-        row = [r.context, _words(r.decision), _limit(r.decision)]
+        row = [labels.get(r.context, r.context), _words(r.decision)]
         if truth:
             row += ([_value(r.floor, r.unit), _value(r.bound, r.unit)] if r.truth else
                     ["", ""])
-        rows.append(row)
+        rows.append([*row, _limit(r.decision)])
     return headers, rows
 
 
@@ -355,7 +370,8 @@ def derive(data: Any, results: Sequence[Any], suite: Any = None,
     a.bottleneck = [(r.context, r.decision.advice, r.unit) for r in results
                     if r.decision is not None and r.decision.advice is not None]
     a.truth = any(r.truth for r in results)
-    a.headers, a.rows = table(results)
+    a.headers, a.rows = table(results, {r.context: of.get(r.context, r.context)
+                                        for r in results} if a.per_problem else None)
     a.identified = [x for x in (_identified(r) for r in results if not r.truth) if x]
     return a
 

@@ -603,16 +603,19 @@ def answer_markdown(a: Any) -> list[str]:
         return []
     lines = ["## The answer", ""]
     for label, text in answer_sentences(a):
-        lines += [textwrap.fill(f"- **{label}**: {' '.join(text.split())}", width=PROSE_WIDTH,
-                                subsequent_indent="  ", break_long_words=False,
-                                break_on_hyphens=False)]
+        flat = f"- **{label}**: {' '.join(text.split())}".replace(" %", _GLUE + "%")
+        lines += [textwrap.fill(flat, width=PROSE_WIDTH, subsequent_indent="  ",
+                                break_long_words=False, break_on_hyphens=False
+                                ).replace(_GLUE, " ")]  # "8 %" never split over two lines
     lines.append("")
     for _, text, headers, rows in a.identified:
         lines += [para(text), "", markdown(headers, rows), ""]
     if a.rows:
-        lines += [markdown(a.headers, a.rows, keep=2), "",
-                  para("Each verdict in full, with its reasons and the ranking: "
-                       "[Results](#results) below."), ""]
+        from .answer import table_note
+
+        lines += [markdown(a.headers, a.rows), "",
+                  para(table_note(a) + " Each verdict in full, with its reasons and the "
+                       "ranking: [Results](#results) below."), ""]
     return lines
 
 

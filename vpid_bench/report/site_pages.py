@@ -105,11 +105,12 @@ def _answer(model: Any, pages: Pages) -> dict[str, Any] | None:
     if a is None:
         return None
     of = model.problem_of()
-    links = {"problem": lambda c: _context_href(pages, of, c)}
+    links = {"problem": lambda c: pages.problem(c) or _context_href(pages, of, c)}
     return {"sentences": answers.sentences(a),
             "identified": [{"text": text, "table": table(h, rows)}
                            for _, text, h, rows in a.identified],
-            "table": table(a.headers, a.rows, links) if a.rows else None}
+            "table": table(a.headers, a.rows, links, caption=answers.table_note(a))
+            if a.rows else None}
 
 
 #: What limits the leader, in a few words (one home: :data:`.answer.LIMITS`).

@@ -246,7 +246,8 @@ def score_table(rows: Sequence[Sequence[Any]], kind: str = "all"
         ranked = sorted((r for r in rows if r[0] == kind and r[1] == name),
                         key=lambda r: (-float(r[5]), r[2]))
         for k, r in enumerate(ranked, 1):
-            out.append(([] if kind == "all" else [f"{r[1]} ({r[3]} problems)"])
+            group = f"{r[1]} ({r[3]} problem{'s' if r[3] != 1 else ''})"
+            out.append(([] if kind == "all" else [group])
                        + [k, *_score_row(r)])
     return (SCORE_SHOWN if kind == "all" else GROUP_SHOWN), out
 
