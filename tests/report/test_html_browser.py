@@ -8,13 +8,16 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from pathlib import Path
 from urllib.parse import unquote, urlparse
 
 import numpy as np
 import pytest
+from archive_slice import slice_archive
 from extras import needs_archive_runs
 from report_synth import EVIL, html_sweep
+from test_no_truth_report import no_truth_sweep
 
 CHROMIUM = os.environ.get("VPID_BENCH_CHROMIUM", "/usr/bin/chromium")
 DRIVER = os.environ.get("VPID_BENCH_CHROMEDRIVER", "/usr/bin/chromedriver")
@@ -209,22 +212,175 @@ def test_the_readme_sweep_is_browsable(browser, tmp_path):
     _check_site(browser, out, {"vehicle"}, {"de1", "de4", "ga"})
 
 
+ARCHIVES = Path(__file__).parents[2] / "archive"
+
+
+@pytest.fixture(scope="module")
+def archive_report(tmp_path_factory):
+    """``archive_report(suite)``: ``vpid-bench-report archive/<suite> -o DIR`` (1-2 min of
+    CPU each), built once per module and suite; returns DIR."""
+    from vpid_bench.report.cli import main as report_main
+
+    built: dict[str, Path] = {}
+
+    def build(suite: str) -> Path:
+        if suite not in built:
+            out = tmp_path_factory.mktemp("archive") / suite
+            assert report_main([str(ARCHIVES / suite), "-o", str(out)]) == 0
+            built[suite] = out
+        return built[suite]
+    return build
+
+
 @pytest.mark.slow
 @needs_archive_runs
 @pytest.mark.parametrize("suite", ["smoke", "vpid1", "vpid1_10k"])
-def test_the_archive_report_is_browsable(browser, tmp_path, suite):
+def test_the_archive_report_is_browsable(browser, archive_report, suite):
     """``vpid-bench-report archive/<suite> -o DIR`` (1-2 min each): every archived problem
     and optimizer on a clean, linked, local, non-blank site."""
     import gzip
 
-    from vpid_bench.report.cli import main as report_main
-
-    archive = Path(__file__).parents[2] / "archive" / suite
-    out = tmp_path / suite
-    assert report_main([str(archive), "-o", str(out)]) == 0
+    archive = ARCHIVES / suite
+    out = archive_report(suite)
     from vpid_bench.store.archive import RECORDS, located
 
     with gzip.open(located(archive, RECORDS), "rt") as fh:  # the runs' data distribution
         records = [json.loads(line) for line in fh]
     _check_site(browser, out, {r["problem"]["name"] for r in records},
                 {r["optimizer"]["name"] for r in records})
+
+
+#: The first screen issue 46 names: a viewport of 1400 x 1000 CSS pixels.
+SCREEN = (1400, 1000)
+
+
+def _first_screen(browser, page: Path, *selectors: str) -> dict:
+    """Open ``page`` in a 1400 x 1000 viewport; return each selector's first element's
+    rectangle (top, bottom, height; ``None`` when absent), the answer's visible text and
+    the page's whole text (its HTML, closed details included)."""
+    width, height = SCREEN
+    browser.execute_cdp_cmd("Emulation.setDeviceMetricsOverride", {
+        "width": width, "height": height, "deviceScaleFactor": 1, "mobile": False})
+    try:
+        _open(browser, page)
+        assert browser.execute_script("return [innerWidth, innerHeight]") == [width, height]
+        rects = {sel: browser.execute_script(
+            "const e = document.querySelector(arguments[0]); if (!e) return null;"
+            "const r = e.getBoundingClientRect();"
+            "return {top: r.top, bottom: r.bottom, height: r.height};", sel)
+            for sel in selectors}
+        text = browser.execute_script(
+            "const e = document.querySelector('#answer'); return e ? e.innerText : '';")
+        return {"rects": rects, "text": " ".join(text.split()),
+                "html": page.read_text(encoding="utf-8")}
+    finally:
+        browser.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})
+
+
+def _on_first_screen(rect: dict | None, whole: bool = True) -> bool:
+    """Whether an element starts (and, ``whole``, ends) within the first screen."""
+    return rect is not None and rect["height"] > 0 and rect["top"] < SCREEN[1] and (
+        not whole or rect["bottom"] <= SCREEN[1])
+
+
+@pytest.fixture(scope="module")
+def vpid1_slice(tmp_path_factory) -> Path:
+    """archive/vpid1 cut to two members (a full car, a quarter car), their first 5
+    instances and all 19 optimizers (tests/report/archive_slice.py), and its report (about
+    8 s of CPU, against 1-2 min for the whole archive)."""
+    from vpid_bench.report.build import build_report
+
+    root = tmp_path_factory.mktemp("slice")
+    slice_archive(ARCHIVES / "vpid1", root / "vpid1")
+    rep = build_report([root / "vpid1"], root / "report")
+    assert rep.failures == []
+    return root / "report"
+
+
+@pytest.fixture(scope="module")
+def no_truth_site(tmp_path_factory) -> Path:
+    """The no-truth sweep of test_no_truth_report (a measured-style record, lsq and random
+    search, 3 runs each; about 3 s)."""
+    return no_truth_sweep(tmp_path_factory.mktemp("no_truth_site")).out_dir
+
+
+ANSWER_PARTS = ("#answer", "#answer .answer-lines", "#answer table tbody tr")
+
+
+@needs_archive_runs
+def test_the_answer_is_on_the_first_screen_of_a_vpid1_slice(browser, vpid1_slice):
+    """The answer's sentences wholly, and its table's first row, within the first screen of
+    the overview; the answer is the slice's own (lsq with residuals, nevergrad without)."""
+    got = _first_screen(browser, vpid1_slice / "index.html", *ANSWER_PARTS)
+    r = got["rects"]
+    assert _on_first_screen(r["#answer .answer-lines"]), r
+    assert _on_first_screen(r["#answer table tbody tr"]), r
+    text = got["text"]
+    assert text.startswith("The answer Which optimizer, by budget: with residuals, lsq at "
+                           "every budget"), text
+    assert "without residuals, nevergrad" in text
+    assert "vpid1_f_bmw_iso_c" in text and "vpid1_q_golden_iso_c" in text
+
+
+def test_the_no_truth_overview_answers_with_the_identified_values(browser, no_truth_site):
+    """A sweep on a record without a truth: the answer block, with the identified values
+    (each parameter's value and 95 % interval) and the stated quantity, on the first screen;
+    no word of a truth anywhere on the overview."""
+    got = _first_screen(browser, no_truth_site / "index.html", *ANSWER_PARTS,
+                        "#answer .identified table")
+    r = got["rects"]
+    assert _on_first_screen(r["#answer .identified table"]), r
+    assert _on_first_screen(r["#answer table tbody tr"], whole=False), r
+    text = got["text"]
+    assert "Identified on decay ps=10: the best run (lsq, run " in text
+    assert "stated, not identified: the record's length: t_end = 3 s" in text
+    for name, unit in (("a", "m"), ("b", "1/s"), ("c", "m")):
+        assert re.search(rf"\b{name} {re.escape(unit)} \d\.\d+ \[\d\.\d+, \d\.\d+\]", text), name
+    assert "truth" not in got["html"].lower()
+
+
+@needs_archive_runs
+def test_the_suite_ecdf_legend_tells_every_line_apart(browser, vpid1_slice):
+    """The overview's ECDF across the suite, 19 optimizers: every legend key drawn, each
+    with its own (colour, dashes, marker), the same as its curve's."""
+    _open(browser, vpid1_slice / "index.html")
+    keys = browser.execute_script("""
+        const fig = document.querySelector('#fig-suite');
+        return Array.from(fig.querySelectorAll('button.toggle')).map(b => {
+          const k = b.querySelector('svg.key'), r = k.getBoundingClientRect();
+          const g = fig.querySelector(`g.series[data-series="${b.dataset.series}"]`);
+          const line = g.querySelector('path.line'), marks = g.querySelector('path.marks');
+          return {name: b.textContent.trim(), colour: k.dataset.colour, dash: k.dataset.dash,
+                  marker: k.dataset.marker, w: r.width, h: r.height,
+                  keyStroke: k.querySelector('line').getAttribute('stroke'),
+                  keyDash: k.querySelector('line').getAttribute('stroke-dasharray') || '',
+                  stroke: line.getAttribute('stroke'),
+                  dash2: line.getAttribute('stroke-dasharray') || '',
+                  marks: marks ? marks.getAttribute('fill') : null};
+        });""")
+    assert len(keys) == 19
+    assert len({(k["colour"], k["dash"], k["marker"]) for k in keys}) == 19
+    for k in keys:
+        assert k["w"] > 20 and k["h"] > 8, k
+        assert k["keyStroke"] == k["stroke"] == k["colour"] == k["marks"], k
+        assert k["keyDash"] == k["dash2"] == k["dash"], k
+
+
+@pytest.mark.slow
+@needs_archive_runs
+def test_the_answer_is_on_the_first_screen_of_archive_vpid1(browser, archive_report):
+    """Issue 46's Done-when on the real archive: archive/vpid1's overview answers on its first
+    screen what the README says, computed: lsq with residuals at every budget; without,
+    nevergrad by 100·D and cmaes by 1,000·D, with lshade, jade and de2 as many."""
+    out = archive_report("vpid1")
+    got = _first_screen(browser, out / "index.html", *ANSWER_PARTS)
+    r = got["rects"]
+    assert _on_first_screen(r["#answer .answer-lines"]), r
+    assert _on_first_screen(r["#answer table tbody tr"]), r
+    text = got["text"]
+    assert "with residuals, lsq at every budget" in text
+    assert "without residuals, nevergrad by 10·D and 100·D" in text
+    tail = text.split("cmaes by 1,000·D (98 %; ")[1].split(")")[0]
+    assert set(tail.replace(" and ", ", ").removesuffix(" as many").split(", ")) == {
+        "lshade", "jade", "de2"}
+    assert "use lsq on 11 of 17 problems" in text

@@ -15,7 +15,7 @@ from vpid_bench.analysis.estimates import comparison_rows
 from vpid_bench.api import Bounds, Problem, ProblemConfig
 from vpid_bench.experiment import run_job
 from vpid_bench.plugins import Registry
-from vpid_bench.report.build import build_report
+from vpid_bench.report.build import Report, build_report
 from vpid_bench.spec import Job, JobSpec
 
 T = np.linspace(0.0, 3.0, 300)
@@ -66,6 +66,11 @@ class Decay(Problem):
         return {"published estimate": {"x": [2.1, 1.4, 0.31], "note": "from a paper"},
                 "naive predictor": {"metrics": {"val_rms": 0.9}, "note": "the mean held"}}
 
+    def describe(self):
+        """A stated quantity (the report's Assumed block; docs/architecture.md)."""
+        return {"known": [{"name": "t_end", "value": 3.0, "unit": "s",
+                           "source": "the record's length", "what": "record length"}]}
+
 
 def _job(optimizer: str, runs: int = 3) -> Job:
     reg = Registry()
@@ -76,13 +81,22 @@ def _job(optimizer: str, runs: int = 3) -> Job:
                Decay, config, optimizer, cls, params, 60)
 
 
-@pytest.fixture(scope="module")
-def sweep(tmp_path_factory) -> Path:
-    root = tmp_path_factory.mktemp("no_truth")
+def no_truth_sweep(root: Path) -> Report:
+    """lsq and random search on the decay record (3 runs each) and the sweep's report in
+    ``root/report`` (the browser tests open its overview too)."""
     for name in ("lsq", "random"):
         run_job(_job(name), root / f"optimizer={name}", optima_dir=root / "optima")
-    build_report([root], root / "report")
-    return root
+    return build_report([root], root / "report")
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory) -> Report:
+    return no_truth_sweep(tmp_path_factory.mktemp("no_truth"))
+
+
+@pytest.fixture(scope="module")
+def sweep(report) -> Path:
+    return report.out_dir.parent
 
 
 def _records(folder: Path) -> list[dict]:
@@ -124,6 +138,22 @@ def test_the_first_screen_says_there_is_no_truth_and_shows_the_intervals(sweep):
     assert "95 % interval (Jacobian)" in results and "95 % interval (profile)" in results
     assert "published estimate" in results and "naive predictor" in results
     assert "NoRE" not in text and "from the truth" not in results
+
+
+def test_the_answer_gives_the_identified_values_first_and_no_truth(report):
+    """Issue 46: the answer at the top of report.md and of the terminal holds the identified
+    values with their intervals and the stated quantity; nothing in it names a truth."""
+    md = report.report_md.read_text(encoding="utf-8")
+    answer = md[md.index("## The answer"):md.index("## Results")]
+    assert md.splitlines().index("## The answer") < 8
+    assert "Identified on decay ps=10: the best run (lsq, run" in answer
+    assert "| a         | m    |" in answer and "95 % interval (Jacobian)" in answer
+    assert "t_end = 3 s (record length)" in " ".join(answer.split())
+    assert "truth" not in md[:md.index("## Results")].lower()
+    first = report.headline.splitlines()[:15]
+    assert first[0] == "The answer"
+    assert any(line.startswith("Identified on decay ps=10") for line in first)
+    assert any(line.startswith("a          m") for line in first), first
 
 
 def test_the_html_page_shows_the_intervals_too(sweep):

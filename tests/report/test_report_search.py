@@ -198,7 +198,7 @@ def test_paired_report_ranks_twice_with_groups_and_explains_the_disagreement(tmp
     assert ("Verdict for vehicle ps=20: use good (it gets closest to each record's own "
             "optimum; early ends nearer the truth by NoRE but searches worse; against early: "
             "p_holm") in results  # the effect size beside the pick
-    assert "A12=" in results.split("use good")[1].split(")")[0]
+    assert "A12=" in results.split("ps=20: use good")[1].split(")")[0]
     assert "More search will not help here" in results
     assert ("The rankings of vehicle ps=20 disagree beyond ties (medians within 0.001 "
             "relative count as equal): early ranks 1 by NoRE but 2") in flat

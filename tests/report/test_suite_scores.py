@@ -66,3 +66,26 @@ def test_families_come_from_the_problem_classes(registry):
     assert family("vpid1_f_bmw_iso_c") == "full car"
     assert family("functions") == ""
     assert family("no_such_problem") == ""
+
+
+def test_the_tables_shown_are_sorted_by_score_with_human_headers_and_no_empty_rung():
+    """Issue 46: the scores best first under readable headers (the CSV keeps its own); the
+    budget ladder in the same order, a rung no run reached (10,000·D here) left out."""
+    rows = [["all", "all problems", "a", 2, 10, 0.2, 0.1, 0.3, 0.5],
+            ["all", "all problems", "b", 2, 10, 0.6, 0.5, 0.7, 1.0],
+            ["family", "full", "a", 1, 5, 0.4, 0.3, 0.5, 0.5],
+            ["family", "full", "b", 1, 5, 0.3, 0.2, 0.4, 1.0]]
+    headers, shown = ss.score_table(rows)
+    assert headers == ["rank", "optimizer", "score (mean AUC, 0 to 1)", "95 % interval",
+                       "solved by the end (%)", "runs"]
+    assert shown == [[1, "b", "0.600", "[0.500, 0.700]", 100, 10],
+                     [2, "a", "0.200", "[0.100, 0.300]", 50, 10]]
+    assert [r[:3] for r in ss.score_table(rows, "family")[1]] == [
+        ["full (1 problem)", 1, "a"], ["full (1 problem)", 2, "b"]]
+    ladder = [["all problems", "a", 0.5, 0.9, math.nan, math.nan],
+              ["all problems", "b", 0.1, 0.99, 1.0, math.nan],
+              ["all problems", "c", 0.7, 0.7, math.nan, math.nan]]  # scored nowhere
+    headers, shown = ss.ladder_table(ladder, rows)
+    assert headers == ["optimizer", "solved by 10·D (%)", "solved by 100·D (%)",
+                       "solved by 1,000·D (%)"]
+    assert shown == [["b", 10, 99, 100], ["a", 50, 90, None], ["c", 70, 70, None]]

@@ -182,20 +182,24 @@ ERT_HEADERS = ["context", "algorithm", "target_rel_gap", "runs", "hits", "ert",
                "ert_batches", "ert_seconds"]
 
 
-def ecdf_figure(runs: Sequence[RunHits], context: str, path: Path) -> Path | str:
-    """The fixed-target ECDF of one context: one step line per optimizer, log x axis."""
+def ecdf_figure(runs: Sequence[RunHits], context: str, path: Path,
+                style_of: Mapping[str, Any] | None = None) -> Path | str:
+    """The fixed-target ECDF of one context: one step line per optimizer, log x axis, each
+    in its style of the report (``style_of``, :mod:`.styles`: colour, dashes, markers)."""
     sel = [r for r in runs if r.context == context]
     if not sel:
         return f"no run of {context} knows its instance's optimum"
     from .figures import _plt, save
+    from .styles import legend, lookup
 
     plt = _plt()
     b = context_budget(runs, context)
     grid = np.unique(np.round(np.geomspace(1.0, max(b, 2.0), 300)))
     fig, ax = plt.subplots(figsize=(7.0, 4.4))
-    styles = ("-", "--", ":", "-.")  # the colour cycle has 10 colours: more lines, new dashes
-    for k, ((_, algorithm), g) in enumerate(sorted(_groups(sel).items())):
-        ax.step(grid, ecdf(g, grid), where="post", linestyle=styles[(k // 10) % len(styles)],
+    groups = sorted(_groups(sel).items())
+    look = lookup(style_of, [a for (_, a), _ in groups])
+    for (_, algorithm), g in groups:
+        ax.step(grid, ecdf(g, grid), where="post", **look[algorithm].mpl(),
                 label=f"{algorithm} (AUC {auc(g, b):.2f}, {len(g)} runs)")
     ax.set_xscale("log")
     ax.set_ylim(-0.02, 1.02)
@@ -205,7 +209,7 @@ def ecdf_figure(runs: Sequence[RunHits], context: str, path: Path) -> Path | str
     ax.set_title(f"{context}: fixed-target ECDF, targets rel_gap = 1, 0.1, ..., 1e-6\n"
                  "(relative gap to each instance's optimum; a batch's hit counts at its end)",
                  fontsize=9)
-    ax.legend(fontsize=8, loc="upper left")
+    legend(ax, len(groups))
     ax.grid(True, which="major", alpha=0.3)
     return save(fig, path)
 

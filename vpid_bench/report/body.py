@@ -289,6 +289,8 @@ def suite_md(rows: Sequence[Sequence[Any]], notes: Sequence[str], fig: Path | st
     """"Across the suite": the score of every optimizer over all problems, the best per
     family and per dimension, and the aggregated ECDF figure (see
     :mod:`.suite_scores`)."""
+    from .suite_scores import score_table
+
     everything = [r for r in rows if r[0] == "all"]
     if not everything:
         return []
@@ -297,14 +299,9 @@ def suite_md(rows: Sequence[Sequence[Any]], notes: Sequence[str], fig: Path | st
                   "over problems of its fixed-target AUC (relative gaps 1 … 1e-6 to each "
                   "instance's optimum, over log evaluations; 1 = every target at the first "
                   "evaluation), with a 95 % bootstrap interval over runs, and the share of "
-                  "(run, target) pairs solved by the end. Each problem weighs the same. "
-                  "`tables/suite_scores.csv` has the groups per family and dimension."), "",
-             "| rank | optimizer | score (AUC) | 95 % interval | solved | runs |",
-             "| ---: | --- | ---: | --- | ---: | ---: |"]
-    for k, r in enumerate(everything, 1):
-        lines.append(f"| {k} | {escape(r[2])} | {r[5]:.3f} | [{r[6]:.3f}, {r[7]:.3f}] | "
-                     f"{100 * r[8]:.0f} % | {r[4]} |")
-    lines.append("")
+                  "(run, target) pairs solved by the end. Each problem weighs the same. Best "
+                  "first. `tables/suite_scores.csv` has the groups per family and dimension."),
+             "", render.markdown(*score_table(rows)), ""]
     best = []
     for kind in ("family", "dimension"):
         for name in dict.fromkeys(r[1] for r in rows if r[0] == kind):
@@ -323,25 +320,21 @@ def suite_md(rows: Sequence[Sequence[Any]], notes: Sequence[str], fig: Path | st
     return lines
 
 
-def ladder_md(rows: Sequence[Sequence[Any]]) -> list[str]:
+def ladder_md(rows: Sequence[Sequence[Any]], scores: Sequence[Sequence[Any]] = ()
+              ) -> list[str]:
     """The budget ladder (:func:`.suite_scores.ladder_rows`): the share of (run, target)
     pairs solved at 10, 100, 1,000 and 10,000 evaluations per dimension, read off the same
-    runs; rungs no run reached are left out."""
-    from .suite_scores import LADDER
+    runs, in the order of the scores (:func:`.suite_scores.ladder_table`); rungs no run
+    reached are left out."""
+    from .suite_scores import ladder_table
 
-    keep = [k for k, _ in enumerate(LADDER) if any(math.isfinite(r[2 + k]) for r in rows)]
-    if not rows or not keep:
+    headers, shown = ladder_table(rows, scores)
+    if not rows or len(headers) < 2:
         return []
-    last = keep[-1]
-    order = sorted(rows, key=lambda r: (-r[2 + last], r[1]))
-    lines = ["### The budget ladder", "",
-             para("Fixed budgets read off the same runs: the share of (run, target) pairs "
-                  "solved within each budget, in evaluations per parameter (D), each problem "
-                  "weighing the same. Rungs beyond some problem's budget are not shown: those "
-                  "runs did not go that far (`budget=`). `tables/budget_ladder.csv`."), "",
-             "| optimizer | " + " | ".join(f"{LADDER[k]:,}·D" for k in keep) + " |",
-             "| --- | " + " | ".join("---:" for _ in keep) + " |"]
-    for r in order:
-        lines.append(f"| {escape(r[1])} | "
-                     + " | ".join(f"{100 * r[2 + k]:.0f} %" for k in keep) + " |")
-    return lines + [""]
+    return ["### The budget ladder", "",
+            para("Fixed budgets read off the same runs: the share of (run, target) pairs "
+                 "solved within each budget, in evaluations per parameter (D), each problem "
+                 "weighing the same; in the order of the scores above. Budgets beyond some "
+                 "problem's budget are not shown: those runs did not go that far (`budget=`). "
+                 "`tables/budget_ladder.csv`."), "",
+            render.markdown(headers, shown), ""]

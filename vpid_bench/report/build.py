@@ -35,7 +35,7 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
-from . import anytime, body, first_screen, outline, render, tables
+from . import answer, anytime, body, first_screen, outline, render, tables
 from .compute import ReportData, compute
 from .load import LoadedRecords, NoRecordsError
 from .model import ReportModel, SuiteScores
@@ -124,7 +124,7 @@ def build_report(
     model, written = _assemble(data, names, registry)
     md, site = _render(model, names)
     written += [md, *site]
-    return Report(out_dir, md, first_screen.terminal_text(model.results),
+    return Report(out_dir, md, first_screen.terminal_text(model.results, answer=model.answer),
                   len(data.loaded.records), data.problems, written,
                   {k: v for k, v in model.figs.items() if isinstance(v, str)}, data.loaded,
                   model.section_errors, data.optima_errors, data.archive_notes,
@@ -158,6 +158,8 @@ def _assemble(data: ReportData, names: _Names, registry: Any
     for placed in model.sections:
         written += list(placed.section.files)
     _add_interactive(model)
+    model.answer = answer.derive(data, model.results, model.suite, answer.residual_users(
+        registry, data.rows) if model.suite is not None else frozenset())
     return model, written
 
 
@@ -259,7 +261,10 @@ def _suite_scores(data: ReportData, registry: Any, names: _Names
     ladder = ss.ladder_rows(data.hits, facts)
     written = (_table(names, "suite_scores", ss.HEADERS, rows)
                + _table(names, "budget_ladder", ss.LADDER_HEADERS, ladder))
-    fig = ss.figure(data.hits, facts, names.file("figures", "suite_ecdf", ".png"))
+    from .styles import of_report
+
+    fig = ss.figure(data.hits, facts, names.file("figures", "suite_ecdf", ".png"),
+                    of_report(data))
     if isinstance(fig, Path):
         written.append(fig)
     from .interactive import suite_ecdf_figure

@@ -41,29 +41,31 @@ def draw_all(data: Any, file: Callable[[str, str, str], Path]) -> dict[str, Path
     from . import anytime, figures
     from .identifiability import reference_levels
     from .load import trace_sets
+    from .styles import of_report
 
     figs: dict[str, Path | str] = {}
     records, rows, df = data.loaded.records, data.rows, data.tests.df
+    style_of = of_report(data)  # one style per optimizer in every figure
     traces = trace_sets(records, rows)
     _draw(figs, "Convergence", figures.convergence_panels(
         traces, *reference_levels(records, rows)) if traces else "no traces in the records",
-        figures.draw_convergence, file("figures", "convergence", ".png"))
+        figures.draw_convergence, file("figures", "convergence", ".png"), style_of)
     for p in sorted(df["problem"].unique()):
         _draw(figs, f"Per-run metric, {p}", figures.runs_metric_data(df, p),
               figures.draw_runs_metric, file("figures", f"runs_{p}", ".png"))
         _draw(figs, f"Median per-run absolute relative error per parameter, {p}",
               figures.error_heatmap_data(df, p), figures.draw_error_heatmap,
               file("figures", f"errors_{p}", ".png"))
-    _cd_figures(figs, data, file)
+    _cd_figures(figs, data, file, style_of)
     for context in sorted({h.context for h in data.hits}):
         _draw(figs, f"Fixed-target ECDF, {context}", data.hits,
               lambda hits, c=context: anytime.ecdf_figure(
-                  hits, c, file("figures", f"ecdf_{c}", ".png")))
+                  hits, c, file("figures", f"ecdf_{c}", ".png"), style_of))
     return figs
 
 
 def _cd_figures(figs: dict[str, Path | str], data: Any,
-                file: Callable[[str, str, str], Path]) -> None:
+                file: Callable[[str, str, str], Path], style_of: Any = None) -> None:
     """The critical-difference diagrams (they need the tests)."""
     from . import figures, stats
 
@@ -93,7 +95,7 @@ def _cd_figures(figs: dict[str, Path | str], data: Any,
              f"{metric} (1 = best)") if inst is not None else
             (f"mean rank of each optimizer's runs among all {len(g)} runs of the context, "
              f"by per-run {metric} (1 = best)"),
-            file("figures", f"cd_{context}", ".png"), alpha)
+            file("figures", f"cd_{context}", ".png"), alpha, style_of)
     title = "Critical-difference diagram across blocks"
     if fr is None or fr.mean_ranks is None or len(fr.blocks) < CD_MIN_BLOCKS:
         found = 0 if fr is None else len(fr.blocks)
@@ -104,4 +106,4 @@ def _cd_figures(figs: dict[str, Path | str], data: Any,
               f"Across {len(fr.blocks)} blocks: bars join optimizers not significantly "
               f"different (Nemenyi, α={alpha})",
               "mean rank of each optimizer's median per-run metric over the blocks (1 = best)",
-              file("figures", "cd_blocks", ".png"), alpha)
+              file("figures", "cd_blocks", ".png"), alpha, style_of)

@@ -214,23 +214,28 @@ def convergence_panels(traces: TraceSets, f_true: Mapping[str, float] | None = N
     return panels
 
 
-def draw_convergence(panels: Sequence[Mapping[str, Any]], path: Path) -> Path | str:
+def draw_convergence(panels: Sequence[Mapping[str, Any]], path: Path,
+                     style_of: Mapping[str, Any] | None = None) -> Path | str:
     """Median best objective vs evaluations per optimizer, IQR band, one panel per context,
     on a logarithmic y axis; a dashed line at the objective of the true parameters and a
     dotted one at the record optimum ``f*`` where the panel knows them (medians over the
     context's instances)."""
     if not panels:
         return "no finite objective values in the traces"
+    from .styles import legend, lookup
+
+    look = lookup(style_of, [c["algorithm"] for p in panels for c in p["curves"]])
     plt = _plt()
     ncol = min(len(panels), 2)
     nrow = -(-len(panels) // ncol)
     fig, axes = plt.subplots(nrow, ncol, figsize=(6.5 * ncol, 4.2 * nrow), squeeze=False)
     for ax, p in zip(axes.flat, panels, strict=False):
-        for colour, c in zip(colours(len(p["curves"])), p["curves"], strict=True):
-            ax.plot(c["x"], c["median"], color=colour, label=c["algorithm"],
+        for c in p["curves"]:
+            st = look[c["algorithm"]]
+            ax.plot(c["x"], c["median"], **st.mpl(), label=c["algorithm"],
                     drawstyle="steps-post")
-            ax.fill_between(c["x"], c["q25"], c["q75"], color=colour, alpha=0.2, step="post",
-                            linewidth=0)
+            ax.fill_between(c["x"], c["q25"], c["q75"], color=st.colour, alpha=0.12,
+                            step="post", linewidth=0)
         values = np.asarray(p["values"], float)
         ft, fo = p.get("f_true"), p.get("f_opt")
         if ft is not None and math.isfinite(ft):
@@ -246,7 +251,7 @@ def draw_convergence(panels: Sequence[Mapping[str, Any]], path: Path) -> Path | 
         ax.set_xlabel("objective evaluations used")
         ax.set_ylabel("best objective value so far" + (" (log scale)" if scale == "log"
                                                        else " (symmetric log scale)"))
-        ax.legend(title="optimizer (median, IQR band)", fontsize=8, title_fontsize=8, loc="best")
+        legend(ax, len(p["curves"]), title="optimizer (median, IQR band)", title_fontsize=8)
     for ax in list(axes.flat)[len(panels):]:
         ax.set_visible(False)
     fig.suptitle("Convergence: median best objective vs evaluations (band = interquartile range)")
@@ -419,7 +424,7 @@ def cd_bars(names: list[str], p: np.ndarray, alpha: float) -> list[list[str]]:
 
 
 def draw_cd(data: Mapping[str, Any], title: str, axis_label: str, path: Path,
-            alpha: float) -> Path | str:
+            alpha: float, style_of: Mapping[str, Any] | None = None) -> Path | str:
     """Critical-difference diagram in Demšar's (2006) layout: the mean ranks on an axis at the
     top (1 = best, on the left); under it one thick bar per group of :func:`cd_bars` (groups
     that do not overlap share a level); each optimizer joined by an elbow line to its label,
@@ -427,6 +432,9 @@ def draw_cd(data: Mapping[str, Any], title: str, axis_label: str, path: Path,
     the right (worst on the top row), so that no two lines cross."""
     plt = _plt()
     names = [name for name, _ in data["ranks"]]
+    from .styles import lookup
+
+    look = lookup(style_of, names)
     rank = {name: r for name, r in data["ranks"]}
     levels: list[float] = []  # the right end of the last bar placed on each level
     placed: list[tuple[float, float, int]] = []
@@ -448,7 +456,7 @@ def draw_cd(data: Mapping[str, Any], title: str, axis_label: str, path: Path,
     sides = [(names[:half], left_x, "right"), (names[half:][::-1], right_x, "left")]
     for i, (group, x_label, align) in enumerate(sides):
         for row, name in enumerate(group):
-            colour = f"C{(names.index(name)) % 10}"
+            colour = look[name].colour
             r = rank[name]
             ax.plot([r, r, x_label], [0, rows[row], rows[row]], color=colour, linewidth=1)
             ax.scatter([r], [0], color=colour, zorder=4)

@@ -26,7 +26,7 @@ from typing import Any
 from ..estimators import DESCRIPTION
 from . import anytime, assumed, verdicts
 from .body import verdict_short
-from .render import fmt, markdown, para, terminal
+from .render import PROSE_WIDTH, fmt, markdown, para, terminal
 from .safe import clean, escape
 from .tables import pair_detail
 from .verdicts import Verdict
@@ -595,11 +595,61 @@ def _wrap_glued(marked: str, width: int) -> str:
     return clean("\n".join(lines).replace(_GLUE, " "), keep_newlines=True)
 
 
-def terminal_text(items: Sequence[ContextResult], width: int | None = None) -> str:
-    """The same first screen for the terminal: a table and a verdict per context, the prose
-    wrapped to the terminal's width."""
+def answer_markdown(a: Any) -> list[str]:
+    """The answer block of ``report.md`` (:mod:`.answer`): its sentences as a list, the
+    identified values where there is no truth, and the compact table per context; each
+    verdict in full is one heading below (Results)."""
+    if a is None:
+        return []
+    lines = ["## The answer", ""]
+    for label, text in answer_sentences(a):
+        flat = f"- **{label}**: {' '.join(text.split())}".replace(" %", _GLUE + "%")
+        lines += [textwrap.fill(flat, width=PROSE_WIDTH, subsequent_indent="  ",
+                                break_long_words=False, break_on_hyphens=False
+                                ).replace(_GLUE, " ")]  # "8 %" never split over two lines
+    lines.append("")
+    for _, text, headers, rows in a.identified:
+        lines += [para(text), "", markdown(headers, rows), ""]
+    if a.rows:
+        from .answer import table_note
+
+        lines += [markdown(a.headers, a.rows), "",
+                  para(table_note(a) + " Each verdict in full, with its reasons and the "
+                       "ranking: [Results](#results) below."), ""]
+    return lines
+
+
+def answer_sentences(a: Any) -> list[tuple[str, str]]:
+    """(label, Markdown sentence) of the answer (:func:`.answer.sentences`)."""
+    from .answer import sentences
+
+    return sentences(a)
+
+
+def answer_terminal(a: Any, width: int) -> str:
+    """The answer block for the terminal: the same sentences (no code marks), wrapped; the
+    identified values; the compact table."""
+    if a is None:
+        return ""
+    out = ["The answer"]
+    for label, text in answer_sentences(a):
+        flat = " ".join(f"{label}: {text}".replace("`", "").split()).replace(" %", _GLUE + "%")
+        out.append(clean(textwrap.fill(flat, width=width, subsequent_indent="  ",
+                                       break_long_words=False, break_on_hyphens=False
+                                       ).replace(_GLUE, " "), keep_newlines=True))
+    for _, text, headers, rows in a.identified:
+        out += ["", _wrap(text, width), terminal(headers, rows)]
+    if a.rows:
+        out += ["", terminal(a.headers, a.rows)]
+    return "\n".join(out)
+
+
+def terminal_text(items: Sequence[ContextResult], width: int | None = None,
+                  answer: Any = None) -> str:
+    """The same first screen for the terminal: the answer (:mod:`.answer`) first, then a
+    table and a verdict per context, the prose wrapped to the terminal's width."""
     width = width or terminal_width()
-    blocks = []
+    blocks = [answer_terminal(answer, width)] if answer is not None else []
     for r in items:
         extra = ""
         for text, headers, rows in extra_blocks(r):

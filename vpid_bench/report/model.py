@@ -56,6 +56,8 @@ class ReportModel:
     suite: SuiteScores | None = None
     #: the interactive figures per context (:mod:`.interactive`): ``ecdf`` and ``convergence``
     interactive: dict[str, dict[str, Any]] = dataclasses.field(default_factory=dict)
+    #: the answer first (:class:`.answer.Answer`): which optimizer, budget, estimator
+    answer: Any = None
 
     def problem_of(self) -> dict[str, str]:
         """Each context's problem."""

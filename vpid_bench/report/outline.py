@@ -48,20 +48,39 @@ def _intro(model: Any, _: str | None) -> list[str]:
     data = model.data
     n = len(data.loaded.records)
     n_ok = sum(r["status"] == "ok" for r in data.loaded.records)
-    what = ", ".join(escape(p) for p in data.problems)
-    no_truth = any(getattr(data, "no_truth", {}).values())
+    what = (", ".join(escape(p) for p in data.problems) if len(data.problems) <= 4 else
+            f"{len(data.problems)} problems")  # named in the table of the answer
     lines = ["# vpid-bench report" + (" (single job)" if data.short else ""), "",
-             para(f"{n} run(s) on {what} ({n_ok} ok, {n - n_ok} failed). Which optimizer, how "
-                  "far from the truth" + (" (or, where there is none, how well it fits and "
-                                          "predicts the record)" if no_truth else "")
-                  + ", and why: below, per context. How to read it, the tests and the "
-                  "sources follow. The same report as browsable pages: `index.html`."), ""]
+             para(f"{n} run(s) on {what} ({n_ok} ok, {n - n_ok} failed). The answer first; "
+                  f"then, per context, which optimizer, {judged(data)}, and why. How to read "
+                  "it, the tests and the sources follow. The same report as browsable pages: "
+                  "`index.html`."), ""]
+    return lines
+
+
+def judged(data: Any) -> str:
+    """What the report judges an optimizer by, in words: the truth only where there is
+    one (a report of measured records never mentions one)."""
+    no_truth = getattr(data, "no_truth", {})
+    if no_truth and all(no_truth.values()):
+        return "how well it fits and predicts the record"
+    return "how far from the truth" + (" (or, where there is none, how well it fits and "
+                                       "predicts the record)" if any(no_truth.values()) else "")
+
+
+def _archive_notes(model: Any, _: str | None) -> list[str]:
+    data = model.data
+    lines: list[str] = []
     if data.archive_notes:
         lines += [para("Archived runs, made earlier by the code named beside them and "
                        "ranked here with this report's own runs (`archive=false` leaves "
                        "them out):"), ""]
         lines += [f"- {escape(n)}" for n in data.archive_notes] + [""]
     return lines
+
+
+def _answer(model: Any, _: str | None) -> list[str]:
+    return first_screen.answer_markdown(getattr(model, "answer", None))
 
 
 def _results(model: Any, problem: str | None) -> list[str]:
@@ -72,7 +91,8 @@ def _suite(model: Any, _: str | None) -> list[str]:
     s = model.suite
     if s is None:
         return []
-    return body.suite_md(s.rows, s.notes, s.figure, model.out_dir) + body.ladder_md(s.ladder)
+    return (body.suite_md(s.rows, s.notes, s.figure, model.out_dir)
+            + body.ladder_md(s.ladder, s.rows))
 
 
 def _single_job(model: Any, _: str | None) -> list[str]:
@@ -144,6 +164,8 @@ def _of(model: Any, problem: str | None, results: list[Any]) -> list[Any]:
 #: The report's sections in the order of report.md: the verdict first, the method after.
 PARTS: tuple[Part, ...] = (
     Part("intro", "index", "page", _intro),
+    Part("answer", "index", "page", _answer),
+    Part("archive_notes", "index", "page", _archive_notes),
     Part("results", "index", "page", _results),
     Part("suite", "index", "page", _suite),
     Part("single_job", "index", "page", _single_job),

@@ -9,7 +9,8 @@ from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
-from . import body, outline, svg
+from . import answer as answers
+from . import body, outline, styles, svg
 from .safe import slug
 from .site import (
     ASSET_DIR,
@@ -42,13 +43,13 @@ def build_pages(model: Any) -> dict[str, str]:
         "problems": [(p, pages.problem(p)) for p in data.problems],
         "optimizers": [(o, pages.optimizer(o)) for o in optimizers],
     }
-    colour_of = dict(zip(optimizers, svg.colours(len(optimizers)), strict=True))
+    style_of = styles.assign(optimizers)  # the one style per optimizer of every figure
     out = {"index.html": render_page("index.html.j2", page="index", title="Overview",
-                                     **common, **_index(model, pages, colour_of))}
+                                     **common, **_index(model, pages, style_of))}
     for p in data.problems:
         out[pages.problem(p)] = render_page("problem.html.j2", page="problem",
                                             title=f"Problem {p}", name=p, **common,
-                                            **_problem(model, pages, p, colour_of))
+                                            **_problem(model, pages, p, style_of))
     for o in optimizers:
         out[pages.optimizer(o)] = render_page("optimizer.html.j2", page="optimizer",
                                               title=f"Optimizer {o}", name=o, **common,
@@ -72,7 +73,7 @@ def fit_line(diag: Any) -> str:
     return plain_line(diag) if diag else ""
 
 
-def _index(model: Any, pages: Pages, colour_of: Mapping[str, str]) -> dict[str, Any]:
+def _index(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, Any]:
     data = model.data
     of = model.problem_of()
     verdicts = []
@@ -80,26 +81,40 @@ def _index(model: Any, pages: Pages, colour_of: Mapping[str, str]) -> dict[str, 
         items = [{"verdict": r.verdict, "context": r.context, "anchor": _anchor(r.context),
                   "n": len(r.rows), "decision": decision(getattr(r, "decision", None), pages),
                   "assumed": [text for text, _, _ in getattr(r, "assumed", [])],
-                  "fit": fit_line(getattr(r, "diagnostics", None))}
+                  "fit": fit_line(getattr(r, "diagnostics", None)),
+                  "words": answers.table([r])[1][0][1]}
                  for r in model.results if of.get(r.context) == p]
-        verdicts.append({"name": p, "href": pages.problem(p), "contexts": items})
+        verdicts.append({"name": p, "href": pages.problem(p), "contexts": items,
+                         "id": "v-" + slug(p)})
     n_ok = sum(r["status"] == "ok" for r in data.loaded.records)
     short_note = ("A single job's report: statistics, no tests, no figures; "
                   "vpid-bench-report builds the full one." if data.short else "")
     figures = [(relative(v, model.out_dir), k) for k, v in model.figs.items()
                if k in INDEX_FIGURES and isinstance(v, Path)]
     return {"verdicts": verdicts, "n_ok": n_ok, "short": data.short, "figures": figures,
-            "archive_notes": data.archive_notes, "suite": _suite(model, pages, colour_of),
-            "short_note": short_note}
+            "archive_notes": data.archive_notes, "suite": _suite(model, pages, style_of),
+            "short_note": short_note, "answer": _answer(model, pages),
+            "judged": outline.judged(data)}
 
 
-#: What limits the leader (:data:`.verdicts.LIMIT_SEARCH` ...), in a few words.
-LIMITS = {"search": "more search would still gain",
-          "below_floor": "its runs stopped short of the optimum (below the floor)",
-          "estimator": "the estimator (objective) sets the floor",
-          "model": "model error sets the floor",
-          "records": "the records set the floor: more search will not help",
-          "truth": "the records allow the truth itself: only search limits it"}
+def _answer(model: Any, pages: Pages) -> dict[str, Any] | None:
+    """The answer block of the overview (:mod:`.answer`): its sentences, the identified
+    values where there is no truth, and the compact table, each context linked to its
+    section."""
+    a = getattr(model, "answer", None)
+    if a is None:
+        return None
+    of = model.problem_of()
+    links = {"problem": lambda c: pages.problem(c) or _context_href(pages, of, c)}
+    return {"sentences": answers.sentences(a),
+            "identified": [{"text": text, "table": table(h, rows)}
+                           for _, text, h, rows in a.identified],
+            "table": table(a.headers, a.rows, links, caption=answers.table_note(a))
+            if a.rows else None}
+
+
+#: What limits the leader, in a few words (one home: :data:`.answer.LIMITS`).
+LIMITS = answers.LIMITS
 
 
 def decision(v: Any, pages: Pages) -> dict[str, Any] | None:
@@ -113,8 +128,8 @@ def decision(v: Any, pages: Pages) -> dict[str, Any] | None:
             "not_beaten": list(v.not_beaten), "over_bound": v.over_bound}
 
 
-def _suite(model: Any, pages: Pages, colour_of: Mapping[str, str]) -> dict[str, Any] | None:
-    from .suite_scores import HEADERS, LADDER_HEADERS
+def _suite(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, Any] | None:
+    from .suite_scores import GROUP_SHOWN, ladder_table, score_table
 
     s = model.suite
     if s is None or not s.rows:
@@ -123,10 +138,14 @@ def _suite(model: Any, pages: Pages, colour_of: Mapping[str, str]) -> dict[str, 
     interactive = None
     if s.interactive is not None:
         interactive = {"figure": s.interactive, "id": "fig-suite",
-                       "layout": svg.layout(s.interactive, dict(colour_of))}
-    return {"table": table(HEADERS, s.rows, _links(pages)), "notes": s.notes,
+                       "layout": svg.layout(s.interactive, style_of)}
+    groups = [row for kind in ("family", "dimension")
+              for row in score_table(s.rows, kind)[1]]
+    return {"table": table(*score_table(s.rows), _links(pages)), "notes": s.notes,
             "interactive": interactive,
-            "ladder": table(LADDER_HEADERS, s.ladder, _links(pages)) if s.ladder else None,
+            "ladder": table(*ladder_table(s.ladder, s.rows), _links(pages)) if s.ladder
+            else None,
+            "groups": table(GROUP_SHOWN, groups, _links(pages)) if groups else None,
             "figure": relative(fig, model.out_dir) if fig else None}
 
 
@@ -141,7 +160,7 @@ def _levels(r: Any) -> str:
     return ", ".join(parts)
 
 
-def _context_block(model: Any, pages: Pages, r: Any, colour_of: Mapping[str, str],
+def _context_block(model: Any, pages: Pages, r: Any, style_of: Mapping[str, Any],
                    counter: list[int]) -> dict[str, Any]:
     data = model.data
     unit = f" ({r.unit})" if r.unit else ""
@@ -160,7 +179,7 @@ def _context_block(model: Any, pages: Pages, r: Any, colour_of: Mapping[str, str
         fig = model.interactive.get(r.context, {}).get(key)
         if fig is not None:
             counter[0] += 1
-            figures.append((key, {"figure": fig, "layout": svg.layout(fig, dict(colour_of)),
+            figures.append((key, {"figure": fig, "layout": svg.layout(fig, style_of),
                                   "id": f"fig{counter[0]}"}))
     from .first_screen import extra_blocks
 
@@ -173,11 +192,11 @@ def _context_block(model: Any, pages: Pages, r: Any, colour_of: Mapping[str, str
             "stats": stats, "figures": figures}
 
 
-def _problem(model: Any, pages: Pages, problem: str, colour_of: Mapping[str, str]
+def _problem(model: Any, pages: Pages, problem: str, style_of: Mapping[str, Any]
              ) -> dict[str, Any]:
     contexts = model.contexts_of(problem)
     counter = [0]
-    blocks = [_context_block(model, pages, r, colour_of, counter)
+    blocks = [_context_block(model, pages, r, style_of, counter)
               for r in model.results if r.context in contexts]
     names = [problem, *contexts]
     pngs = [(relative(v, model.out_dir), k) for k, v in model.figs.items()
@@ -209,10 +228,13 @@ def _optimizer(model: Any, pages: Pages, name: str) -> dict[str, Any]:
                      q.get("rel_gap_median"), q.get("auc")])
     suite = None
     if model.suite is not None and model.suite.rows:
-        from .suite_scores import HEADERS
+        from .suite_scores import GROUP_SHOWN, score_table
 
-        mine = [r for r in model.suite.rows if r[2] == name]
-        suite = table(HEADERS, mine, _links(pages)) if mine else None
+        mine = [row for kind in ("all", "family", "dimension")
+                for row in ([["all problems", *r] for r in score_table(model.suite.rows)[1]]
+                            if kind == "all" else score_table(model.suite.rows, kind)[1])
+                if row[2] == name]
+        suite = table(GROUP_SHOWN, mine, _links(pages)) if mine else None
     links = {**_links(pages), "context": lambda c: _context_href(pages, of, c)}
     return {"table": table(OPTIMIZER_HEADERS, rows, links), "suite": suite}
 

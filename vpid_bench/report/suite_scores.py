@@ -142,9 +142,10 @@ def aggregated_ecdf(per_context: Mapping[str, list[RunHits]], dims: Mapping[str,
     return np.mean([ecdf(g, grid * max(dims[c], 1)) for c, g in per_context.items()], axis=0)
 
 
-def figure(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]], path: Path
-           ) -> Path | str:
-    """Aggregated ECDFs: one panel for all problems, one per family (up to five)."""
+def figure(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]], path: Path,
+           style_of: Mapping[str, Any] | None = None) -> Path | str:
+    """Aggregated ECDFs: one panel for all problems, one per family (up to five); each
+    optimizer in its style of the report (``style_of``, :mod:`.styles`)."""
     budgets = _budgets(runs)
     gs = [g for g in groups({c: f for c, f in facts.items() if c in budgets})
           if g.kind in ("all", "family")][:6]
@@ -160,12 +161,14 @@ def figure(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]], path: 
     nrows = math.ceil(len(gs) / cols)
     fig, axes = plt.subplots(nrows, cols, figsize=(5.2 * cols, 3.8 * nrows), squeeze=False)
     by_alg = _by(runs)
-    styles = ("-", "--", ":", "-.")
+    from .styles import lookup
+
+    look = lookup(style_of, by_alg)
     for ax, g in zip(axes.ravel(), gs):
-        for k, (alg, per) in enumerate(sorted(by_alg.items())):
+        for alg, per in sorted(by_alg.items()):
             if all(c in per for c in g.contexts):
                 ax.step(grid, aggregated_ecdf({c: per[c] for c in g.contexts}, dims, grid),
-                        where="post", linestyle=styles[(k // 10) % len(styles)], label=alg)
+                        where="post", **look[alg].mpl(), label=alg)
         ax.set_xscale("log")
         ax.set_ylim(-0.02, 1.02)
         ax.set_title(f"{g.name} ({len(g.contexts)} problem(s))", fontsize=9)
@@ -174,7 +177,10 @@ def figure(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]], path: 
         ax.grid(True, which="major", alpha=0.3)
     for ax in axes.ravel()[len(gs):]:
         ax.set_visible(False)
-    axes.ravel()[0].legend(fontsize=7, loc="upper left", ncol=2)
+    handles, labels = axes.ravel()[0].get_legend_handles_labels()
+    # one legend for every panel, beside them: every line's colour, dashes and marker
+    fig.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.0, 0.95), fontsize=8,
+               handlelength=3.4, title="optimizer", title_fontsize=8)
     fig.suptitle("Runtime ECDFs aggregated over problems and targets (rel_gap 1 … 1e-6), "
                  "each problem weighing the same", fontsize=10)
     fig.tight_layout()
@@ -215,3 +221,46 @@ def ladder_rows(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]]
         out.append(["all problems", alg, *[math.nan if b else float(v)
                                            for v, b in zip(values, beyond, strict=True)]])
     return out
+
+
+#: The headers a reader sees of the scores (the CSV keeps :data:`HEADERS`).
+SCORE_SHOWN = ["rank", "optimizer", "score (mean AUC, 0 to 1)", "95 % interval",
+               "solved by the end (%)", "runs"]
+GROUP_SHOWN = ["group", *SCORE_SHOWN]
+
+
+def _score_row(r: Sequence[Any]) -> list[Any]:
+    """A score row as shown: the score and its interval at three decimals (as text: a
+    table's columns keep four significant figures), the share solved in whole percent."""
+    return [r[2], f"{float(r[5]):.3f}", f"[{r[6]:.3f}, {r[7]:.3f}]",
+            round(100 * float(r[8])), r[4]]
+
+
+def score_table(rows: Sequence[Sequence[Any]], kind: str = "all"
+                ) -> tuple[list[str], list[list[Any]]]:
+    """The scores of one kind of group as a reader sees them (:data:`SCORE_SHOWN`; for the
+    families and dimensions, :data:`GROUP_SHOWN`): best score first within each group, the
+    share solved in percent. ``rows``: :func:`score_rows`."""
+    out: list[list[Any]] = []
+    for name in dict.fromkeys(r[1] for r in rows if r[0] == kind):
+        ranked = sorted((r for r in rows if r[0] == kind and r[1] == name),
+                        key=lambda r: (-float(r[5]), r[2]))
+        for k, r in enumerate(ranked, 1):
+            group = f"{r[1]} ({r[3]} problem{'s' if r[3] != 1 else ''})"
+            out.append(([] if kind == "all" else [group])
+                       + [k, *_score_row(r)])
+    return (SCORE_SHOWN if kind == "all" else GROUP_SHOWN), out
+
+
+def ladder_table(ladder: Sequence[Sequence[Any]], rows: Sequence[Sequence[Any]]
+                 ) -> tuple[list[str], list[list[Any]]]:
+    """The budget ladder as a reader sees it: one column per rung some run reached (the
+    others, empty, left out), the share solved in whole percent, the optimizers in the order of
+    their score across the suite (best first; ``rows``: :func:`score_rows`), those without a
+    score last."""
+    keep = [k for k in range(len(LADDER)) if any(math.isfinite(r[2 + k]) for r in ladder)]
+    score = {r[2]: float(r[5]) for r in rows if r[0] == "all"}
+    order = sorted(ladder, key=lambda r: (-score.get(r[1], -math.inf), r[1]))
+    headers = ["optimizer", *[f"solved by {LADDER[k]:,}·D (%)" for k in keep]]
+    return headers, [[r[1], *[round(100 * r[2 + k]) if math.isfinite(r[2 + k]) else None
+                              for k in keep]] for r in order]

@@ -1,39 +1,53 @@
 """An :class:`~.interactive.Figure` laid out for an inline SVG: pixel coordinates of each
-series' step path, its band, the axes' ticks, and one colour per optimizer.
+series' step path, its band and markers, the axes' ticks, and one style per optimizer.
 
 Only geometry and numbers are computed here; the SVG elements are written by the page
 templates (auto-escaped: an optimizer's name never reaches the page raw). Why plain SVG
 rather than a plotting library's HTML export: it needs no script from outside (a library's
 self-contained export embeds its whole JavaScript library, megabytes for plotly, in each page),
-opens from ``file://``, and a figure of 20 optimizers weighs tens of kilobytes.
+opens from ``file://``, and a figure of 20 optimizers weighs tens of kilobytes. Each
+optimizer is drawn in its style of the report (:mod:`.styles`: colour, dashes, markers),
+the legend's keys the same.
 """
 
 from __future__ import annotations
 
-import colorsys
 import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 from .interactive import Figure
+from .styles import Style, lookup
 
 WIDTH, HEIGHT = 720, 380
 LEFT, RIGHT, TOP, BOTTOM = 70, 16, 14, 46
-#: Matplotlib's default colour cycle (tab10); more optimizers get evenly spaced hues.
-PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
-           "#7f7f7f", "#bcbd22", "#17becf")
+#: The lines' width (px): the dash patterns of :mod:`.styles` are in line widths.
+LINE_WIDTH = 1.6
+#: Markers along a curve: one every this many pixels of x, and their radius (px).
+MARK_EVERY_PX, MARK_R = 84.0, 3.6
+#: A legend key: a short line with the marker in its middle, this wide and high (px).
+KEY_W, KEY_H = 34, 12
 
 
-def colours(n: int) -> list[str]:
-    """``n`` distinct colours: the palette when it has enough, else ``n`` evenly spaced hues
-    (as the PNG figures do), so no two optimizers share one."""
-    if n <= len(PALETTE):
-        return list(PALETTE[:n])
-    out = []
-    for i in range(n):
-        r, g, b = colorsys.hls_to_rgb(i / n, 0.45, 0.65)
-        out.append(f"#{round(r * 255):02x}{round(g * 255):02x}{round(b * 255):02x}")
-    return out
+def marker_path(marker: str, cx: float, cy: float, r: float = MARK_R) -> str:
+    """An SVG path (filled) of one marker of :data:`.styles.MARKERS` centred at (cx, cy)."""
+    def pts(points: Sequence[tuple[float, float]]) -> str:
+        return "M" + "L".join(f"{cx + a * r:.1f} {cy + b * r:.1f}" for a, b in points) + "Z"
+    if marker == "o":
+        return (f"M{cx - r:.1f} {cy:.1f}a{r:.1f} {r:.1f} 0 1 0 {2 * r:.1f} 0"
+                f"a{r:.1f} {r:.1f} 0 1 0 {-2 * r:.1f} 0Z")
+    t = 0.36  # the half-width of a plus's or a cross's bar, in radii
+    shapes = {
+        "s": [(-0.85, -0.85), (0.85, -0.85), (0.85, 0.85), (-0.85, 0.85)],
+        "^": [(0, -1.05), (1, 0.8), (-1, 0.8)],
+        "v": [(0, 1.05), (1, -0.8), (-1, -0.8)],
+        "D": [(0, -1.15), (0.85, 0), (0, 1.15), (-0.85, 0)],
+        "P": [(-t, -1), (t, -1), (t, -t), (1, -t), (1, t), (t, t), (t, 1), (-t, 1), (-t, t),
+              (-1, t), (-1, -t), (-t, -t)],
+        "X": [(-1, -0.75), (-0.75, -1), (0, -0.25), (0.75, -1), (1, -0.75), (0.25, 0),
+              (1, 0.75), (0.75, 1), (0, 0.25), (-0.75, 1), (-1, 0.75), (-0.25, 0)],
+    }
+    return pts(shapes.get(marker, shapes["s"]))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -44,11 +58,20 @@ class Tick:
 
 @dataclasses.dataclass(frozen=True)
 class DrawnSeries:
+    """One optimizer's curve as drawn: its step ``path``, ``band``, and its style
+    (:mod:`.styles`): ``colour``, ``dasharray`` (SVG's, px; ``""`` solid), ``marks`` (the
+    markers along the curve, one path) and ``key`` (the legend's marker, in a
+    :data:`KEY_W` x :data:`KEY_H` box)."""
+
     name: str
     label: str
     colour: str
     path: str
     band: str
+    dasharray: str = ""
+    marker: str = ""
+    marks: str = ""
+    key: str = ""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -65,6 +88,8 @@ class Layout:
     y_ticks: tuple[Tick, ...]
     series: tuple[DrawnSeries, ...]
     lines: tuple[tuple[str, float], ...]
+    key_w: int = KEY_W
+    key_h: int = KEY_H
 
 
 class _Axis:
@@ -148,9 +173,34 @@ def _band_path(xs: Sequence[float], lo: Sequence[float], hi: Sequence[float], fx
     return "M" + "L".join(f"{x:.1f} {y:.1f}" for x, y in ring) + "Z"
 
 
-def layout(fig: Figure, colour_of: dict[str, str] | None = None) -> Layout:
-    """Pixel geometry of ``fig``; ``colour_of`` keeps one colour per optimizer across the
-    report's figures (default: by order in this figure)."""
+def _marks(xs: Sequence[float], ys: Sequence[float], fx: _Axis, fy: _Axis,
+           st: Style, x_end: float) -> str:
+    """The markers along a step curve: one every :data:`MARK_EVERY_PX` of x, the first
+    shifted by the style's offset (equal curves keep their markers apart), at the curve's
+    value there; none over a gap."""
+    pts = [(fx(x), fy(y)) for x, y in zip(xs, ys, strict=True)
+           if math.isfinite(x) and math.isfinite(y) and not (fy.log and y <= 0)]
+    if not pts:
+        return ""
+    end = fx(x_end) if math.isfinite(x_end) else pts[-1][0]
+    out, k = [], 0
+    px = pts[0][0] + MARK_EVERY_PX * (0.15 + 0.7 * st.offset)
+    while px <= end:
+        while k + 1 < len(pts) and pts[k + 1][0] <= px:
+            k += 1
+        out.append(marker_path(st.marker, px, pts[k][1]))
+        px += MARK_EVERY_PX
+    return "".join(out)
+
+
+def dasharray(st: Style) -> str:
+    """The style's dash pattern as SVG's ``stroke-dasharray`` (px; ``""``: solid)."""
+    return " ".join(f"{v * LINE_WIDTH:.1f}" for v in st.pattern)
+
+
+def layout(fig: Figure, style_of: Mapping[str, Style] | None = None) -> Layout:
+    """Pixel geometry of ``fig``; ``style_of`` (:func:`.styles.of_report`) keeps one style
+    per optimizer across the report's figures (default: by name within this figure)."""
     xs = [v for s in fig.series for v in s.x]
     ys = [v for s in fig.series for v in (*s.y, *s.lo, *s.hi)] + [v for _, v in fig.lines]
     fxv, fyv = _finite(xs, fig.x_log), _finite(ys, fig.y_log)
@@ -166,11 +216,13 @@ def layout(fig: Figure, colour_of: dict[str, str] | None = None) -> Layout:
             y0, y1 = y0 - pad, y1 + pad
     fx = _Axis(x0, x1, fig.x_log, LEFT, WIDTH - RIGHT)
     fy = _Axis(y0, y1, fig.y_log, HEIGHT - BOTTOM, TOP)
-    default = dict(zip([s.name for s in fig.series], colours(len(fig.series)), strict=True))
-    colour_of = colour_of or default
-    drawn = tuple(DrawnSeries(s.name, s.label or s.name, colour_of.get(s.name, default[s.name]),
+    look = lookup(style_of, [s.name for s in fig.series])
+    drawn = tuple(DrawnSeries(s.name, s.label or s.name, look[s.name].colour,
                               _step_path(s.x, s.y, fx, fy, x1),
-                              _band_path(s.x, s.lo, s.hi, fx, fy) if s.lo else "")
+                              _band_path(s.x, s.lo, s.hi, fx, fy) if s.lo else "",
+                              dasharray(look[s.name]), look[s.name].marker,
+                              _marks(s.x, s.y, fx, fy, look[s.name], x1),
+                              marker_path(look[s.name].marker, KEY_W / 2, KEY_H / 2))
                   for s in fig.series)
     lines = tuple((label, round(fy(v), 1)) for label, v in fig.lines
                   if math.isfinite(v) and (v > 0 or not fig.y_log))

@@ -14,6 +14,11 @@ it breaks the tie.
   cost: the fewest evaluations to each instance's optimum (ERT at the final target), then
   the fewest seconds, costs within :data:`COST_TIE` of each other counting as equal
   (:func:`cheapest`); the verdict breaks its ties by the same function.
+* **Optimizers at a budget.** At one rung of the budget ladder (the share of (run, target)
+  pairs solved by 10·D, 100·D, ... evaluations, :mod:`.suite_scores`), optimizers whose
+  shares lie within :data:`SHARE_TIE` of the highest solve as many: the report's answer
+  (:mod:`.answer`) names them together, the one with the higher suite score (the mean area
+  under its ECDF: it gets there sooner) first (:func:`share_leaders`).
 """
 
 from __future__ import annotations
@@ -31,6 +36,11 @@ COST_TIE = 0.10
 #: disagreement between the two rankings, a floor undercut): a looser tolerance than
 #: :data:`OBJECTIVE_RTOL`, for sentences only, never for a rank, a test or a pick.
 WORDS_RTOL = 1e-3
+
+#: Shares solved (0 to 1) within this absolute difference tie: one percentage point, about
+#: two standard errors of a share near 98 % over the 1,785 (run, target) pairs of a suite of
+#: 17 problems x 15 runs x 7 targets, and the precision the report prints shares at.
+SHARE_TIE = 0.01
 
 T = TypeVar("T")
 
@@ -135,3 +145,16 @@ def rank_with_ties(summary: list[dict[str, Any]],
             place += len(ordered)
         out += [s for s in g if not s.get("n_runs")]
     summary[:] = out
+
+
+def share_leaders(shares: Mapping[str, float], scores: Mapping[str, float]
+                  ) -> tuple[str, ...]:
+    """The optimizers whose share (finite, 0 to 1) lies within :data:`SHARE_TIE` of the
+    highest of ``shares``: the leader at that budget and those that solve as many, highest
+    ``scores`` first (then by name); empty when no share is finite."""
+    finite = {k: v for k, v in shares.items() if math.isfinite(v)}
+    if not finite:
+        return ()
+    top = max(finite.values())
+    tied = [k for k, v in finite.items() if v >= top - SHARE_TIE]
+    return tuple(sorted(tied, key=lambda k: (-scores.get(k, -math.inf), -finite[k], k)))
