@@ -92,7 +92,7 @@ def test_the_job_writes_its_diagnostics_and_both_intervals(rich):
     assert set(g["cross"]) == {"ramp"}
     iv = data["intervals"]
     ratio = np.array(iv["robust"]["se"]) / np.array(iv["se"])
-    assert iv["assumes"] == "white residuals" and np.all(ratio > 3)
+    assert iv["assumes"] == "white residuals" and np.all(ratio > 3), (ratio, g["lag1"])
 
 
 def test_one_plain_line_on_every_screen_and_the_robust_interval_trusted(rich):

@@ -175,9 +175,10 @@ def trust_text(diag: Mapping[str, Any], model_error: str = "") -> str:
         text = ("Intervals: the white-noise (Jacobian) interval is trusted: the residuals pass "
                 f"the whiteness test, and the robust (HAC{lags}) interval agrees{spread}.")
     else:
-        text = ("Intervals: the robust (HAC, prewhitened Newey–West sandwich"
-                f"{lags}) interval is trusted{spread}; the white-noise (Jacobian) interval "
-                "counts every sample as independent, which correlated residuals are not.")
+        text = ("Intervals: the robust (HAC: the wider of the plain and the prewhitened "
+                f"Newey–West sandwich{lags}) interval is trusted{spread}; the white-noise "
+                "(Jacobian) interval counts every sample as independent, which correlated "
+                "residuals are not.")
     if model_error or not diag["explained"]:
         why = (f"the record was made by a richer model ({escape(model_error)})" if model_error
                else "the residuals show model error")
