@@ -35,6 +35,7 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
+from ..progress import Stages
 from . import answer, anytime, body, first_screen, outline, render, tables
 from .compute import ReportData, compute
 from .load import LoadedRecords, NoRecordsError
@@ -108,6 +109,7 @@ def build_report(
     baseline: str = tables.BASELINE,
     registry: Any = None,
     archive: bool | Path = False,
+    progress: Stages | None = None,
 ) -> Report:
     """Read the records below ``paths`` and write the report into ``out_dir``.
 
@@ -115,13 +117,17 @@ def build_report(
     (default: the installed plugins) provides the problems' report sections. ``archive``:
     rank the archived built-in optimizers beside these runs (:mod:`.archive`; ``True`` for
     the archives shipped with the package, or a folder of archives). Raises
-    :class:`NoRecordsError` when no readable record exists.
+    :class:`NoRecordsError` when no readable record exists. ``progress``: where each stage
+    (records, tests, figures, pages) is said as it starts (a full report over an archive
+    takes a minute).
     """
-    data = compute(paths, short, alpha, baseline, archive)
+    data = compute(paths, short, alpha, baseline, archive, progress)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     names = _Names(out_dir)
-    model, written = _assemble(data, names, registry)
+    model, written = _assemble(data, names, registry, progress)
+    if progress is not None:
+        progress.stage("writing report.md and the site")
     md, site = _render(model, names)
     written += [md, *site]
     return Report(out_dir, md, first_screen.terminal_text(model.results, answer=model.answer),
@@ -131,8 +137,8 @@ def build_report(
                   site[0] if site else None)
 
 
-def _assemble(data: ReportData, names: _Names, registry: Any
-              ) -> tuple[ReportModel, list[Path]]:
+def _assemble(data: ReportData, names: _Names, registry: Any,
+              progress: Stages | None = None) -> tuple[ReportModel, list[Path]]:
     """Everything the report says, as one :class:`~.model.ReportModel`: the first screen,
     the figures and IOHprofiler export, the suite scores, the problems' sections and the
     interactive figures; with the data files written on the way (tables, PNGs)."""
@@ -147,7 +153,7 @@ def _assemble(data: ReportData, names: _Names, registry: Any
             from ..plugins import Registry
 
             registry = Registry()
-        model.figs = draw_all(data, names.file)
+        model.figs = draw_all(data, names.file, progress)
         written += export_ioh(out_dir / "ioh", data.loaded.records, data.rows, out_dir)
         model.suite, more = _suite_scores(data, registry, names)
         written += more

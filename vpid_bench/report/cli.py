@@ -66,12 +66,14 @@ def _main(argv: Sequence[str] | None) -> int:
     if bad_out:
         print(f"error: -o {args.out} is not allowed: {bad_out}", file=sys.stderr)
         return _exit(2, argv)
+    from ..progress import Stages
     from .build import NoRecordsError, build_report
 
     try:
         report = build_report(args.paths, args.out, short=args.short, alpha=args.alpha,
                               baseline=args.baseline,
-                              archive=False if args.no_archive else (args.archive_dir or True))
+                              archive=False if args.no_archive else (args.archive_dir or True),
+                              progress=None if args.short else Stages("report"))
     except NoRecordsError as exc:
         print(f"error: {clean(exc)}", file=sys.stderr)
         return _exit(2, argv)

@@ -14,7 +14,9 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from ..progress import Stages
 from . import anytime, diagnostics, estimates, estimator_floors, rankings, tables, ties
+from .forked import run_forked
 from .identifiability import crb_norm_by_context, crb_norms_by_instance
 from .load import LoadedRecords, NoRecordsError, load_records, reason, run_rows
 from .optima import add_optimum_columns, load_optima, opt_column_names
@@ -127,12 +129,15 @@ class ReportData:
 
 
 def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: str,
-            archive: bool | Path = False) -> ReportData:
+            archive: bool | Path = False, progress: Stages | None = None) -> ReportData:
     """Load the records below ``paths`` and compute everything the report shows. Raises
     :class:`~.load.NoRecordsError` when no readable record exists. ``archive``: add the
     archived runs of the built-in optimizers on the same problems (``True``: the archives
-    shipped with the package; a folder: the archives below it; see :mod:`.archive`)."""
+    shipped with the package; a folder: the archives below it; see :mod:`.archive`).
+    ``progress``: where each stage is said as it starts."""
     paths = [Path(p) for p in paths]
+    if progress is not None:
+        progress.stage("reading the records")
     loaded, given_optima = _load(paths)
     if not loaded.records:
         extra = ""
@@ -156,6 +161,8 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
     aucs = anytime.auc_table(hits)
     for s in search:
         s["auc"] = aucs.get((s["context"], s["algorithm"]), math.nan)
+    if progress is not None and not short:
+        progress.stage(f"tests over {len(loaded.records):,} runs")
     tests = None if short else _tests(rows, search, alpha)
     if tests is not None:
         _set_groups(summary, tests.pairs)
@@ -204,8 +211,12 @@ def _add_archive(loaded: LoadedRecords, archive: bool | Path) -> tuple[list[Any]
     instance optima and the archive's one-line notes."""
     from .archive import load_all, merge
 
-    archives, bad = load_all(None if archive is True else Path(archive),
-                             {r["problem"]["name"] for r in loaded.records})
+    # only runs of one's own stand beside archived ones (an archive given as a folder to
+    # report is complete in itself: :func:`.archive.merge` adds nothing to its runs)
+    own = {r["problem"]["name"] for r in loaded.records if "_archive" not in r}
+    if not own:
+        return [], []
+    archives, bad = load_all(None if archive is True else Path(archive), own)
     merged = merge(loaded.records, archives)
     loaded.records.extend(merged.records)
     # an archive that cannot be used at all (damaged, a limit crossed) is a failure of the
@@ -222,12 +233,14 @@ def _tests(rows: list[dict[str, Any]], search: list[dict[str, Any]], alpha: floa
     df = runs_frame(rows)
     sdf = rankings.search_test_frame(df)
     sdf = sdf[sdf["context"].isin({s["context"] for s in search})]
-    return Tests(df=df, kw=stats.kruskal_by_context(df),
-                 pairs=stats.pairwise_by_context(df, alpha),
-                 fr=stats.friedman_across_blocks(df, alpha),
-                 spairs=stats.pairwise_by_context(sdf, alpha, "rel_gap_test"),
-                 by_inst={"metric": stats.friedman_by_instances(df, alpha),
-                          "rel_gap": stats.friedman_by_instances(sdf, alpha, "rel_gap_test")})
+    # two families of tests, each a few seconds over an archive: side by side (.forked)
+    (kw, pairs, fr, by_metric), (spairs, by_gap) = run_forked([
+        lambda: (stats.kruskal_by_context(df), stats.pairwise_by_context(df, alpha),
+                 stats.friedman_across_blocks(df, alpha), stats.friedman_by_instances(df, alpha)),
+        lambda: (stats.pairwise_by_context(sdf, alpha, "rel_gap_test"),
+                 stats.friedman_by_instances(sdf, alpha, "rel_gap_test"))])
+    return Tests(df=df, kw=kw, pairs=pairs, fr=fr, spairs=spairs,
+                 by_inst={"metric": by_metric, "rel_gap": by_gap})
 
 
 def _set_groups(items: list[dict[str, Any]], pairs: Any) -> None:

@@ -1,17 +1,23 @@
-"""The report's own figures, drawn one after another in this process (matplotlib, PNG):
-convergence, the per-run metric and the error heatmap per problem, the fixed-target ECDF and
-the critical-difference diagram per context, and one across blocks.
+"""The report's own figures (matplotlib, PNG): convergence, the per-run metric and the error
+heatmap per problem, the fixed-target ECDF and the critical-difference diagram per context,
+and one across blocks.
 
 A figure that cannot be drawn leaves a reason instead of a path; one that raises costs only
-itself (the reason says what failed).
+itself (the reason says what failed). They are planned here (each its path in the report
+folder, claimed in order) and drawn side by side in forked processes (:mod:`.forked`):
+drawing and encoding them was half of an archive report's time.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
+
+from ..progress import Stages
+from .forked import run_forked
 
 log = logging.getLogger(__name__)
 
@@ -21,20 +27,47 @@ CD_MIN_RUNS = 5
 CD_MIN_BLOCKS = 5
 
 
-def _draw(figs: dict[str, Path | str], title: str, data: Any,
+@dataclasses.dataclass(frozen=True)
+class _Figure:
+    """A figure to draw: ``draw(data, *args)`` gives its path or why it was not drawn."""
+
+    title: str
+    draw: Callable[..., Path | str]
+    data: Any
+    args: tuple[Any, ...]
+
+
+def _draw(figs: dict[str, Any], title: str, data: Any,
           draw: Callable[..., Path | str], *args: Any) -> None:
-    """``figs[title]`` = ``draw(data, *args)``, or ``data`` itself when it is a reason."""
-    if isinstance(data, str):
-        figs[title] = data
-        return
+    """Plan ``figs[title]`` = ``draw(data, *args)``, or ``data`` itself when it is a reason."""
+    figs[title] = data if isinstance(data, str) else _Figure(title, draw, data, args)
+
+
+def _one(figure: _Figure) -> Path | str:
     try:
-        figs[title] = draw(data, *args)
+        return figure.draw(figure.data, *figure.args)
     except Exception as exc:  # noqa: BLE001 - a figure's fault costs that figure only
-        log.debug("figure %s failed", title, exc_info=True)
-        figs[title] = f"failed: {type(exc).__name__}: {exc}"
+        log.debug("figure %s failed", figure.title, exc_info=True)
+        return f"failed: {type(exc).__name__}: {exc}"
 
 
-def draw_all(data: Any, file: Callable[[str, str, str], Path]) -> dict[str, Path | str]:
+def _draw_planned(figs: dict[str, Any], progress: Stages | None = None
+                  ) -> dict[str, Path | str]:
+    """Every planned figure of ``figs`` drawn (in forked processes where there are several
+    figures and cores: :func:`.forked.run_forked`), in place of its plan; ``progress``
+    counts them."""
+    planned = [(title, f) for title, f in figs.items() if isinstance(f, _Figure)]
+    if progress is not None:
+        progress.stage("figures", len(planned))
+    drawn = run_forked([lambda f=f: _one(f) for _, f in planned],
+                       None if progress is None else progress.step)
+    for (title, _), result in zip(planned, drawn, strict=True):
+        figs[title] = result
+    return figs
+
+
+def draw_all(data: Any, file: Callable[[str, str, str], Path],
+             progress: Stages | None = None) -> dict[str, Path | str]:
     """Every core figure of a full report (``data``: a :class:`~.compute.ReportData`), in
     report order: title -> PNG path, or why it was not drawn. ``file(kind, name, suffix)``
     claims a path in the report folder."""
@@ -43,7 +76,7 @@ def draw_all(data: Any, file: Callable[[str, str, str], Path]) -> dict[str, Path
     from .load import trace_sets
     from .styles import of_report
 
-    figs: dict[str, Path | str] = {}
+    figs: dict[str, Any] = {}
     records, rows, df = data.loaded.records, data.rows, data.tests.df
     style_of = of_report(data)  # one style per optimizer in every figure
     traces = trace_sets(records, rows)
@@ -58,10 +91,9 @@ def draw_all(data: Any, file: Callable[[str, str, str], Path]) -> dict[str, Path
               file("figures", f"errors_{p}", ".png"))
     _cd_figures(figs, data, file, style_of)
     for context in sorted({h.context for h in data.hits}):
-        _draw(figs, f"Fixed-target ECDF, {context}", data.hits,
-              lambda hits, c=context: anytime.ecdf_figure(
-                  hits, c, file("figures", f"ecdf_{c}", ".png"), style_of))
-    return figs
+        _draw(figs, f"Fixed-target ECDF, {context}", data.hits, anytime.ecdf_figure, context,
+              file("figures", f"ecdf_{context}", ".png"), style_of)
+    return _draw_planned(figs, progress)
 
 
 def _cd_figures(figs: dict[str, Path | str], data: Any,

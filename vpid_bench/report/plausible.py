@@ -25,7 +25,7 @@ What a run gives (an ok run; a failed run has no result to check):
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
 #: A magnitude no objective, metric or parameter of a real run reaches.
@@ -44,18 +44,27 @@ def _bad_number(name: str, v: Any) -> str | None:
     return None
 
 
-def _numbers(record: Mapping[str, Any]) -> list[tuple[str, Any]]:
-    """Every number of an ok record's result and trace, named."""
+def _numbers(record: Mapping[str, Any]) -> Iterator[tuple[str, Any]]:
+    """Every number of an ok record's result and trace that is not plainly a finite float
+    below :data:`ABSURD`, named, in the record's order (lazily: an archive's report checks
+    hundreds of thousands, and only a suspect one needs its name)."""
     res = record.get("result") or {}
-    out: list[tuple[str, Any]] = [("result.f_best", res.get("f_best"))]
-    out += [(f"result.x_best[{i}]", v) for i, v in enumerate(res.get("x_best") or [])]
-    out += [(f"result.metrics.{k}", v) for k, v in (res.get("metrics") or {}).items()]
-    out += [(f"result.rel_error_percent[{i}]", v)
-            for i, v in enumerate(res.get("rel_error_percent") or [])]
     trace = record.get("trace") or {}
-    out += [(f"trace.best[{i}]", v) for i, v in enumerate(trace.get("best") or [])
-            if v is not None]  # null: nothing finite found yet
-    return out
+    yield "result.f_best", res.get("f_best")
+    yield from _suspects("result.x_best", res.get("x_best") or [])
+    yield from ((f"result.metrics.{k}", v) for k, v in (res.get("metrics") or {}).items())
+    yield from _suspects("result.rel_error_percent", res.get("rel_error_percent") or [])
+    yield from _suspects("trace.best", trace.get("best") or [], skip_null=True)
+
+
+def _suspects(prefix: str, values: Sequence[Any], skip_null: bool = False
+              ) -> Iterator[tuple[str, Any]]:
+    for i, v in enumerate(values):
+        if type(v) is float and -ABSURD < v < ABSURD:
+            continue  # the common case, not named
+        if v is None and skip_null:
+            continue  # a trace's null: nothing finite found yet
+        yield f"{prefix}[{i}]", v
 
 
 def _box(record: Mapping[str, Any]) -> str | None:

@@ -97,6 +97,7 @@ def _enabled(config: Any, key: str = "report") -> bool:
 def write_report(folder: Path, short: bool, archive: bool = True) -> bool:
     """Build the report of ``folder`` into ``folder/report``, print the headline and where it
     is, and write the outcome into ``folder/report/status.json``. Never raises."""
+    from ..progress import Stages
     from ..report.build import NoRecordsError, build_report
     from ..report.safe import clean  # every line may quote records or archives
 
@@ -105,7 +106,8 @@ def write_report(folder: Path, short: bool, archive: bool = True) -> bool:
                               "invocation": os.environ.get(INVOCATION_ENV)}
     try:
         own_folder(out)  # a link planted there: removed, never written through
-        report = build_report([folder], out, short=short, archive=archive)
+        report = build_report([folder], out, short=short, archive=archive,
+                              progress=None if short else Stages("report"))
     except NoRecordsError:  # every job failed: its own error line said why
         print(f"report: none, no run was recorded in {folder}", file=sys.stderr, flush=True)
         status["status"] = "no_records"

@@ -11,15 +11,7 @@ import time
 from collections.abc import Callable
 from typing import TextIO
 
-
-def duration(seconds: float) -> str:
-    """``"45 s"``, ``"3 min 05 s"``, ``"1 h 02 min"``."""
-    s = max(0, round(seconds))
-    if s < 60:
-        return f"{s} s"
-    if s < 3600:
-        return f"{s // 60} min {s % 60:02d} s"
-    return f"{s // 3600} h {s % 3600 // 60:02d} min"
+from ..progress import duration
 
 
 class SweepProgress:

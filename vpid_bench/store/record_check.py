@@ -45,7 +45,9 @@ def _is_int(v: Any, nullable: bool = True) -> bool:
 
 
 def _num_list(v: Any, n: int | None = None) -> bool:
-    return isinstance(v, list) and all(_is_num(x) for x in v) and (n is None or len(v) == n)
+    # a trace holds thousands of numbers: plain floats and ints pass on their type alone
+    return isinstance(v, list) and (n is None or len(v) == n) and all(
+        type(x) is float or type(x) is int or _is_num(x) for x in v)
 
 
 def _texts(v: Any) -> bool:
