@@ -24,9 +24,10 @@ RAW = ("\x1b", "\x07", "\u202e", "\r", "\x9b")
 
 
 def _forged(text: str) -> list[str]:
-    """Lines that the hostile name would have started (a forged table row)."""
+    """Lines that the hostile name would have started (a forged table row: its pipes not
+    escaped; a wrapped paragraph may start a line with the name's escaped ``forged \\|``)."""
     return [line for line in text.splitlines() if line.lstrip().startswith(("| forged",
-                                                                           "forged"))]
+                                                                           "forged |"))]
 
 
 @pytest.mark.parametrize("text", [HOSTILE, "plain", "", "a\tb", "ü ∑ 日本", "\\x1b"])

@@ -42,15 +42,17 @@ def test_every_page_type_is_written_with_its_links_resolving(report_dir):
 
 
 def test_a_broken_link_is_found(report_dir, tmp_path):
-    """The control of the link check: a page naming a missing file, and one on the web."""
+    """The control of the link check: a page naming a missing file, and ones on the web (a
+    link to a paper too: the report's own links are the only links, issue 44 N5)."""
     page = tmp_path / "x.html"
     page.write_text('<a href="nope.html">a</a><img alt="x" src="https://example.org/a.png">'
                     '<link rel="stylesheet" href="//cdn.example.org/x.css">'
                     '<a class="x" href="https://doi.org/10.1/x">a paper</a>',
                     encoding="utf-8")
     assert site.check_links(tmp_path, [page]) == [
-        "x.html: nope.html", "x.html: https://example.org/a.png (not a local file)",
-        "x.html: //cdn.example.org/x.css (not a local file)"]
+        "x.html: nope.html", "x.html: https://example.org/a.png (not a file of the report)",
+        "x.html: //cdn.example.org/x.css (not a file of the report)",
+        "x.html: https://doi.org/10.1/x (not a file of the report)"]
 
 
 def test_nothing_is_loaded_from_the_network(report_dir):
