@@ -189,8 +189,10 @@ def test_the_suite_ecdf_figure_weighs_each_problem_the_same():
 @pytest.mark.parametrize("planted", ["index.html", "assets"])
 def test_a_link_planted_in_the_report_folder_is_never_written_through(tmp_path, planted):
     """A symbolic link where the site writes a page or its assets, pointing outside the
-    report folder: nothing is written outside (the report refuses, naming the path)."""
-    from vpid_bench.report.safe import UnsafePathError
+    report folder: nothing is written outside; the report is written all the same (built
+    beside the folder, it replaces it whole: the link goes with the old folder, issue 44 N6)
+    and names the link in one line."""
+    from vpid_bench.report.build import build_report
 
     outside = tmp_path / "outside"
     outside.mkdir()
@@ -199,9 +201,16 @@ def test_a_link_planted_in_the_report_folder_is_never_written_through(tmp_path, 
     (report / planted).symlink_to(outside / planted, target_is_directory=planted == "assets")
     if planted == "assets":
         (outside / planted).mkdir()
-    with pytest.raises(UnsafePathError, match="outside the report folder"):
-        html_sweep(tmp_path / "s", short=True, evil="ga")
+    html_sweep(tmp_path / "s", short=True, evil="ga")
     assert [p for p in outside.rglob("*") if p.is_file()] == []
+    assert not (report / planted).is_symlink() and (report / "index.html").is_file()
+    rep = build_report([tmp_path / "s"], report, short=True, archive=False)
+    assert rep.folder_notes == []  # the folder it replaced held no link any more
+    (report / "runs.csv").unlink()
+    (report / "runs.csv").symlink_to(outside / "runs.csv")
+    (note,) = build_report([tmp_path / "s"], report, short=True, archive=False).folder_notes
+    assert note.startswith(f"warning: {report} held 1 symbolic link(s) ({report / 'runs.csv'})")
+    assert not (outside / "runs.csv").exists()
 
 
 def test_the_index_renders_the_verdict_objects(report_dir):

@@ -13,6 +13,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from ..fileio import write_refused
+
 log = logging.getLogger(__name__)
 
 #: A per-context critical-difference diagram needs this many successful runs per optimizer.
@@ -30,6 +32,8 @@ def _draw(figs: dict[str, Path | str], title: str, data: Any,
     try:
         figs[title] = draw(data, *args)
     except Exception as exc:  # noqa: BLE001 - a figure's fault costs that figure only
+        if write_refused(exc):  # a full disk is the report's failure, not the figure's
+            raise
         log.debug("figure %s failed", title, exc_info=True)
         figs[title] = f"failed: {type(exc).__name__}: {exc}"
 

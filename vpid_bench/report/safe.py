@@ -84,7 +84,10 @@ def clean(text: object, keep_newlines: bool = False) -> str:
 
 
 _MD_ESCAPES = {"|": "\\|", "&": "&amp;", "<": "&lt;", ">": "&gt;", "`": "'",
-               "\n": " ", "\r": " ", "\t": " ", "\\": "\\\\", "[": "\\[", "]": "\\]"}
+               "\n": " ", "\r": " ", "\t": " ", "[": "\\[", "]": "\\]"}
+#: A backslash that would escape what follows it (ASCII punctuation, or whatever the report
+#: writes after the text): doubled, so it is shown. Before a letter it is shown as it is.
+_MD_BACKSLASH = re.compile(r"\\(?=[!-/:-@\[-`{-~]|$)")
 
 #: What a Markdown renderer turns into a link or an image on its own (GitHub's autolinks):
 #: the ``:`` of ``scheme://`` (and of ``mailto:``/``xmpp:``), the ``.`` of ``www.`` and the
@@ -103,11 +106,12 @@ def _inert_autolinks(text: str) -> str:
 
 def escape(text: object) -> str:
     """Record text for a Markdown line or table cell, shown as it is and nothing else: ``|``,
-    ``\\``, ``[`` and ``]`` backslash-escaped (no table cell, link, image or reference), HTML
-    (``& < >``) as entities (no tag, no autolink), backticks as quotes, the triggers of bare-URL
-    autolinks escaped, line breaks as spaces, any other control or format character made
-    visible (:func:`clean`)."""
-    return clean(_inert_autolinks("".join(_MD_ESCAPES.get(c, c) for c in str(text))))
+    ``[``, ``]`` and a ``\\`` that would escape the next character backslash-escaped (no
+    table cell, link, image or reference), HTML (``& < >``) as entities (no tag, no
+    autolink), backticks as quotes, the triggers of bare-URL autolinks escaped, line breaks
+    as spaces, any other control or format character made visible (:func:`clean`)."""
+    s = _MD_BACKSLASH.sub(r"\\\\", str(text))
+    return clean(_inert_autolinks("".join(_MD_ESCAPES.get(c, c) for c in s)))
 
 
 #: A backslash escape already in Markdown (kept as it is), or a character that starts a
