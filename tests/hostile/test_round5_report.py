@@ -303,6 +303,33 @@ def test_n8_the_folder_swap_keeps_the_old_folder_until_the_new_one_is_whole(tmp_
     assert out.stat().st_mode & 0o777 == 0o777 & ~mask
 
 
+def test_n8_a_mount_point_is_swapped_entry_by_entry(two_sweeps, tmp_path, monkeypatch):
+    """A folder that is a mount point cannot be renamed: its entries are swapped (the new
+    ones built in a hidden folder inside it), a failed build leaves them as they were, and
+    nothing hidden is left in it."""
+    from vpid_bench.report import render
+
+    a, b = two_sweeps
+    out = tmp_path / "mnt"
+    out.mkdir()
+    real_ismount = os.path.ismount
+    monkeypatch.setattr(os.path, "ismount", lambda p: Path(p) == out or real_ismount(p))
+    _report([a], out)
+    before = _files(out)
+    _report([a], tmp_path / "fresh")
+    assert before == _files(tmp_path / "fresh")
+    monkeypatch.setattr(render, "write_csv", lambda *_: 1 / 0)
+    with pytest.raises(ZeroDivisionError):
+        _report([b], out)
+    assert _files(out) == before
+    monkeypatch.undo()
+    monkeypatch.setattr(os.path, "ismount", lambda p: Path(p) == out or real_ismount(p))
+    _report([b], out)
+    _report([b], tmp_path / "fresh-b")
+    assert _files(out) == _files(tmp_path / "fresh-b")
+    assert [p.name for p in out.iterdir() if p.name.startswith(".")] == []
+
+
 def _plant_links(out: Path, outside: Path) -> None:
     """Links where a report writes: report.md to a file outside, tables/ to a folder outside,
     and a figure to a file outside."""
