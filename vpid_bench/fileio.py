@@ -9,17 +9,31 @@ through :func:`write_text_atomic`: a crash leaves the old file or the new one, n
 one, and a link at the target path is replaced rather than followed (``os.replace`` renames
 over the link itself). The folders it keeps inside an output folder (``optima``, ``report``)
 are made by :func:`own_folder`, which never follows a link planted in their place.
+
+A folder that must be one thing whole (a report: its pages, tables and ``runs.csv`` belong
+together) is written by :class:`WholeFolder`: everything goes into a new hidden folder beside
+it, which then takes its place in one rename; the old folder stays whole until that moment and
+is removed after it (issue 44, N8: two reports written at once, or one stopped by SIGTERM over
+an older one, once left pages of one and ``runs.csv`` of the other, and stale pages of earlier
+reports were never removed). A link planted in the old folder is removed with it, never
+followed (N6).
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import hashlib
 import json
 import os
+import shutil
+import signal
 import stat
 import sys
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
+from types import TracebackType
 from typing import TextIO
 
 #: The largest results file read back (a run record with a long trace is a few MB).
@@ -112,6 +126,22 @@ def _remove_planted_link(path: Path) -> None:
     path.unlink(missing_ok=True)  # another process may have removed it first
     print(f"warning: {path} was a symbolic link; removed (the link only) so that nothing "
           "is written outside the output folder", file=sys.stderr, flush=True)
+#: The errors of a write the system refused: a file-size limit (``EFBIG``, RLIMIT_FSIZE with
+#: SIGXFSZ ignored), a full disk or quota, a read-only or failing disk.
+WRITE_REFUSED = frozenset(getattr(errno, n) for n in (
+    "EFBIG", "ENOSPC", "EDQUOT", "EROFS", "EIO") if hasattr(errno, n))
+
+
+def write_refused(exc: BaseException) -> bool:
+    """Whether ``exc`` (or what it was raised from) is a write the system refused
+    (:data:`WRITE_REFUSED`): never a figure's or a plugin's fault, so never swallowed as one
+    (issue 44, N9: under a file-size limit the report once left out every figure and most
+    tables, torn, and said nothing)."""
+    while exc is not None:
+        if isinstance(exc, OSError) and exc.errno in WRITE_REFUSED:
+            return True
+        exc = exc.__cause__ or exc.__context__  # type: ignore[assignment]
+    return False
 
 
 def own_folder(path: Path) -> Path:
@@ -175,6 +205,163 @@ def write_text_atomic(path: Path, text: str) -> Path:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+class WholeFolder:
+    """A folder written whole or not at all::
+
+        whole = WholeFolder(out)
+        with whole as new:      # a new, empty, hidden folder beside ``out``
+            ...                 # write everything into ``new``
+        # ``out`` is now the new folder; the old one (if any) is gone
+
+    When the block ends without an exception, the new folder takes the place of ``path``
+    in one step (Linux's ``renameat2(RENAME_EXCHANGE)``; elsewhere two renames), with the
+    interrupting signals (SIGINT, SIGTERM, SIGHUP) held back meanwhile and the parent folder
+    locked (``flock``) so that two writers swap one after the other: whatever happens,
+    ``path`` is the old folder or a new one, each whole. The old folder is then removed,
+    never followed through a link it holds (:attr:`links` names them, as they were under
+    ``path``); a link planted in the place of ``path`` itself is replaced, never followed.
+    When the block raises (or is interrupted), the new folder is removed and ``path`` is left
+    as it was. A mount point cannot be renamed: its entries are swapped instead, with the
+    signals held back (not atomic for a reader looking at that moment, nor against SIGKILL).
+    Only SIGKILL or a crash can leave the hidden folder (``.<name>.new-*``) behind.
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(os.path.abspath(path))  # "." and "x/.." have a name and a parent
+        #: the symbolic links the replaced folder held (and one in its place), as paths
+        #: under :attr:`path`
+        self.links: list[Path] = []
+        self._new: Path | None = None
+        self._old: Path | None = None
+
+    def __enter__(self) -> Path:
+        path = self.path
+        mounted = path.is_dir() and not path.is_symlink() and os.path.ismount(path)
+        base = path if mounted else path.parent
+        base.mkdir(parents=True, exist_ok=True)
+        self._new = Path(tempfile.mkdtemp(prefix=f".{path.name}.new-", dir=base))
+        os.chmod(self._new, 0o777 & ~_umask())  # mkdtemp makes 0700; a report is shared
+        return self._new
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        assert self._new is not None, "WholeFolder used without entering it"
+        if exc_type is not None:
+            shutil.rmtree(self._new, ignore_errors=True)
+            return
+        try:
+            self._swap(self._new)
+        except BaseException:  # the swap failed (the old folder is in place), or a signal
+            shutil.rmtree(self._old or self._new, ignore_errors=True)  # held back came now
+            raise
+        if self._old is not None:
+            self.links += _links_below(self._old, self.path)
+            shutil.rmtree(self._old, ignore_errors=True)
+
+    def _swap(self, new: Path) -> None:
+        """``new`` into the place of :attr:`path`; :attr:`_old` names the replaced folder
+        (set before the signals held back can interrupt)."""
+        path = self.path
+        with _signals_held(), _locked(path.parent):
+            if path.is_symlink():  # planted in the folder's place: the link only goes
+                path.unlink()
+                self.links.append(path)
+            if not os.path.lexists(path):
+                os.rename(new, path)
+                return
+            if not path.is_dir():
+                raise NotADirectoryError(errno.ENOTDIR, "not a folder", str(path))
+            if new.parent == path:  # a mount point
+                self._old = _swap_entries(new, path)
+            elif _exchange(new, path):
+                self._old = new
+            else:
+                old = new.with_name(new.name.replace(".new-", ".old-", 1))
+                os.rename(path, old)
+                try:
+                    os.rename(new, path)
+                except OSError:
+                    os.rename(old, path)
+                    raise
+                self._old = old
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Swap ``a`` and ``b`` in one step (Linux: ``renameat2`` with ``RENAME_EXCHANGE``);
+    False where the system or the file system cannot (then nothing happened)."""
+    if not sys.platform.startswith("linux"):
+        return False
+    import ctypes
+
+    try:
+        renameat2 = ctypes.CDLL(None, use_errno=True).renameat2
+    except (OSError, AttributeError):  # a C library without it (glibc < 2.28, musl)
+        return False
+    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p,
+                          ctypes.c_uint]
+    at_fdcwd, rename_exchange = -100, 2
+    return renameat2(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), rename_exchange) == 0
+
+
+def _swap_entries(new: Path, path: Path) -> Path:
+    """The entries of the folder ``path`` (a mount point) moved into a hidden folder in it,
+    those of ``new`` (inside it) moved in; returns the hidden folder of the old entries."""
+    old = Path(tempfile.mkdtemp(prefix=f".{path.name}.old-", dir=path))
+    for entry in os.listdir(path):
+        if entry not in (new.name, old.name):
+            os.rename(path / entry, old / entry)
+    for entry in os.listdir(new):
+        os.rename(new / entry, path / entry)
+    new.rmdir()
+    return old
+
+
+@contextlib.contextmanager
+def _signals_held() -> Iterator[None]:
+    """SIGINT, SIGTERM and SIGHUP held back (delivered when the block ends): a swap of two
+    renames is never cut between them."""
+    sigs = {getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n)}
+    try:
+        before = signal.pthread_sigmask(signal.SIG_BLOCK, sigs)
+    except (AttributeError, OSError, ValueError):  # no signal masks on this platform
+        before = None
+    try:
+        yield
+    finally:
+        if before is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, before)
+
+
+@contextlib.contextmanager
+def _locked(folder: Path) -> Iterator[None]:
+    """An exclusive ``flock`` on ``folder`` itself (no lock file left behind), where the
+    system has one: two writers of one folder swap one after the other."""
+    try:
+        import fcntl
+
+        fd = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except (ImportError, OSError):
+        yield
+        return
+    try:
+        with contextlib.suppress(OSError):
+            fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)
+
+
+def _links_below(folder: Path, shown_as: Path, limit: int = 20) -> list[Path]:
+    """The symbolic links in ``folder`` (never followed), each as the path it had under
+    ``shown_as``; at most ``limit``."""
+    found: list[Path] = []
+    for root, dirs, files in os.walk(folder):
+        for name in [*dirs, *files]:
+            if os.path.islink(os.path.join(root, name)) and len(found) < limit:
+                found.append(shown_as / Path(root, name).relative_to(folder))
+    return found
 
 
 def _umask() -> int:

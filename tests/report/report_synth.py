@@ -142,3 +142,63 @@ def paired_sweep(root: Path, problem: str = "vehicle", ps: tuple[int, ...] = (20
                 recs.append(r)
             write_job(root / f"problem={problem},optimizer={algo},ps={size}", recs)
     return root
+
+
+#: Record and plugin text that once became real images and links in report.md and on the
+#: HTML pages, three of them fetched by the browser (issue 44, N5): an image, a link, an
+#: autolink, a bare URL, a ``www.`` address, a reference-style link and raw HTML. The hosts
+#: are the discard port of this machine: a fetch would fail, but the browser's log shows it.
+LINKS = ("![n5 image](http://127.0.0.1:9/n5-image.png) [n5 link](https://127.0.0.1:9/n5-link) "
+         "<http://127.0.0.1:9/n5-autolink> bare https://127.0.0.1:9/n5-bare and www.n5.invalid "
+         "[n5 ref][r] <img src=\"http://127.0.0.1:9/n5-html.png\"> "
+         "![n5 ref image][r]\n\n[r]: http://127.0.0.1:9/n5-ref")
+
+
+def links_plugin() -> Any:
+    """A plugin whose report section for problem ``vehicle`` carries :data:`LINKS` in its
+    title, its text (beside a Markdown table whose cells carry them too) and a headline
+    column."""
+    import types
+
+    from vpid_bench import hookimpl
+    from vpid_bench.report.sections import Contribution, HeadlineColumn, Section
+
+    def section(ctx):
+        table = ctx.markdown_table(["what", "text"], [["cell", LINKS]])
+        values = {(r["context"], r["algorithm"]): LINKS for r in ctx.rows}
+        return Contribution(
+            sections=(Section("Links [t](http://127.0.0.1:9/n5-title)", f"{LINKS}\n\n{table}"
+                              f"\n\n*kept* emphasis"),),
+            headline=(HeadlineColumn("n5 col", values),))
+
+    @hookimpl
+    def vpid_bench_register_report_sections(register):
+        register("vehicle", section)
+
+    return types.SimpleNamespace(
+        vpid_bench_register_report_sections=vpid_bench_register_report_sections)
+
+
+def links_sweep(root: Path, short: bool = False) -> Path:
+    """A sweep of ``vehicle`` runs (de4, random, and an optimizer named with an image) where
+    one run of each optimizer failed with :data:`LINKS` as its error message, reported with
+    :func:`links_plugin`'s section; returns the report folder."""
+    from vpid_bench.plugins import Registry, get_plugin_manager
+    from vpid_bench.report.build import build_report
+
+    rng = np.random.default_rng(5)
+    for algo, spread in (("de4", 0.01), ("random", 0.3),
+                         ("![o](http://127.0.0.1:9/n5-name.png)", 0.05)):
+        recs = [record(problem="vehicle", optimizer=algo, ps=20, run_index=i,
+                       x=OV * (1 + spread * rng.standard_normal(9)), f=spread * (1 + i),
+                       names=PAPER_NAMES, true=OV, units=["kg"] * 9,
+                       status="ok" if i < 4 else "failed",
+                       info={"f_at_true": 0.004, "metric_units": {"NoRE": "%"}})
+                for i in range(5)]
+        recs[-1]["error"]["message"] = LINKS
+        write_job(root / f"vehicle-{abs(hash(algo)) % 997}", recs)
+    registry = Registry(get_plugin_manager(entry_points=[], extra_plugins=[
+        ("n5links", links_plugin())]))
+    out = root / "report"
+    build_report([root], out, short=short, archive=False, registry=registry)
+    return out

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from archive_slice import slice_archive
 from extras import needs_archive_runs
-from report_synth import EVIL, html_sweep
+from report_synth import EVIL, html_sweep, links_sweep
 from test_no_truth_report import no_truth_sweep
 
 CHROMIUM = os.environ.get("VPID_BENCH_CHROMIUM", "/usr/bin/chromium")
@@ -169,6 +169,34 @@ def test_a_hostile_name_is_shown_as_text(browser, site):
     assert console == []
     assert browser.find_element(By.TAG_NAME, "h1").text == f"Optimizer {EVIL}"
     assert browser.find_elements(By.CSS_SELECTOR, "main img") == []
+
+
+def test_n5_links_and_images_in_records_and_sections_load_nothing(browser, tmp_path):
+    """Issue 44's Done-when (N5): the site of a sweep whose records (a failed run's error
+    message, an optimizer's name) and plugin section (title, text, table, headline column)
+    carry http(s) images, links, autolinks, bare URLs, reference links and raw HTML loads
+    nothing from the network in Chromium (it fetched 3 URLs), and has no link or image to
+    anything but the report's own files; the planted text is shown, as text."""
+    from selenium.webdriver.common.by import By
+
+    out = links_sweep(tmp_path / "s")
+    pages = sorted(out.glob("*.html"))
+    assert len(pages) >= 5
+    _requests(browser)
+    shown = ""
+    for page in pages:
+        console = _open(browser, page)
+        assert [m for m in console if m["level"] == "SEVERE"] == [], page.name
+        urls = browser.execute_script(
+            "return Array.from(document.querySelectorAll('a[href], img[src], [src], "
+            "link[href]')).map(e => e.href || e.src)")
+        assert [u for u in urls if not u.startswith("file://")] == [], page.name
+        shown += browser.find_element(By.TAG_NAME, "body").text
+    requested = _requests(browser)
+    assert requested and all(u.startswith("file://") for u in requested), requested
+    for text in ("http://127.0.0.1:9/n5-image.png", "https://127.0.0.1:9/n5-link",
+                 "http://127.0.0.1:9/n5-html.png", "http://127.0.0.1:9/n5-ref"):
+        assert text in shown, text
 
 
 

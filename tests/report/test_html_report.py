@@ -42,15 +42,17 @@ def test_every_page_type_is_written_with_its_links_resolving(report_dir):
 
 
 def test_a_broken_link_is_found(report_dir, tmp_path):
-    """The control of the link check: a page naming a missing file, and one on the web."""
+    """The control of the link check: a page naming a missing file, and ones on the web (a
+    link to a paper too: the report's own links are the only links, issue 44 N5)."""
     page = tmp_path / "x.html"
     page.write_text('<a href="nope.html">a</a><img alt="x" src="https://example.org/a.png">'
                     '<link rel="stylesheet" href="//cdn.example.org/x.css">'
                     '<a class="x" href="https://doi.org/10.1/x">a paper</a>',
                     encoding="utf-8")
     assert site.check_links(tmp_path, [page]) == [
-        "x.html: nope.html", "x.html: https://example.org/a.png (not a local file)",
-        "x.html: //cdn.example.org/x.css (not a local file)"]
+        "x.html: nope.html", "x.html: https://example.org/a.png (not a file of the report)",
+        "x.html: //cdn.example.org/x.css (not a file of the report)",
+        "x.html: https://doi.org/10.1/x (not a file of the report)"]
 
 
 def test_nothing_is_loaded_from_the_network(report_dir):
@@ -190,8 +192,10 @@ def test_the_suite_ecdf_figure_weighs_each_problem_the_same():
 @pytest.mark.parametrize("planted", ["index.html", "assets"])
 def test_a_link_planted_in_the_report_folder_is_never_written_through(tmp_path, planted):
     """A symbolic link where the site writes a page or its assets, pointing outside the
-    report folder: nothing is written outside (the report refuses, naming the path)."""
-    from vpid_bench.report.safe import UnsafePathError
+    report folder: nothing is written outside; the report is written all the same (built
+    beside the folder, it replaces it whole: the link goes with the old folder, issue 44 N6)
+    and names the link in one line."""
+    from vpid_bench.report.build import build_report
 
     outside = tmp_path / "outside"
     outside.mkdir()
@@ -200,9 +204,16 @@ def test_a_link_planted_in_the_report_folder_is_never_written_through(tmp_path, 
     (report / planted).symlink_to(outside / planted, target_is_directory=planted == "assets")
     if planted == "assets":
         (outside / planted).mkdir()
-    with pytest.raises(UnsafePathError, match="outside the report folder"):
-        html_sweep(tmp_path / "s", short=True, evil="ga")
+    html_sweep(tmp_path / "s", short=True, evil="ga")
     assert [p for p in outside.rglob("*") if p.is_file()] == []
+    assert not (report / planted).is_symlink() and (report / "index.html").is_file()
+    rep = build_report([tmp_path / "s"], report, short=True, archive=False)
+    assert rep.folder_notes == []  # the folder it replaced held no link any more
+    (report / "runs.csv").unlink()
+    (report / "runs.csv").symlink_to(outside / "runs.csv")
+    (note,) = build_report([tmp_path / "s"], report, short=True, archive=False).folder_notes
+    assert note.startswith(f"warning: {report} held 1 symbolic link(s) ({report / 'runs.csv'})")
+    assert not (outside / "runs.csv").exists()
 
 
 def test_the_index_renders_the_verdict_objects(report_dir):

@@ -263,4 +263,5 @@ def test_ctrl_c_during_the_report_is_one_line_and_status_130(tmp_path, monkeypat
     (tmp_path / "sweep").mkdir()
     assert main([str(tmp_path / "sweep"), "-o", str(tmp_path / "out")]) == 130
     err = capsys.readouterr().err
-    assert err.strip() == "interrupted: the report is not complete; run the same command again"
+    assert err.strip() == ("interrupted: no report written (its folder keeps the previous one, "
+                           "if any); run the same command again")

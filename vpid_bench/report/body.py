@@ -17,7 +17,7 @@ from typing import Any
 from . import rankings, render
 from .load import LoadedRecords, reason
 from .render import para
-from .safe import escape
+from .safe import escape, inert_markdown
 from .sections import HeadlineColumn, Section
 
 
@@ -215,9 +215,12 @@ def tests_md(kw: Any, pairs: Any, fr: Any, alpha: float,
 
 
 def section_md(section: Section, out_dir: Path) -> list[str]:
+    """A section of a plugin (or of the core) as Markdown: its title and text made inert (a
+    link or image in them is text, :func:`.safe.inert_markdown`), then the report's own
+    links to the section's files."""
     lines = [f"## {escape(section.title)}", ""]
     if section.text:
-        lines += [section.text.rstrip(), ""]
+        lines += [inert_markdown(section.text).rstrip(), ""]
     links = []
     for f in section.files:
         rel = Path(f).resolve().relative_to(out_dir.resolve()).as_posix()

@@ -13,6 +13,14 @@ and writes into ``out_dir``::
     ioh/                    the runs in IOHprofiler's format
     index.html, *.html      the same report as browsable pages (:mod:`.site_pages`)
 
+``out_dir`` is one report, whole (issue 44, N8, N9): the report is built in a new hidden
+folder beside it that takes its place in one rename once every file is written
+(:class:`~vpid_bench.fileio.WholeFolder`). A report that fails (a full disk, a file-size
+limit: a write that fails is never taken for a figure's or a plugin's fault), is interrupted
+or is written twice at once leaves the old report or a new one, each whole; pages of an
+earlier report never linger beside a new one, and a link planted in the old folder is removed
+with it, never followed (N6).
+
 It runs in stages that pass data, never text. Computation: :func:`.compute.compute` (the
 rankings, tests, floors), then :func:`_assemble` fills one :class:`~.model.ReportModel` (the
 first screen, the figures of :mod:`.core_figures`, the sections of :mod:`.plugin_sections`,
@@ -31,10 +39,12 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import os
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
+from ..fileio import WholeFolder, write_refused
 from ..progress import Stages
 from . import answer, anytime, body, first_screen, outline, render, tables
 from .compute import ReportData, compute
@@ -71,12 +81,31 @@ class Report:
     archive_notes: list[str] = dataclasses.field(default_factory=list)
     #: the HTML site's first page (``index.html``), beside report.md
     index_html: Path | None = None
+    #: ``warning:`` lines on the folder replaced (symbolic links it held, removed with it)
+    folder_notes: list[str] = dataclasses.field(default_factory=list)
 
     @property
     def failures(self) -> list[str]:
         """One line per failed job, failed run, unreadable record, failed plugin section,
         bad optimum file or run below its instance's optimum."""
         return self.loaded.failures + self.section_errors + self.optima_errors
+
+
+#: What a report folder holds at its top, besides its pages (``*.html``), and the outcome a
+#: sweep writes beside them (``status.json``).
+REPORT_ENTRIES = frozenset({"report.md", "runs.csv", "tables", "figures", "ioh", "assets",
+                            "status.json"})
+
+
+def foreign_entries(folder: Path) -> list[str]:
+    """The entries of ``folder`` that no report writes, sorted (none for a missing folder):
+    a report replaces its folder whole, so it must not be written over one holding anything
+    else (a user's files, the records themselves)."""
+    try:
+        names = os.listdir(folder)
+    except (FileNotFoundError, NotADirectoryError):
+        return []
+    return sorted(n for n in names if n not in REPORT_ENTRIES and not n.endswith(".html"))
 
 
 class _Names:
@@ -117,24 +146,42 @@ def build_report(
     (default: the installed plugins) provides the problems' report sections. ``archive``:
     rank the archived built-in optimizers beside these runs (:mod:`.archive`; ``True`` for
     the archives shipped with the package, or a folder of archives). Raises
-    :class:`NoRecordsError` when no readable record exists. ``progress``: where each stage
-    (records, tests, figures, pages) is said as it starts (a full report over an archive
-    takes a minute).
+    :class:`NoRecordsError` when no readable record exists, ``OSError`` when the report
+    could not be written (``out_dir`` is then left as it was). ``progress``: where each
+    stage (records, tests, figures, pages) is said as it starts (a full report over an
+    archive takes a minute).
     """
     data = compute(paths, short, alpha, baseline, archive, progress)
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    names = _Names(out_dir)
-    model, written = _assemble(data, names, registry, progress)
-    if progress is not None:
-        progress.stage("writing report.md and the site")
-    md, site = _render(model, names)
-    written += [md, *site]
-    return Report(out_dir, md, first_screen.terminal_text(model.results, answer=model.answer),
-                  len(data.loaded.records), data.problems, written,
+    whole = WholeFolder(out_dir)
+    with whole as new:
+        names = _Names(new)
+        model, written = _assemble(data, names, registry, progress)
+        if progress is not None:
+            progress.stage("writing report.md and the site")
+        md, site = _render(model, names)
+        written += [md, *site]
+
+    def final(path: Path) -> Path:  # a file's path once the new folder is in place
+        return out_dir / Path(path).relative_to(new)
+
+    errors = [e.replace(str(new), str(out_dir)) for e in model.section_errors]
+    return Report(out_dir, final(md), first_screen.terminal_text(model.results,
+                                                                 answer=model.answer),
+                  len(data.loaded.records), data.problems, [final(f) for f in written],
                   {k: v for k, v in model.figs.items() if isinstance(v, str)}, data.loaded,
-                  model.section_errors, data.optima_errors, data.archive_notes,
-                  site[0] if site else None)
+                  errors, data.optima_errors, data.archive_notes,
+                  final(site[0]) if site else None, _link_notes(out_dir, whole.links))
+
+
+def _link_notes(out_dir: Path, links: list[Path]) -> list[str]:
+    """One ``warning:`` line naming the symbolic links the replaced folder held (N6: they
+    once gave a 20-line traceback, and a sweep no report at all)."""
+    if not links:
+        return []
+    shown = ", ".join(str(p) for p in links[:3]) + (" ..." if len(links) > 3 else "")
+    return [f"warning: {out_dir} held {len(links)} symbolic link(s) ({shown}): removed with "
+            "the previous report, never followed (what they point to is untouched)"]
 
 
 def _assemble(data: ReportData, names: _Names, registry: Any,
@@ -177,6 +224,8 @@ def _add_interactive(model: ReportModel) -> None:
     try:
         model.interactive = interactive_figures(model.data)
     except Exception as exc:  # noqa: BLE001 - a figure's fault costs the figures only
+        if write_refused(exc):
+            raise
         log.debug("interactive figures failed", exc_info=True)
         model.section_errors.append(f"interactive figures: {type(exc).__name__}: {exc}")
 

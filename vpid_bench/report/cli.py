@@ -1,14 +1,19 @@
 """``vpid-bench-report DIR... [-o OUT]``: one report from any set of run records.
 
 Merges the records below every given folder (sweeps, single jobs, record files) and writes
-the report into ``OUT`` (default ``report`` in the current folder). Exit status: 0 when the
-report was written and every record and job was fine, 1 when it was written but some job or
-run failed or some record was unreadable, 2 for a usage error or when no record was found.
+the report into ``OUT`` (default ``report`` in the current folder). ``OUT`` is one report,
+whole: it is built beside it and takes its place once complete (:class:`.build.Report`), so
+``OUT`` must hold a report or nothing. Exit status: 0 when the report was written and every
+record and job was fine, 1 when it was written but some job or run failed or some record was
+unreadable, or when it could not be written (a full disk, a file-size limit: ``OUT`` then
+keeps the previous report), 2 for a usage error or when no record was found. SIGTERM and
+SIGHUP end it as Ctrl-C does (one line, ``OUT`` left as it was; status 143, 129).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import tempfile
 from collections.abc import Sequence
@@ -43,13 +48,18 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Console entry point ``vpid-bench-report``; returns (and exits with) the status. Ctrl-C
-    is one line and status 130 (a report half written is left as it is; run it again)."""
+    (and, for the console command, SIGTERM and SIGHUP) is one line and status 128 + the
+    signal's number: no report is written, the folder keeps the previous one; run it again."""
+    from .. import interrupts
+
+    if argv is None:  # the console command: SIGTERM and SIGHUP end it as Ctrl-C does
+        interrupts.install()
     try:
         return _main(argv)
     except KeyboardInterrupt:
-        print("interrupted: the report is not complete; run the same command again",
-              file=sys.stderr)
-        return _exit(130, argv)
+        print("interrupted: no report written (its folder keeps the previous one, if any); "
+              "run the same command again", file=sys.stderr)
+        return _exit(interrupts.exit_status(), argv)
 
 
 def _main(argv: Sequence[str] | None) -> int:
@@ -62,7 +72,7 @@ def _main(argv: Sequence[str] | None) -> int:
         print(f"error: --alpha={args.alpha} is not allowed: a number between 0 and 1",
               file=sys.stderr)
         return _exit(2, argv)
-    bad_out = check_output_dir(args.out)
+    bad_out = check_output_dir(args.out, args.paths)
     if bad_out:
         print(f"error: -o {args.out} is not allowed: {bad_out}", file=sys.stderr)
         return _exit(2, argv)
@@ -77,12 +87,13 @@ def _main(argv: Sequence[str] | None) -> int:
     except NoRecordsError as exc:
         print(f"error: {clean(exc)}", file=sys.stderr)
         return _exit(2, argv)
-    except OSError as exc:  # the folder checked above became unwritable, or a full disk
+    except OSError as exc:  # the folder became unwritable, a full disk, a file-size limit
         print(f"error: the report could not be written into {clean(args.out)} "
-              f"({exc.strerror or type(exc).__name__})", file=sys.stderr)
+              f"({clean(exc.strerror or type(exc).__name__)}); it keeps the previous report, "
+              "if any", file=sys.stderr)
         return _exit(1, argv)
     # every line below may quote records, archives or paths: cleaned (report.safe)
-    for note in report.archive_notes:
+    for note in [*report.folder_notes, *report.archive_notes]:
         print(clean(note), file=sys.stderr)
     print(clean(report.headline, keep_newlines=True))
     print(f"\nreport: {clean(report.report_md)} ({report.n_records} run records)")
@@ -93,15 +104,31 @@ def _main(argv: Sequence[str] | None) -> int:
     return _exit(1 if report.failures else 0, argv)
 
 
-def check_output_dir(out: Path) -> str | None:
+def check_output_dir(out: Path, inputs: Sequence[Path] = ()) -> str | None:
     """Why ``out`` cannot hold the report (an existing file, a device such as /dev/null, a
-    folder that cannot be created or written), or None. Creates the folder."""
+    folder holding the records read or anything a report does not write: the report replaces
+    it whole; a folder that cannot be created, or whose parent cannot be written), or None.
+    Creates the folder."""
+    from .build import foreign_entries
+
     if out.exists() and not out.is_dir():
         return "a folder (this is an existing file)"
+    where = Path(os.path.abspath(out))
+    for p in inputs:
+        read = Path(os.path.abspath(p))
+        if where == read or where in read.parents:
+            return (f"a folder apart from the records read ({clean(p)} is in it): a report "
+                    "replaces its folder whole")
+    foreign = [] if out.is_symlink() else foreign_entries(out)
+    if foreign:
+        return ("a folder that holds a report or nothing: a report replaces its folder whole, "
+                f"and this one holds {', '.join(clean(f) for f in foreign[:3])}"
+                + (" ..." if len(foreign) > 3 else ""))
     try:
         out.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=out):
-            pass
+        for folder in {out, out if os.path.ismount(out) else where.parent}:
+            with tempfile.TemporaryFile(dir=folder):  # the old report goes, the new one in
+                pass
     except OSError as exc:
         return f"a folder you can create and write to ({exc.strerror or type(exc).__name__})"
     return None

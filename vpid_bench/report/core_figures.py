@@ -16,6 +16,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from ..fileio import write_refused
 from ..progress import Stages
 from .forked import run_forked
 
@@ -47,6 +48,8 @@ def _one(figure: _Figure) -> Path | str:
     try:
         return figure.draw(figure.data, *figure.args)
     except Exception as exc:  # noqa: BLE001 - a figure's fault costs that figure only
+        if write_refused(exc):  # a full disk is the report's failure, not the figure's
+            raise
         log.debug("figure %s failed", figure.title, exc_info=True)
         return f"failed: {type(exc).__name__}: {exc}"
 

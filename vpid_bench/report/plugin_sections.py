@@ -11,6 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from ..fileio import write_refused
 from .model import PlacedSection
 from .safe import UnsafePathError, inside
 from .sections import Contribution, HeadlineColumn, ReportContext, Section
@@ -52,6 +53,8 @@ def plugin_sections(registry: Any, data: Any, out_dir: Path, claim: Callable[[Pa
                 errors += bad
                 columns += [c for c in contrib.headline if isinstance(c, HeadlineColumn)]
             except Exception as exc:  # a plugin's fault costs its section, not the report
+                if write_refused(exc):  # a full disk is the report's failure, not the plugin's
+                    raise
                 log.debug("report section failed", exc_info=True)
                 errors.append(f"report section of plugin {plugin!r} for problem {problem!r} "
                               f"failed: {type(exc).__name__}: {exc}")

@@ -10,6 +10,17 @@ every path it writes is checked by :func:`inside`, and every piece of record tex
 person goes through one of the three text functions, each of which first makes the text one
 line of printable characters (:func:`clean`). This module is the one home of those rules:
 every renderer (terminal, Markdown, HTML) uses it.
+
+Text is text (issue 44, N5): a run's error message or a plugin section holding
+``![x](http://...)``, ``[x](https://...)``, ``<http://...>``, ``<img src=...>``, a reference
+link or a bare URL once became a real image or link in report.md and on the HTML pages, and
+opening the site fetched from the network. :func:`escape` (record text) and
+:func:`inert_markdown` (a plugin section's Markdown: its tables and emphasis kept) make all of
+them inert text for any CommonMark or GitHub renderer: ``[`` and ``]`` escaped (no link, image
+or reference), ``<`` escaped (no HTML, no autolink), and the ``:`` of ``scheme://``, the ``.``
+of ``www.`` and the ``@`` of an e-mail address escaped (no bare-URL autolink). The report's
+own links (to its files and pages) are made by its renderers, never from such text, and are
+the only ones: :func:`local_link` is the rule the HTML renderer and the link check apply.
 """
 
 from __future__ import annotations
@@ -73,14 +84,60 @@ def clean(text: object, keep_newlines: bool = False) -> str:
 
 
 _MD_ESCAPES = {"|": "\\|", "&": "&amp;", "<": "&lt;", ">": "&gt;", "`": "'",
-               "\n": " ", "\r": " ", "\t": " "}
+               "\n": " ", "\r": " ", "\t": " ", "[": "\\[", "]": "\\]"}
+#: A backslash that would escape what follows it (ASCII punctuation, or whatever the report
+#: writes after the text): doubled, so it is shown. Before a letter it is shown as it is.
+_MD_BACKSLASH = re.compile(r"\\(?=[!-/:-@\[-`{-~]|$)")
+
+#: What a Markdown renderer turns into a link or an image on its own (GitHub's autolinks):
+#: the ``:`` of ``scheme://`` (and of ``mailto:``/``xmpp:``), the ``.`` of ``www.`` and the
+#: ``@`` of an e-mail address. Each is backslash-escaped: shown as is, linked by no renderer.
+_AUTOLINK = re.compile(
+    r"(?<![a-z0-9+.-])[a-z][a-z0-9+.-]{0,31}:(?=//)"  # scheme://
+    r"|(?<![a-z0-9+.-])(?:mailto|xmpp):"
+    r"|(?<![a-z0-9_-])www\."
+    r"|(?<=[a-z0-9._+-])@(?=[a-z0-9_-]+\.)", re.IGNORECASE)
+
+
+def _inert_autolinks(text: str) -> str:
+    """``text`` with each autolink trigger (:data:`_AUTOLINK`) backslash-escaped."""
+    return _AUTOLINK.sub(lambda m: m.group(0)[:-1] + "\\" + m.group(0)[-1], text)
 
 
 def escape(text: object) -> str:
-    """Record text for a Markdown line or table cell: ``|`` escaped, HTML (``& < >``) as
-    entities, backticks as quotes, line breaks as spaces, any other control or format
-    character made visible (:func:`clean`)."""
-    return clean("".join(_MD_ESCAPES.get(c, c) for c in str(text)))
+    """Record text for a Markdown line or table cell, shown as it is and nothing else: ``|``,
+    ``[``, ``]`` and a ``\\`` that would escape the next character backslash-escaped (no
+    table cell, link, image or reference), HTML (``& < >``) as entities (no tag, no
+    autolink), backticks as quotes, the triggers of bare-URL autolinks escaped, line breaks
+    as spaces, any other control or format character made visible (:func:`clean`)."""
+    s = _MD_BACKSLASH.sub(r"\\\\", str(text))
+    return clean(_inert_autolinks("".join(_MD_ESCAPES.get(c, c) for c in s)))
+
+
+#: A backslash escape already in Markdown (kept as it is), or a character that starts a
+#: link, an image, a reference, HTML or an autolink (escaped).
+_MD_ACTIVE = re.compile(r"\\[!-/:-@\[-`{-~]|[\[\]<]")
+
+
+def inert_markdown(text: object) -> str:
+    """A plugin section's Markdown with every link, image, reference, raw HTML and autolink
+    made text, the rest (tables, emphasis, headings, lists, code) kept: each ``[``, ``]`` and
+    ``<`` not already escaped is backslash-escaped, and so are the triggers of bare-URL
+    autolinks. Inside a code span these escapes show as typed (a small price: telling code
+    from text is the renderer's parse, which a hostile text can steer)."""
+    s = _MD_ACTIVE.sub(lambda m: m.group(0) if len(m.group(0)) == 2 else "\\" + m.group(0),
+                       str(text))
+    return _inert_autolinks(s)
+
+
+def local_link(url: str) -> bool:
+    """Whether ``url`` names a file of the report itself: a relative path with no scheme,
+    host, absolute path, ``..`` or backslash (``figures/x.png``, ``problem-x.html#ctx``). Any other
+    (``https://``, ``//host``, ``data:``, ``file:``, ``/etc``) is never a link of the report."""
+    u = str(url).strip()
+    return bool(u) and not (re.match(r"[A-Za-z][A-Za-z0-9+.-]*:", u) or u.startswith("/")
+                            or "\\" in u or ".." in u.split("#")[0].split("/")
+                            or any(not c.isprintable() for c in u))
 
 
 def escape_html(text: object) -> str:

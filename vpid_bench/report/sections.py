@@ -42,9 +42,10 @@ from .safe import escape, inside, slug
 
 @dataclasses.dataclass(frozen=True)
 class Section:
-    """One part of ``report.md``: a ``## title``, Markdown ``text`` (written as given; keep
-    lines within 120 characters) and the ``files`` written for it (PNG figures are shown
-    under the text, other files linked)."""
+    """One part of ``report.md``: a ``## title``, Markdown ``text`` (keep lines within 120
+    characters; a link, image or raw HTML in it is shown as text, :func:`.safe.inert_markdown`)
+    and the ``files`` written for it (PNG figures are shown under the text, other files
+    linked: the report's own links are the only links)."""
 
     title: str
     text: str = ""

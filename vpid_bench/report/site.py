@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from . import render
-from .safe import slug
+from .safe import local_link, slug
 
 #: The site's own files, copied from the package beside the pages.
 ASSETS = ("report.css", "report.js")
@@ -111,12 +111,16 @@ def table(headers: Sequence[str], rows: Sequence[Sequence[Any]],
 def _markdown_parser() -> Any:
     from markdown_it import MarkdownIt
 
-    # raw HTML in a section's text is shown as text, never inserted
-    return MarkdownIt("commonmark", {"html": False}).enable("table")
+    # raw HTML in a section's text is shown as text, never inserted; a link or image naming
+    # anything but a file of the report stays text (the report's own links are the only ones)
+    parser = MarkdownIt("commonmark", {"html": False}).enable("table")
+    parser.validateLink = local_link
+    return parser
 
 
 def markdown_html(text: str) -> Any:
-    """Markdown (a section's text, a verdict) as HTML, raw HTML in it escaped."""
+    """Markdown (a section's text, a verdict) as HTML: raw HTML in it escaped, a link or image
+    to anything but a file of the report shown as text (:func:`.safe.local_link`)."""
     from markupsafe import Markup
 
     return Markup(_markdown_parser().render(text or ""))  # noqa: S704 - escaped by the parser
@@ -175,20 +179,17 @@ def written_tables(out_dir: Path) -> list[str]:
 
 def check_links(out_dir: Path, pages: Iterable[Path]) -> list[str]:
     """What the pages name that does not resolve (empty: all do): a relative ``href`` or
-    ``src`` naming no file, and anything the browser would load from elsewhere (a ``src``
-    or style sheet that is not a local file). A link a reader may follow to the web (``<a
-    href="https://...">`` in a plugin section's text) loads nothing and is allowed."""
+    ``src`` naming no file, and anything that is no file of the report (a link or image to
+    the web, another host, an absolute path): the report's own links are the only links
+    (:func:`.safe.local_link`)."""
     bad = []
     for page in pages:
         text = page.read_text(encoding="utf-8")
-        for tag, _attr, target in re.findall(r'<(\w+)[^>]*?\s(href|src)="([^"#]*)', text):
+        for _tag, _attr, target in re.findall(r'<(\w+)[^>]*?\s(href|src)="([^"#]*)', text):
             if not target:
                 continue
-            remote = "://" in target or target.startswith(("//", "data:", "mailto:"))
-            if remote and tag == "a" and target.startswith(("https://", "http://", "mailto:")):
-                continue
-            if remote:
-                bad.append(f"{page.name}: {target} (not a local file)")
+            if not local_link(target):
+                bad.append(f"{page.name}: {target} (not a file of the report)")
             elif not (page.parent / target).exists():
                 bad.append(f"{page.name}: {target}")
     return bad

@@ -96,7 +96,10 @@ def _enabled(config: Any, key: str = "report") -> bool:
 
 def write_report(folder: Path, short: bool, archive: bool = True) -> bool:
     """Build the report of ``folder`` into ``folder/report``, print the headline and where it
-    is, and write the outcome into ``folder/report/status.json``. Never raises."""
+    is, and write the outcome into ``folder/report/status.json``. Never raises. The report
+    takes the folder's place whole once written (:func:`~vpid_bench.report.build.build_report`):
+    one that fails (a full disk, a file-size limit) is one ``warning:`` line, and the folder
+    keeps the previous report; a link planted in it is removed, never followed."""
     from ..progress import Stages
     from ..report.build import NoRecordsError, build_report
     from ..report.safe import clean  # every line may quote records or archives
@@ -113,11 +116,12 @@ def write_report(folder: Path, short: bool, archive: bool = True) -> bool:
         status["status"] = "no_records"
     except Exception as exc:  # noqa: BLE001 - the report must not crash a sweep
         log.debug("report failed", exc_info=True)
-        message = clean(f"report: not written for {folder} ({type(exc).__name__}: {exc})")
+        message = clean(f"warning: the report was not written for {folder} "
+                        f"({type(exc).__name__}: {exc}); {out} keeps the previous one, if any")
         print(message, file=sys.stderr, flush=True)
         status.update(status="failed", problems=[message])
     else:
-        for note in report.archive_notes:
+        for note in [*report.folder_notes, *report.archive_notes]:
             print(clean(note), file=sys.stderr, flush=True)
         print(f"\n{clean(report.headline, keep_newlines=True)}\n\nreport: "
               f"{clean(report.report_md)}", flush=True)
