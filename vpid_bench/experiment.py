@@ -99,6 +99,61 @@ def _existing_ok(path: Path, rid: str) -> bool:
     return record["run_id"] == rid and record["status"] == "ok"
 
 
+def _kept(path: Path, rid: str) -> bool:
+    """Whether ``path`` holds this run's complete ``ok`` record (read only: a bad file is the
+    job's to set aside when it runs)."""
+    try:
+        record = rec.read_record(path) if path.is_file() else None
+    except rec.CorruptRecordError:
+        return False
+    return (record is not None and check_record(record, path.name) is None
+            and record["run_id"] == rid and record["status"] == "ok")
+
+
+def recorded_in_full(jobs: list[Job], job_dirs: list[Path], registry: Registry | None,
+                     problems: ProblemCache | None = None) -> bool:
+    """Whether every job of a sweep ended ``ok`` (its ``job.json``) with the complete record
+    of every run under the run ids it would have now (settings, seeds, plugins' code, the
+    problem's data, targets): then running the sweep again would run nothing, and the
+    command writes nothing but the report. The problems' set-up runs as a job's does (in a
+    supervised worker unless ``isolation=none``); any fault there: ``False`` (the jobs then
+    run as usual and say why)."""
+    from .store.job_status import read_job_status
+
+    if not jobs or len(jobs) != len(job_dirs):
+        return False
+    for job_dir in job_dirs:
+        status = read_job_status(job_dir)
+        if status is None or status.get("status") != "ok":
+            return False
+    pool = Workers(1) if all(j.spec.isolation != "none" and can_send(j) is None
+                             for j in jobs) else None
+    try:
+        return all(_recorded(job, Path(d), registry, pool or _Here(job, problems))
+                   for job, d in zip(jobs, job_dirs, strict=True))
+    except Exception:  # noqa: BLE001 - plugin code: its job runs it again and says why
+        log.debug("the check for a sweep with nothing to run failed", exc_info=True)
+        return False
+    finally:
+        if pool is not None:
+            pool.close()
+
+
+def _recorded(job: Job, job_dir: Path, registry: Registry | None, calls: Any) -> bool:
+    """:func:`recorded_in_full` of one job: its run ids made as :func:`_run_job` makes them."""
+    if not job.spec.resume:
+        return False
+    limit = _limit(setup_limit_s(job))
+    facts = calls.call(job, _facts, what="the problem's set-up", limit=limit)
+    job = job.sized(facts.dim)
+    if job.spec.target is not None:
+        job = dataclasses.replace(job, stop_at=calls.call(
+            job, _stops, what="the certified optima's check", limit=limit))
+    key = _job_key(job, registry, facts)
+    return all(_kept(rec.record_path(job_dir, i, rec.run_id(key, i)), rec.run_id(key, i))
+               for i in range(job.spec.runs))
+
+
 def _set_aside(path: Path, why: str) -> Path:
     """Move the record file ``path`` into ``records/bad/`` (never read as a record; a name
     taken there gets a number) and say so in one line."""

@@ -342,11 +342,12 @@ def _interrupted(what: str = "no job was started or every completed run is recor
 
 
 def _main(argv: Sequence[str] | None) -> None:
+    from ..experiment import recorded_in_full
     from . import preflight
     from .argv import parse_command_line
     from .callbacks import ensure_job_dir_resolver
     from .config_store import register_configs
-    from .resume import FolderLock, new_invocation, resume_command
+    from .resume import new_invocation, resume_command
     from .suites import expand_suites
 
     threading.excepthook = _thread_exception
@@ -379,14 +380,14 @@ def _main(argv: Sequence[str] | None) -> None:
             _run_hydra(cmd.hydra_args, task)
             return
         key = "hydra.sweep.dir" if plan.multirun else "hydra.run.dir"
-        lock = FolderLock(plan.output_dir, key)
-        preflight.check_writable(plan.output_dir, key)
-        lock.acquire()
-        # the problems the pre-flight's checks built are not built twice
-        task.lock, task.progress, task._problems = lock, _sweep_progress(plan), plan.problems
-        preflight.create_job_dirs(plan)
+        lock = _prepare_folder(plan, key, task)
+        nothing_to_run = plan.multirun and recorded_in_full(plan.jobs, plan.job_dirs,
+                                                            registry, plan.problems)
     except VpidBenchError as exc:
         _refuse(exc)
+    if nothing_to_run:
+        _report_only(plan, task, lock, before, watch=console)
+        return
     try:
         _run_hydra(plan.hydra_args, task)
     except KeyboardInterrupt:
@@ -398,6 +399,42 @@ def _main(argv: Sequence[str] | None) -> None:
     _leave(1 if _failures(plan.output_dir, plan.multirun, plan.job_dirs,
                           report_expected=bool(plan.jobs) and plan.jobs[0].spec.report)
            else 0, before, watch=console)
+
+
+def _prepare_folder(plan: Any, key: str, task: JobTask) -> Any:
+    """The output folder checked, locked (the lock returned) and its job folders made; the
+    task given the lock, the sweep's progress line and the problems the pre-flight built (not
+    built twice)."""
+    from . import preflight
+    from .resume import FolderLock
+
+    lock = FolderLock(plan.output_dir, key)
+    preflight.check_writable(plan.output_dir, key)
+    lock.acquire()
+    task.lock, task.progress, task._problems = lock, _sweep_progress(plan), plan.problems
+    preflight.create_job_dirs(plan)
+    return lock
+
+
+def _report_only(plan: Any, task: JobTask, lock: Any, before: set[Any], watch: bool) -> None:
+    """A sweep whose every run is recorded (:func:`~vpid_bench.experiment.recorded_in_full`):
+    say so, write its report again (archives or the report's code may have changed) and
+    nothing else: no job is started and Hydra writes none of its files; then end the command
+    (status 1 when the report failed)."""
+    from .callbacks import write_report
+
+    runs = sum(j.spec.runs for j in plan.jobs)
+    print(f"sweep folder: {plan.output_dir}\n  nothing to run: the {len(plan.jobs)} job(s)' "
+          f"{runs} run(s) are all recorded under these settings, plugins and data; only the "
+          "report is written again", file=sys.stderr, flush=True)
+    spec = plan.jobs[0].spec
+    try:
+        ok = write_report(plan.output_dir, short=False, archive=spec.archive) \
+            if spec.report else True
+    finally:
+        task.close()
+        lock.release()
+    _leave(0 if ok else 1, before, watch)
 
 
 def _quick_help(cmd: Any, registry: Any) -> bool:
