@@ -9,10 +9,12 @@ import re
 import sys
 from pathlib import Path
 
+import pytest
+
 sys.path.insert(0, str(Path(__file__).parents[1] / "sweeps"))
 from sweep_helpers import run_cli  # noqa: E402
 
-from vpid_bench.shell.progress import SweepProgress, duration  # noqa: E402
+from vpid_bench.shell.progress import SweepProgress, duration, first_line  # noqa: E402
 
 
 class Clock:
@@ -72,3 +74,56 @@ def test_no_line_without_a_plan_of_jobs_or_with_progress_false():
     assert _sweep_progress(plan(multirun=False)) is None
     assert _sweep_progress(plan(progress=(True, False))) is None
     assert _sweep_progress(plan(progress=())) is None  # an optimizing sweeper: no plan
+
+
+class _Spec:
+    def __init__(self, runs: int) -> None:
+        self.runs = runs
+
+
+class _Job:
+    def __init__(self, problem: str, runs: int, budget: int) -> None:
+        self.problem_name, self.spec, self.budget = problem, _Spec(runs), budget
+
+
+def test_the_first_line_estimates_the_sweep_before_any_work():
+    """runs x budget x the archived time per evaluation of each job's problem: 2 jobs of 5
+    runs of 400 evaluations at 50 us, one of 10 runs of 900 at 1 ms: 0.2 + 9 s."""
+    jobs = [_Job("a", 5, 400), _Job("a", 5, 400), _Job("b", 10, 900)]
+    line = first_line(jobs, {"a": 50e-6, "b": 1e-3})
+    assert line.startswith("sweep: 3 job(s), 20 run(s): about 9 s (each run's budget at the "
+                           "time per evaluation of its problem in the archives' builds")
+    assert "placing a new optimizer" not in line  # minutes: no quicker step to point to
+    part = first_line([*jobs, _Job("mine", 3, 100)], {"a": 50e-6, "b": 1e-3})
+    assert "about 9 s for the 3 job(s) on problems the archives timed; the others known " \
+           "once they run" in part
+    assert first_line([_Job("mine", 3, 100)], {}) == \
+        "sweep: 1 job(s), 3 run(s); time left known once the first job ends"
+
+
+def test_a_long_estimate_points_to_the_quicker_first_steps():
+    line = first_line([_Job("a", 15, 10_000)], {"a": 0.01})  # 25 min
+    assert "about 25 min 00 s" in line
+    assert line.splitlines()[1].strip().startswith(
+        "placing a new optimizer? a first place in minutes: -m suite=smoke optimizer=<yours>")
+
+
+def test_the_time_per_evaluation_is_read_from_the_archives_summaries(tmp_path):
+    """Per problem, the median over optimizers of median run time / median evaluations; the
+    box centre's one evaluation and odd rows left out."""
+    from vpid_bench.store.archive import SUMMARY, evaluation_seconds
+
+    folder = tmp_path / "suite"
+    folder.mkdir()
+    (folder / "manifest.json").write_text("{}")
+    (folder / SUMMARY).write_text(
+        "problem,optimizer,runs,ok,metric,median_metric,median_rel_gap,reached,"
+        "median_evaluations,median_run_time_s\n"
+        "p,centre,15,15,NoRE,1,1,0,1.0,0.001\n"
+        "p,de1,15,15,NoRE,1,1,0,1000,0.1\n"
+        "p,de2,15,15,NoRE,1,1,0,1000,0.3\n"
+        "p,de3,15,15,NoRE,1,1,0,2000,0.4\n"
+        "p,odd,15,15,NoRE,1,1,0,nan,x\n"
+        "bad name,de1,15,15,NoRE,1,1,0,1000,0.1\n")
+    assert evaluation_seconds(tmp_path) == {"p": pytest.approx(2e-4)}
+    assert set(evaluation_seconds()) >= {"smoke_quarter", "vpid1_q_golden_iso_c"}  # shipped

@@ -342,7 +342,6 @@ def _interrupted(what: str = "no job was started or every completed run is recor
 
 
 def _main(argv: Sequence[str] | None) -> None:
-    from ..experiment import recorded_in_full
     from . import preflight
     from .argv import parse_command_line
     from .callbacks import ensure_job_dir_resolver
@@ -381,8 +380,7 @@ def _main(argv: Sequence[str] | None) -> None:
             return
         key = "hydra.sweep.dir" if plan.multirun else "hydra.run.dir"
         lock = _prepare_folder(plan, key, task)
-        nothing_to_run = plan.multirun and recorded_in_full(plan.jobs, plan.job_dirs,
-                                                            registry, plan.problems)
+        nothing_to_run = _nothing_to_run(plan, registry, task)
     except VpidBenchError as exc:
         _refuse(exc)
     if nothing_to_run:
@@ -414,6 +412,20 @@ def _prepare_folder(plan: Any, key: str, task: JobTask) -> Any:
     task.lock, task.progress, task._problems = lock, _sweep_progress(plan), plan.problems
     preflight.create_job_dirs(plan)
     return lock
+
+
+def _nothing_to_run(plan: Any, registry: Any, task: JobTask) -> bool:
+    """Whether the sweep has nothing to run (:func:`~vpid_bench.experiment.recorded_in_full`);
+    when it has, its first progress line, before any work: about how long it takes."""
+    from ..experiment import recorded_in_full
+    from ..store.archive import evaluation_seconds
+    from .progress import first_line
+
+    if plan.multirun and recorded_in_full(plan.jobs, plan.job_dirs, registry, plan.problems):
+        return True
+    if task.progress is not None:
+        print(first_line(plan.jobs, evaluation_seconds()), file=sys.stderr, flush=True)
+    return False
 
 
 def _report_only(plan: Any, task: JobTask, lock: Any, before: set[Any], watch: bool) -> None:

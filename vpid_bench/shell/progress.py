@@ -8,8 +8,8 @@ from __future__ import annotations
 import math
 import sys
 import time
-from collections.abc import Callable
-from typing import TextIO
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, TextIO
 
 from ..progress import duration
 
@@ -55,3 +55,31 @@ class SweepProgress:
                else f"about {duration(left)} left")
         return (f"sweep: {self.jobs_done}/{self.jobs} jobs, {self.runs_done}/{self.runs} runs "
                 f"done, {duration(self.clock() - self.start)} elapsed, {eta}")
+
+
+#: Above this estimate (s) the first line points to the quicker first steps of placing a new
+#: optimizer (docs/usage.md).
+QUICK_PATH_S = 600.0
+
+
+def first_line(jobs: Sequence[Any], per_evaluation: Mapping[str, float]) -> str:
+    """The sweep's line before any work: its jobs and runs, and about how long they take at
+    the time per evaluation its problems took in the archives' builds (``per_evaluation``,
+    :func:`vpid_bench.store.archive.evaluation_seconds`) times each run's budget; the jobs
+    whose problem no archive timed are counted apart."""
+    runs = sum(j.spec.runs for j in jobs)
+    timed = [j for j in jobs if j.problem_name in per_evaluation]
+    seconds = sum(j.spec.runs * j.budget * per_evaluation[j.problem_name] for j in timed)
+    head = f"sweep: {len(jobs)} job(s), {runs} run(s)"
+    if not timed:
+        return f"{head}; time left known once the first job ends"
+    rest = (f" for the {len(timed)} job(s) on problems the archives timed; the others "
+            "known once they run") if len(timed) < len(jobs) else ""
+    line = (f"{head}: about {duration(seconds)}{rest} (each run's budget at the time per "
+            "evaluation of its problem in the archives' builds; an optimizer's own cost per "
+            "candidate adds to it, a run stopped at its target costs less)")
+    if seconds > QUICK_PATH_S:
+        line += ("\n  placing a new optimizer? a first place in minutes: -m suite=smoke "
+                 "optimizer=<yours>; then suite=vpid1 runs=5 (docs/usage.md, \"Placing a new "
+                 "optimizer\")")
+    return line

@@ -17,6 +17,7 @@ Everything in an archive is untrusted input. ``target=`` reads an archive's opti
 
 from __future__ import annotations
 
+import csv
 import gzip
 import hashlib
 import io
@@ -316,3 +317,31 @@ def archive_optima(root: Path | None = None, problems: Iterable[str] | None = No
             continue
         optima += found
     return optima, bad
+
+
+#: Largest summary.csv read for the time per evaluation (bytes).
+MAX_SUMMARY_BYTES = 1_000_000
+
+
+def evaluation_seconds(root: Path | None = None) -> dict[str, float]:
+    """Per problem of the archives below ``root`` (default: the shipped ones), the seconds one
+    evaluation took in their builds: the median over the optimizers of each one's median run
+    time over its median evaluations, from ``summary.csv`` (the box centre's single
+    evaluation left out). What a sweep's first estimate of its time is made from
+    (``vpid_bench.shell.progress``). Unreadable files and odd rows are left out: an estimate
+    is not worth a refusal."""
+    per: dict[str, list[float]] = {}
+    for folder in find_archives(root):
+        try:
+            text = read_text_limited(folder / SUMMARY, MAX_SUMMARY_BYTES)
+        except (OSError, UnicodeDecodeError):
+            continue
+        for row in csv.DictReader(io.StringIO(text)):
+            try:
+                evals, secs = float(row["median_evaluations"]), float(row["median_run_time_s"])
+            except (KeyError, TypeError, ValueError):
+                continue
+            problem = row.get("problem") or ""
+            if problem.isidentifier() and 1 < evals < 1e12 and 0 < secs < 1e7:
+                per.setdefault(problem, []).append(secs / evals)
+    return {p: sorted(v)[len(v) // 2] for p, v in per.items()}
