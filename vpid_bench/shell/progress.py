@@ -58,7 +58,7 @@ class SweepProgress:
 
 
 #: Above this estimate (s) the first line points to the quicker first steps of placing a new
-#: optimizer (docs/usage.md).
+#: optimizer (docs/plugins.md).
 QUICK_PATH_S = 600.0
 
 
