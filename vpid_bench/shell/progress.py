@@ -80,6 +80,6 @@ def first_line(jobs: Sequence[Any], per_evaluation: Mapping[str, float]) -> str:
             "candidate adds to it, a run stopped at its target costs less)")
     if seconds > QUICK_PATH_S:
         line += ("\n  placing a new optimizer? a first place in minutes: -m suite=smoke "
-                 "optimizer=<yours>; then suite=vpid1 runs=5 (docs/usage.md, \"Placing a new "
+                 "optimizer=<yours>; then suite=vpid1 runs=5 (docs/plugins.md, \"Placing a new "
                  "optimizer\")")
     return line
