@@ -27,8 +27,8 @@ _LAZY = {
     "HeadlineColumn": ".report.sections",
     "ReportContext": ".report.sections",
     "Section": ".report.sections",
-    "BestSignals": ".artifacts",
-    "read_best_signals": ".artifacts",
+    "BestSignals": ".store.artifacts",
+    "read_best_signals": ".store.artifacts",
     "fit_structure": ".analysis.structures",
     "structure_summary": ".analysis.structures",
 }
