@@ -8,7 +8,7 @@ the command's shell (:mod:`vpid_bench.shell`) calls it once per job. The rooms o
   :mod:`vpid_bench.facts`;
 * the runs themselves, alone or in lockstep, through the one run loop:
   :mod:`vpid_bench.job_runs`;
-* one record per run: :func:`vpid_bench.records.make_record`;
+* one record per run: :func:`vpid_bench.assemble.make_record`;
 * what the records allow (bounds, optima, the job's score): :mod:`vpid_bench.job_analysis`;
 * the best run's signals: :func:`vpid_bench.store.artifacts.write_best_signals`.
 

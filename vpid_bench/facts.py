@@ -5,7 +5,7 @@ never builds a problem nor calls its code: a segfault in a problem's ``describe(
 the sweep, and every resume the same way. A worker builds the problem and reads these facts
 (:func:`problem_facts`); the job works from them: the dimension that sizes its budget, whether
 its runs may go in lockstep, the digest of its data (in every run id) and, for each run's
-instance, what its record holds (:func:`vpid_bench.records.make_record`). Without workers the
+instance, what its record holds (:func:`vpid_bench.assemble.make_record`). Without workers the
 same function reads them in the job's own process.
 """
 

@@ -248,7 +248,7 @@ def run_labels(records: list[dict[str, Any]]) -> list[RunLabel]:
 
 
 def _num(value: Any, missing: float = math.inf) -> float:
-    """A record number as float. :func:`~vpid_bench.records.read_record` has already turned
+    """A record number as float. :func:`~vpid_bench.store.records.read_record` has already turned
     the markers ``"inf"``, ``"-inf"``, ``"nan"`` into floats, so ``-inf`` stays ``-inf``;
     ``None`` (how records of earlier versions stored any non-finite value) becomes
     ``missing``."""

@@ -74,7 +74,7 @@ def best_vector(record_paths: Iterable[Path]) -> tuple[np.ndarray, dict[str, Any
 
 def best_of(records: Iterable[Mapping[str, Any]]) -> tuple[np.ndarray, dict[str, Any]] | None:
     """The best identified vector among the ok ``records`` (as read by
-    :func:`vpid_bench.records.read_record`) and where it comes from (``run_index``,
+    :func:`vpid_bench.store.records.read_record`) and where it comes from (``run_index``,
     ``f_best``, ``ranked_by``, ``value``), or ``None``.
 
     Best means the lowest first metric (``result.metrics``) when every ok record has it,
