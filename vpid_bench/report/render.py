@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 import textwrap
 from collections.abc import Sequence
 from pathlib import Path
@@ -122,8 +123,17 @@ def _pipe(headers: list[str], text: list[list[str]], right: list[bool]) -> str:
     return "\n".join([line(headers), rule, *(line(r) for r in text)])
 
 
+_ESCAPE = re.compile(r"\\(.)")
+
+
+def _shown(cell: str) -> int:
+    """The characters of an escaped cell a reader sees (``\\[`` is one): the escapes that
+    keep a record's text inert (:func:`.safe.escape`) must not squeeze a table's columns."""
+    return len(_ESCAPE.sub(r"\1", cell))
+
+
 def _width(headers: list[str], text: list[list[str]]) -> int:
-    widths = [max([len(h), 3, *(len(r[j]) for r in text)]) for j, h in enumerate(headers)]
+    widths = [max([_shown(h), 3, *(_shown(r[j]) for r in text)]) for j, h in enumerate(headers)]
     return sum(widths) + 3 * len(widths) + 1
 
 
@@ -133,7 +143,8 @@ def _shorten(s: str, n: int) -> str:
 
 def markdown(headers: Sequence[str], rows: Sequence[Sequence[Any]], *, keep: int | None = None,
              max_width: int = MAX_WIDTH, digits: int = 4) -> str:
-    """A GitHub pipe table no wider than ``max_width``.
+    """A GitHub pipe table no wider than ``max_width`` as a reader sees it (its source may be
+    a few escapes wider).
 
     The first ``keep`` columns (default all) are always shown; the others are dropped from
     the right until the table fits. If it still does not fit, the longest text cells are
