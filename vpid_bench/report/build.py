@@ -48,6 +48,7 @@ from ..fileio import WholeFolder, write_refused
 from ..progress import Stages
 from . import answer, anytime, body, first_screen, outline, render, tables
 from .compute import ReportData, compute
+from .forked import run_forked
 from .load import LoadedRecords, NoRecordsError
 from .model import ReportModel, SuiteScores
 from .outline import full_report_command
@@ -245,14 +246,36 @@ def _render(model: ReportModel, names: _Names) -> tuple[Path, list[Path]]:
     return md, site
 
 
-def _table(names: _Names, stem: str, headers: Sequence[str],
-           rows: Sequence[Sequence[Any]]) -> list[Path]:
-    """``tables/<stem>.csv`` (full precision) and ``.tex`` (booktabs)."""
-    path = names.file("tables", stem, ".csv")
+def _table_files(path: Path, headers: Sequence[str], rows: Sequence[Sequence[Any]]
+                 ) -> list[Path]:
+    """``path`` (CSV, full precision) and its ``.tex`` (booktabs)."""
     render.write_csv(path, headers, rows)
     tex = path.with_suffix(".tex")
     tex.write_text(render.latex(headers, rows) + "\n", encoding="utf-8")
     return [path, tex]
+
+
+def _table(names: _Names, stem: str, headers: Sequence[str],
+           rows: Sequence[Sequence[Any]]) -> list[Path]:
+    """``tables/<stem>.csv`` (full precision) and ``.tex`` (booktabs)."""
+    return _table_files(names.file("tables", stem, ".csv"), headers, rows)
+
+
+class _Tables:
+    """Tables planned (each its path claimed in order) and written at once, side by side
+    (:func:`.forked.run_forked`: an archive's pairwise tables run to 900 kB of LaTeX)."""
+
+    def __init__(self, names: _Names) -> None:
+        self.names, self.planned = names, []
+
+    def __call__(self, stem: str, headers: Sequence[str], rows: Sequence[Sequence[Any]]
+                 ) -> list[Path]:
+        self.planned.append((self.names.file("tables", stem, ".csv"), headers, rows))
+        return []
+
+    def write(self) -> list[Path]:
+        done = run_forked([lambda t=t: _table_files(*t) for t in self.planned])
+        return [path for paths in done for path in paths]
 
 
 def _write_tables(data: ReportData, names: _Names) -> list[Path]:
@@ -262,31 +285,32 @@ def _write_tables(data: ReportData, names: _Names) -> list[Path]:
         columns += [k for k in r if k not in columns]
     written = [render.write_csv(names.claim(names.root / "runs.csv"), columns,
                                 [[r.get(k) for k in columns] for r in data.rows])]
+    tables = _Tables(names)
     t = data.tests
     if t is not None:
         for stem, frame in (("kruskal", t.kw), ("pairwise", t.pairs),
                             ("pairwise_search", t.spairs)):
             if not frame.empty:
-                written += _table(names, stem, *render.frame_rows(frame))
+                written += tables(stem, *render.frame_rows(frame))
         if t.fr.mean_ranks is not None:
-            written += _table(names, "friedman_wilcoxon", *render.frame_rows(t.fr.wilcoxon))
-            written += _table(names, "nemenyi",
+            written += tables("friedman_wilcoxon", *render.frame_rows(t.fr.wilcoxon))
+            written += tables("nemenyi",
                               *render.frame_rows(t.fr.nemenyi.reset_index(names="optimizer")))
         for what, res in t.by_inst.items():
             if any(r.wilcoxon is not None for r in res.values()):
                 import pandas as pd
 
-                written += _table(names, f"friedman_instances_{what}", *render.frame_rows(
+                written += tables(f"friedman_instances_{what}", *render.frame_rows(
                     pd.concat([r.wilcoxon.assign(context=c) for c, r in res.items()
                                if r.wilcoxon is not None], ignore_index=True)))
     if data.hits:
-        written += _table(names, "ert", anytime.ERT_HEADERS, anytime.ert_rows(data.hits))
+        written += tables("ert", anytime.ERT_HEADERS, anytime.ert_rows(data.hits))
     if data.search:
         keys = ["context", "rank", "group", "algorithm", "n", "reached", "share",
                 "rel_gap_median", "floor_median", "to_opt_median", "auc"]
-        written += _table(names, "search_quality", keys,
+        written += tables("search_quality", keys,
                           [[s.get(k) for k in keys] for s in data.search])
-    return written
+    return written + tables.write()
 
 
 def _write_headline(data: ReportData, extra: list[HeadlineColumn], names: _Names
