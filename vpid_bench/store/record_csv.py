@@ -53,7 +53,7 @@ MAX_SHARE = 0.5
 #: A unit table: unit -> (quantity, factor to the quantity's SI unit).
 Units = Mapping[str, tuple[str, float]]
 _HEADER = re.compile(r"\s*([^\[\]]*?)\s*(?:\[\s*([^\[\]]*?)\s*\])?\s*")
-_SHOWN = re.compile(r"[A-Za-z0-9_ .()'/\[\]-]{1,60}")
+_PLAIN = re.compile(r"[A-Za-z0-9_ .()'/\[\]-]{1,60}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -112,9 +112,15 @@ class Found:
     factor: float
 
 
+def _plain(name: str) -> bool:
+    """A name an error line may show: a few plain ASCII characters, so what a file holds
+    that is no header (a password file's first line) is never quoted."""
+    return _PLAIN.fullmatch(name) is not None
+
+
 def shown(name: str) -> str:
     """A name read from a file, quoted, as an error line may show it."""
-    return repr(name) if _SHOWN.fullmatch(name) else "(a name with unusual characters)"
+    return repr(name) if _plain(name) else "(a name with unusual characters)"
 
 
 def _printable(text: str) -> str:
@@ -205,7 +211,7 @@ class CsvTable:
     def found(self) -> str:
         """The header as read, when it looks like column names (never other file content)."""
         names = list(self.header)
-        if names and len(names) <= 20 and all(_SHOWN.fullmatch(h) for h in names):
+        if names and len(names) <= 20 and all(map(_plain, names)):
             return "found columns " + ", ".join(names)
         return "found no such header row"
 
