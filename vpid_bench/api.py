@@ -14,7 +14,8 @@ Conventions
   unknown or ill-typed key fails when the object is built (see :mod:`vpid_bench.params`).
 
 This module only gathers names; each lives in a small module of its own (``errors``,
-``bounds``, ``problem``, ``optimizer``, ``bridge``, ``fileio``, ``plugins``), which import
+``bounds``, ``problem``, ``optimizer``, ``bridge``, ``fileio``, ``plugins``, and
+``store.record_csv``, the reader of a user's record file), which import
 each other and never this facade, so the package has no import circle.
 ``from vpid_bench import ...`` offers the same names (the one import line for plugins).
 """
@@ -36,12 +37,16 @@ from .problem import (
     default_budget,
     offers_residuals,
 )
+from .store.record_csv import ColumnMap, CsvRecord, CsvTable, RecordColumn
 
 __all__ = [
     "FILLED_PARAMS",
     "PROTOCOL_KEYS",
     "Bounds",
+    "ColumnMap",
     "ConfigError",
+    "CsvRecord",
+    "CsvTable",
     "GenerationalOptimizer",
     "LoopOptimizer",
     "Optimizer",
@@ -50,6 +55,7 @@ __all__ = [
     "PluginError",
     "Problem",
     "ProblemConfig",
+    "RecordColumn",
     "VpidBenchError",
     "added_setting",
     "check_compatible",

@@ -135,7 +135,7 @@ class ReferenceConfig:
         """The record reader's view of the mapping keys."""
         from .record_file import ColumnMap
 
-        return ColumnMap(dict(self.columns), tuple(self.ignore), "record")
+        return ColumnMap(dict(self.columns), tuple(self.ignore))
 
 
 @dataclass(frozen=True)

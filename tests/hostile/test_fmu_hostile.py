@@ -124,22 +124,33 @@ def test_a_bad_key_is_one_error_naming_it(example_fmu, record, keys, match):
 
 
 def test_record_columns_are_strict(example_fmu, record, tmp_path):
+    """The one CSV record reader's rules (vpid_bench.CsvTable), in its words: an input's
+    column under another name, an unused column, an input without a column, a unit that is
+    not the FMU's."""
     text = Path(record).read_text()
     renamed = tmp_path / "road.csv"
     renamed.write_text(text.replace("t,h,", "t,road,", 1))
-    with pytest.raises(ConfigError, match="column 'road' is none of them"):
+    with pytest.raises(ConfigError, match=r"column h is missing; found columns t, road, .*"
+                       r"problem.reference.columns=\{h:<column>\}"):
         _config(example_fmu("fmi2"), renamed)
+    extra = tmp_path / "extra.csv"
+    extra.write_text("\n".join(line + (",temperature" if k == 0 else ",21.5")
+                                for k, line in enumerate(text.splitlines())))
+    with pytest.raises(ConfigError, match="column 'temperature' is not used"):
+        _config(example_fmu("fmi2"), extra)
+    _config(example_fmu("fmi2"), extra, reference={"file": str(extra),
+                                                   "ignore": ["temperature"]})
     mapped = _config(example_fmu("fmi2"), renamed, reference={"file": str(renamed),
                                                               "columns": {"h": "road"}})
     assert FmuProblem(mapped).record.columns["h"] == "road"
     dropped = tmp_path / "noinput.csv"
     dropped.write_text("\n".join(",".join(c for i, c in enumerate(line.split(",")) if i != 1)
                                  for line in text.splitlines()))
-    with pytest.raises(ConfigError, match="input h has none"):
+    with pytest.raises(ConfigError, match="column h is missing"):
         _config(example_fmu("fmi2"), dropped)
     unit = tmp_path / "unit.csv"
     unit.write_text(text.replace("zsdd", "zsdd [g]", 1))
-    with pytest.raises(ConfigError, match=r"FMU's unit \[m/s2\]"):
+    with pytest.raises(ConfigError, match=r"column zsdd in its unit \[m/s2\] or without a unit"):
         _config(example_fmu("fmi2"), unit)
 
 
@@ -186,3 +197,72 @@ def test_members_over_the_size_limits_are_refused(example_fmu, record, monkeypat
     with pytest.raises(ConfigError, match="at most 2 members"):
         _config(example_fmu("fmi2"), record)
     archive._inspect.cache_clear()
+
+
+# --- issue 44's hostile records (N12, N14, N15, N18) reach an FMU too: one reader (issue 45) --
+def _cell(record: Path, out: Path, row: int, column: str, text: str | None = None,
+          every: bool = False) -> Path:
+    """A copy of ``record`` with data row ``row`` (0-based; every row with ``every``) of
+    ``column`` written ``text``."""
+    lines = Path(record).read_text().splitlines()
+    j = lines[0].split(",").index(column)
+    for k in range(1, len(lines)):
+        if every or k == row + 1:
+            cells = lines[k].split(",")
+            cells[j] = text
+            lines[k] = ",".join(cells)
+    out.write_text("\n".join(lines) + "\n")
+    return out
+
+
+@pytest.mark.parametrize("text", ["1_000", "\uff11\uff12", "\u0661\u0662"],
+                         ids=["underscore", "full-width", "arabic-indic"])
+def test_n15_fmu_record_with_underscore_or_fullwidth_digits_refused(example_fmu, record,
+                                                                    tmp_path, text):
+    """``float`` reads ``1_000`` and full-width digits; an FMU's record cell must be ASCII
+    digits, as a vehicle's (the FMU's own reader once used ``float`` alone)."""
+    assert float(text) in (1000.0, 12.0)  # what float() alone would have accepted
+    bad = _cell(record, tmp_path / "digits.csv", 3, "zsdd", text)
+    with pytest.raises(ConfigError, match=r"a number in column zsdd of every row; row 5 has "
+                       r"none \(ASCII digits"):
+        _config(example_fmu("fmi2"), bad)
+
+
+def test_n18_fmu_record_value_beyond_1e100_refused(example_fmu, record, tmp_path):
+    """1e300 is finite, but its square (the channel's norm) is not: refused naming row and
+    column, in the FMU's own units (no SI conversion is claimed)."""
+    bad = _cell(record, tmp_path / "huge.csv", 50, "zudd", "1e300")
+    with pytest.raises(ConfigError, match=r"values of magnitude at most 1e\+100; row 52 "
+                       r"column zudd is 1e\+300$"):
+        _config(example_fmu("fmi2"), bad)
+
+
+def test_n12_fmu_record_sample_dominating_a_channel_refused(example_fmu, record, tmp_path):
+    """A finite spike making up most of a compared output's sum of squares is named (the
+    FMU's reader once weighted the channel by it)."""
+    bad = _cell(record, tmp_path / "spike.csv", 80, "zsdd", "1e6")
+    with pytest.raises(ConfigError, match=r"row 82 column zsdd \(1e\+06\) makes up 100 % of "
+                       "its sum of squares"):
+        _config(example_fmu("fmi2"), bad)
+
+
+@pytest.mark.parametrize(("value", "word"), [("0", "zero"), ("1e-310", "denormal")])
+def test_n14_fmu_record_output_zero_or_denormal_refused(example_fmu, record, tmp_path, value,
+                                                        word):
+    """A denormal output passed the FMU's reader (its norm was > 0, its weight was not
+    finite); zero and denormal are named alike."""
+    bad = _cell(record, tmp_path / "flat.csv", 0, "zudd", value, every=True)
+    with pytest.raises(ConfigError, match=f"column zudd is {word} throughout"):
+        _config(example_fmu("fmi2"), bad)
+
+
+def test_n15_fmu_record_is_one_error_line_before_any_job(example_fmu, record, tmp_path, in_tmp,
+                                                         capsys):
+    """The command itself: exit 2, one ``error:`` line, no job folder."""
+    bad = _cell(record, tmp_path / "digits.csv", 3, "h", "\uff11")
+    code, err = main_in_process(["problem=fmu", f"problem.fmu={example_fmu('fmi2')}",
+                                 f"problem.reference.file={bad}", "optimizer=lsq", "runs=1",
+                                 "progress=false", "report=false"], capsys)
+    assert code == 2 and err.count("\n") == 1 and err.startswith("error: "), err
+    assert "a number in column h of every row; row 5 has none" in err
+    assert not list(in_tmp.rglob("records"))

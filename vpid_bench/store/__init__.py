@@ -7,7 +7,9 @@ reader, its writer and its checks:
 * :mod:`.job_status`: a job folder's ``job.json``;
 * :mod:`.artifacts`: the files a job leaves for the report (the best run's signals);
 * :mod:`.optimum`: the instance-optimum file;
-* :mod:`.archive`: an archive folder's manifest, checked files and optima.
+* :mod:`.archive`: an archive folder's manifest, checked files and optima;
+* :mod:`.record_csv`: a user's CSV record (``problem.reference.file``), read for the problem
+  plugins through the public API.
 
 It sits below the job (``experiment.py``, ``assemble.py``, ``job_analysis.py``), ``analysis/``,
 ``targets.py`` and ``report/`` (docs/architecture.md), and imports only the core's base modules

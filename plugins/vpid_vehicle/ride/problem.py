@@ -128,7 +128,7 @@ class RecordFileConfig:
 
     def mapping(self) -> ColumnMap:
         """The record reader's view of the mapping keys."""
-        return ColumnMap(dict(self.columns), tuple(self.ignore), self.input)
+        return ColumnMap(dict(self.columns), tuple(self.ignore))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -225,7 +225,8 @@ def read_ride_record(model: RideModel, config: Any) -> Record:
     channels = tuple(Column(column_name(c), unit, (c,)) for c, unit in
                      model.sensors[config.sensors])
     record = read_record(config.reference.file, channels, model.record_columns(),
-                         model.needs_record_inputs(config), config.reference.mapping())
+                         model.needs_record_inputs(config), config.reference.mapping(),
+                         input_mode=config.reference.input)
     model.check_record(record)
     check_span(record, config.dt, MAX_STEPS)
     return record
