@@ -6,7 +6,7 @@ VENV ?= .venv
 BIN := $(VENV)/bin
 export MPLBACKEND := Agg
 
-.PHONY: install browser demo test bench bench-scale test-scaleout clean
+.PHONY: install browser demo test test-slow bench bench-scale test-scaleout clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -44,6 +44,12 @@ browser:
 test: install browser
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest -n auto --durations=15
+
+# What the default run leaves out (-m slow, pyproject's addopts): the long experiments, the
+# CLI re-proofs whose fast in-process twins the default run keeps, and the fuzz tests with ten
+# times the examples. Tens of minutes on 2 cores.
+test-slow: install browser
+	$(BIN)/python -m pytest -n auto -m slow --durations=15
 
 # Launchers beyond one process (Ray on a local instance, submitit's local executor): their
 # own environment, every extra in ONE pip run (the Ray launcher pins cloudpickle<3), so the

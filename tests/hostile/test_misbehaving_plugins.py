@@ -174,6 +174,7 @@ def _sweep(site: Path, cwd: Path, optimizer: str, *extra: str, timeout: float = 
            "NAUGHTY_ELSEWHERE": str(cwd / "elsewhere")}
     env.pop("VPID_BENCH_DEBUG", None)
     return subprocess.run([str(BIN / "vpid-bench"), "-m", f"optimizer={optimizer},random",
+                           "problem=functions",  # the optimizer misbehaves: any problem will do
                            "runs=2", "problem.iterations=2", "progress=false", "report=false",
                            "hydra.sweep.dir=sweep", *extra], cwd=cwd, env=env,
                           capture_output=True, text=True, timeout=limit(timeout))
@@ -246,22 +247,33 @@ def test_records_are_not_written_through_a_folder_swapped_for_a_link(site, tmp_p
     assert len(_records(tmp_path, "random")) == 2
 
 
-@pytest.mark.parametrize(("optimizer", "ended"), [("exiter", "exit code 3"),
-                                                  ("aborter", "signal SIGABRT"),
-                                                  ("crasher", "signal SIGSEGV")])
-def test_a_plugin_that_ends_its_process_costs_its_runs_only(site, tmp_path, optimizer, ended):
+#: Optimizers that end their process in ask(), and how the record says it ended.
+ENDERS = [("exiter", "exit code 3"), ("aborter", "signal SIGABRT"), ("crasher", "signal SIGSEGV")]
+
+
+@pytest.fixture(scope="module")
+def ended_sweep(site, tmp_path_factory):
+    """One sweep of the three (then random) and its resume, shared by their tests: each
+    command costs seconds, and one after the other they also show that a fresh worker takes
+    each next job."""
+    cwd = tmp_path_factory.mktemp("enders")
+    names = ",".join(name for name, _ in ENDERS)
+    return cwd, _sweep(site, cwd, names), _sweep(site, cwd, names, "--resume")
+
+
+@pytest.mark.parametrize(("optimizer", "ended"), ENDERS)
+def test_a_plugin_that_ends_its_process_costs_its_runs_only(ended_sweep, optimizer, ended):
     """os._exit, os.abort, a segfault in ask(): in a worker process (isolation=process, the
     command's default) each ends its worker, not the sweep: its runs are recorded as failed
     with how the process ended, random runs after it, and a resume does not crash again."""
     import json
 
-    out = _sweep(site, tmp_path, optimizer)
+    cwd, out, again = ended_sweep
     assert out.returncode == 1, out.stderr[-2000:]
-    assert len(_records(tmp_path, "random")) == 2
-    failed = [json.loads(p.read_text()) for p in _records(tmp_path, optimizer)]
+    assert len(_records(cwd, "random")) == 2
+    failed = [json.loads(p.read_text()) for p in _records(cwd, optimizer)]
     assert len(failed) == 2 and all(r["status"] == "failed" for r in failed)
     assert all(ended in r["error"]["message"] for r in failed), failed[0]["error"]
-    again = _sweep(site, tmp_path, optimizer, "--resume")
     assert again.returncode == 1 and "sweep:" in again.stderr, again.stderr[-2000:]
 
 

@@ -7,6 +7,9 @@ resume of the same jobs (in any order) or a sweep that adds jobs to them goes on
 
 from __future__ import annotations
 
+import shutil
+
+import pytest
 from hostile_helpers import error_lines, run_cli
 
 BASE = ["problem=functions", "runs=1", "problem.iterations=2", "progress=false",
@@ -17,9 +20,24 @@ def _jobs(tmp_path) -> set[str]:
     return {p.parent.parent.name.split(",")[0] for p in (tmp_path / "S").glob("*/records/*")}
 
 
-def test_17_a_second_sweep_into_a_sweep_folder_is_refused_without_merge(tmp_path):
-    first = run_cli(["-m", "optimizer=random,centre", *BASE], tmp_path)
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory):
+    """A finished sweep folder S (random and centre), made once by the real command."""
+    cwd = tmp_path_factory.mktemp("finished")
+    first = run_cli(["-m", "optimizer=random,centre", *BASE], cwd)
     assert first.returncode == 0, first.stderr
+    return cwd / "S"
+
+
+@pytest.fixture
+def after_first(finished, tmp_path):
+    """A copy of the finished sweep folder S in this test's folder, as the command left it."""
+    shutil.copytree(finished, tmp_path / "S", symlinks=True)
+    return tmp_path
+
+
+def test_17_a_second_sweep_into_a_sweep_folder_is_refused_without_merge(after_first):
+    tmp_path = after_first
     second = run_cli(["-m", "optimizer=de1,ga", *BASE], tmp_path)
     assert second.returncode == 2, second.stderr
     (line,) = second.stderr.splitlines()
@@ -30,8 +48,8 @@ def test_17_a_second_sweep_into_a_sweep_folder_is_refused_without_merge(tmp_path
     assert _jobs(tmp_path) == {"optimizer=random", "optimizer=centre"}  # nothing ran
 
 
-def test_17_merging_is_an_explicit_choice_and_said(tmp_path):
-    assert run_cli(["-m", "optimizer=random,centre", *BASE], tmp_path).returncode == 0
+def test_17_merging_is_an_explicit_choice_and_said(after_first):
+    tmp_path = after_first
     merged = run_cli(["--merge", "-m", "optimizer=de1", *BASE], tmp_path)
     assert merged.returncode == 0, merged.stderr
     (line,) = [w for w in merged.stderr.splitlines() if w.startswith("merge:")]
@@ -40,8 +58,8 @@ def test_17_merging_is_an_explicit_choice_and_said(tmp_path):
     assert _jobs(tmp_path) == {"optimizer=random", "optimizer=centre", "optimizer=de1"}
 
 
-def test_17_a_resume_or_a_larger_sweep_is_no_merge(tmp_path):
-    assert run_cli(["-m", "optimizer=random,centre", *BASE], tmp_path).returncode == 0
+def test_17_a_resume_or_a_larger_sweep_is_no_merge(after_first):
+    tmp_path = after_first
     again = run_cli(["-m", "optimizer=centre,random", *BASE], tmp_path)  # same jobs, reordered
     assert again.returncode == 0, again.stderr
     assert "nothing to run: the 2 job(s)' 2 run(s) are all recorded" in again.stderr
@@ -52,8 +70,8 @@ def test_17_a_resume_or_a_larger_sweep_is_no_merge(tmp_path):
     assert again.returncode == 0, again.stderr
 
 
-def test_17_a_single_run_into_a_sweep_folder_is_refused(tmp_path):
-    assert run_cli(["-m", "optimizer=random", *BASE], tmp_path).returncode == 0
+def test_17_a_single_run_into_a_sweep_folder_is_refused(after_first):
+    tmp_path = after_first
     single = run_cli(["optimizer=centre", *BASE[:-1], "hydra.run.dir=S"], tmp_path)
     assert single.returncode == 2, single.stderr
     assert single.stderr.startswith("error: hydra.run.dir='S' is not allowed: a folder "
