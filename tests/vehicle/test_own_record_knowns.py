@@ -134,6 +134,17 @@ def _fit(tmp_path: Path, config: RideQuarterConfig) -> Path:
     return folder
 
 
+def _fit_stated(tmp_path: Path, record: Path) -> tuple[Path, dict, dict[str, float]]:
+    """:func:`_fit` of the logger's ``record`` with the tyre stated and a box that holds the
+    spring: its folder, its record and the identified values by name."""
+    config = RideQuarterConfig(reference=RecordFileConfig(str(record), columns=LOGGER),
+                               known={"kt": KT}, bounds={"ks": [15000.0, 45000.0]})
+    folder = _fit(tmp_path, config)
+    rec = json.loads(next((folder / "records").glob("run-*.json")).read_text())
+    return folder, rec, dict(zip(rec["parameters"]["names"], rec["result"]["x_best"],
+                                 strict=True))
+
+
 def test_a_richer_cars_record_with_the_tyre_stated_gives_ms_mu_ks_within_2_percent(
         tmp_path, logger_record):
     """Issue 41's case: the record fits equally well at any common scale of (ms, mu, ks, cs,
@@ -141,11 +152,7 @@ def test_a_richer_cars_record_with_the_tyre_stated_gives_ms_mu_ks_within_2_perce
     low; with the tyre stated (210,000 N/m) and a box for ks that holds this car's spring
     (29,500 N/m lies above the set's box, 23,737.5), ms, mu and ks are within 2 %, and the
     first screen names the tyre used and the input."""
-    config = RideQuarterConfig(reference=RecordFileConfig(str(logger_record), columns=LOGGER),
-                               known={"kt": KT}, bounds={"ks": [15000.0, 45000.0]})
-    folder = _fit(tmp_path, config)
-    rec = json.loads(next((folder / "records").glob("run-*.json")).read_text())
-    x = dict(zip(rec["parameters"]["names"], rec["result"]["x_best"], strict=True))
+    folder, rec, x = _fit_stated(tmp_path, logger_record)
     for name in ("ms", "mu", "ks"):
         assert x[name] == pytest.approx(TRUTH[name], rel=0.02), (name, x[name])
     info = rec["problem"]["info"]
@@ -178,12 +185,7 @@ def test_a_richer_cars_record_with_the_tyre_stated_gives_ms_mu_ks_within_2_perce
 def test_the_design_holds_on_eight_roads(tmp_path, road):
     """The record design of :data:`DURATION_S`, not one lucky road: on eight roads (and
     noises) ms, mu and ks lie within 2 % and every robust interval is >= 3x the white one."""
-    path = write_logger_record(tmp_path, road, road + 100)
-    config = RideQuarterConfig(reference=RecordFileConfig(str(path), columns=LOGGER),
-                               known={"kt": KT}, bounds={"ks": [15000.0, 45000.0]})
-    folder = _fit(tmp_path, config)
-    rec = json.loads(next((folder / "records").glob("run-*.json")).read_text())
-    x = dict(zip(rec["parameters"]["names"], rec["result"]["x_best"], strict=True))
+    folder, _, x = _fit_stated(tmp_path, write_logger_record(tmp_path, road, road + 100))
     for name in ("ms", "mu", "ks"):
         assert x[name] == pytest.approx(TRUTH[name], rel=0.02), (name, x[name])
     iv = json.loads((folder / "diagnostics.json").read_text())["intervals"]
