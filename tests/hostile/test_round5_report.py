@@ -254,6 +254,43 @@ def test_n8_a_report_stopped_by_sigterm_leaves_the_old_one_whole(two_sweeps, tmp
     assert _files(out) == before and _leftovers(out) == []
 
 
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")  # expected
+def test_n8_a_sigterm_a_fork_callback_swallowed_still_ends_the_report(two_sweeps, tmp_path):
+    """The command's SIGTERM landing in a fork's callback (logging's lock release, while the
+    figures are drawn in forked processes) raises there, and Python only prints "Exception
+    ignored": the report once went on and exited 0. Here the signal is sent from that very
+    callback: the build ends with ``KeyboardInterrupt`` and the old report is whole."""
+    from vpid_bench import interrupts
+    from vpid_bench.report.build import build_report
+
+    a, b = two_sweeps
+    out = tmp_path / "report"
+    _report([a], out, short=True)
+    before = _files(out)
+    armed = {"on": False}
+
+    def kill_in_callback() -> None:
+        if armed.pop("on", False):
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    os.register_at_fork(after_in_parent=kill_in_callback)
+    saved = {sig: signal.getsignal(sig) for sig in interrupts.SIGNALS}
+    watch = (interrupts._Watch.installed, interrupts._Watch.signalled, interrupts._Watch.signum)
+    try:
+        interrupts.install()
+        armed["on"] = True
+        with pytest.raises(KeyboardInterrupt):
+            build_report([b], out, short=False, archive=False)
+        assert interrupts.exit_status() == 128 + signal.SIGTERM
+    finally:
+        armed.clear()
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
+        (interrupts._Watch.installed, interrupts._Watch.signalled,
+         interrupts._Watch.signum) = watch
+    assert _files(out) == before and _leftovers(out) == []
+
+
 def test_n8_two_reports_written_at_once_leave_one_whole(two_sweeps, tmp_path):
     """Two ``vpid-bench-report`` commands writing into one folder at once (over an older
     report): the folder is then one of the two reports, whole (as each alone writes it),

@@ -45,6 +45,7 @@ from pathlib import Path
 from typing import Any
 
 from ..fileio import WholeFolder, write_refused
+from ..interrupts import raise_if_swallowed
 from ..progress import Stages
 from . import answer, anytime, body, first_screen, outline, render, tables
 from .compute import ReportData, compute
@@ -162,6 +163,9 @@ def build_report(
             progress.stage("writing report.md and the site")
         md, site = _render(model, names)
         written += [md, *site]
+        # A signal a fork's callbacks swallowed (logging's at-fork lock release, while the
+        # figures were drawn in forked processes) ends the command here, old report kept.
+        raise_if_swallowed()
 
     def final(path: Path) -> Path:  # a file's path once the new folder is in place
         return out_dir / Path(path).relative_to(new)
