@@ -11,13 +11,16 @@ cores they take half as long.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import multiprocessing
-from collections.abc import Callable, Sequence
+import signal
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any, TypeVar
 
+from ..interrupts import SIGNALS
 from ..machine import available_cores
 
 log = logging.getLogger(__name__)
@@ -32,6 +35,24 @@ def _call(index: int) -> Any:
     return _CALLS[index]()
 
 
+@contextlib.contextmanager
+def _signals_held() -> Iterator[None]:
+    """The command's interrupting signals held back while processes are forked: one arriving
+    in a fork's callbacks (logging's lock release) raised ``KeyboardInterrupt`` there, where
+    Python prints "Exception ignored" and drops it, and the report went on to exit 0. Held
+    back, it is raised once they are let through again."""
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+
+
+def _take_signals() -> None:
+    """In a forked process: the signals :func:`_signals_held` held back are let through."""
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, SIGNALS)
+
+
 def run_forked(calls: Sequence[Callable[[], T]], done: Callable[[int], Any] | None = None
                ) -> list[T]:
     """``[call() for call in calls]``, computed in forked processes where that helps
@@ -42,9 +63,11 @@ def run_forked(calls: Sequence[Callable[[], T]], done: Callable[[int], Any] | No
         _CALLS[:] = calls
         out: list[T] = []
         try:
-            with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")
-                                     ) as pool:
-                for result in pool.map(_call, range(len(calls))):
+            with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"),
+                                     initializer=_take_signals) as pool:
+                with _signals_held():  # the pool forks its processes as the calls are given
+                    results = pool.map(_call, range(len(calls)))
+                for result in results:
                     out.append(result)
                     if done is not None:
                         done(len(out))
