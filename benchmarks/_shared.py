@@ -74,20 +74,26 @@ def run_timed(cmd: list[str], cwd: Any = None, check: bool = True) -> tuple[floa
 
 
 def interleaved(calls: dict[str, Callable[[], object]], rounds: int, number: int = 1,
-                pick: Callable[[list[float]], float] = statistics.median) -> dict[str, float]:
+                pick: Callable[[list[float]], float] = statistics.median,
+                seconds: float | None = None) -> dict[str, float]:
     """Seconds per call of each of ``calls``, timed in ``rounds`` interleaved rounds (each
-    round times ``number`` calls of every one, so a change of the machine's load meets them
-    alike), reduced over the rounds by ``pick`` (the median; ``min`` for the code's own time
-    on a loaded machine). Each is called once first (compilation, caches)."""
-    for fn in calls.values():
+    round times ``number`` calls of every one, or as many as take about ``seconds``, so a
+    change of the machine's load meets them alike), reduced over the rounds by ``pick`` (the
+    median; ``min`` for the code's own time on a loaded machine). Each is called once first
+    (compilation, caches)."""
+    numbers = {}
+    for name, fn in calls.items():
+        t0 = time.perf_counter()
         fn()
+        once = time.perf_counter() - t0
+        numbers[name] = number if seconds is None else max(1, int(seconds / max(once, 1e-9)))
     times: dict[str, list[float]] = {name: [] for name in calls}
     for _ in range(rounds):
         for name, fn in calls.items():
             t0 = time.perf_counter()
-            for _ in range(number):
+            for _ in range(numbers[name]):
                 fn()
-            times[name].append((time.perf_counter() - t0) / number)
+            times[name].append((time.perf_counter() - t0) / numbers[name])
     return {name: pick(t) for name, t in times.items()}
 
 
