@@ -15,7 +15,7 @@ noise) with the ``ml`` optimum polished from the truth:
 
 Both ratios are 1 for an efficient estimator; the rms one carries the more weight (the median
 of ``n`` instances scatters by some 15 % at ``n = 30``). Deterministic. Command:
-``python benchmarks/ml_vs_bound.py --instances 30 --levels 0.05 0.2`` (about a minute).
+``python tools/ml_vs_bound.py --instances 30 --levels 0.05 0.2`` (about a minute).
 """
 
 from __future__ import annotations
@@ -72,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--instances", type=int, default=30)
     ap.add_argument("--levels", type=float, nargs="+", default=[0.05, 0.2])
     args = ap.parse_args(argv)
-    print(f"command: python benchmarks/ml_vs_bound.py --instances {args.instances} --levels "
+    print(f"command: python tools/ml_vs_bound.py --instances {args.instances} --levels "
           + " ".join(f"{v:g}" for v in args.levels))
     print("noise level | rms-norm of ml's errors | CRB norm | ratio | median NoRE of ml | "
           "median of the CRB Gaussian's norm | ratio")

@@ -17,7 +17,7 @@ the truth, its median NoRE, the norm of the per-parameter rms errors, the larges
 standard errors; and ``--lsq K``: ``optimizer=lsq`` from random starts (the default budget) on
 the first K instances, its median relative gap to that optimum. Deterministic.
 
-Command: ``python benchmarks/ml_weights.py --instances 30 --lsq 5`` (about a minute).
+Command: ``python tools/ml_weights.py --instances 30 --lsq 5`` (about a minute).
 """
 
 from __future__ import annotations
@@ -121,7 +121,7 @@ def main() -> None:
     parser.add_argument("--lsq", type=int, default=5)
     parser.add_argument("--exact-record", action="store_true")
     args = parser.parse_args()
-    print(f"command: python benchmarks/ml_weights.py --instances {args.instances} "
+    print(f"command: python tools/ml_weights.py --instances {args.instances} "
           f"--lsq {args.lsq}" + (" --exact-record" if args.exact_record else ""))
     print("             " + " ".join(f"{n:>6s}" for n in PARAM_NAMES))
     for rule in RULES:

@@ -1,7 +1,7 @@
 """The ``structures`` suite's members: the richer structure recovers the truth of the record
 it made, where the linear model fitted to the same record cannot (issue 43, item 3).
 
-    MPLBACKEND=Agg .venv/bin/python benchmarks/structures_recovery.py [--instances 3]
+    MPLBACKEND=Agg .venv/bin/python tools/structures_recovery.py [--instances 3]
 
 Per member and instance: the NoRE (%) of the richer structure's optimum of its own record
 (the IRLS polish from the truth, as the archive certifies optima), and the NoRE of the linear

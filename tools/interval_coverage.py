@@ -18,7 +18,7 @@ instance ``i`` (its own truth, road and noise):
 Prints per member the coverage over every (instance, parameter) of each interval, their
 median half-widths (% of the value) and the median lag-1 autocorrelation of the residuals.
 Deterministic (the members' seeds). Command:
-``python benchmarks/interval_coverage.py --instances 15`` (about a minute per member once
+``python tools/interval_coverage.py --instances 15`` (about a minute per member once
 compiled).
 """
 
