@@ -78,8 +78,8 @@ bench-scale: install
 bench: install
 	$(BIN)/python benchmarks/bench_vehicle.py
 	$(BIN)/python benchmarks/bench_optimizers.py
-	$(BIN)/python benchmarks/bench_ride.py core
-	$(BIN)/python benchmarks/bench_ride.py magic
+	$(BIN)/python benchmarks/bench_kernels.py core
+	$(BIN)/python benchmarks/bench_kernels.py magic
 	$(BIN)/python benchmarks/bench_overhead.py --skip nevergrad
 	$(BIN)/python benchmarks/bench_sweeps.py --ways report,joblib $(PAPER_SWEEP) \
 	  --iterations 50 --kernel --fixed-start

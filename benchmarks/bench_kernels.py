@@ -1,25 +1,25 @@
-"""The ride models' compiled kernels beside other ways to compute the same, per candidate,
-side by side in one run (interleaved rounds).
+"""The problems' compiled kernels beside other ways to compute the same, per candidate, side
+by side in one run (interleaved rounds).
 
-    MPLBACKEND=Agg .venv/bin/python benchmarks/bench_ride.py {core,magic,structures} \\
-        [--rounds 7] [--ps 20]
+    MPLBACKEND=Agg .venv/bin/python benchmarks/bench_kernels.py \\
+        {core,magic,structures,measured} [--rounds 7] [--ps 20]
 
-* ``core``: the paper's half car (Newmark, dt = 1 ms, the paper's window and bump): the paper
-  problem's specialised kernel (``vpid_vehicle.kernel``, one thread, from the rows); the
-  suite's shared linear core (``ride.linear.newmark_outputs``, from M, C, K and the maps:
-  target within 1.3x of the specialised kernel); the same with the model's numpy code that
-  builds the matrices from the rows (what a ride problem's evaluation runs); the plain numpy
-  statement of the scheme (``simulate(newmark(...))``). The median over rounds of 0.3 s each.
+* ``core``: on the paper's half car (Newmark, dt = 1 ms, its window and bump), the paper
+  problem's specialised kernel (``vpid_vehicle.kernel``, one thread); the suite's shared linear
+  core (``ride.linear.newmark_outputs`` from M, C, K and the maps: target within 1.3x of the
+  specialised); the same with the model's numpy code that builds the matrices (what a ride
+  problem runs); the plain numpy scheme (``simulate(newmark(...))``). Rounds of 0.3 s.
 * ``magic``: the Magic Formula kernel with its vectorisable arc tangent and sine
-  (``ride/vecmath``) against the same source compiled with the C library's, on the
-  ``smoke_lateral_mf`` record (2 s at 1 ms); the median over rounds of one call.
-* ``structures``: ``problem.evaluate`` of each ride family (3 s records at 1 ms, hump road)
-  with the linear structure and the richest (cubic spring, bilinear damper: RK4), rows drawn
-  in each box; the least over rounds of the mean of 15 calls (on a loaded machine the least
-  time is the code's).
+  (``ride/vecmath``) against the same source compiled with the C library's, on
+  ``smoke_lateral_mf`` (2 s at 1 ms); one call per round.
+* ``structures``: each ride family's ``evaluate`` (3 s at 1 ms, hump road) with the linear
+  structure and the richest (cubic spring, bilinear damper: RK4), rows drawn in each box; the
+  least over rounds of the mean of 15 calls (on a loaded machine the least time is the code's).
+* ``measured``: the measured and third-party problems at their defaults (docs/measured.md),
+  a population of ``--ps`` at once against one candidate at a time; one pass per round.
 
-Prints per way µs per candidate, the ratio to the first way and, where the ways compute the
-same outputs, the largest difference to the first's (relative to the peak).
+Prints per way the median (or least) µs per candidate, its ratio to the first way and, where
+the ways compute the same outputs, the largest difference to the first's (of the peak).
 """
 
 from __future__ import annotations
@@ -120,13 +120,26 @@ def structures(args) -> Iterator[tuple]:
         yield P.name, ways, args.ps, {}, {"number": 15, "pick": min}
 
 
+def measured(args) -> Iterator[tuple]:
+    registry = Registry()
+    for cfg in ({"name": "emps"}, {"name": "bayesrace"}, {"name": "racecar"},
+                {"name": "racecar", "tyres": "magic_formula"}):
+        p = build_problem(registry, cfg)
+        b = p.bounds
+        X = b.lower + (b.upper - b.lower) * np.random.default_rng(0).random((args.ps, b.dim))
+        ways = {f"{args.ps} at once": lambda p=p, X=X: p.evaluate(X),
+                "1 at a time": lambda p=p, X=X: [p.evaluate(x[None]) for x in X]}
+        yield " ".join(f"{k}={v}" if k != "name" else v for k, v in cfg.items()), ways, \
+            args.ps, {}, {}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("part", choices=("core", "magic", "structures"))
+    ap.add_argument("part", choices=("core", "magic", "structures", "measured"))
     ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--ps", type=int, default=20, help="candidates per call")
     args = ap.parse_args()
-    print(f"command: benchmarks/bench_ride.py {args.part} --rounds {args.rounds} "
+    print(f"command: benchmarks/bench_kernels.py {args.part} --rounds {args.rounds} "
           f"--ps {args.ps}")
     for title, ways, n, diffs, timing in globals()[args.part](args):
         seconds = interleaved(ways, args.rounds, **timing)
