@@ -1,8 +1,6 @@
-"""What the benchmark scripts share: the two commands in a child process and their
-environment, a job's config composed as the command composes it, and the timers.
-
-The scripts import it as ``_shared`` (they run as ``python benchmarks/<script>.py``, which
-puts this folder first on ``sys.path``)."""
+"""What the benchmark scripts share: the two commands in a child process, a job's config
+composed as the command composes it, and the timers. Imported as ``_shared`` (a script run as
+``python benchmarks/<script>.py`` has this folder first on ``sys.path``)."""
 
 from __future__ import annotations
 
@@ -53,9 +51,8 @@ def compose(overrides: list[str]) -> Any:
 
 
 def run_timed(cmd: list[str], cwd: Any = None, check: bool = True) -> tuple[float, float]:
-    """Run ``cmd`` in ``cwd`` (with ``check``, it must succeed: else exit with the end of
-    its stderr); return its wall seconds and its CPU seconds (user + system of the child,
-    which vary much less than the wall time on a machine shared with other work)."""
+    """Wall and CPU seconds (user + system of the child: a shared machine moves them less) of
+    ``cmd`` run in ``cwd``; with ``check`` it must succeed, else exit with its stderr's end."""
     import resource
     import subprocess
 
@@ -76,11 +73,10 @@ def run_timed(cmd: list[str], cwd: Any = None, check: bool = True) -> tuple[floa
 def interleaved(calls: dict[str, Callable[[], object]], rounds: int, number: int = 1,
                 pick: Callable[[list[float]], float] = statistics.median,
                 seconds: float | None = None) -> dict[str, float]:
-    """Seconds per call of each of ``calls``, timed in ``rounds`` interleaved rounds (each
-    round times ``number`` calls of every one, or as many as take about ``seconds``, so a
-    change of the machine's load meets them alike), reduced over the rounds by ``pick`` (the
-    median; ``min`` for the code's own time on a loaded machine). Each is called once first
-    (compilation, caches)."""
+    """Seconds per call of each of ``calls`` (each called once first: compilation, caches),
+    timed in ``rounds`` interleaved rounds of ``number`` calls each (or as many as take about
+    ``seconds``), so a change of load meets them alike; reduced over the rounds by ``pick``
+    (``min``: the code's own time on a loaded machine)."""
     numbers = {}
     for name, fn in calls.items():
         t0 = time.perf_counter()
@@ -99,10 +95,9 @@ def interleaved(calls: dict[str, Callable[[], object]], rounds: int, number: int
 
 def kernel_us(cfg: dict[str, Any], seconds: float = 1.0, batch: int = 20
               ) -> tuple[float, float]:
-    """The problem ``cfg``'s (``name`` and keys) microseconds per candidate on one thread,
-    batches of ``batch`` random candidates in its box (the median of 5 timings of
-    ``seconds / 5`` each), in wall time and in this process's CPU time (which another
-    program on a shared machine does not inflate)."""
+    """The problem ``cfg``'s (``name`` and keys) µs per candidate on one thread, batches of
+    ``batch`` random candidates in its box, the median of 5 timings of ``seconds / 5``; in
+    wall time and in this process's CPU time (which another program does not inflate)."""
     import numpy as np
 
     from vpid_bench.build import build_problem

@@ -1,11 +1,8 @@
-"""What the vehicle's records allow, over many noise instances: the measured floor (the NoRE of
-each instance's optimum x*, polished from the truth) under each estimator (``objective`` eq3,
-ols, ml, ml_profiled) beside the Cramér–Rao bound for the simulated noise, for the paper's
-window and the long record (``problem=vehicle_long_record``: ``record.extra=0.5``).
-
-Prints, per design: the median NoRE of x* over the instances with its quartiles, the CRB
-NoRE (norm of the per-parameter bounds), the per-parameter CRB % and the median |error| of
-x* per parameter. Deterministic (noise instances i = 0 .. n-1 of ``noise.seed=0``).
+"""What the vehicle's records allow, over many noise instances (docs/vehicle.md): the NoRE of
+each instance's optimum x* (polished from the truth) under each estimator (``objective`` eq3,
+ols, ml, ml_profiled) beside the Cramér–Rao bound, for the paper's window and the long record
+(``record.extra=0.5``): median NoRE with its quartiles, the CRB NoRE, per parameter the CRB %
+and the median |error| of x*. Deterministic (instances 0 .. n-1 of ``noise.seed=0``).
 Command: ``python tools/identifiability_floor.py --instances 30``.
 """
 
