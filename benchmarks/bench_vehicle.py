@@ -2,6 +2,7 @@
 
     MPLBACKEND=Agg .venv/bin/python benchmarks/bench_vehicle.py [--ps 20,600] [--rounds 21]
     MPLBACKEND=Agg .venv/bin/python benchmarks/bench_vehicle.py --threshold   # thread hand-off
+    MPLBACKEND=Agg .venv/bin/python benchmarks/bench_vehicle.py --memory      # bytes per sample
 
 Side by side in one process (dt = 1 ms, the paper's window): ``numpy``, a plain numpy Newmark
 loop over time vectorised over the population (kept here so the ratio cannot drift when the
@@ -10,7 +11,10 @@ package changes); ``soa-1``, the package's structure-of-arrays kernel on one thr
 variant once); the tables give the minimum and the median over the rounds, ratios are medians
 of the per-round ratios. Wall time is what a user waits for; for one thread the thread's CPU
 time is given too, much less sensitive to other processes. Also: the kernel on a 1-sample
-window (set-up and call), and a fresh process's build and first evaluation.
+window (set-up and call), and a fresh process's build and first evaluation. ``--memory``
+instead measures, with tracemalloc at two record lengths (the difference cancels fixed costs),
+the bytes per sample of the set-up and per sample and candidate of a residual batch: the
+figures behind the memory cap's ``BYTES_PER_STEP`` and ``BYTES_PER_SAMPLE_CANDIDATE``.
 """
 
 from __future__ import annotations
@@ -21,11 +25,12 @@ import shlex
 import subprocess
 import sys
 import time
+import tracemalloc
 from collections.abc import Callable
 
 import numpy as np
 from vpid_vehicle import kernel
-from vpid_vehicle.config import VehicleConfig
+from vpid_vehicle.config import BYTES_PER_SAMPLE_CANDIDATE, BYTES_PER_STEP, VehicleConfig
 from vpid_vehicle.model import matrices, response_rows, tyre_input
 from vpid_vehicle.problem import VehicleProblem
 
@@ -145,13 +150,38 @@ def threshold(rounds: int) -> None:
         kernel.MIN_PER_THREAD = saved
 
 
+def memory(ps: int = 20) -> None:
+    """Bytes per sample of the set-up and per sample and candidate of a residual batch."""
+    from vpid_bench.params import build_dataclass
+
+    def peak(extra: float) -> tuple[int, int, int]:
+        tracemalloc.start()
+        problem = VehicleProblem(build_dataclass(VehicleConfig, {"record": {"extra": extra}}))
+        setup = tracemalloc.get_traced_memory()[1]
+        tracemalloc.reset_peak()
+        problem.evaluate_with_residuals(problem.bounds.sample(np.random.default_rng(0), ps))
+        batch = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        return problem.t.size, setup, batch
+
+    peak(0.0)  # imports and compiled kernels first: they are not per-sample costs
+    (n1, s1, b1), (n2, s2, b2) = peak(0.5), peak(5.5)
+    print(f"samples {n1} -> {n2}")
+    print(f"set-up: {(s2 - s1) / (n2 - n1):.0f} B per sample (cap assumes {BYTES_PER_STEP})")
+    print(f"one residual batch of {ps}: {(b2 - b1) / (n2 - n1) / ps:.1f} B per sample and "
+          f"candidate (cap assumes {BYTES_PER_SAMPLE_CANDIDATE})")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=21, help="interleaved rounds (default 21)")
     ap.add_argument("--ps", default="20,600", help="population sizes (default 20,600)")
     ap.add_argument("--threshold", action="store_true",
                     help="also time small batches on 1 thread against all threads")
+    ap.add_argument("--memory", action="store_true", help="bytes per sample instead")
     args = ap.parse_args()
+    if args.memory:
+        return memory()
     print("command:", shlex.join([os.path.relpath(sys.executable), *sys.argv]))
     print(f"cores usable: {kernel.available_threads()}, os.getloadavg(): "
           f"{tuple(round(x, 1) for x in os.getloadavg())}")

@@ -50,4 +50,4 @@ def test_every_script_is_documented():
     scripts = {f"{p.parent.name}/{p.name}" for folder in ("benchmarks", "tools")
                for p in (ROOT / folder).glob("*.py") if not p.name.startswith("_")}
     assert scripts - named == set()
-    assert len(named) >= 25
+    assert len(named) >= 20  # the pattern finds the commands at all
