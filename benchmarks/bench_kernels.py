@@ -1,25 +1,23 @@
 """The problems' compiled kernels beside other ways to compute the same, per candidate, side
-by side in one run (interleaved rounds).
+by side in one run (interleaved rounds; the median, or the least where noted).
 
     MPLBACKEND=Agg .venv/bin/python benchmarks/bench_kernels.py \\
         {core,magic,structures,measured} [--rounds 7] [--ps 20]
 
-* ``core``: on the paper's half car (Newmark, dt = 1 ms, its window and bump), the paper
-  problem's specialised kernel (``vpid_vehicle.kernel``, one thread); the suite's shared linear
-  core (``ride.linear.newmark_outputs`` from M, C, K and the maps: target within 1.3x of the
-  specialised); the same with the model's numpy code that builds the matrices (what a ride
-  problem runs); the plain numpy scheme (``simulate(newmark(...))``). Rounds of 0.3 s.
-* ``magic``: the Magic Formula kernel with its vectorisable arc tangent and sine
-  (``ride/vecmath``) against the same source compiled with the C library's, on
-  ``smoke_lateral_mf`` (2 s at 1 ms); one call per round.
-* ``structures``: each ride family's ``evaluate`` (3 s at 1 ms, hump road) with the linear
-  structure and the richest (cubic spring, bilinear damper: RK4), rows drawn in each box; the
-  least over rounds of the mean of 15 calls (on a loaded machine the least time is the code's).
-* ``measured``: the measured and third-party problems at their defaults (docs/measured.md),
-  a population of ``--ps`` at once against one candidate at a time; one pass per round.
+* ``core``, the paper's half car: its specialised kernel (``vpid_vehicle.kernel``, one
+  thread); the suite's shared linear core (``ride.linear.newmark_outputs``, target within 1.3x
+  of it); the same with the model's numpy code that builds M, C, K (what a ride problem runs);
+  the plain numpy scheme (``simulate(newmark(...))``). Rounds of 0.3 s.
+* ``magic``: the Magic Formula kernel with its vectorisable ``atan`` and ``sin``
+  (``ride/vecmath``) against the same source compiled with the C library's
+  (``smoke_lateral_mf``); one call per round.
+* ``structures``: each ride family's ``evaluate`` (3 s at 1 ms) with the linear structure and
+  the richest (cubic spring, bilinear damper: RK4); the least over rounds of 15 calls' mean.
+* ``measured``: the measured problems at their defaults (docs/measured.md), a population of
+  ``--ps`` at once against one candidate at a time.
 
-Prints per way the median (or least) µs per candidate, its ratio to the first way and, where
-the ways compute the same outputs, the largest difference to the first's (of the peak).
+Prints per way µs per candidate, its ratio to the first way and, where the ways compute the
+same outputs, the largest difference to the first's (of the peak).
 """
 
 from __future__ import annotations

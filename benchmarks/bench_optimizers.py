@@ -4,18 +4,14 @@ with ``--quality``, the best objective each reaches at the protocol's budget and
     MPLBACKEND=Agg .venv/bin/python benchmarks/bench_optimizers.py [--optimizers de1 ... random]
         [--ps 20] [--repeats 7] [--number 50] [--quality [--runs 10]]
 
-An optimizer is its name with keys if wanted, ``NAME[:key=value,...]`` (``ga:mutation=
-scaled_halving``, ``lshade:N_init=paper``). One generation is ``ask()`` + ``tell()`` with
-objective values computed beforehand, so no objective time is included. The reference is
-``problem.evaluate`` of one population of PS on ``problem=vehicle`` (``problem=functions``,
-with a notice, if the vehicle is not registered). All are timed in the same process,
-interleaved, best of ``--repeats`` timings of ``--number`` calls, and the script prints
-RATIOS, which hold on a busy machine. Target: a DE generation under 10% of the vehicle
-objective at PS = 20.
-
-``--quality`` (deterministic, seeds 0 .. runs-1): median and max of the best objective value
-over ``--runs`` runs with ``ps * 51`` (1x) and ``ps * 510`` (10x) evaluations, on the 10-D
-sphere and on the vehicle.
+An optimizer is ``NAME[:key=value,...]`` (``ga:mutation=scaled_halving``). One generation is
+``ask()`` + ``tell()`` with objective values computed beforehand; the reference is one
+``problem.evaluate`` of a population of PS on ``problem=vehicle`` (``problem=functions``, with
+a notice, without the vehicle). Timed in one process, interleaved, best of ``--repeats``
+timings of ``--number`` calls: RATIOS, which hold on a busy machine. Target: a DE generation
+under 10% of the vehicle objective at PS = 20. ``--quality`` (deterministic, seeds 0 ..
+runs-1): median and max of the best objective over ``--runs`` runs with ``ps * 51`` and
+``ps * 510`` evaluations, on the 10-D sphere and on the vehicle.
 """
 
 from __future__ import annotations

@@ -114,8 +114,7 @@ def built_report(runs_dir: Path, wall_s: float | None, kernel_seconds: float) ->
     jobs = read_jobs(runs_dir)
     if not jobs:
         raise SystemExit(f"error: no job.json below {runs_dir}")
-    members = sorted({j["problem"] for j in jobs})
-    us = {m: kernel_us({"name": m}, kernel_seconds)[0] for m in members}
+    us = {m: kernel_us({"name": m}, kernel_seconds)[0] for m in {j["problem"] for j in jobs}}
     workers = available_cores()
     evals = sum(e for j in jobs for e, _, _ in j["runs"])
     kernel_1 = sum(e * us[j["problem"]] for j in jobs for e, _, _ in j["runs"]) * 1e-6
@@ -129,8 +128,8 @@ def built_report(runs_dir: Path, wall_s: float | None, kernel_seconds: float) ->
     if wall_s is not None:
         print(f"build wall {wall_s:.0f} s / kernel only on {workers} cores: "
               f"{wall_s / max(kernel_1 / workers, 1e-9):.2f}x")
-    table("Per member", "problem", jobs, us, 1.0, workers)
-    table("Per optimizer", "optimizer", jobs, us, 1.0, workers)
+    for title, key in (("Per member", "problem"), ("Per optimizer", "optimizer")):
+        table(title, key, jobs, us, 1.0, workers)
 
 
 def main() -> None:
@@ -197,8 +196,8 @@ def main() -> None:
           f"(runs {runs_part * scale:.0f} s + analysis {max(analysis, 0) * scale:.0f} s, "
           f"scaled x{scale:g}; outside the jobs {fixed:.0f} s and other stages {other:.0f} s, "
           "as measured)")
-    table("Per member", "problem", jobs, us, scale, workers)
-    table("Per optimizer", "optimizer", jobs, us, scale, workers)
+    for title, key in (("Per member", "problem"), ("Per optimizer", "optimizer")):
+        table(title, key, jobs, us, scale, workers)
 
 
 if __name__ == "__main__":
