@@ -64,19 +64,25 @@ $(SCALEOUT_VENV)/.installed: pyproject.toml
 test-scaleout: $(SCALEOUT_VENV)/.installed
 	$(SCALEOUT_VENV)/bin/python -m pytest -m scaleout tests/sweeps/test_launchers.py
 
-# Speed of the chain, lockstep and threads (minutes; see docs/sweeps.md)
+# Speed of the chain, worker processes, threads and a large study (minutes; docs/sweeps.md)
+PAPER_SWEEP := --optimizers de1,de2,de3,de4,de5,de6,de7,de8,ga --ps 20,30
 bench-scale: install
-	$(BIN)/python benchmarks/bench_chain.py
-	$(BIN)/python benchmarks/bench_threads_sweep.py
-	$(BIN)/python benchmarks/bench_workers.py
-	$(BIN)/python benchmarks/bench_large_study.py
+	$(BIN)/python benchmarks/bench_sweeps.py --ways default,report $(PAPER_SWEEP) \
+	  --iterations 50 --runs-alone --report-alone --fixed-start
+	$(BIN)/python benchmarks/bench_sweeps.py --ways none,threads $(PAPER_SWEEP) --iterations 500
+	$(BIN)/python benchmarks/bench_sweeps.py
+	$(BIN)/python benchmarks/bench_sweeps.py --ways default --report-alone --iterations 50 \
+	  --optimizers de1,de2,de4,de8,jade,shade,lshade,ga,cmaes,scipy_de \
+	  --problems vehicle,vehicle_long_record
 
 bench: install
 	$(BIN)/python benchmarks/bench_vehicle.py
 	$(BIN)/python benchmarks/bench_optimizers.py
-	$(BIN)/python benchmarks/bench_magic.py
+	$(BIN)/python benchmarks/bench_kernels.py core
+	$(BIN)/python benchmarks/bench_kernels.py magic
 	$(BIN)/python benchmarks/bench_overhead.py --skip nevergrad
-	$(BIN)/python benchmarks/paper_experiment.py
+	$(BIN)/python benchmarks/bench_sweeps.py --ways report,joblib $(PAPER_SWEEP) \
+	  --iterations 50 --kernel --fixed-start
 	$(BIN)/python benchmarks/bench_report.py
 
 clean:

@@ -1,14 +1,15 @@
-"""What the benchmark scripts share: how to call the two commands in a child process, with
-what environment, and how to compose a job's config in this process as the command does.
-
-The scripts import it as ``_shared`` (they run as ``python benchmarks/<script>.py``, which
-puts this folder first on ``sys.path``)."""
+"""What the benchmark scripts share: the two commands in a child process, a job's config
+composed as the command composes it, and the timers. Imported as ``_shared`` (a script run as
+``python benchmarks/<script>.py`` has this folder first on ``sys.path``)."""
 
 from __future__ import annotations
 
 import os
+import statistics
 import sys
 import tempfile
+import time
+from collections.abc import Callable
 from typing import Any
 
 #: ``vpid-bench`` and ``vpid-bench-report`` in a child process of this interpreter (the
@@ -49,13 +50,11 @@ def compose(overrides: list[str]) -> Any:
         return hydra_compose(config_name="config", overrides=list(overrides))
 
 
-def run_timed(cmd: list[str], cwd: Any) -> tuple[float, float]:
-    """Run ``cmd`` in ``cwd`` (it must succeed: else exit with the end of its stderr);
-    return its wall seconds and its CPU seconds (user + system of the child, which vary
-    much less than the wall time on a machine shared with other work)."""
+def run_timed(cmd: list[str], cwd: Any = None, check: bool = True) -> tuple[float, float]:
+    """Wall and CPU seconds (user + system of the child: a shared machine moves them less) of
+    ``cmd`` run in ``cwd``; with ``check`` it must succeed, else exit with its stderr's end."""
     import resource
     import subprocess
-    import time
 
     def children_cpu() -> float:
         r = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -65,7 +64,71 @@ def run_timed(cmd: list[str], cwd: Any) -> tuple[float, float]:
     done = subprocess.run(cmd, cwd=cwd, env=cli_env(), capture_output=True, text=True,
                           check=False)
     wall = time.perf_counter() - t0
-    if done.returncode != 0:
+    if check and done.returncode != 0:
         sys.exit(f"failed ({done.returncode}): {' '.join(map(str, cmd))}\n"
                  f"{done.stderr[-2000:]}")
     return wall, children_cpu() - c0
+
+
+def interleaved(calls: dict[str, Callable[[], object]], rounds: int, number: int = 1,
+                pick: Callable[[list[float]], float] = statistics.median,
+                seconds: float | None = None) -> dict[str, float]:
+    """Seconds per call of each of ``calls`` (each called once first: compilation, caches),
+    timed in ``rounds`` interleaved rounds of ``number`` calls each (or as many as take about
+    ``seconds``), so a change of load meets them alike; reduced over the rounds by ``pick``
+    (``min``: the code's own time on a loaded machine)."""
+    numbers = {}
+    for name, fn in calls.items():
+        t0 = time.perf_counter()
+        fn()
+        once = time.perf_counter() - t0
+        numbers[name] = number if seconds is None else max(1, int(seconds / max(once, 1e-9)))
+    times: dict[str, list[float]] = {name: [] for name in calls}
+    for _ in range(rounds):
+        for name, fn in calls.items():
+            t0 = time.perf_counter()
+            for _ in range(numbers[name]):
+                fn()
+            times[name].append((time.perf_counter() - t0) / numbers[name])
+    return {name: pick(t) for name, t in times.items()}
+
+
+def kernel_us(cfg: dict[str, Any], seconds: float = 1.0, batch: int = 20
+              ) -> tuple[float, float]:
+    """The problem ``cfg``'s (``name`` and keys) µs per candidate on one thread, batches of
+    ``batch`` random candidates in its box, the median of 5 timings of ``seconds / 5``; in
+    wall time and in this process's CPU time (which another program does not inflate)."""
+    import numpy as np
+
+    from vpid_bench.build import build_problem
+    from vpid_bench.plugins import Registry
+
+    problem = build_problem(Registry(), cfg)
+    problem.set_threads(1)
+    X = problem.bounds.sample(np.random.default_rng(0), batch)
+    problem.evaluate(X)  # compiled on first use
+    wall, cpu = [], []
+    for _ in range(5):
+        reps, t0, c0 = 0, time.perf_counter(), time.process_time()
+        while time.perf_counter() - t0 < seconds / 5:
+            problem.evaluate(X)
+            reps += 1
+        wall.append((time.perf_counter() - t0) / reps / batch * 1e6)
+        cpu.append((time.process_time() - c0) / reps / batch * 1e6)
+    return statistics.median(wall), statistics.median(cpu)
+
+
+def parse_keys(text: str) -> dict[str, Any]:
+    """``"a=1,b=false,c=paper"`` as ``{"a": 1, "b": False, "c": "paper"}``."""
+    def scalar(value: str) -> Any:
+        if value.lower() in ("true", "false"):
+            return value.lower() == "true"
+        for kind in (int, float):
+            try:
+                return kind(value)
+            except ValueError:
+                pass
+        return value
+
+    pairs = (item.split("=", 1) for item in text.split(",") if item)
+    return {key.strip(): scalar(value.strip()) for key, value in pairs}

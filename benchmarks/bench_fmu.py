@@ -1,19 +1,15 @@
 """Speed of ``problem=fmu``: one simulation of the example quarter-car FMU (FMI 2.0
-co-simulation, 5,000 samples at 500 Hz, the input's slope given each step) three ways, side
-by side in one run:
+co-simulation, the input's slope given each step) three ways, side by side in one run:
+``project``, ``FmuProblem.evaluate`` of one candidate (reset, start values, initialise, the
+compiled step loop of :mod:`vpid_fmu.kernels`, residuals, objective); ``C loop``,
+``benchmarks/fmu_c_loop.c`` compiled here with gcc, driving the same binary through the same
+calls (timed inside C: no process start); ``fmpy``, fmpy's ``simulate_fmu`` on the FMU
+extracted once (its Python loop over steps). Needs gcc and fmpy.
 
-* ``project``: ``FmuProblem.evaluate`` of one candidate (reset, start values, initialise, the
-  compiled step loop of :mod:`vpid_fmu.kernels`, the residuals and the objective);
-* ``C loop``: ``benchmarks/fmu_c_loop.c``, compiled here with gcc, driving the same binary
-  through the same calls from C (timed inside C, so no process start is counted);
-* ``fmpy``: fmpy's ``simulate_fmu`` on the FMU extracted once (its Python loop over steps).
+    MPLBACKEND=Agg .venv/bin/python benchmarks/bench_fmu.py [--rounds 5] [--reps 20] \\
+        [--samples 5000]
 
-Run as a script (needs gcc and fmpy)::
-
-    MPLBACKEND=Agg .venv/bin/python benchmarks/bench_fmu.py
-
-The machine is shared and noisy: the three are timed in interleaved rounds and the table gives
-the median over the rounds (project and C: the median of ``--reps`` simulations per round).
+Interleaved rounds; the median over rounds (project and C: of ``--reps`` simulations each).
 """
 
 from __future__ import annotations

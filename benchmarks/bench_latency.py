@@ -12,14 +12,12 @@ Hydra app's ``--help``.
 from __future__ import annotations
 
 import argparse
-import os
-import resource
 import statistics
-import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
+
+from _shared import run_timed
 
 MINIMAL_APP = '''import hydra
 
@@ -32,18 +30,6 @@ def app(cfg):
 if __name__ == "__main__":
     app()
 '''
-
-
-def _time(cmd: list[str]) -> tuple[float, float]:
-    """Wall and CPU time (s) of one run of ``cmd`` (its exit status is not checked:
-    refusals exit 2)."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    start = time.perf_counter()
-    subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False,
-                   env={**os.environ, "MPLBACKEND": "Agg"})
-    wall = time.perf_counter() - start
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 def main() -> None:
@@ -64,7 +50,7 @@ def main() -> None:
         }
         rows = {}
         for name, cmd in commands.items():
-            times = [_time(cmd) for _ in range(args.repeat)]
+            times = [run_timed(cmd, check=False) for _ in range(args.repeat)]  # refusals exit 2
             rows[name] = (statistics.median(t[0] for t in times),
                           statistics.median(t[1] for t in times))
     hydra_wall, hydra_cpu = rows["minimal @hydra.main app --help"]

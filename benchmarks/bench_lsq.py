@@ -1,24 +1,19 @@
 """How many evaluations lsq needs to reach each record's optimum, and what the bridge costs.
 
-Part ``lsq`` (issue 11's target): on ``problem=vehicle`` with a new noise record per run
-(run ``i`` fits the record of ``problem.noise.seed=i``; its optimizer stream is the job's,
-``run_rng(0, i)``), the record's optimum ``f_opt`` is the lowest of a deterministic polish
-from the true vector (finite-difference Jacobian at every step, run to convergence), an
-independent polish (scipy's ``least_squares`` in an outer IRLS loop) and the run's own best.
-A run reaches the optimum at the first evaluation count (Jacobian rows included) where its
-best-so-far is within ``(f - f_opt) / f_opt <= 1e-6``. Target: >= 27 of 30 within 300 on the
-paper's window, >= 28 of 30 within 150 with ``problem.record.extra=0.5``.
+Part ``lsq`` (issue 11's target): on ``problem=vehicle``, run ``i`` fits the record of
+``problem.noise.seed=i`` with the job's stream ``run_rng(0, i)``. The record's optimum is the
+lowest of a polish from the truth (a fresh finite-difference Jacobian at every step, to
+convergence), an independent one (scipy's ``least_squares`` in an outer IRLS loop) and the
+run's best; a run reaches it at the first evaluation count (Jacobian rows included) within a
+relative 1e-6. Target: >= 27 of 30 within 300 on the paper's window, >= 28 of 30 within 150
+with ``problem.record.extra=0.5``.
 
-Part ``bridge``: wall time per batch of a loop-owning optimizer (through
-``vpid_bench.api.LoopOptimizer``'s worker thread) beside ask/tell ones, on a cheap objective
-(the sphere, 9-D, batches of 20), in the same process, best of several repeats:
-``scipy_de`` vs ``de1`` (both complete DEs), and a do-nothing library loop vs random search
-(the hand-over alone).
+Part ``bridge``: wall time per batch of a loop-owning optimizer (``LoopOptimizer``'s worker
+thread) beside ask/tell ones on the 9-D sphere, batches of 20, best of several repeats:
+``scipy_de`` vs ``de1``, and a do-nothing library loop vs random search (the hand-over alone).
 
-    .venv/bin/python benchmarks/bench_lsq.py                      # both parts
-    .venv/bin/python benchmarks/bench_lsq.py --part lsq --runs 30 --budget 600
-    .venv/bin/python benchmarks/bench_lsq.py --part lsq --variant broyden=false
-    .venv/bin/python benchmarks/bench_lsq.py --part bridge
+    .venv/bin/python benchmarks/bench_lsq.py [--part lsq|bridge|all] [--runs 30] [--budget 600]
+    .venv/bin/python benchmarks/bench_lsq.py --part lsq --variant broyden=false,inner=3
 """
 
 from __future__ import annotations
@@ -28,6 +23,7 @@ import time
 import timeit
 
 import numpy as np
+from _shared import parse_keys
 
 from vpid_bench.api import LoopOptimizer, OptimizerParams
 from vpid_bench.build import build_problem, optimizer_params, run_rng
@@ -116,17 +112,9 @@ def part_bridge(registry: Registry, repeats: int, iterations: int) -> None:
     budget = ps * (iterations + 1)
 
     def runner(name: str | None):
-        if name is None:
-            def make():
-                return IdleLoop(OptimizerParams(ps=ps, iterations=iterations), problem.bounds,
-                                np.random.default_rng(0))
-        else:
-            cls, params = optimizer_params(registry, {"name": name, "ps": ps,
-                                                      "iterations": iterations})
-
-            def make():
-                return cls(params, problem.bounds, np.random.default_rng(0))
-        return lambda: run(problem, make(), budget)
+        cls, params = (IdleLoop, OptimizerParams(ps=ps, iterations=iterations)) if name is None \
+            else optimizer_params(registry, {"name": name, "ps": ps, "iterations": iterations})
+        return lambda: run(problem, cls(params, problem.bounds, np.random.default_rng(0)), budget)
 
     runner("de1")()  # compile / warm up
     cases = {"scipy_de": runner("scipy_de"), "de1": runner("de1"),
@@ -142,21 +130,6 @@ def part_bridge(registry: Registry, repeats: int, iterations: int) -> None:
           f"{per_batch['idle loop (bridge)'] - per_batch['random (ask/tell)']:.1f} us")
 
 
-def _variant(text: str) -> dict:
-    out: dict = {}
-    for item in filter(None, text.split(",")):
-        key, value = item.split("=")
-        lowered = value.strip().lower()
-        if lowered in ("true", "false"):
-            out[key.strip()] = lowered == "true"
-        else:
-            try:
-                out[key.strip()] = int(value) if value.isdigit() else float(value)
-            except ValueError:
-                out[key.strip()] = value.strip()
-    return out
-
-
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--part", choices=("lsq", "bridge", "all"), default="all")
@@ -170,7 +143,7 @@ def main(argv: list[str] | None = None) -> None:
     if args.part in ("bridge", "all"):
         part_bridge(registry, args.repeats, args.iterations)
     if args.part in ("lsq", "all"):
-        part_lsq(registry, args.runs, args.budget, _variant(args.variant))
+        part_lsq(registry, args.runs, args.budget, parse_keys(args.variant))
 
 
 if __name__ == "__main__":

@@ -1,21 +1,16 @@
 """Per-evaluation overhead of every registered optimizer, against the kernel time of the same
 evaluations, measured side by side in one run (issue: studies at kernel speed).
 
-For each optimizer: one run on ``problem=vehicle`` (PS 20, the given budget; ``--problem``
-another, e.g. a suite member at its defaults) through the
-framework's run loop (:func:`vpid_bench.runner.run`), its wall time, and the batches it had
-evaluated (recorded as they pass), after a short warm-up run. Afterwards the same batches are
-evaluated again, the same way (values, or values and residuals for a least-squares method),
-with nothing else around them: the kernel's time. Prints per optimizer the wall time per
-evaluation (µs), the kernel's, their ratio (the overhead factor: 1 means the optimizer costs
-nothing beyond its evaluations) and the number of batches (sequential rounds of ask/tell).
-
-Each optimizer is measured ``--repeat`` times (default 5, each a full run and its kernel
-re-evaluation) and the median of each column printed: a single run of 51 batches moves by
-10-20 % on a shared machine.
-
-    MPLBACKEND=Agg .venv/bin/python benchmarks/bench_overhead.py [--budget 4200] [--repeat 5] \
+    MPLBACKEND=Agg .venv/bin/python benchmarks/bench_overhead.py [--budget 4200] [--repeat 5] \\
         [--skip nevergrad] [--only random lsq] [--problem smoke_quarter]
+
+Per optimizer, after a short warm-up run: one run on ``--problem`` (PS 20, at its defaults)
+through the run loop (:func:`vpid_bench.runner.run`), recording the batches it evaluated;
+then the same batches evaluated again the same way with nothing around them (the kernel's
+time). Prints the medians over ``--repeat`` runs (one run of 51 batches moves by 10-20 % on a
+shared machine) of the wall time per evaluation, the kernel's, their ratio (1: the optimizer
+costs nothing beyond its evaluations), its own ``ask`` and ``tell``, the run loop's share,
+and the batches (sequential rounds of ask/tell).
 """
 
 from __future__ import annotations

@@ -1,26 +1,19 @@
 """What a report costs: the full report of a sweep and the short report of one job, side by
-side with the runs they report on.
+side with the runs they report on; or an archive's report.
 
     .venv/bin/python benchmarks/bench_report.py [--repeats 3] [--records SWEEP_DIR]
     .venv/bin/python benchmarks/bench_report.py --archive ARCHIVE [--instances 15]
 
-* **Full report**: ``vpid-bench-report SWEEP -o OUT`` in a child process (imports included,
-  what a user runs) on the paper experiment's records (9 optimizers x ps 20, 30 x 30 runs;
-  made once into a temporary folder unless ``--records`` names an existing sweep), and the
-  sweep's own wall time for scale.
-* **Short report**: ``vpid-bench runs=30 progress=false`` (DE4 on the vehicle) with
-  ``report=true`` and ``report=false`` alternately, each into a fresh folder: the difference
-  is what the single job's report adds.
-
-* **An archive's report** (``--archive``): ``vpid-bench-report <archive>`` (nothing run) on
-  an archive, as is; with ``--instances N``, first on an archive of the same runs made N
-  times as large (each run copied to N instances, its values scaled by a factor in
-  [1, 1.05) drawn per copy, so the copies are not tied; each instance's optimum copied
-  alike): the size of a full build, measured from a slice of it
-  (``tools/archive_cost.py``). Prints the time of each and their ratio, and the archive's
-  beside the 60 s a report over archive/vpid1 may take on a quiet 2-core machine.
-
-Timings on a shared machine are noisy; compare the columns of one run, not across runs.
+* **Full report**: ``vpid-bench-report SWEEP -o OUT`` in a child process (imports included)
+  on the paper experiment's records (made once into a temporary folder unless ``--records``
+  names a sweep), and the sweep's own wall time for scale.
+* **Short report**: ``vpid-bench runs=30`` (DE4 on the vehicle) with ``report=true`` and
+  ``report=false`` alternately: the difference is what the single job's report adds.
+* **An archive's report** (``--archive``), nothing run, beside the 60 s a report over
+  archive/vpid1 may take on a quiet 2-core machine; with ``--instances N``, also on an archive
+  of the same runs N times as large (each run copied to N instances, its values scaled by a
+  factor in [1, 1.05) drawn per copy so the copies are not tied; the optima copied alike):
+  the size of a full build, from a slice of it (``tools/archive_cost.py``).
 """
 
 from __future__ import annotations
@@ -28,12 +21,10 @@ from __future__ import annotations
 import argparse
 import os
 import statistics
-import subprocess
 import tempfile
-import time
 from pathlib import Path
 
-from _shared import CLI, REPORT, cli_env
+from _shared import CLI, REPORT, run_timed
 
 #: What the report over archive/vpid1 may take on a quiet 2-core machine (issue 46), in s.
 TARGET_S = 60.0
@@ -43,9 +34,7 @@ PAPER_SWEEP = ["-m", "optimizer=de1,de2,de3,de4,de5,de6,de7,de8,ga", "problem.ps
 
 def timed(cmd: list[str]) -> float:
     """Wall seconds of ``cmd`` in a child process (it must succeed)."""
-    t0 = time.perf_counter()
-    subprocess.run(cmd, check=True, capture_output=True, env=cli_env())
-    return time.perf_counter() - t0
+    return run_timed(cmd)[0]
 
 
 def full_report(records: Path | None, repeats: int, tmp: Path) -> None:
@@ -100,15 +89,16 @@ def scaled_archive(archive: Path, instances: int, tmp: Path) -> Path:
         for k in range(instances):
             c = 1.0 + 0.05 * rng.random()
             copy = json.loads(json.dumps(rec))
-            copy["instance"] = {"id": f"{rec['instance']['id']}~{k}", "index": k}
-            copy["run_index"] = k
+            index = int(rec["run_index"]) * instances + k  # apart from the others' copies
+            copy["instance"] = {"id": f"{rec['instance']['id']}~{k}", "index": index}
+            copy["run_index"] = index
             copy["run_id"] = stable_hash([rec["run_id"], k])
             res, trace = copy.get("result") or {}, copy.get("trace") or {}
             if isinstance(res.get("f_best"), float):
                 res["f_best"] *= c
             trace["best"] = [b * c if isinstance(b, float) else b
                              for b in trace.get("best") or []]
-            write_json_atomic(job / "records" / f"run-{k:03d}-{copy['run_id']}.json", copy)
+            write_json_atomic(job / "records" / f"run-{index:03d}-{copy['run_id']}.json", copy)
     for line in (archive / OPTIMA).read_text(encoding="utf-8").splitlines():
         opt = json.loads(line)
         for k in range(instances):
@@ -122,23 +112,12 @@ def scaled_archive(archive: Path, instances: int, tmp: Path) -> Path:
     return out
 
 
-def timed_cpu(cmd: list[str]) -> tuple[float, float]:
-    """Wall and CPU seconds (user + system) of ``cmd`` in a child process (it must
-    succeed); the CPU time is what other work on a shared machine does not inflate."""
-    import resource
-
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    wall = timed(cmd)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-
-
 def archive_report(archive: Path, instances: int | None, tmp: Path) -> None:
     """The report of ``archive`` (nothing run), and of its scaled copy (see the module)."""
     from vpid_bench.report.archive import read_archive
 
     load = os.getloadavg()[0]
-    plain, plain_cpu = timed_cpu([*REPORT, str(archive), "-o", str(tmp / "report-archive")])
+    plain, plain_cpu = run_timed([*REPORT, str(archive), "-o", str(tmp / "report-archive")])
     n = len(read_archive(archive).records)
     print(f"report of the archive {archive} ({n} runs): {plain:.1f} s wall, "
           f"{plain_cpu:.1f} s CPU; target {TARGET_S:.0f} s wall on a quiet 2-core machine: "
@@ -146,7 +125,7 @@ def archive_report(archive: Path, instances: int | None, tmp: Path) -> None:
           f"{os.getloadavg()[0]:.1f} after: above 0.5 the machine was not quiet)")
     if instances:
         scaled = scaled_archive(archive, instances, tmp)
-        big, big_cpu = timed_cpu([*REPORT, str(scaled), "-o", str(tmp / "report-scaled")])
+        big, big_cpu = run_timed([*REPORT, str(scaled), "-o", str(tmp / "report-scaled")])
         size = sum(f.stat().st_size for f in scaled.rglob("*") if f.is_file())
         print(f"report of it scaled to {instances} instances ({n * instances} runs, "
               f"{size / 1e6:.1f} MB): {big:.1f} s wall ({big / plain:.1f}x), "

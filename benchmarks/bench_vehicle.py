@@ -1,40 +1,36 @@
 """Speed of ``problem=vehicle``: microseconds per candidate of three ways to compute Eq. (3).
 
-Run as a script (prints tables, ratios and the command)::
-
-    MPLBACKEND=Agg .venv/bin/python benchmarks/bench_vehicle.py
+    MPLBACKEND=Agg .venv/bin/python benchmarks/bench_vehicle.py [--ps 20,600] [--rounds 21]
     MPLBACKEND=Agg .venv/bin/python benchmarks/bench_vehicle.py --threshold   # thread hand-off
+    MPLBACKEND=Agg .venv/bin/python benchmarks/bench_vehicle.py --memory      # bytes per sample
 
-or with pytest-benchmark: ``.venv/bin/python -m pytest benchmarks/bench_vehicle.py``.
-
-Compared side by side, in one process, at PS = 20 and 600 (dt = 1 ms, the paper's window):
-
-* ``numpy``: a straightforward numpy Newmark loop over time, vectorised over the population
-  (kept here so the ratio cannot drift when the package changes);
-* ``soa-1``: the package's structure-of-arrays kernel, one thread;
-* ``soa-all``: the same with every core this process may use.
-
-The machine is shared and noisy, so the variants are timed in interleaved rounds (each round
-times every variant once) and the tables give the minimum and the median over the rounds;
-ratios are medians of the per-round ratios. Wall time (``perf_counter``) is what a user
-waits for; for the single-thread variants the thread's CPU time (``thread_time``) is also
-given, as it is much less sensitive to other processes.
+Side by side in one process (dt = 1 ms, the paper's window): ``numpy``, a plain numpy Newmark
+loop over time vectorised over the population (kept here so the ratio cannot drift when the
+package changes); ``soa-1``, the package's structure-of-arrays kernel on one thread;
+``soa-all``, the same on every core this process may use. Interleaved rounds (each times every
+variant once); the tables give the minimum and the median over the rounds, ratios are medians
+of the per-round ratios. Wall time is what a user waits for; for one thread the thread's CPU
+time is given too, much less sensitive to other processes. Also: the kernel on a 1-sample
+window (set-up and call), and a fresh process's build and first evaluation. ``--memory``
+instead measures, with tracemalloc at two record lengths (the difference cancels fixed costs),
+the bytes per sample of the set-up and per sample and candidate of a residual batch: the
+figures behind the memory cap's ``BYTES_PER_STEP`` and ``BYTES_PER_SAMPLE_CANDIDATE``.
 """
 
 from __future__ import annotations
 
 import argparse
-import functools
 import os
 import shlex
 import subprocess
 import sys
 import time
+import tracemalloc
 from collections.abc import Callable
 
 import numpy as np
 from vpid_vehicle import kernel
-from vpid_vehicle.config import VehicleConfig
+from vpid_vehicle.config import BYTES_PER_SAMPLE_CANDIDATE, BYTES_PER_STEP, VehicleConfig
 from vpid_vehicle.model import matrices, response_rows, tyre_input
 from vpid_vehicle.problem import VehicleProblem
 
@@ -66,37 +62,27 @@ def baseline_newmark(problem: VehicleProblem, X: np.ndarray) -> np.ndarray:
     return num / np.linalg.norm(ref, axis=1).sum()
 
 
-def variants(problem: VehicleProblem, X: np.ndarray) -> dict[str, Callable[[], np.ndarray]]:
-    """The three ways to compute Eq. (3) for ``X``, as calls without arguments."""
-    ref = problem.reference
-    setup = problem.model._kernel_setup()
-    everyone = kernel.available_threads()
-    return {
-        "numpy": lambda: baseline_newmark(problem, X),
-        "soa-1": lambda: setup.objective(X, ref, 1),
-        "soa-all": lambda: setup.objective(X, ref, everyone),
-    }
-
-
-def timed(fn: Callable[[], object], number: int) -> tuple[float, float]:
-    """Wall and CPU (this thread) seconds per call over ``number`` calls."""
-    w, c = time.perf_counter(), time.thread_time()
+def timed(fn: Callable[[], object], number: int, clock=time.thread_time) -> tuple[float, float]:
+    """Wall and CPU seconds (``clock``: this thread's, or ``process_time`` for all threads)
+    per call over ``number`` calls."""
+    w, c = time.perf_counter(), clock()
     for _ in range(number):
         fn()
-    return (time.perf_counter() - w) / number, (time.thread_time() - c) / number
+    return (time.perf_counter() - w) / number, (clock() - c) / number
 
 
-def measure(ps: int, rounds: int, seconds: float = 0.02) -> dict[str, dict[str, np.ndarray]]:
+def measure(ps: int, rounds: int, seconds: float = 0.02) -> tuple[dict, dict]:
     """Per-candidate wall and CPU microseconds of every variant over interleaved rounds."""
     problem = VehicleProblem(VehicleConfig())
     X = problem.bounds.sample(np.random.default_rng(0), ps)
-    fns = variants(problem, X)
-    expected = fns["numpy"]()
-    numbers = {}
+    ref, setup = problem.reference, problem.model._kernel_setup()
+    fns = {"numpy": lambda: baseline_newmark(problem, X),
+           "soa-1": lambda: setup.objective(X, ref, 1),
+           "soa-all": lambda: setup.objective(X, ref, kernel.available_threads())}
+    expected, numbers = fns["numpy"](), {}
     for name, fn in fns.items():  # compile or load, check, and size each timing
         np.testing.assert_allclose(fn(), expected, rtol=1e-10, atol=0, err_msg=name)
-        once, _ = timed(fn, 1)
-        numbers[name] = max(1, int(seconds / max(once, 1e-9)))
+        numbers[name] = max(1, int(seconds / max(timed(fn, 1)[0], 1e-9)))
     wall = {name: [] for name in fns}
     cpu = {name: [] for name in fns}
     for _ in range(rounds):
@@ -104,8 +90,7 @@ def measure(ps: int, rounds: int, seconds: float = 0.02) -> dict[str, dict[str, 
             w, c = timed(fn, numbers[name])
             wall[name].append(1e6 * w / ps)
             cpu[name].append(1e6 * c / ps)
-    return {"wall": {n: np.array(v) for n, v in wall.items()},
-            "cpu": {n: np.array(v) for n, v in cpu.items()}}
+    return ({n: np.array(v) for n, v in wall.items()}, {n: np.array(v) for n, v in cpu.items()})
 
 
 def setup_cost(ps: int, rounds: int) -> float:
@@ -117,13 +102,12 @@ def setup_cost(ps: int, rounds: int) -> float:
                        cfg.newmark.beta)
     X = problem.bounds.sample(np.random.default_rng(0), ps)
     ref = np.array(problem.reference[:, :1])
-    fn = functools.partial(one.objective, X, ref, 1)
-    fn()
-    return min(1e6 * timed(fn, max(1, 4000 // ps))[1] / ps for _ in range(rounds))
+    one.objective(X, ref, 1)
+    return min(1e6 * timed(lambda: one.objective(X, ref, 1), max(1, 4000 // ps))[1] / ps
+               for _ in range(rounds))
 
 
-def report(ps: int, res: dict[str, dict[str, np.ndarray]]) -> None:
-    wall, cpu = res["wall"], res["cpu"]
+def report(ps: int, wall: dict, cpu: dict) -> None:
     print(f"\nPS = {ps} (us per candidate; {len(wall['numpy'])} interleaved rounds)")
     print(f"{'variant':>9} {'wall min':>9} {'wall med':>9} {'cpu min':>8} "
           f"{'numpy/this (wall med)':>25} {'(cpu med)':>10}")
@@ -142,8 +126,7 @@ def report(ps: int, res: dict[str, dict[str, np.ndarray]]) -> None:
 def threshold(rounds: int) -> None:
     """Small batches on one thread against every thread, with the chunking forced
     (MIN_PER_THREAD = 1): the wall-time ratio (what a user gains when cores are free) and the
-    extra CPU time the hand-off costs per call, summed over threads (``process_time``; much
-    less sensitive to other processes than the wall time)."""
+    extra CPU time the hand-off costs per call, summed over threads."""
     problem = VehicleProblem(VehicleConfig())
     setup, ref = problem.model._kernel_setup(), problem.reference
     threads = kernel.available_threads()
@@ -155,51 +138,38 @@ def threshold(rounds: int) -> None:
               f"{'wall 1 thread / all (median)':>29}")
         for n in (8, 16, 32, 48, 64, 96, 128, 256):
             X = problem.bounds.sample(np.random.default_rng(1), n)
-            one = functools.partial(setup.objective, X, ref, 1)
-            many = functools.partial(setup.objective, X, ref, threads)
-            one(), many()
-            number = max(2, 2000 // n)
-            cpu1, cpun, ratios = [], [], []
-            for _ in range(rounds):
-                (a, ca), (b, cb) = timed_process(one, number), timed_process(many, number)
-                cpu1.append(ca)
-                cpun.append(cb)
-                ratios.append(a / b)
-            print(f"{n:>6} {1e6 * min(cpu1):22.1f} {1e6 * (min(cpun) - min(cpu1)):19.1f} "
-                  f"{np.median(ratios):29.2f}")
+            calls = [lambda t=t, X=X: setup.objective(X, ref, t) for t in (1, threads)]
+            for fn in calls:
+                fn()
+            runs = [[timed(fn, max(2, 2000 // n), time.process_time) for fn in calls]
+                    for _ in range(rounds)]
+            cpu1, cpun = (min(r[i][1] for r in runs) for i in (0, 1))
+            ratio = np.median([a[0] / b[0] for a, b in runs])
+            print(f"{n:>6} {1e6 * cpu1:22.1f} {1e6 * (cpun - cpu1):19.1f} {ratio:29.2f}")
     finally:
         kernel.MIN_PER_THREAD = saved
 
 
-def timed_process(fn: Callable[[], object], number: int) -> tuple[float, float]:
-    """Wall and CPU (all threads of this process) seconds per call over ``number`` calls."""
-    w, c = time.perf_counter(), time.process_time()
-    for _ in range(number):
-        fn()
-    return (time.perf_counter() - w) / number, (time.process_time() - c) / number
+def memory(ps: int = 20) -> None:
+    """Bytes per sample of the set-up and per sample and candidate of a residual batch."""
+    from vpid_bench.params import build_dataclass
 
+    def peak(extra: float) -> tuple[int, int, int]:
+        tracemalloc.start()
+        problem = VehicleProblem(build_dataclass(VehicleConfig, {"record": {"extra": extra}}))
+        setup = tracemalloc.get_traced_memory()[1]
+        tracemalloc.reset_peak()
+        problem.evaluate_with_residuals(problem.bounds.sample(np.random.default_rng(0), ps))
+        batch = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        return problem.t.size, setup, batch
 
-def cold_start_s() -> float:
-    """Seconds for a fresh process to build the problem and evaluate once (loads the
-    numba on-disk cache; compiles only if the cache is missing or stale)."""
-    code = ("import time; t=time.perf_counter(); from vpid_vehicle.problem import VehicleProblem;"
-            "from vpid_vehicle.config import VehicleConfig; p=VehicleProblem(VehicleConfig());"
-            "p.evaluate(p.x_true[None]); print(time.perf_counter()-t)")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    return float(out.stdout.strip())
-
-
-def test_fast_evaluate(benchmark):
-    problem = VehicleProblem(VehicleConfig())
-    X = problem.bounds.sample(np.random.default_rng(0), 20)
-    problem.evaluate(X)
-    benchmark(problem.evaluate, X)
-
-
-def test_baseline_newmark(benchmark):
-    problem = VehicleProblem(VehicleConfig())
-    X = problem.bounds.sample(np.random.default_rng(0), 20)
-    benchmark.pedantic(baseline_newmark, args=(problem, X), rounds=5)
+    peak(0.0)  # imports and compiled kernels first: they are not per-sample costs
+    (n1, s1, b1), (n2, s2, b2) = peak(0.5), peak(5.5)
+    print(f"samples {n1} -> {n2}")
+    print(f"set-up: {(s2 - s1) / (n2 - n1):.0f} B per sample (cap assumes {BYTES_PER_STEP})")
+    print(f"one residual batch of {ps}: {(b2 - b1) / (n2 - n1) / ps:.1f} B per sample and "
+          f"candidate (cap assumes {BYTES_PER_SAMPLE_CANDIDATE})")
 
 
 def main() -> None:
@@ -208,13 +178,20 @@ def main() -> None:
     ap.add_argument("--ps", default="20,600", help="population sizes (default 20,600)")
     ap.add_argument("--threshold", action="store_true",
                     help="also time small batches on 1 thread against all threads")
+    ap.add_argument("--memory", action="store_true", help="bytes per sample instead")
     args = ap.parse_args()
+    if args.memory:
+        return memory()
     print("command:", shlex.join([os.path.relpath(sys.executable), *sys.argv]))
     print(f"cores usable: {kernel.available_threads()}, os.getloadavg(): "
           f"{tuple(round(x, 1) for x in os.getloadavg())}")
-    cold = cold_start_s()
+    code = ("import time; t=time.perf_counter(); from vpid_vehicle.problem import VehicleProblem;"
+            "from vpid_vehicle.config import VehicleConfig; p=VehicleProblem(VehicleConfig());"
+            "p.evaluate(p.x_true[None]); print(time.perf_counter()-t)")
+    cold = float(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                                check=True).stdout.strip())
     for ps in (int(p) for p in args.ps.split(",")):
-        report(ps, measure(ps, args.rounds))
+        report(ps, *measure(ps, args.rounds))
         print(f"soa-1 on a 1-sample window (set-up + call): {setup_cost(ps, args.rounds):.2f} "
               "us per candidate (cpu min)")
     if args.threshold:

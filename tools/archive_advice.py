@@ -2,27 +2,15 @@
 docs/study.md, regenerated from the archive alone (nothing is run).
 
     MPLBACKEND=Agg .venv/bin/python tools/archive_advice.py archive/vpid1 \\
-        [-o docs/study/vpid1-advice] [--alpha 0.05]
+        [-o docs/study/vpid1-advice]
 
-Writes ``<out>/advice.md`` (and prints it), ``<out>/ladder.csv``, ``<out>/scores.csv`` and the
-figure ``<out>/ecdf_families.png``:
-
-* **ECDFs per family at the rungs 10, 100, 1,000·D** (and 10,000·D where the archive's runs
-  went that far): the share of (run, target) pairs solved by then, every problem of the
-  family weighing the same (the report's aggregated ECDF, :mod:`vpid_bench.report.suite_scores`;
-  targets: relative gaps 1 … 1e-6 to each instance's optimum), and the figure of the whole
-  curves, one panel per family.
-* **The score table with intervals**: per group (all problems, each family), each optimizer's
-  mean AUC with its 95 % bootstrap interval and the share solved (the report's
-  ``suite_scores``).
-* **Where methods are not separated**: in each group, the leader (highest score) and every
-  optimizer whose score difference to it has a 95 % paired bootstrap interval that contains
-  0 (per-run AUC differences paired by problem and instance; scipy's percentile bootstrap,
-  10,000 resamples, seed 0): the tests do not separate them, so the advice names them all;
-  the same among the black-box optimizers alone (those whose class does not set
-  ``wants_residuals``), for a problem that offers no residuals.
-* **The protocol's caveats**, with the archive's own facts (instances, budgets, target,
-  objective, the commit that made it).
+Writes (and prints) ``<out>/advice.md``, with ``ladder.csv``, ``scores.csv`` and the figure
+``ecdf_families.png``: per group (all problems, each family) the report's aggregated ECDF
+(:mod:`vpid_bench.report.suite_scores`) at the rungs 10, 100, 1,000 (10,000)·D, each
+optimizer's score (mean AUC, 95 % bootstrap interval), the optimizers not separated from the
+leader (a 95 % paired bootstrap interval of the per-run AUC difference, paired by problem and
+instance, that contains 0), the same among the black-box optimizers (no ``wants_residuals``),
+and the protocol's caveats with the archive's own facts.
 """
 
 from __future__ import annotations

@@ -6,51 +6,46 @@ beside the kernel-only time of the same evaluations, side by side in one run.
     MPLBACKEND=Agg .venv/bin/python tools/archive_cost.py \\
         --built outputs/archive-vpid1 [--wall-s SECONDS]   # a finished build, nothing run
 
-1. **The build** of the slice: :func:`build_archive.build` (the command a user runs, every
-   stage, pack included, into a fresh folder), its wall time per stage.
-2. **Kernel only** (the yardstick): per member, its kernel's microseconds per candidate on one
-   thread in batches of 20 random candidates (the median of 5 timings), measured here before
-   and after the build (their mean; the machine's speed moves during a build); times the
-   evaluations the build's runs used on that member. On ``C`` cores the
-   kernel alone would take that sum over ``C``. The ratio build / kernel-only is what the
-   machinery around the evaluations costs (target: at most 2). The same ratio in CPU
-   seconds (the build's process tree against the kernel's own CPU time) is printed too: on a
-   machine shared with other work the wall times of both are inflated, by different amounts.
+1. **The build** of the slice: :func:`build_archive.build` (every stage, pack included, into
+   ``--out``), its wall and CPU time (the process tree) per stage.
+2. **Kernel only** (the yardstick): per member, its kernel's µs per candidate on one thread
+   (:func:`_shared.kernel_us`), timed before and after the build (their mean: the machine's
+   speed moves during a build), times the evaluations its runs used; over ``C`` cores, that
+   sum over ``C``. Build / kernel only is what the machinery around the evaluations costs
+   (target: at most 2), in wall and in CPU seconds.
 3. **Per member and per optimizer**: runs, evaluations, the runs' own time (the records'
-   ``timing.run_time_s``: the optimizer's time and the run's share of the gathered
-   evaluations, summed over runs, on whichever worker ran them), the kernel-only time of those
-   evaluations, and the jobs' analysis (each ``job.json``'s wall time less its runs' time over
-   the workers it had: the optimum polish, the floors, the records).
-4. **Extrapolation to ``--full-runs`` instances**, the method: a run's cost does not depend on
-   how many instances the job has, so the runs' time and the analysis (its polishes, one per
-   run near the optimum) scale by ``full_runs / runs``; the rest of the sweep's wall (Hydra's
-   composition, worker start-up, warm-up runs; the build's wall less its jobs' wall) and the
-   certify and pack stages are counted once more per job as measured. Jobs of one run put one
-   run per gathered call where 15 runs would share it, so the runs' time is an upper bound.
+   ``timing.run_time_s``), the kernel-only time of those evaluations, and the jobs' analysis
+   (each ``job.json``'s wall time less its runs' time over its workers).
+4. **Extrapolation to ``--full-runs`` instances**: a run's cost does not depend on the job's
+   other runs, so the runs' time and the analysis scale by ``full_runs / runs``; the rest of
+   the sweep (Hydra, worker start-up, warm-ups: the runs stage less its jobs' wall) and the
+   certify and pack stages count once more as measured. A job of one run shares no gathered
+   call, so the runs' time is an upper bound.
 
 Timings on a shared machine move by up to 2x between invocations: compare the columns of one
-invocation, and re-measure on a quiet machine before quoting absolute times.
+invocation.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import statistics
+import sys
 import time
 from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-from build_archive import build, parse_args
+from build_archive import ROOT, build, parse_args
 
 from vpid_bench.machine import available_cores
 
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from _shared import kernel_us  # noqa: E402  (the benchmarks' timer, one home)
+
 
 def cpu_seconds() -> float:
-    """CPU seconds (user + system) of this process and of its children that ended: the
-    build's process tree (the commands, their worker processes) once they are over."""
+    """CPU seconds (user + system) of this process and of its children that ended."""
     import resource
 
     own, kids = resource.getrusage(resource.RUSAGE_SELF), \
@@ -58,39 +53,13 @@ def cpu_seconds() -> float:
     return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
-def kernel_us(name: str, seconds: float = 1.0) -> tuple[float, float]:
-    """The member's microseconds per candidate on one thread, batches of 20 random
-    candidates in its box (the median of 5 timings of ``seconds / 5`` each), in wall time
-    and in this process's CPU time (the second does not count the time other programs on a
-    shared machine take from it)."""
-    from vpid_bench.build import build_problem
-    from vpid_bench.plugins import Registry
-
-    problem = build_problem(Registry(), {"name": name})
-    problem.set_threads(1)
-    X = problem.bounds.sample(np.random.default_rng(0), 20)
-    problem.evaluate(X)  # compiled on first use
-    wall, cpu = [], []
-    for _ in range(5):
-        reps, t0, c0 = 0, time.perf_counter(), time.process_time()
-        while time.perf_counter() - t0 < seconds / 5:
-            problem.evaluate(X)
-            reps += 1
-        wall.append((time.perf_counter() - t0) / reps / 20 * 1e6)
-        cpu.append((time.process_time() - c0) / reps / 20 * 1e6)
-    return statistics.median(wall), statistics.median(cpu)
-
-
 def yardstick(args: argparse.Namespace, seconds: float) -> dict[str, tuple[float, float]]:
-    """:func:`kernel_us` of every member the build will sweep, timed before it starts: the
-    machine's speed moves during a half-hour build (the same yardstick timed after three
-    builds gave 2,016, 1,852 and 1,738 s), so the ratio uses the mean of a timing before
-    and one after."""
+    """:func:`kernel_us` of every member the build will sweep, timed before it starts."""
     from vpid_bench.plugins import Registry
 
     names = (args.problems.split(",") if args.problems
              else sorted(Registry().suites().get(args.suite, ())))
-    return {m: kernel_us(m, seconds) for m in names}
+    return {m: kernel_us({"name": m}, seconds) for m in names}
 
 
 def read_jobs(runs_dir: Path) -> list[dict[str, Any]]:
@@ -140,15 +109,12 @@ def table(title: str, key: str, jobs: list[dict[str, Any]], us: dict[str, float]
 
 def built_report(runs_dir: Path, wall_s: float | None, kernel_seconds: float) -> None:
     """A finished build (every job of ``runs_dir``) beside the kernel-only time of its
-    evaluations: the runs' own time against the kernel's, and the build's wall time when
-    given. A build done in several sittings on a shared machine has no single CPU figure,
-    so the ratio of the runs' own time (each record's ``timing.run_time_s``) is the one
-    that another program's load moves least."""
+    evaluations (the runs' own time against the kernel's: a build in several sittings has
+    no single CPU figure), and the build's wall time when given."""
     jobs = read_jobs(runs_dir)
     if not jobs:
         raise SystemExit(f"error: no job.json below {runs_dir}")
-    members = sorted({j["problem"] for j in jobs})
-    us = {m: kernel_us(m, kernel_seconds)[0] for m in members}
+    us = {m: kernel_us({"name": m}, kernel_seconds)[0] for m in {j["problem"] for j in jobs}}
     workers = available_cores()
     evals = sum(e for j in jobs for e, _, _ in j["runs"])
     kernel_1 = sum(e * us[j["problem"]] for j in jobs for e, _, _ in j["runs"]) * 1e-6
@@ -162,8 +128,8 @@ def built_report(runs_dir: Path, wall_s: float | None, kernel_seconds: float) ->
     if wall_s is not None:
         print(f"build wall {wall_s:.0f} s / kernel only on {workers} cores: "
               f"{wall_s / max(kernel_1 / workers, 1e-9):.2f}x")
-    table("Per member", "problem", jobs, us, 1.0, workers)
-    table("Per optimizer", "optimizer", jobs, us, 1.0, workers)
+    for title, key in (("Per member", "problem"), ("Per optimizer", "optimizer")):
+        table(title, key, jobs, us, 1.0, workers)
 
 
 def main() -> None:
@@ -192,7 +158,7 @@ def main() -> None:
         raise SystemExit("error: the build did not end clean")
     jobs = read_jobs(built.runs_dir)
     members = sorted({j["problem"] for j in jobs})
-    after = {m: kernel_us(m, own.kernel_seconds) for m in members}
+    after = {m: kernel_us({"name": m}, own.kernel_seconds) for m in members}
     measured = {m: tuple((a + b) / 2 for a, b in zip(after[m], before.get(m, after[m])))
                 for m in members}
     us = {m: w for m, (w, _) in measured.items()}
@@ -230,8 +196,8 @@ def main() -> None:
           f"(runs {runs_part * scale:.0f} s + analysis {max(analysis, 0) * scale:.0f} s, "
           f"scaled x{scale:g}; outside the jobs {fixed:.0f} s and other stages {other:.0f} s, "
           "as measured)")
-    table("Per member", "problem", jobs, us, scale, workers)
-    table("Per optimizer", "optimizer", jobs, us, scale, workers)
+    for title, key in (("Per member", "problem"), ("Per optimizer", "optimizer")):
+        table(title, key, jobs, us, scale, workers)
 
 
 if __name__ == "__main__":

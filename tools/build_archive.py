@@ -3,31 +3,13 @@
     .venv/bin/python tools/build_archive.py --suite vpid1 --runs 15 --target 1e-8
     .venv/bin/python tools/build_archive.py --suite smoke --runs 30
 
-One command, resumable: run the same command again after an interruption and only what is
-missing runs (every stage is a ``vpid-bench`` sweep into a fixed folder, which skips the runs
-it has recorded). Its stages:
-
-1. **certify** (only with ``--target``): the instance optima that ``target=`` stops at must be
-   known before the runs. ``vpid-bench -m <members> optimizer=lsq budget_per_dim=100`` (the
-   job polishes each instance's optimum from its truth and from every run's best) into
-   ``<sweep>/certify``, packed as an optima-only archive into ``<sweep>/certified/<suite>``.
-2. **runs**: ``vpid-bench -m <members> optimizer=<every built-in> runs=<runs>
-   [target=<target>] archive=false report=false`` into ``<sweep>/runs``, with
-   ``VPID_BENCH_ARCHIVE_DIR=<sweep>/certified`` so that ``target=`` finds the optima of stage
-   1; its ``optima/`` folder starts from them (the truth's polish is not done twice).
-3. **pack** (refused when a job or run failed): ``archive/<suite>/`` (manifest, records,
-   optima, summary, IOH zip, per-job files) and the size of each file; the records and the
-   IOH zip of a shipped archive then move to ``archive-runs/vpid_archive_runs/<suite>/``,
-   the data distribution that ships them apart from the wheel.
-
-Anything after ``--`` is handed to both sweeps unchanged, so the same build runs through a
-Hydra launcher on a cluster::
-
-    .venv/bin/python tools/build_archive.py --suite vpid1 --runs 15 --target 1e-8 \\
-        --sweep /shared/vpid1 -- hydra/launcher=slurm_cluster hydra.launcher.partition=short
-
-Commit the archive folder together with the code that made it: the manifest names the commit
-(``-dirty`` when the work tree had changes) and the command.
+Resumable: each stage is a ``vpid-bench`` sweep into a fixed folder, which skips the runs it
+has recorded, so the same command again runs only what is missing. The stages (docs/sweeps.md,
+"Building an archive"): **certify** (with ``--target``: the instance optima, packed as an
+optima-only archive that ``target=`` reads), **runs** (every built-in, its ``optima/`` seeded
+from certify), **pack** (refused when a job or run failed; a shipped archive's runs then move
+to ``archive-runs/``). Anything after ``--`` goes to both sweeps (e.g. a Hydra launcher).
+Commit the archive with the code that made it: the manifest names the commit and command.
 """
 
 from __future__ import annotations
@@ -99,11 +81,9 @@ def clean(folder: Path, exit_ok: bool) -> bool:
 
 
 def seed_optima(certify: Path, runs_dir: Path) -> None:
-    """Copy the certify sweep's optimum files and per-problem files (bounds, floors per
-    estimator) into the runs sweep's ``optima/`` folder (only files it does not have; the
-    same file names, since they are keyed by the record's data and the runs, not by the
-    optimizer or the budget), so its jobs start from them instead of polishing each truth
-    and each floor again."""
+    """Copy the certify sweep's optimum and per-problem files (bounds, floors per estimator)
+    that the runs sweep's ``optima/`` lacks (their names key the record's data, not the
+    optimizer), so its jobs do not polish each truth and floor again."""
     for sub in (Path("."), Path(SHARED_DIR)):
         source = certify / "optima" / sub
         if not source.is_dir():

@@ -3,17 +3,11 @@
     .venv/bin/vpid-bench-report archive/smoke -o outputs/smoke-archive-report
     .venv/bin/python tools/not_separated.py outputs/smoke-archive-report
 
-Reads a full report's tables (``headline.csv``, ``pairwise.csv``, ``suite_scores.csv`` and
-``runs.csv``; nothing is recomputed) and prints, per context, in Markdown:
-
-* by the metric (NoRE), the leader and every optimizer the Holm-corrected pairwise tests of
-  the context do not separate from it (p_holm >= alpha);
-* the same among the black-box optimizers (those that need only the objective: not
-  ``wants_residuals``, not a reference), and which of them beat both random search and the box
-  centre (significantly lower);
-* the family's best score (mean fixed-target AUC, "Across the suite") among the black-box
-  optimizers, and those whose 95 % bootstrap interval overlaps its interval (an overlap is no
-  test, but a claim "best" needs intervals apart).
+From a full report's tables (nothing recomputed), per context in Markdown: the leader by NoRE
+and every optimizer the Holm-corrected pairwise tests do not separate from it (p_holm >=
+alpha); the same among the black-box optimizers (not ``wants_residuals``, not a reference),
+and which of them beat both random search and the box centre; the family's best black-box
+score (mean fixed-target AUC) and those whose 95 % bootstrap interval overlaps its own.
 """
 
 from __future__ import annotations

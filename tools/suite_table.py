@@ -1,16 +1,13 @@
 """The table of docs/suite.md: every member of a named suite at its defaults, instance 0.
 
-    .venv/bin/python tools/suite_table.py [--suite vpid1] [--starts 100] [--seed 0]
+    .venv/bin/python tools/suite_table.py [--suite vpid1] [--starts 100] [--seed 0] [--only a,b]
 
-Per problem: the model, the parameter set, the dimension, the input, the sensors, the noise,
-the record length, the Cramér–Rao bound's norm (%, under the problem's objective and noise
-convention, :func:`vpid_bench.analysis.identifiability.cramer_rao`), the condition number of
-the noise-scaled Jacobian in log-parameters, and how many distinct optima ``--starts``
-bounded least-squares fits (scipy's ``least_squares`` in the unit box, from uniform random
-starts, at most 300 evaluations each) end in: two ends are the same optimum when their
-objectives agree to a relative 1e-4; with each optimum, how many starts ended there and its
-NoRE against the truth. Fits that stop at the evaluation limit are counted apart ("stalled"),
-not as optima. Prints Markdown.
+Per problem: model, parameter set, dimension, input, sensors, noise, record length, the
+Cramér–Rao bound's norm (%, :func:`vpid_bench.analysis.identifiability.cramer_rao`), the
+condition number of the noise-scaled Jacobian in log-parameters, and the distinct optima that
+``--starts`` bounded least-squares fits from uniform random starts end in (at most 300
+evaluations each; the same optimum when the objectives agree to a relative 1e-4; with each,
+the starts that ended there and its NoRE). Fits stopped at the limit count apart ("stalled").
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 ones (the suite's model-error members, plugins/vpid_vehicle/ride/richer.py): the diagnostics
 flag the correlated residuals in one line, the robust (HAC) interval is at least 3x the
 white-noise one there, and it covers the pseudo-true value (the fit to the noise-free record)
-at >= 80 % for a nominal 95 % (benchmarks/interval_coverage.py prints the full figures)."""
+at >= 80 % for a nominal 95 % (tools/interval_coverage.py prints the full figures)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parents[2] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).parents[2] / "tools"))
 
 import interval_coverage  # noqa: E402
 

@@ -1,7 +1,7 @@
 """Slow: the floor the vehicle's records allow, on 30 noise instances, for the paper's window
 and the long record, through the job (its optima files and identifiability.json).
 
-Measured with ``python benchmarks/identifiability_floor.py --instances 30`` (the same polish
+Measured with ``python tools/identifiability_floor.py --instances 30`` (the same polish
 from the truth, outside the job): median NoRE of x* 27.1 % (window) and 3.98 % (long record).
 The Cramér–Rao bound's norm under the default noise (5 % multiplicative; samples whose σ is at
 rounding level left out, docs/estimators.md): 0.8834 % and 0.1073 % (the 23.62 % and 2.177 %

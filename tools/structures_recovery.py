@@ -1,14 +1,13 @@
 """The ``structures`` suite's members: the richer structure recovers the truth of the record
-it made, where the linear model fitted to the same record cannot (issue 43, item 3).
+it made, where the linear model fitted to the same record cannot (issue 43; docs/suite.md).
 
-    MPLBACKEND=Agg .venv/bin/python benchmarks/structures_recovery.py [--instances 3]
+    MPLBACKEND=Agg .venv/bin/python tools/structures_recovery.py [--instances 3]
 
-Per member and instance: the NoRE (%) of the richer structure's optimum of its own record
-(the IRLS polish from the truth, as the archive certifies optima), and the NoRE of the linear
-model's optimum on the same record (the record written as a file, the linear model fitted to
-it from the truth's linear part by the same polish) against the truth's linear part (the
-cubic term dropped, the damper the mean of bump and rebound, as ``record_model=
-bilinear_damper`` defines its ``cs``).
+Per member and instance: the NoRE (%) of the richer structure's optimum of its own record (the
+polish from the truth, as the archive certifies optima), and that of the linear model fitted
+to the same record (written as a file; from the truth's linear part) against the truth's
+linear part (no cubic term; the damper the mean of bump and rebound, as ``record_model=
+bilinear_damper`` defines ``cs``).
 """
 
 from __future__ import annotations

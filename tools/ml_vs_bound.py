@@ -1,21 +1,12 @@
 """The likelihood (``objective=ml``) against the Cramér–Rao bound, like with like, at more
-than one noise level.
+than one noise level (docs/estimators.md, "The likelihood against the bound").
 
-The bound's norm ``sqrt(Σ_j CRB_j²)`` (% of the true values) is the **rms** of an efficient
-unbiased estimator's error norm (NoRE): ``E[NoRE²] = trace(cov)``. A median NoRE is a
-different statistic: for a Gaussian error with the bound's covariance its median lies below
-the rms (between about 0.67 and 0.96 of it, by how many parameters share the error). So, per
-noise level, over instances 0 .. n-1 of ``problem=vehicle`` (the paper's window, multiplicative
-noise) with the ``ml`` optimum polished from the truth:
-
-* ``rms-norm``: ``sqrt(Σ_j mean_i e_ij²)`` of the optimum's relative errors ``e`` (%), against
-  the bound's norm;
-* ``median NoRE`` against the median of ``||N(0, cov_CRB)||`` (200,000 seeded draws of the
-  bound's full covariance, relative units).
-
-Both ratios are 1 for an efficient estimator; the rms one carries the more weight (the median
-of ``n`` instances scatters by some 15 % at ``n = 30``). Deterministic. Command:
-``python benchmarks/ml_vs_bound.py --instances 30 --levels 0.05 0.2`` (about a minute).
+Per level, over instances 0 .. n-1 of ``problem=vehicle`` with the ``ml`` optimum polished
+from the truth: the rms-norm ``sqrt(Σ_j mean_i e_ij²)`` of its relative errors (%) against the
+bound's norm (the rms of an efficient estimator's NoRE), and its median NoRE against the
+median of ``||N(0, cov_CRB)||`` (200,000 seeded draws). Both ratios are 1 for an efficient
+estimator. Deterministic. Command:
+``python tools/ml_vs_bound.py --instances 30 --levels 0.05 0.2`` (about a minute).
 """
 
 from __future__ import annotations
@@ -72,7 +63,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--instances", type=int, default=30)
     ap.add_argument("--levels", type=float, nargs="+", default=[0.05, 0.2])
     args = ap.parse_args(argv)
-    print(f"command: python benchmarks/ml_vs_bound.py --instances {args.instances} --levels "
+    print(f"command: python tools/ml_vs_bound.py --instances {args.instances} --levels "
           + " ".join(f"{v:g}" for v in args.levels))
     print("noise level | rms-norm of ml's errors | CRB norm | ratio | median NoRE of ml | "
           "median of the CRB Gaussian's norm | ratio")

@@ -1,25 +1,14 @@
-"""How often the 95 % intervals cover the pseudo-true value on the suite's model-error
-members: the robust (HAC sandwich) interval beside the white-noise (Jacobian) one.
+"""How often the 95 % intervals cover the pseudo-true value on the suite's model-error members:
+the robust (HAC sandwich) interval beside the white-noise (Jacobian) one (docs/estimators.md,
+"What an interval covers under model error").
 
-With model error no parameter vector reproduces the record; an interval can then only be
-about the *pseudo-true* value ``θ*``: the fitted model's best fit to the noise-free record
-(what the estimate tends to with ever less noise). Per member (``record_model`` not linear:
-``vpid1_q_golden_bilinear``, ``vpid1_h_gokdag_seat_iso_c``, ``vpid1_l_civic_model_error``) and
-instance ``i`` (its own truth, road and noise):
-
-* the estimate ``θ̂``: the Gaussian likelihood with each channel's σ unknown and profiled
-  out (``objective=ml_profiled``: the weights ``1/σ̂_c²`` the intervals use, so the
-  sandwich's bread and meat are this estimator's), fitted to the noisy record by
-  iteratively reweighted least squares from the truth, inside the box;
-* ``θ*``: the same estimator on the noise-free record (``problem.clean``);
-* both intervals at ``θ̂`` (:func:`vpid_bench.analysis.intervals.jacobian_intervals`); a
-  parameter is covered when ``θ*_j`` lies inside.
-
-Prints per member the coverage over every (instance, parameter) of each interval, their
-median half-widths (% of the value) and the median lag-1 autocorrelation of the residuals.
-Deterministic (the members' seeds). Command:
-``python benchmarks/interval_coverage.py --instances 15`` (about a minute per member once
-compiled).
+Per member and instance: the estimate ``θ̂`` (``objective=ml_profiled``, fitted to the noisy
+record by iteratively reweighted least squares from the truth, inside the box), the
+pseudo-true ``θ*`` (the same on the noise-free record, ``problem.clean``), both intervals at
+``θ̂`` (:func:`vpid_bench.analysis.intervals.jacobian_intervals`); a parameter is covered when
+``θ*_j`` lies inside. Prints per member the coverage of each interval, their median
+half-widths (% of the value) and the median lag-1 autocorrelation of the residuals.
+Deterministic. Command: ``python tools/interval_coverage.py --instances 15``.
 """
 
 from __future__ import annotations

@@ -1,23 +1,14 @@
 """Why ``objective=ml`` takes each sample's σ from its neighbours: three ways of weighing the
-paper's records under their multiplicative noise, side by side.
+paper's records under their multiplicative noise, side by side (docs/estimators.md).
 
-* ``leave_one_out``: the ``ml`` objective as built (:func:`vpid_bench.estimators.plug_in_sigma`:
-  ``σ_k = level × |z_k|`` estimated from the neighbouring samples only);
-* ``own_sample``: ``σ_k = level × |y_k|`` from the noisy sample itself (the rule before round
-  four), floored like the others;
-* ``exact_likelihood``: ``σ_k(θ) = level × |g_k(θ)|`` from the model's prediction with the
-  ``Σ log σ_k(θ)`` term, floored at ``SIGMA_FLOOR × level × rms(y_c)`` (σ² adds the floor's
-  square), rounding-level samples left out; its residuals for least squares are the whitened
-  ones scaled so that their sum of squares is twice the negative log-likelihood (less a
-  constant).
-
-For each, over instances 0 .. n-1 of ``problem=vehicle`` (or with ``--exact-record`` a record
-made by the exact solution instead of the fitted Newmark integrator): the optimum polished from
-the truth, its median NoRE, the norm of the per-parameter rms errors, the largest |mean error| in
-standard errors; and ``--lsq K``: ``optimizer=lsq`` from random starts (the default budget) on
-the first K instances, its median relative gap to that optimum. Deterministic.
-
-Command: ``python benchmarks/ml_weights.py --instances 30 --lsq 5`` (about a minute).
+``leave_one_out`` (``ml`` as built, :func:`vpid_bench.estimators.plug_in_sigma`);
+``own_sample`` (``σ_k = level × |y_k|`` from the noisy sample, the rule before round four);
+``exact_likelihood`` (``σ_k(θ) = level × |g_k(θ)|`` from the prediction, with the
+``Σ log σ_k(θ)`` term). For each, over instances 0 .. n-1 of ``problem=vehicle`` (or a record
+made by the exact solution, ``--exact-record``): the optimum polished from the truth, its
+median NoRE, the norm of the rms errors, the mean error in standard errors; with ``--lsq K``,
+``optimizer=lsq`` from random starts on the first K instances, its median gap to that
+optimum. Deterministic. Command: ``python tools/ml_weights.py --instances 30 --lsq 5``.
 """
 
 from __future__ import annotations
@@ -121,7 +112,7 @@ def main() -> None:
     parser.add_argument("--lsq", type=int, default=5)
     parser.add_argument("--exact-record", action="store_true")
     args = parser.parse_args()
-    print(f"command: python benchmarks/ml_weights.py --instances {args.instances} "
+    print(f"command: python tools/ml_weights.py --instances {args.instances} "
           f"--lsq {args.lsq}" + (" --exact-record" if args.exact_record else ""))
     print("             " + " ".join(f"{n:>6s}" for n in PARAM_NAMES))
     for rule in RULES:

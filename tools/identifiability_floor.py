@@ -1,12 +1,9 @@
-"""What the vehicle's records allow, over many noise instances: the measured floor (the NoRE of
-each instance's optimum x*, polished from the truth) under each estimator (``objective`` eq3,
-ols, ml, ml_profiled) beside the Cramér–Rao bound for the simulated noise, for the paper's
-window and the long record (``problem=vehicle_long_record``: ``record.extra=0.5``).
-
-Prints, per design: the median NoRE of x* over the instances with its quartiles, the CRB
-NoRE (norm of the per-parameter bounds), the per-parameter CRB % and the median |error| of
-x* per parameter. Deterministic (noise instances i = 0 .. n-1 of ``noise.seed=0``).
-Command: ``python benchmarks/identifiability_floor.py --instances 30``.
+"""What the vehicle's records allow, over many noise instances (docs/vehicle.md): the NoRE of
+each instance's optimum x* (polished from the truth) under each estimator (``objective`` eq3,
+ols, ml, ml_profiled) beside the Cramér–Rao bound, for the paper's window and the long record
+(``record.extra=0.5``): median NoRE with its quartiles, the CRB NoRE, per parameter the CRB %
+and the median |error| of x*. Deterministic (instances 0 .. n-1 of ``noise.seed=0``).
+Command: ``python tools/identifiability_floor.py --instances 30``.
 """
 
 from __future__ import annotations
@@ -48,7 +45,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--instances", type=int, default=30)
     args = parser.parse_args()
-    print(f"command: python benchmarks/identifiability_floor.py --instances {args.instances}")
+    print(f"command: python tools/identifiability_floor.py --instances {args.instances}")
     for (label, design), objective in ((d, o) for d in DESIGNS.items() for o in OBJECTIVES):
         m = measure({**design, "objective": objective}, args.instances)
         q1, med, q3 = np.percentile(m["nore"], [25, 50, 75])
