@@ -30,23 +30,30 @@ def _systems():
             names = list(model.names)
             nominal = np.array([known[k] for k in names])
             X = nominal * rng.uniform(0.7, 1.3, (6, nominal.size))
-            for sensors in model.sensors:
+            for k, sensors in enumerate(model.sensors):
                 system = (quarter_system(X, known["kt"], known.get("ct", 0.0), sensors)
                           if isinstance(model, QuarterCar) else
                           model.system(X, known, sensors))
                 r = system.F.shape[-1]
                 u = np.zeros((600, r))
                 u[50:250] = rng.normal(0.0, 0.01, (200, r))  # zero stretches too
-                out.append((f"{type(model).__name__}-{set_name}-{sensors}", system, u))
+                out.append((f"{type(model).__name__}-{set_name}-{sensors}", system, u,
+                            isinstance(model, FullCar) and k > 0))
             break  # one published set per model: the sizes do not depend on it
     return out
 
 
-SYSTEMS = _systems()
+#: (label, system, inputs, slow): the full car's further sensor sets compile 15-20 s each,
+#: so they run under ``-m slow``.
+_ALL = _systems()
+SYSTEMS = [s[:3] for s in _ALL]
+CASES = [pytest.param(system, u, id=label, marks=pytest.mark.slow if slow else ())
+         for label, system, u, slow in _ALL]
 
 
-@pytest.mark.parametrize(("label", "system", "u"), SYSTEMS, ids=[s[0] for s in SYSTEMS])
-def test_compiled_newmark_equals_the_plain_scheme(label, system, u):
+@pytest.mark.parametrize(("system", "u"), CASES)
+def test_compiled_newmark_equals_the_plain_scheme(system, u, request):
+    label = request.node.callspec.id
     plain = linear.simulate(linear.newmark(system, 1e-3), u)
     fast = linear.newmark_outputs(system, 1e-3, u)
     scale = np.max(np.abs(plain), axis=(0, 1))
