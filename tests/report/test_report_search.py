@@ -249,7 +249,7 @@ def test_block_statistics_need_five_instances(tmp_path):
     assert few.mean_ranks is None and "at least 5 blocks" in few.note
 
 
-@pytest.mark.parametrize("n", [14, 30, 50])
+@pytest.mark.parametrize("n", [14, pytest.param(30, marks=pytest.mark.slow), 50])  # 30: -m slow
 def test_the_fast_wilcoxon_permutation_test_is_scipys(n):
     """With ties or zero differences (14 <= n <= 50) the paired Wilcoxon test is a seeded
     permutation test; the report's vectorised version gives scipy's statistic and p-value
