@@ -1,4 +1,4 @@
-"""Filling a block of the shared core (:mod:`.unrolled`, :mod:`.kernel`) from per-candidate
+"""Filling a block of the shared core (:mod:`.codegen`'s, :mod:`.kernel`) from per-candidate
 tables: the compiled code the generated time loops share."""
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ import numpy as np
 from . import vecmath
 from .blocks import load_block
 
-#: Candidates per block of :func:`run_table_loops` (as in :mod:`.unrolled`).
+#: Candidates per block of :func:`run_table_loops` (as in :mod:`.codegen`).
 LANES = 4
 #: The compiled Newmark path: no GIL, cached, and numpy's floating-point semantics (a
 #: singular matrix gives inf/NaN, never an exception).
@@ -262,7 +262,7 @@ def _step_loops(blk, W, s, p, st):  # pragma: no cover - compiled
 def run_table_loops(T, w0, u, y):  # pragma: no cover - compiled
     """The outputs ``y[j, k, c]`` of the recurrence tabled by :func:`newmark_table` (``T``
     ``(n, s + p, s + r)``, ``w0`` ``(n, s)``) driven by ``u`` ``(N, r)``: the time loops of
-    :mod:`.unrolled` for any sizes, as loops. Slower (the compiler cannot keep a state of
+    :mod:`.codegen` for any sizes, as loops. Slower (the compiler cannot keep a state of
     run-time size in registers) and each dot product summed in order, not pairwise; the
     block layout is the same."""
     n, R, S = T.shape

@@ -16,7 +16,7 @@ Two discretisations of the same system, both a linear recurrence
 
 One compiled kernel (:func:`simulate`) iterates either. The fitted model's path,
 :func:`newmark_outputs`, is compiled end to end instead (the Newmark table per candidate, then
-a time loop written out for the system's sizes, :mod:`.unrolled`): the same outputs to
+a time loop written out for the system's sizes, :mod:`.codegen`): the same outputs to
 rounding, at the speed of the paper's hand-written kernel (``benchmarks/bench_ride_core.py``).
 :func:`newmark` stays as the plain statement of the scheme the tests hold it to. Units are SI
 throughout.
@@ -141,7 +141,7 @@ def newmark_outputs(system: LinearSystem, dt: float, u: np.ndarray, gamma: float
     rest: ``simulate(newmark(system, dt, gamma, beta), u)`` to rounding, compiled end to end
     (see the module docstring)."""
     from . import kernel
-    from .unrolled import RUNS
+    from .codegen import runs
 
     n, d = system.M.shape[0], system.dof
     r, p = system.F.shape[-1], system.Pq.shape[-2]
@@ -153,7 +153,7 @@ def newmark_outputs(system: LinearSystem, dt: float, u: np.ndarray, gamma: float
         _leading(system.Pq, (p, d)), _leading(system.Pu, (p, r)),
         float(dt), float(gamma), float(beta), u[0], T, w0)
     y = np.empty((p, u.shape[0], n))
-    RUNS.get((2 * d, p, r), kernel.run_table_loops)(T, w0, u, y)
+    runs().get((2 * d, p, r), kernel.run_table_loops)(T, w0, u, y)
     return y.transpose(2, 1, 0)
 
 
