@@ -121,17 +121,17 @@ def test_a_file_with_other_content_is_rewritten_whole(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == [path.name]
 
 
-def test_the_cache_folders_follow_numba_cache_dir_then_the_package_then_the_user(
+def test_the_cache_folders_follow_numba_cache_dir_then_the_user_then_the_package(
         monkeypatch, tmp_path):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
     folders = codegen.cache_folders()
     assert folders[0] == tmp_path / "numba" / "vpid_vehicle"
-    assert folders[1] == Path(codegen.__file__).with_name("__pycache__")
     if os.name != "nt":
-        assert folders[2] == tmp_path / "xdg" / "vpid-bench"
+        assert folders[1] == tmp_path / "xdg" / "vpid-bench"
+    assert folders[2] == Path(codegen.__file__).with_name("__pycache__")
     monkeypatch.delenv("NUMBA_CACHE_DIR")
-    assert codegen.cache_folders()[0] == Path(codegen.__file__).with_name("__pycache__")
+    assert codegen.cache_folders() == folders[1:]
 
 
 def test_no_writable_cache_folder_falls_back_to_a_private_temporary_one(monkeypatch, tmp_path):

@@ -14,9 +14,9 @@ Where the code goes. :func:`runs` writes :func:`module_source` once to a real fi
 caches compiled code only for functions with a source file), ``unrolled_<hash>.py`` where
 ``<hash>`` is the first 16 hex digits of the source's SHA-256 (a changed generator writes a
 new file), in the first folder of these it can write: ``$NUMBA_CACHE_DIR/vpid_vehicle`` when
-that variable is set; ``__pycache__`` beside this module; the user's cache folder
-(``$XDG_CACHE_HOME``, else ``~/.cache``; ``%LOCALAPPDATA%`` on Windows) ``/vpid-bench``; a
-fresh private temporary folder (a read-only install with no writable home: the code is then
+that variable is set; the user's cache folder (``$XDG_CACHE_HOME``, else ``~/.cache``;
+``%LOCALAPPDATA%`` on Windows) ``/vpid-bench``; ``__pycache__`` beside this module; a fresh
+private temporary folder (a read-only install with no writable home: the code is then
 compiled anew in each process). The file is written whole under a temporary name and renamed
 into place, so processes that generate it at once never read half of it; one found with other
 content is rewritten. Numba's compiled code goes where numba's own rule puts it (beside the
@@ -131,12 +131,12 @@ def module_source() -> str:
 
 def cache_folders() -> list[Path]:
     """The folders :func:`runs` tries, in order (the module docstring says why)."""
-    folders = [Path(__file__).with_name("__pycache__")]
-    if os.environ.get("NUMBA_CACHE_DIR"):
-        folders.insert(0, Path(os.environ["NUMBA_CACHE_DIR"]) / "vpid_vehicle")
     home = (os.environ.get("LOCALAPPDATA") if os.name == "nt"
             else os.environ.get("XDG_CACHE_HOME")) or Path.home() / ".cache"
-    return [*folders, Path(home) / "vpid-bench"]
+    folders = [Path(home) / "vpid-bench", Path(__file__).with_name("__pycache__")]
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        folders.insert(0, Path(os.environ["NUMBA_CACHE_DIR"]) / "vpid_vehicle")
+    return folders
 
 
 def write_source(folder: Path, source: str) -> Path:
