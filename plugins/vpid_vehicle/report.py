@@ -196,4 +196,3 @@ def vehicle_sections(ctx: ReportContext) -> Contribution:
     if mean_section is not None:
         sections.append(mean_section)
     return Contribution(sections=tuple(sections), headline=tuple(columns))
-
