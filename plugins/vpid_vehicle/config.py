@@ -1,11 +1,6 @@
-"""Settings of ``problem=vehicle`` (frozen dataclasses) and their validation.
-
-Every field is a Hydra key under ``problem.``: ``problem.vehicle.m``, ``problem.bump.V``,
-``problem.noise.level`` ... Units are SI except the bump speed ``V``, which is in km/h as in
-the paper. Defaults are the paper's vehicle and test (Gökdağ 2014, see docs/paper-notes.md).
-
-:func:`validate` raises :class:`vpid_bench.api.ConfigError` naming the key as the user types
-it, so a bad override fails in one line before any simulation starts.
+"""Settings of ``problem=vehicle`` and their validation (one :class:`ConfigError` line naming
+the key, before any simulation). Units SI except the bump speed ``V`` (km/h, as in the
+paper); defaults: the paper's vehicle and test (Gökdağ 2014, docs/paper-notes.md).
 """
 
 from __future__ import annotations
@@ -43,10 +38,8 @@ NOISE_MODELS = ("multiplicative", "additive", "uniform")
 
 @dataclass(frozen=True)
 class VehicleParams:
-    """The half-car (bicycle) model. Masses in kg, ``I`` in kg m^2, stiffnesses in N/m,
-    damping in N s/m, lengths in m. ``a1`` is the distance from the centre of gravity to the
-    front axle, ``L`` the wheelbase (known), so ``a2 = L - a1``. ``kt1``, ``kt2`` (tyre
-    stiffnesses) are known and not identified."""
+    """The half car (kg, kg m^2, N/m, N s/m, m): ``a1`` from the centre of gravity to the
+    front axle; the wheelbase ``L`` and tyre stiffnesses ``kt1``, ``kt2`` are known."""
 
     m: float = 505.1
     I: float = 651.0
@@ -64,8 +57,7 @@ class VehicleParams:
 
 @dataclass(frozen=True)
 class BumpConfig:
-    """Rectangular bump: speed ``V`` in km/h (the paper's unit), height ``h`` and width
-    ``w`` in m. The rear tyre meets it ``L / V`` after the front one."""
+    """Rectangular bump: speed ``V`` (km/h, the paper's unit), height ``h``, width ``w`` (m)."""
 
     V: float = 20.0
     h: float = 0.04
@@ -74,8 +66,8 @@ class BumpConfig:
 
 @dataclass(frozen=True)
 class NewmarkConfig:
-    """Newmark-beta constants; the default is the average-acceleration (trapezoidal) rule.
-    ``gamma`` in [0.5, 1] (below 1/2 the scheme adds energy), ``beta`` in [0, 0.5]."""
+    """Newmark-beta; default the average-acceleration rule. ``gamma`` in [0.5, 1] (below 1/2
+    the scheme adds energy), ``beta`` in [0, 0.5]."""
 
     gamma: float = 0.5
     beta: float = 0.25
@@ -90,17 +82,10 @@ class RecordConfig:
 
 @dataclass(frozen=True)
 class NoiseConfig:
-    """Measurement noise added once to the synthetic reference.
-
-    ``model``: ``multiplicative`` (z (1 + level n), n ~ N(0, 1) per sample, the default
-    reading of the paper's "5 %"), ``additive`` (z + level rms(z) n, rms per channel) or
-    ``uniform`` (z (1 + level u), u ~ U(-1, 1)). ``seed`` seeds the noise generator only.
-
-    ``per_run``: true (the default) gives instance ``i`` of the problem (the record run ``i``
-    of every optimizer fits) its own noise record, drawn from
-    ``numpy.random.SeedSequence(seed, spawn_key=(i,))``; false keeps one record, drawn from
-    ``numpy.random.default_rng(seed)``, for every run.
-    """
+    """Noise added to the synthetic reference (:func:`.objective.add_noise`; ``multiplicative``
+    is the default reading of the paper's "5 %"); ``seed`` seeds the noise only.
+    ``per_run``: instance ``i`` (run ``i`` of every optimizer) gets its own record from
+    ``SeedSequence(seed, spawn_key=(i,))``; false: one record from ``default_rng(seed)``."""
 
     level: float = 0.05
     model: str = "multiplicative"
@@ -110,14 +95,10 @@ class NoiseConfig:
 
 @dataclass(frozen=True)
 class ReferenceConfig:
-    """How the reference record is made. ``null`` means "the same as the model".
-
-    ``integrator``, ``dt`` (s, must divide ``problem.dt``) and ``sampling`` let the synthetic
-    reference differ from the model that fits it (no "inverse crime"). ``file``: a CSV with
-    a measured record (columns ``t, z1dd, z2dd`` in s and m/s^2, any rate and start, units
-    optional: :mod:`.record_file`) fitted instead; no noise is added to it, and the problem
-    has no truth.
-    """
+    """How the reference is made (``null``: as the model). ``integrator``, ``dt`` (s,
+    dividing ``problem.dt``), ``sampling``: a synthetic reference unlike the fitted model (no
+    inverse crime). ``file``: a measured record (:mod:`.reference_io`) fitted instead, no
+    noise added, no truth."""
 
     integrator: str | None = None
     dt: float | None = None
@@ -140,8 +121,8 @@ class ReferenceConfig:
 
 @dataclass(frozen=True)
 class BoundsConfig:
-    """The search box is ``[lower_factor, upper_factor] x`` the true values; a parameter's
-    own box ``problem.bounds.<name>=[lo,hi]`` (SI units) replaces its row."""
+    """The box ``[lower_factor, upper_factor] x`` the true values; ``bounds.<name>=[lo,hi]``
+    (SI) replaces a row."""
 
     lower_factor: float = 0.5
     upper_factor: float = 1.5
@@ -167,17 +148,10 @@ KNOWN_WHAT = {"L": ("m", "wheelbase"), "kt1": ("N/m", "front tyre stiffness"),
 
 @dataclass(frozen=True)
 class VehicleConfig(ProblemConfig):
-    """``problem=vehicle``: identify 9 parameters of a half-car from two body accelerations.
-
-    ``dt`` is the integration step and sample interval in s; ``integrator`` is ``newmark``
-    (fast compiled kernel) or ``exact`` (matrix exponential, for validation); ``sampling`` is
-    how the step input enters Newmark: ``point`` (y at t_k) or ``average`` (each step gets
-    the exact mean of y over the step; see :mod:`vpid_vehicle.road`). ``objective`` is the
-    estimator: ``eq3`` (the paper's), ``ols``, ``ml`` or ``ml_profiled``
-    (:mod:`vpid_bench.estimators`; ``ml`` weighs by the stated noise model, ``noise.model``
-    and ``noise.level``, and is refused for a measured ``reference.file``, whose noise is not
-    known: ``ml_profiled`` estimates each channel's sigma from the residuals).
-    """
+    """``problem=vehicle``: 9 parameters of a half car from two body accelerations (keys:
+    docs/vehicle.md). ``dt``: step and sample interval (s); ``integrator``: ``newmark`` or
+    ``exact``; ``sampling``: :mod:`vpid_vehicle.road`; ``objective``: ``eq3`` (the paper's),
+    ``ols``, ``ml`` (the stated noise; refused for a measured record) or ``ml_profiled``."""
 
     vehicle: VehicleParams = field(default_factory=VehicleParams)
     bump: BumpConfig = field(default_factory=BumpConfig)
@@ -202,8 +176,8 @@ class VehicleConfig(ProblemConfig):
 
 
 def _apply_known(config: VehicleConfig) -> None:
-    """Set the ``vehicle.``/``bump.`` key of each ``known.<name>`` (refusing a name that is
-    not a stated quantity, or ``free``: this problem identifies a fixed set)."""
+    """Set the ``vehicle.``/``bump.`` key of each ``known.<name>`` (this problem identifies
+    a fixed set: nothing freed)."""
     for name, value in config.known.items():
         key = f"problem.known.{name}"
         if name not in KNOWN_KEYS:
@@ -218,8 +192,7 @@ def _apply_known(config: VehicleConfig) -> None:
 
 
 def known_list(config: VehicleConfig) -> list[dict[str, Any]]:
-    """``problem.info.known`` of ``problem=vehicle``: each stated quantity with its value,
-    unit and source."""
+    """``problem.info.known``: each stated quantity with its value, unit and source."""
     out = []
     for name, (part, field_name) in KNOWN_KEYS.items():
         value = getattr(getattr(config, part), field_name)
@@ -249,11 +222,6 @@ def own_boxes(config: VehicleConfig) -> dict[str, tuple[float, float]]:
                               f"[lo, hi] with hi < L = {config.vehicle.L:g} m")
         out[name] = (float(value[0]), float(value[1]))
     return out
-
-
-def _finite(key: str, value: float, allowed: str) -> None:
-    if not math.isfinite(value):
-        raise ConfigError(key, value, allowed)
 
 
 def _positive(key: str, value: float, allowed: str) -> None:
@@ -370,9 +338,8 @@ def _gib(n_bytes: float) -> str:
 
 
 def estimated_memory(config: VehicleConfig, T: float) -> tuple[float, float, float]:
-    """(samples of the model's grid, steps of the reference's grid, estimated bytes) of a
-    job: every step costs :data:`BYTES_PER_STEP`, every sample of a batch of ``ps``
-    candidates :data:`BYTES_PER_SAMPLE_CANDIDATE` (floats: no array is made to count them)."""
+    """(model samples, reference steps, estimated bytes) of a job, by :data:`BYTES_PER_STEP`
+    and :data:`BYTES_PER_SAMPLE_CANDIDATE` (no array is made to count them)."""
     samples = T / config.dt + 1
     ref_dt = config.reference.dt if config.reference.file is None else None
     steps = T / ref_dt + 1 if ref_dt else samples
@@ -381,9 +348,8 @@ def estimated_memory(config: VehicleConfig, T: float) -> tuple[float, float, flo
 
 
 def _blame(config: VehicleConfig, T: float) -> tuple[str, float]:
-    """The key that made the record long: ``problem.dt`` when the step is finer (against the
-    paper's 1 ms) than the window is long (against its 0.48 s), else the largest term of the
-    window ``(L + w) / V + extra`` (a long ``L / V`` is a slow ``problem.bump.V``)."""
+    """The key that made the record long: ``problem.dt`` when the step is finer (against 1
+    ms) than the window is long (against 0.48 s), else the window's largest term."""
     if 0.001 / config.dt > T / 0.48:
         return "problem.dt", config.dt
     v = config.bump.V / 3.6
@@ -413,9 +379,8 @@ def check_size(config: VehicleConfig, T: float) -> None:
 
 
 def check_reference_file(config: VehicleConfig) -> float:
-    """Read ``problem.reference.file`` once, so a file that does not fit fails the command's
-    pre-flight (exit 2) rather than the job; returns the record's span (s), the window the
-    model then integrates over."""
+    """Read ``problem.reference.file`` at the pre-flight (a bad file fails there, exit 2);
+    its span (s), the window the model integrates over."""
     from .record_file import check_span
     from .reference_io import read_measured
 
