@@ -62,6 +62,7 @@ from vpid_bench import (
 
 from . import third_party
 from .dynamic_rows import DYNAMIC_ROWS
+from .problem import ChannelFit
 
 #: The simulator's coefficients, ``deep_dynamics.yaml`` of the records' repository (its
 #: PARAMETERS and VEHICLE_SPECS): value, Min, Max. A test reads the shipped file against them.
@@ -141,7 +142,7 @@ class TrackRecord:
         return out
 
 
-class BayesraceProblem(Problem):
+class BayesraceProblem(ChannelFit, Problem):
     """The Bayesrace records fitted by the continuous-time model (module docstring)."""
 
     Config = BayesraceConfig
@@ -175,34 +176,8 @@ class BayesraceProblem(Problem):
     def x_true(self) -> np.ndarray:
         return self._x_true.copy()
 
-    def _weighted(self, X: np.ndarray) -> np.ndarray:
-        """``measured - computed`` times the objective's weights, ``(n, 3, N)``."""
-        return (self.measured[None] - self.fit.simulate(X)) * self.weights[None]
-
-    def residuals(self, X: np.ndarray) -> np.ndarray:
-        """What a least-squares optimizer minimises (:func:`estimators.residuals_and_value`),
-        channels one after another, ``(n, 3 N)``; inf rows where a simulation fails."""
-        return self.evaluate_with_residuals(X)[1]
-
-    def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
-        """``(measured_c - computed_c) / ||measured_c||`` whatever the objective, channels one
-        after another, ``(n, 3 N)`` (what intervals and bounds differentiate)."""
-        scale = np.linalg.norm(self.measured, axis=1)[None, :, None]
-        R = (self.measured[None] - self.fit.simulate(X)) / scale
-        R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
-        return R.reshape(R.shape[0], -1)
-
-    def fisher_groups(self) -> np.ndarray:
-        return np.repeat(np.arange(3), self.measured.shape[1])
-
-    def residual_groups(self) -> np.ndarray:
-        return estimators.groups(self.config.objective, 3, self.measured.shape[1])
-
-    def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return estimators.residuals_and_value(self.config.objective, self._weighted(X))
-
-    def evaluate(self, X: np.ndarray) -> np.ndarray:
-        return self.evaluate_with_residuals(X)[0]
+    def computed(self, X: np.ndarray) -> np.ndarray:
+        return self.fit.simulate(X)
 
     def metrics(self, x: np.ndarray) -> dict[str, float]:
         """``NoRE`` (%) against the simulator's coefficients, then the held-out track's rms

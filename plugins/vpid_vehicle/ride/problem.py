@@ -232,7 +232,51 @@ def read_ride_record(model: RideModel, config: Any) -> Record:
     return record
 
 
-class RideProblem(Problem):
+class ChannelFit:
+    """The residuals of a problem that fits measured channels ``measured`` ``(p, N)`` with the
+    objective's ``weights`` (:mod:`vpid_bench.estimators`) by :meth:`computed` ``(n, p, N)``
+    (NaN rows where a row is not simulated): channels one after another, inf rows where a
+    simulation fails."""
+
+    measured: np.ndarray
+    weights: np.ndarray
+
+    def computed(self, X: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def _weighted(self, X: np.ndarray) -> np.ndarray:
+        """``measured - computed`` times the objective's fixed weights, ``(n, p, N)``."""
+        return (self.measured[None] - self.computed(X)) * self.weights
+
+    def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return estimators.residuals_and_value(self.config.objective, self._weighted(X))
+
+    def evaluate(self, X: np.ndarray) -> np.ndarray:
+        return self.evaluate_with_residuals(X)[0]
+
+    def residuals(self, X: np.ndarray) -> np.ndarray:
+        """What a least-squares optimizer minimises (:func:`estimators.residuals_and_value`:
+        Eq. 3's over ``||measured_c||``; ``ml_profiled``'s rescaled per channel)."""
+        return self.evaluate_with_residuals(X)[1]
+
+    def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
+        """``(measured_c - computed_c) / ||measured_c||`` whatever the objective (what the
+        intervals and the Cramér–Rao bound differentiate)."""
+        scale = np.linalg.norm(self.measured, axis=1)[None, :, None]
+        R = (self.measured[None] - self.computed(X)) / scale
+        R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
+        return R.reshape(R.shape[0], -1)
+
+    def fisher_groups(self) -> np.ndarray:
+        """The channel of each entry of :meth:`fisher_residuals`."""
+        return np.repeat(np.arange(self.measured.shape[0]), self.measured.shape[1])
+
+    def residual_groups(self) -> np.ndarray:
+        """The channels for Eq. 3 (one norm each), one group for the sums of squares."""
+        return estimators.groups(self.config.objective, *self.measured.shape)
+
+
+class RideProblem(ChannelFit, Problem):
     """A ride model identified from a road record (see the module docstring)."""
 
     model: ClassVar[RideModel]
@@ -333,6 +377,9 @@ class RideProblem(Problem):
         """The instance's truth; ``None`` for a user's record (no truth)."""
         return None if self._x_true is None else self._x_true.copy()
 
+    def computed(self, X: np.ndarray) -> np.ndarray:
+        return self.responses(X)
+
     def responses(self, X: np.ndarray) -> np.ndarray:
         """The fitted model's channels ``(n, p, N)`` for the rows of ``X``; NaN rows for a
         row that is not a vehicle."""
@@ -346,44 +393,12 @@ class RideProblem(Problem):
                 out[ok] = y if self.sampler is None else self.sampler.at_record(y)
         return out
 
-    def _weighted(self, X: np.ndarray) -> np.ndarray:
-        """``measured - computed`` times the objective's fixed weights, ``(n, p, N)``."""
-        return (self.measured[None] - self.responses(X)) * self.weights[None]
-
-    def residuals(self, X: np.ndarray) -> np.ndarray:
-        """What a least-squares optimizer minimises, channels one after another, ``(n, p N)``
-        (:func:`estimators.residuals_and_value`: ``measured_c - computed_c`` times the
-        objective's weights, Eq. 3: over ``||measured_c||``; ``ml_profiled`` rescaled per
-        channel); inf rows where a simulation fails."""
-        return self.evaluate_with_residuals(X)[1]
-
-    def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
-        """``(measured_c - computed_c) / ||measured_c||``, channels one after another,
-        ``(n, p N)``, whatever the objective (what the Cramér–Rao bound differentiates)."""
-        R = (self.measured[None] - self.responses(X)) / self.scale[None, :, None]
-        R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
-        return R.reshape(R.shape[0], -1)
-
-    def fisher_groups(self) -> np.ndarray:
-        """The channel of each entry of :meth:`fisher_residuals`."""
-        return np.repeat(np.arange(self.measured.shape[0]), self.t.size)
-
-    def residual_groups(self) -> np.ndarray:
-        """The channels for Eq. 3 (one norm each), one group for the sums of squares."""
-        return estimators.groups(self.config.objective, self.measured.shape[0], self.t.size)
-
     def residual_sigma(self) -> np.ndarray | None:
         """The simulated noise's sigma of each channel of :meth:`fisher_residuals`, ``(p,)``;
         ``None`` for a user's record (no noise was simulated)."""
         if self.config.noise_level <= 0 or self.sigma is None:
             return None
         return self.sigma / self.scale
-
-    def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return estimators.residuals_and_value(self.config.objective, self._weighted(X))
-
-    def evaluate(self, X: np.ndarray) -> np.ndarray:
-        return self.evaluate_with_residuals(X)[0]
 
     def metrics(self, x: np.ndarray) -> dict[str, float]:
         """``{"NoRE": ...}``: the norm of the relative errors against this instance's truth

@@ -51,6 +51,7 @@ import numpy as np
 from vpid_bench import Bounds, ConfigError, Problem, ProblemConfig, estimators
 
 from . import third_party
+from .problem import ChannelFit
 
 #: The car's constants (``deep_dynamics_iac.yaml``, VEHICLE_SPECS; a test reads the file).
 VEHICLE = {"m": 790.0, "lf": 1.248, "lr": 1.7328}
@@ -172,7 +173,7 @@ def rms(measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
     return np.sqrt(np.mean((measured - predicted)[:, 1:, :] ** 2, axis=(0, 1)))
 
 
-class RacecarProblem(Problem):
+class RacecarProblem(ChannelFit, Problem):
     """The racecar's single-track model identified from one part of its logs, judged on
     another (module docstring)."""
 
@@ -213,35 +214,9 @@ class RacecarProblem(Problem):
             out[ok] = windows.predict(X[ok].T, self.linear, self.config.substeps)
         return out
 
-    def _weighted(self, X: np.ndarray) -> np.ndarray:
-        """``measured - predicted`` over the fitted windows times the objective's weights,
-        ``(n, 2, W (H - 1))``."""
-        return (self.measured[None] - self._flat(self._predict(X, self.fitted))) * self.weights
-
-    def residuals(self, X: np.ndarray) -> np.ndarray:
-        """What a least-squares optimizer minimises (:func:`estimators.residuals_and_value`),
-        channel after channel, ``(n, 2 W (H - 1))``; inf rows where a prediction fails."""
-        return self.evaluate_with_residuals(X)[1]
-
-    def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
-        """``(measured_c - predicted_c) / ||measured_c||`` whatever the objective, channel after
-        channel, ``(n, 2 W (H - 1))`` (what intervals differentiate)."""
-        scale = np.linalg.norm(self.measured, axis=1)[None, :, None]
-        R = (self.measured[None] - self._flat(self._predict(X, self.fitted))) / scale
-        R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
-        return R.reshape(R.shape[0], -1)
-
-    def fisher_groups(self) -> np.ndarray:
-        return np.repeat(np.arange(2), self.measured.shape[1])
-
-    def residual_groups(self) -> np.ndarray:
-        return estimators.groups(self.config.objective, 2, self.measured.shape[1])
-
-    def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return estimators.residuals_and_value(self.config.objective, self._weighted(X))
-
-    def evaluate(self, X: np.ndarray) -> np.ndarray:
-        return self.evaluate_with_residuals(X)[0]
+    def computed(self, X: np.ndarray) -> np.ndarray:
+        """The predicted samples over the fitted windows, ``(n, 2, W (H - 1))``."""
+        return self._flat(self._predict(X, self.fitted))
 
     def _held_out_metrics(self, predicted: np.ndarray) -> dict[str, float]:
         w = self.held_out

@@ -47,8 +47,9 @@ BUMP_BOX = (0.25, 1.5)
 REBOUND_BOX = (0.5, 3.0)
 
 
-class StructuredModel(RideModel):
-    """A ride model with a cubic spring and/or a bilinear damper per axle (the module)."""
+class StructuredModel:
+    """A ride model with a cubic spring and/or a bilinear damper per axle (the module); its
+    input side (wheels, record columns, inputs) is the base model's."""
 
     #: What the problem's ``describe()`` names as the fitted model's solver.
     fitted_solver = "RK4 (the suspension structure's nonlinear forces)"
@@ -75,8 +76,12 @@ class StructuredModel(RideModel):
         self.names = tuple(names)
         self.units = tuple(units)
         self.sets = {key: self._set(published) for key, published in base.sets.items()}
-        self.sensors = base.sensors
-        self.wheel_names = base.wheel_names
+
+    def __getattr__(self, name: str) -> Any:
+        base = self.__dict__.get("base")
+        if base is None or name.startswith("__"):  # copy and pickle probe before __init__
+            raise AttributeError(name)
+        return getattr(base, name)
 
     def _set(self, published: dict[str, float]) -> dict[str, float]:
         """A published set in this structure: the symmetric damper, the reference cubic."""
@@ -87,26 +92,6 @@ class StructuredModel(RideModel):
             if self.damper == "bilinear":
                 out[f"{c}_bump"] = out[f"{c}_rebound"] = out.pop(c)
         return out
-
-    # --- the base model's input side ----------------------------------------------------
-    def wheels(self, known: dict[str, float], speed: float) -> Any:
-        return self.base.wheels(known, speed)
-
-    def record_columns(self) -> Any:
-        return self.base.record_columns()
-
-    def needs_record_inputs(self, config: Any) -> str | None:
-        return self.base.needs_record_inputs(config)
-
-    def check_record(self, record: Any) -> None:
-        self.base.check_record(record)
-
-    def inputs(self, config: Any, known: dict[str, float], dt: float,
-               rng: np.random.Generator) -> np.ndarray:
-        return self.base.inputs(config, known, dt, rng)
-
-    def inputs_from_record(self, record: Any, sampler: Any) -> np.ndarray:
-        return self.base.inputs_from_record(record, sampler)
 
     # --- parameters -----------------------------------------------------------------------
     def split(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
