@@ -1,32 +1,15 @@
-"""What every ride problem of the suite shares: the record, its noise, the instances, the
-objective and the residuals; a model adds only its matrices (:class:`RideModel`).
+"""What every ride problem of the suite shares (docs/suite.md): the record, its noise, the
+instances, the objective and the residuals; a model adds only its matrices.
 
-**Record.** The true vehicle's response by the exact solution for an input linear between
-samples (:func:`.linear.exact_foh`), at ``dt / record_substeps``, sampled every ``dt``; the
-fitted model is Newmark (average acceleration) at ``dt`` with the road sampled at ``dt``. The
-record is therefore not made by the fitted model (no inverse crime); ``record=newmark`` makes it
-with the fitted model, on purpose.
-
-**Noise**, per channel: additive Gaussian, ``sigma_c = noise_level x rms(clean channel c)``.
-
-**Instances.** Run ``i`` fits instance ``i``: from ``SeedSequence([seed, INSTANCE_ROOT,
-crc32(name)], spawn_key=(i,))`` (a root of its own: never the optimizer's ``SeedSequence(seed,
-(i,))``, and one per problem, so two members of equal dimension do not share their truths'
-places in the box) it draws the true vehicle (:func:`draw_truth`: uniform over the box, kept
-``truth_margin`` of its width from each bound; ``truth=set`` uses the published set, the centre
-of the box), the random roads' phases and the noise. The box is fixed, ``[0.5, 1.5] x`` the
-published set (a model may cap it, :meth:`RideModel.box`).
-
-**Roads.** Every wheel follows a track (left or right) with a delay (the rear wheels by
-wheelbase / speed); the event starts 0.2 s into the record under the front wheels. The two
-tracks of an ISO road are independent realisations of the class.
-
-**Objective** (``objective``, :mod:`vpid_bench.estimators`): by default ``f = sum_c
-||measured_c - computed_c|| / ||measured_c||`` (the paper's Eq. 3, one norm per channel; the
-residuals are those differences over ``||measured_c||``, one group per channel); ``ols``,
-``ml`` (weighted by ``sigma_c`` estimated from the record) and ``ml_profiled`` (each channel's
-sigma unknown, profiled out) are sums of squares. Metric: NoRE (%) against the instance's
-truth.
+**Record**: the true vehicle by the exact first-order-hold solution at ``dt /
+record_substeps``, sampled every ``dt``; the fitted model is Newmark at ``dt`` (no inverse
+crime; ``record=newmark`` commits it on purpose). **Noise**: additive Gaussian per channel,
+``sigma_c = noise_level x rms(clean_c)``. **Instances**: run ``i`` fits instance ``i``,
+drawn from ``SeedSequence([seed, INSTANCE_ROOT, crc32(name)], spawn_key=(i,))`` (never an
+optimizer's stream, one root per problem): the truth (:func:`draw_truth`, or the published
+set with ``truth=set``), the random roads' phases, the noise. The box is ``[0.5, 1.5] x`` the
+published set (a model may cap it). **Objective**: Eq. 3 by default (one norm per channel)
+or another estimator (:mod:`vpid_bench.estimators`); metric: NoRE (%) against the truth.
 """
 
 from __future__ import annotations
@@ -71,11 +54,9 @@ MAX_STEPS = 200_000
 INSTANCE_ROOT = 0x5EED1
 
 
-#: Kept free of random truths at each side of the box, as a fraction of its width. The optima
-#: of the suite's determined members (quarter, half and full car under Eq. 3) lie within 0.5-6 %
-#: of the width from the truth in 9 runs of 10 (archive/smoke before round four), so a truth
-#: this far inside keeps them in the box; a parameter the record does not determine (the
-#: lateral members') would need more than the box.
+#: Kept free of random truths at each side of the box, as a fraction of its width: the
+#: determined members' optima lie within 0.5-6 % of the width from the truth in 9 runs of 10
+#: (archive/smoke before round four), so they stay in the box.
 TRUTH_MARGIN = 0.05
 
 
@@ -93,9 +74,8 @@ def instance_streams(seed: int, index: int, name: str) -> list[np.random.SeedSeq
 
 def draw_truth(lower: np.ndarray, upper: np.ndarray, margin: float,
                rng: np.random.Generator) -> np.ndarray:
-    """A true parameter vector uniform over the box ``[lower, upper]`` shrunk by ``margin``
-    times its width at each side: every place in the box (but the margin) is as likely, so an
-    optimizer meets truths near its faces and corners as often as near its centre."""
+    """A truth uniform over the box shrunk by ``margin`` of its width at each side: truths near
+    its faces and corners as often as near its centre."""
     lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     width = upper - lower
     return lower + width * rng.uniform(margin, 1.0 - margin, lower.size)
@@ -110,13 +90,9 @@ def _check(checks: list[tuple[str, bool, str]], config: Any) -> None:
 
 @dataclasses.dataclass(frozen=True)
 class RecordFileConfig:
-    """``file``: a CSV record of one's own vehicle fitted instead of the simulated one (any
-    rate and start time, the measured channels by name, units optional, the inputs as
-    columns where the configuration does not define them; docs/own-record.md). The problem
-    then has no truth and no noise is added. ``columns``: the problem's names mapped to
-    the record's (``{h: road, zsdd: "body_acc [g]"}``); ``ignore``: record columns left
-    unused on purpose (any other unused column is refused); ``input``: ``record`` (the
-    record carries the inputs) or ``config`` (the configured road or manoeuvre)."""
+    """``file``: one's own vehicle's record fitted instead (docs/own-record.md; no truth, no
+    noise added). ``columns``: the problem's names mapped to the record's; ``ignore``: columns
+    unused on purpose; ``input``: ``record`` or ``config`` (the configured road, manoeuvre)."""
 
     file: str | None = None
     columns: dict[str, str] = added_setting(default_factory=dict, open_keys=True)
@@ -133,15 +109,11 @@ class RecordFileConfig:
 
 @dataclasses.dataclass(frozen=True)
 class SuiteConfig(ProblemConfig):
-    """Keys every problem of the suite shares (a model's Config adds ``parameter_set``,
-    ``sensors`` and its input). ``duration_s`` of the record; ``dt`` its sampling (s).
-    ``noise_level``: sigma per channel as a fraction of its clean rms. ``seed``: the
-    instances' streams. ``truth``: ``random`` (uniform over the box, :func:`draw_truth`) or
-    ``set`` (the published set, the box centre). ``truth_margin``: the fraction of the box's
-    width kept free of random truths at each side. ``record``: ``exact`` or ``newmark``
-    (inverse crime). ``record_substeps``: the exact record's steps per sample. ``objective``:
-    the estimator, ``eq3`` (the paper's Eq. 3), ``ols``, ``ml`` or ``ml_profiled``
-    (:mod:`vpid_bench.estimators`)."""
+    """Keys every problem of the suite shares (the module docstring; a model's Config adds
+    ``parameter_set``, ``sensors`` and its input): ``duration_s``, ``dt`` (s), ``noise_level``
+    (a fraction of each clean channel's rms), ``seed``, ``truth`` (``random``, ``set``),
+    ``truth_margin``, ``record`` (``exact``, ``newmark``), ``record_substeps``, ``objective``
+    (``eq3``, ``ols``, ``ml``, ``ml_profiled``)."""
 
     duration_s: float = 3.0
     dt: float = 0.001
@@ -180,10 +152,8 @@ class SuiteConfig(ProblemConfig):
 
 @dataclasses.dataclass(frozen=True)
 class RideConfig(SuiteConfig):
-    """The road of a ride problem: ``road`` is ``hump`` (3.7 m x 0.1 m), ``bump`` (0.1 m x
-    0.04 m), ``step`` (0.1 m) or ``iso8608`` (class ``road_class``), met at ``speed_kmh``.
-    ``spring`` (``linear`` or ``cubic``) and ``damper`` (``linear`` or ``bilinear``): the
-    suspension structure, per axle (:mod:`.structures`)."""
+    """The road (:mod:`.roads`: ``hump``, ``bump``, ``step``, ``iso8608`` of ``road_class``)
+    met at ``speed_kmh``; ``spring``, ``damper``: the suspension (:mod:`.structures`)."""
 
     road: str = "hump"
     road_class: str = "C"
@@ -208,20 +178,16 @@ class RideConfig(SuiteConfig):
 
 
 def check_record_file(config: Any, model: RideModel) -> None:
-    """Read ``reference.file`` once when a config is built, so a file that does not fit
-    fails the command's pre-flight (exit 2, one line) rather than the job; check the stated
-    quantities and boxes (:func:`..knowns.check_config`) there too."""
+    """Check the stated quantities and read ``reference.file`` as a config is built: the
+    pre-flight refuses either (exit 2, one line), not the job."""
     knowns.check_config(config, model)
     if config.reference.file is not None:
         read_ride_record(model, config)
 
 
 def read_ride_record(model: RideModel, config: Any) -> Record:
-    """A user's record for ``model`` under ``config`` (``reference.file``): the configured
-    sensors' channels by their column names (:func:`.record_file.column_name`: ``zs''`` is
-    ``zsdd``), the model's input columns where given (required where
-    :meth:`RideModel.needs_record_inputs` says so). Raises :class:`ConfigError` naming the
-    column, row or time problem."""
+    """A user's record for ``model``: the sensors' channels by column name (``zs''`` is
+    ``zsdd``), the model's input columns; a :class:`ConfigError` naming what does not fit."""
     channels = tuple(Column(column_name(c), unit, (c,)) for c, unit in
                      model.sensors[config.sensors])
     record = read_record(config.reference.file, channels, model.record_columns(),
@@ -325,9 +291,8 @@ class RideProblem(ChannelFit, Problem):
                                           1.0 / self.scale[:, None], plug_in)
 
     def _from_file(self, config: RideConfig) -> None:
-        """A user's record (``reference.file``): no truth, no noise added; the model at
-        rest at the record's first row, integrated at ``dt`` over its span, its inputs
-        from the record's columns or the configuration (docs/own-record.md)."""
+        """A user's record: no truth, no noise added; the model at rest at its first row, its
+        inputs from the record or the configuration (docs/own-record.md)."""
         record = read_ride_record(self.model, config)
         self.sampler = sampler = Sampler(record.t, config.dt)
         self.input_source = knowns.input_text(config, record.input_names,
@@ -381,8 +346,7 @@ class RideProblem(ChannelFit, Problem):
         return self.responses(X)
 
     def responses(self, X: np.ndarray) -> np.ndarray:
-        """The fitted model's channels ``(n, p, N)`` for the rows of ``X``; NaN rows for a
-        row that is not a vehicle."""
+        """The fitted model's channels ``(n, p, N)``; NaN rows for a row that is no vehicle."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         out = np.full((X.shape[0], self.measured.shape[0], self.t.size), np.nan)
         ok = self.model.physical(X, self.known)
@@ -394,22 +358,19 @@ class RideProblem(ChannelFit, Problem):
         return out
 
     def residual_sigma(self) -> np.ndarray | None:
-        """The simulated noise's sigma of each channel of :meth:`fisher_residuals`, ``(p,)``;
-        ``None`` for a user's record (no noise was simulated)."""
+        """The simulated noise's sigma per channel of :meth:`fisher_residuals`, or ``None``."""
         if self.config.noise_level <= 0 or self.sigma is None:
             return None
         return self.sigma / self.scale
 
     def metrics(self, x: np.ndarray) -> dict[str, float]:
-        """``{"NoRE": ...}``: the norm of the relative errors against this instance's truth
-        (percent); none for a user's record (no truth)."""
+        """``{"NoRE": ...}`` (%) against this instance's truth; none for a user's record."""
         if self._x_true is None:
             return {}
         return {"NoRE": float(np.linalg.norm(relative_errors_percent(x, self._x_true)))}
 
     def content_digest(self) -> str | None:
-        """The SHA-256 of a user's record file (it enters every run id: an edited record
-        runs again on resume), else ``None`` (the config defines the record)."""
+        """The SHA-256 of a user's record (an edited record runs again on resume), else ``None``."""
         if self.sampler is None:
             return None
         import hashlib
@@ -444,9 +405,8 @@ class RideProblem(ChannelFit, Problem):
         return getattr(self.model, "fitted_solver", "Newmark average acceleration")
 
     def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any]:
-        """The measured channels over their norms (the units of :meth:`fisher_residuals`),
-        the channels' names and the model's inputs at the record's samples (each wheel's
-        road height ``h`` and its rate ``h'``, as the model is driven)."""
+        """The measured channels over their norms (:meth:`fisher_residuals`' units), their
+        names and the model's inputs at the record's samples (``h``, ``h'`` per wheel)."""
         u = np.asarray(self.u, dtype=float)
         u = u.T if self.sampler is None else self.sampler.at_record(u.T[None])[0]
         wheels = self.model.wheel_names

@@ -1,14 +1,7 @@
-"""What the single-track models share: their sensor sets and the steering manoeuvres.
-
-Both single-track models (:mod:`.lateral`, linear tyres; :mod:`.magic`, Magic Formula tyres)
-read them from here, so the two modules import in one direction only: :mod:`.lateral` uses
-:mod:`.magic` (its record with model error is made by the Magic Formula model), never the
-other way round.
-
-**Manoeuvres** (``manoeuvre``): ``step`` (the steer ramps to ``steer_deg`` over 0.2 s from
-0.5 s on and holds), ``sine`` (``steer_deg`` amplitude at ``sine_hz`` from 0.5 s on); the steer
-angle is at the road wheels, in rad. A user's record may carry the steer angle and the speed
-instead (:class:`SteeredRecord`).
+"""What the two single-track models share (so :mod:`.lateral` imports :mod:`.magic`, never
+the reverse): the sensor sets and the manoeuvres, ``step`` (to ``steer_deg`` over 0.2 s from
+0.5 s, held) or ``sine`` (``steer_deg`` at ``sine_hz`` from 0.5 s), at the road wheels; or a
+user's record's steer angle and speed (:class:`SteeredRecord`).
 """
 
 from __future__ import annotations
@@ -47,9 +40,8 @@ SPEED_TOLERANCE = 0.02
 
 
 class SteeredRecord:
-    """A user's record for a single-track model: its inputs, when it carries them, are the
-    steer angle at the road wheels ``delta`` (rad) and the forward speed ``vx`` (m/s); the
-    configured manoeuvre and ``speed_kmh`` stand for them otherwise."""
+    """A single-track model's record inputs: ``delta`` at the road wheels (rad) and ``vx``
+    (m/s), else the configured manoeuvre and ``speed_kmh``."""
 
     vx: float
 
@@ -60,8 +52,7 @@ class SteeredRecord:
         return None  # the configured manoeuvre is deterministic
 
     def check_record(self, record: Record) -> None:
-        """Refuse a record whose ``vx`` strays more than :data:`SPEED_TOLERANCE` from its
-        mean (the models hold the speed constant), naming the first such row."""
+        """Refuse a ``vx`` straying more than :data:`SPEED_TOLERANCE` from its mean."""
         if record.inputs is None:
             return
         vx = record.inputs[:, 1]
@@ -75,7 +66,6 @@ class SteeredRecord:
                               f"speed constant); data row {k + 1} has {vx[k]:.4g} m/s")
 
     def inputs_from_record(self, record: Record, sampler: Sampler) -> np.ndarray:
-        """The steer angle interpolated linearly onto the model's steps ``(steps, 1)``; the
-        model's speed becomes the record's mean ``vx`` (checked by :meth:`check_record`)."""
+        """The steer angle onto the model's steps; the speed becomes the record's mean ``vx``."""
         self.vx = float(np.mean(record.inputs[:, 1]))
         return sampler.onto_steps(record.t, record.inputs[:, :1])
