@@ -1,26 +1,16 @@
 """The shared core's time loop written out for fixed sizes, generated at first use.
 
-Why generated. One step of the recurrence is ``s + p`` dot products of length ``s`` plus
-the input terms. With the sizes known only at run time, the compiler cannot prove that the
-state it writes and the table it reads do not overlap, keeps everything in memory and does
-not vectorise: about 5x slower than the paper's hand-written kernel
-(:mod:`vpid_vehicle.kernel`). Written out for fixed ``(s, p, r)``, every offset is a
-constant, the state lives in local variables, each dot product is a pairwise tree, and the
-compiler vectorises across the ``LANES`` candidates of a block, as in the hand-written
-kernel. Sizes not in :data:`SIZES` run :func:`.kernel.run_table_loops` (same results to
-rounding, slower); a test checks that every built-in linear ride problem's sizes are listed.
+Why. With run-time sizes the compiler cannot prove that the state it writes and the table it
+reads do not overlap, and does not vectorise: about 5x slower than the paper's hand-written
+kernel. For fixed ``(s, p, r)`` every offset is a constant, the state lives in locals, each
+dot product is a pairwise tree, and the compiler vectorises across a block's ``LANES``
+candidates. Other sizes run :func:`.kernel.run_table_loops` (the same to rounding, slower).
 
-Where the code goes. :func:`runs` writes :func:`module_source` once to a real file (numba
-caches compiled code only for functions with a source file), ``unrolled_<hash>.py`` where
-``<hash>`` is the first 16 hex digits of the source's SHA-256 (a changed generator writes a
-new file), in the first folder of these it can write: ``$NUMBA_CACHE_DIR/vpid_vehicle`` when
-that variable is set; the user's cache folder (``$XDG_CACHE_HOME``, else ``~/.cache``;
-``%LOCALAPPDATA%`` on Windows) ``/vpid-bench``; ``__pycache__`` beside this module; a fresh
-private temporary folder (a read-only install with no writable home: the code is then
-compiled anew in each process). The file is written whole under a temporary name and renamed
-into place, so processes that generate it at once never read half of it; one found with other
-content is rewritten. Numba's compiled code goes where numba's own rule puts it (beside the
-file, or in ``$NUMBA_CACHE_DIR``).
+Where. :func:`runs` writes :func:`module_source` to ``unrolled_<sha256[:16]>.py`` (numba
+caches only functions with a source file) in the first folder of :func:`cache_folders` it
+can write (docs/suite.md), else a private temporary one (a read-only install: compiled anew
+in each process); whole, under a temporary name renamed into place, so processes writing it
+at once never read half of it; a file with other content is rewritten.
 """
 
 from __future__ import annotations
@@ -130,7 +120,9 @@ def module_source() -> str:
 
 
 def cache_folders() -> list[Path]:
-    """The folders :func:`runs` tries, in order (the module docstring says why)."""
+    """The folders :func:`runs` tries, in order: ``$NUMBA_CACHE_DIR/vpid_vehicle`` when set,
+    the user's cache folder (``$XDG_CACHE_HOME`` or ``~/.cache``; ``%LOCALAPPDATA%`` on
+    Windows) ``/vpid-bench``, ``__pycache__`` beside this module."""
     home = (os.environ.get("LOCALAPPDATA") if os.name == "nt"
             else os.environ.get("XDG_CACHE_HOME")) or Path.home() / ".cache"
     folders = [Path(home) / "vpid-bench", Path(__file__).with_name("__pycache__")]
