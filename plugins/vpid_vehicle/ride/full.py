@@ -18,7 +18,7 @@ import numpy as np
 
 from . import linear
 from .model import RideModel, Suspension, Wheel
-from .problem import RideConfig, RideProblem, check_record_file
+from .problem import RideConfig, RideProblem
 
 #: Wheel order of the degrees of freedom 3..6 and of the inputs.
 WHEELS = ("FL", "FR", "RL", "RR")
@@ -132,11 +132,8 @@ class RideFullConfig(RideConfig):
 
     parameter_set: Literal["jazar", "jazar_symmetric", "bmw320i"] = "jazar"
     sensors: Literal["body", "body_wheel", "body_rates"] = "body"
+    Model = FullCar
 
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        check_record_file(self, FullCar())
 
 class RideFullProblem(RideProblem):
     """The full car identified from a two-track road record."""

@@ -17,7 +17,7 @@ from vpid_bench import added_setting
 from ..model import KnownConstants, matrices, tyre_input
 from . import linear
 from .model import RideModel, Suspension, Wheel
-from .problem import RideConfig, RideProblem, check_record_file
+from .problem import RideConfig, RideProblem
 
 
 def _suspension_rows(X: np.ndarray, known: dict[str, float]) -> np.ndarray:
@@ -92,11 +92,8 @@ class RideHalfConfig(RideConfig):
     parameter_set: Literal["gokdag", "jazar_half"] = "gokdag"
     sensors: Literal["body", "body_wheel", "body_pitch_rate"] = "body"
     record_model: Literal["linear", "seat"] = added_setting("linear")
+    Model = HalfCar
 
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        check_record_file(self, HalfCar())
 
 class RideHalfProblem(RideProblem):
     """The half car identified from a road record."""

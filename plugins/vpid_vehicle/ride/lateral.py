@@ -20,8 +20,8 @@ import numpy as np
 from . import linear
 from .magic import CURVATURE, MU, SHAPE, MagicSingleTrack
 from .model import RideModel
-from .problem import RideProblem, SuiteConfig, _check, check_record_file
-from .steering import SENSORS, SteeredRecord, steer_input
+from .problem import RideProblem
+from .steering import SENSORS, SteeredConfig, SteeredRecord, steer_input
 
 
 class SingleTrack(SteeredRecord, RideModel):
@@ -77,27 +77,12 @@ class SingleTrack(SteeredRecord, RideModel):
 
 
 @dataclasses.dataclass(frozen=True)
-class LateralConfig(SuiteConfig):
-    """``parameter_set``, ``sensors``, the manoeuvre (:mod:`.steering`: ``steer_deg`` at the
-    road wheels, at ``speed_kmh``), ``record_model``; the rest: :class:`.problem.SuiteConfig`."""
+class LateralConfig(SteeredConfig):
+    """``parameter_set``, ``record_model``; the rest: :class:`.steering.SteeredConfig`."""
 
     parameter_set: Literal["civic", "smart"] = "civic"
-    sensors: Literal["yaw", "yaw_ay", "yaw_ay_beta"] = "yaw_ay"
-    manoeuvre: Literal["step", "sine"] = "sine"
-    steer_deg: float = 2.0
-    sine_hz: float = 0.5
-    speed_kmh: float = 72.0
     record_model: Literal["linear", "magic_formula"] = "linear"
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        _check([
-            ("steer_deg", 0 < self.steer_deg <= 10, "an angle in (0, 10] degrees (linear "
-             "tyres: small slip angles)"),
-            ("sine_hz", 0 < self.sine_hz <= 5, "a frequency in (0, 5] Hz"),
-            ("speed_kmh", 10 <= self.speed_kmh <= 200, "a speed in [10, 200] km/h"),
-        ], self)
-        check_record_file(self, SingleTrack())
+    Model = SingleTrack
 
 
 class _SingleTrackAt(SingleTrack):

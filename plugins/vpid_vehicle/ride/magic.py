@@ -18,8 +18,8 @@ from typing import Any, Literal
 import numpy as np
 
 from .model import RideModel
-from .problem import RideProblem, SuiteConfig, _check, check_record_file
-from .steering import SENSORS, SteeredRecord, steer_input
+from .problem import RideProblem
+from .steering import SENSORS, SteeredConfig, SteeredRecord, steer_input
 
 G = 9.81  # m/s^2
 #: PAC2002 lateral coefficients of the 185/80R14 tyre file published with Project Chrono:
@@ -80,24 +80,13 @@ class MagicSingleTrack(SteeredRecord, RideModel):
 
 
 @dataclasses.dataclass(frozen=True)
-class LateralMFConfig(SuiteConfig):
+class LateralMFConfig(SteeredConfig):
     """As :class:`.lateral.LateralConfig`; 4 degrees by default (the tyres' nonlinear range)."""
 
     parameter_set: Literal["civic_mf"] = "civic_mf"
-    sensors: Literal["yaw", "yaw_ay", "yaw_ay_beta"] = "yaw_ay"
-    manoeuvre: Literal["step", "sine"] = "sine"
     steer_deg: float = 4.0
-    sine_hz: float = 0.5
-    speed_kmh: float = 72.0
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        _check([
-            ("steer_deg", 0 < self.steer_deg <= 15, "an angle in (0, 15] degrees"),
-            ("sine_hz", 0 < self.sine_hz <= 5, "a frequency in (0, 5] Hz"),
-            ("speed_kmh", 10 <= self.speed_kmh <= 200, "a speed in [10, 200] km/h"),
-        ], self)
-        check_record_file(self, MagicSingleTrack())
+    MAX_STEER = (15.0, "")
+    Model = MagicSingleTrack
 
 
 class LateralMFProblem(RideProblem):

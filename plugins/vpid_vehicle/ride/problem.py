@@ -124,6 +124,8 @@ class SuiteConfig(ProblemConfig):
     record: str = "exact"
     record_substeps: int = 10
     objective: str = "eq3"
+    #: The model a user's record is read for, at the pre-flight (:func:`check_record_file`).
+    Model: ClassVar[type[RideModel] | None] = None
     reference: RecordFileConfig = added_setting(default_factory=RecordFileConfig)
     #: Stated quantities and boxes (:mod:`..knowns`): ``known.kt=210000``, ``known.ms=250``
     #: (fixed), ``known.kt=free``; ``bounds.ks=[lo, hi]``.
@@ -148,6 +150,12 @@ class SuiteConfig(ProblemConfig):
         if self.duration_s / self.dt > MAX_STEPS:
             raise ConfigError("problem.duration_s", self.duration_s,
                               "at most 200000 samples (duration_s / dt)")
+        self._check_own()
+        if self.Model is not None:
+            check_record_file(self, self.Model())
+
+    def _check_own(self) -> None:
+        """A family's own keys, checked before a user's record is read."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -161,8 +169,7 @@ class RideConfig(SuiteConfig):
     spring: Literal["linear", "cubic"] = added_setting("linear")
     damper: Literal["linear", "bilinear"] = added_setting("linear")
 
-    def __post_init__(self) -> None:
-        super().__post_init__()
+    def _check_own(self) -> None:
         _check([
             ("road", self.road in ("hump", "bump", "step", "iso8608"),
              "one of hump, bump, step, iso8608"),

@@ -19,7 +19,7 @@ from vpid_bench import added_setting
 
 from . import linear
 from .model import RideModel, Suspension, Wheel
-from .problem import RideConfig, RideProblem, check_record_file
+from .problem import RideConfig, RideProblem
 
 
 def _suspension_rows(X: np.ndarray, known: dict[str, float]) -> np.ndarray:
@@ -80,11 +80,8 @@ class RideQuarterConfig(RideConfig):
     parameter_set: Literal["golden_car", "quarter_bus"] = "golden_car"
     sensors: Literal["body", "body_wheel", "body_wheel_stroke"] = "body_wheel"
     record_model: Literal["linear", "bilinear_damper"] = added_setting("linear")
+    Model = QuarterCar
 
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        check_record_file(self, QuarterCar())
 
 class RideQuarterProblem(RideProblem):
     """The quarter car identified from a road record."""

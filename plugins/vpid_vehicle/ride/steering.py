@@ -6,13 +6,15 @@ user's record's steer angle and speed (:class:`SteeredRecord`).
 
 from __future__ import annotations
 
-from typing import Any
+import dataclasses
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 
 from vpid_bench import ConfigError
 
 from ..record_file import Column, Record, Sampler
+from .problem import SuiteConfig, _check
 
 #: The measured channels of each sensor set, with their units.
 SENSORS: dict[str, tuple[tuple[str, str], ...]] = {
@@ -20,6 +22,28 @@ SENSORS: dict[str, tuple[tuple[str, str], ...]] = {
     "yaw_ay": (("r", "rad/s"), ("ay", "m/s²")),
     "yaw_ay_beta": (("r", "rad/s"), ("ay", "m/s²"), ("beta", "rad")),
 }
+
+
+@dataclasses.dataclass(frozen=True)
+class SteeredConfig(SuiteConfig):
+    """The measured channels and the manoeuvre (``steer_deg`` at the road wheels, at
+    ``speed_kmh``); the other keys: :class:`.problem.SuiteConfig`."""
+
+    sensors: Literal["yaw", "yaw_ay", "yaw_ay_beta"] = "yaw_ay"
+    manoeuvre: Literal["step", "sine"] = "sine"
+    steer_deg: float = 2.0
+    sine_hz: float = 0.5
+    speed_kmh: float = 72.0
+    #: The largest steer (degrees) and why.
+    MAX_STEER: ClassVar[tuple[float, str]] = (10.0, " (linear tyres: small slip angles)")
+
+    def _check_own(self) -> None:
+        top, why = self.MAX_STEER
+        _check([
+            ("steer_deg", 0 < self.steer_deg <= top, f"an angle in (0, {top:g}] degrees{why}"),
+            ("sine_hz", 0 < self.sine_hz <= 5, "a frequency in (0, 5] Hz"),
+            ("speed_kmh", 10 <= self.speed_kmh <= 200, "a speed in [10, 200] km/h"),
+        ], self)
 
 
 def steer_input(config: Any, dt: float) -> np.ndarray:
