@@ -224,9 +224,13 @@ def own_boxes(config: VehicleConfig) -> dict[str, tuple[float, float]]:
     return out
 
 
-def _positive(key: str, value: float, allowed: str) -> None:
-    if not (math.isfinite(value) and value > 0):
+def _require(key: str, value: Any, ok: bool, allowed: str) -> None:
+    if not ok:
         raise ConfigError(key, value, allowed)
+
+
+def _positive(key: str, value: float, allowed: str) -> None:
+    _require(key, value, math.isfinite(value) and value > 0, allowed)
 
 
 def _choice(key: str, value: str | None, choices: tuple[str, ...], nullable: bool = False) -> None:
@@ -249,8 +253,8 @@ def validate(config: VehicleConfig) -> None:
     _validate_vehicle(config)
     _validate_simulation(config)
     T = window(config)
-    if T < config.dt:
-        raise ConfigError("problem.dt", config.dt, f"a step no longer than the window T = {T:g} s")
+    _require("problem.dt", config.dt, T >= config.dt,
+             f"a step no longer than the window T = {T:g} s")
     _validate_noise_and_reference(config)
     # a measured record states no noise level (noise.level is what synthetic records add)
     estimators.check_objective(config.objective, config.noise.level
@@ -269,68 +273,60 @@ def _validate_vehicle(config: VehicleConfig) -> None:
     for name in ("k1", "k2", "kt1", "kt2"):
         _positive(f"problem.vehicle.{name}", getattr(p, name), "a stiffness > 0 (N/m)")
     for name in ("c1", "c2"):
-        value = getattr(p, name)
-        if not (math.isfinite(value) and value >= 0):
-            raise ConfigError(f"problem.vehicle.{name}", value, "a damping >= 0 (N s/m)")
+        c = getattr(p, name)
+        _require(f"problem.vehicle.{name}", c, math.isfinite(c) and c >= 0,
+                 "a damping >= 0 (N s/m)")
     _positive("problem.vehicle.L", p.L, "a wheelbase > 0 (m)")
-    if not (math.isfinite(p.a1) and 0.0 < p.a1 < p.L):
-        raise ConfigError("problem.vehicle.a1", p.a1, f"a value in (0, L) = (0, {p.L:g}) m")
+    _require("problem.vehicle.a1", p.a1, math.isfinite(p.a1) and 0.0 < p.a1 < p.L,
+             f"a value in (0, L) = (0, {p.L:g}) m")
     _positive("problem.bump.V", config.bump.V, "a speed > 0 (km/h)")
 
 
 def _validate_simulation(config: VehicleConfig) -> None:
     h = config.bump.h
-    if not (math.isfinite(h) and 0 < abs(h) <= MAX_BUMP_HEIGHT):
-        raise ConfigError("problem.bump.h", h, f"a bump height with 0 < |h| <= "
-                          f"{MAX_BUMP_HEIGHT:g} m (0.04 in the paper; negative: a pothole)")
+    _require("problem.bump.h", h, math.isfinite(h) and 0 < abs(h) <= MAX_BUMP_HEIGHT,
+             f"a bump height with 0 < |h| <= {MAX_BUMP_HEIGHT:g} m (0.04 in the paper; "
+             "negative: a pothole)")
     _positive("problem.bump.w", config.bump.w, "a bump width > 0 (m)")
     _positive("problem.dt", config.dt, "a time step > 0 (s)")
     _choice("problem.integrator", config.integrator, INTEGRATORS)
     _choice("problem.sampling", config.sampling, SAMPLINGS)
-    nm = config.newmark
-    if not (math.isfinite(nm.gamma) and 0.5 <= nm.gamma <= 1.0):
-        raise ConfigError("problem.newmark.gamma", nm.gamma, "a value in [0.5, 1] (default 0.5)")
-    if not (math.isfinite(nm.beta) and 0.0 <= nm.beta <= 0.5):
-        raise ConfigError("problem.newmark.beta", nm.beta, "a value in [0, 0.5] (default 0.25)")
-    extra = config.record.extra
-    if not (math.isfinite(extra) and extra >= 0):
-        raise ConfigError("problem.record.extra", extra, "seconds >= 0 recorded after the window")
+    g, b, extra = config.newmark.gamma, config.newmark.beta, config.record.extra
+    _require("problem.newmark.gamma", g, math.isfinite(g) and 0.5 <= g <= 1.0,
+             "a value in [0.5, 1] (default 0.5)")
+    _require("problem.newmark.beta", b, math.isfinite(b) and 0.0 <= b <= 0.5,
+             "a value in [0, 0.5] (default 0.25)")
+    _require("problem.record.extra", extra, math.isfinite(extra) and extra >= 0,
+             "seconds >= 0 recorded after the window")
 
 
 def _validate_noise_and_reference(config: VehicleConfig) -> None:
     nz = config.noise
-    if not (math.isfinite(nz.level) and nz.level >= 0):
-        raise ConfigError("problem.noise.level", nz.level, "a noise level >= 0 (0.05 = 5 %)")
+    _require("problem.noise.level", nz.level, math.isfinite(nz.level) and nz.level >= 0,
+             "a noise level >= 0 (0.05 = 5 %)")
     _choice("problem.noise.model", nz.model, NOISE_MODELS)
-    if nz.seed < 0:
-        raise ConfigError("problem.noise.seed", nz.seed, "an integer >= 0")
+    _require("problem.noise.seed", nz.seed, nz.seed >= 0, "an integer >= 0")
     ref = config.reference
     _choice("problem.reference.integrator", ref.integrator, INTEGRATORS, nullable=True)
     _choice("problem.reference.sampling", ref.sampling, SAMPLINGS, nullable=True)
     if ref.dt is not None:
         _positive("problem.reference.dt", ref.dt, "a time step > 0 (s) or null")
         ratio = config.dt / ref.dt
-        if abs(ratio - round(ratio)) > 1e-6 * ratio or round(ratio) < 1:
-            raise ConfigError(
-                "problem.reference.dt", ref.dt,
-                f"null or a step dividing problem.dt = {config.dt:g} s (e.g. {config.dt / 10:g})",
-            )
+        _require("problem.reference.dt", ref.dt,
+                 abs(ratio - round(ratio)) <= 1e-6 * ratio and round(ratio) >= 1,
+                 f"null or a step dividing problem.dt = {config.dt:g} s (e.g. {config.dt / 10:g})")
 
 
 def _validate_bounds(config: VehicleConfig) -> None:
     p, b = config.vehicle, config.bounds
     _positive("problem.bounds.lower_factor", b.lower_factor, "a factor > 0")
-    if not (math.isfinite(b.upper_factor) and b.upper_factor > b.lower_factor):
-        raise ConfigError(
-            "problem.bounds.upper_factor", b.upper_factor,
-            f"a factor > problem.bounds.lower_factor = {b.lower_factor:g}",
-        )
+    _require("problem.bounds.upper_factor", b.upper_factor,
+             math.isfinite(b.upper_factor) and b.upper_factor > b.lower_factor,
+             f"a factor > problem.bounds.lower_factor = {b.lower_factor:g}")
     own_boxes(config)
-    if b.upper_factor * p.a1 >= p.L and b.a1 is None:
-        raise ConfigError(
-            "problem.bounds.upper_factor", b.upper_factor,
-            f"a factor with upper_factor * a1 < L, i.e. < {p.L / p.a1:.4g} (a2 = L - a1 > 0)",
-        )
+    _require("problem.bounds.upper_factor", b.upper_factor,
+             b.upper_factor * p.a1 < p.L or b.a1 is not None,
+             f"a factor with upper_factor * a1 < L, i.e. < {p.L / p.a1:.4g} (a2 = L - a1 > 0)")
 
 
 def _gib(n_bytes: float) -> str:

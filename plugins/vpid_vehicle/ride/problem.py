@@ -407,10 +407,6 @@ class RideProblem(ChannelFit, Problem):
             out[f"{name}:fitted"] = fitted[c]
         return out
 
-    def _fitted_solver(self) -> str:
-        """The fitted model's solver, in words (a richer structure's: :mod:`.structures`)."""
-        return getattr(self.model, "fitted_solver", "Newmark average acceleration")
-
     def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any]:
         """The measured channels over their norms (:meth:`fisher_residuals`' units), their
         names and the model's inputs at the record's samples (``h``, ``h'`` per wheel)."""
@@ -426,25 +422,25 @@ class RideProblem(ChannelFit, Problem):
 
     def describe(self) -> dict[str, Any]:
         cfg = self.config
+        # the fitted model's solver in words (a richer structure's: :mod:`.structures`)
+        solver = getattr(self.model, "fitted_solver", "Newmark average acceleration")
+        info = {"samples": int(self.t.size), **knowns.info(self),
+                "fitted_model": {"solver": solver, "dt_s": cfg.dt}}
         if self.sampler is not None:
-            return {"samples": int(self.t.size), **knowns.info(self),
-                    "record": {"source": "file", "file": str(cfg.reference.file),
-                               "info": self.record_info},
-                    "fitted_model": {"solver": self._fitted_solver(), "dt_s": cfg.dt}}
+            info["record"] = {"source": "file", "file": str(cfg.reference.file),
+                              "info": self.record_info}
+            return info
         exact = cfg.record == "exact"
-        info = {
-            "samples": int(self.t.size),
-            **knowns.info(self),
+        info.update({
             "record": {"solver": "exact first-order hold" if exact
                        else "Newmark (the fitted model: inverse crime)",
                        "dt_s": cfg.dt / (cfg.record_substeps if exact else 1)},
-            "fitted_model": {"solver": self._fitted_solver(), "dt_s": cfg.dt},
             "noise": {"model": "additive Gaussian", "sigma": self.sigma.tolist(),
                       "channels": [c for c, _ in self.channels]},
             "truth": self._x_true.tolist(),
             "f_at_true": float(self.evaluate(self._x_true[None])[0]),
             "metric_units": {"NoRE": "%"},
-        }
+        })
         richer = getattr(cfg, "record_model", "linear")
         if richer != "linear":  # the report explains a floor below the bound by it
             from .richer import DESCRIPTIONS, FIT_WITH
