@@ -1,10 +1,6 @@
-"""``optimizer=centre``: the do-nothing answer, the centre of the box, one evaluation.
-
-It proposes ``(lower + upper) / 2`` once and is done. Every report that includes it shows what
-an answer that never looked at the data scores: on a problem whose truth sits at the centre of
-its box (the paper's), it scores a NoRE of 0, which is why the suite's problems place the truth
-at a random place in the box.
-"""
+"""``optimizer=centre``: the do-nothing answer, ``(lower + upper) / 2``, one evaluation: what
+an answer that never looked at the data scores (NoRE 0 where the truth is the box's centre,
+as in the paper, which is why the suite's truths are random)."""
 
 from __future__ import annotations
 

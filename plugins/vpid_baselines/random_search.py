@@ -1,10 +1,5 @@
-"""Uniform random search: ``ps`` candidates per batch, drawn uniformly in the box.
-
-Run ``i`` of a job draws from its own generator, so the candidates of a run are the rows of
-``lower + U * (upper - lower)`` with ``U`` the generator's next ``(ps, dim)`` uniforms,
-batch after batch, until the run loop's budget is spent. Nothing is learned from ``tell``:
-the run loop keeps the best-so-far, so this optimizer keeps no state at all.
-"""
+"""Uniform random search: ``ps`` candidates per batch from the run's generator, until the
+budget is spent; no state (the run loop keeps the best so far)."""
 
 from __future__ import annotations
 
@@ -26,8 +21,7 @@ class RandomSearch(Optimizer):
     Params = RandomSearchParams
 
     def ask(self) -> np.ndarray:
-        """``ps`` uniform candidates, clipped so that rounding cannot leave the box by an ulp
-        (clipping changes no candidate that was already inside)."""
+        """``ps`` uniform candidates, clipped (rounding may leave the box by an ulp)."""
         U = self.bounds.sample(self.rng, self.params.ps)
         return np.minimum(np.maximum(U, self.bounds.lower), self.bounds.upper)
 

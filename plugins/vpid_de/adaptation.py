@@ -1,21 +1,6 @@
-"""Control-parameter adaptation of the success-history DE family (JADE, SHADE, L-SHADE).
-
-Pure functions of arrays and a ``numpy.random.Generator``, each tested on hand-built
-success histories:
-
-* :func:`sample_cr`, :func:`sample_f`: per-target crossover rates ``CR_i ~ N(mu, 0.1)`` clipped
-  to [0, 1] and scale factors ``F_i ~ Cauchy(mu, 0.1)`` cut to 1 above and drawn again when
-  ``<= 0`` (Zhang and Sanderson 2009, Sec. IV-C/D; the same in SHADE and L-SHADE);
-* :func:`weighted_mean`, :func:`lehmer_mean`: the means the three algorithms average their
-  successful parameters with;
-* :func:`jade_update`: JADE's ``mu <- (1 - c) mu + c mean(S)``;
-* :class:`SuccessHistory`: SHADE's memories ``M_CR``, ``M_F`` of ``H`` entries, written in turn
-  with means weighted by the improvement each success made; with ``lehmer_cr`` and
-  ``terminal`` L-SHADE's variant (Lehmer mean for ``M_CR`` too, and the terminal value that
-  freezes an entry's CR at 0 once the successes all had ``CR = 0``).
-
-A "success" is a trial that strictly improved on its parent; ``S_CR``, ``S_F`` are the rates
-and factors those trials used and ``delta`` the improvements ``|f(parent) - f(trial)|``.
+"""Control-parameter adaptation of JADE, SHADE and L-SHADE (pure functions, each tested on
+hand-built success histories). A success is a trial that strictly improved on its parent;
+``S_CR``, ``S_F`` are the rates and factors the successes used, ``delta`` their improvements.
 """
 
 from __future__ import annotations
@@ -54,9 +39,8 @@ def sample_f(rng: np.random.Generator, mu: np.ndarray | float, size: int) -> np.
 
 
 def improvement_weights(delta: np.ndarray) -> np.ndarray:
-    """SHADE's weights ``w_k = delta_k / sum(delta)``. An infinite improvement (the parent's
-    simulation had failed, ``f = inf``) gets all the weight, shared equally with the other
-    infinite ones, so the weights stay finite and sum to 1."""
+    """SHADE's ``w_k = delta_k / sum(delta)``; infinite improvements (a failed parent) share
+    all the weight equally, so the weights stay finite."""
     delta = np.asarray(delta, dtype=float)
     w = np.isinf(delta).astype(float) if np.isinf(delta).any() else delta.copy()
     total = w.sum()
@@ -73,9 +57,8 @@ def weighted_mean(S: np.ndarray, w: np.ndarray | None = None) -> float:
 
 
 def lehmer_mean(S: np.ndarray, w: np.ndarray | None = None) -> float:
-    """Lehmer mean ``sum w_k S_k^2 / sum w_k S_k`` (uniform weights when ``w`` is None): it
-    leans towards the larger values, which counters the pull of the CR/F draws towards small
-    factors. NaN when every ``S_k`` is 0 (only a CR can be 0)."""
+    """Lehmer mean ``sum w_k S_k^2 / sum w_k S_k`` (leans to the larger values, against the
+    draws' pull to small factors); NaN when every ``S_k`` is 0."""
     S = np.asarray(S, dtype=float)
     w = np.ones_like(S) if w is None else np.asarray(w, dtype=float)
     den = np.sum(w * S)
@@ -85,9 +68,8 @@ def lehmer_mean(S: np.ndarray, w: np.ndarray | None = None) -> float:
 def jade_update(
     mu_cr: float, mu_f: float, S_CR: np.ndarray, S_F: np.ndarray, c: float
 ) -> tuple[float, float]:
-    """JADE's adaptation after a generation: ``mu_CR <- (1 - c) mu_CR + c mean_A(S_CR)`` and
-    ``mu_F <- (1 - c) mu_F + c mean_L(S_F)`` (arithmetic and Lehmer means, unweighted). With
-    no success the means are undefined and both stay as they are."""
+    """JADE: ``mu_CR <- (1 - c) mu_CR + c mean_A(S_CR)``, ``mu_F <- (1 - c) mu_F + c
+    mean_L(S_F)`` (arithmetic, Lehmer); unchanged with no success."""
     if len(S_CR) == 0:
         return mu_cr, mu_f
     return ((1.0 - c) * mu_cr + c * weighted_mean(S_CR),
@@ -95,16 +77,11 @@ def jade_update(
 
 
 class SuccessHistory:
-    """SHADE's historical memories: ``H`` entries of ``M_CR`` and ``M_F``, all 0.5 at first.
-
-    Each target draws one entry ``r_i`` uniformly and samples ``CR_i``, ``F_i`` around it
-    (:meth:`means`); after a generation with at least one success, entry ``k`` is overwritten
-    by the improvement-weighted means of that generation's successes and ``k`` moves to the
-    next entry (cyclically). ``lehmer_cr``: the ``M_CR`` mean is Lehmer (L-SHADE) instead of
-    arithmetic (SHADE). ``terminal``: L-SHADE's terminal value, kept as NaN: an entry whose
-    successes all had ``CR = 0``, or that already was terminal, becomes (stays) terminal, and
-    a target that draws it uses ``CR = 0``.
-    """
+    """SHADE's memories: ``H`` entries of ``M_CR``, ``M_F`` (0.5 at first). Each target
+    samples around a uniformly drawn entry; after a generation with a success, entry ``k``
+    takes the improvement-weighted means and ``k`` moves on cyclically. ``lehmer_cr``: a
+    Lehmer ``M_CR`` mean (L-SHADE). ``terminal``: L-SHADE's terminal value (NaN, CR = 0), for
+    an entry whose successes all had ``CR = 0`` or that was terminal."""
 
     def __init__(self, H: int, lehmer_cr: bool = False, terminal: bool = False) -> None:
         self.M_CR = np.full(H, 0.5)

@@ -1,20 +1,14 @@
 """``optimizer=jade``, ``shade``, ``lshade``: the success-history adaptive DE family.
 
-* JADE (Zhang and Sanderson 2009): current-to-pbest/1 with an optional external archive; every
-  target draws its own ``CR_i ~ N(mu_CR, 0.1)`` and ``F_i ~ Cauchy(mu_F, 0.1)``, and after each
-  generation ``mu_CR`` moves a fraction ``c`` towards the mean CR of the successful trials,
-  ``mu_F`` towards the Lehmer mean of their F.
-* SHADE (Tanabe and Fukunaga 2013): JADE with ``H`` memory entries instead of one ``mu`` pair,
-  one entry rewritten per generation by means weighted by the improvements, and a random
-  p-best fraction ``p_i ~ U[2/N, 0.2]`` per target.
+* JADE (Zhang and Sanderson 2009): current-to-pbest/1 with an optional archive; each target
+  draws ``CR_i ~ N(mu_CR, 0.1)``, ``F_i ~ Cauchy(mu_F, 0.1)``; after each generation the means
+  move a fraction ``c`` towards the successes' mean CR and Lehmer mean F.
+* SHADE (Tanabe and Fukunaga 2013): ``H`` memory entries instead of one pair, rewritten by
+  improvement-weighted means, and a random p-best fraction ``p_i ~ U[2/N, 0.2]``.
 * L-SHADE (Tanabe and Fukunaga 2014): SHADE whose population shrinks linearly with the
-  evaluations spent, from ``N_init`` to ``N_min`` at the end of the budget, and whose CR
-  memory can become "terminal" (CR = 0 from then on).
+  evaluations spent, and whose CR memory can become terminal (CR = 0).
 
-All three are built on the kernels of :mod:`vpid_de.kernels` (index draws, current-to-pbest/1,
-Eq. 8 crossover, the bounds rules, one-to-one selection) and on :mod:`vpid_de.adaptation`
-and :mod:`vpid_de.population`. Defaults are the papers'; where the benchmark's protocol
-enters (the population size ``ps``, the budget) is said on each ``Params``.
+Defaults are the papers'; where the protocol enters (``ps``, the budget) each ``Params`` says.
 """
 
 from __future__ import annotations
@@ -46,12 +40,8 @@ MIN_POPULATION = 3
 
 @dataclasses.dataclass(frozen=True)
 class AdaptiveDEParams(OptimizerParams):
-    """Keys every member of the family has.
-
-    ``bounds``: the rule for a trial coordinate outside the box; default ``midpoint`` (half
-    way between the parent and the violated face), the rule of the JADE and SHADE papers and
-    of L-SHADE's code. ``reinit``, ``clip`` and ``reflect`` as for DE1-DE8.
-    """
+    """``bounds``: the rule for a trial coordinate outside the box; default ``midpoint``
+    (the JADE and SHADE papers' and L-SHADE's code); the others as for DE1-DE8."""
 
     bounds: BoundsRule = "midpoint"
 
@@ -70,22 +60,16 @@ def _check_unit(key: str, value: float, closed_low: bool = False) -> None:
 
 class AdaptiveDE(GenerationalOptimizer):
     """The generation shared by JADE, SHADE and L-SHADE; subclasses say how ``CR_i``, ``F_i``
-    and the p-best counts are drawn and learnt.
-
-    One generation (:meth:`next_generation`): for each target ``i`` of the current population
-    (``N`` members): ``CR_i``, ``F_i`` (:meth:`parameter_means`, :func:`sample_cr`,
-    :func:`sample_f`), ``pbest`` among the :meth:`pbest_counts` best, ``r1 != i`` from the
-    population, ``r2 != i, r1`` from the population and the archive; the mutant of
-    current-to-pbest/1, Eq. 8 crossover with ``CR_i``, the bounds rule. :meth:`advance` keeps
-    a trial that is better (``ties``: or equal), archives the parents that lost, and hands the
-    successes (strict improvements) to :meth:`adapt`. ``nfe`` counts evaluations told.
-    """
+    and the p-best counts are drawn and learnt. Per target ``i``: ``CR_i``, ``F_i``, ``pbest``
+    among the :meth:`pbest_counts` best, ``r1 != i``, ``r2 != i, r1`` (population and
+    archive), current-to-pbest/1, Eq. 8, the bounds rule. :meth:`advance` keeps a better trial
+    (``ties``: or equal), archives the parents that lost and hands the strict improvements to
+    :meth:`adapt`; ``nfe`` counts evaluations told."""
 
     label: ClassVar[str] = "adaptive_de"
     #: replace a member by an equally good trial (SHADE, L-SHADE) or only a better one (JADE)
     ties: ClassVar[bool] = False
-    #: "numba": the trials in one compiled loop (vpid_de.fused); "numpy": the reference
-    #: kernels. The same vectors either way (tested).
+    #: "numba" (vpid_de.fused) or "numpy" (the reference kernels): the same vectors (tested)
     engine: ClassVar[str] = "numba"
 
     def __init__(self, params: AdaptiveDEParams, bounds: Bounds, rng: np.random.Generator) -> None:
@@ -159,8 +143,7 @@ class AdaptiveDE(GenerationalOptimizer):
 
     def _fused_trials(self, X: np.ndarray, pbest: np.ndarray, r1: np.ndarray, XA: np.ndarray,
                       r2: np.ndarray, F: np.ndarray, CR: np.ndarray) -> np.ndarray:
-        """The trials of :meth:`next_generation` by :func:`vpid_de.fused.pbest_trials`, with
-        the crossover's and the bounds rule's uniforms drawn as the numpy path draws them."""
+        """:func:`vpid_de.fused.pbest_trials`, its uniforms drawn as the numpy path draws them."""
         from .fused import BOUNDS_IDS, pbest_trials
 
         N, dim = X.shape
@@ -191,15 +174,10 @@ class AdaptiveDE(GenerationalOptimizer):
 
 @dataclasses.dataclass(frozen=True)
 class JADEParams(AdaptiveDEParams):
-    """JADE (Zhang and Sanderson 2009). Population ``N`` = the protocol's ``ps``; a run is the
-    initial population plus ``iterations`` generations of ``ps`` trials, like DE1-DE8.
-
-    ``c``: learning rate of ``mu_CR``, ``mu_F`` (paper: 0.1); ``p``: ``pbest`` is drawn from
-    the ``max(1, round(p N))`` best (paper: 0.05, the best one at N = 20); ``archive``: keep
-    up to ``N`` replaced parents for the second difference (paper: "JADE with archive", the
-    variant it recommends; ``false`` is "JADE without archive"). ``mu_CR``, ``mu_F`` start at
-    0.5 (paper).
-    """
+    """JADE (Zhang and Sanderson 2009), ``N = ps``; a run is ``iterations`` generations as
+    DE1-DE8's. ``c``: the means' learning rate (paper: 0.1); ``p``: ``pbest`` from the
+    ``max(1, round(p N))`` best (paper: 0.05); ``archive``: keep up to ``N`` replaced parents
+    ("JADE with archive", the paper's recommendation). ``mu_CR``, ``mu_F`` start at 0.5."""
 
     c: float = 0.1
     p: float = 0.05
@@ -239,14 +217,9 @@ class JADE(AdaptiveDE):
 
 @dataclasses.dataclass(frozen=True)
 class SHADEParams(AdaptiveDEParams):
-    """SHADE (Tanabe and Fukunaga 2013). Population ``N`` = the protocol's ``ps``, archive of
-    up to ``N`` parents (paper: ``|A| = N``); a run is the initial population plus
-    ``iterations`` generations of ``ps`` trials.
-
-    ``H``: memory entries (paper: H = 100, with N = 100; a smaller H adapts faster, which
-    short runs may prefer); ``p_max``: upper end of ``p_i ~ U[2/N, p_max]`` (paper: 0.2; when
-    ``2/N > p_max``, ``p_i = 2/N``).
-    """
+    """SHADE (Tanabe and Fukunaga 2013), ``N = ps``, archive of up to ``N`` parents (paper:
+    ``|A| = N``). ``H``: memory entries (paper: 100, with N = 100); ``p_max``: the upper end
+    of ``p_i ~ U[2/N, p_max]`` (paper: 0.2; ``p_i = 2/N`` when that is larger)."""
 
     H: int = 100
     p_max: float = 0.2
@@ -289,26 +262,15 @@ class SHADE(AdaptiveDE):
 
 @dataclasses.dataclass(frozen=True)
 class LSHADEParams(AdaptiveDEParams):
-    """L-SHADE (Tanabe and Fukunaga 2014).
-
-    ``N_init``: the initial population. ``ps`` (default): the protocol's population size, so
-    L-SHADE starts from the same population as every other optimizer of a comparison and a
-    ``problem.ps`` sweep moves it too. ``paper``: ``round(N_init_rate * D)`` with
-    ``N_init_rate = 18`` (D = number of parameters: 162 on the vehicle), the paper's value,
-    tuned there for budgets of 10,000 D evaluations; at the protocol's budget (``ps * 51``,
-    about 113 D on the vehicle) it spends a sixth of the budget on the random initial
-    population and leaves about a dozen generations (measured in
-    ``benchmarks/bench_adaptive_de.py``). ``N_min``: the final population (paper: 4).
-
-    The population shrinks linearly in the evaluations spent, from ``N_init`` at the start to
-    ``N_min`` when the run's budget (``self.budget``, handed over by the job) is spent; the
-    worst members go. ``iterations`` plays no part: L-SHADE is done when its budget is spent,
-    the last generation cut to what is left.
-
-    ``H``: memory entries (paper: 6); ``p``: ``pbest`` from the ``max(2, round(p N))`` best
-    (paper: 0.11); ``r_arc``: archive of up to ``round(r_arc N)`` parents, shrinking with N
-    (paper: 2.6).
-    """
+    """L-SHADE (Tanabe and Fukunaga 2014). ``N_init``: ``ps`` (default: the population of
+    every other optimizer of a comparison) or ``paper``, ``round(N_init_rate D)`` with the
+    paper's 18 (tuned for 10,000 D evaluations: at the protocol's budget it spends a sixth of
+    it on the initial population, ``benchmarks/bench_adaptive_de.py``). ``N_min``: the final
+    population (paper: 4). The worst members go as the evaluations are spent, down to
+    ``N_min`` at the run's budget; ``iterations`` plays no part (the last generation is cut
+    to the budget). ``H``: memory entries (paper: 6); ``p``: ``pbest`` from the
+    ``max(2, round(p N))`` best (paper: 0.11); ``r_arc``: archive of ``round(r_arc N)``
+    parents (paper: 2.6)."""
 
     N_init: Literal["ps", "paper"] = "ps"
     N_init_rate: float = 18.0

@@ -1,14 +1,9 @@
-"""The generational DE loop shared by DE1-DE8, as an ask/tell optimizer.
+"""The generational DE loop shared by DE1-DE8 (a variant names its mutation kernel and its
+factors ``F``, ``K``: :mod:`vpid_de.variants`).
 
-``DifferentialEvolution.tell`` does the generic work (greedy selection, bookkeeping of the
-generation counter and of the best member); a variant only names its mutation kernel and says
-which factors (``F``, ``K``) a generation uses, in a few lines (see :mod:`vpid_de.variants`).
-
-Schedule: the first ``ask`` returns the initial population, ``ps`` uniform vectors in the box;
-every later ``ask`` returns one generation of ``ps`` trial vectors built from the *current*
-population only (generational updating: no trial sees a member replaced in the same
-generation; ``x_best`` is the best member of the current population). After ``iterations``
-generations ``done`` is true, so a run uses exactly ``ps * (iterations + 1)`` evaluations.
+The first ``ask`` returns ``ps`` uniform vectors in the box; every later one a generation of
+``ps`` trials built from the *current* population only (no trial sees a member replaced in
+the same generation). A run uses exactly ``ps * (iterations + 1)`` evaluations.
 """
 
 from __future__ import annotations
@@ -35,8 +30,7 @@ MAX_RANDOM_BLOCK_BYTES = 512 * 1024**2
 
 
 def check_finite(params: OptimizerParams) -> None:
-    """Every real-valued parameter must be a finite number (``K=inf``, ``R_max=inf`` or an
-    infinite factor range make no sense and only produce degenerate or failing runs)."""
+    """Refuse a real-valued parameter that is not finite (``K=inf`` only degenerates runs)."""
     for f in dataclasses.fields(params):
         value = getattr(params, f.name)
         if isinstance(value, float) and not np.isfinite(value):
@@ -49,15 +43,10 @@ Draw = Literal["generation", "vector"]
 
 @dataclasses.dataclass(frozen=True)
 class DEParams(OptimizerParams):
-    """Parameters every DE variant has.
-
-    ``CR``: crossover constant of Eq. 8, in [0, 1].
-    ``bounds``: what happens to a trial coordinate outside the box (the paper is silent):
-    ``reinit`` (default: a fresh uniform value in the box, what scipy's
-    ``differential_evolution`` does, so results compare with the most used implementation),
-    ``clip``, ``reflect`` or ``midpoint`` (half way between the parent and the face). A
-    ``Literal``: :mod:`vpid_bench.params` refuses any other value and lists these.
-    """
+    """``CR``: Eq. 8's crossover constant in [0, 1]. ``bounds``: the rule for a trial
+    coordinate outside the box (the paper is silent): ``reinit`` (default: a fresh uniform
+    value, as scipy's ``differential_evolution``), ``clip``, ``reflect`` or ``midpoint``
+    (half way between the parent and the face)."""
 
     CR: float = 0.9
     bounds: BoundsRule = "reinit"
@@ -71,11 +60,8 @@ class DEParams(OptimizerParams):
 
 
 class DifferentialEvolution(GenerationalOptimizer):
-    """Generational DE with binomial crossover and greedy one-to-one selection.
-
-    Subclasses set ``Params``, ``mutation`` (a key of :data:`vpid_de.kernels.MUTATIONS`) and
-    override :meth:`factors`.
-    """
+    """Generational DE with binomial crossover and greedy one-to-one selection; subclasses
+    set ``Params``, ``mutation`` (a key of :data:`vpid_de.kernels.MUTATIONS`), :meth:`factors`."""
 
     Params: ClassVar[type[OptimizerParams]] = DEParams
     mutation: ClassVar[str] = "rand1"
@@ -118,9 +104,8 @@ class DifferentialEvolution(GenerationalOptimizer):
 
     # -- what a variant customises ------------------------------------------------------------
     def factors(self) -> dict[str, Any]:
-        """Keyword arguments ``F`` (and ``K``) of the kernel for the generation being built.
-
-        ``self.generation`` is the number of generations completed (0 for the first)."""
+        """The kernel's ``F`` (and ``K``) for the generation being built (``self.generation``
+        completed so far)."""
         return {"F": self.params.F}
 
     def draw_factor(self, low: float, high: float, draw: str) -> float | np.ndarray:
@@ -132,14 +117,11 @@ class DifferentialEvolution(GenerationalOptimizer):
 
     # -- ask/tell -----------------------------------------------------------------------------
     def trials(self) -> np.ndarray:
-        """One generation of trial vectors from the current population (mutation, Eq. 8
-        crossover, bounds rule). Randomness, in order: the factors (DE6, DE7), then ONE block
-        of ``ps x (ps + 2 dim)`` uniforms, split per row into the index keys (ps - 1), the
-        ``rand_j`` (dim), ``rnbr`` (1) and the ``reinit`` values (dim).
-
-        ``engine = "numba"`` (default) computes it in one compiled loop
-        (:mod:`vpid_de.fused`); ``"numpy"`` with the reference kernels of
-        :mod:`vpid_de.kernels`. Both give identical vectors (tested)."""
+        """One generation of trials (mutation, Eq. 8 crossover, bounds rule). Randomness, in
+        order: the factors (DE6, DE7), then ONE block of ``ps x (ps + 2 dim)`` uniforms, per
+        row the index keys (ps - 1), ``rand_j`` (dim), ``rnbr`` (1), the reinit values (dim).
+        ``engine``: ``numba`` (one compiled loop, :mod:`vpid_de.fused`) or ``numpy`` (the
+        reference kernels); identical vectors (tested)."""
         X, f, ps, dim = self.population, self.fitness, self.params.ps, self._dim
         factors = self.factors()
         u = self.rng.random((ps, ps + 2 * dim))

@@ -1,14 +1,6 @@
-"""One DE generation fused into a single compiled loop (numba), for speed only.
-
-The numpy functions of :mod:`vpid_de.kernels` are the reference: they state each step
-(indices, Eqs. 7, 9-14, Eq. 8, bounds rule) and are tested by hand. With ps = 20 and 9
-parameters each numpy call costs about a microsecond of overhead and a generation makes some
-30 of them, which is a fifth of the cost of the (compiled) vehicle objective. This module
-computes exactly the same trial vectors from the same block of uniforms in one call; a test
-checks that both paths agree bit for bit on every mutation and bounds rule, and that whole
-runs are identical with either engine.
-
-Imported lazily (the first generation compiles it; ``cache=True`` keeps the machine code).
+"""One DE generation in one compiled loop (numba), for speed only: the same trials as the
+numpy reference of :mod:`vpid_de.kernels` from the same uniforms, bit for bit (tested). At ps
+= 20 the numpy path's 30 calls cost a fifth of the vehicle objective. Imported lazily.
 """
 
 from __future__ import annotations
@@ -25,10 +17,8 @@ BOUNDS_IDS = {"reinit": 0, "clip": 1, "reflect": 2, "midpoint": 3}
 
 @njit(cache=True)
 def repaired(v, x, lo, hi, u, bounds_rule):  # pragma: no cover - compiled
-    """A mutant coordinate ``v`` brought inside ``[lo, hi]`` by the bounds rule (ids of
-    :data:`BOUNDS_IDS`; ``x``: the parent's coordinate, ``u``: the reinit uniform), as the
-    numpy rules of :mod:`vpid_de.kernels` compute it; ``v`` itself when inside. The one
-    compiled home of the rules, shared by DE1-DE8 and the adaptive DEs."""
+    """A mutant coordinate ``v`` brought inside ``[lo, hi]`` by the bounds rule (``x``: the
+    parent's coordinate, ``u``: the reinit uniform), as the numpy rules compute it."""
     if not (v < lo or v > hi):  # inside (a NaN passes through, as before)
         return v
     if bounds_rule == 0:
@@ -46,14 +36,8 @@ def repaired(v, x, lo, hi, u, bounds_rule):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def generation(X, fitness, u, n_random, mutation, F, K, CR, bounds_rule, lower, upper):
-    """Trial vectors of one generation, shape of ``X`` ``(ps, dim)``.
-
-    ``fitness``: ``(ps,)`` values of ``X`` (the best is its first minimum, as ``argmin``);
-    ``u``: ``(ps, ps + 2 dim)`` uniforms laid out as in
-    :meth:`vpid_de.base.DifferentialEvolution.trials` (keys | rand_j | rnbr | reinit);
-    ``F``: ``(ps,)`` scale factor per target; ``K``: Eq. 13's combination factor;
-    ``mutation`` / ``bounds_rule``: ids from :data:`MUTATION_IDS` / :data:`BOUNDS_IDS`.
-    """
+    """One generation's trials ``(ps, dim)``; ``u`` laid out as in
+    :meth:`vpid_de.base.DifferentialEvolution.trials`, ``F`` one per target, ``K``: Eq. 13's."""
     ps, dim = X.shape
     best = np.argmin(fitness)
     out = np.empty_like(X)
@@ -99,12 +83,8 @@ def generation(X, fitness, u, n_random, mutation, F, K, CR, bounds_rule, lower, 
 @njit(cache=True)
 def pbest_trials(X, pbest, r1, XA, r2, F, CR, u, bounds_rule, lower, upper, u_reinit
                  ):  # pragma: no cover - compiled
-    """The trial vectors of JADE, SHADE and L-SHADE (:meth:`vpid_de.adaptive_de.AdaptiveDE.
-    next_generation`) from their drawn indices, factors and uniforms, in one loop: the mutant
-    of current-to-pbest/1 (``x_i + F_i (x_pbest - x_i) + F_i (x_r1 - xa_r2)``), Eq. 8
-    crossover with ``CR_i`` (``u``: ``(N, dim + 1)``, the ``rand_j`` then ``rnbr``), the
-    bounds rule (``u_reinit``: ``(N, dim)``, used by ``reinit`` only). The same arithmetic as
-    the numpy reference, so the same vectors bit for bit (tested)."""
+    """The adaptive DEs' trials from their draws in one loop: current-to-pbest/1, Eq. 8 with
+    ``CR_i`` (``u``: the ``rand_j`` then ``rnbr``), the bounds rule (``u_reinit``)."""
     ps, dim = X.shape
     out = np.empty_like(X)
     for i in range(ps):

@@ -1,26 +1,10 @@
-"""The numerical pieces of differential evolution, vectorised over the population.
-
-Everything here is a pure function of arrays (and of a ``numpy.random.Generator`` where
-randomness is needed, or of uniforms drawn beforehand: the optimizer draws one block of
-uniforms per generation, see :meth:`vpid_de.base.DifferentialEvolution.trials`), so each
-piece is tested alone on a hand-built population:
-
-* :func:`indices_from_keys` / :func:`draw_indices`: for every target ``i``, ``n`` mutually
-  distinct random indices, all different from ``i`` (the paper's ``r1 != r2 != ... != i``);
-* :data:`MUTATIONS`: one mutation kernel per equation of Gökdağ (2014), Eqs. 7, 9-14, and
-  :func:`current_to_pbest1` with :func:`pbest_indices` and :func:`partner_indices` (JADE,
-  SHADE, L-SHADE);
-* :func:`crossover_from_uniforms` / :func:`binomial_crossover`: Eq. 8 (``rand_j <= CR`` or
-  ``j == rnbr(i)``), with one CR for all or one per target;
-* :data:`BOUNDS_RULES`: how a trial coordinate outside the box is brought back;
-* :func:`greedy_selection`: one-to-one replacement when the trial is better.
-
-DE1-DE8 draw their uniforms in one block per generation (``indices_from_keys``,
-``crossover_from_uniforms``, the numba path of :mod:`vpid_de.fused` mirrors them); the
-adaptive family of :mod:`vpid_de.adaptive_de` draws from the generator as it goes
-(``draw_indices``, ``binomial_crossover``).
-
-Vectors are in physical units; the population ``X`` has shape ``(ps, dim)``.
+"""The pieces of differential evolution, vectorised over the population ``X`` ``(ps, dim)``
+(physical units): pure functions of arrays and of a generator or of uniforms drawn beforehand,
+each tested alone on a hand-built population. Index draws (``r1 != r2 != ... != i``), one
+mutation kernel per equation of Gökdağ (2014), Eqs. 7, 9-14, and current-to-pbest/1 (JADE,
+SHADE, L-SHADE), Eq. 8 crossover, the bounds rules and one-to-one selection. DE1-DE8 draw one
+block of uniforms per generation (:mod:`vpid_de.fused` mirrors them); the adaptive family draws
+from the generator as it goes.
 """
 
 from __future__ import annotations
@@ -38,13 +22,9 @@ BoundsRule = Literal["reinit", "clip", "reflect", "midpoint"]
 
 
 def indices_from_keys(keys: np.ndarray, n: int) -> np.ndarray:
-    """``(ps, n)`` integer array from uniform ``keys`` of shape ``(ps, ps - 1)``: row ``i``
-    holds ``n`` distinct indices in ``0..ps-1``, none equal to ``i``.
-
-    Each row is the first ``n`` entries of the permutation that sorts the row's keys (a
-    uniform random permutation of the ``ps - 1`` others); indices ``>= i`` are shifted by one
-    to skip ``i``. Cost O(ps^2 log ps), negligible at ps = 20-30.
-    """
+    """``(ps, n)`` indices from uniform ``keys`` ``(ps, ps - 1)``: row ``i`` holds ``n``
+    distinct indices in ``0..ps-1``, none equal to ``i`` (the first ``n`` of the permutation
+    that sorts the row's keys, those ``>= i`` shifted by one)."""
     ps = keys.shape[0]
     if n > ps - 1:
         raise ValueError(f"cannot draw {n} distinct indices besides i from a population of {ps}")
@@ -54,9 +34,7 @@ def indices_from_keys(keys: np.ndarray, n: int) -> np.ndarray:
 
 
 def draw_indices(rng: np.random.Generator, ps: int, n: int) -> np.ndarray:
-    """:func:`indices_from_keys` with keys drawn from ``rng``: for every target ``i``, ``n``
-    distinct random indices different from ``i``, uniformly without replacement (the ``r1``
-    of current-to-pbest/1)."""
+    """:func:`indices_from_keys` with keys drawn from ``rng``."""
     if n > ps - 1:
         raise ValueError(f"cannot draw {n} distinct indices besides i from a population of {ps}")
     return indices_from_keys(rng.random((ps, ps - 1)), n)
@@ -115,11 +93,8 @@ MUTATIONS: dict[str, tuple[Callable[..., np.ndarray], int]] = {
 
 
 def pbest_indices(rng: np.random.Generator, f: np.ndarray, count: np.ndarray | int) -> np.ndarray:
-    """For every target, the index of one of the ``count`` best members of the population.
-
-    ``f``: ``(ps,)`` objective values (ties: the lower index ranks first); ``count``: an integer
-    in ``1..ps``, or a ``(ps,)`` array of them (SHADE draws ``p_i`` per target). The member is
-    uniform among the ``count`` best, and may be the target itself (as in JADE)."""
+    """For every target, one of the ``count`` best members (uniform; may be the target, as
+    in JADE; ties: the lower index first). ``count``: an integer or one per target (SHADE)."""
     order = np.argsort(f, kind="stable")
     count = np.asarray(count, dtype=np.intp)
     return order[np.minimum((rng.random(f.shape[0]) * count).astype(np.intp), count - 1)]
@@ -127,11 +102,8 @@ def pbest_indices(rng: np.random.Generator, f: np.ndarray, count: np.ndarray | i
 
 def partner_indices(rng: np.random.Generator, r1: np.ndarray, n_total: int) -> np.ndarray:
     """``r2`` of current-to-pbest/1: for every target ``i``, an index uniform over
-    ``0..n_total-1`` (the population, rows ``0..ps-1``, then the archive) except ``i`` and
-    ``r1[i]`` (both population rows, ``r1[i] != i``).
-
-    Drawn as one of ``n_total - 2`` values, shifted past the two excluded indices in increasing
-    order, so every allowed index has probability ``1 / (n_total - 2)``."""
+    ``0..n_total-1`` (the population, then the archive) except ``i`` and ``r1[i]`` (one of
+    ``n_total - 2`` values shifted past the two, in increasing order)."""
     ps = r1.shape[0]
     if n_total < 3:
         raise ValueError(f"cannot draw r2 besides i and r1 from {n_total} vectors")
@@ -146,11 +118,8 @@ def partner_indices(rng: np.random.Generator, r1: np.ndarray, n_total: int) -> n
 def current_to_pbest1(
     X: np.ndarray, pbest: np.ndarray, r1: np.ndarray, XA: np.ndarray, r2: np.ndarray, F
 ) -> np.ndarray:
-    """``v_i = x_i + F_i (x_pbest - x_i) + F_i (x_r1 - x~_r2)`` (JADE's Eq. 4 with archive).
-
-    ``X``: population ``(ps, dim)``; ``pbest``, ``r1``: ``(ps,)`` population rows;
-    ``XA``: the population stacked over the archive, ``(ps + |A|, dim)``, and ``r2`` rows of
-    it; ``F``: a scalar or a ``(ps, 1)`` column of per-target scale factors."""
+    """``v_i = x_i + F_i (x_pbest - x_i) + F_i (x_r1 - x~_r2)`` (JADE's Eq. 4 with archive);
+    ``r2`` indexes ``XA``, the population stacked over the archive; ``F``: scalar or ``(ps, 1)``."""
     return X + F * (X[pbest] - X) + F * (X[r1] - XA[r2])
 
 
@@ -161,10 +130,8 @@ def current_to_pbest1(
 def crossover_from_uniforms(
     X: np.ndarray, V: np.ndarray, CR: float | np.ndarray, u: np.ndarray, u_j: np.ndarray
 ) -> np.ndarray:
-    """Eq. 8 from pre-drawn uniforms: ``u`` (ps, dim) are the ``rand_j``, ``u_j`` (ps,) picks
-    ``rnbr(i) = floor(u_j * dim)``. Gene ``j`` of trial ``i`` is the mutant's when
-    ``rand_j <= CR`` or ``j == rnbr(i)``, else the parent's. ``CR`` is a scalar or a
-    ``(ps, 1)`` column (one crossover rate per target, as the adaptive DEs draw it)."""
+    """Eq. 8: gene ``j`` of trial ``i`` is the mutant's when ``rand_j <= CR`` (``u``, (ps,
+    dim)) or ``j == rnbr(i) = floor(u_j dim)``, else the parent's; ``CR``: scalar or (ps, 1)."""
     ps, dim = X.shape
     take = u <= CR
     take[np.arange(ps), np.minimum((u_j * dim).astype(np.intp), dim - 1)] = True
@@ -174,12 +141,8 @@ def crossover_from_uniforms(
 def binomial_crossover(
     X: np.ndarray, V: np.ndarray, CR: float | np.ndarray, rng: np.random.Generator
 ) -> np.ndarray:
-    """Eq. 8: ``u_ij = v_ij`` if ``rand_j <= CR`` or ``j == rnbr(i)``, else ``x_ij``.
-
-    ``rand_j ~ U[0, 1)`` is drawn per gene and ``rnbr(i)`` per vector, both fresh every
-    generation, so every trial keeps at least one mutant gene (even with ``CR = 0``).
-    ``CR``: a scalar or a ``(ps, 1)`` column of per-target rates.
-    """
+    """:func:`crossover_from_uniforms` with the uniforms drawn from ``rng``: every trial
+    keeps at least one mutant gene, even with ``CR = 0``."""
     ps, dim = X.shape
     u = rng.random((ps, dim + 1))
     return crossover_from_uniforms(X, V, CR, u[:, :dim], u[:, dim])
@@ -188,13 +151,9 @@ def binomial_crossover(
 def greedy_selection(
     X: np.ndarray, fX: np.ndarray, U: np.ndarray, fU: np.ndarray, ties: bool = False
 ) -> tuple[np.ndarray, np.ndarray]:
-    """One-to-one selection: trial ``u_i`` replaces ``x_i`` when ``f(u_i) < f(x_i)``.
-
-    Strictly smaller by default, as Gökdağ words it ("if u yields a smaller OF value") and as
-    JADE does; a failed trial (``inf``) never replaces a finite member. ``ties=True`` also
-    replaces on equality (``<=``, SHADE and L-SHADE: lets a population drift across plateaus).
-    Returns new arrays; the inputs are not modified.
-    """
+    """Trial ``u_i`` replaces ``x_i`` when ``f(u_i) < f(x_i)`` (Gökdağ: "if u yields a
+    smaller OF value"; JADE), or ``<=`` with ``ties`` (SHADE, L-SHADE: drift across plateaus).
+    A failed trial (inf) never replaces a finite member. New arrays; the inputs stay."""
     better = fU <= fX if ties else fU < fX
     return np.where(better[:, None], U, X), np.where(better, fU, fX)
 

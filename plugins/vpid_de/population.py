@@ -1,12 +1,4 @@
-"""Population bookkeeping of the adaptive DE family: the external archive and L-SHADE's
-linear population size reduction (LPSR).
-
-* :class:`Archive`: parents that lost to their trial (JADE's "inferior solutions"), a source
-  of the second difference vector of current-to-pbest/1; capped at ``capacity`` rows by
-  random deletion.
-* :func:`lpsr_size`: the population size L-SHADE plans after ``nfe`` evaluations (Tanabe
-  and Fukunaga 2014, Eq. 10), and :func:`worst_removed` the survivors of a reduction.
-"""
+"""The adaptive DEs' external archive and L-SHADE's linear population size reduction."""
 
 from __future__ import annotations
 
@@ -16,13 +8,8 @@ import numpy as np
 
 
 class Archive:
-    """Up to ``capacity`` vectors of dimension ``dim`` (``capacity = 0`` keeps nothing).
-
-    :meth:`add` appends the new rows and, when that exceeds the capacity, keeps a uniformly
-    random subset of ``capacity`` rows of old and new together (JADE's rule; SHADE's text
-    deletes old rows first, a difference that only matters within one generation).
-    :meth:`resize` lowers the capacity (L-SHADE) and deletes rows at random to fit.
-    """
+    """Parents that lost to their trial (JADE's "inferior solutions"), the second difference
+    vector's source: up to ``capacity`` rows, random rows deleted to fit (JADE's rule)."""
 
     def __init__(self, capacity: int, dim: int) -> None:
         self.capacity = int(capacity)
@@ -55,9 +42,8 @@ def round_half_up(x: float) -> int:
 
 
 def lpsr_size(nfe: int, max_nfe: int, n_init: int, n_min: int) -> int:
-    """L-SHADE's planned population size after ``nfe`` of ``max_nfe`` evaluations:
-    ``round((n_min - n_init) / max_nfe * nfe + n_init)``, a straight line from ``n_init`` at
-    ``nfe = 0`` to ``n_min`` at ``max_nfe``, never below ``n_min``."""
+    """L-SHADE's planned size after ``nfe`` of ``max_nfe`` evaluations (Eq. 10): a straight
+    line from ``n_init`` to ``n_min``, rounded, never below ``n_min``."""
     return max(n_min, round_half_up((n_min - n_init) / max_nfe * nfe + n_init))
 
 

@@ -1,11 +1,6 @@
-"""DE1-DE8 of Gökdağ (2014), Table I: one table, a few lines per variant.
-
-Each variant is a :class:`~vpid_de.base.DifferentialEvolution` with its own ``Params`` (whose
-defaults are Table I's values, so ``optimizer=de6 optimizer.K=0.4`` works and
-``optimizer=de1 optimizer.K=0.4`` is an unknown key), a mutation kernel and, where the scale
-factor is not a constant, a :meth:`factors` method. :data:`STRATEGIES` maps the command-line
-name to the class.
-"""
+"""DE1-DE8 of Gökdağ (2014), Table I: each a :class:`~vpid_de.base.DifferentialEvolution`
+with its ``Params`` (defaults: Table I's values; ``optimizer=de1 optimizer.K=0.4`` is an
+unknown key), a mutation kernel and, where the scale factor varies, :meth:`factors`."""
 
 from __future__ import annotations
 
@@ -22,8 +17,8 @@ Eq15Form = Literal["das", "printed"]
 
 @dataclasses.dataclass(frozen=True)
 class FixedFParams(DEParams):
-    """A constant scale factor ``F`` (Table I: F = 0.6, CR = 0.9 for DE1-DE5). The paper
-    gives F's range as 0:2."""
+    """DE1-DE5: a constant scale factor, Table I's F = 0.6 and CR = 0.9 (the paper gives F's
+    range as 0:2)."""
 
     F: float = 0.6
 
@@ -31,31 +26,6 @@ class FixedFParams(DEParams):
         super().__post_init__()
         if not 0.0 < self.F <= 2.0:
             raise ConfigError("optimizer.F", self.F, "a number in (0, 2]")
-
-
-@dataclasses.dataclass(frozen=True)
-class DE1Params(FixedFParams):
-    """DE1, Eq. 7 (rand/1): F = 0.6, CR = 0.9."""
-
-
-@dataclasses.dataclass(frozen=True)
-class DE2Params(FixedFParams):
-    """DE2, Eq. 9 (best/2): F = 0.6, CR = 0.9."""
-
-
-@dataclasses.dataclass(frozen=True)
-class DE3Params(FixedFParams):
-    """DE3, Eq. 10 (best/1): F = 0.6, CR = 0.9."""
-
-
-@dataclasses.dataclass(frozen=True)
-class DE4Params(FixedFParams):
-    """DE4, Eq. 11 (current-to-best/1): F = 0.6, CR = 0.9."""
-
-
-@dataclasses.dataclass(frozen=True)
-class DE5Params(FixedFParams):
-    """DE5, Eq. 12 (rand/2): F = 0.6, CR = 0.9."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -119,31 +89,31 @@ def eq15(k: int, k_max: int, r_max: float, r_min: float, form: Eq15Form = "das")
 class DE1(DifferentialEvolution):
     """Eq. 7, rand/1: ``v_i = x_r1 + F (x_r2 - x_r3)``."""
 
-    Params, mutation, label = DE1Params, "rand1", "de1"
+    Params, mutation, label = FixedFParams, "rand1", "de1"
 
 
 class DE2(DifferentialEvolution):
     """Eq. 9, best/2: ``v_i = x_best + F (x_r1 + x_r2 - x_r3 - x_r4)``."""
 
-    Params, mutation, label = DE2Params, "best2", "de2"
+    Params, mutation, label = FixedFParams, "best2", "de2"
 
 
 class DE3(DifferentialEvolution):
     """Eq. 10, best/1: ``v_i = x_best + F (x_r1 - x_r2)``."""
 
-    Params, mutation, label = DE3Params, "best1", "de3"
+    Params, mutation, label = FixedFParams, "best1", "de3"
 
 
 class DE4(DifferentialEvolution):
     """Eq. 11, current-to-best/1: ``v_i = x_i + F (x_best - x_i) + F (x_r1 - x_r2)``."""
 
-    Params, mutation, label = DE4Params, "current_to_best1", "de4"
+    Params, mutation, label = FixedFParams, "current_to_best1", "de4"
 
 
 class DE5(DifferentialEvolution):
     """Eq. 12, rand/2: ``v_i = x_r1 + F (x_r2 - x_r3) + F (x_r4 - x_r5)``."""
 
-    Params, mutation, label = DE5Params, "rand2", "de5"
+    Params, mutation, label = FixedFParams, "rand2", "de5"
 
 
 class DE6(DifferentialEvolution):

@@ -1,22 +1,15 @@
-"""The EMPS rig in its closed loop, simulated sample by sample (numba; population-first).
+"""The EMPS rig in its closed loop, simulated sample by sample (numba).
 
-**Plant** (SI units): ``M q'' = F - Fv q' - Fc sign(q') - offset`` with the motor force
-``F = gtau u`` held constant over each sampling interval (the controller's zero-order hold).
-Over an interval the plant is linear while the sign of ``q'`` does not change, so it is solved
-exactly: ``q'(t) = v_inf + (q'_0 - v_inf) exp(-t Fv / M)`` with ``v_inf = (F - offset - Fc s) /
-Fv``. Where the velocity reaches zero inside the interval the crossing time is solved exactly
-too, and from rest the carriage stays at rest while ``|F - offset| <= Fc`` (static friction
-holds it: the Filippov solution of the discontinuous equation, which a fine integrator with
-``sign(0) = 0`` approaches by chattering) or starts in the direction of the net force. With
-a constant force the velocity is monotone over an interval, so it crosses zero at most once.
+**Plant** (SI units): ``M q'' = F - Fv q' - Fc sign(q') - offset``, the motor force ``F = gtau
+u`` held over each interval, solved exactly: ``q'(t) = v_inf + (q'_0 - v_inf) exp(-t Fv / M)``,
+``v_inf = (F - offset - Fc s) / Fv``, while the sign ``s`` of ``q'`` holds (the velocity is
+monotone, so it crosses zero at most once, at a time solved for); from rest the carriage stays
+while ``|F - offset| <= Fc`` (the Filippov solution a fine integrator approaches by chattering).
 
-**Controller** (``Simulink_EMPS_Rigide.slx`` of the data set): at sample ``k`` the position
-``q_k`` is read; its two-sample mean ``qf_k = (q_k + q_{k-1}) / 2`` is differenced,
-``dq_k = (qf_k - qf_{k-1}) / dt``; the voltage is ``c_k = kv (kp (qg_k - q_k) - dq_k)``.
-The voltage applied over ``[t_k, t_{k+1})`` is ``sat(c_{k-d} + p_{k-d})`` with ``d`` the
-controller delay in samples (the Simulink model has a unit delay, ``d = 1``; the logged voltage
-matches ``d = 0``: see :mod:`.problem`), ``p`` an added pulse voltage (the validation record)
-and ``sat`` the amplifier's limit of ``±vmax`` V.
+**Controller** (``Simulink_EMPS_Rigide.slx``): ``qf_k = (q_k + q_{k-1}) / 2``, ``dq_k = (qf_k -
+qf_{k-1}) / dt``, ``c_k = kv (kp (qg_k - q_k) - dq_k)``; applied over ``[t_k, t_{k+1})``:
+``sat(c_{k-d} + p_{k-d})`` (``d`` the controller delay, ``p`` the pulse voltage, ``sat`` the
+amplifier's ``±vmax`` V).
 """
 
 from __future__ import annotations
@@ -61,16 +54,11 @@ def plant_step(q0, v0, net, Fv, Fc, b, h, g_h):  # pragma: no cover - compiled
 @numba.njit(**_OPTS)
 def closed_loop(P, qg, pulse, q_init, v_init, gtau, kp, kv, vmax, dt, delay, y,
                 u_out):  # pragma: no cover - compiled
-    """Simulate the loop for the candidates ``P`` ``(4, n)`` (rows ``M, Fv, Fc, offset``):
-    writes the position ``y[i, k]`` (m) at each sample and the applied voltage ``u_out[i, k]``
-    (V) over ``[t_k, t_{k+1})``. ``qg`` ``(N,)`` the reference position (m), ``pulse`` ``(N,)``
-    the voltage added to the controller's (V); the rig starts at ``q_init`` moving at
-    ``v_init`` m/s, the controller's past positions on that line. ``delay``: 0 or 1 sample
-    (with 1, the first sample applies its own output: there is no earlier one).
-
-    One candidate after another, each over the whole record (its state stays in registers
-    and its outputs are written in order): the plant's branches keep the compiler from
-    running candidates side by side, so nothing is gained by interleaving them."""
+    """The loop for the candidates ``P`` ``(4, n)`` (``M, Fv, Fc, offset``): the position
+    ``y[i, k]`` (m) and the applied voltage ``u_out[i, k]`` (V); ``qg`` the reference (m),
+    ``pulse`` the added voltage (V); from ``q_init`` at ``v_init`` m/s (the controller's past
+    on that line). ``delay`` 1: the first sample applies its own output. One candidate after
+    another: the plant's branches keep the compiler from interleaving them anyway."""
     n, N = P.shape[1], qg.shape[0]
     for i in range(n):
         M, Fv, Fc, offset = P[0, i], P[1, i], P[2, i], P[3, i]

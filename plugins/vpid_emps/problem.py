@@ -1,55 +1,23 @@
 """``problem=emps``: the mass and friction of a measured positioning rig, from its motor
-position in closed loop (the EMPS data set; measured at 1 kHz, no truth).
+position in closed loop (the EMPS data set, 1 kHz, no truth; docs/measured.md).
 
-**Rig.** A DC motor drives a load along a ball screw (prismatic joint); the motor position is
-read by an encoder and a digital PD-type controller sets the motor voltage. Model (SI units):
+Model (SI units) ``M q'' = gtau u - Fv q' - Fc sign(q') - offset``, simulated in the rig's
+closed loop (:mod:`.loop`) driven by the record's reference position ``qg``; output error on
+the motor position ``qm``. **Identified**: ``M`` (kg), ``Fv`` (N s/m), ``Fc`` (N), ``offset``
+(N), in a box holding the published estimate with a factor of about 2.5 either side (Coulomb
+friction down to none; the offset up to a tenth of the loop's largest force in the estimation
+record, 152 N): a prior about the rig. **Known** (the record and ``Simulink_EMPS_Rigide.slx``):
+``gtau``, ``kp``, ``kv``, the 1 ms period, the position filter, the ±10 V limit.
+``controller_delay``: 0 by default, as the logged voltage shows (the Simulink loop has 1; 0
+fits and predicts better). The held-out record's pulses add the logged 5.07 V (median) to the
+controller's voltage; ``fit_record=pulses`` swaps the records (``estimation`` and
+``validation`` below then mean the fitted and the judged one).
 
-    M q'' = gtau u - Fv q' - Fc sign(q') - offset
-
-simulated in the rig's closed loop (:mod:`.loop`): the reference position ``qg`` of the record
-drives the controller, the simulated position is fed back, and the output is the motor
-position, compared with the measured ``qm`` (output error).
-
-**Identified**: ``M`` (kg), ``Fv`` (N s/m), ``Fc`` (N), ``offset`` (N). Box: ``M`` 40-240,
-``Fv`` 80-500, ``Fc`` 0-60, ``offset`` -20-20: each holds the published estimate with a factor
-of about 2.5 either side (Coulomb friction down to none; the offset up to a tenth of the
-largest force the loop applies in the estimation record, 152 N). A prior about the rig, not a
-fact from the data.
-
-**Known** (from the record and ``Simulink_EMPS_Rigide.slx``): ``gtau`` 35.15 N/V, ``kp``
-160.18 1/s, ``kv`` 243.45 V s/m, the 1 ms period, the two-sample position filter, the
-backward-difference velocity, the ±10 V limit. The rig starts at the first measured position,
-moving at the first difference of the measured positions.
-
-**Controller timing** (``controller_delay``): the published Simulink loop has a unit delay
-between controller and plant (``1``), but the logged voltage is the controller's output
-computed from the position of the same sample (within 0.012 V at every sample of the
-estimation record, against 0.37 V with one sample's delay). We keep ``0`` by default: it
-fits the estimation record better (1.61 against 2.35 µm rms at the optimum) and predicts the
-validation record better (1.92 against 3.00 µm). With ``1``, ``Fv`` moves by about 4 %.
-
-**Records.** Fitted: ``DATA_EMPS.mat`` (24.84 s). Judged: ``DATA_EMPS_PULSES.mat``, the same
-reference with force pulses: the pulse column holds 0 or 5 and, during a pulse, the logged
-voltage exceeds the controller's own by 5.07 V (the median over the record, spread 0.005 V;
-about 178 N). The simulated loop adds that measured amount to the controller's voltage where
-the column is non-zero. ``fit_record=pulses`` fits the pulses record and judges on the other
-(the names ``estimation`` and ``validation`` below then mean the fitted and the judged record).
-
-**Noise** (one channel, the encoder's position): additive, white, sigma unknown (the encoder
-quantum is 0.05 µm, far below the misfit; the residuals are dominated by model error and are
-not white). Intervals use sigma estimated from the residuals.
-
-**Objective**: the mean square of ``qm - q`` over the estimation record in µm² (residuals
-``(qm - q) / sqrt(N)`` in µm, one group). **Metrics** (lower is better), on the validation
-record: ``val_rms_um`` the position's rms error (µm; the headline), ``val_unexplained_pct``
-``= 100 ||y - ŷ|| / ||y - mean(y)||`` (%, 100 minus the fit percentage system-identification
-tools report) and ``val_voltage_rms_V`` the simulated voltage's rms error against the logged
-one (V). (Run records store metrics by name in alphabetical order; these names keep the
-headline first.)
-
-**Published estimate** (the data set's IDIM-LS, an inverse-model least-squares fit: M 95.1089
-kg, Fv 203.5034 N s/m, Fc 20.3935 N, offset -3.1648 N) is a point of comparison
-(:meth:`EmpsProblem.comparisons`), never a truth: ``x_true`` is ``None``.
+**Objective**: the mean square of ``qm - q`` in µm² (residuals ``(qm - q) / sqrt(N)`` µm, one
+group; noise additive white, sigma unknown). **Metrics** (held out, lower is better):
+``val_rms_um`` (µm, the headline: names sort alphabetically in records), ``val_unexplained_pct``
+(100 minus the fit percentage) and ``val_voltage_rms_V`` (V). The published IDIM-LS estimate
+is a comparison row, never a truth.
 """
 
 from __future__ import annotations
@@ -85,8 +53,8 @@ def _checked(name: str, size: int, mtime_ns: int) -> None:
 
 
 def check_data() -> None:
-    """Verify both shipped records (once per file state), so that the pre-flight refuses a
-    damaged installation with one line before any job starts."""
+    """Verify both shipped records (once per file state): the pre-flight refuses a damaged
+    installation in one line."""
     for name in records.SHA256:
         path = records.DATA / name
         stat = path.stat() if path.is_file() else None
@@ -103,11 +71,9 @@ CAVEAT = ("The published Fv and Fc lie outside the white-noise 95 % intervals, a
 
 @dataclasses.dataclass(frozen=True)
 class EmpsConfig(ProblemConfig):
-    """``controller_delay``: samples between the controller's output and the plant, 0 (as the
-    logged voltage shows; default) or 1 (as the published Simulink loop has it).
-    ``fit_record``: ``estimation`` (fit DATA_EMPS.mat, judge on the pulses record: the data
-    set's protocol) or ``pulses`` (the other way round, to see how much the estimate moves
-    with the record)."""
+    """``controller_delay``: samples between controller and plant, 0 (default, as the log
+    shows) or 1 (the Simulink loop). ``fit_record``: ``estimation`` (fit DATA_EMPS.mat, judge
+    on the pulses record: the data set's protocol) or ``pulses`` (the other way round)."""
 
     controller_delay: int = 0
     fit_record: str = "estimation"
@@ -136,9 +102,8 @@ class Loop:
         self.v0 = (q[1] - q[0]) / records.DT
 
     def simulate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Positions (m) and applied voltages (V), each ``(n, N)``, of the rows ``X`` (``M,
-        Fv, Fc, offset``); NaN rows where a row is not a rig (``M``, ``Fv`` > 0, ``Fc`` >=
-        0, all finite)."""
+        """Positions (m) and applied voltages (V), each ``(n, N)``, of the rows ``X``; NaN rows
+        where a row is not a rig (``M``, ``Fv`` > 0, ``Fc`` >= 0, all finite)."""
         from .loop import closed_loop
 
         X = np.atleast_2d(np.asarray(X, dtype=float))
@@ -157,8 +122,7 @@ class Loop:
 
 
 def fit_percent(measured: np.ndarray, simulated: np.ndarray) -> float:
-    """``100 (1 - ||y - ŷ|| / ||y - mean(y)||)``, the fit percentage of system-identification
-    tools (100 is a perfect fit, 0 no better than the mean)."""
+    """``100 (1 - ||y - ŷ|| / ||y - mean(y)||)``, system-identification tools' fit percentage."""
     y = np.asarray(measured, dtype=float)
     return float(100.0 * (1.0 - np.linalg.norm(y - simulated) / np.linalg.norm(y - y.mean())))
 
@@ -209,9 +173,7 @@ class EmpsProblem(Problem):
 
     # --- judged on the validation record ------------------------------------------------
     def metrics(self, x: np.ndarray) -> dict[str, float]:
-        """On the validation record (pulses): ``val_rms_um`` (the position's rms error, µm;
-        the headline), ``val_unexplained_pct`` (100 minus the fit percentage) and
-        ``val_voltage_rms_V`` (simulated against logged voltage, V)."""
+        """The validation record's metrics (the module docstring)."""
         q, u = self.validation.simulate(np.asarray(x, dtype=float).reshape(1, -1))
         rec = self.validation.record
         if not np.all(np.isfinite(q)):
@@ -222,8 +184,7 @@ class EmpsProblem(Problem):
                 "val_voltage_rms_V": float(np.sqrt(np.mean((rec.vir - u[0]) ** 2)))}
 
     def comparisons(self) -> dict[str, dict[str, Any]]:
-        """The data set's own estimate as a fixed comparison row, never a truth (the framework
-        computes its objective and metrics)."""
+        """The data set's own estimate as a fixed comparison row, never a truth."""
         return {"published estimate": {
             "x": PUBLISHED.tolist(),
             "note": "IDIM-LS, the EMPS data set's inverse-model least squares "
@@ -234,9 +195,8 @@ class EmpsProblem(Problem):
         return {"q": "m", "u": "V", "q validation": "m", "u validation": "V"}
 
     def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        """Measured and simulated position ``q`` and voltage ``u`` (the logged voltage against
-        the simulated loop's) on the estimation record and, as ``q validation`` and ``u
-        validation``, on the validation record (the same 1 ms grid)."""
+        """Measured and simulated position ``q`` and voltage ``u`` on both records (the same
+        1 ms grid)."""
         x = np.asarray(x, dtype=float).reshape(1, -1)
         out: dict[str, np.ndarray] = {"t": self.estimation.record.t.copy()}
         for loop, tag in ((self.estimation, ""), (self.validation, " validation")):
@@ -267,10 +227,8 @@ class EmpsProblem(Problem):
         }
 
     def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any]:
-        """For the fit diagnostics: the measured position in the residuals' units (µm over
-        ``sqrt(N)``), the reference position ``qg`` as the loop's input, and the validation
-        record's rms error beside the naive predictor's "the position is its reference"
-        (``qm = qg``), µm."""
+        """The measured position in the residuals' units, ``qg`` as the input, and the held-out
+        rms error beside the naive predictor's "the position is its reference" (µm)."""
         rec = self.estimation.record
         val = self.validation.record
         return {"measured": rec.qm * (UM / np.sqrt(self._m)), "names": ["q"],

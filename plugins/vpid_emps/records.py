@@ -1,15 +1,7 @@
-"""The two EMPS records shipped with this plugin, read and checked.
-
-Both are MATLAB files of the EMPS data set (Janot, Gautier and Brunot), copied byte for byte
-from the repository forgi86/sysid-neural-continuous at commit 956aa7ec (folder
-``examples/EMPS/data/``, Apache License 2.0: ``data/LICENSE``). Each file is verified against
-its SHA-256 below before it is read: a missing or altered file is one error naming the file
-and the checksum expected (nothing is downloaded).
-
-Contents (SI units): ``t`` (s, 1 kHz), ``qm`` the motor position (m, encoder quantum 0.05 µm),
-``qg`` the reference position (m), ``vir`` the logged motor voltage (V; the force is
-``gtau vir``), the loop's constants ``gtau`` (N/V), ``kp`` (1/s), ``kv`` (V s/m), and in the
-validation record ``pulses_N``, 0 or 5 where a force pulse is added (see :mod:`.problem`).
+"""The two EMPS records shipped with this plugin (the EMPS data set of Janot, Gautier and
+Brunot, byte for byte from forgi86/sysid-neural-continuous at 956aa7ec,
+``examples/EMPS/data/``, Apache-2.0: ``data/LICENSE``), each verified against its SHA-256
+before it is read (nothing is downloaded).
 """
 
 from __future__ import annotations
@@ -34,8 +26,9 @@ DT = 1e-3
 
 @dataclasses.dataclass(frozen=True)
 class EmpsRecord:
-    """One record: time (s), measured and reference positions (m), logged voltage (V), the
-    added pulse (its column as stored: 0 or 5), and the loop's constants."""
+    """One record: ``t`` (s, 1 kHz), the motor position ``qm`` (m, encoder quantum 0.05 µm),
+    the reference ``qg`` (m), the logged voltage ``vir`` (V), the pulse column as stored (0
+    or 5), the loop's ``gtau`` (N/V), ``kp`` (1/s), ``kv`` (V s/m)."""
 
     name: str
     t: np.ndarray
@@ -48,9 +41,8 @@ class EmpsRecord:
     kv: float
 
     def controller(self) -> np.ndarray:
-        """The controller's voltage (V) recomputed from the measured positions, sample by
-        sample (the two-sample mean of the position, differenced; the first sample's past
-        taken as itself): what the logged voltage is compared with to read the pulses."""
+        """The controller's voltage (V) recomputed from the measured positions (the first
+        sample's past taken as itself): the logged one minus it reads the pulses."""
         q = self.qm
         qf = 0.5 * (q + np.concatenate([q[:1], q[:-1]]))
         dq = np.diff(qf, prepend=qf[0]) / DT

@@ -1,9 +1,5 @@
-"""The EMPS section of the report: per context, the best run's identified values with their
-95 % intervals beside the data set's published estimate, and both on the validation record.
-
-Reads only the run records (``result.x_best``, ``result.intervals``, ``result.metrics``); the
-published estimate is this plugin's constant.
-"""
+"""The EMPS section of the report: per context, the best run's values and 95 % intervals
+beside the data set's published estimate, from the run records only."""
 
 from __future__ import annotations
 

@@ -1,19 +1,8 @@
-"""An FMU file read with limits: the zip's members checked before anything is read, its
+"""An FMU file read with limits (a zip someone else made; what is refused: docs/fmu.md): its
+members checked before anything is read, sizes counted again while extracting, its
 ``modelDescription.xml`` parsed by fmpy, and, in a worker only, the zip extracted into a
-private folder of this process.
-
-An FMU is a zip someone else made. Refused, each with one line naming the file and the
-member: more than :data:`MAX_MEMBERS` members; a member larger than :data:`MAX_MEMBER_BYTES`
-or all together larger than :data:`MAX_TOTAL_BYTES` (sizes counted while extracting too, not
-only as the zip declares them); a name that is absolute, has a drive letter, a backslash, a
-``..`` or empty part, a control character or more than :data:`MAX_NAME` characters; a
-symbolic link; a description with a document type (``<!DOCTYPE``: entity expansion) or larger
-than :data:`MAX_DESCRIPTION_BYTES`; an FMI version other than 2.0 or 3.0; no binary for this
-platform.
-
-Nothing here loads the binary: checking a config (the command's pre-flight) reads only the
-zip's directory and the description. Loading runs the FMU's code and happens only in the
-supervised worker processes (:mod:`.binary`).
+private folder of the process. Nothing here loads the binary (:mod:`.binary` does, in the
+supervised workers).
 """
 
 from __future__ import annotations
@@ -48,9 +37,8 @@ def fail(path: Any, allowed: str) -> ConfigError:
 
 @dataclasses.dataclass(frozen=True)
 class FmuFile:
-    """What the pre-flight learns of an FMU: its description (fmpy's ``ModelDescription``),
-    the interfaces it offers (``"cs"``, ``"me"``) with their model identifiers, and the
-    member of this platform's binary of each."""
+    """An FMU's description (fmpy's), its interfaces (``cs``, ``me``) with their model
+    identifiers and this platform's binary member of each."""
 
     path: str
     description: Any
@@ -195,9 +183,8 @@ def _remove(folder: Path) -> None:
 
 
 def extracted(path: str | os.PathLike) -> Path:
-    """The folder this process extracted the FMU at ``path`` into (once per file state),
-    removed when the process ends. Every member is checked again as it is written (its real
-    size, its place inside the folder)."""
+    """The folder this process extracted the FMU at ``path`` into (once per file state,
+    removed at exit), every member checked again as it is written."""
     fmu = inspect(path)
     st = Path(fmu.path).stat()
     key = (fmu.path, st.st_size, st.st_mtime_ns)

@@ -1,15 +1,10 @@
-"""The FMU's binary in this process: loaded with ctypes, one instance created once and reset
-between simulations, each simulation's step loop run by :mod:`.kernels`.
+"""The FMU's binary in this process (a supervised worker: a crash or a hang costs one run),
+loaded with ctypes, one instance reset between simulations, the step loop in :mod:`.kernels`.
 
-Loading runs the FMU's code (its library's constructors, then whatever its functions do): it
-happens only where the problem is evaluated, in the supervised worker processes, where a crash
-or a hang costs one run (vpid_bench/workers.py).
-
-Why not fmpy's ``FMU2Slave``/``FMU3Slave`` for loading: they bind every function of the
-standard (an FMI 3.0 binary without an optional one is refused), change the process's working
-directory while loading, and their Python wrappers cannot be called from compiled code. Here
-only the functions a simulation calls are bound, with pointer arguments declared ``size_t``
-(see :mod:`.kernels`).
+Not fmpy's ``FMU2Slave``/``FMU3Slave``: they bind every function of the standard (refusing an
+FMI 3.0 binary without an optional one), change the working directory while loading, and
+cannot be called from compiled code. Only the functions a simulation calls are bound, pointer
+arguments as ``size_t``.
 """
 
 from __future__ import annotations
@@ -71,9 +66,7 @@ def _bind(lib: ctypes.CDLL, name: str, res: Any, *args: Any) -> Any:
 
 
 class Simulator:
-    """One FMU instance of one interface (``cs`` or ``me``) of the FMU extracted at
-    ``folder``: :meth:`simulate` runs the record's inputs through it for given start values.
-    """
+    """One instance of one interface (``cs`` or ``me``) of the FMU extracted at ``folder``."""
 
     def __init__(self, fmu: Any, folder: Path, kind: str, name: str = "vpid") -> None:
         import fmpy
@@ -260,9 +253,7 @@ _SIMULATORS: dict[tuple[int, str], Simulator] = {}
 
 
 def simulator(fmu: Any, kind: str) -> Simulator:
-    """This process's simulator of the FMU ``fmu`` (an :class:`.archive.FmuFile`) and
-    interface ``kind``: extracted, loaded and instantiated on first use, then reused (an
-    instance per worker, reset between simulations)."""
+    """This process's simulator of ``fmu`` and ``kind``, made on first use, then reused."""
     from .archive import extracted
 
     key = (id(fmu), kind)  # fmu is cached per file state and kept alive by its simulator

@@ -1,17 +1,12 @@
-"""Build the example quarter-car FMU from its C source (``sources/quarter_car.c``) with gcc and
-the FMI headers fmpy ships: the model of docs/fmu.md's worked example and of the tests.
+"""Build the example quarter-car FMU (docs/fmu.md's worked example, the tests' model) from
+``sources/quarter_car.c`` with gcc and the FMI headers fmpy ships: ``python -m
+vpid_fmu.example quarter_car.fmu`` (FMI 2.0, both interfaces; ``--fmi 3``: FMI 3.0
+co-simulation). Test variants: ``crash`` (a null-pointer write at t >= 0.5 s), ``hang``,
+``binary=False``, ``interpolate=False``, ``binary_guid`` (a binary with another token).
 
-``python -m vpid_fmu.example quarter_car.fmu`` writes an FMI 2.0 FMU with both interfaces
-(co-simulation and model exchange); ``--fmi 3`` an FMI 3.0 co-simulation one. Variants for the
-tests: ``variant="crash"`` (a null-pointer write in the first step at t >= 0.5 s), ``"hang"``
-(spins for ever there), ``binary=False`` (no binary for this platform), ``interpolate=False``
-(the description says it cannot interpolate inputs), ``binary_guid`` (a binary that accepts a
-different token than its description states).
-
-Parameters (``ms, mu, ks, cs`` with min and max: identified by default; ``kt`` without: a
-known quantity, settable with ``problem.known.kt``), input ``h`` (m), outputs ``zsdd``,
-``zudd`` (m/s²) and ``stroke`` (m). The start values are the golden car of
-``problem=ride_quarter`` (ms 250 kg, mu 37.5 kg, ks 15,825 N/m, cs 1,500 N s/m, kt 163,250 N/m).
+Parameters ``ms, mu, ks, cs`` (with min and max: identified) and ``kt`` (known), input ``h``
+(m), outputs ``zsdd``, ``zudd`` (m/s²), ``stroke`` (m); start values: ``problem=ride_quarter``'s
+golden car.
 """
 
 from __future__ import annotations
@@ -194,12 +189,9 @@ def road(t: np.ndarray, seed: int = 0, rms: float = 0.02) -> np.ndarray:
 def write_record(fmu: str | Path, out: str | Path, truth: dict[str, float] | None = None,
                  duration: float = 4.0, rate: float = 500.0, noise: float = 0.03,
                  seed: int = 0, fine_step: float = 1e-4) -> Path:
-    """A record of the example FMU at ``rate`` Hz written to ``out`` (CSV: ``t, h, zsdd,
-    zudd``), made independently of vpid-bench's importer: fmpy's ``simulate_fmu``
-    (co-simulation) at ``fine_step`` s with the road given at the record's samples (fmpy
-    interpolates it linearly and holds it over each fine step, at the step's middle), the
-    outputs kept at the record's samples, plus white Gaussian noise of ``noise`` times each
-    channel's rms."""
+    """A record (CSV ``t, h, zsdd, zudd``) of the example FMU at ``rate`` Hz made independently
+    of vpid-bench's importer (fmpy's ``simulate_fmu`` at ``fine_step`` s), plus white noise
+    of ``noise`` times each channel's rms."""
     from fmpy import simulate_fmu
 
     n = int(round(duration * rate))

@@ -1,21 +1,11 @@
-"""The compiled step loops of one simulation: numba calling the FMU binary's functions through
-ctypes function pointers (passed as arguments, so each loop compiles once per signature and is
-cached on disk, whatever binary it later calls).
+"""The compiled step loops of one simulation: numba calling the binary's functions through
+ctypes function pointers passed as arguments (each loop compiles once per signature, cached
+on disk, whatever binary it calls). Why numba and ctypes, and the speed against a C loop:
+docs/fmu.md. Pointer arguments are ``size_t`` (a pointer's width, an integer numba passes).
 
-Why numba and ctypes (not cffi, not a C helper): numba is already a dependency of vpid-bench,
-it calls a ctypes function pointer as a direct C call (no Python between steps), and it needs
-no C compiler on the user's machine at install or run time; cffi would add a dependency and, in
-its ABI mode, still call from Python; a C helper would need a compiler at install.
-benchmarks/bench_fmu.py measures the result against a C loop over the same binary.
-
-Every pointer argument of the FMI functions is declared ``size_t`` on the ctypes side
-(:mod:`.binary`): the same width as a pointer on the platforms FMUs ship for, and an integer
-numba can pass (``array.ctypes.data``). Status codes: 0 OK, 1 warning, 2 discard, 3 error,
-4 fatal; a loop stops at the first status above warning and returns it with the step.
-
-Each loop writes the outputs ``y`` ``(N, p)`` at the record's times ``t`` (``t[0]`` is the
-start, where the caller has already read ``y[0]`` after initialisation) and returns
-``(status, k)``: the first failing status and its sample (``(0, N)`` when all went well).
+Each loop writes the outputs ``y`` ``(N, p)`` at the times ``t`` (``y[0]`` is the caller's)
+and returns ``(status, k)``: the first status above warning (2 discard, 3 error, 4 fatal)
+and its sample, or ``(0, N)``.
 """
 
 from __future__ import annotations
@@ -41,10 +31,8 @@ _E = _B - np.array([5179 / 57600, 0.0, 7571 / 16695, 393 / 640, -92097 / 339200,
 
 @njit(cache=True)
 def cs2_derivatives(do_step, set_real, set_der, get_real, c, t, u, vr_in, vr_out, order, y):
-    """FMI 2.0 co-simulation with the input's slope over each step
-    (``fmi2SetRealInputDerivatives``, order 1): the FMU sees the input linear between
-    samples, as the record has it. (Addresses are computed once: ``u`` and ``y`` are
-    C-contiguous, a row ``8 r`` and ``8 p`` bytes apart.)"""
+    """FMI 2.0 co-simulation given each input's slope over the step (order 1): the input
+    linear between samples. ``u``, ``y`` C-contiguous: rows ``8 r``, ``8 p`` bytes apart."""
     n, r = u.shape
     p = vr_out.size
     du = np.empty(r)
@@ -74,9 +62,8 @@ def cs2_derivatives(do_step, set_real, set_der, get_real, c, t, u, vr_in, vr_out
 
 @njit(cache=True)
 def cs2_hold(do_step, set_real, get_real, c, t, u, substeps, vr_in, vr_out, y):
-    """FMI 2.0 co-simulation with the input held over each of ``substeps`` equal sub-steps
-    per sample, set at each sub-step's start from the record's linear interpolation; the
-    sample's own value is set before its outputs are read."""
+    """FMI 2.0 co-simulation, the input held over ``substeps`` sub-steps per sample at its
+    linear interpolation; the sample's own value set before its outputs are read."""
     n, r = u.shape
     p = vr_out.size
     v = np.empty(r)
@@ -161,12 +148,10 @@ def _input_at(t, u, k, tau, v):
 
 @njit(cache=True)
 def me2_dopri5(fns, c, t, u, x, vr_in, vr_out, y, rtol, atol, tables):
-    """FMI 2.0 model exchange integrated by Dormand–Prince 5(4) with error control (the
-    step accepted when the scaled rms error ``|e_i| / (atol + rtol max(|x_i|, |x_new_i|))``
-    is at most 1), the input linear between samples, every sample time hit exactly. ``fns``:
-    ``(set_time, set_real, set_states, get_der, get_real, completed)``; ``x`` the states at
-    ``t[0]``. Returns ``(status, k)``; status 5 means the FMU asked for an event (not
-    supported) and 6 that the step size fell below ``1e-14`` of the span."""
+    """FMI 2.0 model exchange by Dormand–Prince 5(4) (a step accepted when the rms of
+    ``|e_i| / (atol + rtol max(|x_i|, |x_new_i|))`` is at most 1), the input linear between
+    samples, every sample time hit. ``x``: the states at ``t[0]``. Status 5: the FMU asked
+    for an event (not supported); 6: the step fell below ``1e-14`` of the span."""
     set_time, set_real, set_states, get_der, get_real, completed = fns
     A, B, E, C = tables
     n, r = u.shape

@@ -1,15 +1,8 @@
-"""What a config makes of an FMU's variables: the parameters identified and their box, the
-known quantities (start values) and the inputs and outputs.
-
-**Identified** (``problem.parameters``): by default every real parameter (causality
-``parameter``, variability ``fixed`` or ``tunable``: both can be set before initialisation,
-which is when a simulation sets them) with both a ``min`` and a ``max`` in the description, in
-the description's order. Named ones must be real parameters; each needs a box, from its
-``min``/``max`` or ``problem.bounds.<name>=[lo, hi]`` (which overrides them).
-
-**Known** (``problem.known.<name>=value``): the start value of a real parameter that is not
-identified; every other real parameter keeps the FMU's start value. Both are listed, with
-their source, as the problem's known quantities (``describe()["known"]``).
+"""What a config makes of an FMU's variables. **Identified** (``problem.parameters``): by
+default every real parameter (causality ``parameter``, variability ``fixed`` or ``tunable``:
+both settable before initialisation, when a simulation sets them) with a ``min`` and a
+``max``, each boxed by them or by ``problem.bounds.<name>``. **Known**: every other real
+parameter at its start value or ``problem.known.<name>``, listed with its source.
 """
 
 from __future__ import annotations
@@ -30,8 +23,7 @@ FMU_START = "the FMU's start value"
 
 @dataclasses.dataclass(frozen=True)
 class Variable:
-    """An FMU variable the problem uses: name, value reference, unit (or ``None``), start,
-    min and max (``None`` where not given)."""
+    """An FMU variable the problem uses (``None`` where the description gives nothing)."""
 
     name: str
     vr: int
@@ -73,8 +65,8 @@ def _box_of(name: str, value: Any) -> tuple[float, float]:
 
 @dataclasses.dataclass(frozen=True)
 class Plan:
-    """The identified parameters with their box and its source, the known quantities, the
-    inputs and outputs (all :class:`Variable`)."""
+    """The identified parameters, their box and its source, the known quantities, the inputs
+    and outputs."""
 
     identified: tuple[Variable, ...]
     lower: np.ndarray
@@ -95,8 +87,7 @@ class Plan:
                 zip(self.identified, self.lower, self.upper, self.box_sources)]
 
     def start_values(self) -> tuple[np.ndarray, np.ndarray]:
-        """The value references and values of the known quantities set before each
-        simulation (the user's and those with a start value)."""
+        """The known quantities' value references and values, set before each simulation."""
         vrs = np.array([v.vr for v, _, _ in self.known], dtype=np.uint32)
         return vrs, np.array([value for _, value, _ in self.known], dtype=float)
 

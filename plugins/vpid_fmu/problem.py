@@ -1,33 +1,11 @@
 """``problem=fmu``: the parameters of any FMU (FMI 2.0 or 3.0, co-simulation or model
-exchange) identified from a record it should reproduce; no truth (docs/fmu.md).
+exchange) identified from a record it should reproduce; no truth. The keys, the input
+handling between samples and the refusals: docs/fmu.md.
 
-**Keys.** ``fmu``: the FMU file. ``reference.file``: the record (a CSV, :mod:`.record`), its
-columns matched to the FMU's inputs and outputs by name or with ``reference.columns={fmu_name:
-column}``; every FMU input needs a column, the outputs with a column are compared.
-``parameters``: the identified parameters (default: every real parameter with a min and a max,
-:mod:`.plan`), their box from the FMU's min/max or ``bounds.<name>=[lo, hi]``; ``known.<name>``:
-the start value of a parameter not identified. ``interface``: ``auto`` (co-simulation where the
-FMU has it, else model exchange), ``cs`` or ``me``. ``inputs``: how the record's inputs reach the
-FMU between samples, ``auto`` (below), ``derivatives`` or ``hold``; ``substeps``: sub-steps per
-sample when held. ``rtol``, ``atol``: the model-exchange integrator's tolerances.
-``objective``: ``eq3`` (default; the sum over compared outputs of ``||y_c - ŷ_c|| / ||y_c||``)
-or ``ols`` (:mod:`vpid_bench.estimators`).
-
-**Simulation.** The FMU starts at the record's first time with the known and identified
-start values, its inputs at the first row; outputs are read at every row's time.
-Co-simulation steps from row to row. With ``inputs=auto`` an FMI 2.0 FMU that can interpolate
-inputs (``canInterpolateInputs``) is given each input's slope over the step
-(``fmi2SetRealInputDerivatives``), so it sees the record's input linear between samples;
-otherwise each step is cut into ``substeps`` sub-steps with the input held over each at the
-record's linear interpolation (FMI 3.0 has no input derivatives). Model exchange is integrated by
-Dormand–Prince 5(4) with error control (``rtol`` 1e-6, ``atol`` 1e-9 by default), the input
-linear between samples, landing on every sample time; an FMU with event indicators is refused.
-One info line states the choice.
-
-**Where it runs.** Checking a config reads the zip and its description only
-(:mod:`.archive`); the binary is loaded, instantiated once and reset between simulations in
-the process that evaluates (a supervised worker under the command, :mod:`.binary`), its step
-loop compiled (:mod:`.kernels`).
+The FMU starts at the record's first time with the known and identified start values and the
+first row's inputs; its outputs are read at every row's time. Checking a config reads the zip
+and its description only (:mod:`.archive`); the binary is loaded, instantiated once and reset
+between simulations where the problem evaluates (a supervised worker, :mod:`.binary`).
 """
 
 from __future__ import annotations
@@ -135,8 +113,8 @@ class FmuConfig(ProblemConfig):
 
 @dataclasses.dataclass(frozen=True)
 class Setup:
-    """A config read against its FMU and record: the file, the interface, the plan, the
-    record and the input handling (``mode`` and its info line)."""
+    """A config read against its FMU and record (``mode``: the input handling, ``info`` its
+    line)."""
 
     fmu: archive.FmuFile
     kind: str
@@ -260,8 +238,8 @@ class FmuProblem(Problem):
                               f"{exc}") from None
 
     def responses(self, X: np.ndarray) -> np.ndarray:
-        """The compared outputs ``(n, p, N)`` of the rows of ``X``; NaN rows where the FMU
-        fails (the first failure's reason is logged)."""
+        """The compared outputs ``(n, p, N)``; NaN rows where the FMU fails (the first three
+        failures logged)."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         out = np.full((X.shape[0], self.measured.shape[0], self.t.size), np.nan)
         sim = self._simulator()
@@ -327,9 +305,8 @@ class FmuProblem(Problem):
         return out
 
     def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any]:
-        """For the fit diagnostics (where the framework has them): the measured outputs over
-        their norms (the units of :meth:`fisher_residuals`), their names, and each FMU input
-        at the record's samples (for the residuals' cross-correlation with it)."""
+        """The measured outputs over their norms (:meth:`fisher_residuals`' units), their
+        names, and each FMU input at the record's samples."""
         return {"measured": (self.measured / self.scale[:, None]).reshape(-1),
                 "names": list(self.record.output_names),
                 "inputs": {v.name: self.record.inputs[:, j].copy()

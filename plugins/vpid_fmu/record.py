@@ -1,12 +1,7 @@
-"""The record an FMU is fitted to (``problem.reference.file``): vpid-bench's CSV record
-(:class:`vpid_bench.CsvTable`: its format, limits and refusals are stated there and in
-docs/own-record.md#the-file) with a column ``t``, one for every FMU input and for the FMU
-outputs compared, matched by name or mapped with ``problem.reference.columns={fmu_name:
-column}``.
-
-What is the FMU's: a unit in the header, where given, must be the FMU variable's declared
-unit as its description writes it (no conversion: an FMU states its own units); every input
-needs a column; outputs without one are not compared, but at least one must have one.
+"""The record an FMU is fitted to: vpid-bench's CSV record (docs/own-record.md#the-file),
+a column ``t``, one for every input and for the outputs compared (by name or
+``problem.reference.columns``). A header's unit must be the FMU's own (no conversion); at
+least one output needs a column.
 """
 
 from __future__ import annotations

@@ -1,13 +1,7 @@
-"""``problem=functions``: classic test functions with known optima (sphere, Rosenbrock,
-Rastrigin) in ``dim`` dimensions.
-
-Cheap enough to test and compare optimizers in seconds, and proof that the core knows
-nothing about vehicles. The true minimiser is known (``x_true``), but NoRE is not defined
-where a true value is 0, so ``x_true`` is offered only when no coordinate is zero
-(Rosenbrock: all ones); the report then ranks by objective.
-
-Each function is a sum of squares, and ``residuals`` returns the terms (one group), so
-least-squares optimizers run here too.
+"""``problem=functions``: sphere, Rosenbrock and Rastrigin in ``dim`` dimensions, cheap, and
+proof that the core knows no vehicle. ``x_true`` only where no coordinate is zero (NoRE is
+undefined there; Rosenbrock's is all ones). Each is a sum of squares whose terms
+``residuals`` returns (one group), so least-squares optimizers run here too.
 """
 
 from __future__ import annotations

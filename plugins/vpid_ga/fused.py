@@ -1,15 +1,6 @@
-"""The adaptive-feasible mutation (:func:`vpid_ga.mutation.mutationadaptfeasible`) in one
-compiled loop (numba), for speed only.
-
-The numpy functions of :mod:`vpid_ga.mutation` are the reference: they state each step (the
-mesh basis, the tangent cone, the trial order and signs, the first feasible trial) and are
-tested against MATLAB's behaviour. With 9 parameters they cost some 30 numpy calls and
-``4 d`` trial vectors per child, the GA's largest cost per generation (about 5 us per
-evaluation against the vehicle objective's 3). This module computes the same children from
-the same random numbers, drawn by the caller in the reference's order; a test checks that
-both agree bit for bit, points on the bounds included.
-
-Imported lazily (the first generation compiles it; ``cache=True`` keeps the machine code).
+"""The adaptive-feasible mutation in one compiled loop (numba), for speed only: the numpy
+reference of :mod:`vpid_ga.mutation` costs about 5 µs per evaluation at 9 parameters (the
+vehicle objective: 3). The same children from the same random numbers, bit for bit (tested).
 """
 
 from __future__ import annotations
@@ -77,10 +68,9 @@ def _first_feasible(x, step, lower, upper, basis, slot_cols, trial, real, nt, ou
 
 @njit(cache=True)
 def children(X, step, lower, upper, tol, below_u, diagonal, order_u, trial_u):  # pragma: no cover
-    """One child per row of ``X`` (see the module docstring). Random numbers as the reference
-    draws them: ``below_u`` ``(n, d, d)`` for the basis below its diagonal, ``diagonal``
-    ``(n, d)`` the diagonal itself (``±p``), ``order_u`` ``(n, d)`` for the permutation,
-    ``trial_u`` ``(n, 4 d)`` for the trial order."""
+    """One child per row of ``X``, from the reference's draws: ``below_u`` (the basis below
+    its diagonal), ``diagonal`` (``±p``), ``order_u`` (the permutation), ``trial_u`` (the
+    trial order)."""
     n, dim = X.shape
     p = 1.0 / np.sqrt(step)
     out = np.empty_like(X)

@@ -1,20 +1,10 @@
 """``optimizer=ga``: MATLAB R2014b's ``ga`` with default options on a bounded problem.
 
-One generation (``stepGA``): from the current population and scores,
-
-1. ``n_elite`` = EliteCount, ``n_xover = round(CrossoverFraction * (ps - n_elite))``,
-   ``n_mutate = ps - n_elite - n_xover``, ``n_parents = 2 n_xover + n_mutate``;
-2. expectations by rank scaling, ``n_parents`` parents by stochastic uniform selection, then
-   shuffled (a random permutation, as ``stepGA`` does against locality effects);
-3. the next population is ``[elites; crossover children; mutation children]``: the
-   ``n_elite`` best members copied unchanged, ``n_xover`` scattered-crossover children from
-   the first ``2 n_xover`` parents, ``n_mutate`` mutation children from the rest
-   (``optimizer.mutation``: MATLAB's adaptive-feasible operator by default).
-
-As in ``stepGA``, the WHOLE next population is scored, elites included: ``ask`` returns all
-``ps`` rows every generation, so a run spends exactly ``ps * (iterations + 1)`` evaluations,
-like the DE variants. The initial population is uniform in the bounds
-(``gacreationuniform``).
+One generation (``stepGA``): ``n_xover = round(CrossoverFraction (ps - n_elite))``,
+``n_mutate`` the rest; ``2 n_xover + n_mutate`` parents by rank scaling and stochastic uniform
+selection, shuffled; the next population is ``[elites; crossover children; mutation
+children]``, all of it scored (elites too, as ``stepGA``): ``ps * (iterations + 1)``
+evaluations, like the DE variants. The initial population is uniform (``gacreationuniform``).
 """
 
 from __future__ import annotations
@@ -39,13 +29,9 @@ from .operators import (
 
 @dataclasses.dataclass(frozen=True)
 class GAParams(OptimizerParams):
-    """``elite_count``: members copied unchanged into the next generation; ``-1`` (default)
-    means R2014b's default ``floor(0.05 * ps)`` (1 at ps = 20 and at ps = 30).
-    ``crossover_fraction``: MATLAB's CrossoverFraction, default 0.8.
-    ``mutation``: ``adaptfeasible`` (MATLAB's ``mutationadaptfeasible`` structure: steps in
-    the parameters' units along a random mesh-adaptive basis and the tangent cone of active
-    bounds) or ``scaled_halving`` (the project's earlier operator: a random direction scaled
-    by the box width, halved until feasible)."""
+    """``elite_count``: members copied unchanged; ``-1``: R2014b's ``floor(0.05 ps)``.
+    ``crossover_fraction``: MATLAB's CrossoverFraction (default 0.8). ``mutation``:
+    ``adaptfeasible`` (MATLAB's) or ``scaled_halving`` (the project's earlier operator)."""
 
     elite_count: int = -1
     crossover_fraction: float = 0.8
@@ -71,9 +57,7 @@ def default_elite_count(ps: int) -> int:
 
 
 class GeneticAlgorithm(GenerationalOptimizer):
-    """MATLAB-R2014b-like GA: rank scaling, stochastic uniform selection, elitism, scattered
-    crossover, adaptive-feasible mutation; ``iterations`` generations after the initial
-    population, each of ``ps`` evaluations."""
+    """MATLAB-R2014b-like GA (the module docstring)."""
 
     Params: ClassVar[type[OptimizerParams]] = GAParams
 

@@ -1,21 +1,10 @@
-"""The GA's two mutation operators for a bounded problem, chosen by ``optimizer.mutation``.
+"""The GA's two mutation operators for a bounded problem (``optimizer.mutation``).
 
-``adaptfeasible`` (the default): the structure of MATLAB's ``mutationadaptfeasible`` for
-bound constraints, as public derivatives of MathWorks' file show it (see docs/optimizers.md).
-For each parent ``x`` (all parents at once, as arrays):
-
-1. :func:`box_directions`: a random mesh-adaptive basis of ``dim`` directions (a random
-   lower-triangular matrix with ``±1/sqrt(step)`` on the diagonal and integers from 0 to
-   about ``1/sqrt(step)`` below it, rows and columns permuted together), plus the tangent
-   cone of the active bounds (the unit vector of every coordinate within ``tol`` of a bound);
-2. :func:`trial_order` and :func:`trial_directions`: every direction twice, in a random
-   order, with MATLAB's signs (see there: the sign belongs to the trial's position, not to
-   the direction);
-3. :func:`first_feasible`: the child is ``x + step * d`` for the first trial ``d`` that stays
-   inside the box, else the parent itself. No scaling by the box width, no halving.
-
-``scaled_halving``: the project's earlier operator, :func:`mutation_scaled_halving`: a dense
-random direction scaled by ``step`` times the box width, halved until the child is inside.
+``adaptfeasible`` (default): MATLAB's ``mutationadaptfeasible`` for bound constraints, as
+public derivatives of MathWorks' file show it (docs/optimizers.md): a random mesh-adaptive
+basis plus the tangent cone of the active bounds, every direction twice in a random order
+with MATLAB's signs, the child ``x + step d`` for the first trial inside the box (else the
+parent). ``scaled_halving``: the project's earlier operator.
 """
 
 from __future__ import annotations
@@ -25,11 +14,6 @@ import numpy as np
 #: MATLAB's binding tolerance for bounds in ``mutationadaptfeasible``:
 #: ``max(sqrt(eps), TolCon)`` with ``gaoptimset``'s default ``TolCon = 1e-6``.
 ACTIVE_TOL = max(float(np.sqrt(np.finfo(float).eps)), 1e-6)
-
-
-def _matlab_round(values: np.ndarray) -> np.ndarray:
-    """MATLAB's ``round`` element-wise (half away from zero)."""
-    return np.sign(values) * np.floor(np.abs(values) + 0.5)
 
 
 def _diagonal(rng: np.random.Generator, n: int, dim: int, p: float) -> np.ndarray:
@@ -48,19 +32,16 @@ def box_directions(
     rng: np.random.Generator,
     tol: float = ACTIVE_TOL,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """MATLAB's ``boxdirections`` with a mesh-adaptive (MADS) basis, for each row of ``X``.
-
-    Returns ``(basis, active)``. ``basis[i]`` is ``dim x dim`` with the directions as columns:
-    ``P L P^T`` for a random permutation ``P`` and a lower-triangular ``L`` whose diagonal is
-    ``±p`` (random signs) and whose entries below the diagonal are ``round((p + 1) U - 0.5)``,
-    ``U ~ U(0, 1)``, i.e. integers from 0 to about ``p``, with ``p = 1/sqrt(step)``.
-    ``active[i, j]`` says that coordinate ``j`` of ``X[i]`` is within ``tol`` (in the
-    parameters' units) of its lower or upper bound; the tangent cone of the active bounds is
-    spanned by the unit vectors of those coordinates."""
+    """MATLAB's ``boxdirections`` with a mesh-adaptive (MADS) basis, per row of ``X``:
+    ``(basis, active)``. ``basis[i]`` (directions as columns) is ``P L P^T``, ``P`` a random
+    permutation, ``L`` lower-triangular with ``±p`` on the diagonal and
+    ``round((p + 1) U - 0.5)`` below, ``p = 1/sqrt(step)``. ``active[i, j]``: coordinate ``j``
+    within ``tol`` (parameter units) of a bound (the tangent cone's unit vectors)."""
     n, dim = X.shape
     active = (np.abs(X - lower) <= tol) | (np.abs(X - upper) <= tol)
     p = 1.0 / np.sqrt(step)
-    below = np.tril(_matlab_round((p + 1.0) * rng.random((n, dim, dim)) - 0.5), -1)
+    w = (p + 1.0) * rng.random((n, dim, dim)) - 0.5
+    below = np.tril(np.sign(w) * np.floor(np.abs(w) + 0.5), -1)  # MATLAB's round
     diagonal = _diagonal(rng, n, dim, p)
     L = below + diagonal[:, :, None] * np.eye(dim)
     order = np.argsort(rng.random((n, dim)), axis=1)  # one random permutation per row
@@ -71,19 +52,11 @@ def box_directions(
 def trial_directions(
     basis: np.ndarray, active: np.ndarray, order: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The signed search directions of each parent in the order they are tried.
-
-    As in MATLAB, per parent with ``nt`` active bounds the slots are every basis column twice,
-    then every tangent direction twice: ``b_0 .. b_{d-1}, b_0 .. b_{d-1}, t_1 .. t_nt,
-    t_1 .. t_nt`` (``t`` the unit vectors of the active coordinates, in coordinate order),
-    padded to ``4 d`` slots. ``order[i]`` lists slot numbers in trial order, the ``2 (d + nt)``
-    real slots first (a random permutation of them). The sign belongs to the trial's
-    POSITION ``k``, not to its slot: ``+`` for ``k < d``, ``-`` for ``k < 2 d``, ``+`` for
-    ``k < 2 d + nt``, ``-`` after that. So a direction is not always tried with both signs:
-    both of its slots may fall on positions of the same sign.
-
-    Returns ``(trials, valid)``: ``trials[i, k]`` is the ``k``-th direction (a ``dim``
-    vector), ``valid[i, k]`` false for the padding."""
+    """Each parent's signed directions in trial order, ``(trials, valid)`` (``valid`` false
+    for the padding). As in MATLAB the slots are every basis column twice, then every tangent
+    direction twice, padded to ``4 d``; ``order[i]`` lists slots in trial order. The sign
+    belongs to the trial's POSITION ``k``, not to its slot (``+`` for ``k < d``, ``-`` below
+    ``2 d``, ``+`` below ``2 d + nt``, ``-`` after): a direction may never meet both signs."""
     n, dim, _ = basis.shape
     nt = active.sum(axis=1)[:, None]
     # direction table per parent: columns 0 .. d-1 the basis, d .. 2d-1 the unit vectors
@@ -100,8 +73,7 @@ def trial_directions(
 
 
 def trial_order(active: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """A random trial order per parent for :func:`trial_directions`: a uniform random
-    permutation of the ``2 (d + nt)`` real slots, followed by the padding."""
+    """Per parent, a random permutation of the ``2 (d + nt)`` real slots, then the padding."""
     n, dim = active.shape
     nt = active.sum(axis=1)[:, None]
     real = np.arange(4 * dim)[None, :] < 2 * (dim + nt)
@@ -135,13 +107,9 @@ def mutationadaptfeasible(
     tol: float = ACTIVE_TOL,
     engine: str = "numba",
 ) -> np.ndarray:
-    """MATLAB's adaptive-feasible mutation for a box: one child per entry of ``parents``
-    (row indices into ``population``), all parents at once. ``step`` is in the parameters'
-    own units; every child is inside the box.
-
-    ``engine = "numba"`` (default) draws the random numbers in the reference's order and
-    computes the children in one compiled loop (:mod:`vpid_ga.fused`); ``"numpy"`` with the
-    reference functions above. Both give identical children (tested)."""
+    """MATLAB's adaptive-feasible mutation for a box: one child inside it per row index of
+    ``parents`` (``step`` in parameter units). ``engine``: ``numba`` (:mod:`vpid_ga.fused`)
+    or ``numpy`` (the reference above); identical children (tested)."""
     X = population[parents]
     if engine == "numpy":
         basis, active = box_directions(X, step, lower, upper, rng, tol)
@@ -167,14 +135,10 @@ def mutation_scaled_halving(
     rng: np.random.Generator,
     max_halvings: int = 60,
 ) -> np.ndarray:
-    """The project's earlier operator: child = ``x + s * step * (upper - lower) * d``.
-
-    ``d`` is a random direction (uniform on ``[-1, 1]`` per coordinate) in the tangent cone of
-    the active bounds (a component that would leave a face the parent sits on is reversed),
-    and ``s`` starts at 1 and is halved until the child is inside the box. After
-    ``max_halvings`` halvings the child is the parent itself (practically never). The result
-    is clipped exactly so rounding never leaves the box. ``step`` is a fraction of the box
-    width."""
+    """The project's earlier operator: child = ``x + s step (upper - lower) d`` (``step``: a
+    fraction of the box width), ``d`` uniform on ``[-1, 1]`` per coordinate turned into the
+    tangent cone of the active bounds, ``s`` halved from 1 until the child is inside (after
+    ``max_halvings``, the parent)."""
     X = population[parents]
     n, dim = X.shape
     width = upper - lower

@@ -1,18 +1,5 @@
-"""The operators of MATLAB R2014b's ``ga`` with default options on a bounded problem.
-
-Pure functions of arrays and a ``numpy.random.Generator``, each named after the MATLAB
-function it emulates, so each is tested alone:
-
-* :func:`fitscalingrank`: expectation proportional to ``1/sqrt(rank)``, summing to the number
-  of parents;
-* :func:`selectionstochunif`: stochastic uniform (universal) sampling on a wheel laid out by
-  the expectations, one random offset, equal steps;
-* :func:`crossoverscattered`: each gene from parent 1 or parent 2 with probability 1/2;
-* :class:`AdaptiveStep`: the step-size rule of ``mutationadaptfeasible``, a step that grows
-  after an improving generation and shrinks after a stalled one.
-
-The two mutation operators that use the step live in :mod:`vpid_ga.mutation`.
-"""
+"""The operators of MATLAB R2014b's ``ga`` (default options, bounded problem), each a pure
+function named after the MATLAB function it emulates and tested alone."""
 
 from __future__ import annotations
 
@@ -39,10 +26,8 @@ def fitscalingrank(scores: np.ndarray, n_parents: int) -> np.ndarray:
 def selectionstochunif(
     expectation: np.ndarray, n_parents: int, rng: np.random.Generator
 ) -> np.ndarray:
-    """Stochastic uniform selection: lay the expectations along a line of length 1 (a
-    cumulative wheel), put ``n_parents`` equally spaced pointers on it starting at one
-    uniform random offset in ``[0, 1/n_parents)``, and pick the section under each pointer.
-    Returns parent indices in wheel order (the caller shuffles them, as ``stepGA`` does)."""
+    """Stochastic uniform selection: ``n_parents`` equally spaced pointers from one uniform
+    offset on the cumulative wheel of the expectations; parent indices in wheel order."""
     wheel = np.cumsum(expectation) / np.sum(expectation)
     positions = (rng.random() + np.arange(n_parents)) / n_parents
     picks = np.searchsorted(wheel, positions, side="right")
@@ -52,29 +37,22 @@ def selectionstochunif(
 def crossoverscattered(
     population: np.ndarray, parents: np.ndarray, rng: np.random.Generator
 ) -> np.ndarray:
-    """Scattered crossover: ``parents`` is consumed in pairs ``(p1, p2)``; each child gene
-    comes from ``p1`` when a fresh uniform number is > 0.5, else from ``p2``. Children of
-    parents inside a box are inside the box, so no repair is needed for bounds."""
+    """Scattered crossover: per pair of ``parents``, each gene from ``p1`` when a uniform is
+    > 0.5, else from ``p2`` (inside the box when the parents are)."""
     p1, p2 = population[parents[0::2]], population[parents[1::2]]
     return np.where(rng.random(p1.shape) > 0.5, p1, p2)
 
 
 @dataclasses.dataclass
 class AdaptiveStep:
-    """The step-size rule of ``mutationadaptfeasible``: ``step = 1`` in generations 1 and 2;
-    from generation 3 on, ``step = min(1, 4 step)`` when the best score of the previous
-    generation improved on the one before, else ``step = max(sqrt(eps), step / 4)``.
-
-    MATLAB keeps the step in a persistent variable and compares ``state.Best(end)`` with
-    ``state.Best(end-1)``, the best scores after the last two completed generations. The
-    step is in the parameters' own units for ``mutation=adaptfeasible`` and a fraction of the
-    box width for ``mutation=scaled_halving``."""
+    """``mutationadaptfeasible``'s step: 1 in generations 1 and 2; then ``min(1, 4 step)``
+    when the best score improved between the last two completed generations (MATLAB's
+    ``state.Best(end) < state.Best(end-1)``), else ``max(sqrt(eps), step / 4)``."""
 
     step: float = 1.0
 
     def update(self, generation: int, best_history: list[float]) -> float:
-        """The step for ``generation`` (1-based), given the best score after each completed
-        generation (``best_history[-1]`` is the latest)."""
+        """The step for ``generation`` (1-based) after the completed generations' best scores."""
         if generation <= 2 or len(best_history) < 2:
             self.step = 1.0
         elif best_history[-1] < best_history[-2]:
@@ -82,5 +60,3 @@ class AdaptiveStep:
         else:
             self.step = max(np.sqrt(np.finfo(float).eps), self.step / 4.0)
         return self.step
-
-

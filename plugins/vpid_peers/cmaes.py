@@ -1,33 +1,17 @@
-"""``optimizer=cmaes``: CMA-ES from the ``cma`` package (Hansen), as an ask/tell optimizer.
+"""``optimizer=cmaes``: CMA-ES from the ``cma`` package (Hansen), as an ask/tell optimizer
+(docs/optimizers.md).
 
-* **Coordinates**: the search runs in the unit cube (:mod:`vpid_peers.unit_box`), so one
-  step size ``sigma0`` fits every parameter; candidates go back to physical units on ``ask``.
-* **Population** (``popsize``): ``library`` (the default since round three) is cma's own
-  ``4 + 3 ln(dim)``, 10 for the vehicle's 9 parameters; ``ps`` the protocol's population (the
-  default before, which handicapped CMA-ES: the committed study ran so); or a number.
-* **Restarts** (``restarts``): ``none``, or ``ipop``: when cma's termination criteria fire
-  before the budget is spent, a new search starts from a new random point with twice the
-  population (IPOP-CMA-ES, Auger and Hansen 2005), until the budget ends; or ``bipop``
-  (BIPOP-CMA-ES, Hansen 2009): restarts alternate between that large-population regime and a
-  small one, whichever has used fewer evaluations so far; a small search has the population
-  ``floor(l0 (l_large / (2 l0)) ** (u ** 2))`` and the step ``sigma0 * 10 ** (-2 v)`` with
-  ``u``, ``v`` uniform in [0, 1) from the run's generator (``l0``: the first population,
-  ``l_large``: the large regime's current one).
-* **Start**: the mean starts at a point drawn uniformly in the box by the run's generator, not
-  the box's centre (on the vehicle problem the box is centred on the true parameters, so a
-  centred start would begin at the answer). ``sigma0`` is a fraction of the box width.
-* **Bounds**: cma's ``BoundTransform`` (its default boundary handler): the search distribution
-  lives in an unbounded space and every candidate is mapped into the box by a smooth
-  piecewise-quadratic transformation, so every asked candidate is inside.
-* **Randomness**: cma draws all its normal deviates through its ``randn`` option; it gets the
-  run's :class:`numpy.random.Generator` there. cma's ``seed`` option would re-seed numpy's
-  *global* generator instead, which other code in the same process shares; it is left unset.
-* **Stopping**: the optimizer is ``done`` when cma's own termination criteria fire
-  (``tolfun``, ``tolx``, ``tolfunhist``, ``tolflatfitness``, ... with cma's defaults) or when it
-  has used the run's budget (``self.budget``), the same schedule as the DE
-  variants (counted here: cma's ``maxfevals`` fires one generation late, it tests
-  ``countevals - 1 >= maxfevals``). ``stop_reasons`` keeps what ended it.
-* **Quiet**: ``verbose=-9`` and no data logging, so cma prints nothing and writes no files.
+The search runs in the unit cube (one ``sigma0``, a fraction of the box width, fits every
+parameter), from a uniform random start (the vehicle's box is centred on the truth), inside
+the box by cma's ``BoundTransform``. Population (``popsize``): ``library`` (cma's
+``4 + 3 ln(dim)``), ``ps`` or a number. ``restarts``: ``none``, ``ipop`` (IPOP-CMA-ES, Auger
+and Hansen 2005: twice the population at each restart) or ``bipop`` (BIPOP-CMA-ES, Hansen
+2009: the large regime alternates with a small one of population
+``floor(l0 (l_large / (2 l0)) ** (u ** 2))`` and step ``sigma0 10 ** (-2 v)``, ``u``, ``v``
+uniform from the run's generator). cma's normal deviates come from the run's generator
+(``randn``; its ``seed`` would re-seed numpy's global one). Done when cma's termination
+criteria fire or the run's budget is used (counted here: cma's ``maxfevals`` fires a
+generation late); ``stop_reasons`` keeps what ended it. cma prints and writes nothing.
 """
 
 from __future__ import annotations
@@ -45,11 +29,8 @@ from .unit_box import to_physical
 
 @dataclass(frozen=True)
 class CMAESParams(OptimizerParams):
-    """``sigma0``: the initial step size as a fraction of the box width, in (0, 1].
-
-    The default 0.3 follows cma's advice that the optimum should lie within about
-    ``x0 ± 3 sigma0``: from a start anywhere in the unit cube, 3 × 0.3 covers the whole side.
-    """
+    """``sigma0``: the initial step as a fraction of the box width, in (0, 1]; 0.3 by cma's
+    advice that the optimum lie within ``x0 ± 3 sigma0`` (from anywhere in the cube)."""
 
     sigma0: float = 0.3
     popsize: int | Literal["library", "ps"] = "library"
@@ -93,7 +74,6 @@ class CMAES(Optimizer):
         self.schedule = self.budget  # evaluations: the run's budget
         self._used = 0  # evaluations of the searches before the current one
         self._pending: list[np.ndarray] | None = None
-        self._done = False
         self.stop_reasons: dict[str, Any] = {}
         self.searches = 1
 
@@ -160,14 +140,3 @@ class CMAES(Optimizer):
         if stop:
             self.stop_reasons = stop
             self.done = True
-
-    # The core's Optimizer.done is a read-only property today; these two make it settable
-    # here (``self.done = True``) and keep working once the base class makes it an attribute.
-    @property
-    def done(self) -> bool:
-        """True once cma's termination criteria have fired or the schedule is used up."""
-        return self._done
-
-    @done.setter
-    def done(self, value: bool) -> None:
-        self._done = bool(value)

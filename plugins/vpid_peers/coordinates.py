@@ -18,10 +18,8 @@ Scaling = Literal["auto", "log", "box"]
 
 
 class Coordinates:
-    """Maps rows between physical units and the solver's coordinates ``u``.
-
-    ``kind`` ``auto`` is ``log`` when every lower bound is positive, else ``box``.
-    """
+    """Rows between physical units and the solver's ``u`` (``auto``: ``log`` when every lower
+    bound is positive, else ``box``)."""
 
     def __init__(self, bounds: Bounds, kind: Scaling = "auto") -> None:
         positive = bool(np.all(bounds.lower > 0))

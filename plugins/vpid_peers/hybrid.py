@@ -1,12 +1,7 @@
-"""``optimizer=de_lsq``: DE4 (current-to-best/1, Gökdağ 2014) for a fraction of the nominal
-budget, then :mod:`vpid_peers.lsq` from DE4's best vector (later starts uniform random).
-
-DE4 is the installed ``optimizer=de4`` (looked up by name through the plugin registry, so this
-package does not import ``vpid_de``; without it ``de_lsq`` is refused with the installed names).
-DE4 gets ``fraction`` of the run's budget (``self.budget``, handed over by the job): its
-initial population and ``round(fraction * budget / ps) - 1`` generations (at least the
-initial population), with Table I's F = 0.6 and CR = 0.9. The least-squares phase then runs
-until the run's budget ends.
+"""``optimizer=de_lsq``: DE4 (current-to-best/1, Gökdağ 2014; the installed ``de4``, looked up
+by name) for ``fraction`` of the run's budget (``round(fraction budget / ps) - 1`` generations
+after its initial population), then :mod:`vpid_peers.lsq` from its best vector until the
+budget ends.
 """
 
 from __future__ import annotations
@@ -28,9 +23,8 @@ _first_stage = functools.cache(registered_optimizer)
 
 @dataclasses.dataclass(frozen=True)
 class DELSQParams(LSQParams):
-    """``fraction``: share of the run's budget given to DE4, in
-    [0, 1] (0: only the initial population). ``F``, ``CR``: DE4's (Table I). The other keys
-    are :class:`~vpid_peers.lsq.LSQParams`'."""
+    """``fraction``: DE4's share of the budget in [0, 1] (0: its initial population only).
+    ``F``, ``CR``: DE4's (Table I). The other keys: :class:`~vpid_peers.lsq.LSQParams`."""
 
     fraction: float = 0.5
     F: float = 0.6

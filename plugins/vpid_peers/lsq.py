@@ -1,10 +1,7 @@
-"""``optimizer=lsq``: multistart trust-region least squares on the residuals, reweighted so
-that it minimises a sum of group norms (the vehicle's Eq. 3) rather than a sum of squares.
-
-Every start, the first included, is a uniform random point in the box (never the box's
-centre: for the vehicle that is the true vector). A descent (:mod:`vpid_peers.solver`) runs
-to convergence, then the next start is drawn, until the run's budget ends it. Every
-evaluation, finite-difference Jacobians included, goes through the run loop and is counted.
+"""``optimizer=lsq``: multistart trust-region least squares on the residuals, reweighted to
+minimise a sum of group norms (the vehicle's Eq. 3). Each start is uniform in the box (its
+centre is the vehicle's truth); descents (:mod:`vpid_peers.solver`) follow one another until
+the budget ends the run, every evaluation (Jacobians included) counted by the run loop.
 """
 
 from __future__ import annotations
@@ -23,12 +20,9 @@ from .solver import Solver, SolverSettings
 
 @dataclasses.dataclass(frozen=True)
 class LSQParams(OptimizerParams):
-    """``scaling``: the solver's coordinates, ``auto`` (``log`` when every lower bound is
-    positive, else ``box``), ``log`` or ``box``. ``broyden``: rank-one Jacobian updates
-    between finite-difference Jacobians. ``inner``: IRLS sweeps of the local model per
-    iteration. ``fd_step``: finite-difference step in solver coordinates (a relative step
-    in ``log``). ``ftol``: relative decrease of the objective below which a descent has
-    converged and the next start is drawn. ``ps`` and ``iterations`` are not used."""
+    """``scaling``: the solver's coordinates (:mod:`vpid_peers.coordinates`); ``broyden``,
+    ``inner``, ``fd_step``, ``ftol``: :class:`~vpid_peers.solver.SolverSettings`. ``ps`` and
+    ``iterations`` are not used."""
 
     scaling: Scaling = "auto"
     broyden: bool = True
@@ -89,9 +83,6 @@ class LeastSquares(LoopOptimizer):
         check_scaling(params, bounds)
 
     def minimize(self, evaluate: Callable[[np.ndarray], Any]) -> None:
-        multistart(evaluate, self.params, self.bounds, self._groups(), self.rng)
-
-    def _groups(self) -> np.ndarray:
         if self.residual_groups is None:
             raise RuntimeError("lsq needs residual_groups: run it through vpid_bench.runner.run")
-        return self.residual_groups
+        multistart(evaluate, self.params, self.bounds, self.residual_groups, self.rng)

@@ -1,31 +1,13 @@
-"""``optimizer=nevergrad``: any optimizer of nevergrad's registry, ``optimizer.method=<name>``.
+"""``optimizer=nevergrad``: any optimizer of nevergrad's registry, ``optimizer.method=<name>``
+(docs/optimizers.md); an unknown name is refused in one line listing the closest ones.
 
-* **Method**: a name of ``nevergrad.optimizers.registry`` (542 names in nevergrad 1.0.12).
-  An unknown name is refused in one line (:class:`ConfigError`, key ``optimizer.method``)
-  that lists the closest registered names.
-* **Batches** (``batch``): the nevergrad optimizer is built with the run's ``budget`` (the
-  evaluations the run loop allows, ``self.budget``) and ``num_workers`` = 1, nevergrad's
-  default (``library``: one candidate per ask and tell), or ``ps`` (``batch=ps``: each ``ask``
-  asks nevergrad for ``ps`` candidates, each ``tell`` tells all of them; the default before
-  round three).
-  The optimizer is ``done`` once it has told that budget.
-* **Coordinates**: an ``ng.p.Array`` bounded to the unit cube (nevergrad's own bound handling),
-  mapped to physical units on ``ask`` (:mod:`vpid_peers.unit_box`). Its initial value, around
-  which methods such as CMA and NGOpt start, is drawn uniformly in the cube by the run's
-  generator, not nevergrad's default (the centre: on the vehicle problem, the true parameters).
-* **Randomness**: nevergrad draws from its parametrization's ``random_state``; it is a
-  ``numpy.random.RandomState`` seeded with an integer drawn from the run's generator.
-* **Failures**: nevergrad is built on the first ``ask``, not in the constructor, so a method
-  that fails (at construction, e.g. one that cannot run ``ps`` workers, or during the run)
-  raises inside the run loop, and the job records that run as failed and goes on.
-* **As its users run it**: the registry's optimizer is asked and told through nevergrad's
-  public API only, nothing of nevergrad's internals patched or bypassed, so a run costs what
-  it costs a user of nevergrad (its CMA: about 0.8 ms per candidate of its own, most of it
-  in nevergrad's parameter machinery; ``benchmarks/bench_nevergrad_cma.py`` measures it and
-  docs/optimizers.md states it). Every record names nevergrad's version
-  (``optimizer.plugin.library``).
-* **Cost**: ``import nevergrad`` takes about 3 s; it happens when the parameters are checked
-  (the registry is needed to check the name), never when the plugin is registered.
+Built with the run's budget and ``num_workers`` 1 (``batch=library``, nevergrad's default) or
+``ps``; on the first ``ask``, so a method that fails fails its run, not the job. It searches an
+``ng.p.Array`` bounded to the unit cube from a uniform random start (nevergrad's default is
+the centre: the vehicle's truth), with a ``RandomState`` seeded from the run's generator, and
+through nevergrad's public API only: a run costs what it costs a user (its CMA: about 0.8 ms
+per candidate of its own, ``benchmarks/bench_nevergrad_cma.py``). ``import nevergrad`` (about
+3 s) happens when the parameters are checked, never when the plugin is registered.
 """
 
 from __future__ import annotations
@@ -40,11 +22,9 @@ from vpid_bench import Bounds, ConfigError, Optimizer, OptimizerParams
 
 from .unit_box import to_physical
 
-#: The default method: CMA, the method NGOpt (nevergrad's own recommendation) picks at the
-#: paper's protocol (9 parameters, 1020 evaluations, 20 workers: the runs are identical).
-#: NGOpt itself is not the default: in nevergrad 1.0.12 on numpy 2.x it fails at small budgets
-#: (a TypeError inside its metamodel, e.g. 4 parameters and 120 evaluations, or the vehicle
-#: with 10 iterations).
+#: CMA, what NGOpt (nevergrad's recommendation) picks at the paper's protocol (identical runs);
+#: NGOpt itself fails at small budgets in nevergrad 1.0.12 on numpy 2.x (a TypeError in its
+#: metamodel, e.g. 4 parameters and 120 evaluations).
 DEFAULT_METHOD = "CMA"
 
 
@@ -81,13 +61,10 @@ def check_method(method: str) -> None:
 
 @dataclass(frozen=True)
 class NevergradParams(OptimizerParams):
-    """``method``: the name of a nevergrad optimizer, as in ``nevergrad.optimizers.registry``
-    (case matters: ``NGOpt``, ``TwoPointsDE``, ``CMA``, ``PSO``, ``DE``, ``OnePlusOne``, ...)."""
+    """``method``: a name of ``nevergrad.optimizers.registry`` (case matters: ``NGOpt``,
+    ``CMA``, ``DE``, ...). ``batch``: candidates per batch, ``library`` (1) or ``ps``."""
 
     method: str = DEFAULT_METHOD
-    #: candidates per batch (nevergrad's ``num_workers``): ``library`` is nevergrad's default,
-    #: 1 (one candidate asked, evaluated and told at a time); ``ps`` the protocol's
-    #: population (the default before round three)
     batch: Literal["library", "ps"] = "library"
 
     def __post_init__(self) -> None:
@@ -112,7 +89,6 @@ class NevergradOptimizer(Optimizer):
         self._ng: Any = None
         self._pending: list[Any] | None = None
         self._told = 0
-        self._stopped = False
 
     def _build(self) -> Any:
         import nevergrad as ng
@@ -139,13 +115,7 @@ class NevergradOptimizer(Optimizer):
         self._told += len(self._pending)
         self._pending = None
 
-    # Settable (``self.done = True``), like the core's ``done`` is about to become; a
-    # read-only property here would break a base class that assigns ``self.done``.
-    @property
+    @Optimizer.done.getter
     def done(self) -> bool:
-        """True once the run's budget (``self.budget``) has been told."""
-        return self._stopped or self._told >= self.budget
-
-    @done.setter
-    def done(self, value: bool) -> None:
-        self._stopped = bool(value)
+        """True once the run's budget has been told (or ``self.done = True``)."""
+        return self._done or self._told >= self.budget

@@ -1,7 +1,5 @@
-"""``optimizer=scipy_de``, ``lsq``, ``de_lsq``, ``cmaes``, ``nevergrad``, registered with
-vpid-bench. Imports are light: scipy.optimize is imported on first use, and ``cmaes`` and
-``nevergrad`` are registered only when their library (the ``peers`` extra) can be found, which
-does not import it (``import nevergrad`` alone costs about 3 s)."""
+"""The peers registered with vpid-bench; ``cmaes`` and ``nevergrad`` only when their library
+can be found, without importing it (``import nevergrad`` costs about 3 s)."""
 
 from __future__ import annotations
 

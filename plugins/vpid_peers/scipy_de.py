@@ -1,18 +1,8 @@
-"""``optimizer=scipy_de``: ``scipy.optimize.differential_evolution``, through the bridge.
-
-Vectorised (one call per generation) with deferred updating, so each generation is one
-batch, as for DE1-DE8. The population (``popsize``) is scipy's own by default (``library``:
-scipy's ``popsize=15``, a multiplier of the dimension, so 15 D members from scipy's Latin
-hypercube; the run's budget ends the run); ``ps`` gives the protocol's population (the default
-before round three: the committed study of the paper's problem ran so), passed as ``init``:
-``ps`` rows uniform in the box drawn from the run's generator, with ``maxiter = iterations``
-so the run uses ``ps * (iterations + 1)`` evaluations like DE1-DE8. scipy draws its own random
-numbers from the run's generator.
-
-Settings that differ from scipy's defaults (docs/peers.md says why): ``vectorized=True`` (one
-batch per generation), hence ``updating="deferred"`` (scipy overrides it so itself when
-vectorised); ``tol=0`` (the run's budget ends the run, not scipy's convergence test);
-``polish=False`` (no L-BFGS-B descent after the last generation).
+"""``optimizer=scipy_de``: ``scipy.optimize.differential_evolution`` through the bridge, one
+generation per batch (``vectorized=True``, hence deferred updating), ``tol=0`` (the budget
+ends the run), ``polish=False``; docs/peers.md says why. ``popsize``: ``library`` (scipy's 15
+D from its Latin hypercube) or ``ps`` (``ps`` uniform rows from the run's generator as
+``init``, ``maxiter = iterations``: the DE1-DE8 budget). scipy draws from the run's generator.
 """
 
 from __future__ import annotations

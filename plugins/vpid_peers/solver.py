@@ -1,23 +1,12 @@
-"""A bounded trust-region (Levenberg-Marquardt) descent on a sum of group norms, with
-finite-difference Jacobians asked as one batch and Broyden updates in between.
+"""A bounded trust-region (Levenberg-Marquardt) descent on ``F = sum_g ||r_g||`` (the
+vehicle's Eq. 3 up to a factor), from ``evaluate(X) -> (f, R)`` on physical rows.
 
-One descent from a start ``u0`` (in the solver's coordinates, :mod:`vpid_peers.coordinates`):
-
-1. the residuals at ``u0`` and its ``n`` forward-difference neighbours are asked as ONE batch
-   of ``n + 1`` rows (``n`` rows when the residuals at the point are already known);
-2. each iteration builds the local model ``M(p) = sum_g ||r_g + J_g p||``
-   (:mod:`vpid_peers.sumofnorms`), reweights its groups by ``1/||r_g + J_g p||``
-   (IRLS, ``inner`` sweeps, reweighting inside every iteration), takes the damped step inside
-   the box, and asks ONE row, the trial point;
-3. the step is accepted when ``F`` decreases; the damping follows Nielsen's rule; the
-   Jacobian is updated by Broyden's rank-one secant formula after every trial (when
-   ``broyden``), and recomputed by finite differences when a step fails with an updated
-   Jacobian, after ``refresh`` updates, or before the descent is declared converged;
-4. converged: the model predicts a relative decrease below ``ftol`` with a fresh
-   finite-difference Jacobian.
-
-``evaluate(X)`` takes physical rows and returns ``(f, R)``; the solver minimises
-``F = sum_g ||r_g||`` computed from ``R`` (the vehicle's Eq. 3 up to a constant factor).
+A descent asks the point and its ``n`` forward-difference neighbours as ONE batch, then per
+iteration ONE trial row: the damped step inside the box on the local model
+``sum_g ||r_g + J_g p||`` reweighted by IRLS (:mod:`vpid_peers.sumofnorms`). Accepted when
+``F`` decreases (Nielsen's damping rule); Broyden's rank-one update after every trial, finite
+differences again when a step fails with an updated Jacobian, after ``refresh`` updates or
+before convergence (a predicted relative decrease below ``ftol``).
 """
 
 from __future__ import annotations
@@ -35,12 +24,10 @@ Evaluate = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 @dataclasses.dataclass(frozen=True)
 class SolverSettings:
-    """How a descent steps. ``fd_step``: forward-difference step in solver coordinates;
-    ``inner``: IRLS sweeps of the local model per iteration (1: weights frozen at the
-    current point); ``broyden``: secant updates between finite-difference Jacobians;
-    ``refresh``: finite-difference Jacobian after this many updates (0: only when a step
-    fails); ``ftol``: relative decrease below which a descent has converged; ``max_iter``:
-    iterations of one descent at most."""
+    """``fd_step``: forward-difference step in solver coordinates (relative in ``log``);
+    ``inner``: IRLS sweeps per iteration; ``broyden``: secant updates between
+    finite-difference Jacobians; ``refresh``: a fresh Jacobian after this many updates (0:
+    when a step fails); ``ftol``: the relative decrease of convergence."""
 
     fd_step: float = 1e-7
     inner: int = 1
@@ -52,8 +39,7 @@ class SolverSettings:
 
 @dataclasses.dataclass
 class Descent:
-    """Where a descent ended: ``u`` (solver coordinates), ``F`` and residuals ``r`` there,
-    the number of iterations and why it stopped."""
+    """Where a descent ended (``u`` in solver coordinates), after how many iterations, why."""
 
     u: np.ndarray
     F: float
@@ -86,9 +72,8 @@ class Solver:
     def jacobian(
         self, u: np.ndarray, r: np.ndarray | None = None
     ) -> tuple[np.ndarray, np.ndarray, float]:
-        """Forward-difference Jacobian ``dr/du`` (m, n) at ``u``, asked as one batch: the
-        point itself (unless its residuals ``r`` are given) and its ``n`` neighbours (a
-        neighbour that would leave the box steps backwards). Returns ``(J, r, F)``."""
+        """``(J, r, F)``: the forward-difference ``dr/du`` at ``u`` asked as one batch (the
+        point unless ``r`` is given, its neighbours; one leaving the box steps backwards)."""
         n = u.size
         h = np.full(n, self.settings.fd_step)
         h = np.where(u + h > self.coords.upper, -h, h)

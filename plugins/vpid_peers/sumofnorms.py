@@ -1,16 +1,8 @@
-"""The local model of an objective that is a sum of group norms, ``F = sum_g ||r_g||``.
-
-The vehicle's Eq. 3 is such a sum (one norm per measured channel, over a constant); a plain
-sum of squares is the case of one group (``F = ||r||``, minimised where ``||r||^2`` is). With
-residuals ``r`` and their Jacobian ``J`` at a point, the linearised objective of a step ``p``
-is ``M(p) = sum_g ||r_g + J_g p||``, convex in ``p``. Everything here works on the per-group
-Gram quantities ``A_g = J_g^T J_g``, ``b_g = J_g^T r_g``, ``c_g = r_g^T r_g``, so a step costs
-``O(groups n^3)`` whatever the number of residuals.
-
-Iteratively reweighted least squares (IRLS): weighting group ``g`` by ``w_g = 1/||r_g||``
-turns ``F`` into the weighted sum of squares ``1/2 sum_g w_g ||r_g||^2``, whose gradient
-``sum_g w_g J_g^T r_g`` equals the gradient of ``F``; so a point where the weighted
-least-squares problem with its own weights is stationary is a stationary point of ``F``.
+"""The local model of ``F = sum_g ||r_g||`` (the vehicle's Eq. 3; one group is a sum of
+squares): ``M(p) = sum_g ||r_g + J_g p||``, convex, from the per-group Gram quantities
+``A_g = J_g^T J_g``, ``b_g = J_g^T r_g``, ``c_g = r_g^T r_g`` (a step costs
+``O(groups n^3)`` whatever the number of residuals). IRLS: with ``w_g = 1/||r_g||`` the
+weighted sum of squares has the gradient of ``F``, so its stationary points are ``F``'s.
 """
 
 from __future__ import annotations
@@ -81,13 +73,10 @@ class LocalModel:
 def box_step(
     H: np.ndarray, g: np.ndarray, damping: np.ndarray, lower: np.ndarray, upper: np.ndarray
 ) -> np.ndarray:
-    """``argmin 1/2 p^T (H + D) p + g^T p`` over ``lower <= p <= upper`` (``D =
-    diag(damping)``, ``H + D`` positive definite, ``lower <= 0 <= upper``).
-
-    A primal active-set method (Nocedal and Wright, Numerical Optimization, 16.3) from the
-    feasible point 0: minimise over the free coordinates, step towards that minimiser until a
-    face blocks (that coordinate joins the working set), and at a subspace minimiser release
-    the fixed coordinate whose multiplier has the wrong sign; stop when none has."""
+    """``argmin 1/2 p^T (H + diag(damping)) p + g^T p`` over ``lower <= p <= upper`` (``lower
+    <= 0 <= upper``) by a primal active-set method from 0 (Nocedal and Wright, 16.3): step
+    towards the free coordinates' minimiser until a face blocks, release the fixed coordinate
+    whose multiplier has the wrong sign, until none has."""
     n = g.size
     M = H + np.diag(damping)
     p = np.zeros(n)

@@ -1,11 +1,6 @@
-"""Settings of ``problem=vehicle`` (frozen dataclasses) and their validation.
-
-Every field is a Hydra key under ``problem.``: ``problem.vehicle.m``, ``problem.bump.V``,
-``problem.noise.level`` ... Units are SI except the bump speed ``V``, which is in km/h as in
-the paper. Defaults are the paper's vehicle and test (Gökdağ 2014, see docs/paper-notes.md).
-
-:func:`validate` raises :class:`vpid_bench.api.ConfigError` naming the key as the user types
-it, so a bad override fails in one line before any simulation starts.
+"""Settings of ``problem=vehicle`` and their validation (one :class:`ConfigError` line naming
+the key, before any simulation). Units SI except the bump speed ``V`` (km/h, as in the
+paper); defaults: the paper's vehicle and test (Gökdağ 2014, docs/paper-notes.md).
 """
 
 from __future__ import annotations
@@ -43,10 +38,8 @@ NOISE_MODELS = ("multiplicative", "additive", "uniform")
 
 @dataclass(frozen=True)
 class VehicleParams:
-    """The half-car (bicycle) model. Masses in kg, ``I`` in kg m^2, stiffnesses in N/m,
-    damping in N s/m, lengths in m. ``a1`` is the distance from the centre of gravity to the
-    front axle, ``L`` the wheelbase (known), so ``a2 = L - a1``. ``kt1``, ``kt2`` (tyre
-    stiffnesses) are known and not identified."""
+    """The half car (kg, kg m^2, N/m, N s/m, m): ``a1`` from the centre of gravity to the
+    front axle; the wheelbase ``L`` and tyre stiffnesses ``kt1``, ``kt2`` are known."""
 
     m: float = 505.1
     I: float = 651.0
@@ -64,8 +57,7 @@ class VehicleParams:
 
 @dataclass(frozen=True)
 class BumpConfig:
-    """Rectangular bump: speed ``V`` in km/h (the paper's unit), height ``h`` and width
-    ``w`` in m. The rear tyre meets it ``L / V`` after the front one."""
+    """Rectangular bump: speed ``V`` (km/h, the paper's unit), height ``h``, width ``w`` (m)."""
 
     V: float = 20.0
     h: float = 0.04
@@ -74,8 +66,8 @@ class BumpConfig:
 
 @dataclass(frozen=True)
 class NewmarkConfig:
-    """Newmark-beta constants; the default is the average-acceleration (trapezoidal) rule.
-    ``gamma`` in [0.5, 1] (below 1/2 the scheme adds energy), ``beta`` in [0, 0.5]."""
+    """Newmark-beta; default the average-acceleration rule. ``gamma`` in [0.5, 1] (below 1/2
+    the scheme adds energy), ``beta`` in [0, 0.5]."""
 
     gamma: float = 0.5
     beta: float = 0.25
@@ -90,17 +82,10 @@ class RecordConfig:
 
 @dataclass(frozen=True)
 class NoiseConfig:
-    """Measurement noise added once to the synthetic reference.
-
-    ``model``: ``multiplicative`` (z (1 + level n), n ~ N(0, 1) per sample, the default
-    reading of the paper's "5 %"), ``additive`` (z + level rms(z) n, rms per channel) or
-    ``uniform`` (z (1 + level u), u ~ U(-1, 1)). ``seed`` seeds the noise generator only.
-
-    ``per_run``: true (the default) gives instance ``i`` of the problem (the record run ``i``
-    of every optimizer fits) its own noise record, drawn from
-    ``numpy.random.SeedSequence(seed, spawn_key=(i,))``; false keeps one record, drawn from
-    ``numpy.random.default_rng(seed)``, for every run.
-    """
+    """Noise added to the synthetic reference (:func:`.objective.add_noise`; ``multiplicative``
+    is the default reading of the paper's "5 %"); ``seed`` seeds the noise only.
+    ``per_run``: instance ``i`` (run ``i`` of every optimizer) gets its own record from
+    ``SeedSequence(seed, spawn_key=(i,))``; false: one record from ``default_rng(seed)``."""
 
     level: float = 0.05
     model: str = "multiplicative"
@@ -110,14 +95,10 @@ class NoiseConfig:
 
 @dataclass(frozen=True)
 class ReferenceConfig:
-    """How the reference record is made. ``null`` means "the same as the model".
-
-    ``integrator``, ``dt`` (s, must divide ``problem.dt``) and ``sampling`` let the synthetic
-    reference differ from the model that fits it (no "inverse crime"). ``file``: a CSV with
-    a measured record (columns ``t, z1dd, z2dd`` in s and m/s^2, any rate and start, units
-    optional: :mod:`.record_file`) fitted instead; no noise is added to it, and the problem
-    has no truth.
-    """
+    """How the reference is made (``null``: as the model). ``integrator``, ``dt`` (s,
+    dividing ``problem.dt``), ``sampling``: a synthetic reference unlike the fitted model (no
+    inverse crime). ``file``: a measured record (:mod:`.reference_io`) fitted instead, no
+    noise added, no truth."""
 
     integrator: str | None = None
     dt: float | None = None
@@ -140,8 +121,8 @@ class ReferenceConfig:
 
 @dataclass(frozen=True)
 class BoundsConfig:
-    """The search box is ``[lower_factor, upper_factor] x`` the true values; a parameter's
-    own box ``problem.bounds.<name>=[lo,hi]`` (SI units) replaces its row."""
+    """The box ``[lower_factor, upper_factor] x`` the true values; ``bounds.<name>=[lo,hi]``
+    (SI) replaces a row."""
 
     lower_factor: float = 0.5
     upper_factor: float = 1.5
@@ -167,17 +148,10 @@ KNOWN_WHAT = {"L": ("m", "wheelbase"), "kt1": ("N/m", "front tyre stiffness"),
 
 @dataclass(frozen=True)
 class VehicleConfig(ProblemConfig):
-    """``problem=vehicle``: identify 9 parameters of a half-car from two body accelerations.
-
-    ``dt`` is the integration step and sample interval in s; ``integrator`` is ``newmark``
-    (fast compiled kernel) or ``exact`` (matrix exponential, for validation); ``sampling`` is
-    how the step input enters Newmark: ``point`` (y at t_k) or ``average`` (each step gets
-    the exact mean of y over the step; see :mod:`vpid_vehicle.road`). ``objective`` is the
-    estimator: ``eq3`` (the paper's), ``ols``, ``ml`` or ``ml_profiled``
-    (:mod:`vpid_bench.estimators`; ``ml`` weighs by the stated noise model, ``noise.model``
-    and ``noise.level``, and is refused for a measured ``reference.file``, whose noise is not
-    known: ``ml_profiled`` estimates each channel's sigma from the residuals).
-    """
+    """``problem=vehicle``: 9 parameters of a half car from two body accelerations (keys:
+    docs/vehicle.md). ``dt``: step and sample interval (s); ``integrator``: ``newmark`` or
+    ``exact``; ``sampling``: :mod:`vpid_vehicle.road`; ``objective``: ``eq3`` (the paper's),
+    ``ols``, ``ml`` (the stated noise; refused for a measured record) or ``ml_profiled``."""
 
     vehicle: VehicleParams = field(default_factory=VehicleParams)
     bump: BumpConfig = field(default_factory=BumpConfig)
@@ -202,8 +176,8 @@ class VehicleConfig(ProblemConfig):
 
 
 def _apply_known(config: VehicleConfig) -> None:
-    """Set the ``vehicle.``/``bump.`` key of each ``known.<name>`` (refusing a name that is
-    not a stated quantity, or ``free``: this problem identifies a fixed set)."""
+    """Set the ``vehicle.``/``bump.`` key of each ``known.<name>`` (this problem identifies
+    a fixed set: nothing freed)."""
     for name, value in config.known.items():
         key = f"problem.known.{name}"
         if name not in KNOWN_KEYS:
@@ -218,8 +192,7 @@ def _apply_known(config: VehicleConfig) -> None:
 
 
 def known_list(config: VehicleConfig) -> list[dict[str, Any]]:
-    """``problem.info.known`` of ``problem=vehicle``: each stated quantity with its value,
-    unit and source."""
+    """``problem.info.known``: each stated quantity with its value, unit and source."""
     out = []
     for name, (part, field_name) in KNOWN_KEYS.items():
         value = getattr(getattr(config, part), field_name)
@@ -251,14 +224,13 @@ def own_boxes(config: VehicleConfig) -> dict[str, tuple[float, float]]:
     return out
 
 
-def _finite(key: str, value: float, allowed: str) -> None:
-    if not math.isfinite(value):
+def _require(key: str, value: Any, ok: bool, allowed: str) -> None:
+    if not ok:
         raise ConfigError(key, value, allowed)
 
 
 def _positive(key: str, value: float, allowed: str) -> None:
-    if not (math.isfinite(value) and value > 0):
-        raise ConfigError(key, value, allowed)
+    _require(key, value, math.isfinite(value) and value > 0, allowed)
 
 
 def _choice(key: str, value: str | None, choices: tuple[str, ...], nullable: bool = False) -> None:
@@ -281,8 +253,8 @@ def validate(config: VehicleConfig) -> None:
     _validate_vehicle(config)
     _validate_simulation(config)
     T = window(config)
-    if T < config.dt:
-        raise ConfigError("problem.dt", config.dt, f"a step no longer than the window T = {T:g} s")
+    _require("problem.dt", config.dt, T >= config.dt,
+             f"a step no longer than the window T = {T:g} s")
     _validate_noise_and_reference(config)
     # a measured record states no noise level (noise.level is what synthetic records add)
     estimators.check_objective(config.objective, config.noise.level
@@ -301,68 +273,60 @@ def _validate_vehicle(config: VehicleConfig) -> None:
     for name in ("k1", "k2", "kt1", "kt2"):
         _positive(f"problem.vehicle.{name}", getattr(p, name), "a stiffness > 0 (N/m)")
     for name in ("c1", "c2"):
-        value = getattr(p, name)
-        if not (math.isfinite(value) and value >= 0):
-            raise ConfigError(f"problem.vehicle.{name}", value, "a damping >= 0 (N s/m)")
+        c = getattr(p, name)
+        _require(f"problem.vehicle.{name}", c, math.isfinite(c) and c >= 0,
+                 "a damping >= 0 (N s/m)")
     _positive("problem.vehicle.L", p.L, "a wheelbase > 0 (m)")
-    if not (math.isfinite(p.a1) and 0.0 < p.a1 < p.L):
-        raise ConfigError("problem.vehicle.a1", p.a1, f"a value in (0, L) = (0, {p.L:g}) m")
+    _require("problem.vehicle.a1", p.a1, math.isfinite(p.a1) and 0.0 < p.a1 < p.L,
+             f"a value in (0, L) = (0, {p.L:g}) m")
     _positive("problem.bump.V", config.bump.V, "a speed > 0 (km/h)")
 
 
 def _validate_simulation(config: VehicleConfig) -> None:
     h = config.bump.h
-    if not (math.isfinite(h) and 0 < abs(h) <= MAX_BUMP_HEIGHT):
-        raise ConfigError("problem.bump.h", h, f"a bump height with 0 < |h| <= "
-                          f"{MAX_BUMP_HEIGHT:g} m (0.04 in the paper; negative: a pothole)")
+    _require("problem.bump.h", h, math.isfinite(h) and 0 < abs(h) <= MAX_BUMP_HEIGHT,
+             f"a bump height with 0 < |h| <= {MAX_BUMP_HEIGHT:g} m (0.04 in the paper; "
+             "negative: a pothole)")
     _positive("problem.bump.w", config.bump.w, "a bump width > 0 (m)")
     _positive("problem.dt", config.dt, "a time step > 0 (s)")
     _choice("problem.integrator", config.integrator, INTEGRATORS)
     _choice("problem.sampling", config.sampling, SAMPLINGS)
-    nm = config.newmark
-    if not (math.isfinite(nm.gamma) and 0.5 <= nm.gamma <= 1.0):
-        raise ConfigError("problem.newmark.gamma", nm.gamma, "a value in [0.5, 1] (default 0.5)")
-    if not (math.isfinite(nm.beta) and 0.0 <= nm.beta <= 0.5):
-        raise ConfigError("problem.newmark.beta", nm.beta, "a value in [0, 0.5] (default 0.25)")
-    extra = config.record.extra
-    if not (math.isfinite(extra) and extra >= 0):
-        raise ConfigError("problem.record.extra", extra, "seconds >= 0 recorded after the window")
+    g, b, extra = config.newmark.gamma, config.newmark.beta, config.record.extra
+    _require("problem.newmark.gamma", g, math.isfinite(g) and 0.5 <= g <= 1.0,
+             "a value in [0.5, 1] (default 0.5)")
+    _require("problem.newmark.beta", b, math.isfinite(b) and 0.0 <= b <= 0.5,
+             "a value in [0, 0.5] (default 0.25)")
+    _require("problem.record.extra", extra, math.isfinite(extra) and extra >= 0,
+             "seconds >= 0 recorded after the window")
 
 
 def _validate_noise_and_reference(config: VehicleConfig) -> None:
     nz = config.noise
-    if not (math.isfinite(nz.level) and nz.level >= 0):
-        raise ConfigError("problem.noise.level", nz.level, "a noise level >= 0 (0.05 = 5 %)")
+    _require("problem.noise.level", nz.level, math.isfinite(nz.level) and nz.level >= 0,
+             "a noise level >= 0 (0.05 = 5 %)")
     _choice("problem.noise.model", nz.model, NOISE_MODELS)
-    if nz.seed < 0:
-        raise ConfigError("problem.noise.seed", nz.seed, "an integer >= 0")
+    _require("problem.noise.seed", nz.seed, nz.seed >= 0, "an integer >= 0")
     ref = config.reference
     _choice("problem.reference.integrator", ref.integrator, INTEGRATORS, nullable=True)
     _choice("problem.reference.sampling", ref.sampling, SAMPLINGS, nullable=True)
     if ref.dt is not None:
         _positive("problem.reference.dt", ref.dt, "a time step > 0 (s) or null")
         ratio = config.dt / ref.dt
-        if abs(ratio - round(ratio)) > 1e-6 * ratio or round(ratio) < 1:
-            raise ConfigError(
-                "problem.reference.dt", ref.dt,
-                f"null or a step dividing problem.dt = {config.dt:g} s (e.g. {config.dt / 10:g})",
-            )
+        _require("problem.reference.dt", ref.dt,
+                 abs(ratio - round(ratio)) <= 1e-6 * ratio and round(ratio) >= 1,
+                 f"null or a step dividing problem.dt = {config.dt:g} s (e.g. {config.dt / 10:g})")
 
 
 def _validate_bounds(config: VehicleConfig) -> None:
     p, b = config.vehicle, config.bounds
     _positive("problem.bounds.lower_factor", b.lower_factor, "a factor > 0")
-    if not (math.isfinite(b.upper_factor) and b.upper_factor > b.lower_factor):
-        raise ConfigError(
-            "problem.bounds.upper_factor", b.upper_factor,
-            f"a factor > problem.bounds.lower_factor = {b.lower_factor:g}",
-        )
+    _require("problem.bounds.upper_factor", b.upper_factor,
+             math.isfinite(b.upper_factor) and b.upper_factor > b.lower_factor,
+             f"a factor > problem.bounds.lower_factor = {b.lower_factor:g}")
     own_boxes(config)
-    if b.upper_factor * p.a1 >= p.L and b.a1 is None:
-        raise ConfigError(
-            "problem.bounds.upper_factor", b.upper_factor,
-            f"a factor with upper_factor * a1 < L, i.e. < {p.L / p.a1:.4g} (a2 = L - a1 > 0)",
-        )
+    _require("problem.bounds.upper_factor", b.upper_factor,
+             b.upper_factor * p.a1 < p.L or b.a1 is not None,
+             f"a factor with upper_factor * a1 < L, i.e. < {p.L / p.a1:.4g} (a2 = L - a1 > 0)")
 
 
 def _gib(n_bytes: float) -> str:
@@ -370,9 +334,8 @@ def _gib(n_bytes: float) -> str:
 
 
 def estimated_memory(config: VehicleConfig, T: float) -> tuple[float, float, float]:
-    """(samples of the model's grid, steps of the reference's grid, estimated bytes) of a
-    job: every step costs :data:`BYTES_PER_STEP`, every sample of a batch of ``ps``
-    candidates :data:`BYTES_PER_SAMPLE_CANDIDATE` (floats: no array is made to count them)."""
+    """(model samples, reference steps, estimated bytes) of a job, by :data:`BYTES_PER_STEP`
+    and :data:`BYTES_PER_SAMPLE_CANDIDATE` (no array is made to count them)."""
     samples = T / config.dt + 1
     ref_dt = config.reference.dt if config.reference.file is None else None
     steps = T / ref_dt + 1 if ref_dt else samples
@@ -381,9 +344,8 @@ def estimated_memory(config: VehicleConfig, T: float) -> tuple[float, float, flo
 
 
 def _blame(config: VehicleConfig, T: float) -> tuple[str, float]:
-    """The key that made the record long: ``problem.dt`` when the step is finer (against the
-    paper's 1 ms) than the window is long (against its 0.48 s), else the largest term of the
-    window ``(L + w) / V + extra`` (a long ``L / V`` is a slow ``problem.bump.V``)."""
+    """The key that made the record long: ``problem.dt`` when the step is finer (against 1
+    ms) than the window is long (against 0.48 s), else the window's largest term."""
     if 0.001 / config.dt > T / 0.48:
         return "problem.dt", config.dt
     v = config.bump.V / 3.6
@@ -413,9 +375,8 @@ def check_size(config: VehicleConfig, T: float) -> None:
 
 
 def check_reference_file(config: VehicleConfig) -> float:
-    """Read ``problem.reference.file`` once, so a file that does not fit fails the command's
-    pre-flight (exit 2) rather than the job; returns the record's span (s), the window the
-    model then integrates over."""
+    """Read ``problem.reference.file`` at the pre-flight (a bad file fails there, exit 2);
+    its span (s), the window the model integrates over."""
     from .record_file import check_span
     from .reference_io import read_measured
 

@@ -1,15 +1,8 @@
-"""Exact response of the linear model to the rectangular bump (validation solver).
-
-State ``s = [q, q']`` (8 values), ``s' = A s + B y`` with ``A = [[0, I], [-M^-1 K, -M^-1 C]]``
-and ``B = [[0], [M^-1 B_y]]``. The input ``y`` is piecewise constant, so each grid step is
-split at the bump edges that fall inside it and every piece is propagated exactly (zero-order
-hold is exact here) with one matrix exponential of the augmented matrix
-``[[A, B], [0, 0]] tau``, whose top blocks are ``exp(A tau)`` and ``int_0^tau exp(A s) ds B``.
-Only a handful of distinct piece lengths occur, so the exponentials are computed once per
-length for the whole population (``scipy.linalg.expm`` is batched).
-
-The outputs are exact up to round-off at the sample times: the body accelerations do not
-depend on the input directly (the road acts on the wheels only).
+"""Exact response of the linear model to the rectangular bump (validation solver): ``s =
+[q, q']``, ``s' = A s + B y``; each step split at the bump edges inside it and every piece
+propagated exactly (the input is piecewise constant) by the exponential of ``[[A, B], [0, 0]]
+tau``, once per distinct piece length for the whole population. Exact to round-off at the
+samples (the body accelerations do not depend on the input directly).
 """
 
 from __future__ import annotations

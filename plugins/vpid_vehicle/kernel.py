@@ -1,44 +1,14 @@
 """The fast path: Newmark-beta for the 4-DOF half-car as a structure-of-arrays kernel (numba).
 
-Why it is fast. One Newmark step of one candidate is a chain of dependent operations
-(predictor, residual, solve, corrector), so a loop over candidates runs at the latency of that
-chain. Here the population sits in blocks of ``LANES`` candidates instead: every coefficient,
-state and read-out of a block lives in one flat array with the candidate as the innermost,
-contiguous axis, at offsets known at compile time (so the compiler sees that nothing
-aliases). For each block the time loop is outside the lane loop, so the compiler vectorises
-across candidates (AVX2: 4 lanes per instruction) and 10 independent dot products per lane
-are in flight at once.
-
-What it computes. Newmark's step (see :mod:`vpid_vehicle.newmark`) keeps equilibrium at every
-step, ``M a_k + C v_k + K d_k = F_k``, so the acceleration is a linear function of the state
-``x_k = [d_k, v_k]`` (8 numbers) and the input; the whole step is the linear recurrence
-
-    x_{k+1} = A x_k + U y_k + V y_{k+1}
-
-with ``A`` (8x8), ``U``, ``V`` (8x2) computed once per candidate from ``M``, ``C``, ``K``,
-``dt``, ``gamma`` and ``beta`` (``y_k`` = the two tyre inputs, m). The kernel iterates the
-shifted state ``s_k = x_k - V y_k``, for which ``s_{k+1} = A s_k + W y_k`` with
-``W = A V + U``: 8 state terms per row, plus the 2 input terms on the steps where an input
-is non-zero (added after the state terms, so skipping zero terms changes nothing). The two
-measured channels are two more rows,
-``z_k = R x_k = R s_k + (R V) y_k`` with ``z1'' = x'' - a1 theta''`` and
-``z2'' = x'' + a2 theta''`` (the road force acts on the wheel rows only, so the body
-accelerations have no direct input term). Eq. (3) is accumulated on the fly, so the objective
-never stores a response; :func:`body_accelerations` stores them for ``responses()``.
-
-The rounding differs from the step-by-step Newmark, not the scheme: the tests hold this
-kernel to the plain numpy Newmark within 1e-10 of the largest acceleration, for both input
-samplings and several ``gamma``, ``beta``. No fast-math: each candidate's arithmetic is the
-same whichever lane, chunk or thread it lands in, so results are bit-identical for any batch
-composition and thread count (tested).
-
-Threads. The compiled functions release the GIL; a batch of at least ``2 * MIN_PER_THREAD``
-candidates is cut into up to ``threads`` contiguous chunks of at least ``MIN_PER_THREAD``,
-evaluated by a small thread pool (made on first use) and the calling thread. Smaller batches
-run in the calling thread and pay no hand-off.
-
-Importing this module imports numba; it is imported lazily on the first evaluation. The
-compiled code is cached on disk (``cache=True``).
+How and why it is fast: docs/vehicle.md, "Speed". Newmark keeps equilibrium at every step,
+so a step is the linear recurrence ``x_{k+1} = A x_k + U y_k + V y_{k+1}`` (``x = [d, v]``,
+``y`` the two tyre inputs, m), iterated as ``s_{k+1} = A s_k + W y_k`` with ``s_k = x_k - V
+y_k``, ``W = A V + U``, and ``z1''``, ``z2''`` two more rows. The population sits in blocks of
+``LANES`` candidates, the candidate the innermost contiguous axis at compile-time offsets, so
+the compiler vectorises across them. Eq. (3) is accumulated on the fly. Within 1e-10 of the
+plain numpy Newmark; no fast-math, so results are bit-identical for any batch and thread
+count (tested). Batches of at least ``2 MIN_PER_THREAD`` may be cut into chunks run by a small
+thread pool (the compiled code releases the GIL). Imported on the first evaluation; cached.
 """
 
 from __future__ import annotations
@@ -109,12 +79,10 @@ def _coefficients(
     x: np.ndarray, L: float, kt1: float, kt2: float, dt: float, gamma: float, beta: float,
     y10: float, y20: float, blk: np.ndarray, lane: int, ws: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
-    """Write lane ``lane`` of a block: the table entry (row r, term t) at
-    ``blk[r * _ROW + t * LANES + lane]`` and the initial shifted state ``-V y_0`` (slot r at
-    ``blk[_STATE + r * LANES + lane]``), for the candidate ``x`` (physical units).
-
-    ``ws`` is scratch of shape (9, 8, 8) reused for every candidate (no allocation here).
-    Derivation (module docstring): ``a = G x + M^-1 F`` with ``G = -M^-1 [K, C]``; predictor
+    """Write lane ``lane`` of a block for the candidate ``x``: the table entry (row r, term t)
+    at ``blk[r * _ROW + t * LANES + lane]`` and the start state ``-V y_0`` (slot r at
+    ``blk[_STATE + r * LANES + lane]``); ``ws``: scratch reused for every candidate.
+    Derivation: ``a = G x + M^-1 F`` with ``G = -M^-1 [K, C]``; predictor
     ``x* = Q x + H M^-1 F_k`` with ``Q = P + H G``, ``P = [[I, dt I], [0, I]]``,
     ``H = [ca I; cv I]``; solve ``a' = Si (F' - [K, C] x*)``; corrector ``x' = x* + E a'``
     with ``E = [bd I; gd I]``. So ``A = Q - E T Q`` with ``T = Si [K, C]``,
@@ -244,9 +212,8 @@ def _prepare_block(
     X: np.ndarray, j0: int, L: float, kt1: float, kt2: float, dt: float, gamma: float,
     beta: float, y10: float, y20: float, blk: np.ndarray, ok: np.ndarray, ws: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
-    """Fill the block ``blk`` (BLOCK floats) with the table and initial state of rows
-    ``j0 ... j0 + LANES - 1`` of ``X``. Lanes past the end of ``X`` and non-physical rows keep
-    zero coefficients (their state stays 0: no NaN in flight); ``ok[l]`` says which are real."""
+    """Fill ``blk`` with rows ``j0 ... j0 + LANES - 1`` of ``X``; lanes past the end and
+    non-physical rows keep zeros (no NaN in flight), ``ok[l]`` says which are real."""
     blk[:] = 0.0
     for lane in range(LANES):
         j = j0 + lane
@@ -257,10 +224,8 @@ def _prepare_block(
 
 @njit(**_OPTS)
 def _step_block(blk: np.ndarray, u1: float, u2: float) -> None:  # pragma: no cover - compiled
-    """One time step of every lane of the block: the read-out slots get z1'', z2'' at the
-    current step, then the state advances, ``s <- A s + W y``. The input terms are added
-    after the 8 state terms (the same order for every lane); they are skipped when both
-    inputs are 0, which is most steps with point sampling (a skipped term would add 0)."""
+    """One step of every lane: the read-outs get z1'', z2'' now, then ``s <- A s + W y``,
+    the input terms after the state terms and skipped when both inputs are 0 (they add 0)."""
     for lane in range(LANES):
         s = _STATE + lane
         s0, s1, s2, s3 = blk[s], blk[s + LANES], blk[s + 2 * LANES], blk[s + 3 * LANES]
@@ -324,10 +289,8 @@ def objective_rows(
     X: np.ndarray, index: np.ndarray, L: float, kt1: float, kt2: float, y1: np.ndarray,
     y2: np.ndarray, dt: float, gamma: float, beta: float, refs: np.ndarray, f: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
-    """:func:`objective` with a reference per row: ``f[j]`` = Eq. (3) for row ``j`` of ``X``
-    against ``refs[index[j]]`` (``refs``: (m, 2, N)), for runs in lockstep that fit different
-    noise records. Each lane's arithmetic is :func:`objective`'s, in the same order, so every
-    value is bit-identical to evaluating the row against its reference alone (tested)."""
+    """:func:`objective` of row ``j`` against ``refs[index[j]]`` (runs in lockstep fitting
+    different noise records); bit-identical to the row against its reference alone (tested)."""
     n = X.shape[0]
     N = y1.shape[0]
     dens = np.empty(refs.shape[0])
@@ -386,15 +349,13 @@ def available_threads() -> int:
 
 @functools.cache
 def _pool(workers: int) -> ThreadPoolExecutor:
-    """A pool of ``workers`` threads, made on first use and kept (the calling thread takes one
-    chunk itself, so ``threads`` threads need ``threads - 1`` workers)."""
+    """A pool of ``workers`` threads, made on first use and kept (the caller takes a chunk)."""
     return ThreadPoolExecutor(max_workers=workers, thread_name_prefix="vpid-kernel")
 
 
 def chunks(n: int, threads: int) -> list[tuple[int, int]]:
-    """Contiguous ``[start, stop)`` ranges of ``n`` candidates, one per thread used: at most
-    ``threads`` ranges, each of at least ``MIN_PER_THREAD`` candidates (one range for a small
-    batch, so it pays no hand-off)."""
+    """At most ``threads`` contiguous ``[start, stop)`` ranges of ``n`` candidates, each of at
+    least ``MIN_PER_THREAD`` (one for a small batch: no hand-off)."""
     parts = max(1, min(int(threads), n // MIN_PER_THREAD))
     edges = [n * i // parts for i in range(parts + 1)]
     return [(edges[i], edges[i + 1]) for i in range(parts)]
@@ -403,8 +364,7 @@ def chunks(n: int, threads: int) -> list[tuple[int, int]]:
 def _run_chunked(fn, X: np.ndarray, args: tuple, out: np.ndarray, threads: int,
                  rows: tuple = ()) -> None:
     """``fn(X[a:b], *(r[a:b] for r in rows), *args, out[a:b])`` over the chunks, in parallel
-    when there are several (``rows``: further per-row arrays, cut like ``X``). Every
-    candidate's arithmetic is independent of the chunking, so the result is too."""
+    when there are several (the result does not depend on the chunking)."""
     if threads <= 1 or X.shape[0] < 2 * MIN_PER_THREAD:
         fn(X, *rows, *args, out)
         return
@@ -419,9 +379,8 @@ def _run_chunked(fn, X: np.ndarray, args: tuple, out: np.ndarray, threads: int,
 
 
 def as_kernel_array(A: np.ndarray) -> np.ndarray:
-    """``A`` itself if it is already a writable C-contiguous float64 array, else such a copy:
-    every call then has the same numba signature (a read-only or strided array would be a new
-    type and trigger another compilation)."""
+    """``A`` as a writable C-contiguous float64 array (a copy only if needed): one numba
+    signature for every call, no recompilation."""
     A = np.asarray(A)
     if A.dtype == np.float64 and A.flags.c_contiguous and A.flags.writeable:
         return A
@@ -429,9 +388,8 @@ def as_kernel_array(A: np.ndarray) -> np.ndarray:
 
 
 class Setup:
-    """What a model's simulations share: the known constants and Newmark settings, with the
-    tyre inputs ``y`` (N, 2; m) split into contiguous columns once (units as in
-    :class:`vpid_vehicle.model.KnownConstants`, ``dt`` in s)."""
+    """What a model's simulations share: the known constants, the Newmark settings (``dt`` in
+    s) and the tyre inputs ``y`` ``(N, 2)`` (m) split into columns once."""
 
     def __init__(self, L: float, kt1: float, kt2: float, y: np.ndarray, dt: float,
                  gamma: float, beta: float) -> None:
@@ -443,8 +401,7 @@ class Setup:
         self._ref: tuple[np.ndarray | None, np.ndarray | None] = (None, None)
 
     def _reference(self, ref: np.ndarray) -> np.ndarray:
-        """``ref`` as the kernel takes it. A read-only reference (the problem's) is copied once
-        and the copy reused while the same array object comes back."""
+        """``ref`` as the kernel takes it; a read-only one (the problem's) copied once."""
         if ref is self._ref[0]:
             return self._ref[1]
         out = as_kernel_array(ref)
@@ -457,9 +414,7 @@ class Setup:
         return int(self.y1.shape[0])
 
     def objective(self, X: np.ndarray, ref: np.ndarray, threads: int = 1) -> np.ndarray:
-        """Eq. (3) of every row of ``X`` (n, 9) against ``ref`` (2, N), shape ``(n,)``.
-        ``threads``: how many threads a large batch may use (the result does not depend on
-        it)."""
+        """Eq. (3) of every row of ``X`` (n, 9) against ``ref`` (2, N) on up to ``threads``."""
         X = as_kernel_array(np.atleast_2d(X))
         f = np.empty(X.shape[0])
         args = (*self.consts, self.y1, self.y2, *self.newmark, self._reference(ref))
@@ -468,8 +423,7 @@ class Setup:
 
     def objective_rows(self, X: np.ndarray, refs: np.ndarray, index: np.ndarray,
                        threads: int = 1) -> np.ndarray:
-        """Eq. (3) of every row ``j`` of ``X`` (n, 9) against ``refs[index[j]]`` (``refs``:
-        (m, 2, N); ``index``: ints in ``[0, m)``, shape ``(n,)``), shape ``(n,)``; each value
+        """Eq. (3) of row ``j`` of ``X`` against ``refs[index[j]]`` (``refs``: (m, 2, N));
         bit-identical to :meth:`objective` against that reference alone."""
         X = as_kernel_array(np.atleast_2d(X))
         refs = as_kernel_array(refs)
@@ -491,22 +445,3 @@ class Setup:
         out = np.empty((X.shape[0], 2, self.samples))
         _run_chunked(simulate, X, (*self.consts, self.y1, self.y2, *self.newmark), out, threads)
         return out
-
-
-def evaluate(
-    X: np.ndarray, L: float, kt1: float, kt2: float, y: np.ndarray, dt: float, gamma: float,
-    beta: float, ref: np.ndarray, threads: int = 1,
-) -> np.ndarray:
-    """Eq. (3) for every row of ``X`` against the reference ``ref`` (2, N), shape ``(n,)``;
-    ``y``: tyre inputs as sampled for the integrator, ``(N, 2)``. (One-off convenience: a
-    :class:`Setup` made once avoids re-splitting ``y`` on every call.)"""
-    return Setup(L, kt1, kt2, y, dt, gamma, beta).objective(X, ref, threads)
-
-
-def body_accelerations(
-    X: np.ndarray, L: float, kt1: float, kt2: float, y: np.ndarray, dt: float, gamma: float,
-    beta: float, threads: int = 1,
-) -> np.ndarray:
-    """z1'' and z2'' (m/s^2) of every row of ``X``, shape ``(n, 2, N)``; ``y`` is ``(N, 2)``.
-    Rows of non-physical candidates are NaN."""
-    return Setup(L, kt1, kt2, y, dt, gamma, beta).responses(X, threads)

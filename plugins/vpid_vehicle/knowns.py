@@ -1,27 +1,16 @@
-"""Known quantities and boxes: what a vehicle problem states rather than identifies.
+"""Known quantities and boxes: what a vehicle problem states rather than identifies. The
+answer depends on them (the ride models are unchanged when every mass, stiffness and damping
+is scaled by one factor: a tyre stated 25 % too soft makes every identified value 25 % too
+small with no worse fit), so they are explicit and settable (SI units):
 
-Every vehicle problem identifies some quantities and states the others (a tyre's stiffness,
-a wheelbase, a weighed mass). The answer depends on the stated ones: the ride models are
-unchanged when every mass, stiffness and damping is scaled by one factor, so a tyre stated
-25 % too soft makes every identified value 25 % too small with no worse fit. This module
-makes them explicit and settable:
+* ``problem.known.<name>=value`` states a known quantity or fixes an identified one;
+  ``=free`` identifies a known one, only where some quantity of the scaling group
+  (:func:`scale_group`) stays stated; geometry is never freed;
+* ``problem.bounds.<name>=[lo,hi]``: an identified quantity's box (default: the model's).
 
-* ``problem.known.<name>=value`` states a quantity (SI units, as :data:`QUANTITIES` and the
-  model's ``units`` give them): a known one of the parameter set (``problem.known.kt=210000``)
-  or an identified one, which is then fixed and left out of the search
-  (``problem.known.ms=250``); ``problem.known.<name>=free`` identifies a known one instead
-  (``problem.known.kt=free``), allowed only where the problem stays identifiable: some
-  quantity of the scaling group (:func:`scale_group`) must remain stated, and geometry is
-  never freed;
-* ``problem.bounds.<name>=[lo,hi]`` sets the search box of an identified quantity (by default
-  the model's, ``[0.5, 1.5] x`` the parameter set's value).
-
-:func:`plan` checks a config's keys (one ``ConfigError`` line naming the key and the allowed
-names or values) and returns a :class:`Plan`; :class:`StatedModel` presents a ride model
-under that plan (identified names, merged values, box) to :class:`.ride.problem.RideProblem`,
-which needs no other change. :meth:`Plan.known_list` and :meth:`Plan.box_list` are what the
-run record keeps (``problem.info.known``, ``problem.info.box``; docs/architecture.md) and the
-report lists as "Assumed".
+:func:`plan` checks the keys (one ``ConfigError`` line) into a :class:`Plan`;
+:class:`StatedModel` presents a ride model under it to the ride problem. The run record keeps
+:meth:`Plan.known_list` and :meth:`Plan.box_list` (``problem.info``), the report's "Assumed".
 """
 
 from __future__ import annotations
@@ -38,9 +27,8 @@ from vpid_bench import ConfigError
 #: The value of ``problem.known.<name>`` that identifies a known quantity instead.
 FREE = "free"
 
-#: Known quantities of the vehicle models: unit (SI), kind and what they are. ``scale``: a
-#: mass, inertia, stiffness, damping or force (all of them times one factor leave a ride or
-#: single-track record unchanged); ``geometry``: a length or a shape factor (never freed).
+#: Known quantities: unit (SI), kind (``scale``: scales with the others, leaving a record
+#: unchanged; ``geometry``: a length or shape factor, never freed) and what they are.
 QUANTITIES: dict[str, tuple[str, str, str]] = {
     "kt": ("N/m", "scale", "tyre stiffness"),
     "ct": ("N s/m", "scale", "tyre damping"),
@@ -72,8 +60,7 @@ def _freeze(value: Any) -> Any:
 
 
 class FrozenMap(dict):
-    """A read-only mapping that hashes, for a config field (a problem is cached by its
-    config): its values frozen too (a list becomes a tuple)."""
+    """A read-only mapping that hashes (a problem is cached by its config), values frozen."""
 
     def __init__(self, items: Any = ()) -> None:
         super().__init__({str(k): _freeze(v) for k, v in dict(items).items()})
@@ -91,8 +78,7 @@ class FrozenMap(dict):
 
 
 def freeze_fields(config: Any, *names: str, prefix: str = "problem.") -> None:
-    """Make the mapping fields ``names`` of a frozen config :class:`FrozenMap` (a mapping
-    from the command line arrives as a dict); ``prefix`` names the key in an error."""
+    """Make the mapping fields ``names`` of a frozen config :class:`FrozenMap`."""
     for name in names:
         value = getattr(config, name)
         if value is None:
@@ -111,10 +97,8 @@ def _kind(name: str, unit: str) -> str:
 
 @dataclasses.dataclass(frozen=True)
 class Plan:
-    """What a problem identifies and states under a config: ``identified`` names (the
-    model's not fixed, then freed known ones) with ``units``; ``values`` of every quantity
-    (the parameter set's with the user's); ``sources`` of each stated one; the user's
-    ``boxes``; ``model_names`` the model's own identified names, in order."""
+    """What a problem identifies (the model's names not fixed, then those freed) and states
+    under a config: every quantity's value and unit, each stated one's source, the boxes."""
 
     parameter_set: str
     model_names: tuple[str, ...]
@@ -126,8 +110,7 @@ class Plan:
 
     @property
     def reparametrised(self) -> bool:
-        """Whether the identified names differ from the model's (a quantity fixed or
-        freed)."""
+        """Whether a quantity is fixed or freed."""
         return self.identified != self.model_names
 
     @property
@@ -135,8 +118,7 @@ class Plan:
         return tuple(n for n in self.identified if n not in self.model_names)
 
     def known_list(self) -> list[dict[str, Any]]:
-        """The stated quantities as the run record keeps them (``problem.info.known``):
-        ``{"name", "value", "unit", "source", "what"}`` each."""
+        """The stated quantities as ``problem.info.known`` keeps them."""
         return [{"name": n, "value": float(self.values[n]), "unit": self.units[n],
                  "source": self.sources[n],
                  "what": QUANTITIES[n][2] if n in QUANTITIES else "fixed by you"}
@@ -223,9 +205,8 @@ def _boxes(raw: Mapping[str, Any], identified: Sequence[str]) -> dict[str, tuple
 
 
 def plan(config: Any, model: Any, problem: str = "this problem") -> Plan:
-    """Check ``config.known`` and ``config.bounds`` against ``model`` (a ride model: its
-    ``names``, ``units`` and ``sets``) and return the :class:`Plan`; :class:`ConfigError`
-    naming the key and the allowed names or values."""
+    """The :class:`Plan` of ``config.known`` and ``config.bounds`` for ``model``, or a
+    :class:`ConfigError` naming the key and what is allowed."""
     pset = config.parameter_set
     published = dict(model.sets[pset])
     units = dict(zip(model.names, model.units, strict=True))
@@ -267,10 +248,9 @@ def is_default(config: Any) -> bool:
 
 
 class StatedModel:
-    """A ride model under a :class:`Plan`: its ``names`` and ``units`` are the identified
-    ones, its parameter set the plan's values, its ``box`` the model's with the user's boxes;
-    ``simulate``, ``system`` and ``physical`` take rows of the identified quantities and
-    call the model with its own rows and known values. Everything else is the model's."""
+    """A ride model under a :class:`Plan`: the identified names, the plan's values, the
+    user's boxes; ``simulate``, ``system``, ``physical`` take identified rows and call the
+    model with its own rows and known values; everything else is the model's."""
 
     def __init__(self, base: Any, plan: Plan) -> None:
         self.base = base
@@ -288,8 +268,8 @@ class StatedModel:
 
     def _model_rows(self, X: np.ndarray, known: Mapping[str, float]
                     ) -> list[tuple[np.ndarray, dict[str, float]]]:
-        """Groups of the model's own rows with their known values: one group, or one per
-        row where a known quantity is identified (it differs from row to row)."""
+        """The model's own rows with their known values: one group, or one per row where a
+        known quantity is identified."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         if not self.plan.reparametrised:
             return [(X, dict(known))]
@@ -304,8 +284,7 @@ class StatedModel:
                 for i in range(X.shape[0])]
 
     def box(self, nominal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The model's box around the plan's values, each freed quantity's ``[0.5, 1.5] x``
-        its value, then the user's boxes."""
+        """The model's box, ``[0.5, 1.5] x`` a freed quantity's value, then the user's."""
         v = self.plan.values
         lo, hi = self.base.box(np.array([v[n] for n in self.plan.model_names]))
         lower = {n: lo[j] for j, n in enumerate(self.plan.model_names)}
@@ -339,17 +318,16 @@ class StatedModel:
 
 
 def stated_model(base: Any, config: Any, problem: str) -> Any:
-    """``base`` itself when the config states nothing beyond its parameter set, else the
-    :class:`StatedModel` of its :func:`plan`."""
+    """``base`` when the config states nothing, else its :class:`StatedModel`."""
     if is_default(config):
         return base
     return StatedModel(base, plan(config, base, problem))
 
 
 def check_config(config: Any, model: Any) -> Plan:
-    """:func:`plan` of a ride config, when it is built (so the pre-flight refuses a bad key
-    before any job); a quantity fixed or freed is refused for a simulated record made by a
-    richer model (it is made from the model's own parameter vector)."""
+    """:func:`plan` of a ride config as it is built (the pre-flight refuses a bad key); no
+    quantity fixed or freed for a richer model's simulated record (made from the model's
+    own vector)."""
     p = plan(config, model)
     richer = getattr(config, "record_model", "linear")
     if p.reparametrised and config.reference.file is None and richer != "linear":
@@ -376,9 +354,8 @@ def input_text(config: Any, input_names: Sequence[str], columns: Mapping[str, st
 
 
 def info(problem: Any) -> dict[str, Any]:
-    """What a ride problem's ``describe()`` adds: ``known`` (:meth:`Plan.known_list`),
-    ``box`` (:meth:`Plan.box_list`) and, for a user's record, ``input`` (which input the fit
-    used)."""
+    """What a ride problem's ``describe()`` adds: ``known``, ``box`` and, for a user's
+    record, ``input``."""
     model, config = problem.model, problem.config
     p = model.plan if isinstance(model, StatedModel) else plan(config, model)
     lower, upper = model.box(problem.nominal)

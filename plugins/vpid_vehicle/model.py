@@ -1,13 +1,10 @@
 """The half-car model of Gökdağ (2014), Eq. (2) and (5), for a whole population at once.
 
-Degrees of freedom ``q = [x, theta, x1, x2]``: body bounce (m), body pitch (rad, positive
-when the rear goes up), front and rear wheel hop (m). Candidates are rows of ``X`` with the
-columns of Eq. (4), ``[m, I, m1, m2, k1, k2, c1, c2, a1]``; the wheelbase ``L`` and tyre
-stiffnesses ``kt1``, ``kt2`` are known, and ``a2 = L - a1``.
-
-``matrices`` writes M, C, K as printed in Eq. (2) with the erratum K[3,1] = -a2 k2 fixed;
-``lagrangian_matrices`` derives C and K independently as J^T D J (springs and dampers as
-elongations of the DOFs), which the tests compare.
+``q = [x, theta, x1, x2]``: bounce (m), pitch (rad, positive when the rear goes up), front
+and rear wheel hop (m). Candidates are rows ``[m, I, m1, m2, k1, k2, c1, c2, a1]`` (Eq. 4);
+``L``, ``kt1``, ``kt2`` are known, ``a2 = L - a1``. :func:`matrices` is Eq. (2) with the
+erratum K[3,1] = -a2 k2 fixed; :func:`lagrangian_matrices` derives C and K independently
+(``J^T D J``), which the tests compare.
 """
 
 from __future__ import annotations
@@ -61,8 +58,8 @@ def matrices(X: np.ndarray, known: KnownConstants) -> tuple[np.ndarray, np.ndarr
 
 
 def elongation_jacobian(a1: np.ndarray, a2: np.ndarray) -> np.ndarray:
-    """J with ``e = J q``: elongations of the front and rear suspension (wheel minus body
-    point above it) and of the front and rear tyre (wheel minus road). Shape ``(n, 4, 4)``."""
+    """``J`` ``(n, 4, 4)`` of ``e = J q``: front and rear suspension (wheel minus body point
+    above it), front and rear tyre (wheel minus road)."""
     a1 = np.atleast_1d(np.asarray(a1, dtype=float))
     a2 = np.atleast_1d(np.asarray(a2, dtype=float))
     n = a1.size
@@ -106,8 +103,8 @@ def response_rows(X: np.ndarray, known: KnownConstants) -> np.ndarray:
 
 
 def physical(X: np.ndarray, known: KnownConstants) -> np.ndarray:
-    """Boolean per candidate: masses and inertia > 0, stiffness and damping >= 0, all finite,
-    and 0 < a1 < L. Other candidates get an infinite objective instead of a simulation."""
+    """Masses and inertia > 0, stiffness and damping >= 0, all finite, 0 < a1 < L (the others
+    get an infinite objective, no simulation)."""
     X = np.atleast_2d(np.asarray(X, dtype=float))
     ok = np.all(np.isfinite(X), axis=1)
     ok &= np.all(X[:, :4] > 0, axis=1) & np.all(X[:, 4:8] >= 0, axis=1)

@@ -1,11 +1,6 @@
-"""The report's "Model error" section on the suite's members whose record a richer model
-made (issue 43, item 3): per instance of the report's runs, the at-fit ratio (what no
-parameter vector of the fitted model removes, in units of the noise) and, beside it, the
-ratio at the truth (larger: not the model error), with the richer structure the suite fits
-such a record with. Read from :data:`.ride.model_error.RATIOS_FILE`, which the build writes
-(``python -m vpid_vehicle.ride.model_error --write``), so the report computes nothing; runs
-of other settings than the member's defaults (another seed) get a line saying how to
-compute theirs.
+"""The report's "Model error" section (issue 43, item 3) on members whose record a richer
+model made: per instance the at-fit and at-truth ratios (:mod:`.ride.model_error`), read from
+its shipped file, so the report computes nothing (another seed gets a line saying how).
 """
 
 from __future__ import annotations

@@ -1,10 +1,6 @@
-"""Plain Newmark-beta in numpy, batched over candidates: the correctness reference.
-
-Any number of DOFs (the tests use one), any ``gamma``, ``beta``. The fast compiled kernel
-(:mod:`vpid_vehicle.kernel`) must agree with this to 1e-10; this module stays simple on
-purpose and is not used on the hot path.
-
-Acceleration form of one step (n -> n+1), with S = M + gamma dt C + beta dt^2 K:
+"""Plain Newmark-beta in numpy, batched over candidates, any DOFs, ``gamma``, ``beta``: the
+correctness reference the compiled kernel must meet to 1e-10 (simple on purpose, never on
+the hot path). One step, with S = M + gamma dt C + beta dt^2 K:
 predict ``d* = d + dt v + dt^2 (1/2 - beta) a`` and ``v* = v + dt (1 - gamma) a``, solve
 ``S a' = F' - C v* - K d*``, correct ``d' = d* + beta dt^2 a'``, ``v' = v* + gamma dt a'``.
 The start is ``a_0 = M^-1 (F_0 - C v_0 - K d_0)``.
@@ -28,12 +24,9 @@ def newmark(
     d0: np.ndarray | None = None,
     v0: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Integrate ``M a + C v + K d = F`` on ``t_k = k dt``.
-
-    ``M``, ``C``, ``K``: shape ``(n, p, p)`` (n candidates, p DOFs). ``F``: forces at the
-    grid times, shape ``(N, p)`` (shared) or ``(N, n, p)``. ``d0``, ``v0``: ``(n, p)``,
-    default zero. Returns displacement, velocity and acceleration, each ``(N, n, p)``.
-    """
+    """Integrate ``M a + C v + K d = F`` (``M``, ``C``, ``K`` ``(n, p, p)``; ``F`` ``(N, p)``
+    or ``(N, n, p)``) on ``t_k = k dt`` from ``d0``, ``v0`` (default 0): displacement,
+    velocity and acceleration, each ``(N, n, p)``."""
     M, C, K = (np.asarray(A, dtype=float) for A in (M, C, K))
     n, p = M.shape[0], M.shape[1]
     F = np.asarray(F, dtype=float)
@@ -63,10 +56,8 @@ def newmark(
 def body_accelerations(
     X: np.ndarray, known: KnownConstants, y: np.ndarray, dt: float, gamma: float, beta: float
 ) -> np.ndarray:
-    """z1'' and z2'' (m/s^2) of every candidate from the plain Newmark, shape ``(n, 2, N)``.
-
-    ``y``: tyre inputs as sampled for the integrator, shape ``(N, 2)`` (m).
-    """
+    """z1'' and z2'' (m/s^2) ``(n, 2, N)`` from the plain Newmark; ``y``: the tyre inputs
+    ``(N, 2)`` (m) as sampled for the integrator."""
     M, C, K = matrices(X, known)
     F = y @ tyre_input(known).T
     _, _, a = newmark(M, C, K, F, dt, gamma, beta)

@@ -1,8 +1,5 @@
-"""The objective of Eq. (3) and the measurement noise added to a synthetic reference.
-
-Signals are arrays ``(2, N)`` (channels z1'', z2'' in m/s^2, N samples); a population's
-responses are ``(n, 2, N)``.
-"""
+"""Eq. (3) and the noise added to a synthetic reference; signals ``(2, N)`` (z1'', z2'',
+m/s^2), a population's ``(n, 2, N)``."""
 
 from __future__ import annotations
 
@@ -22,12 +19,9 @@ def objective(responses: np.ndarray, reference: np.ndarray) -> np.ndarray:
 
 
 def add_noise(clean: np.ndarray, level: float, model: str, rng: np.random.Generator) -> np.ndarray:
-    """The clean signals ``(2, N)`` with noise, drawn from ``rng`` (channel z1'' first).
-
-    ``multiplicative``: ``z (1 + level n)``, n ~ N(0, 1) per sample; ``additive``:
-    ``z + level rms(z) n`` with the rms of each channel; ``uniform``: ``z (1 + level u)``,
-    u ~ U(-1, 1).
-    """
+    """The clean signals with noise from ``rng`` (z1'' first): ``multiplicative`` ``z (1 +
+    level n)``, ``additive`` ``z + level rms(z) n`` (per channel), ``uniform`` ``z (1 + level
+    u)``, ``n ~ N(0, 1)``, ``u ~ U(-1, 1)``."""
     clean = np.asarray(clean, dtype=float)
     if model == "multiplicative":
         return clean * (1.0 + level * rng.standard_normal(clean.shape))

@@ -1,13 +1,9 @@
-"""The published results: Tables II (PS = 20) and III (PS = 30) of the paper.
-
-Source: H. Gökdağ, "Vehicle Parameter Identification Using DE Algorithms", Journal of
-Multidisciplinary Engineering Science and Technology (JMEST) 1(5), 2014. The CSV
-``data/paper_tables.csv`` (package data of this plugin) holds, per table and algorithm (DE1
-... DE8, GA), the mean of the 30 identified vectors (``quantity = mean``), each parameter's
-relative error in percent with the NoRE (``quantity = eps_percent``), and the optimum values
-(``algorithm = OV``). Table III's DE2 row is repaired (the extracted text lost three decimal
-points: 53, 42, -73 are 0.53, 0.42, -0.73, as the listed means give); its ``note`` column
-says so.
+"""The published results: Tables II (PS = 20) and III (PS = 30) of H. Gökdağ, "Vehicle
+Parameter Identification Using DE Algorithms", JMEST 1(5), 2014, in ``data/paper_tables.csv``:
+per table and algorithm the mean identified vector (``quantity = mean``), each parameter's
+relative error (%) with the NoRE (``eps_percent``), the optimum values (``algorithm = OV``).
+Table III's DE2 row is repaired (the text lost three decimal points: 53, 42, -73 are 0.53,
+0.42, -0.73, as the listed means give; its ``note`` says so).
 """
 
 from __future__ import annotations
@@ -50,9 +46,8 @@ def paper_rows() -> tuple[dict[str, str], ...]:
 
 
 def published(table: Any, algorithm: str, ps: int) -> dict[str, Any] | None:
-    """The paper's mean vector, ε (%) and NoRE of ``algorithm`` (e.g. ``de4``) at ``ps``, or
-    ``None`` when the paper has no such row. ``table``: :func:`paper_table`, or ``None`` to
-    read the CSV without pandas."""
+    """The paper's mean vector, ε (%) and NoRE of ``algorithm`` at ``ps``, or ``None``;
+    ``table``: :func:`paper_table`, or ``None`` (read without pandas)."""
     rows = paper_rows() if table is None else table.to_dict("records")
     rows = [r for r in rows if r["algorithm"] == algorithm.upper() and int(r["ps"]) == ps]
     mean = next((r for r in rows if r["quantity"] == "mean"), None)

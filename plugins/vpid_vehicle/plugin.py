@@ -1,6 +1,5 @@
-"""Registers ``problem=vehicle`` and its report sections. Light on purpose: importing this
-module pulls in neither numba nor scipy.linalg (the compiled kernel is imported on the first
-evaluation), nor pandas or matplotlib (imported when a report section is built)."""
+"""Registers the vehicle problems and their report sections; imports neither numba,
+scipy.linalg, pandas nor matplotlib (each comes when first needed)."""
 
 from __future__ import annotations
 

@@ -1,11 +1,7 @@
-"""``problem=vehicle``: identify the 9 unknowns of Eq. (4) from two body accelerations.
-
-The clean reference (the true vehicle through an integrator) is simulated once per problem;
-each *instance* adds its own noise record to it (``problem.noise.per_run``, see
-:meth:`VehicleProblem.instance`), so run ``i`` of every optimizer fits the same record ``i``.
-A measured record (``problem.reference.file``) is read once and is every instance's record.
-``evaluate`` simulates a whole population per call with the compiled Newmark kernel (or the
-exact solver).
+"""``problem=vehicle``: the 9 unknowns of Eq. (4) from two body accelerations (docs/vehicle.md).
+The clean reference is simulated once; each instance adds its own noise record
+(``noise.per_run``), so run ``i`` of every optimizer fits record ``i``; a measured record is
+every instance's.
 """
 
 from __future__ import annotations
@@ -120,11 +116,8 @@ class VehicleProblem(Problem):
         return add_noise(self.reference_clean, nz.level, nz.model, np.random.default_rng(seed))
 
     def instance(self, index: int) -> VehicleProblem:
-        """Instance ``index``: the same vehicle, bump and simulator, with noise record
-        ``index`` (drawn from ``SeedSequence(noise.seed, spawn_key=(index,))``) when
-        ``noise.per_run`` is true and noise is added; otherwise this problem itself (every
-        instance identical). Instances are shallow copies that share the simulator (and its
-        threads); each is made once and kept, so asking again costs nothing."""
+        """Instance ``index``: noise record ``index`` when instances differ, else this problem;
+        shallow copies sharing the simulator, each made once and kept."""
         if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or index < 0:
             raise ValueError(f"an instance index is an integer >= 0, not {index!r}")
         if not self._instances_differ:
@@ -141,25 +134,21 @@ class VehicleProblem(Problem):
         return self._instances[index]
 
     def instance_id(self) -> str | None:
-        """``"noise.seed=<seed>/<index>"`` when instances have their own records, else
-        ``None`` (a measured record, no noise, or ``noise.per_run=false``)."""
+        """``"noise.seed=<seed>/<index>"`` when instances have their own records, else ``None``."""
         if not self._instances_differ:
             return None
         return f"noise.seed={self.config.noise.seed}/{self._index}"
 
     def residual_sigma(self) -> np.ndarray | None:
-        """The simulated noise's standard deviation of each entry of
-        :meth:`fisher_residuals` ``(2 N,)``, m/s^2: ``level |z_k|`` per sample
-        (multiplicative), ``level × rms(z_c)`` (additive), ``level |z_k| / √3`` (uniform).
-        ``None`` for a measured record or noise level 0."""
+        """The simulated noise's sigma of each entry of :meth:`fisher_residuals` (m/s^2), or
+        ``None`` for a measured record or no noise."""
         nz = self.config.noise
         if self.reference_clean is None or nz.level <= 0:
             return None
         return estimators.noise_sigma(self.reference_clean, nz.level, nz.model).reshape(-1)
 
     def _weighting(self) -> np.ndarray:
-        """What a raw residual is multiplied by, ``(2, N)`` (:func:`estimators.weights`):
-        1 for Eq. 3 (its residuals are in m/s^2), per objective otherwise."""
+        """What a raw residual is multiplied by, ``(2, N)``: 1 for Eq. 3 (m/s^2)."""
         if "_weights" not in self.__dict__:
             nz, ref = self.config.noise, self.reference
             sigma = (estimators.plug_in_sigma(ref, nz.level, nz.model)
@@ -169,20 +158,17 @@ class VehicleProblem(Problem):
         return self._weights
 
     def content_digest(self) -> str | None:
-        """The SHA-256 of ``reference.file``'s bytes as read, or ``None`` for a synthetic
-        record (its config defines it)."""
+        """The SHA-256 of ``reference.file`` as read, or ``None`` (the config defines it)."""
         return self._digest
 
     @property
     def x_true(self) -> np.ndarray | None:
-        """The configured vehicle for a synthetic record; ``None`` for a measured one
-        (``reference.file``): its vehicle is unknown, and ``problem.vehicle`` is only where
-        the box is centred, never a truth to measure errors against."""
+        """The configured vehicle; ``None`` for a measured record (``problem.vehicle`` is then
+        only the box's centre, never a truth)."""
         return None if self.reference_source == "file" else self._x_true.copy()
 
     def set_threads(self, n: int) -> None:
-        """Let the Newmark kernel spread a large batch (at least ``kernel.MIN_PER_THREAD``
-        candidates per thread) over ``n`` threads; results are bit-identical for every n."""
+        """Let the kernel spread a large batch over ``n`` threads (bit-identical results)."""
         from vpid_bench import ConfigError
 
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
@@ -190,8 +176,7 @@ class VehicleProblem(Problem):
         self.model.set_threads(int(n))
 
     def responses(self, X: np.ndarray) -> np.ndarray:
-        """z1'' and z2'' (m/s^2) computed for the rows of ``X``, ``(n, 2, N)``; NaN rows for
-        non-physical candidates (a mass <= 0, a1 outside (0, L), ...)."""
+        """z1'' and z2'' (m/s^2) ``(n, 2, N)``; NaN rows for non-physical candidates."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         out = np.full((X.shape[0], 2, self.t.size), np.nan)
         ok = physical(X, self.known)
@@ -207,8 +192,7 @@ class VehicleProblem(Problem):
         return self.sampler is None or self.sampler.identity
 
     def evaluate(self, X: np.ndarray) -> np.ndarray:
-        """The objective (Eq. 3 by default, ``objective``) for every row of ``X`` (shape
-        ``(n, 9)``), ``inf`` where a simulation fails."""
+        """The objective of every row of ``X``, ``inf`` where a simulation fails."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         if self.config.objective != "eq3" or not self._on_grid:
             return self.evaluate_with_residuals(X)[0]
@@ -218,9 +202,8 @@ class VehicleProblem(Problem):
             return np.full(X.shape[0], np.inf)
 
     def evaluate_instances(self, X: np.ndarray, instance: np.ndarray) -> np.ndarray:
-        """Eq. (3) of row ``j`` of ``X`` against instance ``instance[j]``'s reference, in one
-        kernel call when the instances share this problem's simulator (they differ only in
-        their noise record); else instance by instance (the default)."""
+        """Eq. (3) of row ``j`` against instance ``instance[j]``'s record, in one kernel call
+        when the instances share this simulator; else instance by instance."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         instance = np.asarray(instance, dtype=np.int64).reshape(-1)
         numbers, index = np.unique(instance, return_inverse=True)
@@ -245,17 +228,13 @@ class VehicleProblem(Problem):
         return (self.reference[None] - self.responses(X)) * self._weighting()[None]
 
     def residuals(self, X: np.ndarray) -> np.ndarray:
-        """What a least-squares optimizer minimises, z1'' entries then z2'' entries,
-        ``(n, 2 N)`` (:func:`estimators.residuals_and_value`): measured minus computed times
-        the objective's weights (Eq. 3: none, m/s^2; ``ols``: over the record's norm; ``ml``:
-        over each sample's plug-in sigma; ``ml_profiled``: rescaled per channel); rows of
-        non-physical candidates are inf."""
+        """Measured minus computed times the objective's weights, z1'' then z2'', ``(n, 2 N)``
+        (:func:`estimators.residuals_and_value`); inf rows for non-physical candidates."""
         return self.evaluate_with_residuals(X)[1]
 
     def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
-        """Measured minus computed in m/s^2, z1'' entries then z2'' entries, ``(n, 2 N)``,
-        whatever the objective (what the Cramér–Rao bound differentiates; inf rows where a
-        candidate is non-physical)."""
+        """Measured minus computed (m/s^2), z1'' then z2'', whatever the objective (what the
+        Cramér–Rao bound differentiates)."""
         R = self.reference[None] - self.responses(X)
         R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
         return R.reshape(R.shape[0], -1)
@@ -265,8 +244,7 @@ class VehicleProblem(Problem):
         return np.repeat(np.arange(2), self.t.size)
 
     def metrics(self, x: np.ndarray) -> dict[str, float]:
-        """``{"NoRE": ...}``: the paper's norm of relative errors of ``x`` (percent); none
-        for a measured record (no truth: the report ranks by the objective)."""
+        """``{"NoRE": ...}`` (%); none for a measured record (no truth)."""
         if self.reference_source == "file":
             return {}
         return {"NoRE": nore(x, self._x_true)}
@@ -275,15 +253,12 @@ class VehicleProblem(Problem):
         return {"z1''": "m/s²", "z2''": "m/s²"}
 
     def residual_groups(self) -> np.ndarray:
-        """Eq. 3: 0 for the z1'' entries of a residual vector, 1 for the z2'' entries,
-        ``(2 N,)`` (one norm per group); one group (zeros) for the sums of squares."""
+        """Eq. 3: one norm per channel; one group for the sums of squares."""
         return estimators.groups(self.config.objective, 2, self.t.size)
 
     def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The objective and the residuals of the rows of ``X`` from one simulation: ``f``
-        (n,) (Eq. 3: the sum of the two channel norms of ``R`` (n, 2 N) over the reference's)
-        and ``R`` (:meth:`residuals`); inf (both) where a candidate is non-physical or its
-        simulation fails."""
+        """``f`` and :meth:`residuals` from one simulation (Eq. 3: the channel norms over the
+        reference's); inf where a candidate is non-physical or fails."""
         f, R = estimators.residuals_and_value(self.config.objective, self._weighted(X))
         if self.config.objective == "eq3":
             f = f / float(np.linalg.norm(self.reference, axis=1).sum())
@@ -357,8 +332,7 @@ class VehicleProblem(Problem):
                                         self._bounds.upper, strict=True)]
 
     def write_artifacts(self, directory: Path) -> list[Path]:
-        """``reference.csv``: the clean and noisy record of *this* problem, i.e. instance 0
-        for the problem a job builds (each run's own record is instance ``run_index``)."""
+        """``reference.csv``: this problem's clean and noisy record (a job's: instance 0)."""
         directory = Path(directory)
         directory.mkdir(parents=True, exist_ok=True)
         path = write_reference(directory / "reference.csv", self.t, self.reference,
@@ -367,6 +341,5 @@ class VehicleProblem(Problem):
 
 
 def nore(x: np.ndarray, x_true: np.ndarray) -> float:
-    """Norm of relative errors (the paper's NoRE): the Euclidean norm of the relative errors
-    ``100 (x - x_true) / x_true`` in percent (NaN when ``x`` is not finite)."""
+    """The paper's NoRE: the norm of ``100 (x - x_true) / x_true`` (%)."""
     return float(np.linalg.norm(relative_errors_percent(x, x_true)))

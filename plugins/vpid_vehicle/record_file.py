@@ -1,20 +1,11 @@
-"""A vehicle's own record (``problem.reference.file``): the vehicle problems' columns, units
-and inputs read through vpid-bench's one CSV record reader (:class:`vpid_bench.CsvTable`, whose
-module states the format and what it refuses; docs/own-record.md#the-file).
+"""A vehicle's own record (``problem.reference.file``, docs/own-record.md#the-file) through
+vpid-bench's one CSV reader: the channels' column names, the units a vehicle logger writes
+(converted to SI), and the inputs (read from the record, or the configured input where
+``problem.reference.input=config`` says so; never a silent fallback).
 
-What is the vehicle's: its channels' column names (:func:`column_name`), the units a vehicle
-logger writes (:data:`UNITS`: ``ms``, ``g``, ``mm``, ``cm``, ``km/h``, ``deg``, ``deg/s``
-...), converted to SI on reading, and its inputs (the road under each wheel, the steer angle
-and speed): read from the record, or the configured input where
-``problem.reference.input=config`` says so (never a silent fallback).
-
-**Time.** The record's first row is the model's time 0 (the vehicle at rest, its input as
-the problem defines it from there). The model integrates on its own step ``dt`` from 0 past
-the record's last time and is evaluated at the record's times: exactly where they fall on
-its steps (a rate dividing ``1 / dt``), else by linear interpolation between the two steps
-around each (:class:`Sampler`); input columns are interpolated linearly onto the model's
-steps (:meth:`Sampler.onto_steps`). A span of fewer than ``CsvTable.MIN_ROWS`` model steps,
-or of more than a problem's most, is refused (:func:`check_span`).
+**Time.** The first row is the model's t = 0 (at rest). The model integrates at its own
+``dt`` past the last row and is read at the record's times, exactly where they fall on its
+steps, else linearly between the two around each (:class:`Sampler`).
 """
 
 from __future__ import annotations
@@ -50,8 +41,7 @@ INPUT_MODES = ("record", "config")
 
 @dataclasses.dataclass(frozen=True)
 class Record(CsvRecord):
-    """A read record: times (s, as in the file), outputs ``(p, N)`` and inputs ``(N, r)``
-    (``None`` when the file has none of them) in SI units."""
+    """Times (s, as in the file), outputs ``(p, N)``, inputs ``(N, r)`` or ``None``; SI."""
 
     outputs: np.ndarray
     inputs: np.ndarray | None
@@ -67,12 +57,10 @@ def column_name(channel: str) -> str:
 def read_record(path: str | Path, outputs: Sequence[Column], inputs: Sequence[Column] = (),
                 inputs_required: str | None = None, mapping: ColumnMap | None = None,
                 extra_ok: Sequence[str] = (), input_mode: str = "record") -> Record:
-    """Read and check a record (see the module). ``outputs``: the measured channels, all
-    required; ``inputs``: input columns, all required unless ``input_mode`` is ``config``
-    (the configured input; then none is read); ``inputs_required``: why the problem cannot
-    use a configured input, or ``None``; ``mapping``: the user's column names and ignored
-    columns; ``extra_ok``: columns a record vpid-bench wrote may carry and the problem never
-    uses (left unread)."""
+    """Read and check a record: ``outputs`` all required; ``inputs`` too unless
+    ``input_mode`` is ``config`` (then none is read); ``inputs_required``: why the configured
+    input cannot serve, or ``None``; ``mapping``: the user's names and ignored columns;
+    ``extra_ok``: columns a record vpid-bench wrote may carry, left unread."""
     if input_mode not in INPUT_MODES:
         raise ConfigError("problem.reference.input", input_mode, "one of record (the record "
                           "carries the inputs), config (the configured input)")
@@ -96,8 +84,8 @@ def read_record(path: str | Path, outputs: Sequence[Column], inputs: Sequence[Co
 
 
 def check_span(record: Record, dt: float, max_steps: int) -> None:
-    """Refuse a record whose span needs more than ``max_steps`` model steps of ``dt`` s (a
-    time column in ms read as s once asked for hours of simulation), naming the span."""
+    """Refuse a span of fewer than ``CsvTable.MIN_ROWS`` or more than ``max_steps`` model
+    steps of ``dt`` s (a time in ms read as s once asked for hours), naming it."""
     steps = record.span / dt + 1
     least = CsvTable.MIN_ROWS
     if steps < least:
@@ -113,10 +101,8 @@ def check_span(record: Record, dt: float, max_steps: int) -> None:
 
 
 class Sampler:
-    """The model's steps for a record and how the model is read at the record's times.
-
-    The model's time is the record's minus its first time; its steps are ``k dt`` for
-    ``k = 0 ... K`` with ``K dt`` the first step at or past the record's last time."""
+    """The model's steps ``k dt``, ``k = 0 ... K`` (``K dt`` the first at or past the last
+    row; model time = record time minus the first), and how the model is read at the rows."""
 
     def __init__(self, t: np.ndarray, dt: float) -> None:
         self.dt = float(dt)
@@ -147,8 +133,7 @@ class Sampler:
         return lo + self.weight * (hi - lo)
 
     def onto_steps(self, t: np.ndarray, values: np.ndarray) -> np.ndarray:
-        """Input columns ``(N, r)`` given at the record's times ``t``, linearly interpolated
-        onto the model's steps, ``(K + 1, r)`` (a step past the last row holds its value)."""
+        """Input columns ``(N, r)`` at the times ``t`` linearly onto the model's steps."""
         tau = np.asarray(t, dtype=float) - self.t0
         return np.stack([np.interp(self.steps, tau, values[:, j])
                          for j in range(values.shape[1])], axis=1)

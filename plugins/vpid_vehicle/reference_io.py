@@ -1,15 +1,9 @@
-"""Reading a measured record and writing the fitted reference, as CSV with a header row.
-
-Written (``reference.csv``): ``t`` (s), ``z1dd_clean``, ``z2dd_clean``, ``z1dd_noisy``,
-``z2dd_noisy`` (m/s^2): the front (z1'') and rear (z2'') body accelerations of Eq. (5)
-without and with noise. For a measured record the clean columns are left empty and ``t`` is
-the record's own time.
-
-Read (``problem.reference.file``, :func:`read_measured`): a record in the format of
-:mod:`.record_file`, with columns ``t``, ``z1dd``, ``z2dd`` (or ``z1dd_noisy``,
-``z2dd_noisy``, so a written reference.csv can be fitted again), at any rate and start;
-units optional (``z1dd [g]``). Its first row is the model's t = 0: the front tyre at the
-bump's leading edge, the vehicle at rest until then.
+"""``problem=vehicle``'s records as CSV. Written (``reference.csv``): ``t`` (s), ``z1dd_clean``,
+``z2dd_clean``, ``z1dd_noisy``, ``z2dd_noisy`` (m/s^2, Eq. 5's front and rear body
+accelerations; the clean columns empty for a measured record). Read
+(``problem.reference.file``): ``t``, ``z1dd``, ``z2dd`` (or a written reference.csv's noisy
+columns), any rate and start, units optional; its first row is the model's t = 0, the front
+tyre at the bump's leading edge.
 """
 
 from __future__ import annotations
@@ -33,9 +27,8 @@ CHANNELS = (Column("z1dd", "m/s^2", ("z1dd_noisy", "z1''")),
 def write_reference(
     path: Path, t: np.ndarray, noisy: np.ndarray, clean: np.ndarray | None
 ) -> Path:
-    """Write ``reference.csv`` (see module docstring); ``noisy``/``clean`` are ``(2, N)``.
-    Atomic, like every file vpid-bench writes: a crash or a full disk leaves the old file or
-    the new one, never a torn one, and a link planted at ``path`` is replaced, not followed."""
+    """Write ``reference.csv`` (``noisy``, ``clean``: ``(2, N)``), atomically (never torn, a
+    planted link replaced, not followed)."""
     buffer = io.StringIO(newline="")
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(HEADER)
@@ -53,8 +46,6 @@ WRITTEN_ONLY = ("z1dd_clean", "z2dd_clean")
 
 
 def read_measured(path: str | Path, mapping: ColumnMap | None = None) -> Record:
-    """The measured z1'', z2'' (``outputs``, ``(2, N)``, m/s^2) at the record's times;
-    :class:`~vpid_bench.api.ConfigError` naming the column, row or time problem of a file
-    that does not fit (:func:`.record_file.read_record`). The input is the configured bump
-    (part of the problem's design): a record carries no input column."""
+    """The measured z1'', z2'' ``(2, N)`` (m/s^2) at the record's times, or a one-line
+    :class:`~vpid_bench.api.ConfigError`; no input column (the bump is the design's)."""
     return read_record(path, CHANNELS, mapping=mapping, extra_ok=WRITTEN_ONLY)

@@ -1,15 +1,7 @@
-"""The vehicle's sections of the vpid-bench report (registered in :mod:`.plugin`).
-
-* **The mean identified vector (the paper's Tables II and III)**: per context and optimizer,
-  the mean of the identified vectors, the relative error ε of each parameter of that mean and
-  its NoRE, and, only where the runs follow the paper's protocol (:func:`protocol_gaps`), the
-  published row beside it. Elsewhere one line says why the paper's numbers are not shown.
-  Headline columns: ``mean-vec NoRE`` and ``paper NoRE``.
-
-The measured-vs-fitted figure of the best run is the framework's (it draws one for every
-problem with signals: :mod:`vpid_bench.report.signals`).
-
-Nothing here imports pandas, numpy's heavy parts or matplotlib until a section is built.
+"""The vehicle's report section, the mean identified vector (the paper's Tables II and III):
+per context and optimizer the mean vector's ε per parameter and NoRE, and the published row
+beside it only where the runs follow the paper's protocol (:func:`protocol_gaps`; elsewhere a
+line says why). Headline columns ``mean-vec NoRE``, ``paper NoRE``.
 """
 
 from __future__ import annotations
@@ -37,10 +29,8 @@ def _close(a: Any, b: float) -> bool:
 
 
 def protocol_gaps(record: Mapping[str, Any]) -> list[str]:
-    """How a run record departs from the paper's protocol (empty: it follows it): 5 %
-    multiplicative noise on a synthetic record, the 0.48 s window (``record.extra = 0``),
-    ``dt`` = 1 ms, the paper's bump and vehicle, ``ps`` 20 or 30, 50 generations and the
-    budget ``ps * 51``."""
+    """How a run record departs from the paper's protocol (:data:`PAPER_PS` ...: 5 %
+    multiplicative noise, the 0.48 s window, the paper's bump and vehicle); empty: it follows."""
     from .config import BumpConfig, VehicleParams
 
     cfg = (record.get("problem") or {}).get("config") or {}
@@ -196,4 +186,3 @@ def vehicle_sections(ctx: ReportContext) -> Contribution:
     if mean_section is not None:
         sections.append(mean_section)
     return Contribution(sections=tuple(sections), headline=tuple(columns))
-

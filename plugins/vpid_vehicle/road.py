@@ -1,22 +1,8 @@
 """The road input: a rectangular bump met by the front tyre at t = 0 and by the rear tyre
-``L / V`` later, sampled on the record's time grid.
-
-Times in s, heights in m. The record window is ``T = (L + w) / V + extra`` and the grid is
-``t_k = k dt`` for ``k = 0 ... floor(T / dt)``. Two ways to feed a step input to a
-time-stepping integrator (docs/paper-notes.md):
-
-* ``point``: ``y_k = y(t_k)``, with ``start <= t_k < end`` judged with a 1e-9 s tolerance so
-  an edge that falls on a grid point up to rounding counts as on the grid. Newmark then
-  converges at first order only (the edge is smeared over a step).
-* ``average``: the load over each step ``[t_k, t_{k+1}]`` is the exact mean of ``y`` over
-  that step. Newmark's velocity update integrates the load as ``dt ((1 - gamma) y_k +
-  gamma y_{k+1})``, so the sequence fed to it is ``y_0 = y(0)`` and ``y_{k+1} = (mean_k -
-  (1 - gamma) y_k) / gamma``: each step then receives the exact impulse. For the average
-  acceleration rule this is the trapezoidal rule with exact step means, and the error
-  becomes second order (0.09 % at 1 ms against the exact solution, 3.4 % with ``point``).
-  The effective samples alternate in sign after an edge (they are loads, not road heights);
-  the body accelerations, which do not depend on the load directly, are smooth. This needs
-  ``gamma >= 1/2`` (the recursion is unstable otherwise).
+``L / V`` later (s, m), sampled on ``t_k = k dt`` for the integrator: ``point`` (``y(t_k)``,
+edges judged with a 1e-9 s tolerance; first order) or ``average`` (each Newmark step receives
+the exact impulse of the step's mean; second order, needs ``gamma >= 1/2``). Why and how
+accurate: docs/vehicle.md, "Input and record window"; docs/paper-notes.md.
 """
 
 from __future__ import annotations
@@ -87,9 +73,8 @@ def step_means(bump: Bump, t: np.ndarray) -> np.ndarray:
 
 
 def sample_average(bump: Bump, t: np.ndarray, gamma: float = 0.5) -> np.ndarray:
-    """The load sequence that gives every Newmark step (parameter ``gamma`` >= 1/2) the exact
-    impulse of the step's mean: ``y_0 = y(0)``, ``y_{k+1} = (mean_k - (1 - gamma) y_k) /
-    gamma``. Shape ``(len(t), 2)`` (m)."""
+    """``y_0 = y(0)``, ``y_{k+1} = (mean_k - (1 - gamma) y_k) / gamma``: Newmark's velocity
+    update integrates ``dt ((1 - gamma) y_k + gamma y_{k+1})``, the step's exact impulse."""
     if not gamma >= 0.5:
         raise ValueError(f"average sampling needs gamma >= 1/2, got {gamma}")
     means = step_means(bump, t)

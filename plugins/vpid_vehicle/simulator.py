@@ -1,13 +1,10 @@
 """One way of computing the body accelerations on a time grid: integrator, step, sampling.
-
-The model and the reference each get a :class:`Simulator`; they differ when the user studies
-the "inverse crime" (``problem.reference.*``). The Newmark path runs the compiled kernel,
-imported on first use; if numba is missing it falls back to the plain numpy Newmark.
+The model and the reference each get one; they differ when the user studies the "inverse
+crime" (``problem.reference.*``). Newmark runs the compiled kernel, imported on first use.
 """
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -20,12 +17,9 @@ from .road import Bump, sample, time_grid
 
 @dataclass(frozen=True)
 class Simulator:
-    """Computes z1'' and z2'' (m/s^2) on ``t_k = k dt``, ``k = 0 ... floor(T / dt)``.
-
-    ``T``, ``dt`` in s; ``integrator`` is ``newmark`` or ``exact``; ``sampling`` (``point`` or
-    ``average``) only matters for Newmark; ``stride`` keeps every stride-th sample, so a
-    reference computed at a finer step lands on the model's grid.
-    """
+    """z1'' and z2'' (m/s^2) on ``t_k = k dt``, ``k = 0 ... floor(T / dt)`` (s); ``sampling``
+    matters for Newmark only; ``stride`` keeps every stride-th sample (a reference computed
+    at a finer step lands on the model's grid)."""
 
     known: KnownConstants
     bump: Bump
@@ -48,17 +42,14 @@ class Simulator:
         object.__setattr__(self, "y", sample(self.bump, t, self.sampling, self.gamma))
 
     def set_threads(self, n: int) -> None:
-        """Let the compiled kernel spread a large batch over ``n`` threads (``n >= 1``). An
-        execution setting, not part of the simulation: results are bit-identical for any n."""
+        """Let the kernel spread a large batch over ``n`` threads (bit-identical results)."""
         object.__setattr__(self, "threads", int(n))
 
     def _kernel_setup(self) -> Any:
-        """The kernel's :class:`~vpid_vehicle.kernel.Setup` for this grid, made on first use;
-        None when numba cannot be imported."""
+        """The kernel's :class:`~vpid_vehicle.kernel.Setup` for this grid, made on first use."""
         if self._setup is None:
-            kernel = _kernel()
-            if kernel is None:  # pragma: no cover - numba is a dependency
-                return None
+            from . import kernel
+
             k = self.known
             object.__setattr__(self, "_setup", kernel.Setup(k.L, k.kt1, k.kt2, self.y, self.dt,
                                                             self.gamma, self.beta))
@@ -77,23 +68,14 @@ class Simulator:
 
             out = exact_acc(X, self.known, self.bump, self.t)
         else:
-            setup = self._kernel_setup()
-            if setup is None:  # pragma: no cover - numba is a dependency
-                from .newmark import body_accelerations as plain
-
-                out = plain(X, self.known, self.y, self.dt, self.gamma, self.beta)
-            else:
-                out = setup.responses(X, self.threads)
+            out = self._kernel_setup().responses(X, self.threads)
         return out if self.stride == 1 else out[:, :, :: self.stride]
-
 
     def objective(self, X: np.ndarray, reference: np.ndarray) -> np.ndarray:
         """Eq. (3) of the rows of ``X`` against ``reference`` (2, N), inf where a candidate is
         non-physical or its simulation fails. Newmark with stride 1 runs fully compiled."""
         if self.integrator == "newmark" and self.stride == 1:
-            setup = self._kernel_setup()
-            if setup is not None:
-                return setup.objective(X, reference, self.threads)
+            return self._kernel_setup().objective(X, reference, self.threads)
         X = np.atleast_2d(np.asarray(X, dtype=float))
         f = np.full(X.shape[0], np.inf)
         ok = physical(X, self.known)
@@ -102,32 +84,16 @@ class Simulator:
                 f[ok] = objective(self(X[ok]), reference)
         return f
 
-
     def objective_rows(self, X: np.ndarray, references: np.ndarray,
                        index: np.ndarray) -> np.ndarray:
-        """Eq. (3) of each row ``j`` of ``X`` against ``references[index[j]]``
-        (``references``: (m, 2, N)), shape ``(n,)``: the gathered call of runs in lockstep that
-        fit different records. Each value equals :meth:`objective` of that row against its
-        reference alone (bit for bit on the compiled path)."""
+        """Eq. (3) of row ``j`` of ``X`` against ``references[index[j]]`` (runs in lockstep);
+        each value :meth:`objective`'s of the row alone (bit for bit when compiled)."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         index = np.asarray(index, dtype=np.int64).reshape(-1)
         if self.integrator == "newmark" and self.stride == 1:
-            setup = self._kernel_setup()
-            if setup is not None:
-                return setup.objective_rows(X, references, index, self.threads)
+            return self._kernel_setup().objective_rows(X, references, index, self.threads)
         f = np.empty(X.shape[0])
         for m in np.unique(index):
             rows = np.flatnonzero(index == m)
             f[rows] = self.objective(X[rows], references[m])
         return f
-
-
-@functools.lru_cache(maxsize=1)
-def _kernel():
-    """The compiled kernel module (imported on first use), or None when numba cannot be
-    imported."""
-    try:
-        from . import kernel
-    except ImportError:  # pragma: no cover - numba is a dependency
-        return None
-    return kernel

@@ -1,12 +1,7 @@
-"""The report's "Which structure does the record support?" section (issue 43, item 2).
-
-When a report holds runs of one ride record under two or more suspension structures (a sweep
-``problem.spring=linear,cubic problem.damper=linear,bilinear``), each structure is refitted on
-the record's first two thirds from its best run and compared on the rest
-(``vpid_bench.fit_structure`` and ``structure_summary``: held-out error, AIC, BIC,
-Ljung-Box whiteness, identified values with 95 % intervals). Runs of one record are those
-whose problem settings differ only in ``spring`` and ``damper`` (and the protocol: ``ps``,
-``iterations``).
+"""The report's "Which structure does the record support?" section (issue 43, item 2): runs
+of one ride record (settings equal but ``spring``, ``damper`` and the protocol) under two or
+more structures, each refitted on the first two thirds from its best run and compared on the
+rest (``vpid_bench.fit_structure``, ``structure_summary``).
 """
 
 from __future__ import annotations
@@ -61,8 +56,7 @@ def _problem(rec: Mapping[str, Any]) -> Any:
 
 
 def compare_record(runs: Mapping[tuple[str, str], Sequence[Mapping[str, Any]]]) -> list[Any]:
-    """Each structure fitted and measured (:func:`.analysis.structures.fit_structure`) from
-    the best of its runs."""
+    """Each structure fitted and measured from the best of its runs."""
     import numpy as np
 
     from vpid_bench import fit_structure

@@ -1,10 +1,15 @@
 """The shared core's compiled Newmark path (``linear.newmark_outputs``: the table per
-candidate, then a time loop written out for the sizes, ``ride/unrolled.py``) against the plain
-statement of the scheme (``linear.simulate(linear.newmark(...))``), on every built-in linear
-model and sensor set, and the generated module against its generator."""
+candidate, then a time loop written out for the sizes, generated at first use by
+``ride/codegen.py``) against the plain statement of the scheme
+(``linear.simulate(linear.newmark(...))``), on every built-in linear model and sensor set;
+the generated file (what runs, where it is written, written whole)."""
 
 from __future__ import annotations
 
+import inspect
+import os
+import shutil
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +19,8 @@ from vpid_vehicle.ride.full import FullCar
 from vpid_vehicle.ride.half import HalfCar
 from vpid_vehicle.ride.lateral import SingleTrack
 from vpid_vehicle.ride.quarter import QuarterCar, quarter_system
-from vpid_vehicle.ride.unrolled import RUNS
+
+RUNS = codegen.runs()
 
 #: Largest difference allowed, relative to the largest output of the channel: the two paths
 #: sum the same terms in another order (and the compiled one shifts the state by V u).
@@ -101,8 +107,56 @@ def test_a_singular_mass_matrix_gives_non_finite_outputs_not_an_error():
     assert not np.all(np.isfinite(y[0])) and np.all(np.isfinite(y[1:]))
 
 
-def test_the_generated_module_is_what_the_generator_writes():
-    """plugins/vpid_vehicle/ride/unrolled.py is generated: regenerate it with
-    ``python -m vpid_vehicle.ride.codegen > plugins/vpid_vehicle/ride/unrolled.py``."""
-    committed = Path(codegen.__file__).with_name("unrolled.py").read_text()
-    assert committed == codegen.module_source()
+def test_the_generated_module_is_what_the_generator_writes_and_what_runs():
+    """Every compiled loop comes from one file that holds exactly the generator's output and
+    whose name carries its hash."""
+    files = {inspect.getfile(run.py_func) for run in RUNS.values()}
+    assert len(files) == 1 and set(RUNS) == set(codegen.SIZES)
+    path = Path(files.pop())
+    source = codegen.module_source()
+    assert path.read_text(encoding="utf-8") == source
+    assert path == codegen.write_source(path.parent, source)
+
+
+def test_a_file_with_other_content_is_rewritten_whole(tmp_path):
+    """A stale or planted file under the hashed name is replaced; no temporary file stays."""
+    source = codegen.module_source()
+    path = codegen.write_source(tmp_path, source)
+    path.write_text("RUNS = {}\n", encoding="utf-8")
+    assert codegen.write_source(tmp_path, source) == path
+    assert path.read_text(encoding="utf-8") == source
+    assert [p.name for p in tmp_path.iterdir()] == [path.name]
+
+
+def test_the_cache_folders_follow_numba_cache_dir_then_the_user_then_the_package(
+        monkeypatch, tmp_path):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    folders = codegen.cache_folders()
+    assert folders[0] == tmp_path / "numba" / "vpid_vehicle"
+    if os.name != "nt":
+        assert folders[1] == tmp_path / "xdg" / "vpid-bench"
+    assert folders[2] == Path(codegen.__file__).with_name("__pycache__")
+    monkeypatch.delenv("NUMBA_CACHE_DIR")
+    assert codegen.cache_folders() == folders[1:]
+
+
+def test_no_writable_cache_folder_falls_back_to_a_private_temporary_one(monkeypatch, tmp_path):
+    """A read-only install with no writable home (here: every folder lies under a file, so
+    none can be made, even by root): the loops are written to a fresh temporary folder."""
+    (tmp_path / "file").write_text("", encoding="utf-8")
+    monkeypatch.setattr(codegen, "cache_folders", lambda: [tmp_path / "file" / "cache"])
+    runs = codegen.runs.__wrapped__()  # not the process's cached import
+    path = Path(inspect.getfile(runs[(4, 1, 2)].py_func))
+    assert path.read_text(encoding="utf-8") == codegen.module_source()
+    assert path.parent.name.startswith("vpid-vehicle-") and not path.is_relative_to(tmp_path)
+    shutil.rmtree(path.parent)
+
+
+def test_writers_at_once_leave_one_whole_file(tmp_path):
+    """Processes that generate the file at once (here: threads) each get the whole file."""
+    source = codegen.module_source()
+    with ThreadPoolExecutor(8) as pool:
+        paths = set(pool.map(lambda _: codegen.write_source(tmp_path, source), range(32)))
+    assert len(paths) == 1 and paths.pop().read_text(encoding="utf-8") == source
+    assert len(list(tmp_path.iterdir())) == 1

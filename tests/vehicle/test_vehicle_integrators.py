@@ -63,7 +63,7 @@ def test_kernel_equals_plain_newmark(mode, gamma, beta):
     X = X_TRUE * np.random.default_rng(3).uniform(0.5, 1.5, (8, 9))
     t = time_grid(T + 0.3, 1e-3)
     y = sample(BUMP, t, mode, gamma)
-    fast = kernel.body_accelerations(X, P.L, P.kt1, P.kt2, y, 1e-3, gamma, beta)
+    fast = kernel.Setup(P.L, P.kt1, P.kt2, y, 1e-3, gamma, beta).responses(X)
     plain = newmark.body_accelerations(X, KNOWN, y, 1e-3, gamma, beta)
     assert np.abs(fast - plain).max() <= 1e-10 * np.abs(plain).max()
 
@@ -79,7 +79,7 @@ def test_fused_kernel_objective_equals_numpy_objective():
     t = time_grid(T, 1e-3)
     y = sample(BUMP, t, "point")
     ref = newmark.body_accelerations(X_TRUE, KNOWN, y, 1e-3, 0.5, 0.25)[0] * 1.01
-    fused = kernel.evaluate(X, P.L, P.kt1, P.kt2, y, 1e-3, 0.5, 0.25, ref)
+    fused = kernel.Setup(P.L, P.kt1, P.kt2, y, 1e-3, 0.5, 0.25).objective(X, ref)
     plain = objective(newmark.body_accelerations(X[:4], KNOWN, y, 1e-3, 0.5, 0.25), ref)
     np.testing.assert_allclose(fused[:4], plain, rtol=1e-10, atol=0)
     assert np.all(np.isinf(fused[4:]))

@@ -1,47 +1,27 @@
-"""``problem=bayesrace``: a 1:43 race car's tyre, drive and yaw coefficients from records that
-somebody else's simulator made (Bayesrace, as published with Deep Dynamics), fitted by our own
-continuous-time model. The simulator's coefficients are the truth; the model that made the
-records is not the fitted one.
+"""``problem=bayesrace``: a 1:43 race car's tyre, drive and yaw coefficients from records
+somebody else's simulator made (Bayesrace, published with Deep Dynamics; docs/measured.md).
 
-**Records** (:mod:`.third_party`; GPL-3.0, not part of vpid-bench): ``DYN-PP-ETHZ.npz`` and
-``DYN-PP-ETHZMobil.npz``, the ETH Zurich 1:43 car driven by a controller for 20 s on two
-tracks, 50 Hz. Their state trajectory (``dstates``: forward velocity, lateral velocity, yaw
-rate) is the simulator's **explicit Euler step at 50 Hz** of the equations below with the true
-coefficients: one Euler step from each sample reproduces the next to 1e-15 (tested). At this
-step Euler is at the edge of stability for this car (its yaw mode is fast: 85 rad/s at 1 m/s):
-the recorded yaw rate alternates in sign from sample to sample where the car is slow, which
-no continuous-time model does. That is the discretisation's cost: the record is not the
-continuous system's response. No noise is added; what the fit cannot explain is model error.
+**Records** (:mod:`.third_party`, GPL-3.0): ``DYN-PP-ETHZ.npz``, ``DYN-PP-ETHZMobil.npz``, 20 s at
+50 Hz; their states are the simulator's **explicit Euler step at 50 Hz** of the equations
+below with the true coefficients (one step reproduces the next to 1e-15, tested), at the edge
+of stability for this car: the record is not the continuous system's response. No noise is
+added: what the fit cannot explain is model error.
 
-**Model** (SI units; the simulator's equations, :func:`.kernel.dynamic_single_track`): states
-forward velocity ``vx``, lateral velocity ``vy``, yaw rate ``r``; inputs the drive command
-``d`` and the steer angle ``delta``, each held over its 20 ms interval;
+**Model** (SI units, :func:`.kernel.dynamic_single_track`): states ``vx, vy, r``, inputs the
+drive ``d`` and steer ``delta`` held over each 20 ms;
 
     af = delta - atan2(lf r + vy, |vx|) + Shf,      ar = atan2(lr r - vy, |vx|) + Shr
     Ffy = Svf + Df sin(Cf atan(Bf af - Ef (Bf af - atan(Bf af))))    (Fry likewise)
     Frx = (Cm1 - Cm2 vx) d - Cr0 - Cr2 vx^2
-    vx' = (Frx - Ffy sin delta) / m + vy r
-    vy' = (Fry + Ffy cos delta) / m - vx r
+    vx' = (Frx - Ffy sin delta) / m + vy r,    vy' = (Fry + Ffy cos delta) / m - vx r
     r'  = (Ffy lf cos delta - Fry lr) / Iz
 
-integrated as a user would integrate a continuous-time model: classical RK4 at ``20 ms /
-substeps`` (10 by default: within 2e-6 of each channel's rms of the solution at 40 substeps;
-5 substeps miss the yaw rate by 3e-3 of its rms at the records' lowest speeds), from the record's
-first state.
-
-**Identified** (10): ``Bf, Cf, Df, Br, Cr, Dr, Cm1, Cm2, Cr0, Iz``, in the simulator's own
-ranges (``deep_dynamics.yaml``: Min and Max of each). **Known** (fixed at the simulator's
-values, stated as such): ``m`` 0.041 kg, ``lf`` 0.029 m, ``lr`` 0.033 m, and ``Ef, Er, Cr2``
-(practically non-identifiable from these records: the curvature factors matter only at large
-slip, the quadratic drag only at speeds the car barely reaches) and the four shifts ``Shf,
-Svf, Shr, Svr`` (offsets near zero, whose relative error would be meaningless).
-
-**Objective**: ``problem.objective`` (:mod:`vpid_bench.estimators`): ``ml_profiled`` by
-default, the Gaussian likelihood with each channel's σ unknown and estimated from the residuals
-(no noise level is known: the misfit is the discretisation's), or ``eq3`` (the sum over the
-three channels of ``||measured - computed|| / ||measured||``) or ``ols``. **Metrics**: NoRE
-(%) over the 10 identified coefficients against the simulator's, then the rms error of each
-channel on the other track's record (held out).
+by classical RK4 at ``20 ms / substeps`` (10: within 2e-6 of each channel's rms of the
+solution at 40) from the record's first state. **Identified**: ``Bf, Cf, Df, Br, Cr, Dr, Cm1,
+Cm2, Cr0, Iz`` in the simulator's ranges (``deep_dynamics.yaml``); **known**, at the
+simulator's values: ``m``, ``lf``, ``lr``, ``Ef, Er, Cr2`` (practically non-identifiable
+here) and the shifts. **Objective**: ``ml_profiled`` by default, ``eq3`` or ``ols``.
+**Metrics**: NoRE (%) against the simulator's coefficients, the held-out track's rms errors.
 """
 
 from __future__ import annotations
@@ -62,6 +42,7 @@ from vpid_bench import (
 
 from . import third_party
 from .dynamic_rows import DYNAMIC_ROWS
+from .problem import ChannelFit
 
 #: The simulator's coefficients, ``deep_dynamics.yaml`` of the records' repository (its
 #: PARAMETERS and VEHICLE_SPECS): value, Min, Max. A test reads the shipped file against them.
@@ -90,11 +71,8 @@ def check_data(names: list[str], data_dir: str | None) -> None:
 
 @dataclasses.dataclass(frozen=True)
 class BayesraceConfig(ProblemConfig):
-    """``track``: the record fitted (``ETHZ`` or ``ETHZMobil``; the other is held out).
-    ``substeps``: RK4 steps per 20 ms sample. ``objective``: ``ml_profiled``, ``eq3`` or
-    ``ols`` (:mod:`vpid_bench.estimators`; ``ml`` needs a noise level these records do not
-    state).
-    ``data_dir``: a folder holding the records (default: the installed data distribution)."""
+    """``track``: the record fitted (the other held out); ``substeps``: RK4 steps per sample;
+    ``objective`` (``ml`` needs a noise level these records do not state); ``data_dir``."""
 
     track: Literal["ETHZ", "ETHZMobil"] = "ETHZ"
     substeps: int = 10
@@ -120,8 +98,7 @@ class TrackRecord:
         self.rows = [DYNAMIC_ROWS.index(k) for k in IDENTIFIED]
 
     def simulate(self, X: np.ndarray) -> np.ndarray:
-        """The channels ``(n, 3, N)`` (vx, vy, r) of the rows ``X`` (the identified
-        coefficients); NaN rows where a row has a coefficient <= 0 or not finite."""
+        """``vx, vy, r`` ``(n, 3, N)`` of the rows ``X``; NaN rows where one is not > 0."""
         from .kernel import dynamic_single_track
 
         X = np.atleast_2d(np.asarray(X, dtype=float))
@@ -141,7 +118,7 @@ class TrackRecord:
         return out
 
 
-class BayesraceProblem(Problem):
+class BayesraceProblem(ChannelFit, Problem):
     """The Bayesrace records fitted by the continuous-time model (module docstring)."""
 
     Config = BayesraceConfig
@@ -175,38 +152,12 @@ class BayesraceProblem(Problem):
     def x_true(self) -> np.ndarray:
         return self._x_true.copy()
 
-    def _weighted(self, X: np.ndarray) -> np.ndarray:
-        """``measured - computed`` times the objective's weights, ``(n, 3, N)``."""
-        return (self.measured[None] - self.fit.simulate(X)) * self.weights[None]
-
-    def residuals(self, X: np.ndarray) -> np.ndarray:
-        """What a least-squares optimizer minimises (:func:`estimators.residuals_and_value`),
-        channels one after another, ``(n, 3 N)``; inf rows where a simulation fails."""
-        return self.evaluate_with_residuals(X)[1]
-
-    def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
-        """``(measured_c - computed_c) / ||measured_c||`` whatever the objective, channels one
-        after another, ``(n, 3 N)`` (what intervals and bounds differentiate)."""
-        scale = np.linalg.norm(self.measured, axis=1)[None, :, None]
-        R = (self.measured[None] - self.fit.simulate(X)) / scale
-        R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
-        return R.reshape(R.shape[0], -1)
-
-    def fisher_groups(self) -> np.ndarray:
-        return np.repeat(np.arange(3), self.measured.shape[1])
-
-    def residual_groups(self) -> np.ndarray:
-        return estimators.groups(self.config.objective, 3, self.measured.shape[1])
-
-    def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return estimators.residuals_and_value(self.config.objective, self._weighted(X))
-
-    def evaluate(self, X: np.ndarray) -> np.ndarray:
-        return self.evaluate_with_residuals(X)[0]
+    def computed(self, X: np.ndarray) -> np.ndarray:
+        return self.fit.simulate(X)
 
     def metrics(self, x: np.ndarray) -> dict[str, float]:
-        """``NoRE`` (%) against the simulator's coefficients, then the held-out track's rms
-        error per channel (``val_rms_r`` rad/s, ``val_rms_vx`` and ``val_rms_vy`` m/s)."""
+        """``NoRE`` (%), then the held-out track's ``val_rms_r`` (rad/s), ``val_rms_vx``,
+        ``val_rms_vy`` (m/s)."""
         x = np.asarray(x, dtype=float).reshape(-1)
         out = {"NoRE": float(np.linalg.norm(relative_errors_percent(x, self._x_true)))}
         sim = self.held_out.simulate(x[None])[0]

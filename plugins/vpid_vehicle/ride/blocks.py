@@ -1,4 +1,4 @@
-"""Filling a block of the shared core (:mod:`.unrolled`, :mod:`.kernel`) from per-candidate
+"""Filling a block of the shared core (:mod:`.codegen`'s, :mod:`.kernel`) from per-candidate
 tables: the compiled code the generated time loops share."""
 
 from __future__ import annotations
@@ -8,9 +8,8 @@ import numba
 
 @numba.njit(cache=True, nogil=True)
 def load_block(T, w0, j0, blk, lanes, st):  # pragma: no cover - compiled
-    """Copy candidates ``j0 ... j0 + lanes - 1`` of the tables ``T`` ``(n, s + p, s + r)``
-    and start states ``w0`` ``(n, s)`` into ``blk`` (table, then state and output slots from
-    ``st``). Lanes past the last candidate get zeros: their state stays 0, no NaN in flight."""
+    """Copy candidates ``j0 ... j0 + lanes - 1`` of ``T`` and ``w0`` into ``blk`` (table,
+    then state and output slots from ``st``); lanes past the last get zeros (no NaN)."""
     n, R, S = T.shape
     s = w0.shape[1]
     blk[:] = 0.0

@@ -1,19 +1,12 @@
-"""``problem=ride_full``: the full car (7-DOF ride: bounce, roll, pitch, four wheel hops),
-identified from a record over two road tracks.
+"""``problem=ride_full``: the full car (7-DOF) from a record over two road tracks (docs/suite.md).
 
-Degrees of freedom ``q = [z, phi, theta, zFL, zFR, zRL, zRR]``: body bounce (m), roll (rad,
-positive when the left side goes up), pitch (rad, positive when the rear goes up; as the half
-car) and the four wheel hops (m). A body point at ``x`` forward of the centre of gravity and
-``y`` to its left moves as ``z - x theta + y phi``. Springs and dampers are elongations
-``e = J q`` (the body corner above a wheel minus the wheel; the tyre: the wheel minus the
-road), so ``K = J^T diag(k) J`` and ``C = J^T diag(c) J``; an anti-roll bar on the front axle
-resists the twist ``phi - (zFL - zFR) / (yL + yR)`` with ``kR`` (N m/rad).
-
-**Known quantities**: the geometry (``a1``, ``a2``: centre of gravity to the front and rear
-axle; ``yL``, ``yR``: to the left and right wheels), the tyre stiffness ``kt`` and the
-anti-roll bar ``kR``. Identified: ``m, Ix, Iy, mf, mr, kf, kr, cf, cr`` (per wheel; left and
-right equal). The left wheels follow the left track, the right wheels the right one; the rear
-wheels ``(a1 + a2) / speed`` after the front ones.
+``q = [z, phi, theta, zFL, zFR, zRL, zRR]``: bounce (m), roll (rad, left side up), pitch
+(rad, rear up) and the wheel hops (m); a body point ``x`` ahead of and ``y`` left of the
+centre of gravity moves as ``z - x theta + y phi``. With elongations ``e = J q``, ``K = J^T
+diag(k) J``, ``C = J^T diag(c) J``; a front anti-roll bar ``kR`` (N m/rad) resists ``phi -
+(zFL - zFR) / (yL + yR)``. Known: ``a1``, ``a2``, ``yL``, ``yR``, ``kt``, ``kR``. Identified
+(per wheel, left = right): ``m, Ix, Iy, mf, mr, kf, kr, cf, cr``. The rear wheels follow
+``(a1 + a2) / speed`` after the front ones, each on its side's track.
 """
 
 from __future__ import annotations
@@ -25,7 +18,7 @@ import numpy as np
 
 from . import linear
 from .model import RideModel, Suspension, Wheel
-from .problem import RideConfig, RideProblem, check_record_file
+from .problem import RideConfig, RideProblem
 
 #: Wheel order of the degrees of freedom 3..6 and of the inputs.
 WHEELS = ("FL", "FR", "RL", "RR")
@@ -39,8 +32,7 @@ def _geometry(known: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
 
 def full_car_matrices(X: np.ndarray, known: dict[str, float]
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``M, C, K`` ``(n, 7, 7)`` and the road input map ``F`` ``(n, 7, 8)`` (heights, then
-    rates, of FL, FR, RL, RR) of the rows ``X = [m, Ix, Iy, mf, mr, kf, kr, cf, cr]``."""
+    """``M, C, K`` ``(n, 7, 7)`` and ``F`` ``(n, 7, 8)`` (heights, then rates, FL, FR, RL, RR)."""
     X = np.atleast_2d(X)
     n = X.shape[0]
     m, Ix, Iy, mf, mr, kf, kr, cf, cr = X.T
@@ -136,16 +128,12 @@ class FullCar(RideModel):
 
 @dataclasses.dataclass(frozen=True)
 class RideFullConfig(RideConfig):
-    """``parameter_set``: the published car (docs/suite.md); ``sensors``: the measured
-    channels; the other keys: :class:`.problem.RideConfig`."""
+    """``parameter_set``, ``sensors``; the rest: :class:`.problem.RideConfig`."""
 
     parameter_set: Literal["jazar", "jazar_symmetric", "bmw320i"] = "jazar"
     sensors: Literal["body", "body_wheel", "body_rates"] = "body"
+    Model = FullCar
 
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        check_record_file(self, FullCar())
 
 class RideFullProblem(RideProblem):
     """The full car identified from a two-track road record."""

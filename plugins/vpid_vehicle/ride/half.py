@@ -1,19 +1,8 @@
-"""``problem=ride_half``: the half car (4-DOF: bounce, pitch, front and rear wheel hop) of the
-suite, identified from a road record. The paper's problem (``problem=vehicle``) is the same
-model under the paper's conventions and stays as it is; this one has the suite's record (an
-exact solver, additive noise per channel, the truth at a random place in the box, roads and
-sensor sets).
-
-Degrees of freedom ``q = [x, theta, x1, x2]`` (m, rad positive when the rear goes up, m, m);
-``M``, ``C``, ``K`` are Eq. (2) of Gökdağ (2014) (:func:`vpid_vehicle.model.matrices`, tested
-against a Lagrangian derivation). The body points above the axles move as
-``z1 = x - a1 theta`` and ``z2 = x + a2 theta``.
-
-**Known quantities**: the wheelbase ``L`` and the tyre stiffnesses ``kt1``, ``kt2`` (as in the
-paper). Identified: ``m, I, m1, m2, k1, k2, c1, c2, a1``. **Model error**
-(``record_model=seat``): the record's car carries a driver seat the fitted one lacks
-(:mod:`.richer`). The rear wheel follows the front one
-on the same track, ``L / speed`` later.
+"""``problem=ride_half``: the paper's half car (``q = [x, theta, x1, x2]``, M, C, K of Eq. 2,
+:func:`vpid_vehicle.model.matrices`) with the suite's record, noise, random truth, roads and
+sensors (docs/suite.md). ``L``, ``kt1``, ``kt2`` known; ``m, I, m1, m2, k1, k2, c1, c2, a1``
+identified; the rear wheel on the front's track ``L / speed`` later. ``record_model=seat``: the
+record's car carries a seat the fitted one lacks (:mod:`.richer`).
 """
 
 from __future__ import annotations
@@ -28,7 +17,7 @@ from vpid_bench import added_setting
 from ..model import KnownConstants, matrices, tyre_input
 from . import linear
 from .model import RideModel, Suspension, Wheel
-from .problem import RideConfig, RideProblem, check_record_file
+from .problem import RideConfig, RideProblem
 
 
 def _suspension_rows(X: np.ndarray, known: dict[str, float]) -> np.ndarray:
@@ -98,19 +87,13 @@ class HalfCar(RideModel):
 
 @dataclasses.dataclass(frozen=True)
 class RideHalfConfig(RideConfig):
-    """``parameter_set``: the published car (docs/suite.md); ``sensors``: the measured
-    channels; the other keys: :class:`.problem.RideConfig`."""
+    """``parameter_set``, ``sensors``, ``record_model``; the rest: :class:`.problem.RideConfig`."""
 
     parameter_set: Literal["gokdag", "jazar_half"] = "gokdag"
     sensors: Literal["body", "body_wheel", "body_pitch_rate"] = "body"
-    #: The model that makes the record: ``linear`` (the fitted model's equations) or
-    #: ``seat`` (:mod:`.richer`: a seat mass the fitted model lacks, model error).
     record_model: Literal["linear", "seat"] = added_setting("linear")
+    Model = HalfCar
 
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        check_record_file(self, HalfCar())
 
 class RideHalfProblem(RideProblem):
     """The half car identified from a road record."""
@@ -121,8 +104,7 @@ class RideHalfProblem(RideProblem):
     model = HalfCar()
 
     def _record(self, fine_u: np.ndarray, sub: int) -> np.ndarray:
-        """The linear model's record, or with ``record_model=seat`` the seated car's
-        (:func:`.richer.seated_half`), by the exact first-order-hold solution."""
+        """The record; the seated car's with ``record_model=seat`` (exact, first-order hold)."""
         if self.config.record_model == "linear":
             return super()._record(fine_u, sub)
         from .richer import seated_half

@@ -1,9 +1,6 @@
-"""The compiled recurrence of :mod:`.linear` (numba; imported on the first simulation).
-
-Structure of arrays: every matrix is ``(rows, cols, n)`` with the candidate innermost and
-contiguous, and the loop over candidates is the innermost loop, so the compiler may vectorise
-across candidates. No fast-math: each candidate's arithmetic is the same whatever the batch.
-"""
+"""The compiled loops of the ride models (numba; imported on the first simulation), the
+candidate innermost and contiguous so the compiler vectorises across candidates; no fast-math
+(each candidate's arithmetic is the same whatever the batch)."""
 
 from __future__ import annotations
 
@@ -15,10 +12,9 @@ import numpy as np
 from . import vecmath
 from .blocks import load_block
 
-#: Candidates per block of :func:`run_table_loops` (as in :mod:`.unrolled`).
+#: Candidates per block of :func:`run_table_loops` (as in :mod:`.codegen`).
 LANES = 4
-#: The compiled Newmark path: no GIL, cached, and numpy's floating-point semantics (a
-#: singular matrix gives inf/NaN, never an exception).
+#: No GIL, cached, numpy's floating point (a singular matrix gives inf/NaN, no exception).
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
 
@@ -82,12 +78,9 @@ def _rates(vy, r, delta, P, i, m, Iz, lf, lr, vx, E):  # pragma: no cover - comp
 
 @numba.njit(**_OPTS)
 def mf_single_track(P, Iz, delta, dt, m, lf, lr, vx, E, y):  # pragma: no cover - compiled
-    """The single-track model with a Magic Formula tyre per axle, classical RK4 at ``dt``
-    with the steer linear between samples; ``P`` is ``(6, n)``, its rows ``[Bf, Cf, Df, Br,
-    Cr, Dr]`` of the ``n`` candidates, ``Iz`` ``(n,)``. Writes ``y[k, :, i] = [r, ay, beta]``.
-
-    The candidates are the inner loop (a whole RK4 step of each), so the compiler runs 4 of
-    them at once; each candidate's arithmetic is the same whatever the batch."""
+    """The single-track model with a Magic Formula tyre per axle by RK4 at ``dt``, the steer
+    linear between samples; ``P`` rows ``[Bf, Cf, Df, Br, Cr, Dr]``; ``y[k, :, i] = [r, ay,
+    beta]``."""
     n, N = P.shape[1], delta.shape[0]
     vy, r = np.zeros(n), np.zeros(n)
     kv, kr = np.empty((4, n)), np.empty((4, n))
@@ -151,12 +144,10 @@ def _inverse(S, out, work):  # pragma: no cover - compiled
 
 @numba.njit(**_OPTS)
 def newmark_table(M, C, K, F, Pa, Pv, Pq, Pu, dt, gamma, beta, u0, T, w0):  # pragma: no cover
-    """The shifted recurrence of Newmark-beta (see :func:`.linear.newmark`) per candidate:
-    with ``w_k = x_k - V u_k``, ``w_{k+1} = A w_k + (A V + U) u_k`` and
-    ``y_k = Ox w_k + (Ox V + Ou) u_k``. Writes ``T[c]`` (rows: ``s = 2d`` state rows then
-    ``p`` outputs; terms: ``s`` state coefficients then ``r`` input coefficients) and
-    ``w0[c] = -V u_0`` (the system starts at rest). Arrays as in :class:`.linear.LinearSystem`
-    with a leading axis of ``n`` or 1 (shared by every candidate)."""
+    """Newmark's shifted recurrence per candidate: ``w_k = x_k - V u_k``, ``w_{k+1} = A w_k +
+    (A V + U) u_k``, ``y_k = Ox w_k + (Ox V + Ou) u_k`` into ``T[c]`` (rows: ``2d`` states then
+    ``p`` outputs; terms: states then inputs) and ``w0[c] = -V u_0`` (from rest). Arrays as
+    :class:`.linear.LinearSystem`'s with a leading axis of ``n`` or 1."""
     n, d = T.shape[0], M.shape[1]
     r, p, s = F.shape[2], Pa.shape[1], 2 * M.shape[1]
     Minv, Sinv, work = np.empty((d, d)), np.empty((d, d)), np.empty((d, d))
@@ -260,11 +251,8 @@ def _step_loops(blk, W, s, p, st):  # pragma: no cover - compiled
 
 @numba.njit(**_OPTS)
 def run_table_loops(T, w0, u, y):  # pragma: no cover - compiled
-    """The outputs ``y[j, k, c]`` of the recurrence tabled by :func:`newmark_table` (``T``
-    ``(n, s + p, s + r)``, ``w0`` ``(n, s)``) driven by ``u`` ``(N, r)``: the time loops of
-    :mod:`.unrolled` for any sizes, as loops. Slower (the compiler cannot keep a state of
-    run-time size in registers) and each dot product summed in order, not pairwise; the
-    block layout is the same."""
+    """The outputs ``y[j, k, c]`` of :func:`newmark_table`'s recurrence driven by ``u``:
+    :mod:`.codegen`'s loops for any sizes, as loops (slower; dot products summed in order)."""
     n, R, S = T.shape
     s = w0.shape[1]
     p, r = R - s, S - s
@@ -302,11 +290,8 @@ def _slip_angle(lateral, vx):  # pragma: no cover - compiled
 
 @numba.njit(error_model="numpy")
 def _dynamic_rates(vx, vy, r, d, sd, cd, delta, P, i, m, lf, lr):  # pragma: no cover
-    """The rates ``(vx', vy', r')`` of the dynamic single-track model (Bayesrace's equations):
-    slip ``af = delta - atan2(lf r + vy, |vx|) + Shf``, ``ar = atan2(lr r - vy, |vx|) + Shr``,
-    lateral forces ``Sv + D sin(C atan(B a - E (B a - atan(B a))))``, longitudinal force
-    ``(Cm1 - Cm2 vx) d - Cr0 - Cr2 vx^2`` at the drive command ``d``; ``sd``, ``cd`` the sine
-    and cosine of the steer angle ``delta``."""
+    """``(vx', vy', r')`` of Bayesrace's equations (:mod:`.bayesrace`); ``sd``, ``cd``: the
+    steer angle's sine and cosine."""
     af = delta - _slip_angle(lf * r + vy, vx) + P[4, i]
     ar = _slip_angle(lr * r - vy, vx) + P[10, i]
     ffy = P[5, i] + _mf(af, P[0, i], P[1, i], P[2, i], P[3, i])
@@ -318,12 +303,9 @@ def _dynamic_rates(vx, vy, r, d, sd, cd, delta, P, i, m, lf, lr):  # pragma: no 
 
 @numba.njit(**_OPTS)
 def dynamic_single_track(P, drive, steer, dt, sub, m, lf, lr, x0, y):  # pragma: no cover
-    """The dynamic single-track model (forward speed a state) for the candidates ``P``
-    (``(17, n)``, rows :data:`.dynamic_rows.DYNAMIC_ROWS`), driven by the drive command
-    ``drive`` and the steer angle ``steer`` (rad), each ``(N - 1,)`` and held over its sampling
-    interval (as a zero-order hold), by classical RK4 at ``dt / sub``; from the state
-    ``x0 = (vx, vy, r)``.
-    Writes ``y[k, :, i] = (vx, vy, r)`` at the ``N`` samples (m/s, m/s, rad/s)."""
+    """The dynamic single-track model (``P`` rows :data:`.dynamic_rows.DYNAMIC_ROWS`) driven
+    by ``drive`` and ``steer`` (rad) held over each interval, by RK4 at ``dt / sub`` from
+    ``x0``: ``y[k, :, i] = (vx, vy, r)`` (m/s, m/s, rad/s)."""
     n, N = P.shape[1], y.shape[0]
     vx, vy, r = np.full(n, x0[0]), np.full(n, x0[1]), np.full(n, x0[2])
     ax, ay, ar = np.empty((4, n)), np.empty((4, n)), np.empty((4, n))  # stage rates
@@ -380,14 +362,10 @@ def _scheduled_rates(vy, r, vx, cd, delta, P, i, linear, m, lf, lr):  # pragma: 
 @numba.njit(error_model="numpy")
 def _scheduled(P, linear, vx, delta, starts, H, sub, dt, m, lf, lr, x0,
                y):  # pragma: no cover - compiled
-    """The single-track model with the forward speed as an input, over prediction windows.
-
-    ``P``: the candidates' parameters, ``(3, n)`` ``[Cf, Cr, Iz]`` with ``linear`` tyres
-    (cornering stiffnesses, N/rad) or ``(7, n)`` ``[Bf, Cf, Df, Br, Cr, Dr, Iz]`` (Magic
-    Formula, curvature 0). ``vx``, ``delta`` ``(N,)``: the logged forward speed (m/s) and
-    steer angle (rad) at the samples, linear between them. Window ``w`` starts at sample
-    ``starts[w]`` from the state ``x0[w] = (vy, r)`` and runs ``H`` samples by RK4 at ``dt /
-    sub``; writes ``y[w, j, :, i] = (vy, r)`` at its samples ``j``."""
+    """The single-track model, ``vx`` an input, over prediction windows: ``P`` ``[Cf, Cr,
+    Iz]`` (``linear``, N/rad) or ``[Bf, Cf, Df, Br, Cr, Dr, Iz]``; ``vx`` (m/s), ``delta``
+    (rad) linear between samples; window ``w`` from ``x0[w] = (vy, r)`` at ``starts[w]`` for
+    ``H`` samples by RK4 at ``dt / sub``: ``y[w, j, :, i] = (vy, r)``."""
     n, W = P.shape[1], starts.shape[0]
     vy, r = np.empty(n), np.empty(n)
     avy, ar = np.empty((4, n)), np.empty((4, n))  # stage rates

@@ -1,27 +1,13 @@
-"""``problem=lateral``: identify a car's cornering stiffnesses, yaw inertia and centre of
-gravity from a steering manoeuvre (the linear single-track, or bicycle, model).
+"""``problem=lateral``: a car's cornering stiffnesses, yaw inertia and centre of gravity from
+a steering manoeuvre (the linear single-track model; docs/suite.md). SI units, small angles,
+constant ``vx``, ``af = delta - (vy + lf r) / vx``, ``ar = -(vy - lr r) / vx``:
 
-Model (SI units, small angles, constant forward speed ``vx``): the lateral velocity ``vy`` and
-the yaw rate ``r`` follow from the front and rear axle forces ``Fyf = Cf af``, ``Fyr = Cr ar``
-with the slip angles ``af = delta - (vy + lf r) / vx``, ``ar = -(vy - lr r) / vx``:
+    m (vy' + vx r) = Cf af + Cr ar,      Iz r' = lf Cf af - lr Cr ar
 
-    m (vy' + vx r) = Fyf + Fyr
-    Iz r'          = lf Fyf - lr Fyr
-
-Written on the core's form with ``q' = [vy, r]`` (``K = 0``):
-``M = diag(m, Iz)``, ``C = [[(Cf + Cr)/vx, m vx + (lf Cf - lr Cr)/vx],
-[(lf Cf - lr Cr)/vx, (lf^2 Cf + lr^2 Cr)/vx]]``, ``F = [Cf, lf Cf]`` times the steer angle
-``delta`` at the road wheels. Outputs: the yaw rate ``r`` (rad/s), the lateral acceleration
-``ay = vy' + vx r`` (m/s^2), the side slip ``beta = vy / vx`` (rad).
-
-**Known quantities**: the mass ``m`` (weighed) and the wheelbase ``L``; with them the scaling
-of ``m, Iz, Cf, Cr`` by one factor (which leaves ``r`` and ``ay`` unchanged) is broken.
-Identified: ``Cf, Cr, Iz, lf`` (``lr = L - lf``). Steady state: ``r / delta = vx / (L + K
-vx^2)`` with the understeer gradient ``K = (m / L) (lr / Cf - lf / Cr)`` (tested).
-
-**Manoeuvres** and sensor sets: :mod:`.steering`. Record, noise, instances and objective:
-:mod:`.problem`; ``record_model=magic_formula`` makes the record with the Magic Formula model
-of :mod:`.magic` (this module imports that one, never the reverse).
+on the core's form with ``q' = [vy, r]`` (``K = 0``). Outputs ``r`` (rad/s), ``ay = vy' + vx
+r`` (m/s^2), ``beta = vy / vx`` (rad). Known: ``m`` (weighed) and ``L``, which break the
+scaling of ``m, Iz, Cf, Cr``; identified: ``Cf, Cr, Iz, lf``. ``record_model=magic_formula``:
+the record by :mod:`.magic`'s model (imported here, never the reverse).
 """
 
 from __future__ import annotations
@@ -34,8 +20,8 @@ import numpy as np
 from . import linear
 from .magic import CURVATURE, MU, SHAPE, MagicSingleTrack
 from .model import RideModel
-from .problem import RideProblem, SuiteConfig, _check, check_record_file
-from .steering import SENSORS, SteeredRecord, steer_input
+from .problem import RideProblem
+from .steering import SENSORS, SteeredConfig, SteeredRecord, steer_input
 
 
 class SingleTrack(SteeredRecord, RideModel):
@@ -91,31 +77,12 @@ class SingleTrack(SteeredRecord, RideModel):
 
 
 @dataclasses.dataclass(frozen=True)
-class LateralConfig(SuiteConfig):
-    """``parameter_set``: the published car (docs/suite.md); ``sensors``: the measured
-    channels; ``manoeuvre``: ``step`` or ``sine`` steer of ``steer_deg`` (degrees at the road
-    wheels) at ``speed_kmh``; ``sine_hz``: the sine's frequency. ``record_model``: the model
-    that makes the record, ``linear`` or ``magic_formula`` (a Magic Formula tyre per axle with
-    the truth's cornering stiffnesses: the linear model fitted with model error). Other keys:
-    :class:`.problem.SuiteConfig`."""
+class LateralConfig(SteeredConfig):
+    """``parameter_set``, ``record_model``; the rest: :class:`.steering.SteeredConfig`."""
 
     parameter_set: Literal["civic", "smart"] = "civic"
-    sensors: Literal["yaw", "yaw_ay", "yaw_ay_beta"] = "yaw_ay"
-    manoeuvre: Literal["step", "sine"] = "sine"
-    steer_deg: float = 2.0
-    sine_hz: float = 0.5
-    speed_kmh: float = 72.0
     record_model: Literal["linear", "magic_formula"] = "linear"
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        _check([
-            ("steer_deg", 0 < self.steer_deg <= 10, "an angle in (0, 10] degrees (linear "
-             "tyres: small slip angles)"),
-            ("sine_hz", 0 < self.sine_hz <= 5, "a frequency in (0, 5] Hz"),
-            ("speed_kmh", 10 <= self.speed_kmh <= 200, "a speed in [10, 200] km/h"),
-        ], self)
-        check_record_file(self, SingleTrack())
+    Model = SingleTrack
 
 
 class _SingleTrackAt(SingleTrack):
@@ -142,9 +109,8 @@ class LateralProblem(RideProblem):
         super().__init__(config, index)
 
     def _record(self, fine_u: np.ndarray, sub: int) -> np.ndarray:
-        """The linear model's record, or with ``record_model=magic_formula`` the Magic Formula
-        model's (tyre shape, friction and curvature of :mod:`.magic`, ``B`` from the truth's
-        cornering stiffness ``B C D``, ``D = mu x`` the static axle load) by RK4."""
+        """The record; with ``record_model=magic_formula`` the Magic Formula model's (its tyre
+        from :mod:`.magic`, ``B`` from the truth's stiffness ``B C D``, ``D = mu`` x load)."""
         if self.config.record_model == "linear":
             return super()._record(fine_u, sub)
         Cf, Cr, Iz, lf = self._x_true

@@ -1,25 +1,11 @@
-"""One simulation core for linear mechanical systems driven by road inputs.
-
-A system is ``M q'' + C q' + K q = F u(t)`` for every candidate (batched: ``M``, ``C``, ``K``
-are ``(n, d, d)``, ``F`` is ``(n, d, r)``), with ``u`` the ``r`` input channels (road
-heights and their rates, m and m/s) and measured outputs ``y = Pa q'' + Pv q' + Pq q + Pu u``
-(``Pa``, ``Pv``, ``Pq`` ``(p, d)``, ``Pu`` ``(p, r)``: accelerations, rates, strokes, tyre
-deflections). The state is ``x = [q, q']`` and the system starts at rest.
-
-Two discretisations of the same system, both a linear recurrence
-``x_{k+1} = A x_k + U u_k + V u_{k+1}`` with ``y_k = Ox x_k + Ou u_k``:
-
-* :func:`newmark` (the fitted model): Newmark-beta with equilibrium at every step, average
-  acceleration by default (``gamma = 1/2``, ``beta = 1/4``), second-order accurate in ``dt``;
-* :func:`exact_foh` (the record): the exact solution for an input that is linear between
-  samples (first-order hold), from one matrix exponential per candidate.
-
-One compiled kernel (:func:`simulate`) iterates either. The fitted model's path,
-:func:`newmark_outputs`, is compiled end to end instead (the Newmark table per candidate, then
-a time loop written out for the system's sizes, :mod:`.unrolled`): the same outputs to
-rounding, at the speed of the paper's hand-written kernel (``benchmarks/bench_ride_core.py``).
-:func:`newmark` stays as the plain statement of the scheme the tests hold it to. Units are SI
-throughout.
+"""One simulation core for linear systems driven by road inputs (SI units; docs/suite.md):
+``M q'' + C q' + K q = F u(t)`` per candidate, from rest, outputs ``y = Pa q'' + Pv q' + Pq q
++ Pu u``, discretised as ``x_{k+1} = A x_k + U u_k + V u_{k+1}``, ``y_k = Ox x_k + Ou u_k`` on
+``x = [q, q']`` by :func:`newmark` (the fitted model; average acceleration by default) or
+:func:`exact_foh` (the record: exact for an input linear between samples); :func:`simulate`
+iterates either. :func:`newmark_outputs`, the fitted model's path, is compiled end to end
+(the table per candidate, then :mod:`.codegen`'s loops): the same outputs to rounding, at the
+paper's kernel's speed (``benchmarks/bench_ride_core.py``).
 """
 
 from __future__ import annotations
@@ -32,8 +18,7 @@ import numpy as np
 
 @dataclasses.dataclass(frozen=True)
 class LinearSystem:
-    """A batch of ``n`` linear systems with ``d`` degrees of freedom, ``r`` inputs and ``p``
-    outputs (see the module docstring for the meaning of each array)."""
+    """``n`` linear systems with ``d`` degrees of freedom, ``r`` inputs, ``p`` outputs."""
 
     M: np.ndarray  # (n, d, d) mass matrix, kg (or kg m^2)
     C: np.ndarray  # (n, d, d) damping matrix, N s/m
@@ -108,8 +93,7 @@ def exact_foh(system: LinearSystem, dt: float) -> tuple[np.ndarray, ...]:
 
 @functools.cache
 def _kernel():
-    """The compiled recurrence (:mod:`.kernel`, imported on first use: numba compiles it
-    once and caches it on disk)."""
+    """The compiled recurrence (:mod:`.kernel`, imported on first use)."""
     from .kernel import run
 
     return run
@@ -141,7 +125,7 @@ def newmark_outputs(system: LinearSystem, dt: float, u: np.ndarray, gamma: float
     rest: ``simulate(newmark(system, dt, gamma, beta), u)`` to rounding, compiled end to end
     (see the module docstring)."""
     from . import kernel
-    from .unrolled import RUNS
+    from .codegen import runs
 
     n, d = system.M.shape[0], system.dof
     r, p = system.F.shape[-1], system.Pq.shape[-2]
@@ -153,7 +137,7 @@ def newmark_outputs(system: LinearSystem, dt: float, u: np.ndarray, gamma: float
         _leading(system.Pq, (p, d)), _leading(system.Pu, (p, r)),
         float(dt), float(gamma), float(beta), u[0], T, w0)
     y = np.empty((p, u.shape[0], n))
-    RUNS.get((2 * d, p, r), kernel.run_table_loops)(T, w0, u, y)
+    runs().get((2 * d, p, r), kernel.run_table_loops)(T, w0, u, y)
     return y.transpose(2, 1, 0)
 
 

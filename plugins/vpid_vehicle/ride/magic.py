@@ -1,25 +1,13 @@
-"""``problem=lateral_mf``: the single-track model with a Magic Formula tyre per axle, the
-suite's first nonlinear identification (several basins are expected: the tyre curves trade
-off against each other and against the yaw inertia).
+"""``problem=lateral_mf``: the single-track model with a Magic Formula tyre per axle,
+``Fy = D sin(C atan(B a - E (B a - atan(B a))))`` (several basins expected; docs/suite.md),
+by RK4 (:func:`.kernel.mf_single_track`); the record at ``dt / record_substeps``, the fit at
+``dt`` (``record=newmark``: the fitted step, on purpose). Known: ``m``, ``L``, ``lf``, ``E``;
+identified ``Bf, Cf, Df, Br, Cr, Dr, Iz``; the box's shape factors capped at 1.99 (``C < 2``).
 
-Each axle's lateral force is ``Fy = D sin(C atan(B a - E (B a - atan(B a))))`` at its slip
-angle ``a`` (rad); the equations of motion are those of :mod:`.lateral` with these forces.
-Integrated by the classical Runge-Kutta method (RK4, :func:`.kernel.mf_single_track`, with
-the arc tangent and sine of :mod:`.vecmath`); the record by RK4 at
-``dt / record_substeps``, the fitted model at ``dt`` (a finer step, not the same solver run:
-no inverse crime; ``record=newmark`` here means the fitted model's step, on purpose).
-
-The box is ``[0.5, 1.5] x`` the set with the shape factors capped at 1.99, so a random truth
-(drawn inside the box) keeps ``C < 2``.
-
-**Known quantities**: the mass ``m``, the wheelbase ``L``, the centre of gravity ``lf`` and
-the curvature factor ``E``. Identified: ``Bf, Cf, Df, Br, Cr, Dr, Iz`` (7).
-
-**Parameter set** ``civic_mf`` (ours, derived and stated as such): the openpilot reference
-car of :mod:`.lateral` (m 1462 kg, Iz 2500 kg m², L 2.70 m, lf 1.08 m), with the shape factor
-``C = 1.4675``, the friction ``mu = 0.94`` and ``E = 0.004`` of the PAC2002 tyre file of a
-185/80R14 tyre published with Project Chrono (PCY1, PDY1, PEY1); ``D = mu x`` the static axle
-load, and ``B = C_alpha / (C D)`` so the small-slip cornering stiffness is the car's.
+**Parameter set** ``civic_mf`` (ours, derived and stated as such): :mod:`.lateral`'s openpilot
+car with ``C``, ``mu`` and ``E`` of the PAC2002 file of a 185/80R14 tyre published with
+Project Chrono (PCY1, PDY1, PEY1), ``D = mu`` x the static axle load and ``B = C_alpha / (C
+D)`` (the car's small-slip cornering stiffness).
 """
 
 from __future__ import annotations
@@ -30,8 +18,8 @@ from typing import Any, Literal
 import numpy as np
 
 from .model import RideModel
-from .problem import RideProblem, SuiteConfig, _check, check_record_file
-from .steering import SENSORS, SteeredRecord, steer_input
+from .problem import RideProblem
+from .steering import SENSORS, SteeredConfig, SteeredRecord, steer_input
 
 G = 9.81  # m/s^2
 #: PAC2002 lateral coefficients of the 185/80R14 tyre file published with Project Chrono:
@@ -92,25 +80,13 @@ class MagicSingleTrack(SteeredRecord, RideModel):
 
 
 @dataclasses.dataclass(frozen=True)
-class LateralMFConfig(SuiteConfig):
-    """As :class:`.lateral.LateralConfig`, with a larger default steer (4 degrees at 72
-    km/h reaches the tyres' nonlinear range) and ``record_substeps`` the RK4 record's."""
+class LateralMFConfig(SteeredConfig):
+    """As :class:`.lateral.LateralConfig`; 4 degrees by default (the tyres' nonlinear range)."""
 
     parameter_set: Literal["civic_mf"] = "civic_mf"
-    sensors: Literal["yaw", "yaw_ay", "yaw_ay_beta"] = "yaw_ay"
-    manoeuvre: Literal["step", "sine"] = "sine"
     steer_deg: float = 4.0
-    sine_hz: float = 0.5
-    speed_kmh: float = 72.0
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        _check([
-            ("steer_deg", 0 < self.steer_deg <= 15, "an angle in (0, 15] degrees"),
-            ("sine_hz", 0 < self.sine_hz <= 5, "a frequency in (0, 5] Hz"),
-            ("speed_kmh", 10 <= self.speed_kmh <= 200, "a speed in [10, 200] km/h"),
-        ], self)
-        check_record_file(self, MagicSingleTrack())
+    MAX_STEER = (15.0, "")
+    Model = MagicSingleTrack
 
 
 class LateralMFProblem(RideProblem):

@@ -1,11 +1,5 @@
-"""What a ride model is and how its wheels meet the road: :class:`RideModel` (the
-identified parameters, the published sets, the sensors, the wheels, the matrices; each family
-of :mod:`.quarter`, :mod:`.half`, :mod:`.full`, :mod:`.lateral` and :mod:`.magic` fills it in),
-:class:`Wheel`, the :class:`Suspension` a richer structure replaces (:mod:`.structures`), and
-the road under each wheel (:func:`wheel_inputs`).
-
-Its own module, below both :mod:`.problem` (which builds a problem around a model) and
-:mod:`.structures` (which makes a model richer), so neither imports the other's users.
+"""What a ride model is (:class:`RideModel`, each family fills it in) and how its wheels meet
+the road; below both :mod:`.problem` and :mod:`.structures`, so neither imports the other.
 """
 
 from __future__ import annotations
@@ -22,9 +16,8 @@ from . import linear, roads
 
 @dataclasses.dataclass(frozen=True)
 class Suspension:
-    """A family's suspension elements: ``axles`` (the linear model's spring and damper
-    parameter of each axle), ``axle_of`` (each element's axle) and ``elongations(X, known)``,
-    the rows ``J`` ``(n, elements, dof)`` with ``e = J q`` for the linear rows ``X``."""
+    """A family's suspension elements: each axle's spring and damper parameter, each
+    element's axle, and ``elongations(X, known)``, ``J`` ``(n, elements, dof)`` of ``e = J q``."""
 
     axles: tuple[tuple[str, str], ...]
     axle_of: tuple[int, ...]
@@ -33,8 +26,7 @@ class Suspension:
 
 @dataclasses.dataclass(frozen=True)
 class Wheel:
-    """Where a wheel meets the road: its track (0 left, 1 right) and its delay behind the
-    front axle (s)."""
+    """A wheel's track (0 left, 1 right) and delay behind the front axle (s)."""
 
     track: int
     delay_s: float
@@ -42,14 +34,13 @@ class Wheel:
 
 class RideModel:
     """A linear ride model: the identified parameters, the published sets (identified and
-    known values), the sensor sets, the wheels and the matrices. Subclasses fill it in."""
+    known values), the sensor sets, the wheels and the matrices."""
 
     names: ClassVar[tuple[str, ...]] = ()
     units: ClassVar[tuple[str, ...]] = ()
     sets: ClassVar[dict[str, dict[str, float]]] = {}
     sensors: ClassVar[dict[str, tuple[tuple[str, str], ...]]] = {}
-    #: The suspension's springs and dampers, for the richer structures
-    #: (:mod:`.structures`); ``None``: the model has none to make richer.
+    #: The springs and dampers a richer structure replaces; ``None``: none.
     suspension: ClassVar[Suspension | None] = None
 
     def wheels(self, known: dict[str, float], speed: float) -> tuple[Wheel, ...]:
@@ -64,8 +55,7 @@ class RideModel:
         return tuple(Column(n, "m") for n in self.wheel_names)
 
     def needs_record_inputs(self, config: Any) -> str | None:
-        """Why a user's record must carry its inputs, or ``None`` when the configuration
-        defines them (a hump, a bump, a step)."""
+        """Why a user's record must carry its inputs, or ``None`` (the configuration's serve)."""
         if getattr(config, "road", None) == "iso8608":
             return ("road=iso8608 is a random road, which a record must carry: the road "
                     "height under each wheel; or set problem.road to hump, bump or step")
@@ -75,22 +65,20 @@ class RideModel:
         """Refuse a record this model cannot use beyond its columns (default: none)."""
 
     def inputs_from_record(self, record: Record, sampler: Sampler) -> np.ndarray:
-        """The model's input channels ``(steps, r)`` from a record's input columns: each
-        wheel's height interpolated linearly onto the model's steps, its rate by central
-        differences there (as :func:`wheel_inputs`)."""
+        """The input channels ``(steps, r)`` from a record: each wheel's height linearly onto
+        the model's steps, its rate by central differences (as :func:`wheel_inputs`)."""
         h = sampler.onto_steps(record.t, record.inputs)
         return np.concatenate([h, np.gradient(h, sampler.dt, axis=0)], axis=1)
 
     def inputs(self, config: Any, known: dict[str, float], dt: float,
                rng: np.random.Generator) -> np.ndarray:
-        """The input channels ``(N, r)`` sampled every ``dt`` s over the record (default:
-        each wheel's road height, then their rates)."""
+        """The input channels ``(N, r)`` every ``dt`` s (default: :func:`wheel_inputs`)."""
         return wheel_inputs(config, self.wheels(known, config.speed_kmh / 3.6), dt, rng)
 
     def system(self, X: np.ndarray, known: dict[str, float], sensors: str
                ) -> linear.LinearSystem:
-        """The batch of linear systems of the rows ``X``; inputs ``[h_1..h_w, h'_1..h'_w]``
-        (each wheel's road height and its rate), outputs the ``sensors`` channels."""
+        """The linear systems of the rows ``X``; inputs ``[h_1..h_w, h'_1..h'_w]``, outputs
+        the ``sensors`` channels."""
         raise NotImplementedError
 
     def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
@@ -103,9 +91,8 @@ class RideModel:
 
     def simulate(self, X: np.ndarray, known: dict[str, float], sensors: str, u: np.ndarray,
                  dt: float, solver: str) -> np.ndarray:
-        """The ``sensors`` channels ``(n, N, p)`` of the rows ``X`` driven by ``u`` sampled
-        every ``dt``, from rest; ``solver`` is ``exact`` (the record's) or ``newmark`` (the
-        fitted model's). Default: the linear core (Newmark compiled end to end)."""
+        """The ``sensors`` channels ``(n, N, p)`` driven by ``u`` every ``dt`` from rest, by
+        ``exact`` (the record's solver) or ``newmark`` (the fitted model's)."""
         system = self.system(X, known, sensors)
         if solver == "exact":
             return linear.simulate(linear.exact_foh(system, dt), u)

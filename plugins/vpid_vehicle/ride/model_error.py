@@ -1,22 +1,11 @@
 """How large a member's model error is against its noise: ``python -m
-vpid_vehicle.ride.model_error [member ...]`` prints it (docs/suite.md shows the table).
+vpid_vehicle.ride.model_error [member ...]`` (docs/suite.md). Per instance, ``σ_c`` the noise:
 
-For a member whose record comes from a richer model (``record_model``, :mod:`.richer`), the
-*model error* is what the fitted model cannot reproduce of the clean record whatever its
-parameters. Per instance, with ``σ_c`` the member's noise on channel ``c`` (``noise_level x``
-the clean channel's rms):
-
-* ``ratio``: the rms over every sample of ``(clean_c − fitted_c(θ̂)) / σ_c`` at the fitted
-  model's best fit ``θ̂`` to the *clean* record (weighted least squares from the truth,
-  inside the box): the misfit no parameter removes, in units of the noise. ``≥ 1``: the
-  model error is at least as large as the noise;
-* ``ratio_at_truth``: the same at the truth (the fitted model with the richer model's
-  parameters; larger, since the fit absorbs part of the difference);
-* ``bias_nore``: the NoRE (%) of ``θ̂`` from the truth: the error the model error alone
-  leaves, with no noise at all (an estimator's floor cannot go below it in expectation).
-
-A member whose record is made by the fitted model's own equations has ``ratio`` of the order
-of its discretisation error (``record=exact`` against Newmark), far below 1.
+* ``ratio``: the rms of ``(clean_c − fitted_c(θ̂)) / σ_c`` at the fitted model's best fit
+  ``θ̂`` to the *clean* record: the misfit no parameter removes (``≥ 1``: as large as the
+  noise; a member without model error: its discretisation error, far below 1);
+* ``ratio_at_truth``: the same at the truth (larger: the fit absorbs part of it);
+* ``bias_nore``: the NoRE (%) of ``θ̂``, the error model error alone leaves.
 """
 
 from __future__ import annotations
@@ -68,17 +57,14 @@ def members_with_model_error() -> list[type]:
 
 #: Instances whose at-fit ratio the command prints (each has its own truth).
 INSTANCES = 5
-#: The at-fit ratio of every archived instance of each model-error member, written by
-#: ``python -m vpid_vehicle.ride.model_error --write`` (the report's model-error section reads
-#: it, so a report computes nothing of it).
+#: Each model-error member's ratios per archived instance (``--write``; the report reads it).
 RATIOS_FILE = Path(__file__).with_name("model_error_ratios.json")
 #: Instances of the file (the vpid1 archive's).
 FILE_INSTANCES = 15
 
 
 def ratios(instances: int = FILE_INSTANCES) -> dict[str, Any]:
-    """Per model-error member at its defaults: the at-fit and at-truth ratios of instances
-    ``0 .. instances - 1``, its seed and the structure the suite fits it with."""
+    """Per model-error member: the ratios of its first ``instances``, its seed and fit."""
     from .richer import FIT_WITH
 
     out: dict[str, Any] = {}
@@ -101,9 +87,7 @@ def read_ratios() -> dict[str, Any]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Print each member's model error (instance 0 in full, the at-fit ratio of instances
-    0 to :data:`INSTANCES` - 1, the richer structure the suite fits it with; all
-    model-error members by default)."""
+    """Print each member's model error (all model-error members by default)."""
     from .richer import FIT_WITH
     from .suites import MEMBERS
 

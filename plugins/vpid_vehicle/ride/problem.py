@@ -1,32 +1,15 @@
-"""What every ride problem of the suite shares: the record, its noise, the instances, the
-objective and the residuals; a model adds only its matrices (:class:`RideModel`).
+"""What every ride problem of the suite shares (docs/suite.md): the record, its noise, the
+instances, the objective and the residuals; a model adds only its matrices.
 
-**Record.** The true vehicle's response by the exact solution for an input linear between
-samples (:func:`.linear.exact_foh`), at ``dt / record_substeps``, sampled every ``dt``; the
-fitted model is Newmark (average acceleration) at ``dt`` with the road sampled at ``dt``. The
-record is therefore not made by the fitted model (no inverse crime); ``record=newmark`` makes it
-with the fitted model, on purpose.
-
-**Noise**, per channel: additive Gaussian, ``sigma_c = noise_level x rms(clean channel c)``.
-
-**Instances.** Run ``i`` fits instance ``i``: from ``SeedSequence([seed, INSTANCE_ROOT,
-crc32(name)], spawn_key=(i,))`` (a root of its own: never the optimizer's ``SeedSequence(seed,
-(i,))``, and one per problem, so two members of equal dimension do not share their truths'
-places in the box) it draws the true vehicle (:func:`draw_truth`: uniform over the box, kept
-``truth_margin`` of its width from each bound; ``truth=set`` uses the published set, the centre
-of the box), the random roads' phases and the noise. The box is fixed, ``[0.5, 1.5] x`` the
-published set (a model may cap it, :meth:`RideModel.box`).
-
-**Roads.** Every wheel follows a track (left or right) with a delay (the rear wheels by
-wheelbase / speed); the event starts 0.2 s into the record under the front wheels. The two
-tracks of an ISO road are independent realisations of the class.
-
-**Objective** (``objective``, :mod:`vpid_bench.estimators`): by default ``f = sum_c
-||measured_c - computed_c|| / ||measured_c||`` (the paper's Eq. 3, one norm per channel; the
-residuals are those differences over ``||measured_c||``, one group per channel); ``ols``,
-``ml`` (weighted by ``sigma_c`` estimated from the record) and ``ml_profiled`` (each channel's
-sigma unknown, profiled out) are sums of squares. Metric: NoRE (%) against the instance's
-truth.
+**Record**: the true vehicle by the exact first-order-hold solution at ``dt /
+record_substeps``, sampled every ``dt``; the fitted model is Newmark at ``dt`` (no inverse
+crime; ``record=newmark`` commits it on purpose). **Noise**: additive Gaussian per channel,
+``sigma_c = noise_level x rms(clean_c)``. **Instances**: run ``i`` fits instance ``i``,
+drawn from ``SeedSequence([seed, INSTANCE_ROOT, crc32(name)], spawn_key=(i,))`` (never an
+optimizer's stream, one root per problem): the truth (:func:`draw_truth`, or the published
+set with ``truth=set``), the random roads' phases, the noise. The box is ``[0.5, 1.5] x`` the
+published set (a model may cap it). **Objective**: Eq. 3 by default (one norm per channel)
+or another estimator (:mod:`vpid_bench.estimators`); metric: NoRE (%) against the truth.
 """
 
 from __future__ import annotations
@@ -71,11 +54,9 @@ MAX_STEPS = 200_000
 INSTANCE_ROOT = 0x5EED1
 
 
-#: Kept free of random truths at each side of the box, as a fraction of its width. The optima
-#: of the suite's determined members (quarter, half and full car under Eq. 3) lie within 0.5-6 %
-#: of the width from the truth in 9 runs of 10 (archive/smoke before round four), so a truth
-#: this far inside keeps them in the box; a parameter the record does not determine (the
-#: lateral members') would need more than the box.
+#: Kept free of random truths at each side of the box, as a fraction of its width: the
+#: determined members' optima lie within 0.5-6 % of the width from the truth in 9 runs of 10
+#: (archive/smoke before round four), so they stay in the box.
 TRUTH_MARGIN = 0.05
 
 
@@ -93,9 +74,8 @@ def instance_streams(seed: int, index: int, name: str) -> list[np.random.SeedSeq
 
 def draw_truth(lower: np.ndarray, upper: np.ndarray, margin: float,
                rng: np.random.Generator) -> np.ndarray:
-    """A true parameter vector uniform over the box ``[lower, upper]`` shrunk by ``margin``
-    times its width at each side: every place in the box (but the margin) is as likely, so an
-    optimizer meets truths near its faces and corners as often as near its centre."""
+    """A truth uniform over the box shrunk by ``margin`` of its width at each side: truths near
+    its faces and corners as often as near its centre."""
     lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     width = upper - lower
     return lower + width * rng.uniform(margin, 1.0 - margin, lower.size)
@@ -110,13 +90,9 @@ def _check(checks: list[tuple[str, bool, str]], config: Any) -> None:
 
 @dataclasses.dataclass(frozen=True)
 class RecordFileConfig:
-    """``file``: a CSV record of one's own vehicle fitted instead of the simulated one (any
-    rate and start time, the measured channels by name, units optional, the inputs as
-    columns where the configuration does not define them; docs/own-record.md). The problem
-    then has no truth and no noise is added. ``columns``: the problem's names mapped to
-    the record's (``{h: road, zsdd: "body_acc [g]"}``); ``ignore``: record columns left
-    unused on purpose (any other unused column is refused); ``input``: ``record`` (the
-    record carries the inputs) or ``config`` (the configured road or manoeuvre)."""
+    """``file``: one's own vehicle's record fitted instead (docs/own-record.md; no truth, no
+    noise added). ``columns``: the problem's names mapped to the record's; ``ignore``: columns
+    unused on purpose; ``input``: ``record`` or ``config`` (the configured road, manoeuvre)."""
 
     file: str | None = None
     columns: dict[str, str] = added_setting(default_factory=dict, open_keys=True)
@@ -133,15 +109,11 @@ class RecordFileConfig:
 
 @dataclasses.dataclass(frozen=True)
 class SuiteConfig(ProblemConfig):
-    """Keys every problem of the suite shares (a model's Config adds ``parameter_set``,
-    ``sensors`` and its input). ``duration_s`` of the record; ``dt`` its sampling (s).
-    ``noise_level``: sigma per channel as a fraction of its clean rms. ``seed``: the
-    instances' streams. ``truth``: ``random`` (uniform over the box, :func:`draw_truth`) or
-    ``set`` (the published set, the box centre). ``truth_margin``: the fraction of the box's
-    width kept free of random truths at each side. ``record``: ``exact`` or ``newmark``
-    (inverse crime). ``record_substeps``: the exact record's steps per sample. ``objective``:
-    the estimator, ``eq3`` (the paper's Eq. 3), ``ols``, ``ml`` or ``ml_profiled``
-    (:mod:`vpid_bench.estimators`)."""
+    """Keys every problem of the suite shares (the module docstring; a model's Config adds
+    ``parameter_set``, ``sensors`` and its input): ``duration_s``, ``dt`` (s), ``noise_level``
+    (a fraction of each clean channel's rms), ``seed``, ``truth`` (``random``, ``set``),
+    ``truth_margin``, ``record`` (``exact``, ``newmark``), ``record_substeps``, ``objective``
+    (``eq3``, ``ols``, ``ml``, ``ml_profiled``)."""
 
     duration_s: float = 3.0
     dt: float = 0.001
@@ -152,6 +124,8 @@ class SuiteConfig(ProblemConfig):
     record: str = "exact"
     record_substeps: int = 10
     objective: str = "eq3"
+    #: The model a user's record is read for, at the pre-flight (:func:`check_record_file`).
+    Model: ClassVar[type[RideModel] | None] = None
     reference: RecordFileConfig = added_setting(default_factory=RecordFileConfig)
     #: Stated quantities and boxes (:mod:`..knowns`): ``known.kt=210000``, ``known.ms=250``
     #: (fixed), ``known.kt=free``; ``bounds.ks=[lo, hi]``.
@@ -176,14 +150,18 @@ class SuiteConfig(ProblemConfig):
         if self.duration_s / self.dt > MAX_STEPS:
             raise ConfigError("problem.duration_s", self.duration_s,
                               "at most 200000 samples (duration_s / dt)")
+        self._check_own()
+        if self.Model is not None:
+            check_record_file(self, self.Model())
+
+    def _check_own(self) -> None:
+        """A family's own keys, checked before a user's record is read."""
 
 
 @dataclasses.dataclass(frozen=True)
 class RideConfig(SuiteConfig):
-    """The road of a ride problem: ``road`` is ``hump`` (3.7 m x 0.1 m), ``bump`` (0.1 m x
-    0.04 m), ``step`` (0.1 m) or ``iso8608`` (class ``road_class``), met at ``speed_kmh``.
-    ``spring`` (``linear`` or ``cubic``) and ``damper`` (``linear`` or ``bilinear``): the
-    suspension structure, per axle (:mod:`.structures`)."""
+    """The road (:mod:`.roads`: ``hump``, ``bump``, ``step``, ``iso8608`` of ``road_class``)
+    met at ``speed_kmh``; ``spring``, ``damper``: the suspension (:mod:`.structures`)."""
 
     road: str = "hump"
     road_class: str = "C"
@@ -191,8 +169,7 @@ class RideConfig(SuiteConfig):
     spring: Literal["linear", "cubic"] = added_setting("linear")
     damper: Literal["linear", "bilinear"] = added_setting("linear")
 
-    def __post_init__(self) -> None:
-        super().__post_init__()
+    def _check_own(self) -> None:
         _check([
             ("road", self.road in ("hump", "bump", "step", "iso8608"),
              "one of hump, bump, step, iso8608"),
@@ -208,20 +185,16 @@ class RideConfig(SuiteConfig):
 
 
 def check_record_file(config: Any, model: RideModel) -> None:
-    """Read ``reference.file`` once when a config is built, so a file that does not fit
-    fails the command's pre-flight (exit 2, one line) rather than the job; check the stated
-    quantities and boxes (:func:`..knowns.check_config`) there too."""
+    """Check the stated quantities and read ``reference.file`` as a config is built: the
+    pre-flight refuses either (exit 2, one line), not the job."""
     knowns.check_config(config, model)
     if config.reference.file is not None:
         read_ride_record(model, config)
 
 
 def read_ride_record(model: RideModel, config: Any) -> Record:
-    """A user's record for ``model`` under ``config`` (``reference.file``): the configured
-    sensors' channels by their column names (:func:`.record_file.column_name`: ``zs''`` is
-    ``zsdd``), the model's input columns where given (required where
-    :meth:`RideModel.needs_record_inputs` says so). Raises :class:`ConfigError` naming the
-    column, row or time problem."""
+    """A user's record for ``model``: the sensors' channels by column name (``zs''`` is
+    ``zsdd``), the model's input columns; a :class:`ConfigError` naming what does not fit."""
     channels = tuple(Column(column_name(c), unit, (c,)) for c, unit in
                      model.sensors[config.sensors])
     record = read_record(config.reference.file, channels, model.record_columns(),
@@ -232,7 +205,51 @@ def read_ride_record(model: RideModel, config: Any) -> Record:
     return record
 
 
-class RideProblem(Problem):
+class ChannelFit:
+    """The residuals of a problem that fits measured channels ``measured`` ``(p, N)`` with the
+    objective's ``weights`` (:mod:`vpid_bench.estimators`) by :meth:`computed` ``(n, p, N)``
+    (NaN rows where a row is not simulated): channels one after another, inf rows where a
+    simulation fails."""
+
+    measured: np.ndarray
+    weights: np.ndarray
+
+    def computed(self, X: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def _weighted(self, X: np.ndarray) -> np.ndarray:
+        """``measured - computed`` times the objective's fixed weights, ``(n, p, N)``."""
+        return (self.measured[None] - self.computed(X)) * self.weights
+
+    def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return estimators.residuals_and_value(self.config.objective, self._weighted(X))
+
+    def evaluate(self, X: np.ndarray) -> np.ndarray:
+        return self.evaluate_with_residuals(X)[0]
+
+    def residuals(self, X: np.ndarray) -> np.ndarray:
+        """What a least-squares optimizer minimises (:func:`estimators.residuals_and_value`:
+        Eq. 3's over ``||measured_c||``; ``ml_profiled``'s rescaled per channel)."""
+        return self.evaluate_with_residuals(X)[1]
+
+    def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
+        """``(measured_c - computed_c) / ||measured_c||`` whatever the objective (what the
+        intervals and the Cramér–Rao bound differentiate)."""
+        scale = np.linalg.norm(self.measured, axis=1)[None, :, None]
+        R = (self.measured[None] - self.computed(X)) / scale
+        R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
+        return R.reshape(R.shape[0], -1)
+
+    def fisher_groups(self) -> np.ndarray:
+        """The channel of each entry of :meth:`fisher_residuals`."""
+        return np.repeat(np.arange(self.measured.shape[0]), self.measured.shape[1])
+
+    def residual_groups(self) -> np.ndarray:
+        """The channels for Eq. 3 (one norm each), one group for the sums of squares."""
+        return estimators.groups(self.config.objective, *self.measured.shape)
+
+
+class RideProblem(ChannelFit, Problem):
     """A ride model identified from a road record (see the module docstring)."""
 
     model: ClassVar[RideModel]
@@ -281,9 +298,8 @@ class RideProblem(Problem):
                                           1.0 / self.scale[:, None], plug_in)
 
     def _from_file(self, config: RideConfig) -> None:
-        """A user's record (``reference.file``): no truth, no noise added; the model at
-        rest at the record's first row, integrated at ``dt`` over its span, its inputs
-        from the record's columns or the configuration (docs/own-record.md)."""
+        """A user's record: no truth, no noise added; the model at rest at its first row, its
+        inputs from the record or the configuration (docs/own-record.md)."""
         record = read_ride_record(self.model, config)
         self.sampler = sampler = Sampler(record.t, config.dt)
         self.input_source = knowns.input_text(config, record.input_names,
@@ -333,9 +349,11 @@ class RideProblem(Problem):
         """The instance's truth; ``None`` for a user's record (no truth)."""
         return None if self._x_true is None else self._x_true.copy()
 
+    def computed(self, X: np.ndarray) -> np.ndarray:
+        return self.responses(X)
+
     def responses(self, X: np.ndarray) -> np.ndarray:
-        """The fitted model's channels ``(n, p, N)`` for the rows of ``X``; NaN rows for a
-        row that is not a vehicle."""
+        """The fitted model's channels ``(n, p, N)``; NaN rows for a row that is no vehicle."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         out = np.full((X.shape[0], self.measured.shape[0], self.t.size), np.nan)
         ok = self.model.physical(X, self.known)
@@ -346,55 +364,20 @@ class RideProblem(Problem):
                 out[ok] = y if self.sampler is None else self.sampler.at_record(y)
         return out
 
-    def _weighted(self, X: np.ndarray) -> np.ndarray:
-        """``measured - computed`` times the objective's fixed weights, ``(n, p, N)``."""
-        return (self.measured[None] - self.responses(X)) * self.weights[None]
-
-    def residuals(self, X: np.ndarray) -> np.ndarray:
-        """What a least-squares optimizer minimises, channels one after another, ``(n, p N)``
-        (:func:`estimators.residuals_and_value`: ``measured_c - computed_c`` times the
-        objective's weights, Eq. 3: over ``||measured_c||``; ``ml_profiled`` rescaled per
-        channel); inf rows where a simulation fails."""
-        return self.evaluate_with_residuals(X)[1]
-
-    def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
-        """``(measured_c - computed_c) / ||measured_c||``, channels one after another,
-        ``(n, p N)``, whatever the objective (what the Cramér–Rao bound differentiates)."""
-        R = (self.measured[None] - self.responses(X)) / self.scale[None, :, None]
-        R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
-        return R.reshape(R.shape[0], -1)
-
-    def fisher_groups(self) -> np.ndarray:
-        """The channel of each entry of :meth:`fisher_residuals`."""
-        return np.repeat(np.arange(self.measured.shape[0]), self.t.size)
-
-    def residual_groups(self) -> np.ndarray:
-        """The channels for Eq. 3 (one norm each), one group for the sums of squares."""
-        return estimators.groups(self.config.objective, self.measured.shape[0], self.t.size)
-
     def residual_sigma(self) -> np.ndarray | None:
-        """The simulated noise's sigma of each channel of :meth:`fisher_residuals`, ``(p,)``;
-        ``None`` for a user's record (no noise was simulated)."""
+        """The simulated noise's sigma per channel of :meth:`fisher_residuals`, or ``None``."""
         if self.config.noise_level <= 0 or self.sigma is None:
             return None
         return self.sigma / self.scale
 
-    def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return estimators.residuals_and_value(self.config.objective, self._weighted(X))
-
-    def evaluate(self, X: np.ndarray) -> np.ndarray:
-        return self.evaluate_with_residuals(X)[0]
-
     def metrics(self, x: np.ndarray) -> dict[str, float]:
-        """``{"NoRE": ...}``: the norm of the relative errors against this instance's truth
-        (percent); none for a user's record (no truth)."""
+        """``{"NoRE": ...}`` (%) against this instance's truth; none for a user's record."""
         if self._x_true is None:
             return {}
         return {"NoRE": float(np.linalg.norm(relative_errors_percent(x, self._x_true)))}
 
     def content_digest(self) -> str | None:
-        """The SHA-256 of a user's record file (it enters every run id: an edited record
-        runs again on resume), else ``None`` (the config defines the record)."""
+        """The SHA-256 of a user's record (an edited record runs again on resume), else ``None``."""
         if self.sampler is None:
             return None
         import hashlib
@@ -424,14 +407,9 @@ class RideProblem(Problem):
             out[f"{name}:fitted"] = fitted[c]
         return out
 
-    def _fitted_solver(self) -> str:
-        """The fitted model's solver, in words (a richer structure's: :mod:`.structures`)."""
-        return getattr(self.model, "fitted_solver", "Newmark average acceleration")
-
     def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any]:
-        """The measured channels over their norms (the units of :meth:`fisher_residuals`),
-        the channels' names and the model's inputs at the record's samples (each wheel's
-        road height ``h`` and its rate ``h'``, as the model is driven)."""
+        """The measured channels over their norms (:meth:`fisher_residuals`' units), their
+        names and the model's inputs at the record's samples (``h``, ``h'`` per wheel)."""
         u = np.asarray(self.u, dtype=float)
         u = u.T if self.sampler is None else self.sampler.at_record(u.T[None])[0]
         wheels = self.model.wheel_names
@@ -444,25 +422,25 @@ class RideProblem(Problem):
 
     def describe(self) -> dict[str, Any]:
         cfg = self.config
+        # the fitted model's solver in words (a richer structure's: :mod:`.structures`)
+        solver = getattr(self.model, "fitted_solver", "Newmark average acceleration")
+        info = {"samples": int(self.t.size), **knowns.info(self),
+                "fitted_model": {"solver": solver, "dt_s": cfg.dt}}
         if self.sampler is not None:
-            return {"samples": int(self.t.size), **knowns.info(self),
-                    "record": {"source": "file", "file": str(cfg.reference.file),
-                               "info": self.record_info},
-                    "fitted_model": {"solver": self._fitted_solver(), "dt_s": cfg.dt}}
+            info["record"] = {"source": "file", "file": str(cfg.reference.file),
+                              "info": self.record_info}
+            return info
         exact = cfg.record == "exact"
-        info = {
-            "samples": int(self.t.size),
-            **knowns.info(self),
+        info.update({
             "record": {"solver": "exact first-order hold" if exact
                        else "Newmark (the fitted model: inverse crime)",
                        "dt_s": cfg.dt / (cfg.record_substeps if exact else 1)},
-            "fitted_model": {"solver": self._fitted_solver(), "dt_s": cfg.dt},
             "noise": {"model": "additive Gaussian", "sigma": self.sigma.tolist(),
                       "channels": [c for c, _ in self.channels]},
             "truth": self._x_true.tolist(),
             "f_at_true": float(self.evaluate(self._x_true[None])[0]),
             "metric_units": {"NoRE": "%"},
-        }
+        })
         richer = getattr(cfg, "record_model", "linear")
         if richer != "linear":  # the report explains a floor below the bound by it
             from .richer import DESCRIPTIONS, FIT_WITH

@@ -1,19 +1,11 @@
-"""``problem=ride_quarter``: identify a quarter car (2-DOF) from what it records on a road.
-
-Model (SI units): the sprung mass ``ms`` (body, height zs) on the suspension spring ``ks`` and
-damper ``cs`` above the unsprung mass ``mu`` (wheel, height zu), on the tyre (stiffness
-``kt``, damping ``ct``) over the road height h(t):
+"""``problem=ride_quarter``: a quarter car from what it records on a road (docs/suite.md).
 
     ms zs'' + cs (zs' - zu') + ks (zs - zu) = 0
     mu zu'' - cs (zs' - zu') - ks (zs - zu) + ct zu' + kt zu = kt h + ct h'
 
-**Model error** (``record_model=bilinear_damper``): the record's damper is bilinear
-(:mod:`.richer`), the fitted one linear.
-
-**Known quantity: the tyre.** With a road as input and only kinematic outputs, scaling every
-mass, stiffness and damping by one factor leaves the record unchanged; the tyre (``kt``,
-``ct``, measured on a tyre rig) is therefore known and ``ms, mu, ks, cs`` are identified.
-Record, noise, instances and objective: :mod:`.problem`.
+(SI units). The tyre ``kt``, ``ct`` is known (scaling every mass, stiffness and damping leaves
+the record unchanged); ``ms, mu, ks, cs`` are identified. ``record_model=bilinear_damper``: the
+record's damper is bilinear (:mod:`.richer`).
 """
 
 from __future__ import annotations
@@ -27,7 +19,7 @@ from vpid_bench import added_setting
 
 from . import linear
 from .model import RideModel, Suspension, Wheel
-from .problem import RideConfig, RideProblem, check_record_file
+from .problem import RideConfig, RideProblem
 
 
 def _suspension_rows(X: np.ndarray, known: dict[str, float]) -> np.ndarray:
@@ -64,8 +56,7 @@ class QuarterCar(RideModel):
 
 
 def quarter_system(X: np.ndarray, kt: float, ct: float, sensors: str) -> linear.LinearSystem:
-    """The quarter cars of the rows ``X = [ms, mu, ks, cs]`` as a batch of linear systems;
-    inputs ``[h, h']``, outputs the ``sensors`` channels."""
+    """The quarter cars of the rows ``[ms, mu, ks, cs]``; inputs ``[h, h']``."""
     X = np.atleast_2d(X)
     n = X.shape[0]
     ms, mu, ks, cs = X.T
@@ -84,19 +75,13 @@ def quarter_system(X: np.ndarray, kt: float, ct: float, sensors: str) -> linear.
 
 @dataclasses.dataclass(frozen=True)
 class RideQuarterConfig(RideConfig):
-    """``parameter_set``: the published car (docs/suite.md); ``sensors``: the measured
-    channels; the other keys: :class:`.problem.RideConfig`."""
+    """``parameter_set``, ``sensors``, ``record_model``; the rest: :class:`.problem.RideConfig`."""
 
     parameter_set: Literal["golden_car", "quarter_bus"] = "golden_car"
     sensors: Literal["body", "body_wheel", "body_wheel_stroke"] = "body_wheel"
-    #: The model that makes the record: ``linear`` (the fitted model's equations) or
-    #: ``bilinear_damper`` (:mod:`.richer`: the linear model fitted with model error).
     record_model: Literal["linear", "bilinear_damper"] = added_setting("linear")
+    Model = QuarterCar
 
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        check_record_file(self, QuarterCar())
 
 class RideQuarterProblem(RideProblem):
     """The quarter car identified from a road record."""
@@ -107,8 +92,7 @@ class RideQuarterProblem(RideProblem):
     model = QuarterCar()
 
     def _record(self, fine_u: np.ndarray, sub: int) -> np.ndarray:
-        """The linear model's record, or with ``record_model=bilinear_damper`` the bilinear
-        damper's (:func:`.richer.bilinear_quarter`, RK4 at the record's fine step)."""
+        """The record, by the bilinear damper's RK4 with ``record_model=bilinear_damper``."""
         if self.config.record_model == "linear":
             return super()._record(fine_u, sub)
         from .richer import QUARTER_CHANNELS, bilinear_quarter

@@ -1,44 +1,23 @@
 """``problem=racecar``: a full-scale autonomous racecar's tyres and yaw inertia from its logs
-(measured; no truth), judged by how well the fitted model predicts held-out driving against a
-naive predictor.
+(measured, no truth; docs/measured.md), judged by held-out prediction against a naive one.
 
-**Logs** (:mod:`.third_party`; GPL-3.0, not part of vpid-bench): an Indy Autonomous Challenge
-car at Putnam Park (road course, ``putnam``, 476 s, up to 32 m/s) and at Las Vegas Motor
-Speedway (oval, ``lvms``, 672 s, up to 21 m/s), 25 Hz, as published with Deep Dynamics. Read:
-forward and lateral velocity, yaw rate and steer angle at the road wheels. How they were
-estimated on the car (which sensors, which point of the body) is not documented with them.
-
-**Model** (SI units; :func:`.kernel.scheduled_single_track`): the single-track model with the
-forward speed taken from the log (an input, linear between samples, like the steer angle):
+**Logs** (:mod:`.third_party`, GPL-3.0): an Indy Autonomous Challenge car at Putnam Park
+(``putnam``) and Las Vegas Motor Speedway (``lvms``), 25 Hz, published with Deep Dynamics:
+``vx``, ``vy``, ``r`` and the steer angle at the road wheels (how estimated on the car is not
+documented). **Model** (SI units, :func:`.kernel.scheduled_single_track`), ``vx`` an input:
 
     af = delta - atan((vy + lf r) / vx),         ar = atan((lr r - vy) / vx)
     vy' = (Fry + Ffy cos delta) / m - vx r,      r' = (lf Ffy cos delta - lr Fry) / Iz
 
-with ``tyres=linear`` (``Fy = C a``; identified ``Cf, Cr`` N/rad and ``Iz``) or
-``tyres=magic_formula`` (``Fy = D sin(C atan(B a))``, curvature 0; identified ``Bf, Cf, Df,
-Br, Cr, Dr, Iz``). RK4 at ``40 ms / substeps``. **Known** (``deep_dynamics_iac.yaml``):
-``m`` 790 kg, ``lf`` 1.248 m, ``lr`` 1.7328 m. ``steer_delay_s``: a known delay of the logged
-steer angle (0 by default; in both logs the yaw rate follows the kinematic ``vx delta / L``
-best 0.32-0.36 s later).
-
-**Box**: Magic Formula and ``Iz`` as the yaml's ranges (``B`` 5-30, ``C`` 0.5-2, ``D``
-100-10000 N, ``Iz`` 500-2000 kg m²); linear cornering stiffnesses 10,000-400,000 N/rad (from
-about 2 to 90 times each axle's static load per radian).
-
-**Windows**: the fitted and the held-out part (``fit``, ``validate``: a log or its first or
-second half; they must not overlap) are cut into consecutive windows of ``horizon_s`` where
-the car runs at ``min_speed`` or more throughout. Each window is predicted from the logged
-``(vy, r)`` at its first sample. The **naive predictor** holds both at that value over the
-window; a model must beat it to count.
-
-**Noise** (channels ``vy`` m/s, ``r`` rad/s): additive, sigma unknown per channel (estimated
-from the residuals). **Objective**: ``problem.objective`` (:mod:`vpid_bench.estimators`, over
-the fitted windows' samples after each window's first): ``ml_profiled`` by default, the
-Gaussian likelihood with each channel's σ unknown and estimated from the residuals, or ``eq3``
-(per channel ``||measured - predicted|| / ||measured||``) or ``ols``. **Metrics** (lower is
-better, held out): ``val_rel_naive``, the mean over the two channels of the model's rms error
-over the naive predictor's (below 1: it beats holding the state), then ``val_rms_r`` and
-``val_rms_vy``.
+``tyres=linear`` (``Fy = C a``: ``Cf, Cr`` N/rad, ``Iz``) or ``magic_formula`` (``D sin(C
+atan(B a))``: ``Bf, Cf, Df, Br, Cr, Dr, Iz``), RK4 at ``40 ms / substeps``. **Known**
+(``deep_dynamics_iac.yaml``): ``m``, ``lf``, ``lr``; ``steer_delay_s``. **Box**: the yaml's
+ranges; linear stiffnesses 10,000-400,000 N/rad (about 2 to 90 times each axle's static load
+per radian). **Windows** of ``horizon_s`` where ``vx >= min_speed``, each predicted from its
+first logged ``(vy, r)``; the **naive predictor** holds that value. **Objective**:
+``ml_profiled`` by default, ``eq3`` or ``ols``, over the samples after each window's first.
+**Metrics** (held out): ``val_rel_naive`` (the model's rms over the naive one's, mean over
+``vy``, ``r``: below 1 beats it), ``val_rms_r``, ``val_rms_vy``.
 """
 
 from __future__ import annotations
@@ -51,6 +30,7 @@ import numpy as np
 from vpid_bench import Bounds, ConfigError, Problem, ProblemConfig, estimators
 
 from . import third_party
+from .problem import ChannelFit
 
 #: The car's constants (``deep_dynamics_iac.yaml``, VEHICLE_SPECS; a test reads the file).
 VEHICLE = {"m": 790.0, "lf": 1.248, "lr": 1.7328}
@@ -74,13 +54,9 @@ def _log_of(part: str) -> str:
 
 @dataclasses.dataclass(frozen=True)
 class RacecarConfig(ProblemConfig):
-    """``tyres``: ``linear`` or ``magic_formula``. ``fit`` / ``validate``: ``putnam`` or
-    ``lvms``, whole or ``_first_half`` / ``_second_half`` (not overlapping). ``horizon_s``:
-    the prediction window (s). ``min_speed``: windows where ``vx`` stays at or above it (m/s).
-    ``substeps``: RK4 steps per 40 ms sample. ``steer_delay_s``: the logged steer angle's
-    known delay (s). ``objective``: ``ml_profiled``, ``eq3`` or ``ols`` (``ml`` needs a
-    stated noise level). ``data_dir``: a folder holding the logs (default: the installed data
-    distribution)."""
+    """``fit`` / ``validate``: a log, whole or ``_first_half`` / ``_second_half`` (not
+    overlapping); ``horizon_s`` (s), ``min_speed`` (m/s), ``substeps``, ``steer_delay_s`` (s),
+    ``objective`` (``ml`` needs a stated noise level), ``data_dir`` (see the module)."""
 
     tyres: Literal["linear", "magic_formula"] = "linear"
     fit: str = "putnam_first_half"
@@ -172,9 +148,8 @@ def rms(measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
     return np.sqrt(np.mean((measured - predicted)[:, 1:, :] ** 2, axis=(0, 1)))
 
 
-class RacecarProblem(Problem):
-    """The racecar's single-track model identified from one part of its logs, judged on
-    another (module docstring)."""
+class RacecarProblem(ChannelFit, Problem):
+    """The racecar's single-track model from one part of its logs, judged on another."""
 
     Config = RacecarConfig
     name = "racecar"
@@ -213,35 +188,9 @@ class RacecarProblem(Problem):
             out[ok] = windows.predict(X[ok].T, self.linear, self.config.substeps)
         return out
 
-    def _weighted(self, X: np.ndarray) -> np.ndarray:
-        """``measured - predicted`` over the fitted windows times the objective's weights,
-        ``(n, 2, W (H - 1))``."""
-        return (self.measured[None] - self._flat(self._predict(X, self.fitted))) * self.weights
-
-    def residuals(self, X: np.ndarray) -> np.ndarray:
-        """What a least-squares optimizer minimises (:func:`estimators.residuals_and_value`),
-        channel after channel, ``(n, 2 W (H - 1))``; inf rows where a prediction fails."""
-        return self.evaluate_with_residuals(X)[1]
-
-    def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
-        """``(measured_c - predicted_c) / ||measured_c||`` whatever the objective, channel after
-        channel, ``(n, 2 W (H - 1))`` (what intervals differentiate)."""
-        scale = np.linalg.norm(self.measured, axis=1)[None, :, None]
-        R = (self.measured[None] - self._flat(self._predict(X, self.fitted))) / scale
-        R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
-        return R.reshape(R.shape[0], -1)
-
-    def fisher_groups(self) -> np.ndarray:
-        return np.repeat(np.arange(2), self.measured.shape[1])
-
-    def residual_groups(self) -> np.ndarray:
-        return estimators.groups(self.config.objective, 2, self.measured.shape[1])
-
-    def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return estimators.residuals_and_value(self.config.objective, self._weighted(X))
-
-    def evaluate(self, X: np.ndarray) -> np.ndarray:
-        return self.evaluate_with_residuals(X)[0]
+    def computed(self, X: np.ndarray) -> np.ndarray:
+        """The predicted samples over the fitted windows, ``(n, 2, W (H - 1))``."""
+        return self._flat(self._predict(X, self.fitted))
 
     def _held_out_metrics(self, predicted: np.ndarray) -> dict[str, float]:
         w = self.held_out
@@ -251,8 +200,7 @@ class RacecarProblem(Problem):
         return {k: (v if np.isfinite(v) else float("inf")) for k, v in values.items()}
 
     def metrics(self, x: np.ndarray) -> dict[str, float]:
-        """Held out: ``val_rel_naive`` (the mean over ``vy`` and ``r`` of the model's rms
-        error over the naive predictor's), ``val_rms_r`` (rad/s), ``val_rms_vy`` (m/s)."""
+        """The held-out metrics (the module docstring)."""
         return self._held_out_metrics(self._predict(x, self.held_out)[0])
 
     def naive_objective(self) -> float:
@@ -262,8 +210,7 @@ class RacecarProblem(Problem):
                                       (self.measured[None] - naive) * self.weights)[0])
 
     def comparisons(self) -> dict[str, dict[str, Any]]:
-        """The naive predictor (no parameters): its held-out metrics, the point a model must
-        beat (its objective on the fitted windows in the note)."""
+        """The naive predictor's held-out metrics, the point a model must beat."""
         return {NAIVE: {"metrics": self._held_out_metrics(self.held_out.naive()),
                         "note": f"no model: each window's first logged state held; objective "
                                 f"on the fitted windows {self.naive_objective():.4g}"}}
@@ -272,8 +219,7 @@ class RacecarProblem(Problem):
         return dict(CHANNELS)
 
     def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        """The held-out windows one after another (time jumps between windows): logged and
-        predicted ``vy`` and ``r``."""
+        """Logged and predicted ``vy``, ``r`` over the held-out windows, one after another."""
         w = self.held_out
         pred = self._predict(x, w)[0]
         out = {"t": w.t.reshape(-1)}

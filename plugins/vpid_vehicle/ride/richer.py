@@ -1,21 +1,11 @@
-"""Records made by richer models than the fitted ones: the suite's model-error members.
+"""Records made by richer models than the fitted ones (``record_model``): a misfit no parameter
+vector removes, as on a measured record (how large: :mod:`.model_error`, docs/suite.md).
 
-A real vehicle is never the model fitted to it. These models make a member's record while the
-linear model of its family is fitted (``record_model`` of the ride configs), so the fit meets
-a misfit no parameter vector removes, as it would on a measured record:
-
-* ``bilinear_damper`` (quarter car): the suspension damper is stiffer in rebound (extension,
-  ``zs' - zu' > 0``) than in compression, ``F = cs (1 + a) v`` for ``v > 0`` and ``cs (1 - a) v``
-  otherwise, with the asymmetry ``a`` = :data:`DAMPER_ASYMMETRY` (rebound/compression 3:1, the
-  usual range of passenger-car dampers is 2:1 to 4:1). The truth's ``cs`` is the mean of the
-  two. Integrated by the classical Runge-Kutta method (RK4) at the record's fine step with the
-  road linear between samples (:func:`bilinear_quarter`).
-* ``seat`` (half car): a driver and seat of :data:`SEAT` ``mass_kg`` on a cushion
-  (``hz``, damping ratio ``zeta``) at ``x_m`` ahead of the centre of gravity, a fifth degree
-  of freedom the fitted half car lacks; linear, so the record is the exact first-order-hold
-  solution as for every ride record (:func:`seated_half`).
-
-How large the model error is against the noise: :mod:`.model_error` (docs/suite.md).
+* ``bilinear_damper`` (quarter car): ``F = cs (1 + a) v`` in rebound (``v = zs' - zu' > 0``),
+  ``cs (1 - a) v`` otherwise, ``a`` = :data:`DAMPER_ASYMMETRY` (3:1; passenger cars 2:1 to
+  4:1), by RK4 at the record's fine step (:func:`bilinear_quarter`);
+* ``seat`` (half car): a driver and seat (:data:`SEAT`) on a cushion, a fifth degree of freedom
+  the fitted half car lacks, by the exact first-order hold (:func:`seated_half`).
 """
 
 from __future__ import annotations
@@ -37,10 +27,8 @@ SEAT = {"mass_kg": 80.0, "hz": 4.5, "zeta": 0.3, "x_m": 0.3}
 
 def seated_half(system: linear.LinearSystem, seat: dict[str, float] = SEAT
                 ) -> linear.LinearSystem:
-    """The half cars of ``system`` (degrees of freedom ``[x, theta, x1, x2]``, body points
-    ``z = x - s theta`` at ``s`` ahead of the centre of gravity) with a seat mass on a
-    spring and damper at ``seat["x_m"]`` ahead: a fifth degree of freedom ``zs``, with the
-    cushion's elongation ``zs - (x - s theta)``; no input acts on it and no output reads it."""
+    """The half cars of ``system`` with a seat mass ``zs`` on a cushion at ``seat["x_m"]``
+    ahead of the centre of gravity (elongation ``zs - (x - s theta)``; no input or output)."""
     n, d = system.M.shape[0], system.dof
     m = seat["mass_kg"]
     w = 2 * math.pi * seat["hz"]
@@ -140,9 +128,8 @@ QUARTER_CHANNELS = {"zs''": 0, "zu''": 1, "zs": 2, "zu": 3, "zs-zu": 4}
 
 def bilinear_quarter(x: np.ndarray, kt: float, ct: float, u: np.ndarray, dt: float,
                      asymmetry: float = DAMPER_ASYMMETRY) -> np.ndarray:
-    """The quarter car ``x = [ms, mu, ks, cs]`` with the bilinear damper, from rest, driven by
-    ``u = [h, h']`` ``(N, 2)`` sampled every ``dt`` s (linear between samples): ``(N, 5)``
-    columns ``zs'', zu'', zs, zu, zs - zu`` (:data:`QUARTER_CHANNELS`), by RK4 at ``dt``."""
+    """The quarter car ``[ms, mu, ks, cs]`` with the bilinear damper from rest, driven by
+    ``[h, h']`` every ``dt`` s: ``(N, 5)`` (:data:`QUARTER_CHANNELS`) by RK4 at ``dt``."""
     y = np.empty((u.shape[0], 5))
     _bilinear_rk4(np.ascontiguousarray(x, dtype=float), float(kt), float(ct),
                   float(asymmetry), np.ascontiguousarray(u, dtype=float), float(dt), y)

@@ -1,22 +1,12 @@
-"""Road profiles h(x) (m) over distance x (m), and their time histories at a speed.
+"""Road profiles h(x) (m) over distance x (m): :func:`bump` (the paper's, 0.04 m x 0.10 m),
+:func:`step` (the University of Michigan quarter bus's 0.10 m, its edge rounded over a tyre's
+0.15 m contact: a sharp step would make the wheel's acceleration a Dirac pulse), :func:`hump`
+(one raised-cosine period, UK TRL geometry: 3.7 m, 0.10 m), :func:`iso8608`.
 
-* :func:`bump`: a rectangular bump (the paper's: 0.04 m high, 0.10 m long);
-* :func:`step`: a step up (the University of Michigan quarter-bus case: 0.10 m), its edge
-  rounded over a tyre's contact length (0.15 m, a half raised cosine): a tyre envelops a sharp
-  edge, and with tyre damping a sharp step would make the wheel's acceleration a Dirac pulse
-  that no sampled record (nor a model fitted at ``dt``) can hold;
-* :func:`hump`: a speed hump, one raised-cosine period (UK TRL geometry: 3.7 m long, 0.10 m
-  high): ``h = H/2 (1 - cos(2 pi s / L))`` for ``0 <= s <= L``;
-* :func:`iso8608`: a random road of an ISO 8608 class, a sum of sinusoids with random phases.
-
-ISO 8608 values used here (a public generator uses the class *upper* limits instead, and one
-is off by 1600x: these are the class geometric means). Displacement PSD
-``Gd(n) = Gd(n0) (n / n0)^-w`` with ``n0 = 0.1`` cycles/m, ``w = 2``, ``Gd(n0)`` of classes
-A..H = 16, 64, 256, 1024, 4096, 16384, 65536, 262144 x 1e-6 m^3, over the band
-0.011..2.83 cycles/m (wavelengths about 0.35..91 m). The profile is
-``h(x) = sum_i sqrt(2 Gd(n_i) dn) cos(2 pi n_i x + phi_i)`` on an even grid of ``n_i`` with
-spacing ``dn``, ``phi_i ~ U(0, 2 pi)`` from the given generator: its one-sided PSD is
-``Gd(n)`` on the band (tested against the formula).
+ISO 8608 at the class geometric means (a public generator uses the upper limits, and one is
+off by 1600x): ``Gd(n) = Gd(n0) (n / n0)^-2``, ``n0 = 0.1`` cycles/m, ``Gd(n0)`` of A..H =
+16 x 4^i x 1e-6 m^3, over 0.011..2.83 cycles/m; ``h(x) = sum_i sqrt(2 Gd(n_i) dn) cos(2 pi
+n_i x + phi_i)``, ``phi_i ~ U(0, 2 pi)``: one-sided PSD ``Gd(n)`` on the band (tested).
 """
 
 from __future__ import annotations
@@ -62,10 +52,9 @@ ISO8608_DX = 0.01
 
 def iso8608(x: np.ndarray, road_class: str, rng: np.random.Generator,
             waves: int = 2000, taper_m: float = 5.0) -> np.ndarray:
-    """A random ISO 8608 road of ``road_class`` (A..H) at the distances ``x`` (m): ``waves``
-    sinusoids on the band, computed every ``ISO8608_DX`` m and linear in between (so a fine
-    record and a coarse fit see one road); the first ``taper_m`` metres are faded in with a
-    half cosine so the car starts at rest on a level road."""
+    """A random ISO 8608 road of ``road_class`` at ``x`` (m): ``waves`` sinusoids every
+    ``ISO8608_DX`` m, linear between (a fine record and a coarse fit see one road), faded in
+    over ``taper_m`` (the car starts at rest on a level road)."""
     lo, hi = ISO8608_BAND
     dn = (hi - lo) / waves
     n = lo + dn * (np.arange(waves) + 0.5)

@@ -1,25 +1,20 @@
-"""What the single-track models share: their sensor sets and the steering manoeuvres.
-
-Both single-track models (:mod:`.lateral`, linear tyres; :mod:`.magic`, Magic Formula tyres)
-read them from here, so the two modules import in one direction only: :mod:`.lateral` uses
-:mod:`.magic` (its record with model error is made by the Magic Formula model), never the
-other way round.
-
-**Manoeuvres** (``manoeuvre``): ``step`` (the steer ramps to ``steer_deg`` over 0.2 s from
-0.5 s on and holds), ``sine`` (``steer_deg`` amplitude at ``sine_hz`` from 0.5 s on); the steer
-angle is at the road wheels, in rad. A user's record may carry the steer angle and the speed
-instead (:class:`SteeredRecord`).
+"""What the two single-track models share (so :mod:`.lateral` imports :mod:`.magic`, never
+the reverse): the sensor sets and the manoeuvres, ``step`` (to ``steer_deg`` over 0.2 s from
+0.5 s, held) or ``sine`` (``steer_deg`` at ``sine_hz`` from 0.5 s), at the road wheels; or a
+user's record's steer angle and speed (:class:`SteeredRecord`).
 """
 
 from __future__ import annotations
 
-from typing import Any
+import dataclasses
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 
 from vpid_bench import ConfigError
 
 from ..record_file import Column, Record, Sampler
+from .problem import SuiteConfig, _check
 
 #: The measured channels of each sensor set, with their units.
 SENSORS: dict[str, tuple[tuple[str, str], ...]] = {
@@ -27,6 +22,28 @@ SENSORS: dict[str, tuple[tuple[str, str], ...]] = {
     "yaw_ay": (("r", "rad/s"), ("ay", "m/s²")),
     "yaw_ay_beta": (("r", "rad/s"), ("ay", "m/s²"), ("beta", "rad")),
 }
+
+
+@dataclasses.dataclass(frozen=True)
+class SteeredConfig(SuiteConfig):
+    """The measured channels and the manoeuvre (``steer_deg`` at the road wheels, at
+    ``speed_kmh``); the other keys: :class:`.problem.SuiteConfig`."""
+
+    sensors: Literal["yaw", "yaw_ay", "yaw_ay_beta"] = "yaw_ay"
+    manoeuvre: Literal["step", "sine"] = "sine"
+    steer_deg: float = 2.0
+    sine_hz: float = 0.5
+    speed_kmh: float = 72.0
+    #: The largest steer (degrees) and why.
+    MAX_STEER: ClassVar[tuple[float, str]] = (10.0, " (linear tyres: small slip angles)")
+
+    def _check_own(self) -> None:
+        top, why = self.MAX_STEER
+        _check([
+            ("steer_deg", 0 < self.steer_deg <= top, f"an angle in (0, {top:g}] degrees{why}"),
+            ("sine_hz", 0 < self.sine_hz <= 5, "a frequency in (0, 5] Hz"),
+            ("speed_kmh", 10 <= self.speed_kmh <= 200, "a speed in [10, 200] km/h"),
+        ], self)
 
 
 def steer_input(config: Any, dt: float) -> np.ndarray:
@@ -47,9 +64,8 @@ SPEED_TOLERANCE = 0.02
 
 
 class SteeredRecord:
-    """A user's record for a single-track model: its inputs, when it carries them, are the
-    steer angle at the road wheels ``delta`` (rad) and the forward speed ``vx`` (m/s); the
-    configured manoeuvre and ``speed_kmh`` stand for them otherwise."""
+    """A single-track model's record inputs: ``delta`` at the road wheels (rad) and ``vx``
+    (m/s), else the configured manoeuvre and ``speed_kmh``."""
 
     vx: float
 
@@ -60,8 +76,7 @@ class SteeredRecord:
         return None  # the configured manoeuvre is deterministic
 
     def check_record(self, record: Record) -> None:
-        """Refuse a record whose ``vx`` strays more than :data:`SPEED_TOLERANCE` from its
-        mean (the models hold the speed constant), naming the first such row."""
+        """Refuse a ``vx`` straying more than :data:`SPEED_TOLERANCE` from its mean."""
         if record.inputs is None:
             return
         vx = record.inputs[:, 1]
@@ -75,7 +90,6 @@ class SteeredRecord:
                               f"speed constant); data row {k + 1} has {vx[k]:.4g} m/s")
 
     def inputs_from_record(self, record: Record, sampler: Sampler) -> np.ndarray:
-        """The steer angle interpolated linearly onto the model's steps ``(steps, 1)``; the
-        model's speed becomes the record's mean ``vx`` (checked by :meth:`check_record`)."""
+        """The steer angle onto the model's steps; the speed becomes the record's mean ``vx``."""
         self.vx = float(np.mean(record.inputs[:, 1]))
         return sampler.onto_steps(record.t, record.inputs[:, :1])

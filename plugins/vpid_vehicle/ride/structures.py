@@ -1,29 +1,17 @@
-"""Richer suspension structures of the ride models, nested with the linear one:
-``problem.spring=linear|cubic`` and ``problem.damper=linear|bilinear`` (issue 43, item 1).
+"""Richer suspension structures nested with the linear one (issue 43, item 1; docs/suite.md):
+per axle, on each element's elongation ``e = J q`` (body point minus wheel, m):
 
-Each suspension element (a quarter car's one, a half car's front and rear, a full car's four
-corners) has an elongation ``e = J q`` (the body point above the wheel minus the wheel, m) and
-its rate ``e'``. The linear model's element force is ``k e + c e'``; the structures add, per
-axle (the two corners of a full-car axle share their values):
+* ``spring=cubic``: ``k e + k3 e^3``, parameter ``<k>_cubic`` (N/m³) in ``[0, 2] x``
+  :data:`CUBIC_PER_K` ``x k`` (``k3 = 0``: the linear spring). :data:`CUBIC_PER_K` = 100 m⁻²
+  (25 % of the linear force at 50 mm: a stated choice for a progressive or bump-stop-assisted
+  spring; Dixon, *The Shock Absorber Handbook*, 2nd ed., 2007, ch. 1; Reimpell et al., *The
+  Automotive Chassis*, 2001, sec. 5.3);
+* ``damper=bilinear``: ``<c>_bump`` (``e' < 0``) and ``<c>_rebound`` (N s/m) for ``<c>``, in
+  :data:`BUMP_BOX` and :data:`REBOUND_BOX` ``x c``: the symmetric damper and rebound/bump
+  ratios 1:1 to 4:1 and beyond (Dixon 2007, ch. 5: 2:1 to 4:1 usual).
 
-* ``spring=cubic``: a progressive spring ``k e + k3 e^3``; parameter ``<k>_cubic`` (N/m³),
-  box ``[0, 2] x`` :data:`CUBIC_PER_K` ``x k`` of the published set (``k3 = 0`` is the linear
-  spring, so the linear structure lies inside the cubic one's box). The reference value
-  :data:`CUBIC_PER_K` = 100 m⁻² makes the cubic term 25 % of the linear force at 50 mm of
-  travel: a stated choice for a progressive coil or a bump-stop-assisted spring, whose rate
-  rises by tens of percent over the working travel (Dixon, *The Shock Absorber Handbook*,
-  2nd ed., 2007, ch. 1; Reimpell et al., *The Automotive Chassis*, 2001, sec. 5.3);
-* ``damper=bilinear``: bump (compression, ``e' < 0``) and rebound (extension, ``e' > 0``)
-  coefficients ``<c>_bump`` and ``<c>_rebound`` (N s/m) in place of ``<c>``; boxes
-  :data:`BUMP_BOX` and :data:`REBOUND_BOX` ``x c`` of the published set, which hold the
-  symmetric damper (``bump = rebound``) and passenger-car rebound/compression ratios from 1:1
-  to 4:1 and beyond (Dixon 2007, ch. 5: 2:1 to 4:1 usual; :mod:`.richer`'s record damper is
-  3:1).
-
-Every other parameter keeps its name, unit and box. The linear structure is the model itself
-(its Newmark kernel, unchanged); a richer structure is simulated by the classical Runge-Kutta
-method (RK4) at the fitted model's ``dt`` with the road linear between samples, and its
-record at ``dt / record_substeps`` (so the record is still not made at the fitted step).
+The linear structure is the model itself (its kernel); a richer one runs RK4 at ``dt``, the
+road linear between samples, its record at ``dt / record_substeps``.
 """
 
 from __future__ import annotations
@@ -47,8 +35,9 @@ BUMP_BOX = (0.25, 1.5)
 REBOUND_BOX = (0.5, 3.0)
 
 
-class StructuredModel(RideModel):
-    """A ride model with a cubic spring and/or a bilinear damper per axle (the module)."""
+class StructuredModel:
+    """A ride model with a cubic spring and/or a bilinear damper per axle (the module); its
+    input side (wheels, record columns, inputs) is the base model's."""
 
     #: What the problem's ``describe()`` names as the fitted model's solver.
     fitted_solver = "RK4 (the suspension structure's nonlinear forces)"
@@ -75,8 +64,12 @@ class StructuredModel(RideModel):
         self.names = tuple(names)
         self.units = tuple(units)
         self.sets = {key: self._set(published) for key, published in base.sets.items()}
-        self.sensors = base.sensors
-        self.wheel_names = base.wheel_names
+
+    def __getattr__(self, name: str) -> Any:
+        base = self.__dict__.get("base")
+        if base is None or name.startswith("__"):  # copy and pickle probe before __init__
+            raise AttributeError(name)
+        return getattr(base, name)
 
     def _set(self, published: dict[str, float]) -> dict[str, float]:
         """A published set in this structure: the symmetric damper, the reference cubic."""
@@ -88,30 +81,10 @@ class StructuredModel(RideModel):
                 out[f"{c}_bump"] = out[f"{c}_rebound"] = out.pop(c)
         return out
 
-    # --- the base model's input side ----------------------------------------------------
-    def wheels(self, known: dict[str, float], speed: float) -> Any:
-        return self.base.wheels(known, speed)
-
-    def record_columns(self) -> Any:
-        return self.base.record_columns()
-
-    def needs_record_inputs(self, config: Any) -> str | None:
-        return self.base.needs_record_inputs(config)
-
-    def check_record(self, record: Any) -> None:
-        self.base.check_record(record)
-
-    def inputs(self, config: Any, known: dict[str, float], dt: float,
-               rng: np.random.Generator) -> np.ndarray:
-        return self.base.inputs(config, known, dt, rng)
-
-    def inputs_from_record(self, record: Any, sampler: Any) -> np.ndarray:
-        return self.base.inputs_from_record(record, sampler)
-
     # --- parameters -----------------------------------------------------------------------
     def split(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The linear model's rows (the damper at its bump value), each axle's cubic
-        coefficient ``(n, axles)`` (N/m³) and rebound minus bump ``(n, axles)`` (N s/m)."""
+        """The linear rows (the damper at its bump value), each axle's cubic coefficient
+        (N/m³) and rebound minus bump (N s/m), ``(n, axles)`` each."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         col = {name: X[:, i] for i, name in enumerate(self.names)}
         lin = np.stack([col.get(name, col.get(f"{name}_bump")) for name in self.base.names],
@@ -126,8 +99,7 @@ class StructuredModel(RideModel):
         return lin, k3, dc
 
     def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
-        """The linear rows a vehicle, every cubic coefficient finite and ``>= 0``, every
-        damper coefficient ``> 0``."""
+        """The linear rows a vehicle, cubic coefficients ``>= 0``, damper coefficients ``> 0``."""
         lin, k3, dc = self.split(X)
         return (self.base.physical(lin, known) & np.all(np.isfinite(k3) & (k3 >= 0), axis=1)
                 & np.all(np.isfinite(dc) & (lin[:, [self.base.names.index(c) for _, c in
@@ -160,8 +132,7 @@ class StructuredModel(RideModel):
 
     def simulate(self, X: np.ndarray, known: dict[str, float], sensors: str, u: np.ndarray,
                  dt: float, solver: str) -> np.ndarray:
-        """The ``sensors`` channels ``(n, N, p)`` by RK4 at ``dt`` from rest (either
-        ``solver``: the record passes its fine step, the fitted model its ``dt``)."""
+        """The ``sensors`` channels ``(n, N, p)`` by RK4 at ``dt`` from rest (any ``solver``)."""
         lin, k3, dc = self.split(X)
         return simulate_structured(self.base.system(lin, known, sensors),
                                    self.suspension.elongations(lin, known),
@@ -170,8 +141,7 @@ class StructuredModel(RideModel):
 
 
 def structured(base: RideModel, config: Any) -> RideModel:
-    """``base`` itself for the linear structure (its own kernel), else its
-    :class:`StructuredModel` for ``config.spring`` and ``config.damper``."""
+    """``base`` for the linear structure, else its :class:`StructuredModel`."""
     spring = getattr(config, "spring", "linear")
     damper = getattr(config, "damper", "linear")
     if spring == "linear" and damper == "linear":
@@ -189,9 +159,8 @@ def _full(a: np.ndarray | None, n: int, shape: tuple[int, ...]) -> np.ndarray:
 def simulate_structured(system: linear.LinearSystem, J: np.ndarray, axle_of: np.ndarray,
                         k3: np.ndarray, dc: np.ndarray, u: np.ndarray, dt: float
                         ) -> np.ndarray:
-    """``M q'' + C q' + K q + J^T g(J q, J q') = F u`` with ``g = k3 e^3 + dc max(e', 0)``
-    per element (its axle's values), from rest, by RK4 at ``dt`` with ``u`` linear between
-    samples; outputs ``y = Pa q'' + Pv q' + Pq q + Pu u``, ``(n, N, p)``."""
+    """``M q'' + C q' + K q + J^T g(J q, J q') = F u``, ``g = k3 e^3 + dc max(e', 0)`` per
+    element, from rest by RK4 at ``dt`` (``u`` linear between samples): ``y`` ``(n, N, p)``."""
     n, d = system.M.shape[0], system.dof
     r, p = system.F.shape[-1], system.Pq.shape[-2]
     Minv = np.linalg.inv(system.M)

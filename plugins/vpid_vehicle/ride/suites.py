@@ -1,24 +1,10 @@
-"""The named suites of the vehicle plugin: each member is a problem of its own (a ride or
-lateral problem with member-specific defaults), registered under a stable name and listing the
-suite it belongs to, so ``vpid-bench -m suite=smoke optimizer=...`` sweeps them.
-
-* ``smoke``: every family once, short records and a small protocol (``iterations=10``), for a
-  first look in minutes;
-* ``structures``: one member per ride family fitting a richer suspension structure
-  (:mod:`.structures`: the bilinear damper) to the record it made, so the
-  richer structure's recovery of the truth can be set beside the linear model's misfit
-  (``vpid1_q_golden_bilinear``); not archived;
-* ``vpid1``: the suite proper, 17 problems over the four families (quarter, half and full car,
-  single-track lateral), dimensions 4 to 9, three road inputs and two manoeuvres, every sensor
-  set, three problems whose record comes from a richer model than the fitted one (a bilinear
-  damper, a seat mass, Magic Formula tyres: model error, :mod:`.richer` and
-  :mod:`.model_error`) and one with several basins (the Magic Formula model). Its protocol
-  is the archive's: a run's default budget is 1,000·D evaluations (``iterations = 50 D - 1``
-  at ``ps`` 20, so the paper's methods also end there), so ``vpid-bench -m suite=vpid1
-  optimizer=<yours>`` runs what ``archive/vpid1`` holds and is ranked among it.
-
-A member's keys can still be changed on the command line; its defaults are what makes it the
-member (docs/suite.md lists them).
+"""The named suites (docs/suite.md): each member a problem of its own (a ride or lateral
+problem with its defaults, which the command line may still change), registered under a
+stable name with its suites, so ``vpid-bench -m suite=smoke optimizer=...`` sweeps them.
+``smoke``: every family once, short; ``structures``: richer structures fitted to the records
+they made (not archived); ``vpid1``: the suite proper, at the archive's protocol (a default
+budget of 1,000·D evaluations), so ``suite=vpid1 optimizer=<yours>`` is ranked among
+``archive/vpid1``.
 """
 
 from __future__ import annotations
@@ -40,9 +26,7 @@ VPID1_BUDGET_PER_DIM = 1000
 
 
 def protocol(base: type, suites: tuple[str, ...]) -> dict[str, Any]:
-    """The protocol defaults a suite gives each member (a member's own defaults come after):
-    ``smoke`` a short look (``iterations=10``, 2 s records), ``vpid1`` a default budget of
-    :data:`VPID1_BUDGET_PER_DIM` evaluations per parameter at ``ps`` 20."""
+    """The protocol defaults a suite gives each member (its own come after)."""
     if "smoke" in suites:
         return dict(SMOKE)
     if "vpid1" in suites:
@@ -53,8 +37,8 @@ def protocol(base: type, suites: tuple[str, ...]) -> dict[str, Any]:
 
 
 def member(base: type, name: str, suites: tuple[str, ...], **defaults: Any) -> type:
-    """A subclass of the problem ``base`` named ``name`` whose Config defaults are its suites'
-    :func:`protocol` and then ``defaults``, listed in ``suites``."""
+    """A subclass of ``base`` named ``name`` in ``suites``, its suites' :func:`protocol` and
+    ``defaults`` its Config's defaults."""
     defaults = {**protocol(base, suites), **defaults}
     hints = typing.get_type_hints(base.Config)
     unknown = set(defaults) - set(hints)

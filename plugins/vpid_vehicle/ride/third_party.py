@@ -1,13 +1,7 @@
-"""Third-party records of :mod:`.bayesrace` and :mod:`.racecar`: where they are, their
-checksums, and readers that check what they read.
-
-The files come from the repository linklab-uva/deep-dynamics at commit 88c85653 (GPL-3.0).
-vpid-bench (MIT) does not contain them: they are a separately licensed data distribution,
-``records-gpl/`` of the repository (``vpid-records-gpl``, installed by ``make install``), or a
-folder the user names with ``problem.data_dir`` holding the same files under the same names
-(for example the repository's ``deep_dynamics/data/``). Either way each file is checked against
-its SHA-256 below before it is read, and a missing or different file is one error naming the
-file and the checksum expected. Nothing is downloaded.
+"""The third-party records of :mod:`.bayesrace` and :mod:`.racecar` (linklab-uva/deep-dynamics
+at 88c85653, GPL-3.0): not in vpid-bench (MIT) but in the data distribution ``records-gpl/``
+(``make install``) or a folder named by ``problem.data_dir``; each checked against its
+SHA-256 before it is read (one error line otherwise; nothing is downloaded).
 """
 
 from __future__ import annotations
@@ -48,9 +42,8 @@ def _digest(path: str, size: int, mtime_ns: int) -> str:
 
 
 def verified(name: str, data_dir: str | None) -> Path:
-    """The path of file ``name`` (a key of :data:`SHA256`) in ``data_dir`` or else the installed
-    distribution, after checking its SHA-256 (once per file state); :class:`ConfigError`
-    naming ``problem.data_dir``, the file and the checksum otherwise."""
+    """The path of ``name`` in ``data_dir`` or the installed distribution, its SHA-256 checked
+    (once per file state); else a :class:`ConfigError` naming the file and the checksum."""
     expected = SHA256[name]
     folder = Path(data_dir).expanduser() if data_dir else installed_folder()
     if folder is None:
@@ -71,10 +64,8 @@ def verified(name: str, data_dir: str | None) -> Path:
 
 @dataclasses.dataclass(frozen=True)
 class SimulatorRecord:
-    """A Bayesrace record: ``t`` (s, ``N``), the states ``(3, N)`` forward velocity, lateral
-    velocity (m/s) and yaw rate (rad/s) as the simulator's explicit Euler made them, and the
-    inputs held over each interval, drive command (1) and steer angle (rad), each
-    ``(N - 1,)``."""
+    """A Bayesrace record: ``t`` (s), the states ``vx, vy`` (m/s), ``r`` (rad/s) ``(3, N)`` as
+    the simulator's Euler made them, the drive (1) and steer (rad) held, ``(N - 1,)`` each."""
 
     name: str
     t: np.ndarray
@@ -84,9 +75,7 @@ class SimulatorRecord:
 
 
 def read_simulator_record(name: str, data_dir: str | None) -> SimulatorRecord:
-    """Read a Bayesrace ``.npz`` (no pickled objects are loaded). Its ``dstates`` rows 3-5
-    are the Euler trajectory (vx, vy, yaw rate) from the first state of ``states``; column 0
-    of ``dstates`` holds that first state's velocities."""
+    """Read a Bayesrace ``.npz`` (no pickles): ``dstates`` rows 3-5, the Euler trajectory."""
     path = verified(name, data_dir)
     with np.load(path, allow_pickle=False) as data:
         t = np.asarray(data["time"], dtype=float)
@@ -102,8 +91,8 @@ def read_simulator_record(name: str, data_dir: str | None) -> SimulatorRecord:
 
 @dataclasses.dataclass(frozen=True)
 class RacecarLog:
-    """A racecar log at 25 Hz: ``t`` (s from the first row), forward and lateral velocity
-    (m/s), yaw rate (rad/s) and steer angle at the road wheels (rad), each ``(N,)``."""
+    """A racecar log at 25 Hz: ``t`` (s from the first row), ``vx``, ``vy`` (m/s), ``r``
+    (rad/s), the steer angle at the road wheels ``delta`` (rad)."""
 
     name: str
     t: np.ndarray

@@ -1,25 +1,12 @@
-"""Arc tangent and sine that the compiler can run 4 candidates at once (numba; inlined).
+"""Arc tangent and sine the compiler can run 4 candidates at once (numba; inlined).
 
-Why: the Magic Formula model (:mod:`.magic`) evaluates 16 arc tangents and 8 sines per RK4
-step and candidate, and the C library's ``atan`` and ``sin`` are opaque calls the compiler
-cannot vectorise: they were nearly all of that model's time (about 15 ns each here). Numba
-vectorises them only through Intel's SVML, which needs an SVML-patched LLVM that the
-llvmlite wheels on PyPI do not ship; numpy's float64 ``arctan`` and ``sin`` are scalar on
-AVX2 too. Written here as straight-line code (no branches, no calls), they vectorise.
-
-The algorithms are those of the Cephes library (S. L. Moshier, *Methods and Programs for
-Mathematical Functions*, 1989), ``atan`` and ``sin``: a range reduction and a rational
-(``atan``) or polynomial (``sin``) approximation with Cephes' published coefficients, the
-branches turned into selects.
-
-Accuracy (``tests/vehicle/test_vecmath.py``, against the C library over millions of points):
-``atan`` within 1 unit in the last place everywhere; ``sin`` within 2 units for
-``|x| < 2**30`` (the reduction by pi/4 in three parts is exact there; the Magic Formula's
-arguments stay below pi). Signed zeros, infinities and NaN behave as in the C library.
-
-Inlined into :mod:`.kernel`, whose compiled code numba caches keyed on ``kernel.py`` alone:
-after editing this file, touch ``kernel.py`` (or clear its ``__pycache__``) so the kernel
-is compiled again.
+Why: the Magic Formula model's 16 arc tangents and 8 sines per RK4 step were nearly all its
+time as the C library's opaque calls (numba vectorises them only through SVML, which the
+llvmlite wheels do not ship). Straight-line Cephes (S. L. Moshier, *Methods and Programs for
+Mathematical Functions*, 1989): range reduction, Cephes' coefficients, selects for branches.
+Accuracy (``tests/vehicle/test_vecmath.py``): ``atan`` within 1 ulp; ``sin`` within 2 ulp for
+``|x| < 2**30``; signed zeros, infinities, NaN as the C library. numba caches
+:mod:`.kernel` keyed on ``kernel.py`` alone: after editing this file, touch ``kernel.py``.
 """
 
 from __future__ import annotations
