@@ -47,7 +47,7 @@ POLISH_NEAR = 1.01
 SAME_POINT = 1e-3
 #: scipy's xtol/ftol/gtol for each weighted least-squares step. 1e-10 makes a polish 2.2x
 #: cheaper than 1e-15 and moves f* by at most 4.3e-13 (relative) from DE1 run bests and the
-#: truths of 30 instances of the default problem (``benchmarks/bench_polish_tolerance.py``):
+#: truths of 30 instances of the default problem (``benchmarks/bench_optima.py polish``):
 #: far below the relative gap of 1e-6 at which a run counts as having reached the optimum.
 INNER_TOL = 1e-10
 
