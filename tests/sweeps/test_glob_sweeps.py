@@ -9,7 +9,8 @@ from sweep_helpers import planned_job_dirs, run_cli
 
 from vpid_bench.plugins import Registry
 
-TINY = ["problem.iterations=1", "runs=1", "progress=false", "report=false"]
+# the cheap problem: what is tested is the optimizers' folders, the same on any problem
+TINY = ["problem=functions", "problem.iterations=1", "runs=1", "progress=false", "report=false"]
 
 
 @pytest.mark.parametrize("pattern, expect", [
@@ -47,8 +48,9 @@ def test_the_plan_renders_values_as_hydra_does(tmp_path):
     """A float Hydra renders otherwise (0.000001 -> 1e-06) and a key given twice (the last
     wins, in the first's place): the planned folders are the ones the jobs write, so no empty
     folder is left and reported as a failed job."""
-    args = ["-m", "optimizer=random,de1", "runs=2", "runs=1", "run_timeout_s=0.000001",
-            "problem.iterations=1", "progress=false", "report=false", "hydra.sweep.dir=sweep"]
+    args = ["-m", "problem=functions", "optimizer=random,de1", "runs=2", "runs=1",
+            "run_timeout_s=0.000001", "problem.iterations=1", "progress=false", "report=false",
+            "hydra.sweep.dir=sweep"]
     planned = planned_job_dirs([*args[:-1], f"hydra.sweep.dir={tmp_path / 'sweep'}"])
     out = run_cli(args, tmp_path)
     assert "Traceback" not in out.stderr and "job.json not written" not in out.stderr
