@@ -14,7 +14,7 @@ import argparse
 import statistics
 import time
 
-from vpid_bench.report.archive import load_all
+from vpid_bench.store.archive_records import load_all
 
 
 def timed(problem: str, optima_only: bool, repeat: int) -> tuple[float, int, int]:

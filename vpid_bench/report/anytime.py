@@ -69,7 +69,7 @@ def hit_times(evaluations: Sequence[float], gaps: Sequence[float],
 def batch_numbers(trace: Mapping[str, Any], n: int) -> list[float]:
     """The batch number (1, 2, ...) of each of the ``n`` trace entries: the trace's own
     ``batch`` list where an archive cut the trace to its improvements
-    (:func:`.pack.compact_trace`), else one entry per batch."""
+    (:func:`vpid_bench.store.archive_pack.compact_trace`), else one entry per batch."""
     batch = trace.get("batch")
     if isinstance(batch, list) and len(batch) == n:
         return [float(b) for b in batch]

@@ -46,6 +46,8 @@ from typing import Any
 
 from ..fileio import WholeFolder, write_refused
 from ..progress import Stages
+from ..store import csv_table, ioh
+from ..store.paths import inside, slug
 from . import answer, anytime, body, first_screen, outline, render, tables
 from .compute import ReportData, compute
 from .forked import run_forked
@@ -53,7 +55,6 @@ from .load import LoadedRecords, NoRecordsError
 from .model import ReportModel, SuiteScores
 from .outline import full_report_command
 from .plugin_sections import plugin_sections
-from .safe import inside, slug
 from .sections import HeadlineColumn
 
 __all__ = ["NoRecordsError", "Report", "build_report", "full_report_command"]
@@ -94,7 +95,7 @@ class Report:
 
 #: What a report folder holds at its top, besides its pages (``*.html``), and the outcome a
 #: sweep writes beside them (``status.json``).
-REPORT_ENTRIES = frozenset({"report.md", "runs.csv", "tables", "figures", "ioh", "assets",
+REPORT_ENTRIES = frozenset({"report.md", "runs.csv", "tables", "figures", ioh.FOLDER, "assets",
                             "status.json"})
 
 
@@ -195,14 +196,13 @@ def _assemble(data: ReportData, names: _Names, registry: Any,
     model = ReportModel(data, first_screen.results(data), out_dir)
     if not data.short:
         from .core_figures import draw_all
-        from .ioh_export import export_ioh
 
         if registry is None:
             from ..plugins import Registry
 
             registry = Registry()
         model.figs = draw_all(data, names.file, progress)
-        written += export_ioh(out_dir / "ioh", data.loaded.records, data.rows, out_dir)
+        written += ioh.export_ioh(out_dir / ioh.FOLDER, data.loaded.records, data.rows, out_dir)
         model.suite, more = _suite_scores(data, registry, names)
         written += more
     model.sections, model.extra, model.section_errors = plugin_sections(
@@ -249,7 +249,7 @@ def _render(model: ReportModel, names: _Names) -> tuple[Path, list[Path]]:
 def _table_files(path: Path, headers: Sequence[str], rows: Sequence[Sequence[Any]]
                  ) -> list[Path]:
     """``path`` (CSV, full precision) and its ``.tex`` (booktabs)."""
-    render.write_csv(path, headers, rows)
+    csv_table.write_csv(path, headers, rows)
     tex = path.with_suffix(".tex")
     tex.write_text(render.latex(headers, rows) + "\n", encoding="utf-8")
     return [path, tex]
@@ -283,7 +283,7 @@ def _write_tables(data: ReportData, names: _Names) -> list[Path]:
     columns: list[str] = []
     for r in data.rows:
         columns += [k for k in r if k not in columns]
-    written = [render.write_csv(names.claim(names.root / "runs.csv"), columns,
+    written = [csv_table.write_csv(names.claim(names.root / "runs.csv"), columns,
                                 [[r.get(k) for k in columns] for r in data.rows])]
     tables = _Tables(names)
     t = data.tests

@@ -185,7 +185,8 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
 def _load(paths: Sequence[Path]) -> tuple[LoadedRecords, list[Any]]:
     """The records below ``paths``; an archive folder among them (``archive/smoke``) gives
     its archived runs and instance optima, so a report of the archive alone needs no run."""
-    from .archive import ArchiveError, is_archive, read_archive
+    from ..store.archive import ArchiveError, is_archive
+    from ..store.archive_records import read_archive
 
     folders = [p for p in paths if is_archive(p)]
     rest = [p for p in paths if p not in folders]
@@ -209,7 +210,8 @@ def _load(paths: Sequence[Path]) -> tuple[LoadedRecords, list[Any]]:
 def _add_archive(loaded: LoadedRecords, archive: bool | Path) -> tuple[list[Any], list[str]]:
     """Add the archived runs that stand beside ``loaded`` to it (in place); return their
     instance optima and the archive's one-line notes."""
-    from .archive import load_all, merge
+    from ..store.archive_records import load_all
+    from .archive import merge
 
     # only runs of one's own stand beside archived ones (an archive given as a folder to
     # report is complete in itself: :func:`.archive.merge` adds nothing to its runs)

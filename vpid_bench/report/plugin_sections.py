@@ -12,8 +12,8 @@ from pathlib import Path
 from typing import Any
 
 from ..fileio import write_refused
+from ..store.paths import UnsafePathError, inside
 from .model import PlacedSection
-from .safe import UnsafePathError, inside
 from .sections import Contribution, HeadlineColumn, ReportContext, Section
 
 log = logging.getLogger(__name__)
@@ -74,7 +74,8 @@ def _checked(contrib: Any, plugin: str, out_dir: Path
         for f in sec.files:
             try:
                 kept.append(inside(out_dir, Path(f)))
-            except UnsafePathError as exc:
-                errors.append(f"report section of plugin {plugin!r}: {exc}")
+            except UnsafePathError:
+                errors.append(f"report section of plugin {plugin!r}: {Path(f)} is outside the "
+                              f"report folder {out_dir}")
         out.append((plugin, dataclasses.replace(sec, files=tuple(kept))))
     return out, errors

@@ -1,5 +1,5 @@
 """Tables as text: Markdown pipe tables that fit in 120 columns, terminal tables, LaTeX
-(booktabs, via tabulate) and CSV, from plain headers and rows (no pandas needed).
+(booktabs, via tabulate), from plain headers and rows (no pandas needed).
 
 Numbers are formatted per column (:func:`format_column`), so a column never mixes ``14517``
 with ``1.513e+04``: a column of integers is printed as integers, a column whose values span
@@ -11,12 +11,10 @@ tables are escaped (:func:`.safe.escape`), those of terminal tables cleaned
 
 from __future__ import annotations
 
-import csv
 import math
 import re
 import textwrap
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 from .safe import clean, escape
@@ -196,32 +194,6 @@ def latex(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4
     return tabulate([[clean(c) for c in r] for r in cells(headers, rows, digits)],
                     headers=[clean(h) for h in headers],
                     tablefmt="latex_booktabs", disable_numparse=True)
-
-
-def write_csv(path: Path, headers: Sequence[str], rows: Sequence[Sequence[Any]]) -> Path:
-    """``headers`` and ``rows`` as CSV at full precision (NaN and ``None`` as empty cells)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="", encoding="utf-8") as fh:
-        w = csv.writer(fh)
-        w.writerow(headers)
-        for r in rows:
-            w.writerow([_csv_cell(v) for v in r])
-    return path
-
-
-def _csv_cell(v: Any) -> Any:
-    """A CSV cell: floats at full precision (``repr``), NaN and ``None`` empty."""
-    if v is None or isinstance(v, (bool, str)):
-        return "" if v is None else v
-    x = _number(v)
-    if x is None:
-        return v
-    if math.isnan(x):
-        return ""
-    if float(x).is_integer() and not isinstance(v, float) and type(v).__name__.startswith(
-            ("int", "uint")):
-        return int(x)
-    return repr(x)
 
 
 def frame_rows(df: Any) -> tuple[list[str], list[list[Any]]]:

@@ -1,15 +1,14 @@
-"""Untrusted text made safe: file names (:func:`slug`), paths kept inside the report folder
-(:func:`inside`), and record text going to a reader: the terminal (:func:`clean`), Markdown
-(:func:`escape`) and HTML (:func:`escape_html`).
+"""Untrusted text made safe for a reader: the terminal (:func:`clean`), Markdown
+(:func:`escape`) and HTML (the site's templates auto-escape text that :func:`clean` made one
+printable line). File names and paths made from record content follow
+:mod:`vpid_bench.store.paths` (``slug``, ``inside``).
 
 Records, archives and result folders may come from anyone: a problem name, an optimizer
 parameter or a context label can hold ``../``, ``/``, ``|``, HTML, a thousand characters, a
 terminal escape sequence (``ESC ] 0 ;`` sets the window title) or a newline that forges a
-table row. Every file name the report builds from record content goes through :func:`slug`,
-every path it writes is checked by :func:`inside`, and every piece of record text shown to a
-person goes through one of the three text functions, each of which first makes the text one
-line of printable characters (:func:`clean`). This module is the one home of those rules:
-every renderer (terminal, Markdown, HTML) uses it.
+table row. Every piece of record text shown to a person is first made one line of printable
+characters (:func:`clean`), then escaped for its renderer. This module is the one home of
+those rules: every renderer (terminal, Markdown, HTML) uses it.
 
 Text is text (issue 44, N5): a run's error message or a plugin section holding
 ``![x](http://...)``, ``[x](https://...)``, ``<http://...>``, ``<img src=...>``, a reference
@@ -25,41 +24,7 @@ the only ones: :func:`local_link` is the rule the HTML renderer and the link che
 
 from __future__ import annotations
 
-import hashlib
-import html
 import re
-from pathlib import Path
-
-#: Longest file-name stem :func:`slug` returns (characters).
-MAX_SLUG = 80
-
-
-def slug(text: str, max_len: int = MAX_SLUG) -> str:
-    """A file-name-safe form of ``text``: only ``[A-Za-z0-9._=-]``, no ``..``, no leading dot
-    or dash, at most ``max_len`` characters (a long text keeps its start and gets a short
-    hash of the whole, so distinct long texts stay distinct). Never empty."""
-    s = re.sub(r"[^A-Za-z0-9._=-]+", "_", str(text))
-    s = re.sub(r"_+", "_", re.sub(r"\.{2,}", "_", s)).strip("._-")
-    if not s:
-        s = "x"
-    if len(s) > max_len:
-        digest = hashlib.sha256(str(text).encode()).hexdigest()[:10]
-        s = s[: max_len - 11].rstrip("._-") + "-" + digest
-    return s
-
-
-class UnsafePathError(ValueError):
-    """A path that would leave the report folder."""
-
-
-def inside(root: Path, path: Path) -> Path:
-    """``path`` if it lies inside ``root`` once both are resolved; else
-    :class:`UnsafePathError`."""
-    root_r = Path(root).resolve()
-    path_r = Path(path).resolve()
-    if path_r != root_r and root_r not in path_r.parents:
-        raise UnsafePathError(f"{path} is outside the report folder {root}")
-    return path
 
 
 def _visible(char: str) -> str:
@@ -138,10 +103,3 @@ def local_link(url: str) -> bool:
     return bool(u) and not (re.match(r"[A-Za-z][A-Za-z0-9+.-]*:", u) or u.startswith("/")
                             or "\\" in u or ".." in u.split("#")[0].split("/")
                             or any(not c.isprintable() for c in u))
-
-
-def escape_html(text: object) -> str:
-    """Record text for HTML (element text or a quoted attribute value): ``& < > " '`` as
-    entities, line breaks and every other control or format character made visible
-    (:func:`clean`)."""
-    return html.escape(clean(text), quote=True)

@@ -36,8 +36,10 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from ..store import csv_table
+from ..store.paths import inside, slug
 from . import render
-from .safe import escape, inside, slug
+from .safe import escape
 
 
 @dataclasses.dataclass(frozen=True)
@@ -116,7 +118,7 @@ class ReportContext:
         """Write ``tables/<name>.csv`` (full precision) and ``.tex`` (booktabs)."""
         csv_path = self.path("tables", name, ".csv")
         tex = csv_path.with_suffix(".tex")
-        render.write_csv(csv_path, headers, rows)
+        csv_table.write_csv(csv_path, headers, rows)
         tex.write_text(render.latex(headers, rows) + "\n", encoding="utf-8")
         return [csv_path, tex]
 

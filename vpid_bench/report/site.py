@@ -23,8 +23,9 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from ..store.paths import slug
 from . import render
-from .safe import local_link, slug
+from .safe import local_link
 
 #: The site's own files, copied from the package beside the pages.
 ASSETS = ("report.css", "report.js")

@@ -9,9 +9,10 @@ from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
+from ..store.ioh import FOLDER as IOH_FOLDER
+from ..store.paths import slug
 from . import answer as answers
 from . import body, outline, styles, svg
-from .safe import slug
 from .site import (
     ASSET_DIR,
     ASSETS,
@@ -251,7 +252,7 @@ def _protocol(model: Any) -> dict[str, Any]:
             "archive_notes": data.archive_notes,
             "failures": [*model.section_errors, *data.optima_errors],
             "tables": written_tables(model.out_dir),
-            "ioh": (model.out_dir / "ioh").is_dir()}
+            "ioh": (model.out_dir / IOH_FOLDER).is_dir()}
 
 
 def interactive_figures(data: Any) -> dict[str, dict[str, Any]]:
