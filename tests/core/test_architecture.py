@@ -329,3 +329,18 @@ def test_every_name_of_the_plugin_api_resolves():
         except (AttributeError, ImportError) as exc:
             missing.append(f"{name}: {exc}")
     assert missing == []
+
+
+def test_the_plugin_api_names_are_written_once():
+    """api.py's ``__all__`` is the one list of the plugin API's names: the package's
+    ``__all__`` is made from it (issue 45: it was once written in both files),
+    with no name twice."""
+    import vpid_bench
+    from vpid_bench import api
+
+    init = ast.parse((CORE / "__init__.py").read_text(encoding="utf-8"))
+    texts = {n.value for n in ast.walk(init)
+             if isinstance(n, ast.Constant) and isinstance(n.value, str)}
+    assert "Problem" in api.__all__ and texts & set(api.__all__) == set()
+    assert vpid_bench.__all__[:len(api.__all__)] == api.__all__
+    assert len(set(vpid_bench.__all__)) == len(vpid_bench.__all__)
