@@ -181,6 +181,19 @@ def test_generic_metric_columns(tmp_path):
     assert "err" in rep.headline
 
 
+def test_the_population_size_is_the_problems_as_its_record_states_it(tmp_path):
+    """A run's ``ps`` (its context's first token and the rows' ``ps``) is the problem's
+    protocol, ``problem.config.ps``: never an optimizer parameter of that name (the loader
+    once read ``optimizer.params.ps`` first)."""
+    recs = [record(problem="toy", optimizer="a", ps=10, run_index=i, x=np.ones(2), f=1.0 + i,
+                   names=["x1", "x2"], true=None) for i in range(2)]
+    for r in recs:
+        r["optimizer"]["params"]["ps"] = 99
+    write_job(tmp_path / "s" / "a", recs)
+    rows = run_rows(load_records([tmp_path / "s"]).records)
+    assert {(r["context"], r["ps"]) for r in rows} == {("toy ps=10", 10)}
+
+
 def test_a_null_metric_ranks_last_and_minus_inf_stays_minus_inf(tmp_path):
     job = objective_job(tmp_path / "s", "a", 10, [1.0, 2.0, 3.0])
     path = sorted((job / "records").glob("run-*.json"))[0]

@@ -33,7 +33,8 @@ from ..store.record_check import check_record
 from ..store.records import CorruptRecordError, decode_number, iter_record_files, read_record
 from .safe import clean
 
-#: Problem-config keys that never define a context of their own (ps is taken from the optimizer).
+#: Problem-config keys that never define a context of their own (ps, the problem's protocol
+#: as its record states it under ``problem.config``, is the context's first token).
 PROBLEM_KEYS_IGNORED = ("ps",)
 #: Optimizer parameters that never distinguish algorithm variants (the protocol and the
 #: budget the job fills in; records of older versions may hold them under the optimizer).
@@ -202,8 +203,7 @@ def _drop_implied(
                     continue
                 pflat = flatten(r["problem"].get("config") or {})
                 pflat["budget"] = r.get("budget")
-                ps = (r["optimizer"].get("params") or {}).get("ps", pflat.get("ps"))
-                ident = repr((ps, [pflat.get(k) for k in others]))
+                ident = repr((pflat.get("ps"), [pflat.get(k) for k in others]))
                 seen.setdefault(ident, set()).add(repr(pflat.get(key)))
             if all(len(v) == 1 for v in seen.values()):
                 kept.remove(key)
@@ -233,7 +233,7 @@ def run_labels(records: list[dict[str, Any]]) -> list[RunLabel]:
         pflat = flatten(r["problem"].get("config") or {})
         pflat["budget"] = r.get("budget")
         oflat = flatten(r["optimizer"].get("params") or {})
-        ps = oflat.get("ps", pflat.get("ps"))
+        ps = pflat.get("ps")
         pvary = {k: pflat.get(k) for k in problem_keys[pname]}
         ovary = {k: oflat.get(k) for k in optimizer_keys[oname]}
         # labels every renderer shows (tables, figures, the terminal): one printable line
