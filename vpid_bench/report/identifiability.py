@@ -32,6 +32,7 @@ from typing import Any
 from ..analysis.identifiability import ROUNDING
 from ..analysis.optimum import find_optimum, load_optima, record_settings
 from ..analysis.profile import STRUCTURAL_RATIO
+from ..problem import FILLED_PARAMS
 from ..store.job_files import ESTIMATORS, IDENTIFIABILITY, read_job_json
 from ..store.records import stable_hash
 from .estimator_floors import read_estimator_floors
@@ -238,12 +239,15 @@ def crb_norms_by_instance(records: Sequence[Mapping[str, Any]],
     return out
 
 
-def _design_label(contexts: Sequence[str]) -> str:
-    """The contexts of a design without their protocol tokens (``ps=20``, ...)."""
+def _design_label(rows: Sequence[Mapping[str, Any]]) -> str:
+    """The labels of a design's contexts without the protocol: the problem and its varying
+    settings (the rows' ``problem.<key>`` columns) but ``ps``, ``iterations`` and the
+    budget."""
     labels = []
-    for c in contexts:
-        words = [w for w in c.split(" ") if not w.startswith(("ps=", "iterations=", "budget="))]
-        label = " ".join(words)
+    for row in rows:
+        label = str(row["problem"]) + "".join(
+            f" {k.removeprefix('problem.')}={v}" for k, v in row.items()
+            if k.startswith("problem.") and k.removeprefix("problem.") not in FILLED_PARAMS)
         if label not in labels:
             labels.append(label)
     return " / ".join(labels)
@@ -327,7 +331,7 @@ def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
         per_estimator = next((data for job in d["jobs"] for data in
                               [read_estimator_floors(job / ESTIMATORS)[0]] if data), None)
         out.append({
-            "label": _design_label(d["contexts"]), "contexts": sorted(d["contexts"]),
+            "label": _design_label(d["rows"]), "contexts": sorted(d["contexts"]),
             "names": names, "true": params.get("true"), "crb": crb, "metric": metric,
             "floor": statistics.median(floors.values()) if floors else None,
             "floor_errors": ([statistics.median(e[j] for e in errors.values())
