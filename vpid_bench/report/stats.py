@@ -3,7 +3,7 @@
 Within a context (one problem, one population size, one noise setting), the runs of different
 optimizers are independent samples: Kruskal–Wallis tests whether any optimizer differs, and
 every pair is compared with a two-sided Mann–Whitney U test, the p-values Holm-corrected over
-all pairs of that context. The effect size is Vargha–Delaney's A12, computed from scipy's U.
+all pairs of that context. The effect size is Vargha–Delaney's A12 (= U / (n m)), counted over all pairs.
 
 Across contexts (blocks: population sizes, noise seeds, problems), each optimizer's median
 per-run metric in each block is ranked within the block: the Friedman test asks whether the
@@ -32,12 +32,6 @@ from typing import Any
 import numpy as np
 
 ALPHA = 0.05
-
-
-def a12_from_u(u1: float, n1: int, n2: int) -> float:
-    """Vargha–Delaney A12 = P(X > Y) + P(X = Y)/2 = U1 / (n1 n2), with U1 the Mann–Whitney
-    statistic of the first sample (scipy's ``mannwhitneyu(x, y).statistic``)."""
-    return float(u1) / (n1 * n2)
 
 
 def a12_magnitude(a12: float) -> str:
