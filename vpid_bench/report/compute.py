@@ -190,7 +190,7 @@ def _load(paths: Sequence[Path]) -> tuple[LoadedRecords, list[Any]]:
 
     folders = [p for p in paths if is_archive(p)]
     rest = [p for p in paths if p not in folders]
-    loaded = load_records(rest) if rest else LoadedRecords([], [], [], 0, {})
+    loaded = load_records(rest) if rest else LoadedRecords([], [], 0, {})
     optima: list[Any] = []
     for folder in folders:
         try:

@@ -21,9 +21,6 @@ from .safe import clean, escape
 from .tables import pair_detail
 from .verdicts import Verdict
 
-#: How the reference optimizers are named in a verdict.
-REFERENCE_WORDS = {"random": "random search", "centre": "the box centre"}
-
 
 @dataclasses.dataclass
 class ContextResult:
@@ -85,7 +82,8 @@ def _names(items: Sequence[str]) -> str:
 
 
 def _ref(name: str) -> str:
-    return f"{REFERENCE_WORDS[name]} ({name})" if name in REFERENCE_WORDS else _name(name)
+    words = verdicts.REFERENCE_WORDS.get(name)
+    return f"{words} ({name})" if words else _name(name)
 
 
 def context_result(data: Any, context: str) -> ContextResult:

@@ -1,31 +1,15 @@
-"""The report's identifiability section: what each record design can determine, and what the
-records actually allowed.
-
-It reads only files the jobs wrote (never rebuilds a problem): each job's
-``identifiability.json`` (the Cramér–Rao bounds of its design, :mod:`vpid_bench.analysis`)
-and the instances' optima (``<sweep>/optima/*.json`` or ``<job>/optima/*.json``). Every file
-from a results folder is untrusted: it is checked (types, finite numbers, sizes) and a bad one
-is skipped with one line in the section.
-
-A *design* is what defines a record apart from its noise draw: the problem and its settings
-without the protocol (``ps``, ``iterations``); the contexts ``<problem> ps=20`` and
-``<problem> ps=30`` share one design. Per design the section gives the bound of every
-parameter (relative standard deviation, %), the bounds' norm (comparable to a norm of relative
-errors, the per-run metric of a problem that knows its truth), the singular values
-and condition number of the scaled Jacobian, and beside them the measured *floor*: the
-context's headline metric of each instance's optimum ``x*``, median over the instances of the
-design, and per parameter the median ``|x*_j - θ_j| / |θ_j|``. A parameter whose bound exceeds
-:data:`UNDETERMINED_PERCENT` is one the design cannot determine.
-
-Also here, for the convergence figure: the median over the instances of a context of the
-objective at the truth and of the record optimum ``f*`` (:func:`reference_levels`).
-"""
+"""The report's identifiability section: what each record design can determine (the
+Cramér–Rao bounds each job wrote, ``identifiability.json``), beside what the records allowed
+(the instances' optima). A *design* is the problem and its settings without the protocol
+(``<problem> ps=20`` and ``ps=30`` share one). Files from a results folder are untrusted: a
+bad one is skipped with one line in the section. Also the convergence figure's reference
+levels (:func:`reference_levels`)."""
 
 from __future__ import annotations
 
 import math
 import statistics
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -42,15 +26,13 @@ from .optima import opt_column_names
 from .safe import escape
 from .sections import Contribution, ReportContext, Section
 
-#: A parameter whose Cramér–Rao bound (one relative standard deviation) exceeds this many
-#: percent is "not determined" by the design: even an efficient estimator would miss it by
-#: more than 10 % in one run of three, and a 95 % interval would span more than ±20 %.
+#: A parameter whose Cramér–Rao bound (relative sd, %) exceeds this is "not determined": a
+#: 95 % interval would span more than ±20 %.
 UNDETERMINED_PERCENT = 10.0
 FILE = IDENTIFIABILITY
 #: Instances (and runs of one instance) an identifiability file may list.
 MAX_INSTANCES = 100_000
-#: The noise convention, in words (each problem gives σ per residual group or per sample
-#: through ``Problem.residual_sigma``: the noise that was simulated).
+#: The noise convention, in words (σ from ``Problem.residual_sigma``).
 CONVENTION = (
     "Bounds: the Fisher information at the true parameters from a central-difference "
     "Jacobian of the clean responses, under independent Gaussian noise of the size that was "
@@ -72,8 +54,7 @@ def _finite(v: Any) -> bool:
 
 def read_identifiability(path: Path, names: Sequence[str]) -> tuple[dict[str, Any] | None, str]:
     """A job's ``identifiability.json``, checked against the records' parameter ``names``:
-    ``(data, "")``, or ``(None, why)`` for a file that is missing, too large, not JSON or
-    has a field of the wrong type, size or value."""
+    ``(data, "")``, or ``(None, why)``."""
     d = len(names)
     data, why = read_job_json(path)
     if why:
@@ -149,20 +130,12 @@ def _optional_checks(data: Mapping[str, Any], d: int) -> list[tuple[str, bool, s
     return checks
 
 
-def _optima_folders(records: Iterable[Mapping[str, Any]]) -> list[Path]:
-    """``<sweep>/optima`` and ``<job>/optima`` of every job the records came from."""
-    folders: list[Path] = []
-    for rec in records:
-        job = Path(str(rec.get("_job_dir", ".")))
-        for folder in (job / "optima", job.parent / "optima"):
-            if folder not in folders:
-                folders.append(folder)
-    return folders
-
-
 def optima_by_run(records: Sequence[Mapping[str, Any]]) -> dict[str, Mapping[str, Any]]:
-    """The optimum of the instance each run fitted (checked files only), by ``run_id``."""
-    optima = load_optima(_optima_folders(records))
+    """The optimum of the instance each run fitted (checked files of ``<job>/optima`` and
+    ``<sweep>/optima``), by ``run_id``."""
+    jobs = dict.fromkeys(Path(str(rec.get("_job_dir", "."))) for rec in records)
+    optima = load_optima(dict.fromkeys(f for job in jobs
+                                       for f in (job / "optima", job.parent / "optima")))
     if not optima:
         return {}
     out = {}
@@ -181,8 +154,8 @@ def _instance(rec: Mapping[str, Any]) -> Any:
 def reference_levels(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
                      ) -> tuple[dict[str, float], dict[str, float]]:
     """Per context, the median over its instances of the objective at the truth
-    (``problem.info.f_at_true``) and of the record optimum ``f*`` (from the optima files);
-    a context is left out of a map when one of its instances lacks a finite value."""
+    (``problem.info.f_at_true``) and of the record optimum ``f*``; a context is left out
+    where an instance lacks a finite value."""
     context = {r["run_id"]: r["context"] for r in rows}
     optima = optima_by_run(records)
     f_true: dict[str, dict[Any, float]] = {}
@@ -206,9 +179,8 @@ def reference_levels(records: Sequence[Mapping[str, Any]], rows: Sequence[Mappin
 
 def crb_norm_by_context(records: Sequence[Mapping[str, Any]],
                         rows: Sequence[Mapping[str, Any]]) -> dict[str, float]:
-    """Per context, the norm of the Cramér–Rao bounds (percent) its jobs wrote (the first
-    readable ``identifiability.json`` of the context's jobs); contexts without one are left
-    out. For the report's first screen: what an efficient estimator could reach."""
+    """Per context, the norm of the Cramér–Rao bounds (%) of the first readable
+    ``identifiability.json`` of its jobs: what an efficient estimator could reach."""
     def read(path: Path, rec: Mapping[str, Any]) -> Any:
         names = list((rec.get("parameters") or {}).get("names") or [])
         return read_identifiability(path, names)[0] if path.exists() else None
@@ -219,11 +191,9 @@ def crb_norm_by_context(records: Sequence[Mapping[str, Any]],
 
 def crb_norms_by_instance(records: Sequence[Mapping[str, Any]],
                           rows: Sequence[Mapping[str, Any]]) -> dict[str, dict[Any, float]]:
-    """Per context, the norm of each instance's own Cramér–Rao bounds (percent; the
-    ``instances`` of the first readable ``identifiability.json`` of its jobs that has them),
-    keyed as the rows' ``instance`` column: the instance's id, or the run index where every
-    run fits the same data. For the verdicts, which compare each instance's floor with its
-    own bound (:func:`.verdicts.floor_over_bound`); contexts without them are left out."""
+    """Per context, each instance's own bound norm (%), keyed as the rows' ``instance``
+    column (its id, or the run index where every run fits the same data): what the verdicts
+    compare each instance's floor with (:func:`.verdicts.floor_over_bound`)."""
     def read(path: Path, rec: Mapping[str, Any]) -> Any:
         names = list((rec.get("parameters") or {}).get("names") or [])
         data = read_identifiability(path, names)[0] if path.exists() else None
@@ -290,10 +260,8 @@ def _first_bounds(jobs: Sequence[Path], names: Sequence[str], notes: list[str]
 def _floors(d: Mapping[str, Any], names: Sequence[str], metric: Any,
             optima: Mapping[str, Mapping[str, Any]]
             ) -> tuple[dict[Any, float], dict[Any, list[float]]]:
-    """Per instance of a design: its optimum's metric, and its optimum's absolute relative
-    error per parameter (percent). The metric comes from the rows' floor column where the
-    report matched an optimum the files here do not hold (an archive's optima), so the
-    section never says "no optimum" while the rankings use one."""
+    """Per instance of a design: its optimum's metric (the rows' floor column first, so an
+    archive's optima count too) and absolute relative error per parameter (%)."""
     floors: dict[Any, float] = {}
     errors: dict[Any, list[float]] = {}
     column, _ = opt_column_names(d["rows"])
@@ -347,15 +315,9 @@ def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
     return out, notes
 
 
-def _figure(ctx: ReportContext, design: Mapping[str, Any]) -> Path:
-    """The design's figure (:func:`draw_design`)."""
-    data = {k: design[k] for k in ("names", "crb", "floor_errors", "instances", "label")}
-    return ctx.save_figure(draw_design(data), f"identifiability_{design['label']}")
-
-
 def draw_design(design: Mapping[str, Any]) -> Any:
-    """Bars: the bound of each parameter (%, log axis); dots: the median |error| of the
-    instances' optima; a dashed line at :data:`UNDETERMINED_PERCENT`. Returns the figure."""
+    """Bars: each parameter's bound (%, log axis); dots: the median |error| of the instances'
+    optima; a dashed line at :data:`UNDETERMINED_PERCENT`."""
     from matplotlib.ticker import FuncFormatter
 
     from .figures import _plt
@@ -421,8 +383,7 @@ def _design_text(ctx: ReportContext, design: Mapping[str, Any]) -> str:
 
 
 def _sensitivity_text(ctx: ReportContext, crb: Mapping[str, Any]) -> str:
-    """The rounding-level samples left out and the bound under a σ floor (multiplicative
-    noise), or ``""``."""
+    """The rounding-level samples left out and the bound under a σ floor, or ``""``."""
     text = ""
     if crb.get("excluded_entries"):
         text += (f" {crb['excluded_entries']} sample(s) with no or rounding-level noise (σ at "
@@ -450,8 +411,8 @@ def _instances_text(ctx: ReportContext, crb: Mapping[str, Any]) -> str:
 
 
 def section(ctx: ReportContext) -> Contribution | None:
-    """The identifiability section of one problem's runs (``None`` when no job of it wrote
-    an ``identifiability.json``; a problem without residuals or truth writes none)."""
+    """The identifiability section of one problem's runs (``None``: no job wrote an
+    ``identifiability.json``)."""
     designs, notes = _designs(ctx)
     if not designs:
         if not notes:
@@ -503,7 +464,7 @@ def section(ctx: ReportContext) -> Contribution | None:
         parts += [ctx.markdown_table(["parameter", "CRB %", "floor median |error| %", ""],
                                      body, digits=3), ""]
         if not ctx.short:
-            files.append(_figure(ctx, d))
+            files.append(ctx.save_figure(draw_design(d), f"identifiability_{d['label']}"))
     if notes:
         parts += [ctx.para("Skipped: " + "; ".join(notes) + "."), ""]
     return Contribution(sections=(Section("Identifiability", "\n".join(parts).rstrip(),

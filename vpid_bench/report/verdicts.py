@@ -42,6 +42,8 @@ AT_FLOOR = 1.1
 EQUIVALENCE_MARGIN = 0.10
 #: The optimizers a recommended method must beat, when they were run (built-in baselines).
 REFERENCES: tuple[str, ...] = ("random", "centre")
+#: Their names in words.
+REFERENCE_WORDS = {"random": "random search", "centre": "the box centre"}
 
 #: Kinds of verdict.
 USE, NONE, DESCRIBE, EMPTY = "use", "none", "describe", "empty"
