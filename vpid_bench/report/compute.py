@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -18,7 +18,7 @@ from ..progress import Stages
 from . import anytime, diagnostics, estimates, estimator_floors, rankings, tables, ties
 from .forked import run_forked
 from .identifiability import crb_norm_by_context, crb_norms_by_instance
-from .load import LoadedRecords, NoRecordsError, load_records, reason, run_rows
+from .load import LoadedRecords, NoRecordsError, by_context, load_records, reason, run_rows
 from .optima import add_optimum_columns, load_optima, opt_column_names
 
 
@@ -249,10 +249,7 @@ def _set_groups(items: list[dict[str, Any]], pairs: Any) -> None:
     """Each row's rank group (compact letters from the Holm-corrected pairwise tests)."""
     from .stats import rank_groups
 
-    by_context: dict[str, list[dict[str, Any]]] = {}
-    for s in items:
-        by_context.setdefault(s["context"], []).append(s)
-    for context, g in by_context.items():
+    for context, g in by_context(items).items():
         n = "n_runs" if "n_runs" in g[0] else "n"
         order = [s["algorithm"] for s in sorted((s for s in g if s.get(n)),
                                                 key=lambda s: s["rank"])]
@@ -260,10 +257,3 @@ def _set_groups(items: list[dict[str, Any]], pairs: Any) -> None:
         for s in g:
             s["group"] = letters.get(s["algorithm"], "—")
 
-
-def by_context(items: Sequence[Mapping[str, Any]]) -> dict[str, list[Mapping[str, Any]]]:
-    """``items`` grouped by their ``context``, in order of appearance."""
-    out: dict[str, list[Mapping[str, Any]]] = {}
-    for s in items:
-        out.setdefault(s["context"], []).append(s)
-    return out

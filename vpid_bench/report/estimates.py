@@ -1,11 +1,7 @@
 """The report's view of a problem without a truth: which contexts have none, the identified
-values with their 95 % intervals, and the problem's fixed comparison rows.
-
-It reads only what the jobs wrote: each run's ``result.intervals`` (the Jacobian intervals of
-its best vector, :mod:`vpid_bench.analysis.intervals`), each job's ``profile.json`` and
-``comparisons.json`` (:mod:`vpid_bench.analysis.estimates`). Everything from a results folder
-is untrusted: a field of the wrong type, length or size is left out, never shown.
-"""
+values with their 95 % intervals (each run's ``result.intervals``, each job's
+``profile.json``) and the problem's comparison rows (``comparisons.json``), all untrusted: a
+field of the wrong type, length or size is left out."""
 
 from __future__ import annotations
 
@@ -48,17 +44,15 @@ class Identified:
     sigma: list[float]  # σ estimated per residual group
     profile: dict[str, Any] | None = None  # profile.json (status ok), or None
     profile_note: str = ""  # why there is no profile, when there is none
-    #: the robust (HAC) interval beside the Jacobian one (None: not in the record); the
-    #: first screen shows it with the fit diagnostics (:mod:`.diagnostics`)
+    #: the robust (HAC) interval's lower ends (None: not in the record)
     robust_lower: list[float | None] | None = None
-    robust_upper: list[float | None] | None = None
     objective_unit: str = ""  # the objective's unit the problem states (its info), or ""
     objective_what: str = ""  # what the objective is, in words, or ""
     caveat: str = ""  # what the problem says of its intervals (its info), or ""
 
     def rows(self) -> tuple[list[str], list[list[Any]]]:
-        """A table: parameter, unit, value, its Jacobian interval, the half-width in % of
-        the value, and the profile interval where one was computed."""
+        """A table: parameter, unit, value, its Jacobian interval and half-width (%), and the
+        profile interval where one was computed."""
         headers = ["parameter", "unit", "value", "95 % interval (Jacobian)",
                    "± %"]
         prof = self.profile
@@ -119,7 +113,7 @@ def check_intervals(value: Any, d: int) -> dict[str, Any] | None:
 
 def read_profile(path: Path, d: int) -> dict[str, Any] | None:
     """A job's ``profile.json`` (any status), checked; ``None`` when missing or malformed."""
-    data = _read(path)
+    data = read_job_json(path)[0]
     if not isinstance(data, dict) or data.get("schema") != PROFILE_SCHEMA:
         return None
     if not _num(data.get("f_start")) or data.get("status") not in ("ok", "skipped", "failed"):
@@ -132,13 +126,9 @@ def read_profile(path: Path, d: int) -> dict[str, Any] | None:
     return data
 
 
-def _read(path: Path) -> Any:
-    return read_job_json(path)[0]
-
-
 def read_comparisons(path: Path, record: Mapping[str, Any]) -> list[dict[str, Any]] | None:
     """A job's ``comparisons.json`` rows, checked; ``None`` when missing or malformed."""
-    data = _read(path)
+    data = read_job_json(path)[0]
     if not isinstance(data, dict) or data.get("schema") != COMPARISONS_SCHEMA:
         return None
     rows = data.get("rows")
@@ -168,9 +158,8 @@ def comparisons_by_context(records: Sequence[Mapping[str, Any]],
 def identified_by_context(records: Sequence[Mapping[str, Any]],
                           rows: Sequence[Mapping[str, Any]],
                           contexts: Mapping[str, bool]) -> dict[str, Identified]:
-    """Per context without a truth: the best ok run (lowest headline metric, then objective)
-    with readable intervals, and the profile of the context's job that started it at the
-    lowest objective."""
+    """Per context without a truth: the best ok run with readable intervals, and the
+    profile started at the lowest objective."""
     by_id = {r["run_id"]: r for r in records}
     out: dict[str, Identified] = {}
     for context in (c for c, none in contexts.items() if none):
@@ -211,7 +200,7 @@ def _identified(row: Mapping[str, Any], rec: Mapping[str, Any]) -> Identified | 
     return Identified(f"{row['algorithm']}, run {row['run_index']}", _key(res.get("f_best")),
                       names, list(params.get("units") or []), [float(v) for v in x],
                       iv["lower"], iv["upper"], [float(s) for s in iv["sigma"]],
-                      robust_lower=robust.get("lower"), robust_upper=robust.get("upper"),
+                      robust_lower=robust.get("lower"),
                       objective_unit=_text(objective.get("unit"), 20),
                       objective_what=_text(objective.get("what"), 120),
                       caveat=_text(info.get("caveat"), 400))
@@ -224,8 +213,8 @@ def _text(v: Any, most: int) -> str:
 
 def _best_profile(records: Sequence[Mapping[str, Any]], d: int
                   ) -> tuple[dict[str, Any] | None, str]:
-    """The readable ``profile.json`` with the lowest start among the records' job folders
-    (status ok), or ``None`` and why not (the reason of one that was skipped)."""
+    """The readable ``profile.json`` (status ok) with the lowest start among the records'
+    jobs, or ``None`` and why not."""
     seen: set[str] = set()
     found: list[dict[str, Any]] = []
     for rec in records:

@@ -20,8 +20,7 @@ def _number(v: Any) -> bool:
 
 
 def read_estimator_floors(path: Path) -> tuple[dict[str, Any] | None, str]:
-    """A job's ``estimators.json``: ``(data, "")`` or ``(None, why)`` for a file that is
-    missing, too large, not JSON or has a field of the wrong type or value."""
+    """A job's ``estimators.json``, checked: ``(data, "")`` or ``(None, why)``."""
     data, why = read_job_json(path)
     if why:
         return None, why
@@ -67,8 +66,3 @@ def sentence(data: Mapping[str, Any], unit: str, fmt: Any) -> str:
             f"{data['instances']} instance(s): " + "; ".join(parts))
 
 
-def best_other(data: Mapping[str, Any]) -> tuple[str, float] | None:
-    """The objective other than the chosen one whose floor is lowest, with that floor."""
-    others = [(o, float(v["median"])) for o, v in data["floors"].items()
-              if o != data["chosen"]]
-    return min(others, key=lambda item: item[1]) if others else None

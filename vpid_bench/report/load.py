@@ -68,6 +68,14 @@ class LoadedRecords:
         return out
 
 
+def by_context(items: Iterable[Any]) -> dict[str, list[Any]]:
+    """``items`` (mappings with a ``context``) grouped by it, in order of appearance."""
+    out: dict[str, list[Any]] = {}
+    for s in items:
+        out.setdefault(s["context"], []).append(s)
+    return out
+
+
 def reason(path: Path, why: str) -> str:
     """``why`` without a leading ``path: `` (a :class:`CorruptRecordError` names its file,
     and the lines that quote it name the file already)."""

@@ -15,8 +15,10 @@ import math
 import re
 import textwrap
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
+from ..store import csv_table
 from .safe import clean, escape
 
 #: The widest line a person reads in ``report.md`` (characters).
@@ -194,6 +196,15 @@ def latex(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4
     return tabulate([[clean(c) for c in r] for r in cells(headers, rows, digits)],
                     headers=[clean(h) for h in headers],
                     tablefmt="latex_booktabs", disable_numparse=True)
+
+
+def write_table(path: Path, headers: Sequence[str], rows: Sequence[Sequence[Any]]
+                ) -> list[Path]:
+    """``path`` (CSV, full precision) and its ``.tex`` (booktabs)."""
+    csv_table.write_csv(path, headers, rows)
+    tex = path.with_suffix(".tex")
+    tex.write_text(latex(headers, rows) + "\n", encoding="utf-8")
+    return [path, tex]
 
 
 def frame_rows(df: Any) -> tuple[list[str], list[list[Any]]]:

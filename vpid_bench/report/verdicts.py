@@ -24,7 +24,7 @@ from typing import Any
 
 from .optima import REACHED
 from .rankings import TIE_RTOL
-from .ties import cheapest
+from .ties import cheapest, same
 
 #: A bound (norm of the Cramér–Rao bounds, %) above this: no estimator determines the
 #: parameters from such a record (one standard deviation is larger than the values).
@@ -197,9 +197,7 @@ def floor_over_bound(floors: Mapping[Any, float], bounds: Mapping[Any, float]) -
 
 def tied(a: float, b: float) -> bool:
     """Whether two medians are equal within :data:`~.rankings.TIE_RTOL` (relative)."""
-    if not (math.isfinite(a) and math.isfinite(b)):
-        return a == b
-    return abs(a - b) <= TIE_RTOL * max(abs(a), abs(b), 1e-300)
+    return same(a, b, TIE_RTOL)
 
 
 def _pair(pairs: Sequence[Mapping[str, Any]], a: str, b: str) -> Mapping[str, Any] | None:
