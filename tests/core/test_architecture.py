@@ -242,12 +242,15 @@ def test_one_schema_string_per_file_format():
     """Each format's schema string and file names are written once, in its module under
     store/ (the optimum file's was once in analysis/optimum.py and report/optima.py; the
     archive's writer and the IOHprofiler export once lived in report/)."""
-    from vpid_bench.store import archive, ioh, optimum, records
+    from vpid_bench.store import archive, ioh, job_checks, optimum, records
 
     for schema, home in ((optimum.SCHEMA, "store/optimum.py"),
                          (archive.SCHEMA, "store/archive.py"),
                          (records.SCHEMA, "store/records.py"),
                          (ioh.FORMAT_VERSION, "store/ioh.py"),
+                         *((s, "store/job_checks.py") for s in (
+                             job_checks.DIAGNOSTICS_SCHEMA, job_checks.PROFILE_SCHEMA,
+                             job_checks.COMPARISONS_SCHEMA)),
                          *((name, "store/archive.py") for name in (
                              archive.MANIFEST, archive.RECORDS, archive.OPTIMA, archive.SUMMARY,
                              archive.IOH))):

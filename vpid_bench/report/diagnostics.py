@@ -12,85 +12,14 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..analysis.diagnostics import MISFIT, SCHEMA
+from ..analysis.diagnostics import MISFIT
 from ..analysis.intervals import Z95
-from ..store.job_files import DIAGNOSTICS, read_job_json
+from ..store.job_checks import read_diagnostics
+from ..store.job_files import DIAGNOSTICS
 from .render import fmt
 from .safe import escape
 
-#: Most channels, inputs per channel and lags read.
-MAX_GROUPS, MAX_INPUTS, MAX_LAGS = 64, 16, 200
 TITLE = "Fit diagnostics: residual autocorrelation and cross-correlation"
-
-
-def _num(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
-def _nums(v: Any, most: int) -> bool:
-    return isinstance(v, list) and 0 < len(v) <= most and all(_num(x) for x in v)
-
-
-def _opt(v: Any) -> float:
-    return float(v) if _num(v) else math.nan
-
-
-def _group(g: Any) -> dict[str, Any] | None:
-    """One channel's entry, checked (``None``: unusable)."""
-    if not isinstance(g, Mapping) or not _nums(g.get("acf"), MAX_LAGS + 1):
-        return None
-    if not all(_num(g.get(k)) for k in ("band99", "lag1", "n")):
-        return None
-    cross = {}
-    raw = g.get("cross")
-    for name, c in (list(raw.items())[:MAX_INPUTS] if isinstance(raw, Mapping) else []):
-        if isinstance(c, Mapping) and _nums(c.get("ccf"), 2 * MAX_LAGS + 1) and all(
-                _num(c.get(k)) for k in ("band99", "max_abs", "lag_at_max", "outside")):
-            cross[str(name)[:40]] = dict(c)
-    out = {k: _opt(g.get(k)) for k in ("rms", "signal_rms", "rms_over_signal", "sigma",
-                                        "rms_over_sigma", "ljung_box_p", "band99", "lag1")}
-    out.update(name=str(g.get("name", ""))[:40], acf=[float(x) for x in g["acf"]],
-               sigma_source="stated" if g.get("sigma_source") == "stated" else "estimated",
-               cross=cross, correlated=g.get("correlated") is True,
-               input_correlated=g.get("input_correlated") is True,
-               misfit=g.get("misfit") is True, n=int(g["n"]))
-    return out
-
-
-def _intervals(iv: Any, d: int) -> dict[str, Any] | None:
-    """The white and robust standard errors, checked (``None`` where unusable)."""
-    def se(v: Any) -> bool:
-        return isinstance(v, list) and len(v) == d and all(x is None or _num(x) for x in v)
-
-    if not isinstance(iv, Mapping) or not se(iv.get("se")):
-        return None
-    rob = iv.get("robust")
-    if not isinstance(rob, Mapping) or not se(rob.get("se")):
-        return None
-    return {"se": iv["se"], "robust_se": rob["se"],
-            "lags": int(rob["lags"]) if _num(rob.get("lags")) else None}
-
-
-def read_diagnostics(path: Path) -> dict[str, Any] | None:
-    """A job's ``diagnostics.json``, checked; ``None`` when missing, failed or malformed."""
-    data = read_job_json(path)[0]
-    if not isinstance(data, dict) or data.get("schema") != SCHEMA or data.get("status") != "ok":
-        return None
-    groups = data.get("groups")
-    if not isinstance(groups, list) or not 0 < len(groups) <= MAX_GROUPS:
-        return None
-    checked = [_group(g) for g in groups]
-    names, x = data.get("names"), data.get("x")
-    if None in checked or not _num(data.get("f")) or not _nums(x, 1000) \
-            or not (isinstance(names, list) and len(names) == len(x)):
-        return None
-    held = data.get("held_out")
-    return {"groups": checked, "f": float(data["f"]), "x": [float(v) for v in x],
-            "names": [str(n)[:40] for n in names],
-            "intervals": _intervals(data.get("intervals"), len(x)),
-            "held_out": dict(held) if isinstance(held, Mapping) and _num(held.get("error"))
-            and _num(held.get("naive")) else None,
-            "explained": not any(g["correlated"] or g["input_correlated"] for g in checked)}
 
 
 def by_context(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]

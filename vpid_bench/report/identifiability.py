@@ -17,9 +17,9 @@ from ..analysis.identifiability import ROUNDING
 from ..analysis.optimum import find_optimum, load_optima, record_settings
 from ..analysis.profile import STRUCTURAL_RATIO
 from ..problem import FILLED_PARAMS
-from ..store.job_files import ESTIMATORS, IDENTIFIABILITY, read_job_json
+from ..store.job_checks import finite, read_estimator_floors, read_identifiability
+from ..store.job_files import ESTIMATORS, IDENTIFIABILITY
 from ..store.records import stable_hash
-from .estimator_floors import read_estimator_floors
 from .estimator_floors import sentence as estimator_sentence
 from .load import first_file_by_context
 from .optima import opt_column_names
@@ -30,8 +30,6 @@ from .sections import Contribution, ReportContext, Section
 #: 95 % interval would span more than ±20 %.
 UNDETERMINED_PERCENT = 10.0
 FILE = IDENTIFIABILITY
-#: Instances (and runs of one instance) an identifiability file may list.
-MAX_INSTANCES = 100_000
 #: The noise convention, in words (σ from ``Problem.residual_sigma``).
 CONVENTION = (
     "Bounds: the Fisher information at the true parameters from a central-difference "
@@ -46,88 +44,6 @@ CONVENTION = (
     "values: of the Jacobian whitened by σ and scaled by the true values. Samples whose σ "
     f"is at most {ROUNDING:g} of their channel's largest (a value that is zero in exact "
     "arithmetic, computed to rounding) carry no information and are left out.")
-
-
-def _finite(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
-def read_identifiability(path: Path, names: Sequence[str]) -> tuple[dict[str, Any] | None, str]:
-    """A job's ``identifiability.json``, checked against the records' parameter ``names``:
-    ``(data, "")``, or ``(None, why)``."""
-    d = len(names)
-    data, why = read_job_json(path)
-    if why:
-        return None, why
-    if not isinstance(data, dict):
-        return None, "not a JSON object"
-    checks = (
-        ("names", data.get("names") == list(names), f"the records' parameter names {names}"),
-        ("crb_percent", isinstance(data.get("crb_percent"), list)
-         and len(data["crb_percent"]) == d
-         and all(_finite(v) and v >= 0 for v in data["crb_percent"]),
-         f"a list of {d} finite numbers >= 0"),
-        ("crb_norm_percent", _finite(data.get("crb_norm_percent"))
-         and data["crb_norm_percent"] >= 0, "a finite number >= 0"),
-        ("singular_values", isinstance(data.get("singular_values"), list)
-         and 1 <= len(data["singular_values"]) <= d
-         and all(_finite(v) and v >= 0 for v in data["singular_values"]),
-         f"a list of 1 to {d} finite numbers >= 0"),
-        ("condition_number", data.get("condition_number") is None
-         or (_finite(data["condition_number"]) and data["condition_number"] >= 1),
-         "a finite number >= 1 or null (infinite)"),
-        ("sigma", isinstance(data.get("sigma"), list) and 1 <= len(data["sigma"]) <= 10_000
-         and all(_finite(v) and v > 0 for v in data["sigma"]), "a list of numbers > 0"),
-    )
-    for key, ok, expected in (*checks, *_optional_checks(data, d)):
-        if not ok:
-            return None, f"field {key}: expected {expected}"
-    return data, ""
-
-
-def _bounds_ok(v: Any, d: int) -> bool:
-    return (isinstance(v, list) and len(v) == d and all(_finite(b) and b >= 0 for b in v))
-
-
-def _floor_entry_ok(e: Any, d: int) -> bool:
-    return (isinstance(e, dict) and _finite(e.get("fraction")) and e["fraction"] >= 0
-            and _finite(e.get("crb_norm_percent")) and e["crb_norm_percent"] >= 0
-            and _bounds_ok(e.get("crb_percent"), d))
-
-
-def _instance_entry_ok(e: Any, d: int) -> bool:
-    norms = e.get("sigma_floor_norms") if isinstance(e, dict) else None
-    return (isinstance(e, dict) and (e.get("instance") is None
-                                     or isinstance(e["instance"], str))
-            and isinstance(e.get("runs"), list) and 1 <= len(e["runs"]) <= MAX_INSTANCES
-            and all(isinstance(i, int) and not isinstance(i, bool) and i >= 0
-                    for i in e["runs"])
-            and _bounds_ok(e.get("crb_percent"), d)
-            and _finite(e.get("crb_norm_percent")) and e["crb_norm_percent"] >= 0
-            and (norms is None or (isinstance(norms, list) and len(norms) <= 10
-                                   and all(_finite(v) and v >= 0 for v in norms))))
-
-
-def _optional_checks(data: Mapping[str, Any], d: int) -> list[tuple[str, bool, str]]:
-    """Checks of the fields written since round four (absent in older files)."""
-    checks = []
-    if "excluded_entries" in data:
-        v = data["excluded_entries"]
-        checks.append(("excluded_entries", isinstance(v, int) and not isinstance(v, bool)
-                       and v >= 0, "an integer >= 0"))
-    if "sigma_floor_sensitivity" in data:
-        v = data["sigma_floor_sensitivity"]
-        checks.append(("sigma_floor_sensitivity", isinstance(v, list) and 1 <= len(v) <= 10
-                       and all(_floor_entry_ok(e, d) for e in v),
-                       f"a list of 1 to 10 {{fraction, crb_percent ({d} numbers), "
-                       "crb_norm_percent}"))
-    if "instances" in data:
-        v = data["instances"]
-        checks.append(("instances", isinstance(v, list) and len(v) <= MAX_INSTANCES
-                       and all(_instance_entry_ok(e, d) for e in v),
-                       f"a list of at most {MAX_INSTANCES} {{instance, runs, crb_percent "
-                       f"({d} numbers), crb_norm_percent[, sigma_floor_norms]}}"))
-    return checks
 
 
 def optima_by_run(records: Sequence[Mapping[str, Any]]) -> dict[str, Mapping[str, Any]]:
@@ -166,7 +82,7 @@ def reference_levels(records: Sequence[Mapping[str, Any]], rows: Sequence[Mappin
             continue
         info = (rec.get("problem") or {}).get("info") or {}
         v = info.get("f_at_true") if isinstance(info, Mapping) else None
-        f_true.setdefault(c, {})[_instance(rec)] = float(v) if _finite(v) else math.nan
+        f_true.setdefault(c, {})[_instance(rec)] = float(v) if finite(v) else math.nan
         opt = optima.get(rec["run_id"])
         f_opt.setdefault(c, {})[_instance(rec)] = float(opt["f_opt"]) if opt else math.nan
 
@@ -266,17 +182,17 @@ def _floors(d: Mapping[str, Any], names: Sequence[str], metric: Any,
     errors: dict[Any, list[float]] = {}
     column, _ = opt_column_names(d["rows"])
     for rec, row in zip(d["records"], d["rows"], strict=True):
-        if column and _finite(row.get(column)):
+        if column and finite(row.get(column)):
             floors.setdefault(_instance(rec), float(row[column]))
         opt = optima.get(rec["run_id"])
         if opt is None:
             continue
         value = (opt.get("metrics") or {}).get(metric)
-        if _finite(value):
+        if finite(value):
             floors[_instance(rec)] = float(value)
         rec_true = (rec.get("parameters") or {}).get("true")
         if (isinstance(rec_true, list) and len(rec_true) == len(names)
-                and all(_finite(t) and t != 0 for t in rec_true)):
+                and all(finite(t) and t != 0 for t in rec_true)):
             errors[_instance(rec)] = [abs(100.0 * (x - t) / t)
                                       for x, t in zip(opt["x_opt"], rec_true, strict=True)]
     return floors, errors

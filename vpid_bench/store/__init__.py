@@ -5,7 +5,9 @@ reader, its writer and its checks:
   :mod:`.record_check` (the field rules every reader applies) and :mod:`.provenance` (which
   versions of what produced it);
 * :mod:`.job_status`: a job folder's ``job.json``;
-* :mod:`.artifacts`: the files a job leaves for the report (the best run's signals);
+* :mod:`.artifacts`: the files a job leaves for the report (the best run's signals), with
+  :mod:`.job_files` (its JSON files: names, size cap, reader, writer) and :mod:`.job_checks`
+  (each JSON file's schema and content checks);
 * :mod:`.optimum`: the instance-optimum file;
 * :mod:`.archive`: an archive folder's manifest, checked files and optima, with
   :mod:`.archive_records` (its runs, each line checked, :mod:`.plausible` the values a run
@@ -18,5 +20,5 @@ reader, its writer and its checks:
 
 It sits below the job (``experiment.py``, ``assemble.py``, ``job_analysis.py``), ``analysis/``,
 ``targets.py`` and ``report/`` (docs/architecture.md), and imports only the core's base modules
-(``errors``, ``fileio``, ``problem``).
+(``errors``, ``fileio``, ``problem``, and ``estimators`` for the objectives' names).
 """
