@@ -21,10 +21,8 @@ log = logging.getLogger(__name__)
 
 def plugin_sections(registry: Any, data: Any, out_dir: Path, claim: Callable[[Path], Path]
                     ) -> tuple[list[PlacedSection], list[HeadlineColumn], list[str]]:
-    """Per problem of ``data`` (a :class:`~.compute.ReportData`): the core's sections
-    (identifiability, measured-vs-fitted signals), then the plugins'. Returns the sections
-    (each with its problem and plugin), the headline columns they add, and one line per
-    failure."""
+    """Per problem: the core's sections, then the plugins'; with the headline columns they
+    add and one line per failure."""
     from . import diagnostics, identifiability, signals
 
     if registry is None:

@@ -1,13 +1,7 @@
-"""Tables as text: Markdown pipe tables that fit in 120 columns, terminal tables, LaTeX
-(booktabs, via tabulate), from plain headers and rows (no pandas needed).
-
-Numbers are formatted per column (:func:`format_column`), so a column never mixes ``14517``
-with ``1.513e+04``: a column of integers is printed as integers, a column whose values span
-a moderate range in fixed point with the same number of decimals, any other in scientific
-notation with four significant figures. Text cells may come from records: those of Markdown
-tables are escaped (:func:`.safe.escape`), those of terminal tables cleaned
-(:func:`.safe.clean`: no escape sequence, no line break that would forge a row).
-"""
+"""Tables as text from plain headers and rows: Markdown within 120 columns, terminal, LaTeX
+(booktabs). Numbers are formatted per column (:func:`format_column`: integers, fixed point
+with one number of decimals, or scientific), so a column never mixes ``14517`` with
+``1.513e+04``; record text is escaped (Markdown) or cleaned (terminal)."""
 
 from __future__ import annotations
 
@@ -59,8 +53,7 @@ def fmt(value: Any, digits: int = 4) -> str:
 
 
 def p_text(p: float, bound: bool, name: str = "p") -> str:
-    """A p-value as text: ``p=0.012``, or ``p≤0.0002`` where it is a permutation test's
-    smallest value (``bound``): the true p may be smaller still."""
+    """A p-value as text: ``p=0.012``, or ``p≤0.0002`` where it is a bound."""
     return f"{name}{'≤' if bound else '='}{float(p):.2g}"
 
 
