@@ -1,15 +1,8 @@
-"""The archive beside a report: the archived runs of the built-in optimizers (read through
-:mod:`vpid_bench.store.archive_records`; the format is :mod:`vpid_bench.store.archive`) that
-stand beside a sweep's own runs, so a newcomer compares a new optimizer without re-running
-anyone.
-
-:func:`merge` adds to a report's records the archived runs of every problem the report's runs
-are on, for the optimizers the report's runs do not include, on the instances they share.
-Nothing archived is mixed in unless it was made by the same version of the problem: the same
-plugin distribution and version, the same config and budget, and, per shared instance, the
-same true parameters and objective at the truth. A problem whose archive fails that check is
-refused with one line and left out.
-"""
+"""The archived runs of the built-in optimizers that stand beside a report's own (read through
+:mod:`vpid_bench.store.archive_records`): :func:`merge` adds, per problem of the report, the
+optimizers it did not run, on the instances it shares, only where the same version of the
+problem made them (plugin distribution and version, config and budget, and per instance the
+truth and the objective at it); a problem whose archive fails is refused with one line."""
 
 from __future__ import annotations
 

@@ -1,10 +1,6 @@
-"""The report's first stage: everything it says, computed from the records, as data.
-
-:func:`compute` reads the records below some folders and returns a :class:`ReportData`: the
-tidy rows, the per-context summaries of both rankings, the anytime hits, the floors and bounds,
-and (full report only) the significance tests and the rank groups. The later stages (tables,
-figures, Markdown, terminal) only read it. Short mode imports neither pandas nor scipy.stats.
-"""
+"""The report's first stage: everything it says, computed from the records, as data
+(:class:`ReportData`), which the later stages only read. Short mode imports neither pandas
+nor scipy.stats."""
 
 from __future__ import annotations
 
@@ -88,9 +84,7 @@ class ReportData:
         return units.pop() if len(units) == 1 else ""
 
     def estimator(self, context: str) -> str | None:
-        """The objective the context's runs minimised (its ``problem.objective`` key, e.g.
-        ``eq3``, ``ml``) when they share one, else ``None`` (a problem without the key, or a
-        mix)."""
+        """The objective (``problem.objective``) the context's runs share, else ``None``."""
         ids = {r["run_id"] for r in self.rows if r["context"] == context}
         found = set()
         for rec in self.loaded.records:
@@ -102,8 +96,8 @@ class ReportData:
             else None
 
     def floors(self, context: str) -> dict[Any, float]:
-        """Per instance of ``context`` whose optimum is known: the floor, the headline metric
-        of that optimum (the ``<metric>_floor`` column of the rows; one value per instance)."""
+        """Per instance of ``context`` with a known optimum: its floor (the optimum's
+        headline metric)."""
         rows = [r for r in self.rows if r["context"] == context]
         column, _ = opt_column_names(rows)
         out: dict[Any, float] = {}
@@ -115,7 +109,7 @@ class ReportData:
 
     def groups(self, which: str, context: str) -> dict[str, str] | None:
         """Rank-group letters of a context's ranking (``"metric"`` or ``"search"``), or
-        ``None`` where no test was run (short mode)."""
+        ``None`` untested."""
         if self.tests is None:
             return None
         items = self.metric_rows(context) if which == "metric" else self.search_rows(context)
@@ -130,11 +124,9 @@ class ReportData:
 
 def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: str,
             archive: bool | Path = False, progress: Stages | None = None) -> ReportData:
-    """Load the records below ``paths`` and compute everything the report shows. Raises
-    :class:`~.load.NoRecordsError` when no readable record exists. ``archive``: add the
-    archived runs of the built-in optimizers on the same problems (``True``: the archives
-    shipped with the package; a folder: the archives below it; see :mod:`.archive`).
-    ``progress``: where each stage is said as it starts."""
+    """Load the records below ``paths`` and compute everything the report shows (raises
+    :class:`~.load.NoRecordsError` without a readable record); ``archive``: add the
+    archived built-ins' runs (``True``: the shipped archives; or a folder of archives)."""
     paths = [Path(p) for p in paths]
     if progress is not None:
         progress.stage("reading the records")
@@ -183,8 +175,7 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
 
 
 def _load(paths: Sequence[Path]) -> tuple[LoadedRecords, list[Any]]:
-    """The records below ``paths``; an archive folder among them (``archive/smoke``) gives
-    its archived runs and instance optima, so a report of the archive alone needs no run."""
+    """The records below ``paths``; an archive folder among them gives its runs and optima."""
     from ..store.archive import ArchiveError, is_archive
     from ..store.archive_records import read_archive
 
@@ -208,8 +199,8 @@ def _load(paths: Sequence[Path]) -> tuple[LoadedRecords, list[Any]]:
 
 
 def _add_archive(loaded: LoadedRecords, archive: bool | Path) -> tuple[list[Any], list[str]]:
-    """Add the archived runs that stand beside ``loaded`` to it (in place); return their
-    instance optima and the archive's one-line notes."""
+    """Add the archived runs that stand beside ``loaded`` (in place); return their optima
+    and one-line notes."""
     from ..store.archive_records import load_all
     from .archive import merge
 

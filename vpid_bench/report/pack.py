@@ -1,10 +1,6 @@
-"""Making an archive from a finished sweep: its records and optima read and its per-problem
-summary computed as the report reads them, then written by the archive's one writer
-(:func:`vpid_bench.store.archive_pack.write_archive`).
-
-Kept apart from the reading (:mod:`.archive`, which :mod:`.compute` uses) so that the two
-import each other in one direction only: ``pack -> compute -> archive``.
-"""
+"""Making an archive from a finished sweep: its records, optima and per-problem summary as the
+report reads them, written by :func:`vpid_bench.store.archive_pack.write_archive`. Apart from
+:mod:`.archive` so that imports go one way: ``pack -> compute -> archive``."""
 
 from __future__ import annotations
 
@@ -21,10 +17,8 @@ from .optima import REACHED, load_optima
 
 def pack(sweep_dir: Path, suite: str, out: Path, *, command: str, commit: str | None,
          made_at: str, optima_only: bool = False) -> dict[str, Any]:
-    """Write the archive of the sweep in ``sweep_dir`` into ``out`` and return its manifest.
-    The records and the instance optima are the sweep's own. ``optima_only``: ship the
-    instance optima alone (no runs to rank beside a report's, the optima that ``target=``
-    stops at)."""
+    """Write the archive of the sweep in ``sweep_dir`` into ``out``; return its manifest
+    (``optima_only``: the instance optima alone, what ``target=`` stops at)."""
     data = compute([sweep_dir], True, 0.05, "random", archive=False)
     optima = load_optima([sweep_dir], data.loaded.records).optima
     return write_archive(out, suite, data.loaded.records, data.rows, optima,

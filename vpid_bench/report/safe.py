@@ -10,15 +10,10 @@ table row. Every piece of record text shown to a person is first made one line o
 characters (:func:`clean`), then escaped for its renderer. This module is the one home of
 those rules: every renderer (terminal, Markdown, HTML) uses it.
 
-Text is text (issue 44, N5): a run's error message or a plugin section holding
-``![x](http://...)``, ``[x](https://...)``, ``<http://...>``, ``<img src=...>``, a reference
-link or a bare URL once became a real image or link in report.md and on the HTML pages, and
-opening the site fetched from the network. :func:`escape` (record text) and
-:func:`inert_markdown` (a plugin section's Markdown: its tables and emphasis kept) make all of
-them inert text for any CommonMark or GitHub renderer: ``[`` and ``]`` escaped (no link, image
-or reference), ``<`` escaped (no HTML, no autolink), and the ``:`` of ``scheme://``, the ``.``
-of ``www.`` and the ``@`` of an e-mail address escaped (no bare-URL autolink). The report's
-own links (to its files and pages) are made by its renderers, never from such text, and are
+Text is text (issue 44, N5): :func:`escape` (record text) and :func:`inert_markdown` (a
+plugin section's Markdown, tables and emphasis kept) make links, images, HTML and bare-URL
+autolinks inert for any CommonMark or GitHub renderer (``[``, ``]``, ``<`` and the
+triggers of ``scheme://``, ``www.`` and e-mail addresses escaped). The report's own links are
 the only ones: :func:`local_link` is the rule the HTML renderer and the link check apply.
 """
 
@@ -34,12 +29,9 @@ def _visible(char: str) -> str:
 
 
 def clean(text: object, keep_newlines: bool = False) -> str:
-    """``text`` as printable characters only: every control character (C0 and C1, so every
-    terminal escape sequence, and line breaks), every format character (bidirectional
-    overrides) and every separator other than the space is written as its escape (ESC as
-    ``\\x1b``), so it cannot act on a terminal nor start a line of its own.
-    ``keep_newlines``: a block of several lines (a terminal table) keeps its ``\\n``, each
-    line cleaned. Idempotent: cleaning clean text changes nothing."""
+    """``text`` as printable characters only: every control, format or separator character
+    but the space written as its escape (ESC as ``\\x1b``), so it cannot act on a terminal
+    nor start a line; ``keep_newlines`` keeps a block's ``\\n``. Idempotent."""
     s = str(text)
     if keep_newlines:
         return "\n".join(clean(line) for line in s.split("\n"))
@@ -70,11 +62,9 @@ def _inert_autolinks(text: str) -> str:
 
 
 def escape(text: object) -> str:
-    """Record text for a Markdown line or table cell, shown as it is and nothing else: ``|``,
-    ``[``, ``]`` and a ``\\`` that would escape the next character backslash-escaped (no
-    table cell, link, image or reference), HTML (``& < >``) as entities (no tag, no
-    autolink), backticks as quotes, the triggers of bare-URL autolinks escaped, line breaks
-    as spaces, any other control or format character made visible (:func:`clean`)."""
+    """Record text for a Markdown line or cell, shown as it is: ``|``, ``[``, ``]``, a
+    trailing-escape ``\\`` and autolink triggers backslash-escaped, ``& < >`` as entities,
+    backticks as quotes, line breaks as spaces, the rest :func:`clean`."""
     s = _MD_BACKSLASH.sub(r"\\\\", str(text))
     return clean(_inert_autolinks("".join(_MD_ESCAPES.get(c, c) for c in s)))
 
@@ -86,19 +76,16 @@ _MD_ACTIVE = re.compile(r"\\[!-/:-@\[-`{-~]|[\[\]<]")
 
 def inert_markdown(text: object) -> str:
     """A plugin section's Markdown with every link, image, reference, raw HTML and autolink
-    made text, the rest (tables, emphasis, headings, lists, code) kept: each ``[``, ``]`` and
-    ``<`` not already escaped is backslash-escaped, and so are the triggers of bare-URL
-    autolinks. Inside a code span these escapes show as typed (a small price: telling code
-    from text is the renderer's parse, which a hostile text can steer)."""
+    made text (each unescaped ``[``, ``]``, ``<`` and autolink trigger escaped), the rest
+    kept; inside a code span the escapes show as typed."""
     s = _MD_ACTIVE.sub(lambda m: m.group(0) if len(m.group(0)) == 2 else "\\" + m.group(0),
                        str(text))
     return _inert_autolinks(s)
 
 
 def local_link(url: str) -> bool:
-    """Whether ``url`` names a file of the report itself: a relative path with no scheme,
-    host, absolute path, ``..`` or backslash (``figures/x.png``, ``problem-x.html#ctx``). Any other
-    (``https://``, ``//host``, ``data:``, ``file:``, ``/etc``) is never a link of the report."""
+    """Whether ``url`` names a file of the report: a relative path with no scheme, host,
+    absolute path, ``..`` or backslash (``figures/x.png``, ``problem-x.html#ctx``)."""
     u = str(url).strip()
     return bool(u) and not (re.match(r"[A-Za-z][A-Za-z0-9+.-]*:", u) or u.startswith("/")
                             or "\\" in u or ".." in u.split("#")[0].split("/")
