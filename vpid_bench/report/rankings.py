@@ -156,17 +156,6 @@ def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[s
     return text.rstrip()
 
 
-def search_table(context_rows: Sequence[Mapping[str, Any]], groups: Mapping[str, str] | None
-                 ) -> tuple[list[str], list[list[Any]]]:
-    """(headers, rows) of one context's search-quality table (Markdown)."""
-    h = ["rank", "group", "optimizer", "n", "reached", "median rel_gap", "median floor",
-         "median to x*", "AUC"]
-    body = [[s["rank"], (groups or {}).get(s["algorithm"], "—"), s["algorithm"], s["n"],
-             f"{s['reached']}/{s['n']}", s["rel_gap_median"], s["floor_median"],
-             s["to_opt_median"], s.get("auc", math.nan)] for s in context_rows]
-    return h, body
-
-
 def search_lines(context: str, search: Sequence[Mapping[str, Any]],
                  groups: Mapping[str, str] | None, metric_name: str, test: str | None
                  ) -> list[str]:
@@ -174,7 +163,11 @@ def search_lines(context: str, search: Sequence[Mapping[str, Any]],
     rows = [s for s in search if s["context"] == context]
     if not rows:
         return []
-    h, body = search_table(rows, groups)
+    h = ["rank", "group", "optimizer", "n", "reached", "median rel_gap", "median floor",
+         "median to x*", "AUC"]
+    body = [[s["rank"], (groups or {}).get(s["algorithm"], "—"), s["algorithm"], s["n"],
+             f"{s['reached']}/{s['n']}", s["rel_gap_median"], s["floor_median"],
+             s["to_opt_median"], s.get("auc", math.nan)] for s in rows]
     how = (f"`group`: optimizers sharing a letter are not separated by the Holm-corrected "
            f"pairwise tests ({escape(test)}) on max(rel_gap, {REACHED:g})" if test else
            "`group`: not tested in a single job's report")
