@@ -1,1 +1,1 @@
-"""The archives of built-in results (data only; read by :mod:`vpid_bench.report.archive`)."""
+"""The archives of built-in results (data only; read by :mod:`vpid_bench.store.archive`)."""

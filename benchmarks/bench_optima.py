@@ -56,7 +56,7 @@ def polish_part(runs: int) -> None:
 
 
 def read_part(problem: str, repeat: int) -> None:
-    from vpid_bench.report.archive import load_all
+    from vpid_bench.store.archive_records import load_all
 
     rows = {}
     for name, optima_only in (("whole archives", False), ("optima alone", True)):

@@ -71,8 +71,8 @@ def scaled_archive(archive: Path, instances: int, tmp: Path) -> Path:
     import numpy as np
 
     from vpid_bench.analysis.optimum import optimum_key, record_settings
-    from vpid_bench.report.archive import JOBS, MANIFEST, OPTIMA, RECORDS
     from vpid_bench.report.pack import pack
+    from vpid_bench.store.archive import JOBS, MANIFEST, OPTIMA, RECORDS
     from vpid_bench.store.records import stable_hash, write_json_atomic
 
     sweep = tmp / "scaled-sweep"
@@ -114,7 +114,7 @@ def scaled_archive(archive: Path, instances: int, tmp: Path) -> Path:
 
 def archive_report(archive: Path, instances: int | None, tmp: Path) -> None:
     """The report of ``archive`` (nothing run), and of its scaled copy (see the module)."""
-    from vpid_bench.report.archive import read_archive
+    from vpid_bench.store.archive_records import read_archive
 
     load = os.getloadavg()[0]
     plain, plain_cpu = run_timed([*REPORT, str(archive), "-o", str(tmp / "report-archive")])

@@ -27,8 +27,10 @@ import numpy as np
 
 from vpid_bench.report import suite_scores as ss
 from vpid_bench.report.anytime import RunHits, auc
-from vpid_bench.report.archive import ArchiveError, budgets_per_dim, read_archive
+from vpid_bench.report.archive import budgets_per_dim
 from vpid_bench.report.compute import compute
+from vpid_bench.store.archive import ArchiveError
+from vpid_bench.store.archive_records import read_archive
 
 RESAMPLES = 10_000
 

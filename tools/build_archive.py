@@ -27,10 +27,9 @@ from pathlib import Path
 
 from vpid_bench.job_analysis import SHARED_DIR
 from vpid_bench.plugins import Registry
-from vpid_bench.report.archive import ARCHIVE_DIR_ENV
 from vpid_bench.report.load import load_records
 from vpid_bench.report.pack import pack
-from vpid_bench.store.archive import RUN_FILES
+from vpid_bench.store.archive import ARCHIVE_DIR_ENV, RUN_FILES
 
 ROOT = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent

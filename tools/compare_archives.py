@@ -14,7 +14,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from vpid_bench.report.archive import ArchiveError, read_archive
+from vpid_bench.store.archive import ArchiveError
+from vpid_bench.store.archive_records import read_archive
 
 
 def runs(folder: Path) -> dict[tuple[str, str, int], dict]:

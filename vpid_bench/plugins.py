@@ -44,6 +44,16 @@ class PluginManagerInfo:
     sources: dict[str, dict[str, Any]] = dataclasses.field(default_factory=dict)
 
 
+class PluginManager(pluggy.PluginManager):
+    """pluggy's manager of the ``vpid_bench`` hooks, with what happened while its plugins
+    loaded (:attr:`info`)."""
+
+    def __init__(self) -> None:
+        super().__init__(hookspecs.PROJECT_NAME)
+        self.add_hookspecs(hookspecs)
+        self.info = PluginManagerInfo()
+
+
 def _blocked_names() -> set[str]:
     raw = os.environ.get(BLOCK_ENV, "")
     return {name.strip() for name in raw.split(",") if name.strip()}
@@ -59,16 +69,15 @@ def _entry_point_owner(ep: importlib.metadata.EntryPoint) -> str:
 def get_plugin_manager(
     entry_points: Iterable[importlib.metadata.EntryPoint] | None = None,
     extra_plugins: Iterable[tuple[str, Any]] = (),
-) -> pluggy.PluginManager:
+) -> PluginManager:
     """A fresh plugin manager with every ``vpid_bench`` entry point loaded.
 
     ``entry_points`` replaces the installed entry points (tests use it); ``extra_plugins``
-    registers ``(name, module_or_object)`` pairs on top. The manager's ``vpid_bench_info``
-    attribute is a :class:`PluginManagerInfo` listing blocked and failed plugins.
+    registers ``(name, module_or_object)`` pairs on top. The manager's :attr:`~PluginManager.info`
+    lists blocked and failed plugins and where each loaded one came from.
     """
-    pm = pluggy.PluginManager(hookspecs.PROJECT_NAME)
-    pm.add_hookspecs(hookspecs)
-    info = PluginManagerInfo()
+    pm = PluginManager()
+    info = pm.info
     blocked = _blocked_names()
     if entry_points is None:
         entry_points = importlib.metadata.entry_points(group=ENTRY_POINT_GROUP)
@@ -107,7 +116,6 @@ def get_plugin_manager(
             f"{exc}; the hooks are vpid_bench_register_optimizers, "
             "vpid_bench_register_problems and vpid_bench_register_report_sections"
         ) from exc
-    pm.vpid_bench_info = info  # type: ignore[attr-defined]
     return pm
 
 
@@ -121,8 +129,10 @@ def _register(pm: pluggy.PluginManager, plugin: Any, name: str, owner: str) -> N
 class Registry:
     """The problems and optimizers the plugins registered, by name."""
 
-    def __init__(self, pm: pluggy.PluginManager | None = None) -> None:
+    def __init__(self, pm: PluginManager | None = None) -> None:
         self.pm = pm if pm is not None else get_plugin_manager()
+        #: What happened while the plugins loaded and registered (blocked, failed, sources).
+        self.info = self.pm.info
         self.optimizers: dict[str, type[Optimizer]] = {}
         self.problems: dict[str, type[Problem]] = {}
         self._owner: dict[tuple[str, str], str] = {}
@@ -183,9 +193,7 @@ class Registry:
                 for key in set(table) - set(before):  # undo what it half registered
                     del table[key]
                     self._owner.pop((kind, key), None)
-                info = getattr(self.pm, "vpid_bench_info", None)
-                if info is not None:
-                    info.failed[plugin_name] = f"{type(exc).__name__}: {exc}"
+                self.info.failed[plugin_name] = f"{type(exc).__name__}: {exc}"
                 warnings.warn(
                     f"vpid-bench plugin {plugin_name!r} failed to register its {kind}s and was "
                     f"skipped: {type(exc).__name__}: {exc}",
@@ -215,8 +223,7 @@ class Registry:
         :func:`~vpid_bench.store.provenance.code_digest`, so a plugin changed under the
         same version is told apart)."""
         plugin = self._owner[(kind, name)]
-        info = getattr(self.pm, "vpid_bench_info", None)
-        source = info.sources.get(plugin, {}) if info is not None else {}
+        source = self.info.sources.get(plugin, {})
         cls = (self.problems if kind == "problem" else self.optimizers)[name]
         out = {"plugin": plugin, **source, "code": code_digest(cls)}
         library = getattr(cls, "library", None) if kind == "optimizer" else None

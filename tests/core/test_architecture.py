@@ -239,13 +239,21 @@ def test_the_store_sits_below_analysis_targets_and_the_report():
 
 
 def test_one_schema_string_per_file_format():
-    """Each format's schema string is written once, in its module under store/ (the optimum
-    file's was once in analysis/optimum.py and report/optima.py)."""
-    from vpid_bench.store import archive, optimum, records
+    """Each format's schema string and file names are written once, in its module under
+    store/ (the optimum file's was once in analysis/optimum.py and report/optima.py; the
+    archive's writer and the IOHprofiler export once lived in report/)."""
+    from vpid_bench.store import archive, ioh, job_checks, optimum, records
 
     for schema, home in ((optimum.SCHEMA, "store/optimum.py"),
                          (archive.SCHEMA, "store/archive.py"),
-                         (records.SCHEMA, "store/records.py")):
+                         (records.SCHEMA, "store/records.py"),
+                         (ioh.FORMAT_VERSION, "store/ioh.py"),
+                         *((s, "store/job_checks.py") for s in (
+                             job_checks.DIAGNOSTICS_SCHEMA, job_checks.PROFILE_SCHEMA,
+                             job_checks.COMPARISONS_SCHEMA)),
+                         *((name, "store/archive.py") for name in (
+                             archive.MANIFEST, archive.RECORDS, archive.OPTIMA, archive.SUMMARY,
+                             archive.IOH))):
         holders = [str(p.relative_to(CORE)) for p in _files(CORE)
                    if f'"{schema}"' in p.read_text(encoding="utf-8")]
         assert holders == [home], (schema, holders)
@@ -285,6 +293,33 @@ def test_json_files_are_parsed_only_in_the_store():
     assert bad == ["vpid_bench/shell/main.py"], bad
 
 
+#: Modules that read or write a data format (compressed, archived, pickled): the store's.
+FORMAT_MODULES = ("gzip", "zipfile", "tarfile", "pickle")
+#: Calls that parse or write a JSON data file.
+JSON_CALLS = ("json.dump", "json.dumps", "json.load", "json.loads", "loads_json")
+
+
+def _format_io(path: Path) -> list[str]:
+    """Where a file imports a data-format module or calls a JSON reader or writer."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    hits = [f"{path.name}:{n.lineno} imports {m}" for n in ast.walk(tree)
+            for m in ([a.name for a in n.names] if isinstance(n, ast.Import) else
+                      [n.module or ""] if isinstance(n, ast.ImportFrom) else [])
+            if m.split(".")[0] in FORMAT_MODULES]
+    hits += [f"{path.name}:{n.lineno} calls {ast.unparse(n.func)}" for n in ast.walk(tree)
+             if isinstance(n, ast.Call) and ast.unparse(n.func) in JSON_CALLS]
+    return hits
+
+
+def test_the_report_reads_and_writes_data_formats_only_through_the_store():
+    """report/ holds no reader or writer of a data format of its own (issue 45): an archive
+    (records.jsonl.gz, optima, manifest, ioh.zip), the IOHprofiler export and every JSON file
+    a job writes are read and written through ``vpid_bench.store``. The report's own output
+    (report.md, the HTML pages, figures, its CSV and LaTeX tables) is not a data format."""
+    assert _format_io(CORE / "store" / "archive_pack.py")  # the control: the check sees them
+    assert [h for p in _files(CORE / "report") for h in _format_io(p)] == []
+
+
 def test_every_name_of_the_plugin_api_resolves():
     """``from vpid_bench import <name>`` works for every name the package lists, the ones
     served on first use included (a module moved once left two of them pointing nowhere)."""
@@ -297,3 +332,18 @@ def test_every_name_of_the_plugin_api_resolves():
         except (AttributeError, ImportError) as exc:
             missing.append(f"{name}: {exc}")
     assert missing == []
+
+
+def test_the_plugin_api_names_are_written_once():
+    """api.py's ``__all__`` is the one list of the plugin API's names: the package's
+    ``__all__`` is made from it (issue 45: it was once written in both files),
+    with no name twice."""
+    import vpid_bench
+    from vpid_bench import api
+
+    init = ast.parse((CORE / "__init__.py").read_text(encoding="utf-8"))
+    texts = {n.value for n in ast.walk(init)
+             if isinstance(n, ast.Constant) and isinstance(n.value, str)}
+    assert "Problem" in api.__all__ and texts & set(api.__all__) == set()
+    assert vpid_bench.__all__[:len(api.__all__)] == api.__all__
+    assert len(set(vpid_bench.__all__)) == len(vpid_bench.__all__)

@@ -16,7 +16,7 @@ from vpid_bench.analysis.optimum import polish
 from vpid_bench.experiment import run_from_config
 from vpid_bench.params import hydra_node
 from vpid_bench.report.build import build_report
-from vpid_bench.report.estimator_floors import read_estimator_floors
+from vpid_bench.store.job_checks import read_estimator_floors
 
 
 def test_each_objectives_optimum_on_the_first_instances():

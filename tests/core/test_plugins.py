@@ -77,15 +77,41 @@ def test_a_plugin_that_fails_to_import_is_reported_and_skipped(fake_modules):
     fake_modules(plug_a=_plugin_module("plug_a", ("good",)))
     with pytest.warns(PluginLoadWarning, match="'broken'.*ModuleNotFoundError"):
         pm = get_plugin_manager([_ep("broken", "no_such_module_xyz"), _ep("alpha", "plug_a")])
-    assert "broken" in pm.vpid_bench_info.failed
+    assert "broken" in pm.info.failed
     assert set(Registry(pm).optimizers) == {"good"}
+
+
+def test_a_hook_that_raises_is_named_in_the_registry_info_and_by_the_preflight(fake_modules):
+    """What went wrong while the plugins loaded has one home, the manager's ``info`` (it was
+    an attribute stuck on pluggy's manager, read back with ``getattr`` in four places): a
+    registration hook that raises is recorded there, and the pre-flight's error names it."""
+    from vpid_bench.plugins import PluginManagerInfo
+    from vpid_bench.shell.preflight import _check_choice
+
+    mod = types.ModuleType("plug_raises")
+
+    @hookimpl
+    def vpid_bench_register_optimizers(register):
+        register("half", Dummy)
+        raise RuntimeError("boom")
+
+    mod.vpid_bench_register_optimizers = vpid_bench_register_optimizers
+    fake_modules(plug_raises=mod, plug_a=_plugin_module("plug_a", ("good",)))
+    pm = get_plugin_manager([_ep("raiser", "plug_raises"), _ep("alpha", "plug_a")])
+    assert isinstance(pm.info, PluginManagerInfo) and pm.info.failed == {}
+    with pytest.warns(PluginLoadWarning, match="'raiser' failed to register"):
+        registry = Registry(pm)
+    assert registry.info is pm.info and registry.info.failed == {"raiser": "RuntimeError: boom"}
+    assert set(registry.optimizers) == {"good"}  # what it half registered is undone
+    with pytest.raises(ConfigError, match="failed to load: raiser: RuntimeError: boom"):
+        _check_choice("optimizer", "half", registry)
 
 
 def test_blocked_plugins_are_not_loaded(fake_modules, monkeypatch):
     fake_modules(plug_a=_plugin_module("plug_a", ("a1",)), plug_b=_plugin_module("plug_b", ("b1",)))
     monkeypatch.setenv(BLOCK_ENV, " beta , other")
     pm = get_plugin_manager([_ep("alpha", "plug_a"), _ep("beta", "plug_b")])
-    assert pm.vpid_bench_info.blocked == ["beta"]
+    assert pm.info.blocked == ["beta"]
     assert set(Registry(pm).optimizers) == {"a1"}
 
 

@@ -15,10 +15,11 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parents[1] / "sweeps"))
 from sweep_helpers import run_cli  # noqa: E402
 
-from vpid_bench.report import archive as arch  # noqa: E402
 from vpid_bench.report.anytime import hit_times  # noqa: E402
 from vpid_bench.report.pack import pack  # noqa: E402
 from vpid_bench.runner import Lane, run_many  # noqa: E402
+from vpid_bench.store import archive as arch  # noqa: E402
+from vpid_bench.store.archive_records import read_archive  # noqa: E402
 from vpid_bench.targets import stop_value  # noqa: E402
 
 KEYS = ["report=false", "isolation=none", "progress=false", "problem=smoke_quarter",
@@ -62,7 +63,7 @@ def test_runs_stop_at_the_target_and_their_traces_are_prefixes(archives, tmp_pat
     assert done.returncode == 0, done.stderr[-2000:]
     full = _records(archives.parent / "base" / next(
         p.name for p in (archives.parent / "base").iterdir() if "de4" in p.name))
-    optima = {o.instance: o.f_opt for o in arch.read_archive(archives / "smoke").optima}
+    optima = {o.instance: o.f_opt for o in read_archive(archives / "smoke").optima}
     stopped = _records(out)
     assert len(stopped) == 3
     for i, r in stopped.items():
@@ -157,7 +158,7 @@ def test_an_archive_of_optima_alone_certifies_without_adding_runs(archives, tmp_
     manifest = pack(archives.parent / "base", "paper", only / "paper", command="test",
                          commit=None, made_at="2026-01-01T00:00:00+00:00", optima_only=True)
     assert manifest["runs"] == 0 and manifest["optima_only"] is True
-    read = arch.read_archive(only / "paper")
+    read = read_archive(only / "paper")
     assert read.records == [] and len(read.optima) >= 3
     done, out = _job(tmp_path, only, "runs=3", "target=0.5")
     assert done.returncode == 0, done.stderr[-2000:]

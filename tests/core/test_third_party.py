@@ -128,7 +128,8 @@ def test_on_the_smoke_suite_it_is_ranked_among_the_archived_builtins(site, tmp_p
     and run alone on ``suite=smoke`` (or one of its members: the default run's fast twin of
     the same path), is ranked beside every built-in optimizer from the archive shipped with
     vpid-bench, and nothing but its own jobs runs."""
-    from vpid_bench.report.archive import default_root, read_archive
+    from vpid_bench.store.archive import default_root
+    from vpid_bench.store.archive_records import read_archive
 
     shipped = read_archive(default_root() / "smoke")
     builtins = set(shipped.manifest["optimizers"])

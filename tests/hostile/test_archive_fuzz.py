@@ -2,10 +2,10 @@
 the manifest, the record lines and the optimum lines of a real small archive, and the
 manifest's checksums are made to match (as a forger would). Whatever the content:
 
-* :func:`~vpid_bench.report.archive.read_archive` returns an archive or raises
-  :class:`~vpid_bench.report.archive.ArchiveError` (one line), never anything else;
+* :func:`~vpid_bench.store.archive_records.read_archive` returns an archive or raises
+  :class:`~vpid_bench.store.archive.ArchiveError` (one line), never anything else;
 * what it returns holds each run once, and every record passes the type check and the
-  plausibility check (:mod:`vpid_bench.report.plausible`);
+  plausibility check (:mod:`vpid_bench.store.plausible`);
 * the report computed beside a sweep's own runs does not fail, and its terminal text holds
   no control character.
 """
@@ -27,9 +27,10 @@ from hypothesis import strategies as st  # noqa: E402
 from test_untrusted_archive import SETTINGS  # noqa: E402
 
 from vpid_bench.experiment import run_from_config  # noqa: E402
-from vpid_bench.report import archive as arch  # noqa: E402
-from vpid_bench.report.load import check_record  # noqa: E402
-from vpid_bench.report.plausible import implausible  # noqa: E402
+from vpid_bench.store import archive as arch  # noqa: E402
+from vpid_bench.store.archive_records import read_archive  # noqa: E402
+from vpid_bench.store.plausible import implausible  # noqa: E402
+from vpid_bench.store.record_check import check_record  # noqa: E402
 
 #: Hostile leaves: non-finite and huge numbers, wrong types, control characters, long text.
 LEAF = st.one_of(
@@ -160,7 +161,7 @@ def test_hostile_archive_content_is_refused_or_checked(base, records, optima, ma
     _write(base, target, _apply(base["records"], records, junk),
            _apply(base["optima"], optima, junk), manifest)
     try:
-        archive = arch.read_archive(target)
+        archive = read_archive(target)
     except arch.ArchiveError as exc:
         hypothesis.event("refused")
         assert "\n" not in str(exc) and str(exc).startswith("archive ")

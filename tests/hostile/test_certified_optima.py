@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 from hostile_helpers import error_lines, main_in_process, run_cli
 
-from vpid_bench.report import archive as arch
+from vpid_bench.store import archive as arch
 
 PROBLEM = "smoke_quarter"
 JOB = [f"problem={PROBLEM}", "optimizer=random", "runs=2", "progress=false", "report=false",

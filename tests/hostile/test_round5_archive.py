@@ -27,7 +27,7 @@ import pytest
 from hostile_helpers import TINY, error_lines, main_in_process
 
 from vpid_bench.fileio import MAX_JSON_DEPTH, loads_json
-from vpid_bench.report import archive as arch
+from vpid_bench.store import archive as arch
 from vpid_bench.store.record_check import MAX_NAME_CHARS, MAX_TEXT_CHARS, check_record
 
 SETTINGS = [*TINY, "problem=smoke_quarter", "runs=2"]

@@ -190,7 +190,7 @@ def test_n8_a_report_that_fails_mid_build_leaves_the_old_one_whole(two_sweeps, t
     report is there, byte for byte, and no hidden copy is left beside it; the same where the
     one-step exchange of two folders is not available (two renames, signals held back)."""
     from vpid_bench import fileio
-    from vpid_bench.report import render
+    from vpid_bench.store import csv_table
 
     a, b = two_sweeps
     out = tmp_path / "report"
@@ -198,7 +198,7 @@ def test_n8_a_report_that_fails_mid_build_leaves_the_old_one_whole(two_sweeps, t
     before = _files(out)
     if not exchange:
         monkeypatch.setattr(fileio, "_exchange", lambda *_: False)
-    real, calls = render.write_csv, []
+    real, calls = csv_table.write_csv, []
 
     def failing(path, *args, **kwargs):
         calls.append(path)
@@ -206,11 +206,11 @@ def test_n8_a_report_that_fails_mid_build_leaves_the_old_one_whole(two_sweeps, t
             raise RuntimeError("mid-build failure")
         return real(path, *args, **kwargs)
 
-    monkeypatch.setattr(render, "write_csv", failing)
+    monkeypatch.setattr(csv_table, "write_csv", failing)
     with pytest.raises(RuntimeError, match="mid-build"):
         _report([b], out)
     assert len(calls) == 3 and _files(out) == before and _leftovers(out) == []
-    monkeypatch.setattr(render, "write_csv", real)
+    monkeypatch.setattr(csv_table, "write_csv", real)
     _report([b], out)  # and the swap itself, either way
     assert (out / "optimizer-gamma.html").is_file() and not (out / "optimizer-alpha.html").exists()
     assert _leftovers(out) == []
@@ -344,7 +344,7 @@ def test_n8_a_mount_point_is_swapped_entry_by_entry(two_sweeps, tmp_path, monkey
     """A folder that is a mount point cannot be renamed: its entries are swapped (the new
     ones built in a hidden folder inside it), a failed build leaves them as they were, and
     nothing hidden is left in it."""
-    from vpid_bench.report import render
+    from vpid_bench.store import csv_table
 
     a, b = two_sweeps
     out = tmp_path / "mnt"
@@ -355,7 +355,7 @@ def test_n8_a_mount_point_is_swapped_entry_by_entry(two_sweeps, tmp_path, monkey
     before = _files(out)
     _report([a], tmp_path / "fresh")
     assert before == _files(tmp_path / "fresh")
-    monkeypatch.setattr(render, "write_csv", lambda *_: 1 / 0)
+    monkeypatch.setattr(csv_table, "write_csv", lambda *_: 1 / 0)
     with pytest.raises(ZeroDivisionError):
         _report([b], out)
     assert _files(out) == before

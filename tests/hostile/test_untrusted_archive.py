@@ -25,9 +25,10 @@ from extras import limit, needs_archive_runs
 from hostile_helpers import REPORT_CLI, TINY, cli_env, error_lines
 
 from vpid_bench.experiment import run_from_config
-from vpid_bench.report import archive as arch
 from vpid_bench.report.build import build_report
 from vpid_bench.report.pack import pack
+from vpid_bench.store import archive as arch
+from vpid_bench.store.archive_records import read_archive
 
 SETTINGS = [*TINY, "problem=smoke_quarter"]
 #: The address space a report process may use in these tests (bytes): a bomb read whole (512
@@ -126,12 +127,12 @@ def test_6_a_line_longer_than_the_limit_is_refused(made, tmp_path, monkeypatch):
     _write_records(folder, ["[" + "0," * 5000 + "0]\n"])
     monkeypatch.setattr("vpid_bench.store.archive.MAX_LINE_BYTES", 1000)  # its one home
     with pytest.raises(arch.ArchiveError, match="line 1 is longer than 1000 bytes"):
-        arch.read_archive(folder)
+        read_archive(folder)
 
 
 @needs_archive_runs
 def test_6_the_shipped_archive_is_within_every_limit():
-    a = arch.read_archive(arch.default_root() / "smoke")
+    a = read_archive(arch.default_root() / "smoke")
     assert len(a.records) < arch.MAX_LINES and a.bad == []
 
 
@@ -147,7 +148,7 @@ def test_7_a_run_given_twice_refuses_the_archive(how, made, tmp_path):
     _write_records(folder, [json.dumps(r) + "\n" for r in [*recs, copy]])
     with pytest.raises(arch.ArchiveError, match=rf"line {len(recs) + 1} repeats the run of "
                                                 r"line 1 \(an archive holds each run once"):
-        arch.read_archive(folder)
+        read_archive(folder)
     report = build_report([made["mine"]], tmp_path / "report", short=True,
                           archive=folder.parent)
     assert [r for r in report.loaded.records if "_archive" in r] == []
@@ -163,7 +164,7 @@ def test_7_an_optimum_given_twice_refuses_the_archive(made, tmp_path):
     (folder / arch.OPTIMA).write_text("".join(lines) + json.dumps(first) + "\n")
     _rehash(folder, arch.OPTIMA)
     with pytest.raises(arch.ArchiveError, match=r"gives the optimum of the instance of line 1"):
-        arch.read_archive(folder)
+        read_archive(folder)
 
 
 def _set(record: dict, fields: str, value) -> None:
@@ -204,7 +205,7 @@ def test_8_a_value_no_run_gives_is_skipped_and_named(field, value, words, made, 
     for r in forged:
         _set(r, field, value)
     _write_records(folder, [json.dumps(r) + "\n" for r in recs])
-    archive = arch.read_archive(folder)
+    archive = read_archive(folder)
     assert {r["optimizer"]["name"] for r in archive.records} == {"random"}
     assert len(archive.bad) == len(forged) and all(words in b for b in archive.bad), archive.bad
     report = build_report([made["mine"]], tmp_path / "report", short=True,
@@ -233,7 +234,7 @@ def test_7_packing_jobs_with_optima_of_their_own_keeps_the_lowest_per_instance(m
     found = load_optima([base, base / "random"], []).optima
     pack(base, "smoke", tmp_path / "a" / "smoke", command="t", commit="c",
          made_at="2026-01-01T00:00:00+00:00")
-    archive = arch.read_archive(tmp_path / "a" / "smoke")
+    archive = read_archive(tmp_path / "a" / "smoke")
     assert len(found) == 2 * len(archive.optima)
     best = {arch.optimum_instance(o): o.f_opt for o in sorted(found, key=lambda o: -o.f_opt)}
     assert {arch.optimum_instance(o): o.f_opt for o in archive.optima} == best

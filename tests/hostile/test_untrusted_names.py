@@ -14,13 +14,19 @@ import pytest
 from hostile_helpers import TINY, run_cli
 
 from vpid_bench.experiment import run_from_config
-from vpid_bench.report.safe import clean, escape, escape_html
+from vpid_bench.report.safe import clean, escape
+from vpid_bench.report.site import environment
 from vpid_bench.store import records as rec
 
 #: A name that sets the window title, rings, colours, reverses the text and forges a row.
 HOSTILE = "evil\x1b]0;pwned\x07\x1b[31m\u202e\r\n| forged | row |\x9b2J"
 #: What must never reach a reader raw.
 RAW = ("\x1b", "\x07", "\u202e", "\r", "\x9b")
+
+
+def _html(text: str) -> str:
+    """Record text as the HTML pages show it: cleaned, then auto-escaped by the templates."""
+    return environment().from_string("{{ t }}").render(t=clean(text))
 
 
 def _forged(text: str) -> list[str]:
@@ -35,14 +41,14 @@ def test_clean_leaves_one_printable_line_and_is_idempotent(text):
     out = clean(text)
     assert out.isprintable() and "\n" not in out
     assert clean(out) == out
-    assert escape(text).isprintable() and escape_html(text).isprintable()
+    assert escape(text).isprintable() and _html(text).isprintable()
     if text.isprintable():
         assert out == text  # printable text is left exactly as it was
 
 
 def test_each_renderer_keeps_its_own_rules():
     assert escape("a|b<i>&\nc") == "a\\|b&lt;i&gt;&amp; c"
-    assert escape_html('<b title="x">\x1b') == "&lt;b title=&quot;x&quot;&gt;\\x1b"
+    assert _html('<b title="x">\x1b') == "&lt;b title=&#34;x&#34;&gt;\\x1b"
     assert clean("a\nb\x1b", keep_newlines=True) == "a\nb\\x1b"
 
 

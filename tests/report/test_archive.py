@@ -22,9 +22,13 @@ from extras import limit, needs_archive_runs
 sys.path.insert(0, str(Path(__file__).parents[1] / "sweeps"))
 from sweep_helpers import run_cli  # noqa: E402
 
-from vpid_bench.report import archive as arch  # noqa: E402
+from vpid_bench.report import archive as report_archive  # noqa: E402
 from vpid_bench.report.build import build_report  # noqa: E402
-from vpid_bench.report.pack import compact_trace, pack  # noqa: E402
+from vpid_bench.report.pack import pack  # noqa: E402
+from vpid_bench.store import archive as arch  # noqa: E402
+from vpid_bench.store import archive_records  # noqa: E402
+from vpid_bench.store.archive_pack import compact_trace  # noqa: E402
+from vpid_bench.store.archive_records import load_all, read_archive  # noqa: E402
 
 SWEEP = ["report=false", "archive=false", "isolation=none", "problem=smoke_quarter"]
 
@@ -160,11 +164,11 @@ def test_the_optima_alone_are_read_without_the_records_and_checked_the_same(
     """What ``target=`` reads (``optima_only``): the same optima as the whole archive, no
     record parsed (the shipped archives' 8,265 records took 6.5 s, once per job), and a
     changed records file still refuses the archive."""
-    whole = arch.read_archive(made["archives"] / "smoke")
+    whole = read_archive(made["archives"] / "smoke")
     with monkeypatch.context() as m:
-        m.setattr(arch, "_read_records", lambda *a: pytest.fail("records were read"))
-        alone = arch.read_archive(made["archives"] / "smoke", optima_only=True)
-        found, bad = arch.load_all(made["archives"], {"smoke_quarter"}, optima_only=True)
+        m.setattr(archive_records, "_read_records", lambda *a: pytest.fail("records were read"))
+        alone = read_archive(made["archives"] / "smoke", optima_only=True)
+        found, bad = load_all(made["archives"], {"smoke_quarter"}, optima_only=True)
     assert whole.records and alone.records == [] and bad == []
     assert alone.optima == whole.optima and [a.optima for a in found] == [whole.optima]
     archives = _copy(made, tmp_path)
@@ -173,7 +177,7 @@ def test_the_optima_alone_are_read_without_the_records_and_checked_the_same(
     data[-9] ^= 0xFF
     path.write_bytes(bytes(data))
     with pytest.raises(arch.ArchiveError, match="does not match the SHA-256"):
-        arch.read_archive(archives / "smoke", optima_only=True)
+        read_archive(archives / "smoke", optima_only=True)
 
 
 def test_target_certifies_from_the_optima_alone(made, monkeypatch, registry,
@@ -184,7 +188,8 @@ def test_target_certifies_from_the_optima_alone(made, monkeypatch, registry,
 
     job = parse_job(compose_config([*SWEEP, "optimizer=random", "runs=3", "target=1e-8"]),
                     registry)
-    monkeypatch.setattr(arch, "_read_records", lambda *a: pytest.fail("records were read"))
+    monkeypatch.setattr(archive_records, "_read_records",
+                        lambda *a: pytest.fail("records were read"))
     found = certified_optima(job, build_problem_from_job(job), made["archives"])
     assert sorted(found) == [0, 1, 2]
 
@@ -263,7 +268,7 @@ def test_per_job_files_are_checked_like_the_rest(made, tmp_path, damage, fragmen
     archives = _copy(made, tmp_path)
     damage(archives / "smoke")
     with pytest.raises(arch.ArchiveError, match=fragment):
-        arch.read_archive(archives / "smoke")
+        read_archive(archives / "smoke")
 
 
 def _add_listed(folder: Path, name: str) -> None:
@@ -299,7 +304,7 @@ def test_archived_traces_keep_their_improvements_and_lose_nothing(made):
     from vpid_bench.report.load import load_records
 
     own = {r["run_id"]: r for r in load_records([made["base"]]).records}
-    archived = arch.read_archive(made["archives"] / "smoke").records
+    archived = read_archive(made["archives"] / "smoke").records
     cut = 0
     for rec in archived:
         full = own[rec["run_id"]]
@@ -339,7 +344,7 @@ def test_a_trace_is_cut_to_its_improvements():
 
 @pytest.fixture(scope="module")
 def shipped():
-    return arch.read_archive(arch.default_root() / "smoke")
+    return read_archive(arch.default_root() / "smoke")
 
 
 @needs_archive_runs
@@ -373,7 +378,7 @@ def test_the_shipped_archive_was_made_by_this_code(shipped, registry):
         cls = registry.problem(name)
         problem = cls(build_dataclass(cls.Config, rec["problem"]["config"])).instance(index)
         assert problem.instance_id() == rec["instance"]["id"]
-        assert arch._same_instance(
+        assert report_archive._same_instance(
             {"parameters": {"true": problem.x_true.tolist()},
              "problem": {"info": problem.describe()}}, rec) is None, (name, index)
     assert len(seen) == 2 * len(shipped.problems)
@@ -386,7 +391,7 @@ def test_the_shipped_paper_optima_belong_to_this_codes_records(registry):
     optimum (first two instances per design) is the archived value, to 1e-9."""
     from vpid_bench.params import build_dataclass
 
-    paper = arch.read_archive(arch.default_root() / "paper")
+    paper = read_archive(arch.default_root() / "paper")
     assert paper.records == [] and paper.manifest["optima_only"] is True
     by_design: dict[str, list] = {}
     for o in paper.optima:
@@ -555,7 +560,7 @@ def test_the_wheel_alone_certifies_and_the_report_says_what_to_install(tmp_path,
     alone, bad = archive_optima(None, {"smoke_quarter"})
     assert bad == [] and alone == with_runs
     with pytest.raises(arch.ArchiveError, match=r"records.jsonl.gz is missing .*make install"):
-        arch.read_archive(smoke)
+        read_archive(smoke)
 
 
 def test_the_wheel_ships_no_archived_runs():

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from vpid_bench.report.archive import Archive, merge
+from vpid_bench.report.archive import merge
+from vpid_bench.store.archive_records import Archive
 
 
 def _record(optimizer: str, budget: int, instance: str = "i0") -> dict:

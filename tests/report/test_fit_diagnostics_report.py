@@ -17,8 +17,9 @@ from vpid_bench.api import Bounds, Problem, ProblemConfig
 from vpid_bench.experiment import run_job
 from vpid_bench.plugins import Registry
 from vpid_bench.report.build import build_report
-from vpid_bench.report.diagnostics import plain_line, read_diagnostics
+from vpid_bench.report.diagnostics import plain_line
 from vpid_bench.spec import Job, JobSpec
+from vpid_bench.store.job_checks import read_diagnostics
 
 T = np.linspace(0.0, 3.0, 600)
 HIDDEN = np.array([2.0, 1.5, 0.3])

@@ -249,3 +249,24 @@ def test_a_structural_symmetry_is_named_in_the_section(tmp_path, registry, full)
     assert "The record is blind to a combination of the parameters" in md
     assert "Ix (" in md.split("## Identifiability")[1]
     assert "blind to a combination" not in " ".join(full.report_md.read_text().split())
+
+
+def test_a_design_is_labelled_from_its_settings_not_by_stripping_its_context_text(tmp_path):
+    """A design's label is its problem and varying settings without the protocol, made from
+    the rows' columns: a setting whose value reads like a protocol token (``a ps=7``) is
+    kept whole (stripping ``ps=`` words from the context label once cut it to ``a``)."""
+    from report_synth import record, write_job
+
+    from vpid_bench.report.identifiability import _design_label
+    from vpid_bench.report.load import load_records, run_rows
+
+    for note in ("a ps=7", "b"):
+        for ps in (10, 20):
+            write_job(tmp_path / f"{note[0]}{ps}", [record(
+                problem="toy", optimizer="o", ps=ps, run_index=0, x=np.ones(2), f=1.0,
+                names=["x1", "x2"], true=None, problem_extra={"note": note})])
+    rows = run_rows(load_records([tmp_path]).records)
+    assert {r["context"] for r in rows} >= {"toy ps=10 note=a ps=7", "toy ps=20 note=b"}
+    design = [r for r in rows if r["problem.note"] == "a ps=7"]
+    assert _design_label(design) == "toy note=a ps=7"
+    assert _design_label(rows) == "toy note=a ps=7 / toy note=b"

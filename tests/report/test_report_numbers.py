@@ -181,6 +181,19 @@ def test_generic_metric_columns(tmp_path):
     assert "err" in rep.headline
 
 
+def test_the_population_size_is_the_problems_as_its_record_states_it(tmp_path):
+    """A run's ``ps`` (its context's first token and the rows' ``ps``) is the problem's
+    protocol, ``problem.config.ps``: never an optimizer parameter of that name (the loader
+    once read ``optimizer.params.ps`` first)."""
+    recs = [record(problem="toy", optimizer="a", ps=10, run_index=i, x=np.ones(2), f=1.0 + i,
+                   names=["x1", "x2"], true=None) for i in range(2)]
+    for r in recs:
+        r["optimizer"]["params"]["ps"] = 99
+    write_job(tmp_path / "s" / "a", recs)
+    rows = run_rows(load_records([tmp_path / "s"]).records)
+    assert {(r["context"], r["ps"]) for r in rows} == {("toy ps=10", 10)}
+
+
 def test_a_null_metric_ranks_last_and_minus_inf_stays_minus_inf(tmp_path):
     job = objective_job(tmp_path / "s", "a", 10, [1.0, 2.0, 3.0])
     path = sorted((job / "records").glob("run-*.json"))[0]
@@ -237,7 +250,8 @@ def test_a12_matches_a_direct_count():
     x, y = np.array([1.0, 2.0, 3.0, 3.0]), np.array([3.0, 0.5, 4.0])
     direct = np.mean([(a > b) + 0.5 * (a == b) for a in x for b in y])
     u = ss.mannwhitneyu(x, y).statistic
-    assert stats.a12_from_u(u, len(x), len(y)) == pytest.approx(direct, abs=1e-12)
+    assert stats.a12(x, y) == pytest.approx(direct, abs=1e-12)
+    assert stats.a12(x, y) == pytest.approx(u / (len(x) * len(y)), abs=1e-12)
 
 
 def test_friedman_needs_blocks_and_says_so(three_optimizers):

@@ -217,7 +217,7 @@ def test_paired_report_ranks_twice_with_groups_and_explains_the_disagreement(tmp
 
 def test_ioh_export_loads_in_iohinspector(tmp_path):
     ih = pytest.importorskip("iohinspector")
-    from vpid_bench.report.ioh_export import export_ioh
+    from vpid_bench.store.ioh import export_ioh
 
     root = _paired_sweep(tmp_path)
     loaded = load_records([root])

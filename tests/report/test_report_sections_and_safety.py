@@ -18,9 +18,10 @@ from report_synth import objective_job, record, write_job
 from vpid_bench import hookimpl
 from vpid_bench.plugins import Registry
 from vpid_bench.report.build import build_report
-from vpid_bench.report.safe import escape, slug
+from vpid_bench.report.safe import escape
 from vpid_bench.report.sections import Contribution, HeadlineColumn, Section
 from vpid_bench.store.artifacts import BadArtifactError, read_best_signals, write_best_signals
+from vpid_bench.store.paths import slug
 
 
 def _toy_plugin(calls: list) -> types.SimpleNamespace:

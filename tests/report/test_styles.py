@@ -17,7 +17,7 @@ NAMES = [f"opt{k:02d}" for k in range(20)]
 
 def test_twenty_names_get_twenty_distinct_styles():
     got = styles.assign(NAMES)
-    assert len({s.key() for s in got.values()}) == 20
+    assert len({(s.colour, s.dash, s.marker) for s in got.values()}) == 20
     # colour and dashes alone tell 40 apart; no colour shares its marker below 70
     many = styles.assign(f"o{k:03d}" for k in range(70))
     assert len({(s.colour, s.dash) for s in list(many.values())[:40]}) == 40

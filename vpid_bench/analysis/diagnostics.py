@@ -41,9 +41,9 @@ from typing import Any
 
 import numpy as np
 
+from ..store.job_checks import DIAGNOSTICS_SCHEMA as SCHEMA
 from ..store.job_files import DIAGNOSTICS
 
-SCHEMA = "vpid-bench/diagnostics/1"
 #: The two-sided 99 % normal quantile (scipy.stats.norm.ppf(0.995)).
 Z99 = 2.5758293035489004
 #: Significance level of the whiteness test (Ljung–Box).

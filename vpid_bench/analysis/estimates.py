@@ -23,17 +23,14 @@ from typing import Any
 import numpy as np
 
 from ..problem import Problem
+from ..store.job_checks import COMPARISONS_SCHEMA, MAX_COMPARISONS, PROFILE_SCHEMA
 from ..store.job_files import COMPARISONS, PROFILE, write_job_json
 
 PROFILE_FILE = PROFILE
 COMPARISONS_FILE = COMPARISONS
-PROFILE_SCHEMA = "vpid-bench/profile/1"
-COMPARISONS_SCHEMA = "vpid-bench/comparisons/1"
 #: Longest a profile may take (s), judged from its first fit before it starts (a job's
 #: analysis should not outlast its runs by much; docs/report.md).
 PROFILE_LIMIT_S = 120.0
-#: Most comparison rows a problem may give (the report prints each).
-MAX_COMPARISONS = 20
 
 
 def write_profile(problem: Problem, optimum: dict[str, Any], job_dir: Path,

@@ -1,29 +1,9 @@
-"""The answer first: which optimizer, for which budget, with which estimator, in a few lines
-at the top of the terminal's first screen, of ``report.md`` and of the HTML overview.
-
-Everything here is derived from what the report already computed, never written by hand:
-
-* **Which optimizer, for which budget** (a report with suite scores, :mod:`.suite_scores`):
-  at each rung of the budget ladder (10·D, 100·D, ... evaluations, where the runs went that
-  far), the optimizer that solves the largest share of (run, target) pairs across the suite,
-  with those that solve as many (:func:`.ties.share_leaders`: within one percentage point;
-  the higher suite score first). Where some optimizers use the problem's residuals (their
-  class sets ``wants_residuals``: they need a problem that offers residuals) and lead, the
-  answer is given twice: with residuals (every optimizer) and without (those that need none).
-  The references (random search, the box centre) are never named a leader; where one solves
-  as many as the leader, the answer says so.
-* **Per problem**: the verdicts (:mod:`.verdicts`): whom they recommend on how many contexts,
-  and on how many none, at the runs' budget.
-* **With which estimator**: the objective the runs minimised (``problem.objective``) and
-  where it, not the search or the records, limits the accuracy (rule 4 of the verdicts),
-  with the estimator whose optimum lies closer.
-* **A compact table**: per context, the verdict in a few words, what limits it, the floor and
-  the bound; the verdicts in full are one heading (Markdown) or one click (HTML) away.
-* **Without a truth** (a measured record): the identified values with their 95 % intervals
-  and the stated quantities, and no word of a truth.
-
-Texts are Markdown with record text escaped (:func:`.safe.escape`); the terminal cleans them.
-"""
+"""The answer first, at the top of the terminal, ``report.md`` and the HTML overview, all
+derived from what the report computed: which optimizer leads at each rung of the budget
+ladder (:mod:`.suite_scores`; given with and without residuals where optimizers that use
+them lead; references never named a leader), whom the verdicts recommend per problem, which
+estimator and where it limits the accuracy, a compact table per context, and without a truth
+the identified values. Texts are Markdown with record text escaped."""
 
 from __future__ import annotations
 
@@ -55,16 +35,13 @@ LIMITED_BY = {"search": "search (more would gain)",
 #: Without a truth: whether the leader reaches the record's optimum.
 LIMITS_NO_TRUTH = {True: "the record (optimum reached)",
                    False: "search (more would move it)"}
-#: Readers' names of the references.
-REFERENCE_WORDS = {"random": "random search", "centre": "the box centre"}
 
 
 @dataclasses.dataclass(frozen=True)
 class Rung:
-    """Who leads at one budget: ``per_dim`` evaluations per parameter; ``leaders``: the
-    leader first, then those that solve as many (:func:`.ties.share_leaders`); ``share``:
-    the leader's share of (run, target) pairs solved; ``references``: references that solve
-    as many (then nothing is shown to beat them there)."""
+    """Who leads at ``per_dim`` evaluations per parameter: the leader first, then those that
+    solve as many; ``share``: the leader's share of (run, target) pairs solved;
+    ``references``: references that solve as many."""
 
     per_dim: int
     leaders: tuple[str, ...]
@@ -74,9 +51,8 @@ class Rung:
 
 @dataclasses.dataclass(frozen=True)
 class Pool:
-    """The leaders among some optimizers, rung by rung: ``label`` ``"with residuals"``,
-    ``"without residuals"`` or ``""`` (every optimizer, none uses residuals or it does not
-    matter)."""
+    """The leaders among some optimizers, rung by rung (``label``: ``"with residuals"``,
+    ``"without residuals"`` or ``""``)."""
 
     label: str
     rungs: tuple[Rung, ...]
@@ -165,9 +141,8 @@ def pools(ladder: Sequence[Sequence[Any]], scores: Mapping[str, float],
 
 
 def _pool_text(pool: Pool) -> str:
-    """``"`lsq` at every budget (10·D: 92 %, 100·D: 100 %, 1,000·D: 100 %; `de_lsq` as many by
-    1,000·D)"`` or ``"`nevergrad` by 10·D and 100·D (8 %, 56 %), `cmaes` by 1,000·D (98 %;
-    `de2`, `lshade` and `jade` as many)"``: consecutive rungs with one leader said once."""
+    """``"`nevergrad` by 10·D and 100·D (8 %, 56 %), `cmaes` by 1,000·D (98 %; `de2` as
+    many)"``: consecutive rungs with one leader said once."""
     spans: list[list[Rung]] = []
     for r in pool.rungs:
         if spans and spans[-1][-1].leaders[0] == r.leaders[0]:
@@ -189,7 +164,8 @@ def _pool_text(pool: Pool) -> str:
             if r.leaders[1:]:
                 extra.append(f"{_names(r.leaders[1:])} as many{at}")
             if r.references:
-                refs = " and ".join(REFERENCE_WORDS.get(x, escape(x)) for x in r.references)
+                refs = " and ".join(verdicts.REFERENCE_WORDS.get(x, escape(x))
+                                    for x in r.references)
                 extra.append(f"{refs} as many{at}: none is shown to beat it there")
         parts.append(f"`{escape(span[0].leaders[0])}` {head} ({shares}"
                      + "".join(f"; {e}" for e in extra) + ")")
@@ -208,8 +184,7 @@ def _count(items: Mapping[str, int], total: int, noun: str) -> str:
 
 
 def sentences(a: Answer) -> list[tuple[str, str]]:
-    """The answer as (label, Markdown sentence) pairs, in order: which optimizer for which
-    budget, per problem, with which estimator."""
+    """The answer as (label, Markdown sentence) pairs, in order."""
     out: list[tuple[str, str]] = []
     noun = "problems" if a.per_problem else "contexts"
     if a.pools:
@@ -298,10 +273,9 @@ def _value(x: float, unit: str) -> str:
 
 def table(results: Sequence[Any], labels: Mapping[str, str] | None = None
           ) -> tuple[list[str], list[list[Any]]]:
-    """The compact table: per context (:class:`.first_screen.ContextResult`; shown as
-    ``labels[context]``, e.g. its problem where each problem has one context), the verdict in
-    a few words, the floor and the bound (with their units) and what limits it; without any
-    truth, no floor or bound columns. Record text raw: each renderer makes it safe."""
+    """The compact table: per context (shown as ``labels[context]``), the verdict in a few
+    words, the floor and the bound (none without any truth) and what limits it. Record text
+    raw: each renderer makes it safe."""
     truth = any(r.truth for r in results)
     labels = labels or {}
     headers = ["problem", "verdict"] + (["floor", "bound"] if truth else []) + ["limited by"]
@@ -316,8 +290,7 @@ def table(results: Sequence[Any], labels: Mapping[str, str] | None = None
 
 
 def _budget(data: Any) -> str:
-    """The runs' budget per parameter (``"1,000·D"``) when every context's runs share one,
-    else ``""``."""
+    """The runs' budget per parameter (``"1,000·D"``) when all share one, else ``""``."""
     dims = {r["run_id"]: len((r.get("parameters") or {}).get("names") or [])
             for r in data.loaded.records}
     per = set()
@@ -347,9 +320,8 @@ def _identified(r: Any) -> tuple[str, str, list[str], list[list[Any]]] | None:
 
 def derive(data: Any, results: Sequence[Any], suite: Any = None,
            residual_users: set[str] | frozenset[str] = frozenset()) -> Answer:
-    """The answer of a report from its :class:`~.compute.ReportData`, its first screens
-    (:class:`.first_screen.ContextResult`) and suite scores (:class:`.model.SuiteScores`,
-    or ``None``); ``residual_users``: the optimizers (row labels) that need residuals."""
+    """The answer of a report from its data, first screens and suite scores (or ``None``);
+    ``residual_users``: the optimizers (row labels) that need residuals."""
     a = Answer()
     if suite is not None and suite.ladder:
         scores = {r[2]: float(r[5]) for r in suite.rows if r[0] == "all"}

@@ -1,22 +1,10 @@
-"""Anytime performance against each instance's optimum: fixed-target ECDF, ERT and AUC.
-
-A *target* is a relative gap ``rel_gap = (f - f_opt) / |f_opt|`` (see :mod:`.optima`); the
-report uses the targets 1, 1e-1, ..., 1e-6. A run *hits* a target at the first evaluation
-count of its best-so-far trace whose relative gap is at most the target. The records keep the
-best after every evaluated batch, so a hit is counted at the end of the batch that reached it
-(never earlier than it can have happened).
-
-* **ECDF** (fixed-target, as COCO and IOHprofiler draw it): at ``e`` evaluations, the share
-  of (run, target) pairs hit within ``e`` evaluations.
-* **ERT** (expected running time) of a target: the evaluations spent by all runs until they
-  hit it (a run that never does counts its whole use), divided by the number of runs that hit
-  it; ``inf`` when none did.
-* **AUC**: the area under the ECDF over ``log(e)`` from 1 to the budget ``B``, divided by
-  ``log(B)`` (0: nothing hit; 1: every target hit at the first evaluation). A pair hit at
-  ``h`` evaluations adds ``log(B / h) / log(B)``, so AUC is the mean of that over all pairs.
-
-Numpy only; :func:`ecdf_figure` draws with matplotlib.
-"""
+"""Anytime performance against each instance's optimum (numpy only). A *target* is a
+relative gap to the optimum (1, 0.1, ..., 1e-6), *hit* at the end of the first batch whose
+best-so-far reaches it. The fixed-target ECDF is the share of (run, target) pairs hit within
+``e`` evaluations; the ERT of a target, the evaluations all runs spent until they hit it (a
+run that never does: its whole use) over the runs that hit it (``inf``: none); the AUC, the
+area under the ECDF over ``log(e)`` from 1 to the budget ``B`` over ``log(B)`` (1: every
+target at the first evaluation)."""
 
 from __future__ import annotations
 
@@ -43,9 +31,8 @@ class RunHits:
     budget: float
     used: float
     hits: tuple[float, ...]
-    #: per target, the sequential batches (rounds of ask/tell) and the run's own seconds
-    #: until the hit (``nan``: never, or no per-batch times in the record); and what the
-    #: whole run used of each
+    #: per target, the batches (rounds of ask/tell) and the run's seconds until the hit
+    #: (``nan``: never, or no per-batch times); and what the whole run used of each
     hit_batches: tuple[float, ...] = ()
     hit_seconds: tuple[float, ...] = ()
     used_batches: float = math.nan
@@ -54,9 +41,8 @@ class RunHits:
 
 def hit_times(evaluations: Sequence[float], gaps: Sequence[float],
               targets: Sequence[float] = TARGETS) -> tuple[float, ...]:
-    """The first evaluation count at which ``gaps`` (relative gaps of the best-so-far after
-    each batch, in order) is at most each target; ``nan`` where never. Any cost aligned with
-    the trace works in place of ``evaluations`` (batch numbers, the run's seconds)."""
+    """The first evaluation count (or any cost aligned with the trace) at which ``gaps`` is
+    at most each target; ``nan`` where never."""
     ev = np.asarray(evaluations, float)
     g = np.asarray(gaps, float)
     out = []
@@ -67,9 +53,8 @@ def hit_times(evaluations: Sequence[float], gaps: Sequence[float],
 
 
 def batch_numbers(trace: Mapping[str, Any], n: int) -> list[float]:
-    """The batch number (1, 2, ...) of each of the ``n`` trace entries: the trace's own
-    ``batch`` list where an archive cut the trace to its improvements
-    (:func:`.pack.compact_trace`), else one entry per batch."""
+    """The batch number of each of the ``n`` trace entries (an archive's cut trace holds its
+    own, :func:`vpid_bench.store.archive_pack.compact_trace`)."""
     batch = trace.get("batch")
     if isinstance(batch, list) and len(batch) == n:
         return [float(b) for b in batch]
@@ -104,7 +89,6 @@ def run_hits(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, A
     return out
 
 
-
 def ecdf(runs: Sequence[RunHits], grid: Sequence[float]) -> np.ndarray:
     """The share of (run, target) pairs hit within each number of evaluations of ``grid``."""
     h = np.asarray([r.hits for r in runs], float).ravel()
@@ -116,10 +100,8 @@ def ecdf(runs: Sequence[RunHits], grid: Sequence[float]) -> np.ndarray:
 
 
 def ert(runs: Sequence[RunHits], target_index: int, cost: str = "evaluations") -> float:
-    """Expected running time of one target (see the module); ``inf`` when no run hit it.
-    ``cost``: counted in ``evaluations``, ``batches`` (sequential rounds of ask/tell: what
-    parallel hardware cannot shorten) or ``seconds`` (the runs' own time; ``nan`` when a
-    record has no per-batch times)."""
+    """Expected running time of one target in ``evaluations``, ``batches`` (what parallel
+    hardware cannot shorten) or ``seconds`` (``nan`` without per-batch times)."""
     pick = {"evaluations": (lambda r: r.hits, lambda r: r.used),
             "batches": (lambda r: r.hit_batches, lambda r: r.used_batches),
             "seconds": (lambda r: r.hit_seconds, lambda r: r.used_seconds)}[cost]
@@ -184,8 +166,7 @@ ERT_HEADERS = ["context", "algorithm", "target_rel_gap", "runs", "hits", "ert",
 
 def ecdf_figure(runs: Sequence[RunHits], context: str, path: Path,
                 style_of: Mapping[str, Any] | None = None) -> Path | str:
-    """The fixed-target ECDF of one context: one step line per optimizer, log x axis, each
-    in its style of the report (``style_of``, :mod:`.styles`: colour, dashes, markers)."""
+    """The fixed-target ECDF of one context: a step line per optimizer in its report style."""
     sel = [r for r in runs if r.context == context]
     if not sel:
         return f"no run of {context} knows its instance's optimum"
@@ -215,10 +196,6 @@ def ecdf_figure(runs: Sequence[RunHits], context: str, path: Path,
 
 
 def costs_to_optimum(hits: Sequence[Any]) -> dict[tuple[str, str], tuple[float, float]]:
-    """Per (context, algorithm): the ERT to the final target (each instance's optimum), in
-    evaluations and in seconds (``inf``: no run reached it)."""
-    by: dict[tuple[str, str], list[Any]] = {}
-    for h in hits:
-        by.setdefault((h.context, h.algorithm), []).append(h)
+    """Per (context, algorithm): the ERT to the final target in evaluations and seconds."""
     last = len(TARGETS) - 1
-    return {k: (ert(g, last), ert(g, last, "seconds")) for k, g in by.items()}
+    return {k: (ert(g, last), ert(g, last, "seconds")) for k, g in _groups(hits).items()}

@@ -1,17 +1,7 @@
 """What an answer assumes: the quantities a problem states rather than identifies, the boxes
-it searched, the input it was driven by, and estimates on or near a bound.
-
-A problem states them in its ``describe()`` (kept in every run record as ``problem.info``,
-docs/architecture.md): ``known`` a list of ``{"name", "value", "unit", "source"}`` (and
-optionally ``"what"``), ``box`` a list of ``{"name", "lower", "upper", "unit", "source"}``,
-``input`` one line saying which input a fit of a user's record used. A problem that gives
-none of them (or gives ``known`` in another form) gets no block. Everything read here comes
-from a results folder and is untrusted: a field of the wrong type is left out, texts are cut
-to :data:`MAX_TEXT` characters and lists to :data:`MAX_ROWS` rows.
-
-The block (:func:`blocks`) goes on the first screen, in ``report.md`` and on the HTML
-overview (:func:`.first_screen.extra_blocks`).
-"""
+it searched, the input it used (``known``, ``box``, ``input`` of ``problem.info``,
+docs/architecture.md), and estimates on or near a bound. Untrusted: a field of the wrong
+type is left out, texts cut to :data:`MAX_TEXT`, lists to :data:`MAX_ROWS`."""
 
 from __future__ import annotations
 
@@ -40,14 +30,13 @@ def _num(value: Any) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
-#: A group of more boxes than this from one source that is not the user's is named, not
-#: listed (nine factor boxes: "m, I, m1, ... (9)"; the numbers are in the records).
+#: A group of more boxes than this from one source not the user's is named, not listed.
 MAX_LISTED = 4
 
 
 def _grouped(items: list[tuple[str, str, str]], short: bool = False) -> str:
-    """``(source, name, text)`` items as "source: text, text; source: text" (sources in
-    order); with ``short``, a large group not set by the user gives its names only."""
+    """``(source, name, text)`` items as "source: text, text; source: text"; with ``short``,
+    a large group not set by the user gives its names only."""
     by: dict[str, list[tuple[str, str]]] = {}
     for source, name, text in items:
         by.setdefault(source, []).append((name, text))
@@ -104,8 +93,7 @@ def _info(rec: Mapping[str, Any]) -> Mapping[str, Any]:
 
 
 def fits_a_record(data: Any, context: str) -> bool:
-    """False where a record of ``context`` says its problem fits no record
-    (``problem.info.fits_a_record`` false: a test function), else True."""
+    """False where a record says its problem fits no record (a test function)."""
     return all(_info(r).get("fits_a_record", True) is not False
                for r in _context_records(data, context))
 
@@ -121,8 +109,8 @@ def _best(records: Sequence[Mapping[str, Any]]) -> Mapping[str, Any] | None:
 
 
 def near_bounds(rec: Mapping[str, Any]) -> list[str]:
-    """Each parameter of a run's ``x_best`` within :data:`NEAR_BOUND` of its box's width
-    from a bound, in words (Markdown-escaped)."""
+    """Each parameter of a run's ``x_best`` within :data:`NEAR_BOUND` of its box's width from
+    a bound, in words."""
     params, result = rec.get("parameters"), rec.get("result")
     if not isinstance(params, Mapping) or not isinstance(result, Mapping):
         return []
@@ -149,8 +137,7 @@ def near_bounds(rec: Mapping[str, Any]) -> list[str]:
 
 
 def blocks(data: Any, context: str) -> list[tuple[str, list[str], list[list[Any]]]]:
-    """The "Assumed" block of ``context`` as ``(Markdown text, headers, rows)`` items (empty
-    headers: text only); none when its records state nothing (see the module)."""
+    """The "Assumed" block of ``context`` as ``(Markdown text, headers, rows)`` items."""
     records = _context_records(data, context)
     info = next((_info(r) for r in records if "known" in _info(r) or "box" in _info(r)), {})
     known, box = _known_text(info.get("known")), _box_text(info.get("box"))

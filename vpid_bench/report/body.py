@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from . import rankings, render
-from .load import LoadedRecords, reason
+from .load import LoadedRecords, by_context, reason
 from .render import para
 from .safe import escape, inert_markdown
 from .sections import HeadlineColumn, Section
@@ -124,13 +124,6 @@ STATS_MD = [("optimizer", "algorithm"), ("n", "n_runs"), ("median", "median"), (
             ("q3", "q3"), ("mean", "mean"), ("sd", "sd"), ("best", "best"), ("worst", "worst"),
             ("median f", "f_median"), ("best f", "f_best"), ("evaluations", "evaluations_max"),
             ("s/run", "wall_time_mean_s")]
-
-
-def by_context(items: Sequence[Mapping[str, Any]]) -> dict[str, list[Mapping[str, Any]]]:
-    out: dict[str, list[Mapping[str, Any]]] = {}
-    for s in items:
-        out.setdefault(s["context"], []).append(s)
-    return out
 
 
 def stats_md(summary: list[dict[str, Any]]) -> list[str]:

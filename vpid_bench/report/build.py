@@ -1,38 +1,14 @@
-"""Build a report from run records: tables, tests, figures, plugin sections, ``report.md`` and
-the HTML site.
+"""Build a report from the run records below any folders into ``out_dir``: ``report.md``,
+``runs.csv``, ``tables/`` (CSV and LaTeX), ``figures/``, ``ioh/`` (IOHprofiler's format) and
+the HTML pages.
 
-:func:`build_report` reads the records below any number of job or sweep folders (merged),
-and writes into ``out_dir``::
-
-    report.md               the report: its first screen answers which optimizer, how far
-                            from the truth and why; method and detail follow
-    runs.csv                one row per run
-    tables/*.csv, *.tex     headline, run_stats, tests, and the tables of plugin sections
-    figures/*.png           convergence, per-run metric, error heatmap, ECDFs, CD diagrams,
-                            and the sections' figures
-    ioh/                    the runs in IOHprofiler's format
-    index.html, *.html      the same report as browsable pages (:mod:`.site_pages`)
-
-``out_dir`` is one report, whole (issue 44, N8, N9): the report is built in a new hidden
-folder beside it that takes its place in one rename once every file is written
-(:class:`~vpid_bench.fileio.WholeFolder`). A report that fails (a full disk, a file-size
-limit: a write that fails is never taken for a figure's or a plugin's fault), is interrupted
-or is written twice at once leaves the old report or a new one, each whole; pages of an
-earlier report never linger beside a new one, and a link planted in the old folder is removed
-with it, never followed (N6).
-
-It runs in stages that pass data, never text. Computation: :func:`.compute.compute` (the
-rankings, tests, floors), then :func:`_assemble` fills one :class:`~.model.ReportModel` (the
-first screen, the figures of :mod:`.core_figures`, the sections of :mod:`.plugin_sections`,
-the suite scores, the interactive figures). Rendering, which only formats that model:
-``report.md`` (:mod:`.outline`, the registry of sections), the HTML site and the terminal
-text (:mod:`.first_screen`). ``short=True`` is a single job's report: the
-same first screen, statistics and plugin sections, without significance tests and figures,
-and without importing pandas, matplotlib or scipy.stats.
-
-It is honest whatever the numbers: every table says how many runs it rests on, the tests say
-when they could not be run, and nothing claims significance that the Holm-corrected p-values
-do not show.
+``out_dir`` is one report, whole (issue 44, N6, N8, N9): it is built in a hidden folder that
+takes its place in one rename (:class:`~vpid_bench.fileio.WholeFolder`), so a failed,
+interrupted or concurrent build leaves the old report or a new one, and a link planted in the
+old folder is removed, never followed. Stages pass data, never text: :func:`.compute.compute`,
+then :func:`_assemble` fills one :class:`~.model.ReportModel`, which the renderers only
+format. ``short=True`` (a single job's report) has no tests or figures and imports neither
+pandas, matplotlib nor scipy.stats.
 """
 
 from __future__ import annotations
@@ -47,6 +23,8 @@ from typing import Any
 from ..fileio import WholeFolder, write_refused
 from ..interrupts import raise_if_swallowed
 from ..progress import Stages
+from ..store import csv_table, ioh
+from ..store.paths import inside, slug
 from . import answer, anytime, body, first_screen, outline, render, tables
 from .compute import ReportData, compute
 from .forked import run_forked
@@ -54,7 +32,6 @@ from .load import LoadedRecords, NoRecordsError
 from .model import ReportModel, SuiteScores
 from .outline import full_report_command
 from .plugin_sections import plugin_sections
-from .safe import inside, slug
 from .sections import HeadlineColumn
 
 __all__ = ["NoRecordsError", "Report", "build_report", "full_report_command"]
@@ -95,7 +72,7 @@ class Report:
 
 #: What a report folder holds at its top, besides its pages (``*.html``), and the outcome a
 #: sweep writes beside them (``status.json``).
-REPORT_ENTRIES = frozenset({"report.md", "runs.csv", "tables", "figures", "ioh", "assets",
+REPORT_ENTRIES = frozenset({"report.md", "runs.csv", "tables", "figures", ioh.FOLDER, "assets",
                             "status.json"})
 
 
@@ -144,14 +121,11 @@ def build_report(
 ) -> Report:
     """Read the records below ``paths`` and write the report into ``out_dir``.
 
-    ``short``: a single job's report (no tests, no figures, no pandas). ``registry``
-    (default: the installed plugins) provides the problems' report sections. ``archive``:
-    rank the archived built-in optimizers beside these runs (:mod:`.archive`; ``True`` for
-    the archives shipped with the package, or a folder of archives). Raises
-    :class:`NoRecordsError` when no readable record exists, ``OSError`` when the report
-    could not be written (``out_dir`` is then left as it was). ``progress``: where each
-    stage (records, tests, figures, pages) is said as it starts (a full report over an
-    archive takes a minute).
+    ``registry`` (default: the installed plugins) gives the report sections; ``archive``:
+    rank the archived built-ins beside these runs (``True``: the shipped archives, or a
+    folder of archives); ``progress``: where each stage is said as it starts. Raises
+    :class:`NoRecordsError` when no readable record exists, ``OSError`` when the report could
+    not be written (``out_dir`` then left as it was).
     """
     data = compute(paths, short, alpha, baseline, archive, progress)
     out_dir = Path(out_dir)
@@ -191,22 +165,20 @@ def _link_notes(out_dir: Path, links: list[Path]) -> list[str]:
 
 def _assemble(data: ReportData, names: _Names, registry: Any,
               progress: Stages | None = None) -> tuple[ReportModel, list[Path]]:
-    """Everything the report says, as one :class:`~.model.ReportModel`: the first screen,
-    the figures and IOHprofiler export, the suite scores, the problems' sections and the
-    interactive figures; with the data files written on the way (tables, PNGs)."""
+    """Everything the report says, as one :class:`~.model.ReportModel`, with the files
+    written on the way (tables, figures, the IOHprofiler export)."""
     out_dir = names.root
     written = _write_tables(data, names)
     model = ReportModel(data, first_screen.results(data), out_dir)
     if not data.short:
         from .core_figures import draw_all
-        from .ioh_export import export_ioh
 
         if registry is None:
             from ..plugins import Registry
 
             registry = Registry()
         model.figs = draw_all(data, names.file, progress)
-        written += export_ioh(out_dir / "ioh", data.loaded.records, data.rows, out_dir)
+        written += ioh.export_ioh(out_dir / ioh.FOLDER, data.loaded.records, data.rows, out_dir)
         model.suite, more = _suite_scores(data, registry, names)
         written += more
     model.sections, model.extra, model.section_errors = plugin_sections(
@@ -222,8 +194,7 @@ def _assemble(data: ReportData, names: _Names, registry: Any,
 
 
 def _add_interactive(model: ReportModel) -> None:
-    """The interactive figures of each context (numpy only: a single job's report has them
-    too); a failure costs them only, and is said."""
+    """The interactive figures of each context; a failure costs them only, and is said."""
     from .site_pages import interactive_figures
 
     try:
@@ -236,9 +207,7 @@ def _add_interactive(model: ReportModel) -> None:
 
 
 def _render(model: ReportModel, names: _Names) -> tuple[Path, list[Path]]:
-    """The renderers, which only format the model: ``report.md`` (:mod:`.outline`) and the
-    HTML site (:mod:`.site_pages`, ``index.html`` first). The terminal's text is made from
-    the same model by :func:`.first_screen.terminal_text`."""
+    """``report.md`` (:mod:`.outline`) and the HTML site, ``index.html`` first."""
     from .site import check_links
     from .site_pages import write_site
 
@@ -250,19 +219,9 @@ def _render(model: ReportModel, names: _Names) -> tuple[Path, list[Path]]:
     return md, site
 
 
-def _table_files(path: Path, headers: Sequence[str], rows: Sequence[Sequence[Any]]
-                 ) -> list[Path]:
-    """``path`` (CSV, full precision) and its ``.tex`` (booktabs)."""
-    render.write_csv(path, headers, rows)
-    tex = path.with_suffix(".tex")
-    tex.write_text(render.latex(headers, rows) + "\n", encoding="utf-8")
-    return [path, tex]
-
-
 def _table(names: _Names, stem: str, headers: Sequence[str],
            rows: Sequence[Sequence[Any]]) -> list[Path]:
-    """``tables/<stem>.csv`` (full precision) and ``.tex`` (booktabs)."""
-    return _table_files(names.file("tables", stem, ".csv"), headers, rows)
+    return render.write_table(names.file("tables", stem, ".csv"), headers, rows)
 
 
 class _Tables:
@@ -278,7 +237,7 @@ class _Tables:
         return []
 
     def write(self) -> list[Path]:
-        done = run_forked([lambda t=t: _table_files(*t) for t in self.planned])
+        done = run_forked([lambda t=t: render.write_table(*t) for t in self.planned])
         return [path for paths in done for path in paths]
 
 
@@ -287,7 +246,7 @@ def _write_tables(data: ReportData, names: _Names) -> list[Path]:
     columns: list[str] = []
     for r in data.rows:
         columns += [k for k in r if k not in columns]
-    written = [render.write_csv(names.claim(names.root / "runs.csv"), columns,
+    written = [csv_table.write_csv(names.claim(names.root / "runs.csv"), columns,
                                 [[r.get(k) for k in columns] for r in data.rows])]
     tables = _Tables(names)
     t = data.tests

@@ -1,14 +1,8 @@
-"""``vpid-bench-report DIR... [-o OUT]``: one report from any set of run records.
-
-Merges the records below every given folder (sweeps, single jobs, record files) and writes
-the report into ``OUT`` (default ``report`` in the current folder). ``OUT`` is one report,
-whole: it is built beside it and takes its place once complete (:class:`.build.Report`), so
-``OUT`` must hold a report or nothing. Exit status: 0 when the report was written and every
-record and job was fine, 1 when it was written but some job or run failed or some record was
-unreadable, or when it could not be written (a full disk, a file-size limit: ``OUT`` then
-keeps the previous report), 2 for a usage error or when no record was found. SIGTERM and
-SIGHUP end it as Ctrl-C does (one line, ``OUT`` left as it was; status 143, 129).
-"""
+"""``vpid-bench-report DIR... [-o OUT]``: one report from the records below any folders, into
+``OUT`` (one report, whole: it must hold a report or nothing). Exit status: 0 written and all
+fine; 1 written with a failed job, run or unreadable record, or not written (``OUT`` keeps
+the previous report); 2 a usage error or no record. SIGTERM and SIGHUP end it as Ctrl-C does
+(one line, status 143, 129)."""
 
 from __future__ import annotations
 
@@ -47,9 +41,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Console entry point ``vpid-bench-report``; returns (and exits with) the status. Ctrl-C
-    (and, for the console command, SIGTERM and SIGHUP) is one line and status 128 + the
-    signal's number: no report is written, the folder keeps the previous one; run it again."""
+    """Console entry point ``vpid-bench-report``; returns (and exits with) the status."""
     from .. import interrupts
 
     if argv is None:  # the console command: SIGTERM and SIGHUP end it as Ctrl-C does
@@ -105,9 +97,8 @@ def _main(argv: Sequence[str] | None) -> int:
 
 
 def check_output_dir(out: Path, inputs: Sequence[Path] = ()) -> str | None:
-    """Why ``out`` cannot hold the report (an existing file, a device such as /dev/null, a
-    folder holding the records read or anything a report does not write: the report replaces
-    it whole; a folder that cannot be created, or whose parent cannot be written), or None.
+    """Why ``out`` cannot hold the report (a file, a folder holding the records read or
+    anything a report does not write, one that cannot be created or written), or None.
     Creates the folder."""
     from .build import foreign_entries
 

@@ -1,16 +1,12 @@
-"""The report's first stage: everything it says, computed from the records, as data.
-
-:func:`compute` reads the records below some folders and returns a :class:`ReportData`: the
-tidy rows, the per-context summaries of both rankings, the anytime hits, the floors and bounds,
-and (full report only) the significance tests and the rank groups. The later stages (tables,
-figures, Markdown, terminal) only read it. Short mode imports neither pandas nor scipy.stats.
-"""
+"""The report's first stage: everything it says, computed from the records, as data
+(:class:`ReportData`), which the later stages only read. Short mode imports neither pandas
+nor scipy.stats."""
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -18,7 +14,7 @@ from ..progress import Stages
 from . import anytime, diagnostics, estimates, estimator_floors, rankings, tables, ties
 from .forked import run_forked
 from .identifiability import crb_norm_by_context, crb_norms_by_instance
-from .load import LoadedRecords, NoRecordsError, load_records, reason, run_rows
+from .load import LoadedRecords, NoRecordsError, by_context, load_records, reason, run_rows
 from .optima import add_optimum_columns, load_optima, opt_column_names
 
 
@@ -88,9 +84,7 @@ class ReportData:
         return units.pop() if len(units) == 1 else ""
 
     def estimator(self, context: str) -> str | None:
-        """The objective the context's runs minimised (its ``problem.objective`` key, e.g.
-        ``eq3``, ``ml``) when they share one, else ``None`` (a problem without the key, or a
-        mix)."""
+        """The objective (``problem.objective``) the context's runs share, else ``None``."""
         ids = {r["run_id"] for r in self.rows if r["context"] == context}
         found = set()
         for rec in self.loaded.records:
@@ -102,8 +96,8 @@ class ReportData:
             else None
 
     def floors(self, context: str) -> dict[Any, float]:
-        """Per instance of ``context`` whose optimum is known: the floor, the headline metric
-        of that optimum (the ``<metric>_floor`` column of the rows; one value per instance)."""
+        """Per instance of ``context`` with a known optimum: its floor (the optimum's
+        headline metric)."""
         rows = [r for r in self.rows if r["context"] == context]
         column, _ = opt_column_names(rows)
         out: dict[Any, float] = {}
@@ -115,7 +109,7 @@ class ReportData:
 
     def groups(self, which: str, context: str) -> dict[str, str] | None:
         """Rank-group letters of a context's ranking (``"metric"`` or ``"search"``), or
-        ``None`` where no test was run (short mode)."""
+        ``None`` untested."""
         if self.tests is None:
             return None
         items = self.metric_rows(context) if which == "metric" else self.search_rows(context)
@@ -130,11 +124,9 @@ class ReportData:
 
 def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: str,
             archive: bool | Path = False, progress: Stages | None = None) -> ReportData:
-    """Load the records below ``paths`` and compute everything the report shows. Raises
-    :class:`~.load.NoRecordsError` when no readable record exists. ``archive``: add the
-    archived runs of the built-in optimizers on the same problems (``True``: the archives
-    shipped with the package; a folder: the archives below it; see :mod:`.archive`).
-    ``progress``: where each stage is said as it starts."""
+    """Load the records below ``paths`` and compute everything the report shows (raises
+    :class:`~.load.NoRecordsError` without a readable record); ``archive``: add the
+    archived built-ins' runs (``True``: the shipped archives; or a folder of archives)."""
     paths = [Path(p) for p in paths]
     if progress is not None:
         progress.stage("reading the records")
@@ -183,13 +175,13 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
 
 
 def _load(paths: Sequence[Path]) -> tuple[LoadedRecords, list[Any]]:
-    """The records below ``paths``; an archive folder among them (``archive/smoke``) gives
-    its archived runs and instance optima, so a report of the archive alone needs no run."""
-    from .archive import ArchiveError, is_archive, read_archive
+    """The records below ``paths``; an archive folder among them gives its runs and optima."""
+    from ..store.archive import ArchiveError, is_archive
+    from ..store.archive_records import read_archive
 
     folders = [p for p in paths if is_archive(p)]
     rest = [p for p in paths if p not in folders]
-    loaded = load_records(rest) if rest else LoadedRecords([], [], [], 0, {})
+    loaded = load_records(rest) if rest else LoadedRecords([], [], 0, {})
     optima: list[Any] = []
     for folder in folders:
         try:
@@ -207,9 +199,10 @@ def _load(paths: Sequence[Path]) -> tuple[LoadedRecords, list[Any]]:
 
 
 def _add_archive(loaded: LoadedRecords, archive: bool | Path) -> tuple[list[Any], list[str]]:
-    """Add the archived runs that stand beside ``loaded`` to it (in place); return their
-    instance optima and the archive's one-line notes."""
-    from .archive import load_all, merge
+    """Add the archived runs that stand beside ``loaded`` (in place); return their optima
+    and one-line notes."""
+    from ..store.archive_records import load_all
+    from .archive import merge
 
     # only runs of one's own stand beside archived ones (an archive given as a folder to
     # report is complete in itself: :func:`.archive.merge` adds nothing to its runs)
@@ -247,10 +240,7 @@ def _set_groups(items: list[dict[str, Any]], pairs: Any) -> None:
     """Each row's rank group (compact letters from the Holm-corrected pairwise tests)."""
     from .stats import rank_groups
 
-    by_context: dict[str, list[dict[str, Any]]] = {}
-    for s in items:
-        by_context.setdefault(s["context"], []).append(s)
-    for context, g in by_context.items():
+    for context, g in by_context(items).items():
         n = "n_runs" if "n_runs" in g[0] else "n"
         order = [s["algorithm"] for s in sorted((s for s in g if s.get(n)),
                                                 key=lambda s: s["rank"])]
@@ -258,10 +248,3 @@ def _set_groups(items: list[dict[str, Any]], pairs: Any) -> None:
         for s in g:
             s["group"] = letters.get(s["algorithm"], "—")
 
-
-def by_context(items: Sequence[Mapping[str, Any]]) -> dict[str, list[Mapping[str, Any]]]:
-    """``items`` grouped by their ``context``, in order of appearance."""
-    out: dict[str, list[Mapping[str, Any]]] = {}
-    for s in items:
-        out.setdefault(s["context"], []).append(s)
-    return out

@@ -1,12 +1,8 @@
-"""The report's own figures (matplotlib, PNG): convergence, the per-run metric and the error
-heatmap per problem, the fixed-target ECDF and the critical-difference diagram per context,
-and one across blocks.
-
-A figure that cannot be drawn leaves a reason instead of a path; one that raises costs only
-itself (the reason says what failed). They are planned here (each its path in the report
-folder, claimed in order) and drawn side by side in forked processes (:mod:`.forked`):
-drawing and encoding them was half of an archive report's time.
-"""
+"""The report's own figures (PNG): convergence, per problem the per-run metric and the error
+heatmap, per context the ECDF and critical-difference diagram, and one across blocks. A
+figure that cannot be drawn leaves a reason instead of a path (one that raises costs only
+itself). Planned here, drawn side by side in forked processes (half an archive report's
+time)."""
 
 from __future__ import annotations
 
@@ -56,9 +52,7 @@ def _one(figure: _Figure) -> Path | str:
 
 def _draw_planned(figs: dict[str, Any], progress: Stages | None = None
                   ) -> dict[str, Path | str]:
-    """Every planned figure of ``figs`` drawn (in forked processes where there are several
-    figures and cores: :func:`.forked.run_forked`), in place of its plan; ``progress``
-    counts them."""
+    """Every planned figure of ``figs`` drawn in place of its plan (:func:`.forked.run_forked`)."""
     planned = [(title, f) for title, f in figs.items() if isinstance(f, _Figure)]
     if progress is not None:
         progress.stage("figures", len(planned))
@@ -71,9 +65,8 @@ def _draw_planned(figs: dict[str, Any], progress: Stages | None = None
 
 def draw_all(data: Any, file: Callable[[str, str, str], Path],
              progress: Stages | None = None) -> dict[str, Path | str]:
-    """Every core figure of a full report (``data``: a :class:`~.compute.ReportData`), in
-    report order: title -> PNG path, or why it was not drawn. ``file(kind, name, suffix)``
-    claims a path in the report folder."""
+    """Every core figure of a full report, in order: title -> PNG path, or why it was not
+    drawn; ``file(kind, name, suffix)`` claims a path in the report folder."""
     from . import anytime, figures
     from .identifiability import reference_levels
     from .load import trace_sets

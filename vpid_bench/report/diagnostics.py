@@ -1,24 +1,9 @@
 """The report's fit diagnostics: does the fitted model explain the record, and which interval
-can be trusted?
-
-It reads each job's ``diagnostics.json`` (:mod:`vpid_bench.analysis.diagnostics`: the
-residuals at the instance's optimum, per channel, and the white-noise and robust (HAC)
-intervals there) and gives, per context, below the ranking on the first screen, in
-``report.md`` and the HTML:
-
-* ONE plain line when the model does not explain the record (:func:`plain_line`), e.g. "the
-  residuals are correlated (lag-1 0.95): the model misses dynamics the record holds; the
-  white-noise intervals below are too narrow";
-* per channel the residual rms against the signal's and the noise's, the lag-1
-  autocorrelation, the whiteness test and the largest cross-correlation with an input;
-* per parameter the white-noise and the robust half-widths, and which one the report trusts
-  and why (with model error: the interval describes the fitted model, not the system that
-  made the record).
-
-The residual figure (autocorrelation and cross-correlations with their 99 % bands) is a core
-report section (:func:`section`). Everything read from a results folder is untrusted: a
-field of the wrong type is left out, never shown.
-"""
+can be trusted? From each job's ``diagnostics.json`` (:mod:`vpid_bench.analysis.diagnostics`,
+untrusted: a field of the wrong type is left out), per context: one plain line where the
+model does not explain the record (:func:`plain_line`), a table per channel, the white-noise
+and robust intervals and which is trusted; the residual figure is a core section
+(:func:`section`)."""
 
 from __future__ import annotations
 
@@ -27,91 +12,19 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..analysis.diagnostics import MISFIT, SCHEMA
+from ..analysis.diagnostics import MISFIT
 from ..analysis.intervals import Z95
-from ..store.job_files import DIAGNOSTICS, read_job_json
+from ..store.job_checks import read_diagnostics
+from ..store.job_files import DIAGNOSTICS
 from .render import fmt
 from .safe import escape
 
-#: Most channels, inputs per channel and lags read.
-MAX_GROUPS, MAX_INPUTS, MAX_LAGS = 64, 16, 200
 TITLE = "Fit diagnostics: residual autocorrelation and cross-correlation"
-
-
-def _num(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
-def _nums(v: Any, most: int) -> bool:
-    return isinstance(v, list) and 0 < len(v) <= most and all(_num(x) for x in v)
-
-
-def _opt(v: Any) -> float:
-    return float(v) if _num(v) else math.nan
-
-
-def _group(g: Any) -> dict[str, Any] | None:
-    """One channel's entry, checked (``None``: unusable)."""
-    if not isinstance(g, Mapping) or not _nums(g.get("acf"), MAX_LAGS + 1):
-        return None
-    if not all(_num(g.get(k)) for k in ("band99", "lag1", "n")):
-        return None
-    cross = {}
-    raw = g.get("cross")
-    for name, c in (list(raw.items())[:MAX_INPUTS] if isinstance(raw, Mapping) else []):
-        if isinstance(c, Mapping) and _nums(c.get("ccf"), 2 * MAX_LAGS + 1) and all(
-                _num(c.get(k)) for k in ("band99", "max_abs", "lag_at_max", "outside")):
-            cross[str(name)[:40]] = dict(c)
-    out = {k: _opt(g.get(k)) for k in ("rms", "signal_rms", "rms_over_signal", "sigma",
-                                        "rms_over_sigma", "ljung_box_p", "band99", "lag1")}
-    out.update(name=str(g.get("name", ""))[:40], acf=[float(x) for x in g["acf"]],
-               sigma_source="stated" if g.get("sigma_source") == "stated" else "estimated",
-               cross=cross, correlated=g.get("correlated") is True,
-               input_correlated=g.get("input_correlated") is True,
-               misfit=g.get("misfit") is True, n=int(g["n"]))
-    return out
-
-
-def _intervals(iv: Any, d: int) -> dict[str, Any] | None:
-    """The white and robust standard errors, checked (``None`` where unusable)."""
-    def se(v: Any) -> bool:
-        return isinstance(v, list) and len(v) == d and all(x is None or _num(x) for x in v)
-
-    if not isinstance(iv, Mapping) or not se(iv.get("se")):
-        return None
-    rob = iv.get("robust")
-    if not isinstance(rob, Mapping) or not se(rob.get("se")):
-        return None
-    return {"se": iv["se"], "robust_se": rob["se"],
-            "lags": int(rob["lags"]) if _num(rob.get("lags")) else None}
-
-
-def read_diagnostics(path: Path) -> dict[str, Any] | None:
-    """A job's ``diagnostics.json``, checked; ``None`` when missing, failed or malformed."""
-    data = read_job_json(path)[0]
-    if not isinstance(data, dict) or data.get("schema") != SCHEMA or data.get("status") != "ok":
-        return None
-    groups = data.get("groups")
-    if not isinstance(groups, list) or not 0 < len(groups) <= MAX_GROUPS:
-        return None
-    checked = [_group(g) for g in groups]
-    names, x = data.get("names"), data.get("x")
-    if None in checked or not _num(data.get("f")) or not _nums(x, 1000) \
-            or not (isinstance(names, list) and len(names) == len(x)):
-        return None
-    held = data.get("held_out")
-    return {"groups": checked, "f": float(data["f"]), "x": [float(v) for v in x],
-            "names": [str(n)[:40] for n in names],
-            "intervals": _intervals(data.get("intervals"), len(x)),
-            "held_out": dict(held) if isinstance(held, Mapping) and _num(held.get("error"))
-            and _num(held.get("naive")) else None,
-            "explained": not any(g["correlated"] or g["input_correlated"] for g in checked)}
 
 
 def by_context(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
                ) -> dict[str, dict[str, Any]]:
-    """Per context, the readable ``diagnostics.json`` of its jobs at the lowest objective
-    (each job writes one at its instance's optimum)."""
+    """Per context, the readable ``diagnostics.json`` of its jobs at the lowest objective."""
     by_id = {r["run_id"]: r for r in records}
     found: dict[str, dict[str, Any]] = {}
     tried: set[Path] = set()
@@ -161,8 +74,8 @@ def plain_line(diag: Mapping[str, Any]) -> str:
 
 
 def trust_text(diag: Mapping[str, Any], model_error: str = "") -> str:
-    """Which interval the report trusts, and why; with model error (known, or shown by the
-    residuals), that it describes the fitted model, not the system that made the record."""
+    """Which interval the report trusts, and why (with model error: it describes the fitted
+    model, not the system that made the record)."""
     iv = diag.get("intervals")
     if iv is None:
         return ""
@@ -189,9 +102,8 @@ def trust_text(diag: Mapping[str, Any], model_error: str = "") -> str:
 
 
 def channel_rows(diag: Mapping[str, Any]) -> tuple[list[str], list[list[Any]]]:
-    """Per channel: residual rms, its share of the signal's rms, the noise sigma (stated or
-    estimated), rms over sigma, lag-1 autocorrelation with the 99 % band, the whiteness
-    test's p, and the largest cross-correlation with an input against its band."""
+    """Per channel: residual rms against the signal's and the noise's, lag-1
+    autocorrelation, whiteness test, and the largest cross-correlation with an input."""
     headers = ["channel", "residual rms", "% of signal rms", "noise σ", "rms / σ",
                "lag-1 (99 % band)", "Ljung–Box p", "max |xcorr| with an input (band)"]
     rows = []
@@ -210,8 +122,7 @@ def channel_rows(diag: Mapping[str, Any]) -> tuple[list[str], list[list[Any]]]:
 
 
 def interval_rows(diag: Mapping[str, Any]) -> tuple[list[str], list[list[Any]]]:
-    """Per parameter: the value at the optimum and the 95 % half-widths in % of it, white
-    and robust, and their ratio."""
+    """Per parameter: the value at the optimum, the white and robust 95 % half-widths (%)."""
     iv = diag["intervals"]
     headers = ["parameter", "value at the optimum", "± % white", "95 % interval (robust, HAC)",
                "± % robust", "robust / white"]
@@ -229,8 +140,7 @@ def interval_rows(diag: Mapping[str, Any]) -> tuple[list[str], list[list[Any]]]:
 def blocks(diag: Mapping[str, Any] | None, model_error: str = ""
            ) -> list[tuple[str, list[str], list[list[Any]]]]:
     """The first screen's fit-diagnostics blocks of one context, ``(Markdown text, headers,
-    rows)``: the plain line (where the model does not explain the record) with the channel
-    table, then the intervals and which is trusted."""
+    rows)``: the channel table, then the intervals and which is trusted."""
     if diag is None:
         return []
     line = plain_line(diag)
@@ -255,13 +165,13 @@ def blocks(diag: Mapping[str, Any] | None, model_error: str = ""
 
 
 def draw(diag: Mapping[str, Any], title: str) -> Any:
-    """Per channel: the residual's autocorrelation (lags 1..L) and its cross-correlation with
-    each input (lags -L..L), each with its 99 % band. Returns the matplotlib figure."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    """Per channel: the residual's autocorrelation and its cross-correlation with each input,
+    each with its 99 % band."""
     import numpy as np
+
+    from .figures import _plt
+
+    plt = _plt()
 
     groups = diag["groups"]
     fig, axes = plt.subplots(len(groups), 2, figsize=(9, 2.4 * len(groups) + 0.8),
@@ -294,8 +204,7 @@ def draw(diag: Mapping[str, Any], title: str) -> Any:
 
 
 def section(ctx: Any) -> Any:
-    """The residual figure of the problem's best context (full report only; ``None`` where no
-    job wrote readable diagnostics)."""
+    """The residual figure of the problem's best context (full report only)."""
     from .sections import Contribution, Section
 
     if ctx.short:

@@ -1,11 +1,7 @@
 """The report's view of a problem without a truth: which contexts have none, the identified
-values with their 95 % intervals, and the problem's fixed comparison rows.
-
-It reads only what the jobs wrote: each run's ``result.intervals`` (the Jacobian intervals of
-its best vector, :mod:`vpid_bench.analysis.intervals`), each job's ``profile.json`` and
-``comparisons.json`` (:mod:`vpid_bench.analysis.estimates`). Everything from a results folder
-is untrusted: a field of the wrong type, length or size is left out, never shown.
-"""
+values with their 95 % intervals (each run's ``result.intervals``, each job's
+``profile.json``) and the problem's comparison rows (``comparisons.json``), all untrusted: a
+field of the wrong type, length or size is left out."""
 
 from __future__ import annotations
 
@@ -15,14 +11,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..analysis.estimates import (
-    COMPARISONS_FILE,
-    COMPARISONS_SCHEMA,
-    MAX_COMPARISONS,
-    PROFILE_FILE,
-    PROFILE_SCHEMA,
-)
-from ..store.job_files import read_job_json
+from ..store.job_checks import finite, interval_ends, read_comparisons, read_profile
+from ..store.job_files import COMPARISONS, PROFILE
 from .load import first_file_by_context
 
 #: The words every no-truth context starts with (the first screen and the body).
@@ -48,17 +38,15 @@ class Identified:
     sigma: list[float]  # σ estimated per residual group
     profile: dict[str, Any] | None = None  # profile.json (status ok), or None
     profile_note: str = ""  # why there is no profile, when there is none
-    #: the robust (HAC) interval beside the Jacobian one (None: not in the record); the
-    #: first screen shows it with the fit diagnostics (:mod:`.diagnostics`)
+    #: the robust (HAC) interval's lower ends (None: not in the record)
     robust_lower: list[float | None] | None = None
-    robust_upper: list[float | None] | None = None
     objective_unit: str = ""  # the objective's unit the problem states (its info), or ""
     objective_what: str = ""  # what the objective is, in words, or ""
     caveat: str = ""  # what the problem says of its intervals (its info), or ""
 
     def rows(self) -> tuple[list[str], list[list[Any]]]:
-        """A table: parameter, unit, value, its Jacobian interval, the half-width in % of
-        the value, and the profile interval where one was computed."""
+        """A table: parameter, unit, value, its Jacobian interval and half-width (%), and the
+        profile interval where one was computed."""
         headers = ["parameter", "unit", "value", "95 % interval (Jacobian)",
                    "± %"]
         prof = self.profile
@@ -72,7 +60,7 @@ class Identified:
                               _interval(lo, hi), half]
             if prof is not None:
                 est = prof.get("estimate")
-                row += [est[j] if _ends(est, len(self.names)) else None,
+                row += [est[j] if interval_ends(est, len(self.names)) else None,
                         _interval(prof["lower"][j], prof["upper"][j])]
             out.append(row)
         return headers, out
@@ -82,14 +70,6 @@ def _interval(lo: float | None, hi: float | None) -> str:
     from .render import fmt
 
     return f"[{'open' if lo is None else fmt(lo)}, {'open' if hi is None else fmt(hi)}]"
-
-
-def _num(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
-def _ends(v: Any, d: int) -> bool:
-    return isinstance(v, list) and len(v) == d and all(x is None or _num(x) for x in v)
 
 
 def no_truth(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
@@ -109,68 +89,25 @@ def check_intervals(value: Any, d: int) -> dict[str, Any] | None:
     """A record's ``result.intervals``, or ``None`` when missing or malformed."""
     if not isinstance(value, Mapping):
         return None
-    if not (_ends(value.get("lower"), d) and _ends(value.get("upper"), d)):
+    if not (interval_ends(value.get("lower"), d) and interval_ends(value.get("upper"), d)):
         return None
     sigma = value.get("sigma")
-    if not (isinstance(sigma, list) and 0 < len(sigma) <= 1000 and all(_num(s) for s in sigma)):
+    if not (isinstance(sigma, list) and 0 < len(sigma) <= 1000 and all(finite(s) for s in sigma)):
         return None
     return dict(value)
-
-
-def read_profile(path: Path, d: int) -> dict[str, Any] | None:
-    """A job's ``profile.json`` (any status), checked; ``None`` when missing or malformed."""
-    data = _read(path)
-    if not isinstance(data, dict) or data.get("schema") != PROFILE_SCHEMA:
-        return None
-    if not _num(data.get("f_start")) or data.get("status") not in ("ok", "skipped", "failed"):
-        return None
-    if data["status"] == "ok" and not (_ends(data.get("lower"), d)
-                                       and _ends(data.get("upper"), d)):
-        return None
-    reason = data.get("reason", "")
-    data["reason"] = reason[:200] if isinstance(reason, str) else ""
-    return data
-
-
-def _read(path: Path) -> Any:
-    return read_job_json(path)[0]
-
-
-def read_comparisons(path: Path, record: Mapping[str, Any]) -> list[dict[str, Any]] | None:
-    """A job's ``comparisons.json`` rows, checked; ``None`` when missing or malformed."""
-    data = _read(path)
-    if not isinstance(data, dict) or data.get("schema") != COMPARISONS_SCHEMA:
-        return None
-    rows = data.get("rows")
-    if not isinstance(rows, list) or not 0 < len(rows) <= MAX_COMPARISONS:
-        return None
-    out = []
-    for row in rows:
-        if not isinstance(row, dict) or not isinstance(row.get("name"), str):
-            return None
-        metrics = row.get("metrics") or {}
-        if not (isinstance(metrics, dict) and all(isinstance(k, str) and _num(v)
-                                                  for k, v in metrics.items())):
-            return None
-        f = row.get("f")
-        note = row.get("note")
-        out.append({"name": row["name"][:80], "f": f if _num(f) else math.nan,
-                    "metrics": metrics, "note": note[:200] if isinstance(note, str) else ""})
-    return out
 
 
 def comparisons_by_context(records: Sequence[Mapping[str, Any]],
                            rows: Sequence[Mapping[str, Any]]) -> dict[str, list[dict[str, Any]]]:
     """Per context, the comparison rows of its first job that wrote readable ones."""
-    return first_file_by_context(records, rows, COMPARISONS_FILE, read_comparisons)
+    return first_file_by_context(records, rows, COMPARISONS, read_comparisons)
 
 
 def identified_by_context(records: Sequence[Mapping[str, Any]],
                           rows: Sequence[Mapping[str, Any]],
                           contexts: Mapping[str, bool]) -> dict[str, Identified]:
-    """Per context without a truth: the best ok run (lowest headline metric, then objective)
-    with readable intervals, and the profile of the context's job that started it at the
-    lowest objective."""
+    """Per context without a truth: the best ok run with readable intervals, and the
+    profile started at the lowest objective."""
     by_id = {r["run_id"]: r for r in records}
     out: dict[str, Identified] = {}
     for context in (c for c, none in contexts.items() if none):
@@ -188,7 +125,7 @@ def identified_by_context(records: Sequence[Mapping[str, Any]],
 
 
 def _key(v: Any) -> float:
-    return float(v) if _num(v) else math.inf
+    return float(v) if finite(v) else math.inf
 
 
 def _identified(row: Mapping[str, Any], rec: Mapping[str, Any]) -> Identified | None:
@@ -197,21 +134,21 @@ def _identified(row: Mapping[str, Any], rec: Mapping[str, Any]) -> Identified | 
     res = rec.get("result") or {}
     x = res.get("x_best")
     d = len(names)
-    if not (d and isinstance(x, list) and len(x) == d and all(_num(v) for v in x)):
+    if not (d and isinstance(x, list) and len(x) == d and all(finite(v) for v in x)):
         return None
     iv = check_intervals(res.get("intervals"), d)
     if iv is None:
         return None
     robust = iv.get("robust")
-    robust = robust if isinstance(robust, Mapping) and _ends(robust.get("lower"), d) \
-        and _ends(robust.get("upper"), d) else {}
+    robust = robust if isinstance(robust, Mapping) and interval_ends(robust.get("lower"), d) \
+        and interval_ends(robust.get("upper"), d) else {}
     info = (rec.get("problem") or {}).get("info")
     info = info if isinstance(info, Mapping) else {}
     objective = info.get("objective") if isinstance(info.get("objective"), Mapping) else {}
     return Identified(f"{row['algorithm']}, run {row['run_index']}", _key(res.get("f_best")),
                       names, list(params.get("units") or []), [float(v) for v in x],
                       iv["lower"], iv["upper"], [float(s) for s in iv["sigma"]],
-                      robust_lower=robust.get("lower"), robust_upper=robust.get("upper"),
+                      robust_lower=robust.get("lower"),
                       objective_unit=_text(objective.get("unit"), 20),
                       objective_what=_text(objective.get("what"), 120),
                       caveat=_text(info.get("caveat"), 400))
@@ -224,8 +161,8 @@ def _text(v: Any, most: int) -> str:
 
 def _best_profile(records: Sequence[Mapping[str, Any]], d: int
                   ) -> tuple[dict[str, Any] | None, str]:
-    """The readable ``profile.json`` with the lowest start among the records' job folders
-    (status ok), or ``None`` and why not (the reason of one that was skipped)."""
+    """The readable ``profile.json`` (status ok) with the lowest start among the records'
+    jobs, or ``None`` and why not."""
     seen: set[str] = set()
     found: list[dict[str, Any]] = []
     for rec in records:
@@ -233,7 +170,7 @@ def _best_profile(records: Sequence[Mapping[str, Any]], d: int
         if folder in seen:
             continue
         seen.add(folder)
-        data = read_profile(Path(folder) / PROFILE_FILE, d)
+        data = read_profile(Path(folder) / PROFILE, d)
         if data is not None:
             found.append(data)
     ok = [p for p in found if p["status"] == "ok"]

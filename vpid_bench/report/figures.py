@@ -1,21 +1,8 @@
-"""The core report's figures (matplotlib, PNG, Agg backend), each readable alone.
-
-Every figure comes in two halves, so that what a figure shows can be tested without drawing
-it:
-
-* a *data* function (``convergence_panels``, ``runs_metric_data``, ``error_heatmap_data``,
-  ``cd_data``) runs in the report's process and reduces the records or the runs frame to
-  plain, small data (numpy arrays, lists, dicts; no DataFrame), or says why the figure cannot
-  be drawn;
-* a *draw* function (``draw_convergence``, ``draw_runs_metric``, ``draw_error_heatmap``,
-  ``draw_cd``) takes that data and a path, imports only matplotlib, writes one PNG and
-  returns its path.
-
-A draw function returns the PNG path, a data function the data or a string saying why the
-figure cannot be drawn. Lower is better on every
-metric axis. Problem-specific figures come from the problem's plugin through a report
-section.
-"""
+"""The core report's figures (matplotlib, PNG, Agg backend), each readable alone, lower is
+better on every metric axis. Each comes in two halves, so that what a figure shows is tested
+without drawing it: a *data* function reduces the records or runs to small plain data (or a
+string saying why the figure cannot be drawn), a *draw* function writes one PNG from it and
+returns its path."""
 
 from __future__ import annotations
 
@@ -29,8 +16,7 @@ import numpy as np
 
 #: Resolution of every PNG (dots per inch).
 DPI = 110
-#: zlib level of the PNG files: 1 instead of the default 6 saves about 5 % of the drawing time
-#: of a 540-run report's figures, for files 5-7 % larger.
+#: zlib level of the PNG files: 1 (not 6) saves 5 % of the drawing time, files 5-7 % larger.
 PNG_COMPRESS_LEVEL = 1
 #: A convergence curve keeps at most this many points (step corners; see :func:`thin_steps`).
 MAX_CURVE_POINTS = 400
@@ -57,13 +43,9 @@ def save(fig: Any, path: Path) -> Path:
     return path
 
 
-_save = save  # the name the report used before
-
-
 def colours(n: int) -> list[Any]:
-    """``n`` distinct colours: matplotlib's current colour cycle when it has enough, else
-    ``n`` evenly spaced hues (seaborn's ``husl``), as seaborn colours a ``hue`` with more
-    levels than the cycle; a repeated colour would make two optimizers one curve."""
+    """``n`` distinct colours: matplotlib's colour cycle when it has enough, else ``n`` evenly
+    spaced hues (seaborn's ``husl``): a repeated colour would make two curves one."""
     plt = _plt()
     cycle = plt.rcParams["axes.prop_cycle"].by_key().get("color") or ["C0"]
     if n <= len(cycle):
@@ -73,22 +55,14 @@ def colours(n: int) -> list[Any]:
     return list(sns.color_palette("husl", n))
 
 
-def metric_label(metric_name: str) -> str:
-    """Axis label of the per-run metric."""
-    if metric_name == "f_best":
-        return "best objective value f"
-    return f"{metric_name} of the best vector"
-
-
 def _use_log(values: np.ndarray) -> bool:
     v = values[np.isfinite(values)]
     return bool(v.size and np.all(v > 0) and v.max() / v.min() > 50)
 
 
 def extremes(values: np.ndarray) -> np.ndarray:
-    """The few numbers of ``values`` that :func:`set_log_y` decides on (the smallest, the
-    largest and the smallest non-zero magnitude of the finite values): the same scale from
-    a handful of numbers instead of every point."""
+    """The few finite numbers of ``values`` that :func:`set_log_y` decides on (least,
+    largest, least non-zero magnitude)."""
     v = np.asarray(values, float)
     v = v[np.isfinite(v)]
     if not v.size:
@@ -118,21 +92,18 @@ def set_log_y(ax: Any, values: np.ndarray) -> str:
 # --- convergence -----------------------------------------------------------------------------
 
 def step_values(ev: np.ndarray, best: np.ndarray, grid: np.ndarray) -> np.ndarray:
-    """A best-so-far trace read at ``grid`` evaluation counts as a step function: the value
-    after the last batch that ended at or before each count (NaN before the first batch)."""
+    """A best-so-far trace read at ``grid`` evaluation counts as a step function (NaN before
+    the first batch)."""
     idx = np.searchsorted(ev, grid, side="right") - 1
     return np.where(idx >= 0, best[np.clip(idx, 0, None)], np.nan)
 
 
 def thin_steps(x: np.ndarray, *ys: np.ndarray, max_points: int = MAX_CURVE_POINTS
                ) -> tuple[np.ndarray, ...]:
-    """Fewer points for step curves drawn with ``steps-post`` (x increasing, each y holds
-    from its x to the next): first every point where no y changes is dropped, which changes
-    nothing drawn; if more than ``max_points`` remain, the x range is cut into
-    ``max_points - 1`` equal bins and each bin keeps its last point (the first point is
-    kept too). Then the thinned curve's value at any x is the original's value at some
-    x' in ``[x - w, x]``, ``w`` the bin width: exact at every kept point and off by at most
-    one bin (about a pixel for a few hundred bins) in between. Returns (x, *ys)."""
+    """Fewer points for ``steps-post`` curves: the points where no y changes are dropped
+    (nothing drawn changes); past ``max_points``, the x range is cut into equal bins, each
+    keeping its last point: exact at every kept point, off by at most one bin between.
+    Returns (x, *ys)."""
     x = np.asarray(x, float)
     ys = tuple(np.asarray(y, float) for y in ys)
     if x.size <= 2:
@@ -157,10 +128,9 @@ TraceSets = Mapping[str, Mapping[str, Sequence[tuple[np.ndarray, np.ndarray]]]]
 
 
 def nan_column_quantiles(m: np.ndarray, qs: Sequence[float]) -> np.ndarray:
-    """``np.nanquantile(m, qs, axis=0)`` of a 2-D ``m``, the same numbers (tested), with one
-    ``np.quantile`` call per count of values that are not NaN in a column: numpy's own loops
-    over the columns in Python, which made the convergence figure of an archive of 4,000
-    runs take minutes. A column of NaN only gives NaN."""
+    """``np.nanquantile(m, qs, axis=0)`` of a 2-D ``m`` (the same numbers, tested) with one
+    ``np.quantile`` call per count of non-NaN values: numpy's loops over columns in Python
+    took minutes over an archive."""
     m = np.asarray(m, dtype=float)
     out = np.full((len(qs), m.shape[1]), np.nan)
     counts = np.count_nonzero(~np.isnan(m), axis=0)
@@ -174,11 +144,9 @@ def nan_column_quantiles(m: np.ndarray, qs: Sequence[float]) -> np.ndarray:
 
 def convergence_panels(traces: TraceSets, f_true: Mapping[str, float] | None = None,
                        f_opt: Mapping[str, float] | None = None) -> list[dict[str, Any]]:
-    """The convergence figure's data, one panel per context (sorted) with a finite value:
-    the quartiles over the runs of each optimizer of the best-so-far on the context's
-    common evaluation grid (every evaluation count a run of the context reported, at most
-    :data:`MAX_GRID_POINTS`), thinned by :func:`thin_steps`. ``traces[context][algorithm]``:
-    the (evaluations, best) arrays of each successful run (NaN: nothing finite yet)."""
+    """The convergence figure's data, one panel per context with a finite value: each
+    optimizer's quartiles over its runs of the best-so-far on the context's evaluation grid,
+    thinned. ``traces[context][algorithm]``: each run's (evaluations, best) arrays."""
     f_true = dict(f_true or {})
     f_opt = dict(f_opt or {})
     panels = []
@@ -216,10 +184,8 @@ def convergence_panels(traces: TraceSets, f_true: Mapping[str, float] | None = N
 
 def draw_convergence(panels: Sequence[Mapping[str, Any]], path: Path,
                      style_of: Mapping[str, Any] | None = None) -> Path | str:
-    """Median best objective vs evaluations per optimizer, IQR band, one panel per context,
-    on a logarithmic y axis; a dashed line at the objective of the true parameters and a
-    dotted one at the record optimum ``f*`` where the panel knows them (medians over the
-    context's instances)."""
+    """Median best objective vs evaluations per optimizer with its IQR band, a panel per
+    context, log y axis; dashed: the objective at the truth, dotted: the record optimum."""
     if not panels:
         return "no finite objective values in the traces"
     from .styles import legend, lookup
@@ -262,8 +228,7 @@ def draw_convergence(panels: Sequence[Mapping[str, Any]], path: Path,
 # --- per-run metric --------------------------------------------------------------------------
 
 def runs_metric_data(df: Any, problem: str) -> dict[str, Any] | str:
-    """The per-run metric figure's data: the successful runs' finite metric values per
-    (optimizer, context) of ``problem``."""
+    """The successful runs' finite metric values per (optimizer, context) of ``problem``."""
     d = df[(df["problem"] == problem) & (df["status"] == "ok") & np.isfinite(df["metric"])]
     if d.empty:
         return f"no successful runs with a finite metric for {problem}"
@@ -277,9 +242,8 @@ def runs_metric_data(df: Any, problem: str) -> dict[str, Any] | str:
 
 
 def draw_runs_metric(data: Mapping[str, Any], path: Path) -> Path | str:
-    """Per-run metric per optimizer, grouped by context: a box (median, quartiles, whiskers
-    to the furthest run within 1.5 IQR, no outlier markers) and every run as a dot beside
-    it (jittered sideways by a fixed generator), one colour per context."""
+    """Per-run metric per optimizer, grouped by context: a box (whiskers to 1.5 IQR) and every
+    run as a dot (jittered by a fixed generator), one colour per context."""
     plt = _plt()
     order, hue_order = data["order"], data["hue_order"]
     m = max(1, len(hue_order))
@@ -310,7 +274,8 @@ def draw_runs_metric(data: Mapping[str, Any], path: Path) -> Path | str:
     if data["log"]:
         ax.set_yscale("log")
     ax.set_xlabel("optimizer")
-    ax.set_ylabel(metric_label(data["name"]) + " (lower is better)")
+    ax.set_ylabel(("best objective value f" if data["name"] == "f_best" else
+                   f"{data['name']} of the best vector") + " (lower is better)")
     ax.set_title(f"Per-run {data['name']} of every run, {data['problem']} "
                  "(box = median and IQR, dots = runs)")
     from matplotlib.patches import Patch
@@ -335,8 +300,7 @@ def error_label(v: float) -> str:
 
 
 def error_heatmap_data(df: Any, problem: str) -> dict[str, Any] | str:
-    """The error heatmap's data: per (optimizer, context) row and parameter column, the
-    median over the successful runs of the parameter's |relative error| (%)."""
+    """Per (optimizer, context) row and parameter column, the median |relative error| (%)."""
     eps_cols = [c for c in df.columns if c.startswith("eps.")]
     d = df[(df["problem"] == problem) & (df["status"] == "ok")]
     eps_cols = [c for c in eps_cols if d[c].notna().any()]
@@ -354,9 +318,8 @@ def error_heatmap_data(df: Any, problem: str) -> dict[str, Any] | str:
 
 
 def draw_error_heatmap(data: Mapping[str, Any], path: Path) -> Path | str:
-    """Median over the successful runs of each parameter's |relative error| (%), per
-    optimizer and context, on a logarithmic colour scale (per-run errors, not the error of
-    the mean vector, which hides scatter: errors of opposite sign cancel in a mean)."""
+    """Median per-run |relative error| (%) of each parameter, per optimizer and context, on a
+    log colour scale (not the mean vector's error: opposite signs cancel in a mean)."""
     import matplotlib.colors as mcolors
     from matplotlib.ticker import FuncFormatter
 
@@ -398,8 +361,7 @@ def draw_error_heatmap(data: Mapping[str, Any], path: Path) -> Path | str:
 
 def cd_data(ranks: Any, pvalues: Any) -> dict[str, Any] | str:
     """The CD diagram's data: (name, mean rank) best first, and the p-value matrix in that
-    order. ``ranks``: a Series or mapping name -> mean rank; ``pvalues``: a square DataFrame
-    indexed by the names."""
+    order (``pvalues``: a square DataFrame indexed by the names)."""
     if ranks is None or len(ranks) < 2:
         return "fewer than 2 optimizers to compare"
     items = sorted(((str(k), float(v)) for k, v in dict(ranks).items()), key=lambda kv: kv[1])
@@ -409,10 +371,8 @@ def cd_data(ranks: Any, pvalues: Any) -> dict[str, Any] | str:
 
 
 def cd_bars(names: list[str], p: np.ndarray, alpha: float) -> list[list[str]]:
-    """The bars of a critical-difference diagram: each largest group (two or more) of
-    optimizers no pair of which differs significantly (``p >= alpha``), as the columns of the
-    compact letter display (:func:`vpid_bench.report.stats.compact_letters`), best first.
-    ``names``: best first; ``p``: their symmetric p-value matrix in that order."""
+    """The bars of a critical-difference diagram: each group (two or more) no pair of which
+    differs significantly, the columns of the compact letter display, best first."""
     from .stats import compact_letters
 
     different = {frozenset((names[i], names[j])) for i in range(len(names))
@@ -425,11 +385,9 @@ def cd_bars(names: list[str], p: np.ndarray, alpha: float) -> list[list[str]]:
 
 def draw_cd(data: Mapping[str, Any], title: str, axis_label: str, path: Path,
             alpha: float, style_of: Mapping[str, Any] | None = None) -> Path | str:
-    """Critical-difference diagram in Demšar's (2006) layout: the mean ranks on an axis at the
-    top (1 = best, on the left); under it one thick bar per group of :func:`cd_bars` (groups
-    that do not overlap share a level); each optimizer joined by an elbow line to its label,
-    the better half to labels on the left (best on the top row), the other half to labels on
-    the right (worst on the top row), so that no two lines cross."""
+    """Critical-difference diagram in Demšar's (2006) layout: mean ranks on a top axis, a bar
+    per group of :func:`cd_bars`, each optimizer's elbow line to its label (better half
+    left, the rest right), no two lines crossing."""
     plt = _plt()
     names = [name for name, _ in data["ranks"]]
     from .styles import lookup

@@ -1,17 +1,7 @@
-"""The report's first screen: per context, which optimizer, how far from the truth, and why.
-
-The same :class:`ContextResult` feeds the top of ``report.md`` and the terminal, so the two
-never disagree (the terminal no longer re-reads the Markdown). Per context:
-
-* one ranking table by the problem's metric, with its unit, and beside it the search-quality
-  columns where each instance's optimum is known (runs that reach it, the median gap to it);
-* what the data allow: the floor (the metric of each instance's own optimum under the
-  objective that was optimised, median over the instances) and the Cramér–Rao bound norm
-  (what an efficient estimator could reach on such records);
-* one verdict (:mod:`.verdicts` decides it, this module writes it in words): whom to use, or
-  why no one, how far from the truth they end, and whether more search, a better estimator
-  or better records would help.
-"""
+"""The report's first screen, per context: the ranking (with the search-quality columns where
+each instance's optimum is known), the floor and Cramér–Rao bound, and the verdict in words
+(:mod:`.verdicts` decides it). One :class:`ContextResult` feeds ``report.md`` and the
+terminal, so the two never disagree."""
 
 from __future__ import annotations
 
@@ -30,9 +20,6 @@ from .render import PROSE_WIDTH, fmt, markdown, para, terminal
 from .safe import clean, escape
 from .tables import pair_detail
 from .verdicts import Verdict
-
-#: How the reference optimizers are named in a verdict.
-REFERENCE_WORDS = {"random": "random search", "centre": "the box centre"}
 
 
 @dataclasses.dataclass
@@ -61,13 +48,11 @@ class ContextResult:
     fits_a_record: bool = True
 
     def value(self, x: float) -> str:
-        """A metric value with its unit."""
         return _value(x, self.unit, escape)
 
 
 #: Record text in a verdict is marked (``_name``) so that the terminal never breaks a line
-#: inside it: a name's own words never start a line there (a hostile name could look like
-#: a table row); :func:`verdict_text` removes the marks.
+#: inside it (a hostile name starting a line could look like a table row).
 _OPEN, _CLOSE = "\x02", "\x03"
 _MARKED = re.compile(f"{_OPEN}(.*?){_CLOSE}", re.S)
 
@@ -97,7 +82,8 @@ def _names(items: Sequence[str]) -> str:
 
 
 def _ref(name: str) -> str:
-    return f"{REFERENCE_WORDS[name]} ({name})" if name in REFERENCE_WORDS else _name(name)
+    words = verdicts.REFERENCE_WORDS.get(name)
+    return f"{words} ({name})" if words else _name(name)
 
 
 def context_result(data: Any, context: str) -> ContextResult:
@@ -145,13 +131,13 @@ def context_result(data: Any, context: str) -> ContextResult:
 
 
 def evidence(data: Any, context: str) -> verdicts.Evidence:
-    """What the verdict of ``context`` rests on, from a :class:`~.compute.ReportData`."""
+    """What the verdict of ``context`` rests on."""
     mrows = sorted((s for s in data.metric_rows(context) if s.get("n_runs")),
                    key=lambda s: s["rank"])
     srows = {s["algorithm"]: s for s in data.search_rows(context)}
     mgroups = data.groups("metric", context) or {}
     sgroups = data.groups("search", context) or {}
-    cost = _costs(data.hits, context)
+    cost = {a: v for (c, a), v in anytime.costs_to_optimum(data.hits).items() if c == context}
     methods = []
     for s in mrows:
         q = srows.get(s["algorithm"])
@@ -182,8 +168,7 @@ def evidence(data: Any, context: str) -> verdicts.Evidence:
 
 
 def _model_error(data: Any, context: str) -> str:
-    """What the richer model that made the context's records adds to the fitted one
-    (``problem.info.model_error.what``, a short text from the records), or ``""``."""
+    """What the richer model that made the records adds (``problem.info.model_error``)."""
     ids = {r["run_id"] for r in data.rows if r["context"] == context}
     for rec in data.loaded.records:
         if rec["run_id"] not in ids:
@@ -208,12 +193,6 @@ def _edge(data: Any, context: str) -> tuple[int, int]:
     return int(sum(seen.values())), len(seen)
 
 
-def _costs(hits: Sequence[Any], context: str) -> dict[str, tuple[float, float]]:
-    """Per optimizer of ``context``: its ERT to the final target (each instance's optimum),
-    in evaluations and in seconds."""
-    return {a: v for (c, a), v in anytime.costs_to_optimum(hits).items() if c == context}
-
-
 def results(data: Any) -> list[ContextResult]:
     """The first screen of every context, in report order."""
     return [context_result(data, c) for c in data.contexts]
@@ -225,7 +204,6 @@ def verdict_text(v: Verdict) -> str:
 
 
 def _marked_verdict(v: Verdict) -> str:
-    """:func:`verdict_text` with its record text marked (:func:`_name`)."""
     head = f"Verdict for {_name(v.context)}: "
     if v.kind == verdicts.EMPTY:
         return head + "no successful run to rank."
@@ -299,7 +277,7 @@ def _why(v: Verdict) -> str:
 
 
 def _cost_words(v: Verdict) -> str:
-    """``": 23.7 evaluations (ERT) against 130 for de_lsq; 0.0202 s against 0.0158 s"``."""
+    """``": 23.7 evaluations to it (ERT) against 130 for de_lsq; 0.02 s against ..."``."""
     if len(v.costs) < 2:
         return ""
     me, others = v.costs[0], v.costs[1:]
@@ -315,8 +293,7 @@ def _cost_words(v: Verdict) -> str:
 
 
 def _not_equivalent(v: Verdict) -> str:
-    """``", though their medians differ by up to 56 % (more than the 10 % margin within
-    which methods count as equivalent): more runs would tell"``, or ``""``."""
+    """``", though their medians differ by up to 56 % (...): more runs would tell"``."""
     if v.spread <= verdicts.EQUIVALENCE_MARGIN:
         return ""
     return (f", though their medians differ by up to {fmt(100 * v.spread, 2)} % (more than the "
@@ -325,8 +302,7 @@ def _not_equivalent(v: Verdict) -> str:
 
 
 def _effect(v: Verdict) -> str:
-    """``"; against de6: p_holm=0.31, A12=0.45 [0.31, 0.60]"``: the pick against the next
-    optimizer by the metric (A12 below 0.5: the pick tends to end lower)."""
+    """``"; against de6: p_holm=0.31, A12=0.45 [0.31, 0.60]"``: the pick against the next."""
     row = v.next_pair
     if row is None or not math.isfinite(float(row.get("A12", math.nan))):
         return ""
@@ -352,7 +328,7 @@ def _estimator(v: Verdict) -> str:
 
 def _limits(v: Verdict) -> str:
     """What the records allow, and what limits the leader: search, the estimator or the
-    data; the estimator named as the bottleneck whenever its floor is far above the bound."""
+    data."""
     if not v.truth:
         return _limits_without_truth(v)
     parts = [_allowed(v)]
@@ -414,8 +390,7 @@ def _cannot_identify(v: Verdict) -> str:
 
 
 def _below_bound(v: Verdict) -> str:
-    """Why a floor can lie below the Cramér–Rao bound: the bound holds for unbiased
-    estimators, and the record's optimum is biased by model error or by the box."""
+    """Why a floor can lie below the Cramér–Rao bound (which holds for unbiased estimators)."""
     why = []
     if v.model_error:
         why.append(f"the record was made by a richer model than the fitted one "
@@ -450,8 +425,8 @@ def _advice(v: Verdict, a: verdicts.EstimatorAdvice) -> str:
 
 
 def _limits_without_truth(v: Verdict) -> str:
-    """Without a truth: whether the leader reaches the record's optimum of the objective, and
-    what that optimum scores by the headline metric (held out) where there is one."""
+    """Without a truth: whether the leader reaches the record's optimum, and what that
+    optimum scores by the headline metric (held out)."""
     if v.search is None:
         return ""
     text = ("; it reaches the record's optimum of the objective, so more search will not "
@@ -467,8 +442,7 @@ def _limits_without_truth(v: Verdict) -> str:
 
 
 def _no_truth_lines(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
-    """The paragraphs and tables a context without a truth adds below its ranking:
-    ``(text, headers, rows)`` (empty headers: text only)."""
+    """The paragraphs and tables a context without a truth adds below its ranking."""
     from .estimates import NO_TRUTH, NO_TRUTH_NO_RECORD
 
     out: list[tuple[str, list[str], list[list[Any]]]] = []
@@ -508,8 +482,7 @@ def _no_truth_lines(r: ContextResult) -> list[tuple[str, list[str], list[list[An
 
 
 def _objective(ident: Any) -> str:
-    """The best run's objective value with the unit and meaning the problem states, e.g.
-    ``2.591 µm² (the mean square position error over the estimation record)``."""
+    """The best run's objective with the unit and meaning the problem states."""
     text = fmt(ident.f, 4)
     if getattr(ident, "objective_unit", ""):
         text += f" {escape(ident.objective_unit)}"
@@ -537,19 +510,18 @@ def markdown_lines(items: Sequence[ContextResult]) -> list[str]:
 
 
 def extra_blocks(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
-    """What every renderer shows below a context's ranking: why row 1 is not the verdict's
-    choice (where it is not), what the answer assumes (stated quantities, boxes, input,
-    estimates on a bound: :mod:`.assumed`), for a context without a truth the identified
-    values with their intervals and the problem's comparison rows, and for every context with
-    a job's ``diagnostics.json`` its fit diagnostics; as ``(Markdown text, headers, rows)``
-    (empty headers: text only)."""
+    """What every renderer shows below a context's ranking, as ``(Markdown text, headers,
+    rows)`` (empty headers: text only): why row 1 is not the verdict's choice, what the
+    answer assumes (:mod:`.assumed`), without a truth the identified values and comparison
+    rows, and the fit diagnostics (:mod:`.diagnostics`)."""
+    from .diagnostics import blocks
+
     return (_row_one_note(r) + list(r.assumed) + ([] if r.truth else _no_truth_lines(r))
-            + _diagnostic_blocks(r))
+            + blocks(r.diagnostics, r.model_error))
 
 
 def _row_one_note(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
-    """Why row 1 of the ranking is not the verdict's choice, when it is not (a reference,
-    not shown to beat the references, or behind the pick by search quality)."""
+    """Why row 1 of the ranking is not the verdict's choice, when it is not."""
     v = r.decision
     first = r.rows[0][r.headers.index("optimizer")] if r.rows and "optimizer" in r.headers \
         else None
@@ -564,14 +536,6 @@ def _row_one_note(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]
         why = "it is not shown to beat every reference that was run"
     # no record text here: the terminal wraps these blocks without keeping names whole
     return [(f"Row 1 of the ranking is not the verdict's choice: {why}.", [], [])]
-
-
-def _diagnostic_blocks(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
-    """The fit diagnostics of a context (truth or not): one plain line where the model does
-    not explain the record, the channel table, the intervals and which one is trusted."""
-    from .diagnostics import blocks
-
-    return blocks(r.diagnostics, r.model_error)
 
 
 def terminal_width() -> int:
@@ -596,13 +560,14 @@ def _wrap_glued(marked: str, width: int) -> str:
 
 
 def answer_markdown(a: Any) -> list[str]:
-    """The answer block of ``report.md`` (:mod:`.answer`): its sentences as a list, the
-    identified values where there is no truth, and the compact table per context; each
-    verdict in full is one heading below (Results)."""
+    """The answer block of ``report.md`` (:mod:`.answer`): its sentences, the identified
+    values where there is no truth, and the compact table per context."""
+    from .answer import sentences
+
     if a is None:
         return []
     lines = ["## The answer", ""]
-    for label, text in answer_sentences(a):
+    for label, text in sentences(a):
         flat = f"- **{label}**: {' '.join(text.split())}".replace(" %", _GLUE + "%")
         lines += [textwrap.fill(flat, width=PROSE_WIDTH, subsequent_indent="  ",
                                 break_long_words=False, break_on_hyphens=False
@@ -619,20 +584,14 @@ def answer_markdown(a: Any) -> list[str]:
     return lines
 
 
-def answer_sentences(a: Any) -> list[tuple[str, str]]:
-    """(label, Markdown sentence) of the answer (:func:`.answer.sentences`)."""
+def answer_terminal(a: Any, width: int) -> str:
+    """The answer block for the terminal: the same, wrapped, without code marks."""
     from .answer import sentences
 
-    return sentences(a)
-
-
-def answer_terminal(a: Any, width: int) -> str:
-    """The answer block for the terminal: the same sentences (no code marks), wrapped; the
-    identified values; the compact table."""
     if a is None:
         return ""
     out = ["The answer"]
-    for label, text in answer_sentences(a):
+    for label, text in sentences(a):
         flat = " ".join(f"{label}: {text}".replace("`", "").split()).replace(" %", _GLUE + "%")
         out.append(clean(textwrap.fill(flat, width=width, subsequent_indent="  ",
                                        break_long_words=False, break_on_hyphens=False

@@ -1,55 +1,36 @@
-"""The report's identifiability section: what each record design can determine, and what the
-records actually allowed.
-
-It reads only files the jobs wrote (never rebuilds a problem): each job's
-``identifiability.json`` (the Cramér–Rao bounds of its design, :mod:`vpid_bench.analysis`)
-and the instances' optima (``<sweep>/optima/*.json`` or ``<job>/optima/*.json``). Every file
-from a results folder is untrusted: it is checked (types, finite numbers, sizes) and a bad one
-is skipped with one line in the section.
-
-A *design* is what defines a record apart from its noise draw: the problem and its settings
-without the protocol (``ps``, ``iterations``); the contexts ``<problem> ps=20`` and
-``<problem> ps=30`` share one design. Per design the section gives the bound of every
-parameter (relative standard deviation, %), the bounds' norm (comparable to a norm of relative
-errors, the per-run metric of a problem that knows its truth), the singular values
-and condition number of the scaled Jacobian, and beside them the measured *floor*: the
-context's headline metric of each instance's optimum ``x*``, median over the instances of the
-design, and per parameter the median ``|x*_j - θ_j| / |θ_j|``. A parameter whose bound exceeds
-:data:`UNDETERMINED_PERCENT` is one the design cannot determine.
-
-Also here, for the convergence figure: the median over the instances of a context of the
-objective at the truth and of the record optimum ``f*`` (:func:`reference_levels`).
-"""
+"""The report's identifiability section: what each record design can determine (the
+Cramér–Rao bounds each job wrote, ``identifiability.json``), beside what the records allowed
+(the instances' optima). A *design* is the problem and its settings without the protocol
+(``<problem> ps=20`` and ``ps=30`` share one). Files from a results folder are untrusted: a
+bad one is skipped with one line in the section. Also the convergence figure's reference
+levels (:func:`reference_levels`)."""
 
 from __future__ import annotations
 
 import math
 import statistics
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from ..analysis.identifiability import ROUNDING
 from ..analysis.optimum import find_optimum, load_optima, record_settings
 from ..analysis.profile import STRUCTURAL_RATIO
-from ..store.job_files import ESTIMATORS, IDENTIFIABILITY, read_job_json
+from ..problem import FILLED_PARAMS
+from ..store.job_checks import finite, read_estimator_floors, read_identifiability
+from ..store.job_files import ESTIMATORS, IDENTIFIABILITY
 from ..store.records import stable_hash
-from .estimator_floors import read_estimator_floors
 from .estimator_floors import sentence as estimator_sentence
 from .load import first_file_by_context
 from .optima import opt_column_names
 from .safe import escape
 from .sections import Contribution, ReportContext, Section
 
-#: A parameter whose Cramér–Rao bound (one relative standard deviation) exceeds this many
-#: percent is "not determined" by the design: even an efficient estimator would miss it by
-#: more than 10 % in one run of three, and a 95 % interval would span more than ±20 %.
+#: A parameter whose Cramér–Rao bound (relative sd, %) exceeds this is "not determined": a
+#: 95 % interval would span more than ±20 %.
 UNDETERMINED_PERCENT = 10.0
 FILE = IDENTIFIABILITY
-#: Instances (and runs of one instance) an identifiability file may list.
-MAX_INSTANCES = 100_000
-#: The noise convention, in words (each problem gives σ per residual group or per sample
-#: through ``Problem.residual_sigma``: the noise that was simulated).
+#: The noise convention, in words (σ from ``Problem.residual_sigma``).
 CONVENTION = (
     "Bounds: the Fisher information at the true parameters from a central-difference "
     "Jacobian of the clean responses, under independent Gaussian noise of the size that was "
@@ -65,103 +46,12 @@ CONVENTION = (
     "arithmetic, computed to rounding) carry no information and are left out.")
 
 
-def _finite(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
-def read_identifiability(path: Path, names: Sequence[str]) -> tuple[dict[str, Any] | None, str]:
-    """A job's ``identifiability.json``, checked against the records' parameter ``names``:
-    ``(data, "")``, or ``(None, why)`` for a file that is missing, too large, not JSON or
-    has a field of the wrong type, size or value."""
-    d = len(names)
-    data, why = read_job_json(path)
-    if why:
-        return None, why
-    if not isinstance(data, dict):
-        return None, "not a JSON object"
-    checks = (
-        ("names", data.get("names") == list(names), f"the records' parameter names {names}"),
-        ("crb_percent", isinstance(data.get("crb_percent"), list)
-         and len(data["crb_percent"]) == d
-         and all(_finite(v) and v >= 0 for v in data["crb_percent"]),
-         f"a list of {d} finite numbers >= 0"),
-        ("crb_norm_percent", _finite(data.get("crb_norm_percent"))
-         and data["crb_norm_percent"] >= 0, "a finite number >= 0"),
-        ("singular_values", isinstance(data.get("singular_values"), list)
-         and 1 <= len(data["singular_values"]) <= d
-         and all(_finite(v) and v >= 0 for v in data["singular_values"]),
-         f"a list of 1 to {d} finite numbers >= 0"),
-        ("condition_number", data.get("condition_number") is None
-         or (_finite(data["condition_number"]) and data["condition_number"] >= 1),
-         "a finite number >= 1 or null (infinite)"),
-        ("sigma", isinstance(data.get("sigma"), list) and 1 <= len(data["sigma"]) <= 10_000
-         and all(_finite(v) and v > 0 for v in data["sigma"]), "a list of numbers > 0"),
-    )
-    for key, ok, expected in (*checks, *_optional_checks(data, d)):
-        if not ok:
-            return None, f"field {key}: expected {expected}"
-    return data, ""
-
-
-def _bounds_ok(v: Any, d: int) -> bool:
-    return (isinstance(v, list) and len(v) == d and all(_finite(b) and b >= 0 for b in v))
-
-
-def _floor_entry_ok(e: Any, d: int) -> bool:
-    return (isinstance(e, dict) and _finite(e.get("fraction")) and e["fraction"] >= 0
-            and _finite(e.get("crb_norm_percent")) and e["crb_norm_percent"] >= 0
-            and _bounds_ok(e.get("crb_percent"), d))
-
-
-def _instance_entry_ok(e: Any, d: int) -> bool:
-    norms = e.get("sigma_floor_norms") if isinstance(e, dict) else None
-    return (isinstance(e, dict) and (e.get("instance") is None
-                                     or isinstance(e["instance"], str))
-            and isinstance(e.get("runs"), list) and 1 <= len(e["runs"]) <= MAX_INSTANCES
-            and all(isinstance(i, int) and not isinstance(i, bool) and i >= 0
-                    for i in e["runs"])
-            and _bounds_ok(e.get("crb_percent"), d)
-            and _finite(e.get("crb_norm_percent")) and e["crb_norm_percent"] >= 0
-            and (norms is None or (isinstance(norms, list) and len(norms) <= 10
-                                   and all(_finite(v) and v >= 0 for v in norms))))
-
-
-def _optional_checks(data: Mapping[str, Any], d: int) -> list[tuple[str, bool, str]]:
-    """Checks of the fields written since round four (absent in older files)."""
-    checks = []
-    if "excluded_entries" in data:
-        v = data["excluded_entries"]
-        checks.append(("excluded_entries", isinstance(v, int) and not isinstance(v, bool)
-                       and v >= 0, "an integer >= 0"))
-    if "sigma_floor_sensitivity" in data:
-        v = data["sigma_floor_sensitivity"]
-        checks.append(("sigma_floor_sensitivity", isinstance(v, list) and 1 <= len(v) <= 10
-                       and all(_floor_entry_ok(e, d) for e in v),
-                       f"a list of 1 to 10 {{fraction, crb_percent ({d} numbers), "
-                       "crb_norm_percent}"))
-    if "instances" in data:
-        v = data["instances"]
-        checks.append(("instances", isinstance(v, list) and len(v) <= MAX_INSTANCES
-                       and all(_instance_entry_ok(e, d) for e in v),
-                       f"a list of at most {MAX_INSTANCES} {{instance, runs, crb_percent "
-                       f"({d} numbers), crb_norm_percent[, sigma_floor_norms]}}"))
-    return checks
-
-
-def _optima_folders(records: Iterable[Mapping[str, Any]]) -> list[Path]:
-    """``<sweep>/optima`` and ``<job>/optima`` of every job the records came from."""
-    folders: list[Path] = []
-    for rec in records:
-        job = Path(str(rec.get("_job_dir", ".")))
-        for folder in (job / "optima", job.parent / "optima"):
-            if folder not in folders:
-                folders.append(folder)
-    return folders
-
-
 def optima_by_run(records: Sequence[Mapping[str, Any]]) -> dict[str, Mapping[str, Any]]:
-    """The optimum of the instance each run fitted (checked files only), by ``run_id``."""
-    optima = load_optima(_optima_folders(records))
+    """The optimum of the instance each run fitted (checked files of ``<job>/optima`` and
+    ``<sweep>/optima``), by ``run_id``."""
+    jobs = dict.fromkeys(Path(str(rec.get("_job_dir", "."))) for rec in records)
+    optima = load_optima(dict.fromkeys(f for job in jobs
+                                       for f in (job / "optima", job.parent / "optima")))
     if not optima:
         return {}
     out = {}
@@ -180,8 +70,8 @@ def _instance(rec: Mapping[str, Any]) -> Any:
 def reference_levels(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
                      ) -> tuple[dict[str, float], dict[str, float]]:
     """Per context, the median over its instances of the objective at the truth
-    (``problem.info.f_at_true``) and of the record optimum ``f*`` (from the optima files);
-    a context is left out of a map when one of its instances lacks a finite value."""
+    (``problem.info.f_at_true``) and of the record optimum ``f*``; a context is left out
+    where an instance lacks a finite value."""
     context = {r["run_id"]: r["context"] for r in rows}
     optima = optima_by_run(records)
     f_true: dict[str, dict[Any, float]] = {}
@@ -192,7 +82,7 @@ def reference_levels(records: Sequence[Mapping[str, Any]], rows: Sequence[Mappin
             continue
         info = (rec.get("problem") or {}).get("info") or {}
         v = info.get("f_at_true") if isinstance(info, Mapping) else None
-        f_true.setdefault(c, {})[_instance(rec)] = float(v) if _finite(v) else math.nan
+        f_true.setdefault(c, {})[_instance(rec)] = float(v) if finite(v) else math.nan
         opt = optima.get(rec["run_id"])
         f_opt.setdefault(c, {})[_instance(rec)] = float(opt["f_opt"]) if opt else math.nan
 
@@ -205,9 +95,8 @@ def reference_levels(records: Sequence[Mapping[str, Any]], rows: Sequence[Mappin
 
 def crb_norm_by_context(records: Sequence[Mapping[str, Any]],
                         rows: Sequence[Mapping[str, Any]]) -> dict[str, float]:
-    """Per context, the norm of the Cramér–Rao bounds (percent) its jobs wrote (the first
-    readable ``identifiability.json`` of the context's jobs); contexts without one are left
-    out. For the report's first screen: what an efficient estimator could reach."""
+    """Per context, the norm of the Cramér–Rao bounds (%) of the first readable
+    ``identifiability.json`` of its jobs: what an efficient estimator could reach."""
     def read(path: Path, rec: Mapping[str, Any]) -> Any:
         names = list((rec.get("parameters") or {}).get("names") or [])
         return read_identifiability(path, names)[0] if path.exists() else None
@@ -218,11 +107,9 @@ def crb_norm_by_context(records: Sequence[Mapping[str, Any]],
 
 def crb_norms_by_instance(records: Sequence[Mapping[str, Any]],
                           rows: Sequence[Mapping[str, Any]]) -> dict[str, dict[Any, float]]:
-    """Per context, the norm of each instance's own Cramér–Rao bounds (percent; the
-    ``instances`` of the first readable ``identifiability.json`` of its jobs that has them),
-    keyed as the rows' ``instance`` column: the instance's id, or the run index where every
-    run fits the same data. For the verdicts, which compare each instance's floor with its
-    own bound (:func:`.verdicts.floor_over_bound`); contexts without them are left out."""
+    """Per context, each instance's own bound norm (%), keyed as the rows' ``instance``
+    column (its id, or the run index where every run fits the same data): what the verdicts
+    compare each instance's floor with (:func:`.verdicts.floor_over_bound`)."""
     def read(path: Path, rec: Mapping[str, Any]) -> Any:
         names = list((rec.get("parameters") or {}).get("names") or [])
         data = read_identifiability(path, names)[0] if path.exists() else None
@@ -238,12 +125,15 @@ def crb_norms_by_instance(records: Sequence[Mapping[str, Any]],
     return out
 
 
-def _design_label(contexts: Sequence[str]) -> str:
-    """The contexts of a design without their protocol tokens (``ps=20``, ...)."""
+def _design_label(rows: Sequence[Mapping[str, Any]]) -> str:
+    """The labels of a design's contexts without the protocol: the problem and its varying
+    settings (the rows' ``problem.<key>`` columns) but ``ps``, ``iterations`` and the
+    budget."""
     labels = []
-    for c in contexts:
-        words = [w for w in c.split(" ") if not w.startswith(("ps=", "iterations=", "budget="))]
-        label = " ".join(words)
+    for row in rows:
+        label = str(row["problem"]) + "".join(
+            f" {k.removeprefix('problem.')}={v}" for k, v in row.items()
+            if k.startswith("problem.") and k.removeprefix("problem.") not in FILLED_PARAMS)
         if label not in labels:
             labels.append(label)
     return " / ".join(labels)
@@ -286,25 +176,23 @@ def _first_bounds(jobs: Sequence[Path], names: Sequence[str], notes: list[str]
 def _floors(d: Mapping[str, Any], names: Sequence[str], metric: Any,
             optima: Mapping[str, Mapping[str, Any]]
             ) -> tuple[dict[Any, float], dict[Any, list[float]]]:
-    """Per instance of a design: its optimum's metric, and its optimum's absolute relative
-    error per parameter (percent). The metric comes from the rows' floor column where the
-    report matched an optimum the files here do not hold (an archive's optima), so the
-    section never says "no optimum" while the rankings use one."""
+    """Per instance of a design: its optimum's metric (the rows' floor column first, so an
+    archive's optima count too) and absolute relative error per parameter (%)."""
     floors: dict[Any, float] = {}
     errors: dict[Any, list[float]] = {}
     column, _ = opt_column_names(d["rows"])
     for rec, row in zip(d["records"], d["rows"], strict=True):
-        if column and _finite(row.get(column)):
+        if column and finite(row.get(column)):
             floors.setdefault(_instance(rec), float(row[column]))
         opt = optima.get(rec["run_id"])
         if opt is None:
             continue
         value = (opt.get("metrics") or {}).get(metric)
-        if _finite(value):
+        if finite(value):
             floors[_instance(rec)] = float(value)
         rec_true = (rec.get("parameters") or {}).get("true")
         if (isinstance(rec_true, list) and len(rec_true) == len(names)
-                and all(_finite(t) and t != 0 for t in rec_true)):
+                and all(finite(t) and t != 0 for t in rec_true)):
             errors[_instance(rec)] = [abs(100.0 * (x - t) / t)
                                       for x, t in zip(opt["x_opt"], rec_true, strict=True)]
     return floors, errors
@@ -327,7 +215,7 @@ def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
         per_estimator = next((data for job in d["jobs"] for data in
                               [read_estimator_floors(job / ESTIMATORS)[0]] if data), None)
         out.append({
-            "label": _design_label(d["contexts"]), "contexts": sorted(d["contexts"]),
+            "label": _design_label(d["rows"]), "contexts": sorted(d["contexts"]),
             "names": names, "true": params.get("true"), "crb": crb, "metric": metric,
             "floor": statistics.median(floors.values()) if floors else None,
             "floor_errors": ([statistics.median(e[j] for e in errors.values())
@@ -343,15 +231,9 @@ def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
     return out, notes
 
 
-def _figure(ctx: ReportContext, design: Mapping[str, Any]) -> Path:
-    """The design's figure (:func:`draw_design`)."""
-    data = {k: design[k] for k in ("names", "crb", "floor_errors", "instances", "label")}
-    return ctx.save_figure(draw_design(data), f"identifiability_{design['label']}")
-
-
 def draw_design(design: Mapping[str, Any]) -> Any:
-    """Bars: the bound of each parameter (%, log axis); dots: the median |error| of the
-    instances' optima; a dashed line at :data:`UNDETERMINED_PERCENT`. Returns the figure."""
+    """Bars: each parameter's bound (%, log axis); dots: the median |error| of the instances'
+    optima; a dashed line at :data:`UNDETERMINED_PERCENT`."""
     from matplotlib.ticker import FuncFormatter
 
     from .figures import _plt
@@ -417,8 +299,7 @@ def _design_text(ctx: ReportContext, design: Mapping[str, Any]) -> str:
 
 
 def _sensitivity_text(ctx: ReportContext, crb: Mapping[str, Any]) -> str:
-    """The rounding-level samples left out and the bound under a σ floor (multiplicative
-    noise), or ``""``."""
+    """The rounding-level samples left out and the bound under a σ floor, or ``""``."""
     text = ""
     if crb.get("excluded_entries"):
         text += (f" {crb['excluded_entries']} sample(s) with no or rounding-level noise (σ at "
@@ -446,8 +327,8 @@ def _instances_text(ctx: ReportContext, crb: Mapping[str, Any]) -> str:
 
 
 def section(ctx: ReportContext) -> Contribution | None:
-    """The identifiability section of one problem's runs (``None`` when no job of it wrote
-    an ``identifiability.json``; a problem without residuals or truth writes none)."""
+    """The identifiability section of one problem's runs (``None``: no job wrote an
+    ``identifiability.json``)."""
     designs, notes = _designs(ctx)
     if not designs:
         if not notes:
@@ -499,7 +380,7 @@ def section(ctx: ReportContext) -> Contribution | None:
         parts += [ctx.markdown_table(["parameter", "CRB %", "floor median |error| %", ""],
                                      body, digits=3), ""]
         if not ctx.short:
-            files.append(_figure(ctx, d))
+            files.append(ctx.save_figure(draw_design(d), f"identifiability_{d['label']}"))
     if notes:
         parts += [ctx.para("Skipped: " + "; ".join(notes) + "."), ""]
     return Contribution(sections=(Section("Identifiability", "\n".join(parts).rstrip(),

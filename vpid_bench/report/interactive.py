@@ -1,11 +1,6 @@
-"""The report's interactive figures as data: the fixed-target ECDF and the convergence of each
-context, one series per optimizer, ready to draw as SVG (:mod:`.svg`) or to test.
-
-Numpy only, no drawing library: a :class:`Figure` holds what is drawn (each optimizer's step
-curve, the convergence's interquartile band, reference lines) in data units, with the axis
-labels, units and scales, and a sentence that describes it (the alt text). The HTML pages
-draw them inline, and a reader switches optimizers on and off.
-"""
+"""The HTML pages' interactive figures as data (numpy only): each context's fixed-target ECDF
+and convergence, the suite's ECDF, one series per optimizer in data units, with axes and an
+alt text, drawn inline as SVG (:mod:`.svg`)."""
 
 from __future__ import annotations
 
@@ -26,8 +21,7 @@ ECDF_GRID = 240
 
 @dataclasses.dataclass(frozen=True)
 class Series:
-    """One optimizer's curve: a step function through (x, y) (each y holds until the next
-    x); ``lo``/``hi``: a band around it (the interquartile range), or empty."""
+    """One optimizer's step curve through (x, y), with a band ``lo``/``hi`` or none."""
 
     name: str
     x: tuple[float, ...]
@@ -39,8 +33,7 @@ class Series:
 
 @dataclasses.dataclass(frozen=True)
 class Figure:
-    """An interactive figure: its series, axes (label with unit, log or linear) and alt
-    text. ``lines``: horizontal reference lines (label, y)."""
+    """An interactive figure; ``lines``: horizontal reference lines (label, y)."""
 
     key: str
     title: str
@@ -59,9 +52,7 @@ def _tuple(a: Any) -> tuple[float, ...]:
 
 
 def ecdf_figure(hits: Sequence[RunHits], context: str) -> Figure | None:
-    """The fixed-target ECDF of ``context`` (targets rel_gap 1 ... 1e-6; see :mod:`.anytime`),
-    one series per optimizer with its AUC in the legend; ``None`` when no run of the context
-    knows its instance's optimum."""
+    """The fixed-target ECDF of ``context`` (``None``: no run knows its optimum)."""
     from .figures import thin_steps
 
     sel = [h for h in hits if h.context == context]
@@ -87,9 +78,7 @@ def ecdf_figure(hits: Sequence[RunHits], context: str) -> Figure | None:
 
 
 def convergence_figure(panel: Mapping[str, Any]) -> Figure:
-    """One context's convergence (a panel of :func:`.figures.convergence_panels`): the median
-    best objective so far per optimizer with its interquartile band, and the objective at the
-    truth and at the record optimum where known."""
+    """One context's convergence (a panel of :func:`.figures.convergence_panels`)."""
     from .figures import thin_steps
 
     context = str(panel["context"])
@@ -136,17 +125,12 @@ def convergence_figures(records: Sequence[Mapping[str, Any]],
 
 def suite_ecdf_figure(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]]
                       ) -> Figure | None:
-    """The runtime ECDF aggregated over every problem of the suite (each weighing the same;
-    :func:`.suite_scores.aggregated_ecdf`), against evaluations per parameter; one series per
-    optimizer that ran every problem. ``None`` below two problems with known optima."""
+    """The runtime ECDF aggregated over the suite (:func:`.suite_scores.aggregated_ecdf`),
+    one series per optimizer that ran every problem; ``None`` below two problems."""
     from .figures import thin_steps
-    from .suite_scores import aggregated_ecdf
+    from .suite_scores import _budgets, _by, aggregated_ecdf
 
-    budgets: dict[str, float] = {}
-    by_alg: dict[str, dict[str, list[RunHits]]] = {}
-    for r in runs:
-        budgets[r.context] = max(budgets.get(r.context, 0.0), r.budget)
-        by_alg.setdefault(r.algorithm, {}).setdefault(r.context, []).append(r)
+    budgets, by_alg = _budgets(runs), _by(runs)
     contexts = sorted(c for c in budgets if c in facts)
     if len(contexts) < 2:
         return None

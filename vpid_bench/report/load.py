@@ -1,20 +1,8 @@
-"""Read run records from any set of job or sweep folders into one tidy table.
-
-Every ``records/run-*.json`` below the given paths is read; a corrupt file is listed by name
-and skipped, never fatal. Records that appear twice (the same ``run_id``, e.g. the same folder
-given twice or one sweep copied into another) are kept once.
-
-The tidy table has one row per run. Runs are grouped for comparison by:
-
-* ``context``: what the optimizers are compared on: the problem, the population size ``ps``
-  and any problem-config key that varies across the records (e.g. a noise level or noise
-  seed), plus the budget when it varies;
-* ``algorithm``: the optimizer name, plus any of its own parameters that vary across that
-  optimizer's records (e.g. ``de1[F=0.5]``).
-
-The top-level ``seed`` is not a grouping key: runs of different seeds are independent runs
-of the same optimizer and are pooled.
-"""
+"""Read the run records below any folders (a corrupt file is named and skipped; a run given
+twice is kept once) into one tidy table, a row per run, grouped by ``context`` (the problem,
+``ps`` and every problem setting that varies across the records, the budget too) and
+``algorithm`` (the optimizer, with its own varying parameters: ``de1[F=0.5]``). Runs of
+different seeds are pooled."""
 
 from __future__ import annotations
 
@@ -33,7 +21,8 @@ from ..store.record_check import check_record
 from ..store.records import CorruptRecordError, decode_number, iter_record_files, read_record
 from .safe import clean
 
-#: Problem-config keys that never define a context of their own (ps is taken from the optimizer).
+#: Problem-config keys that never define a context of their own (ps, the problem's protocol
+#: as its record states it under ``problem.config``, is the context's first token).
 PROBLEM_KEYS_IGNORED = ("ps",)
 #: Optimizer parameters that never distinguish algorithm variants (the protocol and the
 #: budget the job fills in; records of older versions may hold them under the optimizer).
@@ -49,7 +38,6 @@ class LoadedRecords:
     """The records found below some paths, with what was skipped and the jobs' statuses."""
 
     records: list[dict[str, Any]]
-    files: list[Path]
     skipped: list[tuple[Path, str]]
     duplicates: int
     job_status: dict[Path, dict[str, Any] | None]
@@ -80,6 +68,14 @@ class LoadedRecords:
         return out
 
 
+def by_context(items: Iterable[Any]) -> dict[str, list[Any]]:
+    """``items`` (mappings with a ``context``) grouped by it, in order of appearance."""
+    out: dict[str, list[Any]] = {}
+    for s in items:
+        out.setdefault(s["context"], []).append(s)
+    return out
+
+
 def reason(path: Path, why: str) -> str:
     """``why`` without a leading ``path: `` (a :class:`CorruptRecordError` names its file,
     and the lines that quote it name the file already)."""
@@ -87,28 +83,17 @@ def reason(path: Path, why: str) -> str:
     return why[len(prefix):] if why.startswith(prefix) else why
 
 
-def _job_dirs_below(paths: Iterable[Path]) -> set[Path]:
-    """Folders below ``paths`` that hold a ``job.json`` (jobs that ended with no records)."""
-    found = set()
-    for p in paths:
-        p = Path(p)
-        if p.is_file() and p.name == "job.json":
-            found.add(p.parent)
-        elif p.is_dir():
-            found.update(j.parent for j in p.rglob("job.json"))
-    return found
-
-
 def load_records(paths: Iterable[str | Path]) -> LoadedRecords:
     """Read every run record below ``paths`` (files or folders, any number, merged)."""
     paths = [Path(p) for p in paths]
     records: list[dict[str, Any]] = []
-    files: list[Path] = []
     skipped: list[tuple[Path, str]] = []
     seen: set[str] = set()
     seen_files: set[Path] = set()
     duplicates = 0
-    job_dirs = _job_dirs_below(paths)
+    # jobs that ended with no records hold a job.json too
+    job_dirs = {p.parent for p in paths if p.is_file() and p.name == "job.json"}
+    job_dirs.update(j.parent for p in paths if p.is_dir() for j in p.rglob("job.json"))
     for path in iter_record_files(paths):
         resolved = path.resolve()
         if resolved in seen_files:
@@ -132,9 +117,8 @@ def load_records(paths: Iterable[str | Path]) -> LoadedRecords:
         record["_file"] = str(path)
         record["_job_dir"] = str(path.parent.parent)
         records.append(record)
-        files.append(path)
     statuses = {d: read_job_status(d) for d in sorted(job_dirs)}
-    return LoadedRecords(records, files, skipped, duplicates, statuses)
+    return LoadedRecords(records, skipped, duplicates, statuses)
 
 
 def flatten(obj: Any, prefix: str = "") -> dict[str, Any]:
@@ -162,13 +146,17 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
+def _settings(r: Mapping[str, Any]) -> dict[str, Any]:
+    """A record's problem settings, flat, with its budget."""
+    return {**flatten(r["problem"].get("config") or {}), "budget": r.get("budget")}
+
+
 def grouping(records: list[dict[str, Any]]) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
     """Varying problem keys per problem name, and varying optimizer keys per optimizer name."""
     by_problem: dict[str, list[dict[str, Any]]] = {}
     by_opt: dict[str, list[dict[str, Any]]] = {}
     for r in records:
-        pflat = flatten(r["problem"].get("config") or {})
-        pflat["budget"] = r.get("budget")
+        pflat = _settings(r)
         for k in PROBLEM_KEYS_IGNORED:
             pflat.pop(k, None)
         by_problem.setdefault(r["problem"]["name"], []).append(pflat)
@@ -200,10 +188,8 @@ def _drop_implied(
             for r in records:
                 if r["problem"]["name"] != pname:
                     continue
-                pflat = flatten(r["problem"].get("config") or {})
-                pflat["budget"] = r.get("budget")
-                ps = (r["optimizer"].get("params") or {}).get("ps", pflat.get("ps"))
-                ident = repr((ps, [pflat.get(k) for k in others]))
+                pflat = _settings(r)
+                ident = repr((pflat.get("ps"), [pflat.get(k) for k in others]))
                 seen.setdefault(ident, set()).add(repr(pflat.get(key)))
             if all(len(v) == 1 for v in seen.values()):
                 kept.remove(key)
@@ -230,10 +216,9 @@ def run_labels(records: list[dict[str, Any]]) -> list[RunLabel]:
     for r in records:
         pname = r["problem"]["name"]
         oname = r["optimizer"]["name"]
-        pflat = flatten(r["problem"].get("config") or {})
-        pflat["budget"] = r.get("budget")
+        pflat = _settings(r)
         oflat = flatten(r["optimizer"].get("params") or {})
-        ps = oflat.get("ps", pflat.get("ps"))
+        ps = pflat.get("ps")
         pvary = {k: pflat.get(k) for k in problem_keys[pname]}
         ovary = {k: oflat.get(k) for k in optimizer_keys[oname]}
         # labels every renderer shows (tables, figures, the terminal): one printable line
@@ -248,10 +233,7 @@ def run_labels(records: list[dict[str, Any]]) -> list[RunLabel]:
 
 
 def _num(value: Any, missing: float = math.inf) -> float:
-    """A record number as float. :func:`~vpid_bench.store.records.read_record` has already turned
-    the markers ``"inf"``, ``"-inf"``, ``"nan"`` into floats, so ``-inf`` stays ``-inf``;
-    ``None`` (how records of earlier versions stored any non-finite value) becomes
-    ``missing``."""
+    """A record number as float (``-inf`` stays ``-inf``); ``None`` becomes ``missing``."""
     if value is None:
         return missing
     return float(decode_number(value))
@@ -283,9 +265,8 @@ def choose_metrics(records: list[dict[str, Any]], labels: list[RunLabel]) -> dic
 
 
 def metric_unit(record: Mapping[str, Any], name: str) -> str:
-    """The unit of metric ``name`` as the problem stated it (``problem.info.metric_units``,
-    from :meth:`~vpid_bench.api.Problem.describe`), or ``""``: a short plain string only (the
-    record is untrusted)."""
+    """The unit of metric ``name`` the problem states (``problem.info.metric_units``): a short
+    plain string, else ``""``."""
     info = (record.get("problem") or {}).get("info")
     units = info.get("metric_units") if isinstance(info, Mapping) else None
     unit = units.get(name) if isinstance(units, Mapping) else None
@@ -295,19 +276,11 @@ def metric_unit(record: Mapping[str, Any], name: str) -> str:
 
 
 def run_rows(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The tidy table of all runs as plain rows (one mapping per record, sorted by context,
-    algorithm, seed and run index). No pandas: the single job's report uses it too.
-
-    Columns: ``context``, ``problem``, ``ps``, ``algorithm``, ``optimizer``, one column per
-    varying config key (``problem.<key>``, ``optimizer.<key>``), ``seed``, ``run_index``,
-    ``status``, ``f_best``, ``metric.<name>`` per metric the problem reports (``inf`` where
-    the record has ``null``), ``metric`` (the context's headline metric, see
-    :func:`choose_metrics`; ``inf`` for an ok run without a finite value) and
-    ``metric_name``, ``evaluations``, ``budget``, ``wall_time_s``, ``run_time_s``,
-    ``stopped_by``, ``error``, ``x.<param>``, ``eps.<param>`` (relative error, percent),
-    ``true.<param>``, ``run_id``, ``file``. Failed runs have NaN results. A ``null``
-    objective (no finite value found) is ``inf``.
-    """
+    """The tidy table of all runs as plain rows (no pandas: the single job's report uses it),
+    sorted by context, algorithm, seed and run index: one column per varying setting
+    (``problem.<key>``, ``optimizer.<key>``), ``metric.<name>`` per metric, ``metric`` (the
+    context's headline, :func:`choose_metrics`), ``x.``/``eps.`` (%)/``true.<param>``, ...
+    Failed runs have NaN results; a ``null`` objective or metric is ``inf``."""
     labels = run_labels(records)
     chosen = choose_metrics(records, labels)
     metric_names: list[str] = []
@@ -382,10 +355,8 @@ def runs_frame(rows: list[dict[str, Any]]) -> Any:
 
 def trace_sets(records: list[dict[str, Any]], rows: list[dict[str, Any]]
                ) -> dict[str, dict[str, list[tuple[np.ndarray, np.ndarray]]]]:
-    """Best-so-far traces of the successful runs in ``rows``:
-    ``out[context][algorithm]`` is a list of (evaluations, best) float arrays, one per run in
-    the order of ``rows`` (``null`` as NaN: nothing finite found yet). Plain numpy, what the
-    convergence figure needs (no DataFrame of every trace point)."""
+    """Best-so-far traces of the successful runs in ``rows``: ``out[context][algorithm]``, a
+    list of (evaluations, best) arrays in the order of ``rows`` (``null`` as NaN)."""
     by_id = {r["run_id"]: r for r in records}
     out: dict[str, dict[str, list[tuple[np.ndarray, np.ndarray]]]] = {}
     for row in rows:
@@ -405,10 +376,8 @@ def trace_sets(records: list[dict[str, Any]], rows: list[dict[str, Any]]
 def first_file_by_context(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]],
                           name: str, read: Callable[[Path, Mapping[str, Any]], Any]
                           ) -> dict[str, Any]:
-    """Per context, the first file ``name`` of its jobs that ``read(path, record)`` accepts
-    (returns other than ``None``): the files a job writes once for all its runs (bounds,
-    floors per estimator). Rows and records pair by run id (rows are sorted, records are
-    not); each job folder is tried once; contexts with no readable file are left out."""
+    """Per context, the first file ``name`` of its jobs (each tried once) that
+    ``read(path, record)`` accepts (returns other than ``None``)."""
     out: dict[str, Any] = {}
     by_id = {r["run_id"]: r for r in records}
     tried: set[Path] = set()

@@ -1,16 +1,9 @@
-"""The report as one model: everything its renderers show, computed once.
-
-:func:`.build.build_report` fills a :class:`ReportModel` in stages (the computation of
-:mod:`.compute`, the first screen, the sections of :mod:`.plugin_sections`, the figures, the
-suite scores), then hands the same model to each renderer: the terminal's first screen and
-``report.md`` (:mod:`.first_screen`, :mod:`.body`) and the HTML site (:mod:`.site`). A
-renderer only formats what the model holds.
-"""
+"""The report as one model, filled in stages by :func:`.build.build_report`: everything its
+renderers (terminal, ``report.md``, the HTML site) show, which they only format."""
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -19,8 +12,7 @@ from .sections import HeadlineColumn, Section
 
 @dataclasses.dataclass(frozen=True)
 class PlacedSection:
-    """A report section with the problem it is about and the plugin that made it (the core's
-    are ``vpid-bench``)."""
+    """A report section with its problem and the plugin that made it (``vpid-bench``)."""
 
     plugin: str
     problem: str
@@ -29,9 +21,8 @@ class PlacedSection:
 
 @dataclasses.dataclass
 class SuiteScores:
-    """The scores across the suite (:mod:`.suite_scores`): rows with
-    :data:`~.suite_scores.HEADERS`, notes on optimizers left out, the budget ladder and its
-    figure (a PNG path, or why it was not drawn)."""
+    """The scores across the suite (:mod:`.suite_scores`), the budget ladder and the figure
+    (a PNG path, or why it was not drawn)."""
 
     rows: list[list[Any]]
     notes: list[str]
@@ -66,6 +57,3 @@ class ReportModel:
     def contexts_of(self, problem: str) -> list[str]:
         of = self.problem_of()
         return [c for c in self.data.contexts if of.get(c) == problem]
-
-    def sections_of(self, problem: str) -> Sequence[PlacedSection]:
-        return [s for s in self.sections if s.problem == problem]

@@ -1,29 +1,10 @@
-"""Each run judged against its instance's attainable optimum: the report's side.
-
-A job with a problem that offers residuals and knows its truth writes, per instance, the
-lowest objective value its record allows (``optima/<key>.json`` in the sweep folder, or in
-the job folder for a single job; see :mod:`vpid_bench.analysis.optimum`). The report only
-*reads* those files: it never polishes or simulates (result folders are untrusted input).
-Every field of a file is checked; a bad file is skipped with one line naming it.
-
-Per run, :func:`add_optimum_columns` adds to the tidy rows:
-
-``instance``
-    the instance's id (the index when ids are null: all instances identical);
-``f_opt``, ``gap``, ``rel_gap``
-    the instance's optimum, ``f_best - f_opt`` and ``gap / |f_opt|`` (the gap itself where
-    ``f_opt`` is 0: a relative gap is undefined there);
-``<metric>_floor``
-    the problem's first metric of ``x*`` (e.g. ``nore_floor``): what the record allows;
-``<metric>_to_opt``
-    the run's distance to ``x*``, ``100 ||(x_best - x*) / x_true||`` in percent (the form of
-    a norm of relative errors, measured against ``x*`` instead of the truth).
-
-``<metric>`` is the lower-cased name of the problem's first metric, or ``rel_error`` for a
-problem that reports none. A run whose ``f_best`` lies below its instance's ``f_opt`` (the
-job re-polishes from every run's best, so this should not happen) keeps its negative gap and
-is named in one line.
-"""
+"""Each run judged against its instance's optimum, read (never computed) from the optimum
+files the jobs wrote (``optima/<key>.json``, :mod:`vpid_bench.store.optimum`; a bad file is
+skipped with one line). :func:`add_optimum_columns` adds to each row ``instance``, ``f_opt``,
+``gap``, ``rel_gap`` (``gap / |f_opt|``; the gap itself where ``f_opt`` is 0),
+``<metric>_floor`` (the problem's first metric of ``x*``, lower-cased, or ``rel_error``) and
+``<metric>_to_opt`` (``100 ||(x_best - x*) / x_true||``, %). A run below its optimum keeps
+its negative gap and is named in one line."""
 
 from __future__ import annotations
 
@@ -32,27 +13,14 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..store.optimum import (  # noqa: F401  (the file format's home; names kept here)
-    MAX_BYTES,
-    SCHEMA,
-    OptimaIndex,
-    Optimum,
-    _data_settings,
-    _finite,
-    check_optimum,
-    match_optimum,
-    matching_optima,
-    optimum_from_data,
-    read_optimum_file,
-)
+from ..store.optimum import OptimaIndex, _finite, match_optimum, read_optimum_file
 
 #: A run "reaches" its instance's optimum when its relative gap is at most this.
 REACHED = 1e-6
 
 
 def optima_folders(paths: Iterable[Path], records: Sequence[Mapping[str, Any]]) -> list[Path]:
-    """Where optimum files may be: ``optima/`` in every given folder, in every record's job
-    folder and in the folder above it (a sweep's shared ``optima/``)."""
+    """``optima/`` in every given folder, every record's job folder and the folder above."""
     found: list[Path] = []
     cands = [Path(p) / "optima" for p in paths]
     for r in records:
@@ -81,8 +49,7 @@ def load_optima(paths: Iterable[Path], records: Sequence[Mapping[str, Any]]) -> 
 
 
 def column_stem(metrics: Mapping[str, float], record_metrics: Sequence[str]) -> str:
-    """``<metric>`` of the column names: the problem's first metric, lower-cased, else
-    ``rel_error``."""
+    """``<metric>`` of the column names."""
     names = list(record_metrics) or list(metrics)
     return names[0].lower() if names else "rel_error"
 
@@ -96,8 +63,7 @@ def rel_gap(gap: float, f_opt: float) -> float:
 
 def distance_percent(x: Sequence[float], x_opt: Sequence[float], x_true: Sequence[float]
                      ) -> float:
-    """``100 ||(x - x_opt) / x_true||`` (percent); NaN when a value is missing or a true value
-    is zero."""
+    """``100 ||(x - x_opt) / x_true||`` (%); NaN when a value is missing or a truth zero."""
     try:
         terms = [100.0 * (float(a) - float(b)) / float(t)
                  for a, b, t in zip(x, x_opt, x_true, strict=True)]
@@ -110,8 +76,8 @@ def distance_percent(x: Sequence[float], x_opt: Sequence[float], x_true: Sequenc
 
 def add_optimum_columns(rows: list[dict[str, Any]], records: Sequence[Mapping[str, Any]],
                         index: OptimaIndex) -> list[str]:
-    """Add the module's columns to every row (in place; NaN where no optimum is known) and
-    return one line per run whose ``f_best`` lies below its instance's optimum."""
+    """Add the module's columns to every row (in place; NaN where no optimum is known);
+    return one line per run below its instance's optimum."""
     by_id = {r["run_id"]: r for r in records}
     notes: list[str] = []
     stems: list[str] = []
@@ -173,9 +139,8 @@ EDGE_RTOL = 1e-6
 
 
 def on_edge(x_opt: Sequence[float], params: Mapping[str, Any]) -> float:
-    """1.0 when a parameter of ``x_opt`` lies on the record's box edge (within
-    :data:`EDGE_RTOL` of the width), 0.0 when none does, NaN when the record's bounds are not
-    readable: the box then holds the optimum, and its error is cut by the box."""
+    """1.0 when a parameter of ``x_opt`` lies on the box's edge (the box holds the optimum:
+    its error is cut), 0.0 when none does, NaN when the bounds are not readable."""
     lo, hi = params.get("lower"), params.get("upper")
     n = len(x_opt)
     if not (isinstance(lo, list) and isinstance(hi, list) and len(lo) == len(hi) == n

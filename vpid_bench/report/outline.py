@@ -1,15 +1,7 @@
-"""The report's sections, registered once, in order: what ``report.md`` holds and where the
-HTML site shows the same thing.
-
-Each :class:`Part` makes its Markdown from the :class:`~.model.ReportModel` (all of it, or
-one problem's share) and names the site's page that shows it: ``index``, ``problem`` (each
-problem's page shows that problem's share) or ``protocol``. ``drawn="page"`` means the page's
-template draws the part itself from the same model (sortable tables, interactive figures:
-the verdicts, rankings, figures); ``drawn="markdown"`` means the site shows the part's own
-Markdown, converted to HTML. A problem's report sections (the core's identifiability and
-signals, and every plugin's, :mod:`.plugin_sections`) are one part: a plugin's section is in
-``report.md`` and on its problem's page by the same function.
-"""
+"""The report's sections, registered once, in order: what ``report.md`` holds and which page
+of the HTML site shows the same (``index``, ``problem``: each problem's share, or
+``protocol``), drawn there by the page's template from the model (``drawn="page"``) or from
+the part's own Markdown (``drawn="markdown"``)."""
 
 from __future__ import annotations
 
@@ -59,8 +51,7 @@ def _intro(model: Any, _: str | None) -> list[str]:
 
 
 def judged(data: Any) -> str:
-    """What the report judges an optimizer by, in words: the truth only where there is
-    one (a report of measured records never mentions one)."""
+    """What the report judges an optimizer by, in words (the truth only where there is one)."""
     no_truth = getattr(data, "no_truth", {})
     if no_truth and all(no_truth.values()):
         return "how well it fits and predicts the record"
@@ -79,14 +70,6 @@ def _archive_notes(model: Any, _: str | None) -> list[str]:
     return lines
 
 
-def _answer(model: Any, _: str | None) -> list[str]:
-    return first_screen.answer_markdown(getattr(model, "answer", None))
-
-
-def _results(model: Any, problem: str | None) -> list[str]:
-    return first_screen.markdown_lines(_of(model, problem, model.results))
-
-
 def _suite(model: Any, _: str | None) -> list[str]:
     s = model.suite
     if s is None:
@@ -101,10 +84,6 @@ def _single_job(model: Any, _: str | None) -> list[str]:
         return []
     return [para("A single job's report: statistics, no tests, no figures. The full report "
                  "with figures:"), "", f"    {escape(full_report_command(data.paths[0]))}", ""]
-
-
-def _rankings(model: Any, _: str | None) -> list[str]:
-    return body.headline_md(model.data, model.extra)
 
 
 def _sections(model: Any, problem: str | None) -> list[str]:
@@ -134,10 +113,6 @@ def _tests(model: Any, _: str | None) -> list[str]:
     return body.tests_md(t.kw, t.pairs, t.fr, model.data.alpha, t.by_inst)
 
 
-def _figures(model: Any, _: str | None) -> list[str]:
-    return body.figures_md(model.figs, model.out_dir) if model.data.tests is not None else []
-
-
 def _how_to_read(model: Any, _: str | None) -> list[str]:
     data = model.data
     return ["## How to read this report", "",
@@ -150,10 +125,6 @@ def _sources(model: Any, _: str | None) -> list[str]:
             + [""])
 
 
-def _files(model: Any, _: str | None) -> list[str]:
-    return body.files_md(model.data.short)
-
-
 def _of(model: Any, problem: str | None, results: list[Any]) -> list[Any]:
     if problem is None:
         return results
@@ -164,19 +135,23 @@ def _of(model: Any, problem: str | None, results: list[Any]) -> list[Any]:
 #: The report's sections in the order of report.md: the verdict first, the method after.
 PARTS: tuple[Part, ...] = (
     Part("intro", "index", "page", _intro),
-    Part("answer", "index", "page", _answer),
+    Part("answer", "index", "page",
+         lambda model, _: first_screen.answer_markdown(getattr(model, "answer", None))),
     Part("archive_notes", "index", "page", _archive_notes),
-    Part("results", "index", "page", _results),
+    Part("results", "index", "page", lambda model, problem: first_screen.markdown_lines(
+        _of(model, problem, model.results))),
     Part("suite", "index", "page", _suite),
     Part("single_job", "index", "page", _single_job),
-    Part("rankings", "problem", "page", _rankings),
+    Part("rankings", "problem", "page",
+         lambda model, _: body.headline_md(model.data, model.extra)),
     Part("sections", "problem", "markdown", _sections),
     Part("stats", "problem", "page", _stats),
     Part("tests", "protocol", "markdown", _tests),
-    Part("figures", "problem", "page", _figures),
+    Part("figures", "problem", "page", lambda model, _: body.figures_md(
+        model.figs, model.out_dir) if model.data.tests is not None else []),
     Part("how_to_read", "protocol", "markdown", _how_to_read),
     Part("sources", "protocol", "markdown", _sources),
-    Part("files", "protocol", "page", _files),
+    Part("files", "protocol", "page", lambda model, _: body.files_md(model.data.short)),
 )
 
 

@@ -12,8 +12,8 @@ from pathlib import Path
 from typing import Any
 
 from ..fileio import write_refused
+from ..store.paths import UnsafePathError, inside
 from .model import PlacedSection
-from .safe import UnsafePathError, inside
 from .sections import Contribution, HeadlineColumn, ReportContext, Section
 
 log = logging.getLogger(__name__)
@@ -21,10 +21,8 @@ log = logging.getLogger(__name__)
 
 def plugin_sections(registry: Any, data: Any, out_dir: Path, claim: Callable[[Path], Path]
                     ) -> tuple[list[PlacedSection], list[HeadlineColumn], list[str]]:
-    """Per problem of ``data`` (a :class:`~.compute.ReportData`): the core's sections
-    (identifiability, measured-vs-fitted signals), then the plugins'. Returns the sections
-    (each with its problem and plugin), the headline columns they add, and one line per
-    failure."""
+    """Per problem: the core's sections, then the plugins'; with the headline columns they
+    add and one line per failure."""
     from . import diagnostics, identifiability, signals
 
     if registry is None:
@@ -74,7 +72,8 @@ def _checked(contrib: Any, plugin: str, out_dir: Path
         for f in sec.files:
             try:
                 kept.append(inside(out_dir, Path(f)))
-            except UnsafePathError as exc:
-                errors.append(f"report section of plugin {plugin!r}: {exc}")
+            except UnsafePathError:
+                errors.append(f"report section of plugin {plugin!r}: {Path(f)} is outside the "
+                              f"report folder {out_dir}")
         out.append((plugin, dataclasses.replace(sec, files=tuple(kept))))
     return out, errors

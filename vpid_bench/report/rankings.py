@@ -1,18 +1,8 @@
-"""The headline's second ranking, by search quality, and the words that compare it with the
-first (by the problem's metric).
-
-The metric ranking (the published question: how close to the truth does an optimizer end?)
-mixes two things on a noisy record: how well the optimizer searches, and where the record's
-own optimum ``x*`` lies. The search-quality ranking asks only the first: the share of runs
-that reach their instance's optimum (``rel_gap <= 1e-6``), then the median ``rel_gap``;
-beside it the identification columns, the median floor (the metric of ``x*``: what the
-record allows) and the median distance of the runs to ``x*``.
-
-Rank groups (compact letters, :func:`.stats.compact_letters`) come from the Holm-corrected
-pairwise tests of each ranking; the search ranking's tests compare ``max(rel_gap, 1e-6)``,
-so runs that both reached the optimum tie (differences below the polish's precision are not
-differences in search). Numpy only: the single job's report uses it too (without tests).
-"""
+"""The second ranking, by search quality, and the words that compare it with the first (by
+the problem's metric, which on a noisy record mixes how well an optimizer searches with where
+the record's own optimum ``x*`` lies): the share of runs reaching their instance's optimum,
+then the median ``rel_gap``, beside the median floor and distance to ``x*``. Its tests
+compare ``max(rel_gap, 1e-6)``: runs that both reached the optimum tie. Numpy only."""
 
 from __future__ import annotations
 
@@ -22,23 +12,22 @@ from typing import Any
 
 import numpy as np
 
+from .load import by_context
 from .optima import REACHED, opt_column_names
 from .render import fmt, markdown, para
 from .safe import escape
-from .ties import WORDS_RTOL
+from .ties import WORDS_RTOL, same
 
 #: A box whose centre lies within this relative distance of every true value is "centred".
 CENTRED = 0.05
-#: Two medians within this relative distance are tied (never a disagreement to explain):
-#: :data:`.ties.WORDS_RTOL`, where every tie tolerance of the report is kept.
+#: Two medians within this relative distance are tied in words (:data:`.ties.WORDS_RTOL`).
 TIE_RTOL = WORDS_RTOL
 
 
 def search_summary(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
-    """Per context and algorithm whose successful runs all know their instance's optimum:
-    n, reached (runs with rel_gap <= REACHED), share, rel_gap_median, floor_median,
-    to_opt_median and rank (1 = largest share reached, then smallest median rel_gap).
-    Contexts with a run lacking an optimum are left out (no ranking on part of the runs)."""
+    """Per context and algorithm, where every ok run knows its instance's optimum: n,
+    reached, share, rel_gap_median, floor_median, to_opt_median and rank (largest share,
+    then smallest median rel_gap first)."""
     floor_col, to_col = opt_column_names(rows)
     groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
     for r in rows:
@@ -65,12 +54,10 @@ def search_summary(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
                     "rel_gap_median": float(np.median(gaps)), "floor_median": med(floor_col),
                     "to_opt_median": med(to_col),
                     "floor_name": floor_col[: -len("_floor")] if floor_col else ""})
-    by_context: dict[str, list[dict[str, Any]]] = {}
-    for s in out:
-        by_context.setdefault(s["context"], []).append(s)
+    grouped = by_context(out)
     ranked = []
-    for context in sorted(by_context):
-        g = sorted(by_context[context],
+    for context in sorted(grouped):
+        g = sorted(grouped[context],
                    key=lambda s: (-s["share"], s["rel_gap_median"], s["algorithm"]))
         for i, s in enumerate(g, start=1):
             s["rank"] = i
@@ -79,8 +66,8 @@ def search_summary(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
 
 
 def search_test_frame(df: Any) -> Any:
-    """The runs with ``rel_gap_test = max(rel_gap, REACHED)`` (what the search ranking's
-    pairwise tests compare: reaching the optimum ties, whatever the last digits)."""
+    """The runs with ``rel_gap_test = max(rel_gap, REACHED)``, what the search tests
+    compare."""
     df = df.copy()
     df["rel_gap_test"] = np.maximum(df["rel_gap"].to_numpy(float), REACHED)
     df.loc[~np.isfinite(df["rel_gap"].to_numpy(float)), "rel_gap_test"] = np.nan
@@ -89,8 +76,8 @@ def search_test_frame(df: Any) -> Any:
 
 def box_centred(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
                 ) -> dict[str, bool]:
-    """Per context: whether every record's search box is centred on its true values (the
-    centre within :data:`CENTRED` of each true value, relative)."""
+    """Per context: whether every record's box is centred on its true values (within
+    :data:`CENTRED`, relative)."""
     context = {r["run_id"]: r["context"] for r in rows}
     out: dict[str, bool] = {}
     for rec in records:
@@ -115,22 +102,13 @@ def _names(items: Sequence[str]) -> str:
     return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
 
 
-def _tied(a: float, b: float, rtol: float) -> bool:
-    if not (math.isfinite(a) and math.isfinite(b)):
-        return a == b
-    return abs(a - b) <= rtol * max(abs(a), abs(b), 1e-300)
-
-
 def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[str, Any]],
                  search: Sequence[Mapping[str, Any]], centred: bool,
                  metric_groups: Mapping[str, str] | None = None,
                  tie_rtol: float = TIE_RTOL) -> str:
-    """Why the two rankings of a context differ, in words (``""`` when they agree).
-
-    Orders that differ only within ties (medians within ``tie_rtol``, or runs that both reach
-    their optimum) are not a disagreement. An optimizer ahead by the metric is said to stop
-    early only when it reaches the optimum in fewer runs than one it passes and its median
-    gap is above the reach threshold; otherwise nothing is claimed about why."""
+    """Why the two rankings of a context differ beyond ties, in words (``""``: they agree).
+    An optimizer ahead by the metric is said to stop early only when it reaches the optimum
+    in fewer runs than one it passes and its median gap is above the reach threshold."""
     by_metric = {s["algorithm"]: s for s in metric_rows if s.get("n_runs")}
     srank = {s["algorithm"]: s for s in search}
     common = [a for a in by_metric if a in srank]
@@ -142,9 +120,9 @@ def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[s
         ma, mb = by_metric[a].get("median", math.nan), by_metric[b].get("median", math.nan)
         sa, sb = srank[a], srank[b]
         search_tie = (sa["reached"] == sb["reached"] and (
-            _tied(sa["rel_gap_median"], sb["rel_gap_median"], tie_rtol)
+            same(sa["rel_gap_median"], sb["rel_gap_median"], tie_rtol)
             or max(sa["rel_gap_median"], sb["rel_gap_median"]) <= REACHED))
-        return not _tied(ma, mb, tie_rtol) and not search_tie
+        return not same(ma, mb, tie_rtol) and not search_tie
 
     pairs = [(a, b) for a in m_order for b in m_order[m_order.index(a) + 1:]
              if s_order.index(b) < s_order.index(a) and really_passes(a, b)]
@@ -159,11 +137,11 @@ def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[s
             f"search quality (it reaches the optimum in {s['reached']} of {s['n']} runs, "
             f"median rel_gap {fmt(s['rel_gap_median'], 3)}). ")
     if metric_groups:
-        same = [b for b in passed
-                if set(metric_groups.get(a, "")) & set(metric_groups.get(b, ""))]
-        if same:
+        unseparated = [b for b in passed
+                       if set(metric_groups.get(a, "")) & set(metric_groups.get(b, ""))]
+        if unseparated:
             text += (f"By {escape(metric_name)} the tests do not separate it from "
-                     f"{_names(same)}, which it passes there. ")
+                     f"{_names(unseparated)}, which it passes there. ")
     stops_short = s["rel_gap_median"] > REACHED and all(
         s["reached"] < srank[b]["reached"] or s["rel_gap_median"] > srank[b]["rel_gap_median"]
         for b in passed)
@@ -178,17 +156,6 @@ def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[s
     return text.rstrip()
 
 
-def search_table(context_rows: Sequence[Mapping[str, Any]], groups: Mapping[str, str] | None
-                 ) -> tuple[list[str], list[list[Any]]]:
-    """(headers, rows) of one context's search-quality table (Markdown)."""
-    h = ["rank", "group", "optimizer", "n", "reached", "median rel_gap", "median floor",
-         "median to x*", "AUC"]
-    body = [[s["rank"], (groups or {}).get(s["algorithm"], "—"), s["algorithm"], s["n"],
-             f"{s['reached']}/{s['n']}", s["rel_gap_median"], s["floor_median"],
-             s["to_opt_median"], s.get("auc", math.nan)] for s in context_rows]
-    return h, body
-
-
 def search_lines(context: str, search: Sequence[Mapping[str, Any]],
                  groups: Mapping[str, str] | None, metric_name: str, test: str | None
                  ) -> list[str]:
@@ -196,7 +163,11 @@ def search_lines(context: str, search: Sequence[Mapping[str, Any]],
     rows = [s for s in search if s["context"] == context]
     if not rows:
         return []
-    h, body = search_table(rows, groups)
+    h = ["rank", "group", "optimizer", "n", "reached", "median rel_gap", "median floor",
+         "median to x*", "AUC"]
+    body = [[s["rank"], (groups or {}).get(s["algorithm"], "—"), s["algorithm"], s["n"],
+             f"{s['reached']}/{s['n']}", s["rel_gap_median"], s["floor_median"],
+             s["to_opt_median"], s.get("auc", math.nan)] for s in rows]
     how = (f"`group`: optimizers sharing a letter are not separated by the Holm-corrected "
            f"pairwise tests ({escape(test)}) on max(rel_gap, {REACHED:g})" if test else
            "`group`: not tested in a single job's report")

@@ -1,17 +1,10 @@
-"""Tables as text: Markdown pipe tables that fit in 120 columns, terminal tables, LaTeX
-(booktabs, via tabulate) and CSV, from plain headers and rows (no pandas needed).
-
-Numbers are formatted per column (:func:`format_column`), so a column never mixes ``14517``
-with ``1.513e+04``: a column of integers is printed as integers, a column whose values span
-a moderate range in fixed point with the same number of decimals, any other in scientific
-notation with four significant figures. Text cells may come from records: those of Markdown
-tables are escaped (:func:`.safe.escape`), those of terminal tables cleaned
-(:func:`.safe.clean`: no escape sequence, no line break that would forge a row).
-"""
+"""Tables as text from plain headers and rows: Markdown within 120 columns, terminal, LaTeX
+(booktabs). Numbers are formatted per column (:func:`format_column`: integers, fixed point
+with one number of decimals, or scientific), so a column never mixes ``14517`` with
+``1.513e+04``; record text is escaped (Markdown) or cleaned (terminal)."""
 
 from __future__ import annotations
 
-import csv
 import math
 import re
 import textwrap
@@ -19,6 +12,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from ..store import csv_table
 from .safe import clean, escape
 
 #: The widest line a person reads in ``report.md`` (characters).
@@ -59,8 +53,7 @@ def fmt(value: Any, digits: int = 4) -> str:
 
 
 def p_text(p: float, bound: bool, name: str = "p") -> str:
-    """A p-value as text: ``p=0.012``, or ``p≤0.0002`` where it is a permutation test's
-    smallest value (``bound``): the true p may be smaller still."""
+    """A p-value as text: ``p=0.012``, or ``p≤0.0002`` where it is a bound."""
     return f"{name}{'≤' if bound else '='}{float(p):.2g}"
 
 
@@ -198,30 +191,13 @@ def latex(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4
                     tablefmt="latex_booktabs", disable_numparse=True)
 
 
-def write_csv(path: Path, headers: Sequence[str], rows: Sequence[Sequence[Any]]) -> Path:
-    """``headers`` and ``rows`` as CSV at full precision (NaN and ``None`` as empty cells)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="", encoding="utf-8") as fh:
-        w = csv.writer(fh)
-        w.writerow(headers)
-        for r in rows:
-            w.writerow([_csv_cell(v) for v in r])
-    return path
-
-
-def _csv_cell(v: Any) -> Any:
-    """A CSV cell: floats at full precision (``repr``), NaN and ``None`` empty."""
-    if v is None or isinstance(v, (bool, str)):
-        return "" if v is None else v
-    x = _number(v)
-    if x is None:
-        return v
-    if math.isnan(x):
-        return ""
-    if float(x).is_integer() and not isinstance(v, float) and type(v).__name__.startswith(
-            ("int", "uint")):
-        return int(x)
-    return repr(x)
+def write_table(path: Path, headers: Sequence[str], rows: Sequence[Sequence[Any]]
+                ) -> list[Path]:
+    """``path`` (CSV, full precision) and its ``.tex`` (booktabs)."""
+    csv_table.write_csv(path, headers, rows)
+    tex = path.with_suffix(".tex")
+    tex.write_text(latex(headers, rows) + "\n", encoding="utf-8")
+    return [path, tex]
 
 
 def frame_rows(df: Any) -> tuple[list[str], list[list[Any]]]:

@@ -1,65 +1,25 @@
-"""Untrusted text made safe: file names (:func:`slug`), paths kept inside the report folder
-(:func:`inside`), and record text going to a reader: the terminal (:func:`clean`), Markdown
-(:func:`escape`) and HTML (:func:`escape_html`).
+"""Untrusted text made safe for a reader: the terminal (:func:`clean`), Markdown
+(:func:`escape`) and HTML (the site's templates auto-escape text that :func:`clean` made one
+printable line). File names and paths made from record content follow
+:mod:`vpid_bench.store.paths` (``slug``, ``inside``).
 
 Records, archives and result folders may come from anyone: a problem name, an optimizer
 parameter or a context label can hold ``../``, ``/``, ``|``, HTML, a thousand characters, a
 terminal escape sequence (``ESC ] 0 ;`` sets the window title) or a newline that forges a
-table row. Every file name the report builds from record content goes through :func:`slug`,
-every path it writes is checked by :func:`inside`, and every piece of record text shown to a
-person goes through one of the three text functions, each of which first makes the text one
-line of printable characters (:func:`clean`). This module is the one home of those rules:
-every renderer (terminal, Markdown, HTML) uses it.
+table row. Every piece of record text shown to a person is first made one line of printable
+characters (:func:`clean`), then escaped for its renderer. This module is the one home of
+those rules: every renderer (terminal, Markdown, HTML) uses it.
 
-Text is text (issue 44, N5): a run's error message or a plugin section holding
-``![x](http://...)``, ``[x](https://...)``, ``<http://...>``, ``<img src=...>``, a reference
-link or a bare URL once became a real image or link in report.md and on the HTML pages, and
-opening the site fetched from the network. :func:`escape` (record text) and
-:func:`inert_markdown` (a plugin section's Markdown: its tables and emphasis kept) make all of
-them inert text for any CommonMark or GitHub renderer: ``[`` and ``]`` escaped (no link, image
-or reference), ``<`` escaped (no HTML, no autolink), and the ``:`` of ``scheme://``, the ``.``
-of ``www.`` and the ``@`` of an e-mail address escaped (no bare-URL autolink). The report's
-own links (to its files and pages) are made by its renderers, never from such text, and are
+Text is text (issue 44, N5): :func:`escape` (record text) and :func:`inert_markdown` (a
+plugin section's Markdown, tables and emphasis kept) make links, images, HTML and bare-URL
+autolinks inert for any CommonMark or GitHub renderer (``[``, ``]``, ``<`` and the
+triggers of ``scheme://``, ``www.`` and e-mail addresses escaped). The report's own links are
 the only ones: :func:`local_link` is the rule the HTML renderer and the link check apply.
 """
 
 from __future__ import annotations
 
-import hashlib
-import html
 import re
-from pathlib import Path
-
-#: Longest file-name stem :func:`slug` returns (characters).
-MAX_SLUG = 80
-
-
-def slug(text: str, max_len: int = MAX_SLUG) -> str:
-    """A file-name-safe form of ``text``: only ``[A-Za-z0-9._=-]``, no ``..``, no leading dot
-    or dash, at most ``max_len`` characters (a long text keeps its start and gets a short
-    hash of the whole, so distinct long texts stay distinct). Never empty."""
-    s = re.sub(r"[^A-Za-z0-9._=-]+", "_", str(text))
-    s = re.sub(r"_+", "_", re.sub(r"\.{2,}", "_", s)).strip("._-")
-    if not s:
-        s = "x"
-    if len(s) > max_len:
-        digest = hashlib.sha256(str(text).encode()).hexdigest()[:10]
-        s = s[: max_len - 11].rstrip("._-") + "-" + digest
-    return s
-
-
-class UnsafePathError(ValueError):
-    """A path that would leave the report folder."""
-
-
-def inside(root: Path, path: Path) -> Path:
-    """``path`` if it lies inside ``root`` once both are resolved; else
-    :class:`UnsafePathError`."""
-    root_r = Path(root).resolve()
-    path_r = Path(path).resolve()
-    if path_r != root_r and root_r not in path_r.parents:
-        raise UnsafePathError(f"{path} is outside the report folder {root}")
-    return path
 
 
 def _visible(char: str) -> str:
@@ -69,12 +29,9 @@ def _visible(char: str) -> str:
 
 
 def clean(text: object, keep_newlines: bool = False) -> str:
-    """``text`` as printable characters only: every control character (C0 and C1, so every
-    terminal escape sequence, and line breaks), every format character (bidirectional
-    overrides) and every separator other than the space is written as its escape (ESC as
-    ``\\x1b``), so it cannot act on a terminal nor start a line of its own.
-    ``keep_newlines``: a block of several lines (a terminal table) keeps its ``\\n``, each
-    line cleaned. Idempotent: cleaning clean text changes nothing."""
+    """``text`` as printable characters only: every control, format or separator character
+    but the space written as its escape (ESC as ``\\x1b``), so it cannot act on a terminal
+    nor start a line; ``keep_newlines`` keeps a block's ``\\n``. Idempotent."""
     s = str(text)
     if keep_newlines:
         return "\n".join(clean(line) for line in s.split("\n"))
@@ -105,11 +62,9 @@ def _inert_autolinks(text: str) -> str:
 
 
 def escape(text: object) -> str:
-    """Record text for a Markdown line or table cell, shown as it is and nothing else: ``|``,
-    ``[``, ``]`` and a ``\\`` that would escape the next character backslash-escaped (no
-    table cell, link, image or reference), HTML (``& < >``) as entities (no tag, no
-    autolink), backticks as quotes, the triggers of bare-URL autolinks escaped, line breaks
-    as spaces, any other control or format character made visible (:func:`clean`)."""
+    """Record text for a Markdown line or cell, shown as it is: ``|``, ``[``, ``]``, a
+    trailing-escape ``\\`` and autolink triggers backslash-escaped, ``& < >`` as entities,
+    backticks as quotes, line breaks as spaces, the rest :func:`clean`."""
     s = _MD_BACKSLASH.sub(r"\\\\", str(text))
     return clean(_inert_autolinks("".join(_MD_ESCAPES.get(c, c) for c in s)))
 
@@ -121,27 +76,17 @@ _MD_ACTIVE = re.compile(r"\\[!-/:-@\[-`{-~]|[\[\]<]")
 
 def inert_markdown(text: object) -> str:
     """A plugin section's Markdown with every link, image, reference, raw HTML and autolink
-    made text, the rest (tables, emphasis, headings, lists, code) kept: each ``[``, ``]`` and
-    ``<`` not already escaped is backslash-escaped, and so are the triggers of bare-URL
-    autolinks. Inside a code span these escapes show as typed (a small price: telling code
-    from text is the renderer's parse, which a hostile text can steer)."""
+    made text (each unescaped ``[``, ``]``, ``<`` and autolink trigger escaped), the rest
+    kept; inside a code span the escapes show as typed."""
     s = _MD_ACTIVE.sub(lambda m: m.group(0) if len(m.group(0)) == 2 else "\\" + m.group(0),
                        str(text))
     return _inert_autolinks(s)
 
 
 def local_link(url: str) -> bool:
-    """Whether ``url`` names a file of the report itself: a relative path with no scheme,
-    host, absolute path, ``..`` or backslash (``figures/x.png``, ``problem-x.html#ctx``). Any other
-    (``https://``, ``//host``, ``data:``, ``file:``, ``/etc``) is never a link of the report."""
+    """Whether ``url`` names a file of the report: a relative path with no scheme, host,
+    absolute path, ``..`` or backslash (``figures/x.png``, ``problem-x.html#ctx``)."""
     u = str(url).strip()
     return bool(u) and not (re.match(r"[A-Za-z][A-Za-z0-9+.-]*:", u) or u.startswith("/")
                             or "\\" in u or ".." in u.split("#")[0].split("/")
                             or any(not c.isprintable() for c in u))
-
-
-def escape_html(text: object) -> str:
-    """Record text for HTML (element text or a quoted attribute value): ``& < > " '`` as
-    entities, line breaks and every other control or format character made visible
-    (:func:`clean`)."""
-    return html.escape(clean(text), quote=True)

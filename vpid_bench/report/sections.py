@@ -1,31 +1,12 @@
-"""The API through which a problem plugin adds its own sections to the report.
+"""The API through which a problem plugin adds its own sections to the report (docs/report.md,
+"Writing report sections for your problem", has an example): the plugin registers
+``section_function`` for a problem name from ``vpid_bench_register_report_sections``; it is
+called with a :class:`ReportContext` and returns a :class:`Contribution` (or ``None``).
 
-A plugin implements the hook ``vpid_bench_register_report_sections(register)`` and calls
-``register("<problem name>", section_function)``. When a report holds runs of that problem,
-``section_function(ctx)`` is called with a :class:`ReportContext` and returns a
-:class:`Contribution` (or ``None``)::
-
-    from vpid_bench import hookimpl
-    from vpid_bench.report.sections import Contribution, HeadlineColumn, Section
-
-    def my_section(ctx):
-        rows = [[r["algorithm"], r["f_best"]] for r in ctx.rows if r["status"] == "ok"]
-        files = ctx.write_table("my_table", ["algorithm", "f"], rows)
-        text = ctx.markdown_table(["algorithm", "f"], rows)
-        best = {(r["context"], r["algorithm"]): r["f_best"] for r in ctx.rows}
-        return Contribution(sections=(Section("My problem's table", text, tuple(files)),),
-                            headline=(HeadlineColumn("my f", best),))
-
-    @hookimpl
-    def vpid_bench_register_report_sections(register):
-        register("my_problem", my_section)
-
-Rules the report enforces: files must be written with the context's helpers (they land in
-``tables/`` and ``figures/`` under names made safe by :func:`.safe.slug`; a returned file
-outside the report folder is dropped), record text placed in Markdown should go through
-:meth:`ReportContext.escape`, and an exception in a section function costs that section
-only (the report says so in one line). In short mode (a single job's report) a section
-should skip figures and anything costly.
+Files are written with the context's helpers (safe, unique names in ``tables/`` and
+``figures/``; a returned file outside the report folder is dropped), record text in Markdown
+goes through :meth:`ReportContext.escape`, and an exception costs that section only. In
+short mode (a single job's report) a section should skip figures and anything costly.
 """
 
 from __future__ import annotations
@@ -36,16 +17,16 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from ..store.paths import inside, slug
 from . import render
-from .safe import escape, inside, slug
+from .safe import escape
 
 
 @dataclasses.dataclass(frozen=True)
 class Section:
-    """One part of ``report.md``: a ``## title``, Markdown ``text`` (keep lines within 120
-    characters; a link, image or raw HTML in it is shown as text, :func:`.safe.inert_markdown`)
-    and the ``files`` written for it (PNG figures are shown under the text, other files
-    linked: the report's own links are the only links)."""
+    """One part of ``report.md``: a ``## title``, Markdown ``text`` (lines within 120
+    characters; links, images and HTML in it are shown as text) and its ``files`` (PNGs
+    shown under the text, others linked)."""
 
     title: str
     text: str = ""
@@ -54,9 +35,8 @@ class Section:
 
 @dataclasses.dataclass(frozen=True)
 class HeadlineColumn:
-    """An extra column of the headline: ``values[(context, algorithm)]`` (a number or short
-    text; a missing key is an empty cell). Keep ``name`` short: the headline must fit in 120
-    columns (columns that do not fit are left out of report.md, never out of the CSV)."""
+    """An extra column of the headline: ``values[(context, algorithm)]`` (a missing key is an
+    empty cell). Keep ``name`` short: columns past 120 characters stay in the CSV only."""
 
     name: str
     values: Mapping[tuple[str, str], Any]
@@ -72,16 +52,9 @@ class Contribution:
 
 @dataclasses.dataclass(frozen=True)
 class ReportContext:
-    """What a section function may read and the helpers it writes with (read-only).
-
-    ``problem``: the problem name the function was registered for. ``rows``: the tidy runs
-    of that problem (one mapping per run, the columns of ``runs.csv``: ``context``,
-    ``algorithm``, ``optimizer``, ``ps``, ``status``, ``f_best``, ``metric``, ``metric_name``,
-    ``metric.<name>``, ``x.<param>``, ``eps.<param>`` (%), ``true.<param>``, ``run_id``, ...).
-    ``records``: the run records of those rows, parsed JSON, same order (do not modify).
-    ``out_dir``: the report folder. ``short``: a single job's report (no figures, no
-    tests). ``alpha``: the significance level.
-    """
+    """What a section function may read and the helpers it writes with (read-only):
+    ``rows``, the problem's rows of ``runs.csv`` as mappings; ``records``, their parsed
+    records in the same order (do not modify); ``short``: a single job's report."""
 
     problem: str
     rows: tuple[Mapping[str, Any], ...]
@@ -102,8 +75,7 @@ class ReportContext:
 
     def path(self, kind: str, name: str, suffix: str) -> Path:
         """A new file ``<out_dir>/<kind>/<slug(name)><suffix>`` (``kind``: ``tables`` or
-        ``figures``), checked to lie inside the report folder, made unique within this
-        report (``-2``, ``-3``, ... when the safe name is taken)."""
+        ``figures``), inside the report folder, unique within the report (``-2``, ...)."""
         if kind not in ("tables", "figures"):
             raise ValueError(f"kind must be 'tables' or 'figures', not {kind!r}")
         if not re.fullmatch(r"\.[A-Za-z0-9]{1,8}", suffix):
@@ -114,15 +86,11 @@ class ReportContext:
     def write_table(self, name: str, headers: Sequence[str],
                     rows: Sequence[Sequence[Any]]) -> list[Path]:
         """Write ``tables/<name>.csv`` (full precision) and ``.tex`` (booktabs)."""
-        csv_path = self.path("tables", name, ".csv")
-        tex = csv_path.with_suffix(".tex")
-        render.write_csv(csv_path, headers, rows)
-        tex.write_text(render.latex(headers, rows) + "\n", encoding="utf-8")
-        return [csv_path, tex]
+        return render.write_table(self.path("tables", name, ".csv"), headers, rows)
 
     def save_figure(self, fig: Any, name: str) -> Path:
-        """Save a matplotlib figure as ``figures/<name>.png``, close it, and return the path
-        (the one way a section draws a figure: build it with matplotlib, hand it here)."""
+        """Save a matplotlib figure as ``figures/<name>.png``, close it, return the path (the
+        one way a section adds a figure)."""
         from .figures import save
 
         return save(fig, self.path("figures", name, ".png"))

@@ -1,11 +1,6 @@
-"""The report's measured-vs-fitted figure, drawn by the framework for any problem that offers
-the ``signals`` capability (:meth:`~vpid_bench.api.Problem.signals`).
-
-Each job writes the signals of its best run (``best_signals.csv``,
-:mod:`vpid_bench.store.artifacts`); this section draws the file of the best job of each problem (the
-problem is never rebuilt from a record): per channel the measured and the fitted signal and,
-under it, the residual measured − fitted. A problem without signals gets no section.
-"""
+"""The measured-vs-fitted figure of any problem that offers ``signals``: from the
+``best_signals.csv`` of the best job (:mod:`vpid_bench.store.artifacts`; the problem is never
+rebuilt), per channel the measured and fitted signal and, under it, the residual."""
 
 from __future__ import annotations
 
@@ -22,14 +17,12 @@ TITLE = "Measured vs fitted signals of the best run"
 
 def draw_signals(t: Any, channels: Mapping[str, tuple[Any, Any]], units: Mapping[str, str],
                  title: str) -> Any:
-    """The measured-vs-fitted figure: per channel a signal panel and, under it, a residual
-    panel (measured − fitted); one legend above all panels (off the data). Returns the
-    matplotlib figure."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    """Per channel a signal panel and a residual panel under it; one legend above all."""
     import numpy as np
+
+    from .figures import _plt
+
+    plt = _plt()
 
     names = sorted(channels)
     ratios = [r for _ in names for r in (3, 1.2)]
@@ -72,8 +65,8 @@ def _best_run(ctx: ReportContext) -> tuple[Mapping[str, Any], Mapping[str, Any]]
 
 
 def section(ctx: ReportContext) -> Contribution | None:
-    """The figure of the best run of ``ctx``'s problem (full report only; ``None`` when no job
-    of the problem wrote signals: the problem does not offer them)."""
+    """The figure of the best run of ``ctx``'s problem (full report only; ``None``: no
+    signals)."""
     if ctx.short:
         return None
     best = _best_run(ctx)

@@ -1,16 +1,8 @@
-"""The report as a static HTML site, beside ``report.md``: ``index.html`` (the verdict per
-problem and the suite scores first), one page per problem, one per optimizer across the
-problems, and the protocol with the data's provenance.
-
-It renders the same :class:`~.model.ReportModel` as the Markdown and the terminal: nothing
-here computes a result. Pages come from Jinja2 templates in auto-escaping, strict mode (a
-name from a record or an archive is always escaped; an undefined template value is an
-error, not an empty string); every link is made by one naming function (:class:`Pages`) and
-checked to exist once the pages are written. The site works from ``file://`` and loads
-nothing from the network: one small style sheet and one small script (table sorting, the
-figures' optimizer toggles) are written beside the pages, the figures are the report's PNG
-files and inline SVG (:mod:`.svg`).
-"""
+"""The report as a static HTML site beside ``report.md`` (the overview, a page per problem
+and per optimizer, the protocol), rendered from the same model: Jinja2 templates in
+auto-escaping, strict mode, every link made by one naming function (:class:`Pages`) and
+checked once written. It works from ``file://`` and loads nothing from the network (a small
+style sheet and script beside the pages; PNG and inline SVG figures)."""
 
 from __future__ import annotations
 
@@ -23,15 +15,13 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from ..store.paths import slug
 from . import render
-from .safe import local_link, slug
+from .safe import local_link
 
 #: The site's own files, copied from the package beside the pages.
 ASSETS = ("report.css", "report.js")
 ASSET_DIR = "assets"
-#: Columns whose cells link to an optimizer's page, and to a problem's page.
-OPTIMIZER_COLUMNS = ("optimizer", "algorithm")
-PROBLEM_COLUMNS = ("problem",)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -91,8 +81,8 @@ def _sort_value(v: Any) -> str | None:
 def table(headers: Sequence[str], rows: Sequence[Sequence[Any]],
           links: Mapping[str, Callable[[str], str | None]] | None = None,
           caption: str = "", digits: int = 4) -> Table:
-    """A sortable table: numbers formatted per column as in report.md (:func:`.render.cells`),
-    sorting on their raw values; cells of the ``links`` columns link to a page."""
+    """A sortable table, numbers formatted as in report.md; cells of the ``links`` columns
+    link to a page."""
     text = render.cells(headers, rows, digits) if rows else []
     links = links or {}
     out = []
@@ -119,8 +109,8 @@ def _markdown_parser() -> Any:
 
 
 def markdown_html(text: str) -> Any:
-    """Markdown (a section's text, a verdict) as HTML: raw HTML in it escaped, a link or image
-    to anything but a file of the report shown as text (:func:`.safe.local_link`)."""
+    """Markdown as HTML: raw HTML escaped, a link or image to anything but a file of the
+    report shown as text."""
     from markupsafe import Markup
 
     return Markup(_markdown_parser().render(text or ""))  # noqa: S704 - escaped by the parser
@@ -149,8 +139,7 @@ def relative(path: Path, root: Path) -> str:
 
 
 def provenance(loaded: Any) -> dict[str, Any]:
-    """Which vpid-bench versions and machines made the records (from the records), and which
-    built the site."""
+    """Which vpid-bench versions and machines made the records, and which built the site."""
     from .. import __version__
 
     versions, machines = set(), set()
@@ -167,8 +156,7 @@ def provenance(loaded: Any) -> dict[str, Any]:
 
 
 def figure_scope(title: str, names: Iterable[str]) -> bool:
-    """Whether a core figure's title (``"<what>, <problem or context>"``) names one of
-    ``names``."""
+    """Whether a figure's title (``"<what>, <problem or context>"``) names one of ``names``."""
     return any(title.endswith(f", {n}") for n in names)
 
 
@@ -178,10 +166,8 @@ def written_tables(out_dir: Path) -> list[str]:
 
 
 def check_links(out_dir: Path, pages: Iterable[Path]) -> list[str]:
-    """What the pages name that does not resolve (empty: all do): a relative ``href`` or
-    ``src`` naming no file, and anything that is no file of the report (a link or image to
-    the web, another host, an absolute path): the report's own links are the only links
-    (:func:`.safe.local_link`)."""
+    """What the pages name that is no file of the report (empty: every ``href`` and ``src``
+    resolves): the report's own links are the only links."""
     bad = []
     for page in pages:
         text = page.read_text(encoding="utf-8")

@@ -9,9 +9,10 @@ from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
+from ..store.ioh import FOLDER as IOH_FOLDER
+from ..store.paths import slug
 from . import answer as answers
 from . import body, outline, styles, svg
-from .safe import slug
 from .site import (
     ASSET_DIR,
     ASSETS,
@@ -65,15 +66,9 @@ def _links(pages: Pages) -> dict[str, Any]:
             "problem": pages.problem}
 
 
-def fit_line(diag: Any) -> str:
-    """The fit diagnostics' one plain line of a context (Markdown), ``""`` when the model
-    explains the record or no diagnostics were written (:func:`.diagnostics.plain_line`)."""
+def _index(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, Any]:
     from .diagnostics import plain_line
 
-    return plain_line(diag) if diag else ""
-
-
-def _index(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, Any]:
     data = model.data
     of = model.problem_of()
     verdicts = []
@@ -81,7 +76,7 @@ def _index(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, A
         items = [{"verdict": r.verdict, "context": r.context, "anchor": _anchor(r.context),
                   "n": len(r.rows), "decision": decision(getattr(r, "decision", None), pages),
                   "assumed": [text for text, _, _ in getattr(r, "assumed", [])],
-                  "fit": fit_line(getattr(r, "diagnostics", None)),
+                  "fit": plain_line(r.diagnostics) if r.diagnostics else "",
                   "words": answers.table([r])[1][0][1]}
                  for r in model.results if of.get(r.context) == p]
         verdicts.append({"name": p, "href": pages.problem(p), "contexts": items,
@@ -98,9 +93,7 @@ def _index(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, A
 
 
 def _answer(model: Any, pages: Pages) -> dict[str, Any] | None:
-    """The answer block of the overview (:mod:`.answer`): its sentences, the identified
-    values where there is no truth, and the compact table, each context linked to its
-    section."""
+    """The answer block of the overview, each context linked to its section."""
     a = getattr(model, "answer", None)
     if a is None:
         return None
@@ -113,18 +106,13 @@ def _answer(model: Any, pages: Pages) -> dict[str, Any] | None:
             if a.rows else None}
 
 
-#: What limits the leader, in a few words (one home: :data:`.answer.LIMITS`).
-LIMITS = answers.LIMITS
-
-
 def decision(v: Any, pages: Pages) -> dict[str, Any] | None:
-    """The headline of a verdict object (:class:`.verdicts.Verdict`): its kind, the pick and
-    those the tests do not separate from it (with their pages), and what limits it."""
+    """The headline of a :class:`.verdicts.Verdict`, names linked to their pages."""
     if v is None or v.kind == "empty":
         return None
     names = [(n, pages.optimizer(n)) for n in v.tied]
     return {"kind": v.kind, "pick": (v.pick, pages.optimizer(v.pick)) if v.pick else None,
-            "tied": names, "limit": LIMITS.get(v.limit, ""),
+            "tied": names, "limit": answers.LIMITS.get(v.limit, ""),
             "not_beaten": list(v.not_beaten), "over_bound": v.over_bound}
 
 
@@ -154,12 +142,6 @@ def _anchor(context: str) -> str:
     return "c-" + slug(context)
 
 
-def _levels(r: Any) -> str:
-    parts = [f"{what} {r.value(v)}" for what, v in (("floor", r.floor), ("bound", r.bound))
-             if math.isfinite(v)]
-    return ", ".join(parts)
-
-
 def _context_block(model: Any, pages: Pages, r: Any, style_of: Mapping[str, Any],
                    counter: list[int]) -> dict[str, Any]:
     data = model.data
@@ -187,7 +169,9 @@ def _context_block(model: Any, pages: Pages, r: Any, style_of: Mapping[str, Any]
              for text, h, rows in extra_blocks(r)]
     return {"context": r.context, "anchor": _anchor(r.context), "verdict": r.verdict,
             "extra": extra,
-            "metric": r.metric, "unit": r.unit, "levels": _levels(r),
+            "metric": r.metric, "unit": r.unit, "levels": ", ".join(
+                f"{what} {r.value(v)}" for what, v in (("floor", r.floor), ("bound", r.bound))
+                if math.isfinite(v)),
             "table": table(r.headers, r.rows, _links(pages)), "search": search,
             "stats": stats, "figures": figures}
 
@@ -251,7 +235,7 @@ def _protocol(model: Any) -> dict[str, Any]:
             "archive_notes": data.archive_notes,
             "failures": [*model.section_errors, *data.optima_errors],
             "tables": written_tables(model.out_dir),
-            "ioh": (model.out_dir / "ioh").is_dir()}
+            "ioh": (model.out_dir / IOH_FOLDER).is_dir()}
 
 
 def interactive_figures(data: Any) -> dict[str, dict[str, Any]]:

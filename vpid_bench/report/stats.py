@@ -1,23 +1,12 @@
-"""Significance tests on the per-run metric, from scipy.stats (numpy for Holm and Nemenyi).
+"""Significance tests on the per-run metric (lower is better), from scipy.stats.
 
-Within a context (one problem, one population size, one noise setting), the runs of different
-optimizers are independent samples: Kruskal–Wallis tests whether any optimizer differs, and
-every pair is compared with a two-sided Mann–Whitney U test, the p-values Holm-corrected over
-all pairs of that context. The effect size is Vargha–Delaney's A12, computed from scipy's U.
-
-Across contexts (blocks: population sizes, noise seeds, problems), each optimizer's median
-per-run metric in each block is ranked within the block: the Friedman test asks whether the
-ranks differ, Nemenyi's post-hoc test gives the pairs for the critical difference diagram,
-and pairwise Wilcoxon signed-rank tests with Holm correction give a second opinion. Too few
-groups, runs or blocks for a test give a note, not an error.
-
-Holm's correction and Nemenyi's test are a few lines of numpy here (the same numbers as
-statsmodels' ``multipletests(method="holm")`` and scikit-posthocs'
-``posthoc_nemenyi_friedman``, which the tests check): importing those libraries costs more
-than the report's statistics themselves (scikit-posthocs imports matplotlib and seaborn,
-statsmodels' Holm runs a full garbage collection on every call).
-
-Lower metric is better everywhere (a problem metric, or the objective).
+Within a context: Kruskal–Wallis, and every pair compared two-sided (Wilcoxon signed-rank
+where the runs pair by instance, else Mann–Whitney U), Holm-corrected over the context's
+pairs; the effect size is Vargha–Delaney's A12. Across blocks (contexts, or the instances of
+one): Friedman, Nemenyi's post-hoc test (the critical-difference diagram) and pairwise
+Wilcoxon with Holm. Too few groups, runs or blocks give a note, not an error. Holm and
+Nemenyi are a few lines of numpy (the numbers of statsmodels and scikit-posthocs, which the
+tests check): importing those libraries costs more than the statistics themselves.
 """
 
 from __future__ import annotations
@@ -34,12 +23,6 @@ import numpy as np
 ALPHA = 0.05
 
 
-def a12_from_u(u1: float, n1: int, n2: int) -> float:
-    """Vargha–Delaney A12 = P(X > Y) + P(X = Y)/2 = U1 / (n1 n2), with U1 the Mann–Whitney
-    statistic of the first sample (scipy's ``mannwhitneyu(x, y).statistic``)."""
-    return float(u1) / (n1 * n2)
-
-
 def a12_magnitude(a12: float) -> str:
     """Vargha and Delaney's (2000) labels for |A12 - 0.5|: 0.06, 0.14, 0.21 thresholds."""
     d = abs(a12 - 0.5)
@@ -53,8 +36,7 @@ def a12_magnitude(a12: float) -> str:
 
 
 def holm(pvalues: list[float]) -> list[float]:
-    """Holm–Bonferroni adjusted p-values (the numbers of statsmodels'
-    ``multipletests(method='holm')``): the i-th smallest of m finite p-values times
+    """Holm–Bonferroni adjusted p-values: the i-th smallest of m finite p-values times
     ``m - i``, made non-decreasing in that order and capped at 1; NaN stays NaN."""
     if not pvalues:
         return []
@@ -72,11 +54,9 @@ def holm(pvalues: list[float]) -> list[float]:
 
 
 def nemenyi_friedman(values: np.ndarray) -> np.ndarray:
-    """Nemenyi's post-hoc p-values of a (blocks x algorithms) table (the numbers of
-    scikit-posthocs' ``posthoc_nemenyi_friedman``): ranks within each block (ties averaged),
-    for each pair the difference of mean ranks over ``sqrt(k (k + 1) / (6 n))`` times
-    ``sqrt(2)`` against the studentized range with k groups and infinite degrees of freedom.
-    A symmetric k x k matrix, diagonal 1."""
+    """Nemenyi's post-hoc p-values of a (blocks x algorithms) table, a symmetric k x k
+    matrix: each pair's difference of mean ranks over ``sqrt(k (k + 1) / (6 n))``, times
+    ``sqrt(2)``, against the studentized range (k groups, infinite degrees of freedom)."""
     from scipy import stats
 
     v = np.asarray(values, float)
@@ -124,8 +104,6 @@ def kruskal_by_context(df: Any) -> Any:
     return pd.DataFrame(rows)
 
 
-#: Runs of a context pair by instance when every instance has an id (the data differ per
-#: instance) and each optimizer ran each instance at most once.
 def paired_by_instance(g: Any) -> bool:
     """Whether the runs of one context (a DataFrame) pair by instance: every successful run
     names an instance id (not just an index: identical instances give nothing to pair on)
@@ -157,13 +135,11 @@ def _permutation(seed: int = 0) -> Any:
 
 def wilcoxon_paired(x: np.ndarray, y: np.ndarray) -> tuple[float, float, str]:
     """Two-sided Wilcoxon signed-rank test of paired ``x``, ``y``: (W, p, how p was got).
-    Exact without ties or zero differences (n <= 50), exhaustive permutation with them for
-    n <= 13 and a seeded permutation test (N_RESAMPLES resamples) up to n = 50, else the
-    normal approximation. All differences zero: p = 1."""
+    Exact without ties or zero differences (n <= 50), all permutations with them for n <= 13,
+    a seeded permutation test up to n = 50, else the normal approximation. Cached: a report
+    tests the same pair twice (pairwise and within Friedman), and the result is a pure
+    function of the values."""
     x, y = np.asarray(x, float), np.asarray(y, float)
-    # The same pair of samples is tested twice in a report (the pairwise tests of a context
-    # whose runs pair by instance, and the block Wilcoxon tests of its Friedman test): the
-    # result is a pure function of the values (the permutation test is seeded), so cache it.
     return _wilcoxon_cached(x.tobytes(), y.tobytes())
 
 
@@ -192,12 +168,9 @@ def _wilcoxon_cached(xb: bytes, yb: bytes) -> tuple[float, float, str]:
 
 
 def _wilcoxon_permutation(d: np.ndarray) -> tuple[float, float]:
-    """``scipy.stats.wilcoxon(x, y, method=_permutation())`` for the differences ``d``, the
-    same statistic and p-value (tested), about 50 times faster: scipy's permutation test
-    calls its statistic once per resample (it is not marked vectorised, 10,000 Python calls:
-    1.4 s per test, most of a study's report), whereas the signed-rank sum under sign flips
-    is one array expression, the ranks of ``|d|`` being the same for every flip. Zero
-    differences are left out of the ranks (scipy's default ``zero_method='wilcox'``)."""
+    """``scipy.stats.wilcoxon(x, y, method=_permutation())`` for the differences ``d`` (the
+    same numbers, tested), vectorised over the sign flips: about 50 times faster than
+    scipy's one call per resample. Zero differences are left out (``zero_method='wilcox'``)."""
     from scipy import stats
 
     nonzero = d != 0
@@ -216,9 +189,9 @@ def _wilcoxon_permutation(d: np.ndarray) -> tuple[float, float]:
 
 
 def mann_whitney(x: np.ndarray, y: np.ndarray) -> tuple[float, float, str]:
-    """Two-sided Mann–Whitney U test: (U of ``x``, p, how p was got). Exact without ties
-    when the larger sample has at most 30 runs, a seeded permutation test with ties for at
-    most 40 runs in all, else the normal approximation (tie-corrected)."""
+    """Two-sided Mann–Whitney U test: (U of ``x``, p, how p was got). Exact without ties up
+    to 30 runs a sample, a seeded permutation test with ties up to 40 in all, else the
+    normal approximation."""
     from scipy import stats
 
     ties = np.unique(np.concatenate([x, y])).size < len(x) + len(y)
@@ -248,19 +221,16 @@ N_BOOT = 1000
 
 def a12_interval(x: np.ndarray, y: np.ndarray, paired: bool, level: float = 0.95,
                  seed: int = 0) -> tuple[float, float]:
-    """A percentile bootstrap interval of A12(x, y): the instances resampled jointly when the
-    samples pair by instance (``x[k]``, ``y[k]`` from instance ``k``), else each sample on
-    its own. ``(nan, nan)`` for an empty sample."""
+    """A percentile bootstrap interval of A12(x, y), the instances resampled jointly when the
+    samples pair by instance; ``(nan, nan)`` for an empty sample."""
     x, y = np.asarray(x, float), np.asarray(y, float)
     if not (x.size and y.size):
         return math.nan, math.nan
     rng = np.random.default_rng(seed)
     ix = rng.integers(0, x.size, (N_BOOT, x.size))
     iy = ix if paired and x.size == y.size else rng.integers(0, y.size, (N_BOOT, y.size))
-    # A resample's A12 is the mean of the pair scores over its pairs: with the score matrix
-    # of the original samples and how often each was drawn, cx^T S cy / (n m). Every term is
-    # a multiple of 1/2 and the sums are exact, so this equals the mean over the resampled
-    # pairs bit for bit, without building the (resamples, n, m) array.
+    # A resample's A12 is cx^T S cy / (n m) with S the pair scores and c the draw counts:
+    # exact (every term a multiple of 1/2), without a (resamples, n, m) array.
     score = (x[:, None] > y[None, :]) + 0.5 * (x[:, None] == y[None, :])
     boots = np.einsum("bi,ij,bj->b", _draw_counts(ix, x.size), score,
                       _draw_counts(iy, y.size)) / (x.size * y.size)
@@ -277,16 +247,15 @@ def _draw_counts(idx: np.ndarray, n: int) -> np.ndarray:
 
 
 def p_floor(method: str, two_sided: bool = True) -> float:
-    """The smallest p a test's method can give (a permutation test's resolution: scipy's
-    ``(hits + 1) / (N_RESAMPLES + 1)``, doubled for a two-sided test), else 0."""
+    """The smallest p a permutation test gives (``1 / (N_RESAMPLES + 1)``, doubled when
+    two-sided), else 0."""
     if not method.startswith("permutation"):
         return 0.0
     return (2.0 if two_sided else 1.0) / (N_RESAMPLES + 1)
 
 
 def at_floor(p: float, method: str, two_sided: bool = True) -> bool:
-    """Whether ``p`` is the permutation test's smallest: the true p may be smaller, so the
-    value is printed as a bound (``p≤...``)."""
+    """Whether ``p`` is the permutation test's smallest (printed as a bound, ``p≤...``)."""
     floor = p_floor(method, two_sided)
     return bool(floor and math.isfinite(p) and p <= floor * (1 + 1e-9))
 
@@ -297,17 +266,12 @@ TEST_UNPAIRED = "Mann–Whitney U"
 
 
 def pairwise_by_context(df: Any, alpha: float = ALPHA, value: str = "metric") -> Any:
-    """Every pair of algorithms of each context compared on ``value`` (lower is better),
-    two-sided, Holm-corrected within the context: the paired Wilcoxon signed-rank test over
-    the instances both ran when the context's runs pair by instance
-    (:func:`paired_by_instance`), else Mann–Whitney U. Columns: context, a, b, test,
-    p_method, n_a, n_b, n_pairs, median_a, median_b, U (Mann–Whitney), W (Wilcoxon), p,
-    p_holm, p_at_floor (the raw p is the permutation test's smallest: p_holm is then a bound),
-    A12 (= P(value_a > value_b) + ties/2; below 0.5 means a tends to be better), A12_lo and
-    A12_hi (its 95 % bootstrap interval, :func:`a12_interval`), effect, significant
-    (p_holm < alpha), better (the algorithm the test finds lower when significant, else
-    empty)."""
+    """Every pair of algorithms of each context compared on ``value``, two-sided,
+    Holm-corrected within the context: Wilcoxon over the shared instances where the runs pair
+    by instance, else Mann–Whitney U. A12 below 0.5: ``a`` tends to be better; ``better``:
+    the lower of a significant pair."""
     import pandas as pd
+    from scipy.stats import rankdata
 
     rows = []
     for context, g in df.groupby("context", sort=True):
@@ -335,7 +299,7 @@ def pairwise_by_context(df: Any, alpha: float = ALPHA, value: str = "metric") ->
                     row["A12_lo"], row["A12_hi"] = a12_interval(xa, yb, paired=True)
                     row["W"], row["p"], row["p_method"] = wilcoxon_paired(xa, yb)
                     d = xa - yb
-                    r = stats_rank(np.abs(d[d != 0]))
+                    r = rankdata(np.abs(d[d != 0])) if (d != 0).any() else np.zeros(0)
                     plus, minus = r[d[d != 0] > 0].sum(), r[d[d != 0] < 0].sum()
                     row["_lower"] = a if plus < minus else b if minus < plus else ""
             elif len(x) and len(y):
@@ -356,18 +320,10 @@ def pairwise_by_context(df: Any, alpha: float = ALPHA, value: str = "metric") ->
     return pd.DataFrame(rows, columns=cols)
 
 
-def stats_rank(values: np.ndarray) -> np.ndarray:
-    """Ranks 1..n of ``values`` (ties get their average rank)."""
-    from scipy.stats import rankdata
-
-    return rankdata(values) if len(values) else np.zeros(0)
-
-
 def compact_letters(order: list[str], different: set[frozenset[str]]) -> dict[str, str]:
-    """Compact letter display (Piepho 2004, insert-and-absorb): letters such that two
-    optimizers share a letter exactly when the tests do not separate them. ``order``: the
-    optimizers best first (the best gets ``a``); ``different``: the significantly different
-    pairs. Columns are split at each separated pair, columns inside others are absorbed."""
+    """Compact letter display (Piepho 2004, insert-and-absorb): two optimizers share a letter
+    exactly when the tests do not separate them. ``order``: best first (it gets ``a``);
+    ``different``: the significantly different pairs."""
     cols: list[frozenset[str]] = [frozenset(order)]
     for pair in sorted(different, key=lambda p: sorted(order.index(x) for x in p)):
         i, j = sorted(pair)
@@ -391,8 +347,8 @@ def compact_letters(order: list[str], different: set[frozenset[str]]) -> dict[st
 
 
 def rank_groups(pairs: Any, context: str, order: list[str]) -> dict[str, str]:
-    """Letters of :func:`compact_letters` for one context from the ``significant`` column of
-    :func:`pairwise_by_context` (a pair not tested counts as not separated)."""
+    """Letters of :func:`compact_letters` for one context (an untested pair: not
+    separated)."""
     sub = pairs[(pairs["context"] == context) & pairs["significant"]]
     diff = {frozenset((r.a, r.b)) for r in sub.itertuples() if r.a in order and r.b in order}
     return compact_letters(order, diff)
@@ -426,8 +382,8 @@ MIN_BLOCKS = 5
 
 @dataclasses.dataclass
 class FriedmanResult:
-    """Friedman test over blocks (independent instances or problems) on one value per block
-    and algorithm, with its post-hoc tests."""
+    """Friedman test over blocks on one value per block and algorithm, with its post-hoc
+    tests."""
 
     blocks: list[str]
     algorithms: list[str]
@@ -443,21 +399,10 @@ class FriedmanResult:
     kind: str = "contexts"  # what the blocks are: "contexts" or "instances"
 
 
-def friedman_statistic(table: np.ndarray) -> float:
-    """Friedman's chi-square of a (blocks x algorithms) table, ranks within each block
-    (ties averaged) and the tie correction of scipy's ``friedmanchisquare``."""
-    from scipy import stats
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return float(stats.friedmanchisquare(*np.asarray(table, float).T).statistic)
-
-
 def friedman_test(table: np.ndarray, seed: int = 0) -> tuple[float, float, str]:
-    """Friedman's chi-square and its permutation p-value: the algorithms' values are
-    permuted within each block (the null hypothesis), exactly when there are at most
-    N_RESAMPLES arrangements, else with N_RESAMPLES seeded random ones. Returns
-    (statistic, p, how p was got)."""
+    """Friedman's chi-square (scipy's, tie-corrected) and its permutation p-value, the values
+    permuted within each block (all arrangements when at most N_RESAMPLES): (statistic, p,
+    how p was got)."""
     from scipy import stats
 
     t = np.asarray(table, float)
@@ -472,14 +417,16 @@ def friedman_test(table: np.ndarray, seed: int = 0) -> tuple[float, float, str]:
                                  vectorized=True, rng=np.random.default_rng(seed))
     exact = math.factorial(k) ** n <= N_RESAMPLES
     how = "exact (all permutations)" if exact else f"permutation ({N_RESAMPLES} resamples)"
-    return friedman_statistic(t), float(res.pvalue), how
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        chi2 = float(stats.friedmanchisquare(*t.T).statistic)
+    return chi2, float(res.pvalue), how
 
 
 def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts"
                       ) -> FriedmanResult:
-    """Friedman (permutation p), Nemenyi and pairwise Wilcoxon (exact, Holm) on a DataFrame
-    of blocks x algorithms (lower is better), run only with at least :data:`MIN_BLOCKS`
-    blocks and 3 algorithms; else the result carries a note saying why not."""
+    """Friedman, Nemenyi and pairwise Wilcoxon (Holm) on a blocks x algorithms DataFrame,
+    with at least :data:`MIN_BLOCKS` blocks and 3 algorithms (else a note says why not)."""
     import pandas as pd
 
     table = table.dropna(axis=1, how="any")
@@ -519,10 +466,8 @@ def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts"
 
 def friedman_across_blocks(df: Any, alpha: float = ALPHA, value: str = "metric"
                            ) -> FriedmanResult:
-    """Friedman over contexts as blocks, on each algorithm's median ``value`` per context,
-    with the algorithms present in every block. Contexts whose runs fit the same instances
-    (e.g. two population sizes on one record) are not independent blocks: then the test is
-    not run (the instances of each context are its blocks, :func:`friedman_by_instances`)."""
+    """Friedman over contexts as blocks, on each algorithm's median ``value`` per context;
+    not run where the contexts fit the same instances (not independent blocks)."""
     ok = df[(df["status"] == "ok") & df[value].notna()]
     medians = ok.groupby(["context", "algorithm"])[value].median().unstack("algorithm")
     if "instance" in ok.columns and len(medians) >= 2:
@@ -538,8 +483,7 @@ def friedman_across_blocks(df: Any, alpha: float = ALPHA, value: str = "metric"
 
 def friedman_by_instances(df: Any, alpha: float = ALPHA, value: str = "metric"
                           ) -> dict[str, FriedmanResult]:
-    """Per context whose runs pair by instance: Friedman with the instances as blocks, on
-    each algorithm's ``value`` per instance (instances every algorithm ran)."""
+    """Per context whose runs pair by instance: Friedman with its instances as blocks."""
     out = {}
     for context, g in df.groupby("context", sort=True):
         if not paired_by_instance(g) or value not in g.columns:

@@ -1,21 +1,9 @@
-"""One style per optimizer for every figure of the report: a colour, a dash pattern and a
-marker shape, so that a figure of up to 20 optimizers (and more) keeps every line apart.
-
-A qualitative palette alone fails past ten lines: evenly spaced hues for 19 optimizers give
-five or six greens no one tells apart. So the i-th optimizer (the report's optimizers sorted
-by name) gets
-
-* the colour ``PALETTE[i % 10]`` (matplotlib's and seaborn's qualitative ``tab10``),
-* the dash pattern ``DASHES[(i // 10) % 4]`` (solid for the first ten, then dashed, dotted,
-  dash-dot): (colour, dash) differs for every pair of the first 40 optimizers,
-* the marker ``MARKERS[i % 7]`` (seven shapes: seven and ten share no factor, so two
-  optimizers of one colour never share a shape below 70), a few per line.
-
-:func:`assign` is the ONE mapping: the PNG figures (:mod:`.anytime`, :mod:`.figures`,
-:mod:`.suite_scores`) and the HTML's SVG figures (:mod:`.svg`) all look their optimizers up
-in the mapping of the whole report (:func:`of_report`), so an optimizer has the same style in
-every figure of a report, whichever subset of optimizers a figure shows.
-"""
+"""One style per optimizer for every figure of the report (PNG and SVG alike), so that 20
+optimizers and more keep every line apart (evenly spaced hues alone give five greens): the
+i-th optimizer by name gets the colour ``PALETTE[i % 10]``, the dashes ``DASHES[(i // 10) %
+4]`` ((colour, dash) differs for the first 40) and the marker ``MARKERS[i % 7]`` (two of one
+colour share no shape below 70). :func:`assign` is the ONE mapping; every figure looks its
+optimizers up in the whole report's (:func:`of_report`)."""
 
 from __future__ import annotations
 
@@ -23,8 +11,7 @@ import dataclasses
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-#: ``tab10``, the qualitative palette of matplotlib's default cycle and of seaborn's
-#: ``deep``/``tab10`` family: ten colours that stay apart for colour-normal readers.
+#: ``tab10``, matplotlib's default qualitative palette.
 PALETTE: tuple[str, ...] = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
                             "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf")
 #: Dash patterns, in line widths: (name, on-off sequence; empty: solid).
@@ -33,17 +20,15 @@ DASHES: tuple[tuple[str, tuple[float, ...]], ...] = (
     ("dash-dot", (6.0, 2.5, 1.2, 2.5)))
 #: Marker shapes, by their matplotlib names (:mod:`.svg` draws the same shapes).
 MARKERS: tuple[str, ...] = ("o", "s", "^", "D", "v", "P", "X")
-#: Markers along a line: one every this fraction of the axes' diagonal (matplotlib's
-#: ``markevery``), each optimizer's first one shifted so that markers of equal curves do
-#: not sit on one another.
+#: Markers along a line: one every this fraction of the axes' diagonal (``markevery``), each
+#: optimizer's first shifted so that equal curves keep them apart.
 MARK_SPACING = 0.18
 
 
 @dataclasses.dataclass(frozen=True)
 class Style:
-    """How one optimizer is drawn: ``colour`` (hex), ``dash`` (a name of :data:`DASHES`),
-    ``marker`` (a name of :data:`MARKERS`); ``index`` is its place in the report's sorted
-    optimizers (it shifts the markers along the line)."""
+    """How one optimizer is drawn; ``index``, its place among the report's optimizers, shifts
+    its markers along the line."""
 
     colour: str
     dash: str
@@ -59,10 +44,6 @@ class Style:
     def offset(self) -> float:
         """Where along the line (fraction of :data:`MARK_SPACING`) its first marker sits."""
         return (self.index * 0.37) % 1.0
-
-    def key(self) -> tuple[str, str, str]:
-        """What tells it apart from another style: (colour, dash, marker)."""
-        return self.colour, self.dash, self.marker
 
     def mpl(self, markers: bool = True) -> dict[str, Any]:
         """Keyword arguments of matplotlib's ``plot``/``step`` for this style."""
@@ -82,20 +63,17 @@ def style(index: int) -> Style:
 
 
 def assign(names: Iterable[str]) -> dict[str, Style]:
-    """The style of each optimizer of ``names`` (sorted, duplicates once): the one mapping
-    every figure of a report uses."""
+    """The style of each optimizer of ``names`` (sorted, duplicates once)."""
     return {name: style(i) for i, name in enumerate(sorted(set(names)))}
 
 
 def of_report(data: Any) -> dict[str, Style]:
-    """The mapping of a report (a :class:`~.compute.ReportData`): every optimizer of its
-    runs."""
+    """The mapping of a report: every optimizer of its runs."""
     return assign(r["algorithm"] for r in data.rows)
 
 
 def lookup(style_of: Mapping[str, Style] | None, names: Iterable[str]) -> dict[str, Style]:
-    """``style_of`` where it names every one of ``names``, else :func:`assign` of ``names``
-    (a figure drawn on its own, outside a report)."""
+    """``style_of`` where it names all ``names``, else :func:`assign` of ``names``."""
     names = list(names)
     if style_of is not None and all(n in style_of for n in names):
         return dict(style_of)
@@ -103,9 +81,8 @@ def lookup(style_of: Mapping[str, Style] | None, names: Iterable[str]) -> dict[s
 
 
 def legend(ax: Any, n: int, **kw: Any) -> Any:
-    """A legend of ``n`` optimizers' lines, each entry long enough to show its dashes and
-    marker: inside the axes (where it hides least) for up to six, beside them (right) for
-    more, where it hides no curve."""
+    """A legend of ``n`` lines, long enough to show dashes and markers: inside the axes for up
+    to six, beside them for more."""
     where: dict[str, Any] = ({"loc": "best"} if n <= 6 else
                              {"loc": "upper left", "bbox_to_anchor": (1.01, 1.0),
                               "borderaxespad": 0.0})

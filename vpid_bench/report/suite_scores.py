@@ -1,20 +1,8 @@
-"""Across the suite: runtime ECDFs aggregated over every problem and target, and a score per
-optimizer with a bootstrap confidence interval (COCO's empirical runtime distributions).
-
-The budget axis is evaluations divided by the problem's dimension ``D`` (evaluations/D), so
-problems of 4 and 9 parameters share one axis. Each context (a problem at one setting) weighs
-the same: the aggregated ECDF at ``x`` evaluations/D is the mean over contexts of the share of
-that context's (run, target) pairs hit within ``x * D`` evaluations. Groups: all contexts, per
-model family (the problem class's ``family``; the problem's name where it declares none) and
-per dimension.
-
-The score of an optimizer in a group is the mean over its contexts of the context's AUC (the
-area under its ECDF over log evaluations, :func:`.anytime.auc`, each context over its own
-budget); its 95 % interval resamples the runs of every context with replacement (percentile
-bootstrap, 2,000 draws, seed 0). ``solved`` is the share of (run, target) pairs hit by the end.
-Only optimizers that ran every context of a group are scored in it (a missing problem would
-flatter or punish them); the others are named.
-"""
+"""Across the suite: runtime ECDFs aggregated over problems and targets on evaluations/D, each
+context weighing the same, and a score per optimizer and group (all, per family, per
+dimension): the mean over contexts of its AUC (:func:`.anytime.auc`), with a 95 % percentile
+bootstrap interval over the runs (2,000 draws, seed 0), and the share solved by the end. Only
+optimizers that ran every context of a group are scored in it; the others are named."""
 
 from __future__ import annotations
 
@@ -59,8 +47,7 @@ def context_facts(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[s
 
 
 def problems_scored(rows: Sequence[Mapping[str, Any]], runs: Sequence[RunHits]) -> set[str]:
-    """The distinct problems among the contexts whose runs know their optima: the suite
-    section needs two or more (two population sizes of one problem are one problem)."""
+    """The distinct problems among the contexts whose runs know their optima."""
     contexts = {h.context for h in runs}
     return {r["problem"] for r in rows if r["context"] in contexts}
 
@@ -92,14 +79,10 @@ def _budgets(runs: Sequence[RunHits]) -> dict[str, float]:
     return {c: context_budget(runs, c) for c in {r.context for r in runs}}
 
 
-def _run_auc(r: RunHits, budget: float) -> float:
-    return auc([r], budget)
-
-
 def score(per_context: Mapping[str, list[RunHits]], budgets: Mapping[str, float],
           rng: np.random.Generator) -> tuple[float, float, float, float]:
     """(score, low, high, solved) of one optimizer over its contexts (see the module)."""
-    values = [np.array([_run_auc(r, budgets[c]) for r in g]) for c, g in per_context.items()]
+    values = [np.array([auc([r], budgets[c]) for r in g]) for c, g in per_context.items()]
     mean = float(np.mean([v.mean() for v in values]))
     boot = np.zeros(N_BOOT)
     for v in values:
@@ -144,8 +127,7 @@ def aggregated_ecdf(per_context: Mapping[str, list[RunHits]], dims: Mapping[str,
 
 def figure(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]], path: Path,
            style_of: Mapping[str, Any] | None = None) -> Path | str:
-    """Aggregated ECDFs: one panel for all problems, one per family (up to five); each
-    optimizer in its style of the report (``style_of``, :mod:`.styles`)."""
+    """Aggregated ECDFs: a panel for all problems, one per family (up to five)."""
     budgets = _budgets(runs)
     gs = [g for g in groups({c: f for c, f in facts.items() if c in budgets})
           if g.kind in ("all", "family")][:6]
@@ -205,10 +187,8 @@ LADDER_HEADERS = ["group", "algorithm", *[f"solved_at_{k}D" for k in LADDER]]
 
 def ladder_rows(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]]
                 ) -> list[list[Any]]:
-    """Fixed-budget results read off the same runs: per optimizer that ran every context, the
-    aggregated ECDF (share of (run, target) pairs hit, each problem weighing the same) at each
-    rung of :data:`LADDER`; ``nan`` at a rung beyond some context's budget (not run that
-    long)."""
+    """Per optimizer that ran every context, the aggregated ECDF at each rung of
+    :data:`LADDER` (``nan`` beyond some context's budget)."""
     budgets = _budgets(runs)
     dims = {c: max(facts[c][1], 1) for c in budgets}
     out = []
@@ -230,17 +210,14 @@ GROUP_SHOWN = ["group", *SCORE_SHOWN]
 
 
 def _score_row(r: Sequence[Any]) -> list[Any]:
-    """A score row as shown: the score and its interval at three decimals (as text: a
-    table's columns keep four significant figures), the share solved in whole percent."""
+    """A score row as shown: three decimals (as text), the share solved in whole percent."""
     return [r[2], f"{float(r[5]):.3f}", f"[{r[6]:.3f}, {r[7]:.3f}]",
             round(100 * float(r[8])), r[4]]
 
 
 def score_table(rows: Sequence[Sequence[Any]], kind: str = "all"
                 ) -> tuple[list[str], list[list[Any]]]:
-    """The scores of one kind of group as a reader sees them (:data:`SCORE_SHOWN`; for the
-    families and dimensions, :data:`GROUP_SHOWN`): best score first within each group, the
-    share solved in percent. ``rows``: :func:`score_rows`."""
+    """The scores of one kind of group as a reader sees them, best first within each group."""
     out: list[list[Any]] = []
     for name in dict.fromkeys(r[1] for r in rows if r[0] == kind):
         ranked = sorted((r for r in rows if r[0] == kind and r[1] == name),
@@ -254,10 +231,8 @@ def score_table(rows: Sequence[Sequence[Any]], kind: str = "all"
 
 def ladder_table(ladder: Sequence[Sequence[Any]], rows: Sequence[Sequence[Any]]
                  ) -> tuple[list[str], list[list[Any]]]:
-    """The budget ladder as a reader sees it: one column per rung some run reached (the
-    others, empty, left out), the share solved in whole percent, the optimizers in the order of
-    their score across the suite (best first; ``rows``: :func:`score_rows`), those without a
-    score last."""
+    """The budget ladder as a reader sees it: a column per rung some run reached, in whole
+    percent, the optimizers by their suite score."""
     keep = [k for k in range(len(LADDER)) if any(math.isfinite(r[2 + k]) for r in ladder)]
     score = {r[2]: float(r[5]) for r in rows if r[0] == "all"}
     order = sorted(ladder, key=lambda r: (-score.get(r[1], -math.inf), r[1]))

@@ -1,14 +1,8 @@
-"""An :class:`~.interactive.Figure` laid out for an inline SVG: pixel coordinates of each
-series' step path, its band and markers, the axes' ticks, and one style per optimizer.
-
-Only geometry and numbers are computed here; the SVG elements are written by the page
-templates (auto-escaped: an optimizer's name never reaches the page raw). Why plain SVG
-rather than a plotting library's HTML export: it needs no script from outside (a library's
-self-contained export embeds its whole JavaScript library, megabytes for plotly, in each page),
-opens from ``file://``, and a figure of 20 optimizers weighs tens of kilobytes. Each
-optimizer is drawn in its style of the report (:mod:`.styles`: colour, dashes, markers),
-the legend's keys the same.
-"""
+"""An :class:`~.interactive.Figure` laid out for an inline SVG: the pixel geometry of each
+series (step path, band, markers in its report style, :mod:`.styles`) and the axes' ticks;
+the page templates write the elements, auto-escaped. Plain SVG, not a plotting library's
+export: no script from outside (plotly's embeds megabytes per page), works from ``file://``,
+tens of kilobytes for 20 optimizers."""
 
 from __future__ import annotations
 
@@ -58,10 +52,8 @@ class Tick:
 
 @dataclasses.dataclass(frozen=True)
 class DrawnSeries:
-    """One optimizer's curve as drawn: its step ``path``, ``band``, and its style
-    (:mod:`.styles`): ``colour``, ``dasharray`` (SVG's, px; ``""`` solid), ``marks`` (the
-    markers along the curve, one path) and ``key`` (the legend's marker, in a
-    :data:`KEY_W` x :data:`KEY_H` box)."""
+    """One optimizer's curve as drawn, in its style; ``marks``: the markers along it, ``key``:
+    the legend's marker (in a :data:`KEY_W` x :data:`KEY_H` box)."""
 
     name: str
     label: str
@@ -175,9 +167,8 @@ def _band_path(xs: Sequence[float], lo: Sequence[float], hi: Sequence[float], fx
 
 def _marks(xs: Sequence[float], ys: Sequence[float], fx: _Axis, fy: _Axis,
            st: Style, x_end: float) -> str:
-    """The markers along a step curve: one every :data:`MARK_EVERY_PX` of x, the first
-    shifted by the style's offset (equal curves keep their markers apart), at the curve's
-    value there; none over a gap."""
+    """The markers along a step curve, one every :data:`MARK_EVERY_PX` of x, the first
+    shifted by the style's offset (equal curves keep them apart)."""
     pts = [(fx(x), fy(y)) for x, y in zip(xs, ys, strict=True)
            if math.isfinite(x) and math.isfinite(y) and not (fy.log and y <= 0)]
     if not pts:
@@ -199,8 +190,7 @@ def dasharray(st: Style) -> str:
 
 
 def layout(fig: Figure, style_of: Mapping[str, Style] | None = None) -> Layout:
-    """Pixel geometry of ``fig``; ``style_of`` (:func:`.styles.of_report`) keeps one style
-    per optimizer across the report's figures (default: by name within this figure)."""
+    """Pixel geometry of ``fig``, each optimizer in its ``style_of`` (default: by name)."""
     xs = [v for s in fig.series for v in s.x]
     ys = [v for s in fig.series for v in (*s.y, *s.lo, *s.hi)] + [v for _, v in fig.lines]
     fxv, fyv = _finite(xs, fig.x_log), _finite(ys, fig.y_log)

@@ -1,11 +1,7 @@
-"""The report's summary table, computed from the tidy run rows (see :mod:`.load`) with numpy
-only, so the single job's report (no pandas) and the full report share it.
-
-:func:`summarize`: per context and algorithm, the statistics of the per-run headline metric
-(median, quartiles, IQR, mean, sample sd, best, worst), of the objective, of every other
-metric the problem reports (median), evaluations, wall time, and the rank by median.
-:func:`baseline_verdicts`: how each algorithm fares against the baseline of its context.
-"""
+"""The report's summary table from the tidy run rows, numpy only (the single job's report
+shares it): per context and algorithm the statistics of the headline metric, the objective
+and every metric, and the rank (:func:`summarize`); and how each fares against the baseline
+(:func:`baseline_verdicts`)."""
 
 from __future__ import annotations
 
@@ -15,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from .load import by_context
 from .render import p_text
 
 #: The optimizer every report compares against by default (random search).
@@ -32,10 +29,8 @@ def metric_names(rows: Sequence[Mapping[str, Any]]) -> list[str]:
 
 
 def metric_stats(m: Sequence[float], f: Sequence[float]) -> dict[str, float]:
-    """Statistics of the per-run metric ``m`` and objective ``f`` of the successful runs:
-    median, q1, q3, iqr, mean, sd (sample; NaN for one run), best, worst; f_median, f_mean,
-    f_sd, f_best, f_worst. Empty for no run. Infinite values count (a run that found
-    nothing finite is the worst); the mean of values with an infinity is infinite."""
+    """Statistics of the per-run metric ``m`` and objective ``f`` of the successful runs
+    (empty for none); infinite values count (a run that found nothing finite is the worst)."""
     m, f = np.asarray(m, dtype=float), np.asarray(f, dtype=float)
     if not len(m):
         return {}
@@ -54,13 +49,8 @@ def metric_stats(m: Sequence[float], f: Sequence[float]) -> dict[str, float]:
 
 
 def summarize(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
-    """One row per context and algorithm (sorted by context, then rank).
-
-    Keys: context, problem, ps, algorithm, optimizer, metric_name, n_runs (successful),
-    n_failed, the :func:`metric_stats` keys (when a run succeeded), ``<name>_median`` per
-    problem metric, evaluations_median, evaluations_max, budget, wall_time_mean_s,
-    wall_time_total_s, rank (1 = lowest median metric in the context, ties broken by the
-    mean; NaN without a successful run)."""
+    """One row per context and algorithm, sorted by context then rank (1 = lowest median
+    metric, then mean; NaN without a successful run), with the :func:`metric_stats` keys."""
     groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
     for r in rows:
         groups.setdefault((r["context"], r["algorithm"]), []).append(r)
@@ -90,12 +80,10 @@ def summarize(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
                        if np.isfinite(wall_ok).any() else math.nan,
                        wall_time_total_s=float(np.sum(wall[np.isfinite(wall)])))
         out.append(row)
-    by_context: dict[str, list[dict[str, Any]]] = {}
-    for row in out:
-        by_context.setdefault(row["context"], []).append(row)
+    grouped = by_context(out)
     ranked = []
-    for context in sorted(by_context):
-        g = by_context[context]
+    for context in sorted(grouped):
+        g = grouped[context]
         with_runs = sorted((r for r in g if r["n_runs"]),
                            key=lambda r: (r["median"], _nan_last(r["mean"]), r["algorithm"]))
         for i, r in enumerate(with_runs, start=1):
@@ -113,10 +101,9 @@ def _nan_last(x: float) -> float:
 
 def baseline_verdicts(summary: Sequence[Mapping[str, Any]], pairs: Any,
                       baseline: str = BASELINE) -> list[str]:
-    """Per summary row: how the algorithm fares against the baseline optimizer of its
-    context: ``baseline``, ``beats it (p_holm=...)``, ``does not clear it (...)``,
-    ``WORSE than it (...)``, ``not tested``, or ``""`` when the baseline was not run.
-    ``pairs``: :func:`.stats.pairwise_by_context` (a DataFrame), or ``None``."""
+    """Per summary row, against its context's baseline: ``baseline``, ``beats it (...)``,
+    ``does not clear it (...)``, ``WORSE than it (...)``, ``not tested`` or ``""`` (not
+    run). ``pairs``: the pairwise tests, or ``None``."""
     out = []
     for r in summary:
         bases = [b for b in summary if b["context"] == r["context"]
@@ -148,9 +135,8 @@ def baseline_verdicts(summary: Sequence[Mapping[str, Any]], pairs: Any,
 
 
 def pair_detail(pair: Mapping[str, Any], first: str) -> str:
-    """``p_holm=8.4e-08, A12=0.05 [0.01, 0.12]`` for one row of the pairwise tests, A12 seen
-    from ``first`` (below 0.5: ``first`` tends to end lower); ``p_holm≤...`` when the raw p is
-    the permutation test's smallest, so the value is a bound."""
+    """``p_holm=8.4e-08, A12=0.05 [0.01, 0.12]`` for one pairwise test, A12 seen from
+    ``first`` (``p_holm≤...`` where the value is a bound)."""
     p = float(pair["p_holm"])
     text = p_text(p, bool(pair.get("p_at_floor", False)), "p_holm")
     a, lo, hi = (float(pair.get(k, np.nan)) for k in ("A12", "A12_lo", "A12_hi"))

@@ -1,24 +1,14 @@
 """Ties are ties: the ONE rule by which the report calls runs and optimizers equal, and how
 it breaks the tie.
 
-* **Runs at the same optimum.** Two ok runs of a context that fit the same data (the same
-  instance id; every run where the instances are identical) and whose objective values differ
-  by at most :data:`OBJECTIVE_RTOL` relative (the archive's final target, 1e-8) ended at the
-  same optimum: their differences in any metric are floating-point noise. :func:`snap_ties`
-  gives each such run the metric values of the lowest run among them, before any test,
-  ranking or verdict reads the runs, so the pairwise tests see zero differences (no pair at
-  the same optimum is "significantly different") and medians are equal, truth and no-truth
-  alike.
-* **Optimizers with equal medians.** Optimizers of a context whose median metrics differ by
-  at most :data:`OBJECTIVE_RTOL` relative share a rank (shown ``1=``), ordered by search
-  cost: the fewest evaluations to each instance's optimum (ERT at the final target), then
-  the fewest seconds, costs within :data:`COST_TIE` of each other counting as equal
-  (:func:`cheapest`); the verdict breaks its ties by the same function.
-* **Optimizers at a budget.** At one rung of the budget ladder (the share of (run, target)
-  pairs solved by 10·D, 100·D, ... evaluations, :mod:`.suite_scores`), optimizers whose
-  shares lie within :data:`SHARE_TIE` of the highest solve as many: the report's answer
-  (:mod:`.answer`) names them together, the one with the higher suite score (the mean area
-  under its ECDF: it gets there sooner) first (:func:`share_leaders`).
+* Runs of one instance whose objectives lie within :data:`OBJECTIVE_RTOL` ended at the same
+  optimum: :func:`snap_ties` gives them the lowest one's metrics before any test, ranking or
+  verdict reads them (their differences are floating-point noise).
+* Optimizers whose median metrics lie within :data:`OBJECTIVE_RTOL` share a rank (``1=``),
+  ordered by cost to the optimum (:func:`cheapest`: ERT, then seconds, within
+  :data:`COST_TIE`); the verdict breaks its ties the same way.
+* At a rung of the budget ladder, shares within :data:`SHARE_TIE` of the highest solve as
+  many (:func:`share_leaders`), the higher suite score first.
 """
 
 from __future__ import annotations
@@ -27,19 +17,20 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, TypeVar
 
+from ..store.archive_records import instance_id
+from .load import by_context
+
 #: Objective values within this relative difference are the same optimum (the archive's
 #: final target, :data:`vpid_bench.targets`).
 OBJECTIVE_RTOL = 1e-8
 #: Two costs (evaluations or seconds to the optimum) within this relative difference tie.
 COST_TIE = 0.10
-#: Two medians within this relative distance are not called different in words (a
-#: disagreement between the two rankings, a floor undercut): a looser tolerance than
-#: :data:`OBJECTIVE_RTOL`, for sentences only, never for a rank, a test or a pick.
+#: Two medians within this relative distance are not called different in words (never used
+#: for a rank, a test or a pick).
 WORDS_RTOL = 1e-3
 
 #: Shares solved (0 to 1) within this absolute difference tie: one percentage point, about
-#: two standard errors of a share near 98 % over the 1,785 (run, target) pairs of a suite of
-#: 17 problems x 15 runs x 7 targets, and the precision the report prints shares at.
+#: two standard errors of a share near 98 % over a suite's 1,785 (run, target) pairs.
 SHARE_TIE = 0.01
 
 T = TypeVar("T")
@@ -53,23 +44,15 @@ def same(a: float, b: float, rtol: float = OBJECTIVE_RTOL) -> bool:
     return abs(a - b) <= rtol * max(abs(a), abs(b), 1e-300)
 
 
-def _instance_key(record: Mapping[str, Any]) -> Any:
-    """The data a run fitted: its instance id (``None``: all instances identical)."""
-    inst = record.get("instance")
-    iid = inst.get("id") if isinstance(inst, Mapping) else None
-    return iid if isinstance(iid, str) else None
-
-
 def snap_ties(rows: list[dict[str, Any]], records: Sequence[Mapping[str, Any]]) -> int:
-    """In place: per context and instance, the ok runs whose ``f_best`` lies within
-    :data:`OBJECTIVE_RTOL` of the lowest there take that lowest run's ``metric`` and
-    ``metric.<name>`` values (see the module). Returns how many runs changed."""
+    """In place: per context and instance, the ok runs within :data:`OBJECTIVE_RTOL` of the
+    lowest take its metric values. Returns how many runs changed."""
     by_id = {r["run_id"]: r for r in records}
     groups: dict[tuple[str, Any], list[dict[str, Any]]] = {}
     for row in rows:
         f = row.get("f_best")
         if row["status"] == "ok" and isinstance(f, (int, float)) and math.isfinite(f):
-            key = (row["context"], _instance_key(by_id.get(row["run_id"], {})))
+            key = (row["context"], instance_id(by_id.get(row["run_id"], {})))
             groups.setdefault(key, []).append(row)
     changed = 0
     for g in groups.values():
@@ -86,9 +69,8 @@ def snap_ties(rows: list[dict[str, Any]], records: Sequence[Mapping[str, Any]]) 
 
 def cheapest(items: Sequence[T], cost: Callable[[T], tuple[float, float]]
              ) -> tuple[T, str]:
-    """The cheapest of ``items`` to reach the optimum, ``cost(item) = (evaluations,
-    seconds)``: fewest evaluations, then fewest seconds, a difference within
-    :data:`COST_TIE` counting as none; returns ``(item, "evaluations" | "seconds")``, or
+    """The cheapest of ``items`` to reach the optimum (``cost(item) = (evaluations,
+    seconds)``, within :data:`COST_TIE` a tie): ``(item, "evaluations" | "seconds")``, or
     ``(items[0], "")`` when cost does not decide."""
     pool = list(items)
     for i, key in enumerate(("evaluations", "seconds")):
@@ -117,17 +99,13 @@ def by_cost(items: Sequence[T], cost: Callable[[T], tuple[float, float]]) -> lis
 
 def rank_with_ties(summary: list[dict[str, Any]],
                    costs: Mapping[tuple[str, str], tuple[float, float]]) -> None:
-    """In place: per context, the rows with runs ordered by median metric, optimizers whose
-    medians are :func:`same` tied and ordered by :func:`by_cost` (``costs[(context,
-    algorithm)] = (evaluations, seconds)`` to the optimum); ``rank`` is each row's place
-    (1, 2, ...), ``rank_tied`` the tie's first place and ``rank_shown`` its text (``"1="``
-    for a tie of more than one). The list is reordered to match."""
-    by_context: dict[str, list[dict[str, Any]]] = {}
-    for s in summary:
-        by_context.setdefault(s["context"], []).append(s)
+    """In place: per context, the rows ordered by median metric, :func:`same` medians by
+    :func:`by_cost` (``costs[(context, algorithm)]``); ``rank`` is each row's place,
+    ``rank_tied`` its tie's first and ``rank_shown`` its text (``"1="``)."""
+    grouped = by_context(summary)
     out: list[dict[str, Any]] = []
-    for context in sorted(by_context):
-        g = by_context[context]
+    for context in sorted(grouped):
+        g = grouped[context]
         ranked = sorted((s for s in g if s.get("n_runs")), key=lambda s: s["rank"])
         place = 1
         while ranked:
@@ -149,8 +127,7 @@ def rank_with_ties(summary: list[dict[str, Any]],
 
 def share_leaders(shares: Mapping[str, float], scores: Mapping[str, float]
                   ) -> tuple[str, ...]:
-    """The optimizers whose share (finite, 0 to 1) lies within :data:`SHARE_TIE` of the
-    highest of ``shares``: the leader at that budget and those that solve as many, highest
+    """The optimizers whose share lies within :data:`SHARE_TIE` of the highest, highest
     ``scores`` first (then by name); empty when no share is finite."""
     finite = {k: v for k, v in shares.items() if math.isfinite(v)}
     if not finite:

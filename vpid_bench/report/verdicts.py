@@ -1,36 +1,17 @@
-"""The report's verdicts as data: per context, whether an optimizer can be recommended, which
-one, and why. Pure computation, no words: :mod:`.first_screen` writes the same
-:class:`Verdict` for the terminal and Markdown, and any other renderer reads it too.
+"""The report's verdicts as data, no words (:mod:`.first_screen` writes them): per context,
+whether an optimizer can be recommended, which one, and why. The rules, each in
+docs/report.md ("Verdicts") with a test in tests/report/test_verdicts.py:
 
-The rules (each in docs/report.md, "Verdicts", with a test in tests/report/test_verdicts.py):
-
-1. **A description, not a recommendation**, where nothing was compared: runs that were not
-   tested (a single job's report, ``--short``) or a context with one optimizer.
-2. **No recommendation where no method identifies the model from the record**: the
-   Cramér–Rao bound (median over the instances) exceeds :data:`BOUND_LIMIT` (even an efficient
-   estimator misses the parameters by more than their size), or no optimizer is separated by
-   the Holm-corrected pairwise tests from each reference that was run (random search, the box
-   centre). The references are never recommended.
-3. **Whom to use**: among the optimizers that beat every reference run, the best group by the
-   metric (optimizers sharing the first one's rank-group letter: the tests separate none of
-   them from another). A tie there is broken by search quality (the best search group), then by
-   cost: the expected evaluations to each instance's optimum (ERT at the final target), then
-   its seconds; costs within :data:`.ties.COST_TIE` of each other are a tie. Where the metric's
-   leaders search worse than others, the best searcher is named (it gets closest to each
-   record's own optimum; a lower metric from runs that stop short is not better search).
-4. **Floor against bound, per instance**: the median over the instances of
-   ``floor_i / bound_i`` (:func:`floor_over_bound`). Above :data:`ESTIMATOR_GAP` the
-   estimator (the objective), not the data, limits the accuracy: the verdict says so at any
-   budget, with where the best other estimator's optimum lies (the job's ``estimators.json``)
-   -- unless a richer model than the fitted one made the record: then model error, which no
-   estimator of the fitted model removes, may set the floor. Below :data:`BELOW_BOUND` the
-   record's optimum is biased (the bound holds for unbiased estimators): by model error or
-   the box, when known.
-5. **Search is not identification under model error** (:func:`cannot_identify`): where a
-   richer model than the fitted one made the record and the record's optimum (the floor,
-   median over the instances) lies farther from the truth than a reference ends (the box
-   centre, random search), the fitted model cannot identify the true system: reaching that
-   optimum is search, never identification, and a richer fitted structure is needed.
+1. nothing compared (untested runs, one optimizer): a description, not a recommendation;
+2. no recommendation where the Cramér–Rao bound exceeds :data:`BOUND_LIMIT` or no optimizer
+   beats every reference that ran (random search, the box centre; never recommended);
+3. whom to use: the best group by the metric among those that beat every reference, a tie
+   broken by search quality, then by cost (ERT to the optimum, then seconds);
+4. floor over bound per instance (:func:`floor_over_bound`): above :data:`ESTIMATOR_GAP` the
+   estimator (or model error, where a richer model made the record) limits the accuracy;
+   below :data:`BELOW_BOUND` the record's optimum is biased;
+5. under model error, a record's optimum farther from the truth than a reference ends means
+   the fitted model cannot identify the system (:func:`cannot_identify`).
 """
 
 from __future__ import annotations
@@ -43,27 +24,26 @@ from typing import Any
 
 from .optima import REACHED
 from .rankings import TIE_RTOL
-from .ties import cheapest
+from .ties import cheapest, same
 
 #: A bound (norm of the Cramér–Rao bounds, %) above this: no estimator determines the
 #: parameters from such a record (one standard deviation is larger than the values).
 BOUND_LIMIT = 100.0
 #: A floor this many times the bound (median per instance): the estimator limits accuracy.
 ESTIMATOR_GAP = 2.0
-#: A floor below this many times the bound (median per instance) is called biased. An
-#: efficient unbiased estimator's error norm has the bound's norm as its rms; its median lies
-#: between about 0.67 (one parameter's error dominating) and 0.96 (nine alike) of it with
-#: Gaussian errors, and a median over 30 instances scatters by some 0.15 around that: a
-#: median ratio of 0.9 says nothing about bias, one below 0.5 does.
+#: A floor below this many times the bound (median per instance) is called biased: an
+#: efficient unbiased estimator's median error norm lies at 0.67 to 0.96 of the bound, and a
+#: median over 30 instances scatters by some 0.15 around that.
 BELOW_BOUND = 0.5
 #: A leader whose median metric is within this factor of the floor has searched enough.
 AT_FLOOR = 1.1
 #: Methods the tests do not separate whose medians differ by more than this (relative) are
 #: not called equivalent: the verdict says more runs would tell.
 EQUIVALENCE_MARGIN = 0.10
-#: The optimizers a recommended method must beat, when they were run: random search and the
-#: centre of the box (names of the built-in baselines).
+#: The optimizers a recommended method must beat, when they were run (built-in baselines).
 REFERENCES: tuple[str, ...] = ("random", "centre")
+#: Their names in words.
+REFERENCE_WORDS = {"random": "random search", "centre": "the box centre"}
 
 #: Kinds of verdict.
 USE, NONE, DESCRIBE, EMPTY = "use", "none", "describe", "empty"
@@ -76,9 +56,8 @@ LIMIT_SEARCH, LIMIT_BELOW, LIMIT_ESTIMATOR, LIMIT_MODEL, LIMIT_RECORDS, LIMIT_TR
 
 @dataclasses.dataclass(frozen=True)
 class Search:
-    """One optimizer's search quality on a context: runs reaching their instance's optimum,
-    the median relative gap, its search rank group, and the cost to the optimum (ERT at the
-    final target in evaluations and in the runs' seconds; ``inf``: no run reached it)."""
+    """One optimizer's search quality on a context, with its cost to the optimum (ERT in
+    evaluations and seconds; ``inf``: no run reached it)."""
 
     reached: int
     runs: int
@@ -95,8 +74,8 @@ class Search:
 
 @dataclasses.dataclass(frozen=True)
 class Method:
-    """One optimizer of a context: its runs, median metric, metric rank group (``""``
-    untested) and search quality (``None`` where the optima are unknown)."""
+    """One optimizer of a context (``group`` ``""``: untested; ``search`` ``None``: the
+    optima are unknown)."""
 
     name: str
     runs: int
@@ -107,12 +86,9 @@ class Method:
 
 @dataclasses.dataclass(frozen=True)
 class Evidence:
-    """What a context's verdict rests on. ``methods``: best first by the metric. ``pairs``:
-    the metric's Holm-corrected pairwise tests (rows with ``a``, ``b``, ``significant``,
-    ``better``, and the effect size). ``floors`` and ``bounds``: per instance, the metric of
-    the instance's optimum under the objective that was optimised, and the norm of its
-    Cramér–Rao bounds. ``references``: the reference optimizers among ``methods``;
-    ``missing``: the reference optimizers that were not run."""
+    """What a context's verdict rests on. ``methods``: best first by the metric; ``pairs``:
+    the metric's pairwise tests; ``floors``, ``bounds``: per instance, its optimum's metric
+    and its Cramér–Rao bound norm; ``references``/``missing``: the references run or not."""
 
     context: str
     metric: str
@@ -128,9 +104,8 @@ class Evidence:
     missing: tuple[str, ...] = ()
     centred: bool = False
     truth: bool = True  # False: the problem knows no truth (the metric is held out)
-    #: what biases the record's optimum: the richer model that made the record (its
-    #: description, ``""`` when the fitted model made it) and (instances whose optimum lies
-    #: on a box edge, instances with a known optimum)
+    #: what biases the record's optimum: the richer model that made it (``""``: none) and
+    #: (instances whose optimum lies on a box edge, instances with a known optimum)
     model_error: str = ""
     on_edge: tuple[int, int] = (0, 0)
 
@@ -146,11 +121,9 @@ class Cost:
 
 @dataclasses.dataclass(frozen=True)
 class EstimatorAdvice:
-    """The estimator as the bottleneck: the chosen objective's floor is ``ratio`` times the
-    bound (median per instance); ``better`` is the objective whose optimum lies closest to
-    the truth on the first ``instances`` instances (``better_floor``, against
-    ``chosen_floor`` for the chosen one there), ``None`` when no other lies closer or the
-    floors per estimator are unknown."""
+    """The estimator as the bottleneck: its floor is ``ratio`` times the bound; ``better``:
+    the objective whose optimum lies closest to the truth on the first ``instances``
+    instances (``None``: none closer, or unknown)."""
 
     chosen: str | None
     ratio: float
@@ -162,19 +135,13 @@ class EstimatorAdvice:
 
 @dataclasses.dataclass(frozen=True)
 class Verdict:
-    """The verdict of one context, with its reasons (see the module for the rules).
-
-    ``kind``: :data:`USE` (recommend ``pick``), :data:`NONE` (no method identifies the model:
-    ``over_bound`` and/or ``not_beaten``), :data:`DESCRIBE` (nothing compared: ``pick`` is
-    the leader described; ``single`` when only one optimizer ran) or :data:`EMPTY`.
-    ``basis``: how ``pick`` was chosen; ``tied``: the optimizers the metric's tests do not
-    separate from it; ``spread``: their largest relative difference of medians from the
-    pick's; ``costs``: the cost of the pick (first) and of those tied with it by search too.
-    ``floor``, ``bound``: medians over the instances; ``ratio``: the median of
-    floor / bound per instance. ``limit``: what limits the leader (search, the floor being
-    undercut by runs that stopped short, the estimator, the records; ``truth``: search, where
-    the floor is 0 and the records allow the truth itself), ``gain``: the leader's median over
-    the floor."""
+    """The verdict of one context, with its reasons. ``kind``: :data:`USE` (``pick``),
+    :data:`NONE` (``over_bound``, ``not_beaten``), :data:`DESCRIBE` (``pick`` described;
+    ``single``: one optimizer ran) or :data:`EMPTY`. ``tied``: those the tests do not
+    separate from the pick, ``spread`` their largest relative difference of medians;
+    ``costs``: the pick's first. ``floor``, ``bound``: medians over the instances, ``ratio``
+    the median of their per-instance ratio; ``limit``: what limits the leader, ``gain`` its
+    median over the floor."""
 
     context: str
     metric: str
@@ -206,14 +173,11 @@ class Verdict:
     advice: EstimatorAdvice | None = None
     truth: bool = True
     search: Search | None = None  # the search quality of ``pick``
-    #: the floor lies below the bound (median per instance): the record's optimum is biased
-    #: (``model_error``, ``on_edge`` say by what, when known)
     bound_range: tuple[float, float] = (math.nan, math.nan)  # the instances' least, largest
-    below_bound: bool = False
+    below_bound: bool = False  # the record's optimum is biased (by model_error, on_edge)
     model_error: str = ""
     on_edge: tuple[int, int] = (0, 0)
-    #: rule 5: the record's optimum lies farther from the truth than these references end
-    #: (name, median metric), under model error: the fitted model cannot identify the true system
+    #: rule 5: the references (name, median) ending nearer the truth than the optimum
     cannot_identify: tuple[tuple[str, float], ...] = ()
 
 
@@ -223,9 +187,8 @@ def _median(values: Sequence[float]) -> float:
 
 
 def floor_over_bound(floors: Mapping[Any, float], bounds: Mapping[Any, float]) -> float:
-    """The median over the instances that have both of ``floor_i / bound_i`` (``nan`` when
-    none has both with a positive bound). Comparing a median floor with one instance's
-    bound mixes instances whose bounds differ by factors."""
+    """The median over the instances of ``floor_i / bound_i`` (``nan``: none has both):
+    instances' bounds differ by factors, so a median floor is not set against one bound."""
     ratios = [floors[k] / bounds[k] for k in floors
               if k in bounds and math.isfinite(floors[k]) and math.isfinite(bounds[k])
               and bounds[k] > 0]
@@ -234,9 +197,7 @@ def floor_over_bound(floors: Mapping[Any, float], bounds: Mapping[Any, float]) -
 
 def tied(a: float, b: float) -> bool:
     """Whether two medians are equal within :data:`~.rankings.TIE_RTOL` (relative)."""
-    if not (math.isfinite(a) and math.isfinite(b)):
-        return a == b
-    return abs(a - b) <= TIE_RTOL * max(abs(a), abs(b), 1e-300)
+    return same(a, b, TIE_RTOL)
 
 
 def _pair(pairs: Sequence[Mapping[str, Any]], a: str, b: str) -> Mapping[str, Any] | None:
@@ -244,15 +205,13 @@ def _pair(pairs: Sequence[Mapping[str, Any]], a: str, b: str) -> Mapping[str, An
 
 
 def beats(pairs: Sequence[Mapping[str, Any]], a: str, b: str) -> bool:
-    """Whether the Holm-corrected test of ``a`` against ``b`` finds ``a`` significantly
-    lower."""
+    """Whether the Holm-corrected test finds ``a`` significantly lower than ``b``."""
     row = _pair(pairs, a, b)
     return bool(row is not None and row.get("significant") and row.get("better") == a)
 
 
 def _lead(items: Sequence[Method], group: Any) -> list[Method]:
-    """The best group of ``items`` (ordered best first): those sharing the first one's first
-    rank-group letter (``group(m)``), or the first alone when it has no letter."""
+    """Those of ``items`` (best first) sharing the first one's first rank-group letter."""
     if not items:
         return []
     letters = group(items[0])
@@ -262,10 +221,7 @@ def _lead(items: Sequence[Method], group: Any) -> list[Method]:
 
 
 def _by_cost(items: Sequence[Method]) -> tuple[Method, str]:
-    """The cheapest of ``items`` to reach the optimum (:func:`.ties.cheapest`, the rule the
-    rank column breaks its ties by too): fewest evaluations (ERT), then fewest seconds, a
-    difference within :data:`.ties.COST_TIE` counting as none; ``(items[0], "")`` when cost does
-    not decide."""
+    """The cheapest of ``items`` to reach the optimum (:func:`.ties.cheapest`)."""
     return cheapest(items, lambda m: (m.search.evaluations, m.search.seconds) if m.search
                     else (math.nan, math.nan))
 
@@ -296,9 +252,7 @@ def _choose(ev: Evidence, eligible: list[Method]) -> tuple[Method, str, list[Met
 
 def _limit(pick: Method, floor: float, ratio: float, model_error: str = ""
            ) -> tuple[str, float]:
-    """What limits the leader: (limit, the leader's median over the floor). At the floor,
-    where the floor is far above the bound: model error when a richer model made the record,
-    else the estimator; otherwise the records."""
+    """What limits the leader, and its median over the floor."""
     if not math.isfinite(floor) or floor < 0:
         return "", math.nan
     m = pick.median
@@ -316,9 +270,8 @@ def _limit(pick: Method, floor: float, ratio: float, model_error: str = ""
 
 def estimator_advice(chosen: str | None, ratio: float,
                      floors: Mapping[str, Any] | None) -> EstimatorAdvice | None:
-    """Rule 4: the advice when the floor is more than :data:`ESTIMATOR_GAP` times the bound
-    (median per instance), else ``None``. ``floors``: a job's ``estimators.json`` (checked
-    by :func:`.estimator_floors.read_estimator_floors`)."""
+    """Rule 4's advice (``None`` within :data:`ESTIMATOR_GAP`); ``floors``: a job's
+    ``estimators.json``."""
     if not (math.isfinite(ratio) and ratio > ESTIMATOR_GAP):
         return None
     if not floors:
@@ -333,8 +286,7 @@ def estimator_advice(chosen: str | None, ratio: float,
 
 
 def cannot_identify(ev: Evidence, floor: float) -> tuple[tuple[str, float], ...]:
-    """Rule 5: the references (name, median metric) that end nearer the truth than the
-    record's optimum (``floor``) where a richer model made the record; empty otherwise."""
+    """Rule 5: the references (name, median) ending nearer the truth than ``floor``."""
     if not ev.model_error or not math.isfinite(floor):
         return ()
     return tuple((m.name, m.median) for m in ev.methods
@@ -358,8 +310,7 @@ def decide(ev: Evidence) -> Verdict:
 
 
 def _base(ev: Evidence) -> dict[str, Any]:
-    """What every verdict of ``ev`` carries: its names and, from the floors and bounds per
-    instance, rule 4's levels (floor, bound, their ratio, the estimator's advice, bias)."""
+    """What every verdict of ``ev`` carries: its names and rule 4's levels."""
     base: dict[str, Any] = {
         "context": ev.context, "metric": ev.metric, "unit": ev.unit, "tested": ev.tested,
         "references": ev.references, "missing": ev.missing, "centred": ev.centred,
@@ -372,8 +323,7 @@ def _base(ev: Evidence) -> dict[str, Any]:
         "floor": _median(list(ev.floors.values())), "bound": _median(list(ev.bounds.values())),
         "ratio": ratio,
         "bound_range": (min(finite), max(finite)) if finite else (math.nan, math.nan),
-        # a floor far above the bound from a richer model's record: model error, which
-        # no estimator of the fitted model removes, not the estimator
+        # far above the bound from a richer model's record: model error, not the estimator
         "advice": None if ev.model_error else estimator_advice(
             ev.estimator, ratio, ev.estimator_floors),
         "below_bound": math.isfinite(ratio) and ratio < BELOW_BOUND,
@@ -392,8 +342,7 @@ def _describe(ev: Evidence, candidates: list[Method], base: dict[str, Any]) -> V
 
 def _no_method(ev: Evidence, candidates: list[Method], over: bool,
                base: dict[str, Any]) -> Verdict:
-    """Rule 2: no method identifies the model (the bound) or none is shown to beat the
-    references."""
+    """Rule 2: no method identifies the model, or none is shown to beat the references."""
     not_beaten = tuple(r for r in ev.references
                        if not any(beats(ev.pairs, m.name, r) for m in candidates))
     lead = candidates[0]
@@ -404,8 +353,7 @@ def _no_method(ev: Evidence, candidates: list[Method], over: bool,
 
 
 def _use(ev: Evidence, eligible: list[Method], base: dict[str, Any]) -> Verdict:
-    """Rule 3: whom to use among the eligible (:func:`_choose`), with those the tests do not
-    separate from it, their spread and costs, and the next optimizer's pair."""
+    """Rule 3: whom to use among the eligible (:func:`_choose`)."""
     pick, basis, mlead, pool, leaders = _choose(ev, eligible)
     # those the metric's tests do not separate from the pick: its rank group, or, where the
     # pick is not in the metric's best group, each eligible method without a significant pair

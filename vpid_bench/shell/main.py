@@ -262,8 +262,7 @@ def print_versions(registry: Any) -> None:
     from .. import __version__
 
     print(f"vpid-bench {__version__}")
-    info = getattr(registry.pm, "vpid_bench_info", None)
-    for plugin, source in sorted((info.sources if info else {}).items()):
+    for plugin, source in sorted(registry.info.sources.items()):
         where = f"{source.get('distribution')} {source.get('version')}" if source else "?"
         print(f"  plugin {plugin}: {where}")
 

@@ -197,10 +197,9 @@ def _check_choice(group: str, name: str, registry: Registry, folders: Sequence[s
         return
     allowed = "one of " + ", ".join(names) if names else "none is registered"
     allowed += did_you_mean(name.strip("'\""), names)
-    info = getattr(registry.pm, "vpid_bench_info", None)
-    if info is not None and info.failed:
+    if registry.info.failed:
         allowed += " (plugins that failed to load: " + ", ".join(
-            f"{n}: {why}" for n, why in sorted(info.failed.items())) + ")"
+            f"{n}: {why}" for n, why in sorted(registry.info.failed.items())) + ")"
     raise ConfigError(group, name, allowed)
 
 

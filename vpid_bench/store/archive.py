@@ -1,8 +1,8 @@
 """An archive folder's format: its manifest, the files it lists (each checked against its
 SHA-256, each read through its size cap), its JSON-lines files and its optima.
 
-The layout (``<root>/<suite>/``; see :mod:`vpid_bench.report.archive` for what the report
-makes of the runs)::
+The layout (``<root>/<suite>/``; written by :mod:`.archive_pack`, its runs read by
+:mod:`.archive_records`)::
 
     manifest.json       what made it and the SHA-256 and size of each file below
     records.jsonl.gz    one run record per line
@@ -12,7 +12,7 @@ makes of the runs)::
 
 Everything in an archive is untrusted input. ``target=`` reads an archive's optima through
 :func:`archive_optima` without the report; the report reads the runs too
-(:func:`vpid_bench.report.archive.read_archive`), through the same checks.
+(:func:`.archive_records.read_archive`), through the same checks.
 """
 
 from __future__ import annotations
@@ -274,7 +274,7 @@ def _read_optima(folder: Path, manifest: Mapping[str, Any], bad: _Bad) -> list[O
 
 def optimum_instance(opt: Optimum) -> str:
     """The instance an optimum is of (problem, instance id, settings), canonical: an archive
-    holds one optimum per instance (:func:`.pack.pack` keeps the lowest it finds)."""
+    holds one optimum per instance (:func:`.archive_pack.write_archive` keeps the lowest)."""
     return canonical_json([opt.problem, opt.instance, opt.settings])
 
 

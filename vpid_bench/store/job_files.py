@@ -5,8 +5,8 @@ and comparisons of estimates) and the per-problem copies a sweep shares between 
 One home for their names, their one size cap, their reader and their writer. The reader
 never follows a planted link, opens nothing but a regular file, refuses a file over
 :data:`MAX_BYTES` and JSON that is not JSON (nested past the recursion limit included), and
-says why in a few words; each file's content is checked by the module that reads it (a
-report never trusts what a job folder holds).
+says why in a few words; each file's content is checked by :mod:`.job_checks` (a report
+never trusts what a job folder holds).
 """
 
 from __future__ import annotations

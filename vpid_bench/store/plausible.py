@@ -1,6 +1,6 @@
 """Values no real run gives: the check an archived record passes before it is ranked.
 
-A record of a results folder is checked for its types (:func:`.load.check_record`); an
+A record of a results folder is checked for its types (:func:`.record_check.check_record`); an
 archive's records stand beside a user's runs without being run again, so each must also hold
 values that a run of vpid-bench can give. A forged or damaged archive whose checksums match
 once ranked runs with a NaN metric, an infinite objective or a negative error as
@@ -145,10 +145,3 @@ def implausible(record: Mapping[str, Any], f_opt: float | None = None) -> str | 
         return (f"result.f_best = {f!r}: expected a value not below its instance's optimum "
                 f"({f_opt!r}, optima.jsonl)")
     return None
-
-
-def first_reasons(reasons: Sequence[str], limit: int = 3) -> str:
-    """``reasons`` joined for one line: the first ``limit`` and how many more."""
-    shown = "; ".join(reasons[:limit])
-    more = len(reasons) - limit
-    return shown + (f"; and {more} more" if more > 0 else "")

@@ -1,6 +1,7 @@
 """The runs' best-so-far traces in IOHprofiler's data format, for IOHanalyzer and iohinspector.
 
-Layout (one folder per context and optimizer, below the report's ``ioh/``)::
+Layout (one folder per context and optimizer, below the report's ``ioh/``; an archive's
+``ioh.zip`` holds the same, :func:`write_zip`)::
 
     ioh/<context>/<optimizer>/IOHprofiler_f<id>_<problem>.json       meta-data
     ioh/<context>/<optimizer>/data_f<id>_<problem>/IOHprofiler_f<id>_DIM<d>.dat
@@ -25,14 +26,18 @@ from __future__ import annotations
 
 import json
 import math
+import tempfile
+import zipfile
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from .safe import inside, slug
+from .paths import inside, slug
 
 #: IOHprofiler's format version this export follows (the ``ioh`` package's JSON meta-data).
 FORMAT_VERSION = "0.3.22"
+#: The export's folder in a report (and in an archive's zip).
+FOLDER = "ioh"
 #: IOHprofiler's instance numbers are 16-bit.
 MAX_INSTANCE = 65535
 
@@ -126,3 +131,17 @@ def export_ioh(root: Path, records: Sequence[Mapping[str, Any]],
         js.write_text(json.dumps(meta, indent=1, allow_nan=False) + "\n", encoding="utf-8")
         written.append(js)
     return written
+
+
+def write_zip(path: Path, records: Sequence[Mapping[str, Any]],
+              rows: Sequence[Mapping[str, Any]]) -> None:
+    """The export of ``records`` zipped into ``path`` (an archive's ``ioh.zip``) with fixed
+    dates, so a rebuild of the same records gives the same bytes."""
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        files = export_ioh(root / FOLDER, records, rows, root)
+        with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as zf:
+            for f in sorted(files):
+                info = zipfile.ZipInfo(str(f.relative_to(root)), date_time=(2026, 1, 1, 0, 0, 0))
+                info.compress_type = zipfile.ZIP_DEFLATED
+                zf.writestr(info, f.read_bytes())

@@ -1,0 +1,180 @@
+"""An archive's runs, read: each line of ``records.jsonl.gz`` checked as a record file is
+(:func:`.record_check.check_record`) and for values a run gives (:mod:`.plausible`), beside the
+manifest, job files and optima (:mod:`.archive`). What the report makes of them (which runs
+stand beside a user's) is :mod:`vpid_bench.report.archive`."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from .archive import (
+    JOBS,
+    MAX_GZ_BYTES,
+    RECORDS,
+    ArchiveError,
+    _Bad,
+    _check_job_files,
+    _checked_file,
+    _gz_lines,
+    _lines,
+    _manifest,
+    _plain,
+    _read_optima,
+    find_archives,
+    runs_installed,
+)
+from .optimum import Optimum, _data_settings
+from .plausible import implausible
+from .record_check import check_record
+from .records import CorruptRecordError, canonical_json, parse_record
+
+
+@dataclasses.dataclass
+class Archive:
+    """One checked archive: its manifest, records and optima."""
+
+    folder: Path
+    suite: str
+    manifest: Mapping[str, Any]
+    records: list[dict[str, Any]]
+    optima: list[Optimum]
+    #: One line per skipped record or optimum line: ``"<file>:<line>: <why>"``.
+    bad: list[str] = dataclasses.field(default_factory=list)
+
+    @property
+    def skipped(self) -> int:
+        """How many record or optimum lines were skipped (:attr:`bad` says why)."""
+        return len(self.bad)
+
+    @property
+    def problems(self) -> set[str]:
+        return {r["problem"]["name"] for r in self.records}
+
+    @property
+    def made_by(self) -> str:
+        """``vpid-bench <version>, commit <sha>`` as the manifest states it (plain text)."""
+        m = self.manifest
+        version = _plain(m.get("vpid_bench_version"))
+        commit = _plain(m.get("commit"))
+        return f"vpid-bench {version}" + (f", commit {commit[:12]}" if commit else "")
+
+
+def _job_folder(folder: Path, manifest: Mapping[str, Any], problem: str) -> Path:
+    """Where the report finds a problem's per-job files: ``jobs/<problem>`` when the manifest
+    lists files there (each checked against its SHA-256 by :func:`read_archive`), else the
+    archive folder (no such files). A name that is not an identifier never becomes a path."""
+    if problem.isidentifier() and any(
+            str(name).startswith(f"{JOBS}/{problem}/") for name in manifest["files"]):
+        return folder / JOBS / problem
+    return folder
+
+
+def _run_identity(rec: Mapping[str, Any]) -> str:
+    """What makes a run the run it is (its setting, optimizer, seed and index), whatever
+    run id its line claims."""
+    optimizer = rec.get("optimizer") or {}
+    return canonical_json([run_setting(rec), optimizer.get("name"), optimizer.get("params"),
+                           (rec.get("seeds") or {}).get("seed"), rec.get("run_index")])
+
+
+def _optimum_key(problem: str, instance: Any, settings: Any, dim: int) -> str:
+    """The instance an optimum or a record belongs to (protocol keys left out)."""
+    return canonical_json([problem, instance, _data_settings(settings), dim])
+
+
+def _read_records(folder: Path, manifest: Mapping[str, Any], optima: Sequence[Optimum],
+                  bad: _Bad) -> list[dict[str, Any]]:
+    """The record lines that pass every check a record file passes and hold values a run
+    gives (:func:`.plausible.implausible`); a run given twice refuses the archive."""
+    f_opt = {_optimum_key(o.problem, o.instance, o.settings, len(o.x_opt)): o.f_opt
+             for o in optima if o.settings is not None}
+    records: list[dict[str, Any]] = []
+    seen: dict[str, int] = {}
+    data = _checked_file(folder, manifest, RECORDS, MAX_GZ_BYTES)
+    for n, obj, unreadable in _lines(_gz_lines(data, folder), folder / RECORDS):
+        if unreadable:
+            bad.add(RECORDS, n, unreadable)
+            continue
+        try:
+            rec = parse_record(obj, "")
+        except CorruptRecordError as exc:
+            bad.add(RECORDS, n, str(exc).removeprefix(": "))
+            continue
+        why = check_record(rec)
+        why = f"field {why}" if why else implausible(rec, f_opt.get(_optimum_key(
+            rec["problem"]["name"], instance_id(rec), rec["problem"].get("config") or {},
+            len(rec["parameters"].get("names") or []))))
+        if why:
+            bad.add(RECORDS, n, why)
+            continue
+        for key in (f"run id {rec['run_id']}", _run_identity(rec)):
+            if key in seen:
+                raise ArchiveError(
+                    f"archive {folder}: {RECORDS} line {n} repeats the run of line "
+                    f"{seen[key]} (an archive holds each run once: a repeated run would count "
+                    "as more runs than were made)")
+            seen[key] = n
+        rec["_file"] = f"{folder / RECORDS}:{n}"
+        rec["_job_dir"] = str(_job_folder(folder, manifest, rec["problem"]["name"]))
+        rec["_archive"] = manifest["suite"]
+        records.append(rec)
+    return records
+
+
+def read_archive(folder: Path, optima_only: bool = False) -> Archive:
+    """Read and check the archive in ``folder``; :class:`ArchiveError` says why it cannot be
+    used (a changed file, a limit crossed, a run or an optimum given twice, too many bad
+    lines). Bad record or optimum lines are skipped and named (:attr:`Archive.bad`).
+
+    ``optima_only``: its optima without its records (what ``target=`` needs), the records
+    file checked against its SHA-256 but not read line by line: reading and checking the
+    8,265 records of the shipped archives took 6.5 s, once in the pre-flight and once more
+    in every job of a ``target=`` sweep."""
+    folder = Path(folder)
+    manifest = _manifest(folder)
+    _check_job_files(folder, manifest)
+    bad = _Bad(folder)
+    optima = _read_optima(folder, manifest, bad)
+    if optima_only:
+        if runs_installed(folder):
+            _checked_file(folder, manifest, RECORDS, MAX_GZ_BYTES)
+        records: list[dict[str, Any]] = []
+    else:
+        records = _read_records(folder, manifest, optima, bad)
+    return Archive(folder, manifest["suite"], manifest, records, optima, bad.lines)
+
+
+def run_setting(rec: Mapping[str, Any]) -> str:
+    """A record's problem, plugin, config and budget: what must match to compare runs."""
+    problem = rec.get("problem") or {}
+    plugin = problem.get("plugin") if isinstance(problem.get("plugin"), Mapping) else {}
+    return canonical_json({"name": problem.get("name"), "config": problem.get("config"),
+                           "budget": rec.get("budget"),
+                           "plugin": [plugin.get("distribution"), plugin.get("version")]})
+
+
+def instance_id(rec: Mapping[str, Any]) -> str | None:
+    """A record's instance id, when it is a text (``None``: all instances identical)."""
+    inst = rec.get("instance")
+    iid = inst.get("id") if isinstance(inst, Mapping) else None
+    return iid if isinstance(iid, str) else None
+
+
+def load_all(root: Path | None = None, problems: Iterable[str] | None = None,
+             optima_only: bool = False) -> tuple[list[Archive], list[str]]:
+    """Every readable archive below ``root`` whose manifest lists one of ``problems`` (all
+    when ``None``), and one line per such archive that cannot be used (``optima_only``: see
+    :func:`read_archive`)."""
+    found, bad = [], []
+    wanted = None if problems is None else set(problems)
+    for folder in find_archives(root):
+        try:
+            if wanted is not None and not wanted & set(_manifest(folder).get("problems") or ()):
+                continue
+            found.append(read_archive(folder, optima_only))
+        except ArchiveError as exc:
+            bad.append(str(exc))
+    return found, bad
