@@ -228,21 +228,18 @@ class FmuProblem(Problem):
                  self.record.rate_text())
 
     # --- simulation ---------------------------------------------------------------------
-    def _simulator(self) -> Any:
-        from .binary import FmuRuntimeError, simulator
-
-        try:
-            return simulator(self.fmu, self.kind)
-        except FmuRuntimeError as exc:
-            raise ConfigError("problem.fmu", self.fmu.path, f"an FMU whose binary runs: "
-                              f"{exc}") from None
-
     def responses(self, X: np.ndarray) -> np.ndarray:
         """The compared outputs ``(n, p, N)``; NaN rows where the FMU fails (the first three
         failures logged)."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         out = np.full((X.shape[0], self.measured.shape[0], self.t.size), np.nan)
-        sim = self._simulator()
+        from .binary import FmuRuntimeError, simulator
+
+        try:
+            sim = simulator(self.fmu, self.kind)
+        except FmuRuntimeError as exc:
+            raise ConfigError("problem.fmu", self.fmu.path, f"an FMU whose binary runs: "
+                              f"{exc}") from None
         for i, x in enumerate(X):
             if not np.all(np.isfinite(x)):
                 continue

@@ -99,19 +99,6 @@ class RideModel:
         return linear.newmark_outputs(system, dt, u)
 
 
-def track_profile(cfg: Any, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """The road height (m) of one track at distances ``x`` (m); the event starts where the
-    front wheels are 0.2 s into the record."""
-    start = 0.2 * cfg.speed_kmh / 3.6
-    if cfg.road == "hump":
-        return roads.hump(x, start)
-    if cfg.road == "bump":
-        return roads.bump(x, start)
-    if cfg.road == "step":
-        return roads.step(x, start)
-    return roads.iso8608(x, cfg.road_class, rng)
-
-
 def wheel_inputs(cfg: Any, wheels: tuple[Wheel, ...], dt: float,
                  rng: np.random.Generator) -> np.ndarray:
     """``[h_1..h_w, h'_1..h'_w]`` (m, m/s) sampled every ``dt`` s over the record,
@@ -121,7 +108,10 @@ def wheel_inputs(cfg: Any, wheels: tuple[Wheel, ...], dt: float,
     tracks = 1 + max(w.track for w in wheels)
     lead = max(w.delay_s for w in wheels)
     x_track = np.arange(-lead * v - 1.0, v * t[-1] + 1.0, min(roads.ISO8608_DX, v * dt))
-    profiles = [track_profile(cfg, np.maximum(x_track, 0.0), rng) for _ in range(tracks)]
+    x, start = np.maximum(x_track, 0.0), 0.2 * v  # the event 0.2 s into the record
+    event = {"hump": roads.hump, "bump": roads.bump, "step": roads.step}.get(cfg.road)
+    profiles = [event(x, start) if event else roads.iso8608(x, cfg.road_class, rng)
+                for _ in range(tracks)]
     h = np.stack([np.interp(v * (t - w.delay_s), x_track, profiles[w.track]) for w in wheels],
                  axis=1)
     return np.concatenate([h, np.gradient(h, dt, axis=0)], axis=1)
