@@ -121,12 +121,6 @@ class Loop:
         return q, u
 
 
-def fit_percent(measured: np.ndarray, simulated: np.ndarray) -> float:
-    """``100 (1 - ||y - ŷ|| / ||y - mean(y)||)``, system-identification tools' fit percentage."""
-    y = np.asarray(measured, dtype=float)
-    return float(100.0 * (1.0 - np.linalg.norm(y - simulated) / np.linalg.norm(y - y.mean())))
-
-
 class EmpsProblem(Problem):
     """The EMPS rig (see the module docstring)."""
 
@@ -180,7 +174,9 @@ class EmpsProblem(Problem):
             return {"val_rms_um": float("inf"), "val_unexplained_pct": float("inf"),
                     "val_voltage_rms_V": float("inf")}
         return {"val_rms_um": float(UM * np.sqrt(np.mean((rec.qm - q[0]) ** 2))),
-                "val_unexplained_pct": 100.0 - fit_percent(rec.qm, q[0]),
+                # 100 minus the fit percentage, 100 (1 - ||y - ŷ|| / ||y - mean(y)||)
+                "val_unexplained_pct": 100.0 - float(100.0 * (1.0 - np.linalg.norm(
+                    rec.qm - q[0]) / np.linalg.norm(rec.qm - rec.qm.mean()))),
                 "val_voltage_rms_V": float(np.sqrt(np.mean((rec.vir - u[0]) ** 2)))}
 
     def comparisons(self) -> dict[str, dict[str, Any]]:

@@ -121,12 +121,6 @@ def _description(path: Path, z: zipfile.ZipFile) -> Any:
         raise fail(path, f"a valid modelDescription.xml (fmpy: {text})") from None
 
 
-def _platform_folder(major: int) -> str:
-    import fmpy
-
-    return fmpy.platform_tuple if major == 3 else fmpy.platform
-
-
 @functools.lru_cache(maxsize=16)
 def _inspect(path: str, size: int, mtime_ns: int) -> FmuFile:
     p = Path(path)
@@ -149,7 +143,7 @@ def _inspect(path: str, size: int, mtime_ns: int) -> FmuFile:
         raise fail(p, "an FMU with a co-simulation or model-exchange interface")
     import fmpy
 
-    folder = _platform_folder(int(version[0]))
+    folder = fmpy.platform_tuple if version[0] == "3" else fmpy.platform
     binaries = {k: f"binaries/{folder}/{ident}{fmpy.sharedLibraryExtension}"
                 for k, ident in identifiers.items()}
     binaries = {k: m for k, m in binaries.items() if m in names}

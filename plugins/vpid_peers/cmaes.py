@@ -83,7 +83,7 @@ class CMAES(Optimizer):
             "popsize": self._popsize,
             "bounds": [0.0, 1.0],
             "BoundaryHandler": "BoundTransform",
-            "randn": self._standard_normal,
+            "randn": lambda *shape: self.rng.standard_normal(shape),  # the run's generator
             "seed": float("nan"),  # nan: cma neither reads nor re-seeds numpy's global RNG
             "verbose": -9,
             "verb_log": 0,
@@ -108,10 +108,6 @@ class CMAES(Optimizer):
             self._regime = "large"
             self._large_popsize *= 2
             self._popsize, self._sigma = self._large_popsize, self.params.sigma0
-
-    def _standard_normal(self, *shape: int) -> np.ndarray:
-        """cma's ``randn(lam, N)``: standard normal deviates from the run's generator."""
-        return self.rng.standard_normal(shape)
 
     def ask(self) -> np.ndarray:
         if self._pending is None:

@@ -171,24 +171,19 @@ class VehicleConfig(ProblemConfig):
 
     def __post_init__(self) -> None:
         knowns.freeze_fields(self, "known")
-        _apply_known(self)
+        # each known.<name> sets its vehicle. or bump. key (a fixed set: nothing freed)
+        for name, value in self.known.items():
+            key = f"problem.known.{name}"
+            if name not in KNOWN_KEYS:
+                raise ConfigError(key, value, "one of " + ", ".join(KNOWN_KEYS) + " (the "
+                                  "stated quantities of problem=vehicle; fixing or freeing a "
+                                  "parameter is offered by problem=ride_half, the same half car)")
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ConfigError(key, value, f"a number in {KNOWN_WHAT[name][0]}")
+            part, field_name = KNOWN_KEYS[name]
+            object.__setattr__(self, part, dataclasses.replace(getattr(self, part),
+                                                               **{field_name: float(value)}))
         validate(self)  # at build time, so the pre-flight refuses a bad value before any job
-
-
-def _apply_known(config: VehicleConfig) -> None:
-    """Set the ``vehicle.``/``bump.`` key of each ``known.<name>`` (this problem identifies
-    a fixed set: nothing freed)."""
-    for name, value in config.known.items():
-        key = f"problem.known.{name}"
-        if name not in KNOWN_KEYS:
-            raise ConfigError(key, value, "one of " + ", ".join(KNOWN_KEYS) + " (the stated "
-                              "quantities of problem=vehicle; fixing or freeing a parameter "
-                              "is offered by problem=ride_half, the same half car)")
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigError(key, value, f"a number in {KNOWN_WHAT[name][0]}")
-        part, field_name = KNOWN_KEYS[name]
-        object.__setattr__(config, part, dataclasses.replace(getattr(config, part),
-                                                             **{field_name: float(value)}))
 
 
 def known_list(config: VehicleConfig) -> list[dict[str, Any]]:
@@ -333,16 +328,6 @@ def _gib(n_bytes: float) -> str:
     return f"about {n_bytes / 1024**3:.3g} GiB"
 
 
-def estimated_memory(config: VehicleConfig, T: float) -> tuple[float, float, float]:
-    """(model samples, reference steps, estimated bytes) of a job, by :data:`BYTES_PER_STEP`
-    and :data:`BYTES_PER_SAMPLE_CANDIDATE` (no array is made to count them)."""
-    samples = T / config.dt + 1
-    ref_dt = config.reference.dt if config.reference.file is None else None
-    steps = T / ref_dt + 1 if ref_dt else samples
-    n_bytes = (samples + steps) * BYTES_PER_STEP + samples * config.ps * BYTES_PER_SAMPLE_CANDIDATE
-    return samples, steps, n_bytes
-
-
 def _blame(config: VehicleConfig, T: float) -> tuple[str, float]:
     """The key that made the record long: ``problem.dt`` when the step is finer (against 1
     ms) than the window is long (against 0.48 s), else the window's largest term."""
@@ -358,8 +343,12 @@ def _blame(config: VehicleConfig, T: float) -> tuple[str, float]:
 
 def check_size(config: VehicleConfig, T: float) -> None:
     """Refuse a record past :data:`MAX_SAMPLES` samples or a job past :data:`MAX_MEMORY`
-    (estimated), naming the key that made it large and the estimate."""
-    samples, steps, n_bytes = estimated_memory(config, T)
+    (estimated by :data:`BYTES_PER_STEP` and :data:`BYTES_PER_SAMPLE_CANDIDATE`: no array
+    is made to count them), naming the key that made it large and the estimate."""
+    samples = T / config.dt + 1
+    ref_dt = config.reference.dt if config.reference.file is None else None
+    steps = T / ref_dt + 1 if ref_dt else samples
+    n_bytes = (samples + steps) * BYTES_PER_STEP + samples * config.ps * BYTES_PER_SAMPLE_CANDIDATE
     what = (f"this one: T = {T:.4g} s at problem.dt = {config.dt:g} s is {samples:.4g} samples, "
             f"{_gib(n_bytes)} for ps = {config.ps} candidates")
     if samples > MAX_SAMPLES:

@@ -242,11 +242,6 @@ def plan(config: Any, model: Any, problem: str = "this problem") -> Plan:
     return Plan(pset, tuple(model.names), identified, units, values, sources, boxes)
 
 
-def is_default(config: Any) -> bool:
-    """Whether ``config`` states nothing beyond its parameter set (no known, no bounds)."""
-    return not getattr(config, "known", None) and not getattr(config, "bounds", None)
-
-
 class StatedModel:
     """A ride model under a :class:`Plan`: the identified names, the plan's values, the
     user's boxes; ``simulate``, ``system``, ``physical`` take identified rows and call the
@@ -319,7 +314,7 @@ class StatedModel:
 
 def stated_model(base: Any, config: Any, problem: str) -> Any:
     """``base`` when the config states nothing, else its :class:`StatedModel`."""
-    if is_default(config):
+    if not getattr(config, "known", None) and not getattr(config, "bounds", None):
         return base
     return StatedModel(base, plan(config, base, problem))
 

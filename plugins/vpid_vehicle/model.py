@@ -57,25 +57,15 @@ def matrices(X: np.ndarray, known: KnownConstants) -> tuple[np.ndarray, np.ndarr
     return M, C, K
 
 
-def elongation_jacobian(a1: np.ndarray, a2: np.ndarray) -> np.ndarray:
-    """``J`` ``(n, 4, 4)`` of ``e = J q``: front and rear suspension (wheel minus body point
-    above it), front and rear tyre (wheel minus road)."""
-    a1 = np.atleast_1d(np.asarray(a1, dtype=float))
-    a2 = np.atleast_1d(np.asarray(a2, dtype=float))
-    n = a1.size
-    J = np.zeros((n, 4, 4))
-    J[:, 0, 0], J[:, 0, 1], J[:, 0, 2] = -1.0, a1, 1.0  # x1 - (x - a1 theta)
-    J[:, 1, 0], J[:, 1, 1], J[:, 1, 3] = -1.0, -a2, 1.0  # x2 - (x + a2 theta)
-    J[:, 2, 2] = 1.0  # x1 - y1
-    J[:, 3, 3] = 1.0  # x2 - y2
-    return J
-
-
 def lagrangian_matrices(X: np.ndarray, known: KnownConstants) -> tuple[np.ndarray, np.ndarray]:
     """C and K from the Lagrangian: potential 1/2 e^T D_k e and Rayleigh dissipation
-    1/2 e'^T D_c e' give K = J^T D_k J and C = J^T D_c J (no tyre damping)."""
+    1/2 e'^T D_c e' give K = J^T D_k J and C = J^T D_c J (no tyre damping), ``e = J q``
+    the front and rear suspension (wheel minus body point) and tyre (wheel minus road)."""
     m, I, m1, m2, k1, k2, c1, c2, a1 = _columns(X)
-    J = elongation_jacobian(a1, known.L - a1)
+    J = np.zeros((m.size, 4, 4))
+    J[:, 0, 0], J[:, 0, 1], J[:, 0, 2] = -1.0, a1, 1.0  # x1 - (x - a1 theta)
+    J[:, 1, 0], J[:, 1, 1], J[:, 1, 3] = -1.0, -(known.L - a1), 1.0  # x2 - (x + a2 theta)
+    J[:, 2, 2] = J[:, 3, 3] = 1.0  # x1 - y1, x2 - y2
     zero = np.zeros_like(m)
     Dk = np.stack([k1, k2, np.full_like(m, known.kt1), np.full_like(m, known.kt2)], axis=1)
     Dc = np.stack([c1, c2, zero, zero], axis=1)

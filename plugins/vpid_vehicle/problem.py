@@ -274,14 +274,8 @@ class VehicleProblem(Problem):
             "z2'':fitted": fitted[1],
         }
 
-    def _f_at_true(self) -> float:
-        """The objective at the true vector: the floor that noise (or a model mismatch) sets."""
-        if not hasattr(self, "_f_true"):
-            self._f_true = float(self.evaluate(self._x_true[None])[0])
-        return self._f_true
-
     def describe(self) -> dict[str, Any]:
-        cfg = self.config
+        cfg, b, own = self.config, self.config.bounds, own_boxes(self.config)
         rear_in = max(0.0, min(self.bump.rear_off, self.T) - self.bump.rear_on)
         info: dict[str, Any] = {
             "samples": int(self.t.size),
@@ -294,10 +288,16 @@ class VehicleProblem(Problem):
             "rear_excited_s": float(rear_in),
             "reference": {"source": self.reference_source},
             "known": known_list(cfg),
-            "box": self._box_info(),
+            "box": [{"name": n, "lower": float(lo), "upper": float(hi), "unit": u,
+                     "source": (f"set by you (problem.bounds.{n})" if n in own else
+                                f"[{b.lower_factor:g}, {b.upper_factor:g}] x the configured "
+                                "vehicle (problem.bounds.lower_factor, upper_factor)")}
+                    for n, u, lo, hi in zip(PARAM_NAMES, PARAM_UNITS, self._bounds.lower,
+                                            self._bounds.upper, strict=True)],
         }
-        if self.reference_source != "file":
-            info.update(f_at_true=self._f_at_true(), metric_units={"NoRE": "%"})
+        if self.reference_source != "file" and not hasattr(self, "_f_true"):
+            # the objective at the truth: the floor noise (or a model mismatch) sets
+            self._f_true = float(self.evaluate(self._x_true[None])[0])
         ref = cfg.reference
         if self.reference_source == "file":
             info["reference"].update(file=str(ref.file), info=self.record_info,
@@ -305,6 +305,7 @@ class VehicleProblem(Problem):
                                          self.sampler is not None and self.sampler.on_steps))
             info["noise"] = {"applied": False}
         else:
+            info.update(f_at_true=self._f_true, metric_units={"NoRE": "%"})
             info["reference"].update(
                 integrator=ref.integrator or cfg.integrator,
                 dt_s=float(ref.dt or cfg.dt),
@@ -320,16 +321,6 @@ class VehicleProblem(Problem):
                 **noise_summary(self.reference_clean, self.reference),
             }
         return info
-
-    def _box_info(self) -> list[dict[str, Any]]:
-        """``problem.info.box``: each parameter's box with its source."""
-        b, own = self.config.bounds, own_boxes(self.config)
-        return [{"name": n, "lower": float(lo), "upper": float(hi), "unit": u,
-                 "source": (f"set by you (problem.bounds.{n})" if n in own else
-                            f"[{b.lower_factor:g}, {b.upper_factor:g}] x the configured "
-                            "vehicle (problem.bounds.lower_factor, upper_factor)")}
-                for n, u, lo, hi in zip(PARAM_NAMES, PARAM_UNITS, self._bounds.lower,
-                                        self._bounds.upper, strict=True)]
 
     def write_artifacts(self, directory: Path) -> list[Path]:
         """``reference.csv``: this problem's clean and noisy record (a job's: instance 0)."""

@@ -60,15 +60,10 @@ INSTANCE_ROOT = 0x5EED1
 TRUTH_MARGIN = 0.05
 
 
-def member_key(name: str) -> int:
-    """A stable 32-bit number of a problem's registered name (CRC-32 of its UTF-8 bytes)."""
-    return zlib.crc32(name.encode("utf-8"))
-
-
 def instance_streams(seed: int, index: int, name: str) -> list[np.random.SeedSequence]:
     """The truth's, the road's and the noise's streams of instance ``index`` of the problem
     registered as ``name``."""
-    root = [seed, INSTANCE_ROOT, member_key(name)]
+    root = [seed, INSTANCE_ROOT, zlib.crc32(name.encode("utf-8"))]  # stable per problem name
     return np.random.SeedSequence(root, spawn_key=(index,)).spawn(3)
 
 
