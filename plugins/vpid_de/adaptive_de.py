@@ -168,7 +168,6 @@ class AdaptiveDE(GenerationalOptimizer):
         self.after_generation()
 
 
-# ------------------------------------------------------------------------------------------------
 # JADE
 
 
@@ -211,7 +210,6 @@ class JADE(AdaptiveDE):
         self.mu_cr, self.mu_f = jade_update(self.mu_cr, self.mu_f, S_CR, S_F, self.params.c)
 
 
-# ------------------------------------------------------------------------------------------------
 # SHADE
 
 
@@ -256,7 +254,6 @@ class SHADE(AdaptiveDE):
         self.memory.update(S_CR, S_F, delta)
 
 
-# ------------------------------------------------------------------------------------------------
 # L-SHADE
 
 

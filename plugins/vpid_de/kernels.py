@@ -17,7 +17,6 @@ import numpy as np
 #: the choices of the ``bounds`` key (the keys of :data:`BOUNDS_RULES`, in the same order)
 BoundsRule = Literal["reinit", "clip", "reflect", "midpoint"]
 
-# ----------------------------------------------------------------------------------------------
 # Index drawing
 
 
@@ -40,11 +39,8 @@ def draw_indices(rng: np.random.Generator, ps: int, n: int) -> np.ndarray:
     return indices_from_keys(rng.random((ps, ps - 1)), n)
 
 
-# ----------------------------------------------------------------------------------------------
-# Mutation kernels. Signature: kernel(X, best, r, F, K) -> V, shape (ps, dim).
-#   X: population (ps, dim); best: index of the best member of X; r: (ps, n) from draw_indices;
-#   F: scale factor, a scalar or a (ps, 1) column (one factor per target vector);
-#   K: combination factor (only Eq. 13 uses it).
+# Mutation kernels, kernel(X, best, r, F, K) -> V (ps, dim): ``best`` the best member's index,
+# ``r`` (ps, n) from draw_indices, F a scalar or (ps, 1), K Eq. 13's combination factor.
 
 
 def rand1(X: np.ndarray, best: int, r: np.ndarray, F, K=None) -> np.ndarray:
@@ -88,7 +84,6 @@ MUTATIONS: dict[str, tuple[Callable[..., np.ndarray], int]] = {
 }
 
 
-# ----------------------------------------------------------------------------------------------
 # current-to-pbest/1 with an external archive (Zhang and Sanderson 2009; SHADE, L-SHADE)
 
 
@@ -123,7 +118,6 @@ def current_to_pbest1(
     return X + F * (X[pbest] - X) + F * (X[r1] - XA[r2])
 
 
-# ----------------------------------------------------------------------------------------------
 # Crossover and selection
 
 
@@ -158,11 +152,8 @@ def greedy_selection(
     return np.where(better[:, None], U, X), np.where(better, fU, fX)
 
 
-# ----------------------------------------------------------------------------------------------
-# Bounds handling. Signature: rule(U, parent, lower, upper, u) -> U inside [lower, upper], where
-# ``u`` is a (ps, dim) block of uniforms drawn with the generation (only ``reinit`` uses it).
-# Only coordinates outside the box change. Every rule ends with an exact clip, so rounding in
-# ``lower + something`` can never leave a candidate one ulp outside the box.
+# Bounds rules, rule(U, parent, lower, upper, u) -> U inside the box (``u``: uniforms, for
+# ``reinit``): only coordinates outside change, and an exact clip ends each (no ulp outside).
 
 
 def _exact(U: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:

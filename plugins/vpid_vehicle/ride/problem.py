@@ -255,8 +255,7 @@ class RideProblem(ChannelFit, Problem):
 
         self.config = config
         self._index = index
-        #: The model in the configured suspension structure (the class's for the linear one),
-        #: then with the quantities the user stated fixed or freed (knowns.py).
+        #: The model in the configured structure, with what the user fixed or freed (knowns.py).
         self.model = structured(self.model, config)
         self.model = knowns.stated_model(self.model, config, type(self).name)
         published = self.model.sets[config.parameter_set]
@@ -286,9 +285,7 @@ class RideProblem(ChannelFit, Problem):
                               "every measured channel moves (one is zero throughout)")
         plug_in = (estimators.plug_in_sigma(self.measured, config.noise_level, "additive")
                    if config.objective == "ml" else None)
-        #: What a raw residual is multiplied by, ``(p, N)``: ``1 / ||measured_c||`` (Eq. 3),
-        #: ``1 / ||measured||`` (ols), ``1 / sigma`` plugged in from the record (ml),
-        #: ``1 / rms(measured_c)`` (ml_profiled).
+        #: What a raw residual is multiplied by, ``(p, N)`` (Eq. 3: ``1 / ||measured_c||``).
         self.weights = estimators.weights(config.objective, self.measured,
                                           1.0 / self.scale[:, None], plug_in)
 
