@@ -92,7 +92,6 @@ class Simulator:
             self.f_enter = b(lib, "fmi2EnterInitializationMode", c_int, P)
             self.f_exit = b(lib, "fmi2ExitInitializationMode", c_int, P)
             self.f_reset = b(lib, "fmi2Reset", c_int, P)
-            self.f_terminate = b(lib, "fmi2Terminate", c_int, P)
             self.f_set = b(lib, "fmi2SetReal", c_int, P, P, P, P)
             self.f_get = b(lib, "fmi2GetReal", c_int, P, P, P, P)
             if self.kind == "cs":
@@ -117,7 +116,6 @@ class Simulator:
                              c_double, c_bool, c_double)
             self.f_exit = b(lib, "fmi3ExitInitializationMode", c_int, P)
             self.f_reset = b(lib, "fmi3Reset", c_int, P)
-            self.f_terminate = b(lib, "fmi3Terminate", c_int, P)
             self.f_set = b(lib, "fmi3SetFloat64", c_int, P, P, P, P, P)
             self.f_get = b(lib, "fmi3GetFloat64", c_int, P, P, P, P, P)
             self.f_step = b(lib, "fmi3DoStep", c_int, P, c_double, c_double, c_bool, P, P, P, P)

@@ -14,7 +14,6 @@ from vpid_bench import Contribution, ReportContext, Section
 
 #: Settings that shape the search, not the record.
 PROTOCOL = ("ps", "iterations", "budget")
-STRUCTURE = ("spring", "damper")
 
 
 def record_groups(records: Sequence[Mapping[str, Any]]

@@ -24,8 +24,6 @@ import numpy as np
 from . import linear
 from .model import RideModel
 
-SPRINGS = ("linear", "cubic")
-DAMPERS = ("linear", "bilinear")
 #: The cubic coefficient's reference per unit of the linear rate (m⁻²): 25 % at 50 mm.
 CUBIC_PER_K = 0.25 / 0.05**2
 #: Box of the cubic coefficient as multiples of ``CUBIC_PER_K x k`` (published k).
