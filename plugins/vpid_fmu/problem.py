@@ -111,19 +111,6 @@ class FmuConfig(ProblemConfig):
         setup(self)
 
 
-@dataclasses.dataclass(frozen=True)
-class Setup:
-    """A config read against its FMU and record (``mode``: the input handling, ``info`` its
-    line)."""
-
-    fmu: archive.FmuFile
-    kind: str
-    plan: plan.Plan
-    record: record.FmuRecord
-    mode: str
-    info: str
-
-
 def _kind(config: FmuConfig, fmu: archive.FmuFile) -> str:
     offered = sorted(fmu.binaries)
     kind = config.interface
@@ -166,15 +153,14 @@ def _mode(config: FmuConfig, fmu: archive.FmuFile, kind: str) -> tuple[str, str]
 
 
 @functools.lru_cache(maxsize=16)
-def _setup(config: FmuConfig, fmu_state: tuple, record_state: tuple) -> Setup:
+def _setup(config: FmuConfig, fmu_state: tuple, record_state: tuple) -> tuple:
     fmu = archive.inspect(config.fmu)
     kind = _kind(config, fmu)
     p = plan.plan(fmu.description, config.parameters, config.bounds, config.known)
     rec = record.read(config.reference.file, [(v.name, v.unit) for v in p.inputs],
                       [(v.name, v.unit) for v in p.outputs], config.reference.columns,
                       config.reference.ignore)
-    mode, info = _mode(config, fmu, kind)
-    return Setup(fmu, kind, p, rec, mode, info)
+    return (fmu, kind, p, rec, *_mode(config, fmu, kind))
 
 
 def _state(path: str) -> tuple:
@@ -183,9 +169,9 @@ def _state(path: str) -> tuple:
     return (str(p), st.st_size if st else -1, st.st_mtime_ns if st else -1)
 
 
-def setup(config: FmuConfig) -> Setup:
-    """Read the FMU's description and the record under ``config`` (cached per config and
-    file states); raises :class:`ConfigError` naming the key."""
+def setup(config: FmuConfig) -> tuple:
+    """``(fmu, kind, plan, record, mode, mode_info)``: the FMU's description and the record
+    read under ``config`` (cached per config and file states), or a :class:`ConfigError`."""
     return _setup(config, _state(config.fmu), _state(config.reference.file))
 
 
@@ -199,9 +185,7 @@ class FmuProblem(Problem):
 
     def __init__(self, config: FmuConfig) -> None:
         super().__init__(config)
-        s = setup(config)
-        self.fmu, self.kind, self.plan, self.record = s.fmu, s.kind, s.plan, s.record
-        self.mode, self.mode_info = s.mode, s.info
+        self.fmu, self.kind, self.plan, self.record, self.mode, self.mode_info = setup(config)
         self.t = self.record.t
         self.measured = self.record.outputs
         self.scale = np.linalg.norm(self.measured, axis=1)
