@@ -64,10 +64,19 @@ SPEED_TOLERANCE = 0.02
 
 
 class SteeredRecord:
-    """A single-track model's record inputs: ``delta`` at the road wheels (rad) and ``vx``
-    (m/s), else the configured manoeuvre and ``speed_kmh``."""
+    """What the single-track models share: the sensor sets, the forward speed ``vx`` (m/s:
+    the problem's, or a user's record's mean) and the inputs, the configured manoeuvre or a
+    record's ``delta`` at the road wheels (rad) and ``vx``."""
 
-    vx: float
+    sensors = SENSORS
+
+    def __init__(self, vx: float = 20.0) -> None:
+        self.vx = vx
+
+    def inputs(self, config: Any, known: dict[str, float], dt: float,
+               rng: np.random.Generator) -> np.ndarray:
+        """The steer angle at the road wheels (rad) ``(N, 1)`` of the configured manoeuvre."""
+        return steer_input(config, dt)
 
     def record_columns(self) -> tuple[Column, ...]:
         return (Column("delta", "rad"), Column("vx", "m/s"))
