@@ -54,10 +54,6 @@ class HalfCar(RideModel):
     def wheels(self, known: dict[str, float], speed: float) -> tuple[Wheel, ...]:
         return (Wheel(0, 0.0), Wheel(0, known["L"] / speed))
 
-    def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
-        ok = np.all(np.isfinite(X) & (X > 0), axis=1)
-        return ok & (X[:, 8] < known["L"])
-
     def system(self, X: np.ndarray, known: dict[str, float], sensors: str
                ) -> linear.LinearSystem:
         X = np.atleast_2d(X)

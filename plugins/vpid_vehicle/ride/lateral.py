@@ -37,10 +37,6 @@ class SingleTrack(SteeredRecord, RideModel):
         "smart": {"Cf": 70000.0, "Cr": 90000.0, "Iz": 3000.0, "lf": 1.142,
                   "m": 820.0, "L": 1.812},
     }
-    def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
-        ok = np.all(np.isfinite(X) & (X > 0), axis=1)
-        return ok & (X[:, 3] < known["L"])
-
     def system(self, X: np.ndarray, known: dict[str, float], sensors: str,
                vx: float | None = None) -> linear.LinearSystem:
         """The systems at ``vx`` m/s (default: the model's speed)."""

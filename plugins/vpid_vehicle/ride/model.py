@@ -82,8 +82,12 @@ class RideModel:
         raise NotImplementedError
 
     def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
-        """Rows that describe a vehicle (default: every parameter finite and > 0)."""
-        return np.all(np.isfinite(X) & (X > 0), axis=1)
+        """Rows that describe a vehicle: every parameter finite and > 0, an identified centre
+        of gravity (``a1``, ``lf``: behind the front axle) inside the wheelbase ``L``."""
+        ok = np.all(np.isfinite(X) & (X > 0), axis=1)
+        for j in (j for j, name in enumerate(self.names) if name in ("a1", "lf")):
+            ok &= X[:, j] < known["L"]
+        return ok
 
     def box(self, nominal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The search box around the published set (default ``[0.5, 1.5] x`` it)."""
