@@ -125,6 +125,7 @@ class BayesraceProblem(ChannelFit, Problem):
     name = "bayesrace"
     family = "single-track dynamic, third-party simulator"
     rows_independent: ClassVar[bool] = True
+    channels = CHANNELS
 
     def __init__(self, config: BayesraceConfig) -> None:
         super().__init__(config)
@@ -135,7 +136,7 @@ class BayesraceProblem(ChannelFit, Problem):
         self.held_out = TrackRecord(third_party.read_simulator_record(TRACKS[held_out],
                                                                       config.data_dir),
                                     config.substeps)
-        self.measured = self.fit.record.states
+        self.measured, self.t = self.fit.record.states, self.fit.record.t
         self.weights = estimators.weights(
             config.objective, self.measured,
             1.0 / np.linalg.norm(self.measured, axis=1, keepdims=True), None)
@@ -164,16 +165,6 @@ class BayesraceProblem(ChannelFit, Problem):
         err = np.sqrt(np.mean((self.held_out.record.states - sim) ** 2, axis=1))
         for (name, _), e in zip(CHANNELS, err, strict=True):
             out[f"val_rms_{name}"] = float(e) if np.isfinite(e) else float("inf")
-        return out
-
-    def signal_units(self) -> dict[str, str]:
-        return dict(CHANNELS)
-
-    def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        sim = self.fit.simulate(np.asarray(x, dtype=float).reshape(1, -1))[0]
-        out = {"t": self.fit.record.t.copy()}
-        for c, (name, _) in enumerate(CHANNELS):
-            out[f"{name}:measured"], out[f"{name}:fitted"] = self.measured[c].copy(), sim[c]
         return out
 
     def describe(self) -> dict[str, Any]:

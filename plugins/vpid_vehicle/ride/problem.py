@@ -243,6 +243,17 @@ class ChannelFit:
         """The channels for Eq. 3 (one norm each), one group for the sums of squares."""
         return estimators.groups(self.config.objective, *self.measured.shape)
 
+    def signal_units(self) -> dict[str, str]:
+        return dict(self.channels)
+
+    def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        """Each channel measured and fitted at the record's times ``t``."""
+        fitted = self.computed(np.asarray(x, dtype=float).reshape(1, -1))[0]
+        out = {"t": self.t.copy()}
+        for c, (name, _) in enumerate(self.channels):
+            out[f"{name}:measured"], out[f"{name}:fitted"] = self.measured[c].copy(), fitted[c]
+        return out
+
 
 class RideProblem(ChannelFit, Problem):
     """A ride model identified from a road record (see the module docstring)."""
@@ -388,17 +399,6 @@ class RideProblem(ChannelFit, Problem):
         return None if self.sampler is not None else f"seed={self.config.seed}/{self._index}"
 
     # --- signals ------------------------------------------------------------------------
-    def signal_units(self) -> dict[str, str]:
-        return dict(self.channels)
-
-    def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        fitted = self.responses(np.asarray(x, dtype=float).reshape(1, -1))[0]
-        out = {"t": self.t.copy()}
-        for c, (name, _) in enumerate(self.channels):
-            out[f"{name}:measured"] = self.measured[c].copy()
-            out[f"{name}:fitted"] = fitted[c]
-        return out
-
     def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any]:
         """The measured channels over their norms (:meth:`fisher_residuals`' units), their
         names and the model's inputs at the record's samples (``h``, ``h'`` per wheel)."""
