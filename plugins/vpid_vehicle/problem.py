@@ -26,7 +26,7 @@ from .config import (
     window,
 )
 from .model import KnownConstants, physical
-from .objective import add_noise, noise_summary
+from .objective import ChannelFit, add_noise, noise_summary
 from .record_file import Sampler
 from .reference_io import read_measured, write_reference
 from .road import Bump
@@ -35,12 +35,13 @@ from .simulator import Simulator
 log = logging.getLogger(__name__)
 
 
-class VehicleProblem(Problem):
+class VehicleProblem(ChannelFit, Problem):
     """Half-car parameter identification (Gökdağ 2014); see docs/vehicle.md."""
 
     Config = VehicleConfig
     name = "vehicle"
     rows_independent = True  # the kernel's values never depend on the batch (tested)
+    channels = (("z1''", "m/s²"), ("z2''", "m/s²"))
 
     def __init__(self, config: VehicleConfig) -> None:
         super().__init__(config)
@@ -147,6 +148,14 @@ class VehicleProblem(Problem):
             return None
         return estimators.noise_sigma(self.reference_clean, nz.level, nz.model).reshape(-1)
 
+    @property
+    def measured(self) -> np.ndarray:
+        return self.reference
+
+    @property
+    def weights(self) -> np.ndarray:
+        return self._weighting()
+
     def _weighting(self) -> np.ndarray:
         """What a raw residual is multiplied by, ``(2, N)``: 1 for Eq. 3 (m/s^2)."""
         if "_weights" not in self.__dict__:
@@ -174,6 +183,9 @@ class VehicleProblem(Problem):
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
             raise ConfigError("threads", n, "an integer >= 1")
         self.model.set_threads(int(n))
+
+    def computed(self, X: np.ndarray) -> np.ndarray:
+        return self.responses(X)
 
     def responses(self, X: np.ndarray) -> np.ndarray:
         """z1'' and z2'' (m/s^2) ``(n, 2, N)``; NaN rows for non-physical candidates."""
@@ -223,15 +235,6 @@ class VehicleProblem(Problem):
         except (ValueError, FloatingPointError, ZeroDivisionError, np.linalg.LinAlgError):
             return super().evaluate_instances(X, instance)
 
-    def _weighted(self, X: np.ndarray) -> np.ndarray:
-        """Measured minus computed times the objective's fixed weights, ``(n, 2, N)``."""
-        return (self.reference[None] - self.responses(X)) * self._weighting()[None]
-
-    def residuals(self, X: np.ndarray) -> np.ndarray:
-        """Measured minus computed times the objective's weights, z1'' then z2'', ``(n, 2 N)``
-        (:func:`estimators.residuals_and_value`); inf rows for non-physical candidates."""
-        return self.evaluate_with_residuals(X)[1]
-
     def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
         """Measured minus computed (m/s^2), z1'' then z2'', whatever the objective (what the
         Cramér–Rao bound differentiates)."""
@@ -239,40 +242,19 @@ class VehicleProblem(Problem):
         R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
         return R.reshape(R.shape[0], -1)
 
-    def fisher_groups(self) -> np.ndarray:
-        """0 for the z1'' entries of :meth:`fisher_residuals`, 1 for the z2'' entries."""
-        return np.repeat(np.arange(2), self.t.size)
-
     def metrics(self, x: np.ndarray) -> dict[str, float]:
         """``{"NoRE": ...}`` (%); none for a measured record (no truth)."""
         if self.reference_source == "file":
             return {}
         return {"NoRE": nore(x, self._x_true)}
 
-    def signal_units(self) -> dict[str, str]:
-        return {"z1''": "m/s²", "z2''": "m/s²"}
-
-    def residual_groups(self) -> np.ndarray:
-        """Eq. 3: one norm per channel; one group for the sums of squares."""
-        return estimators.groups(self.config.objective, 2, self.t.size)
-
     def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``f`` and :meth:`residuals` from one simulation (Eq. 3: the channel norms over the
         reference's); inf where a candidate is non-physical or fails."""
-        f, R = estimators.residuals_and_value(self.config.objective, self._weighted(X))
+        f, R = super().evaluate_with_residuals(X)
         if self.config.objective == "eq3":
             f = f / float(np.linalg.norm(self.reference, axis=1).sum())
         return f, R
-
-    def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        fitted = self.responses(np.asarray(x, dtype=float).reshape(1, -1))[0]
-        return {
-            "t": self.t.copy(),
-            "z1'':measured": self.reference[0].copy(),
-            "z1'':fitted": fitted[0],
-            "z2'':measured": self.reference[1].copy(),
-            "z2'':fitted": fitted[1],
-        }
 
     def describe(self) -> dict[str, Any]:
         cfg, b, own = self.config, self.config.bounds, own_boxes(self.config)

@@ -40,9 +40,9 @@ from vpid_bench import (
     relative_errors_percent,
 )
 
+from ..objective import ChannelFit
 from . import third_party
 from .dynamic_rows import DYNAMIC_ROWS
-from .problem import ChannelFit
 
 #: The simulator's coefficients, ``deep_dynamics.yaml`` of the records' repository (its
 #: PARAMETERS and VEHICLE_SPECS): value, Min, Max. A test reads the shipped file against them.

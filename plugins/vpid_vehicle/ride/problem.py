@@ -33,6 +33,7 @@ from vpid_bench import (
 )
 
 from .. import knowns
+from ..objective import ChannelFit
 from ..record_file import (
     Column,
     ColumnMap,
@@ -198,61 +199,6 @@ def read_ride_record(model: RideModel, config: Any) -> Record:
     model.check_record(record)
     check_span(record, config.dt, MAX_STEPS)
     return record
-
-
-class ChannelFit:
-    """The residuals of a problem that fits measured channels ``measured`` ``(p, N)`` with the
-    objective's ``weights`` (:mod:`vpid_bench.estimators`) by :meth:`computed` ``(n, p, N)``
-    (NaN rows where a row is not simulated): channels one after another, inf rows where a
-    simulation fails."""
-
-    measured: np.ndarray
-    weights: np.ndarray
-
-    def computed(self, X: np.ndarray) -> np.ndarray:
-        raise NotImplementedError
-
-    def _weighted(self, X: np.ndarray) -> np.ndarray:
-        """``measured - computed`` times the objective's fixed weights, ``(n, p, N)``."""
-        return (self.measured[None] - self.computed(X)) * self.weights
-
-    def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return estimators.residuals_and_value(self.config.objective, self._weighted(X))
-
-    def evaluate(self, X: np.ndarray) -> np.ndarray:
-        return self.evaluate_with_residuals(X)[0]
-
-    def residuals(self, X: np.ndarray) -> np.ndarray:
-        """What a least-squares optimizer minimises (:func:`estimators.residuals_and_value`:
-        Eq. 3's over ``||measured_c||``; ``ml_profiled``'s rescaled per channel)."""
-        return self.evaluate_with_residuals(X)[1]
-
-    def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
-        """``(measured_c - computed_c) / ||measured_c||`` whatever the objective (what the
-        intervals and the Cramér–Rao bound differentiate)."""
-        scale = np.linalg.norm(self.measured, axis=1)[None, :, None]
-        R = (self.measured[None] - self.computed(X)) / scale
-        R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
-        return R.reshape(R.shape[0], -1)
-
-    def fisher_groups(self) -> np.ndarray:
-        """The channel of each entry of :meth:`fisher_residuals`."""
-        return np.repeat(np.arange(self.measured.shape[0]), self.measured.shape[1])
-
-    def residual_groups(self) -> np.ndarray:
-        """The channels for Eq. 3 (one norm each), one group for the sums of squares."""
-        return estimators.groups(self.config.objective, *self.measured.shape)
-
-    def signal_units(self) -> dict[str, str]:
-        return dict(self.channels)
-
-    def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        """Each channel measured and fitted at the record's times ``t``."""
-        fitted = self.computed(np.asarray(x, dtype=float).reshape(1, -1))[0]
-        out = {"t": self.t.copy()}
-        for c, (name, _) in enumerate(self.channels):
-            out[f"{name}:measured"], out[f"{name}:fitted"] = self.measured[c].copy(), fitted[c]
-        return out
 
 
 class RideProblem(ChannelFit, Problem):

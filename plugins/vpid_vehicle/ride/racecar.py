@@ -29,8 +29,8 @@ import numpy as np
 
 from vpid_bench import Bounds, ConfigError, Problem, ProblemConfig, estimators
 
+from ..objective import ChannelFit
 from . import third_party
-from .problem import ChannelFit
 
 #: The car's constants (``deep_dynamics_iac.yaml``, VEHICLE_SPECS; a test reads the file).
 VEHICLE = {"m": 790.0, "lf": 1.248, "lr": 1.7328}
