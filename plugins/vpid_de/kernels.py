@@ -88,8 +88,8 @@ MUTATIONS: dict[str, tuple[Callable[..., np.ndarray], int]] = {
 
 
 def pbest_indices(rng: np.random.Generator, f: np.ndarray, count: np.ndarray | int) -> np.ndarray:
-    """For every target, one of the ``count`` best members (uniform; may be the target, as
-    in JADE; ties: the lower index first). ``count``: an integer or one per target (SHADE)."""
+    """For every target, one of the ``count`` best, uniform (itself too, as JADE; ties: lower
+    index first); ``count``: an integer or one per target (SHADE)."""
     order = np.argsort(f, kind="stable")
     count = np.asarray(count, dtype=np.intp)
     return order[np.minimum((rng.random(f.shape[0]) * count).astype(np.intp), count - 1)]
@@ -135,8 +135,7 @@ def crossover_from_uniforms(
 def binomial_crossover(
     X: np.ndarray, V: np.ndarray, CR: float | np.ndarray, rng: np.random.Generator
 ) -> np.ndarray:
-    """:func:`crossover_from_uniforms` with the uniforms drawn from ``rng``: every trial
-    keeps at least one mutant gene, even with ``CR = 0``."""
+    """:func:`crossover_from_uniforms` drawn from ``rng`` (at least one mutant gene per trial)."""
     ps, dim = X.shape
     u = rng.random((ps, dim + 1))
     return crossover_from_uniforms(X, V, CR, u[:, :dim], u[:, dim])
@@ -161,8 +160,7 @@ def _exact(U: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
 
 
 def bounds_reinit(U, parent, lower, upper, u: np.ndarray) -> np.ndarray:
-    """A coordinate outside the box gets a fresh uniform value in ``[lower, upper)``, as
-    scipy's ``differential_evolution`` does. Keeps diversity; forgets the mutant's direction."""
+    """Outside coordinates get a fresh uniform value in the box (as scipy's DE): diversity kept."""
     out = (U < lower) | (U > upper)
     if not out.any():
         return U
@@ -176,8 +174,7 @@ def bounds_clip(U, parent, lower, upper, u=None) -> np.ndarray:
 
 
 def bounds_reflect(U, parent, lower, upper, u=None) -> np.ndarray:
-    """Mirror at the violated face (``2 lower - u``), folded repeatedly if a large step
-    crosses the whole box (a triangle wave of period ``2 (upper - lower)``)."""
+    """Mirror at the violated face, folded again if a large step crosses the whole box."""
     out = (U < lower) | (U > upper)
     if not out.any():
         return U
@@ -188,8 +185,7 @@ def bounds_reflect(U, parent, lower, upper, u=None) -> np.ndarray:
 
 
 def bounds_midpoint(U, parent, lower, upper, u=None) -> np.ndarray:
-    """Half way between the parent ``x_i`` (inside the box) and the violated face:
-    ``(x_ij + lower_j) / 2`` below, ``(x_ij + upper_j) / 2`` above."""
+    """Half way between the parent (inside the box) and the violated face."""
     below, above = U < lower, U > upper
     if not (below.any() or above.any()):
         return U

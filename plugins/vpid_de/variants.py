@@ -17,8 +17,7 @@ Eq15Form = Literal["das", "printed"]
 
 @dataclasses.dataclass(frozen=True)
 class FixedFParams(DEParams):
-    """DE1-DE5: a constant scale factor, Table I's F = 0.6 and CR = 0.9 (the paper gives F's
-    range as 0:2)."""
+    """DE1-DE5: a constant scale factor, Table I's F = 0.6, CR = 0.9 (the paper's range 0:2)."""
 
     F: float = 0.6
 

@@ -162,8 +162,7 @@ class Simulator:
 
     def _start(self, vrs: np.ndarray, values: np.ndarray, t0: float, t1: float,
                u0: np.ndarray, vr_in: np.ndarray, tolerance: float | None) -> str | None:
-        """Reset (or create) the instance, set the start values and the first input,
-        initialise. ``None``, or the call that failed."""
+        """Reset (or create), set the start values and first input, initialise; what failed."""
         if not self.c:
             self.instantiate()
         elif not self._fresh and self.f_reset(self.c) > 1:
@@ -192,8 +191,7 @@ class Simulator:
     def simulate(self, vrs: np.ndarray, values: np.ndarray, t: np.ndarray, u: np.ndarray,
                  vr_in: np.ndarray, vr_out: np.ndarray, how: dict[str, Any]
                  ) -> tuple[np.ndarray | None, str | None]:
-        """The outputs ``(N, p)`` at the times ``t`` with the start values ``values`` at
-        ``vrs`` and the inputs ``u`` ``(N, r)``; ``(None, why)`` when the FMU fails."""
+        """The outputs ``(N, p)`` at ``t`` for the start values and inputs, or ``(None, why)``."""
         y = np.empty((t.size, vr_out.size))
         failed = self._start(vrs, values, float(t[0]), float(t[-1]), u[0], vr_in,
                              how.get("rtol") if self.kind == "me" else None)

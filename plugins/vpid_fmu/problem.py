@@ -29,8 +29,7 @@ OBJECTIVES = ("eq3", "ols")
 
 
 class FrozenMap(dict):
-    """A read-only mapping that hashes (a problem is cached by its config); lists in it
-    become tuples."""
+    """A read-only mapping that hashes (a problem is cached by its config); lists become tuples."""
 
     def __init__(self, items: Any = ()) -> None:
         super().__init__({str(k): tuple(v) if isinstance(v, (list, tuple)) else v
@@ -61,8 +60,7 @@ def _freeze(config: Any, prefix: str, *names: str) -> None:
 
 @dataclasses.dataclass(frozen=True)
 class ReferenceConfig:
-    """``file``: the record (CSV); ``columns``: FMU names mapped to record columns;
-    ``ignore``: record columns left unused on purpose."""
+    """``file``: the record (CSV); ``columns``: FMU names to record columns; ``ignore``: unused."""
 
     file: str | None = None
     columns: dict[str, str] = added_setting(default_factory=dict, open_keys=True)
@@ -170,8 +168,7 @@ def _state(path: str) -> tuple:
 
 
 def setup(config: FmuConfig) -> tuple:
-    """``(fmu, kind, plan, record, mode, mode_info)``: the FMU's description and the record
-    read under ``config`` (cached per config and file states), or a :class:`ConfigError`."""
+    """``(fmu, kind, plan, record, mode, mode_info)`` of ``config`` (cached), or ConfigError."""
     return _setup(config, _state(config.fmu), _state(config.reference.file))
 
 
@@ -213,8 +210,7 @@ class FmuProblem(Problem):
 
     # --- simulation ---------------------------------------------------------------------
     def responses(self, X: np.ndarray) -> np.ndarray:
-        """The compared outputs ``(n, p, N)``; NaN rows where the FMU fails (the first three
-        failures logged)."""
+        """The compared outputs ``(n, p, N)``; NaN rows where the FMU fails (three are logged)."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         out = np.full((X.shape[0], self.measured.shape[0], self.t.size), np.nan)
         from .binary import FmuRuntimeError, simulator
@@ -251,8 +247,7 @@ class FmuProblem(Problem):
         return estimators.residuals_and_value(self.config.objective, self._weighted(X))
 
     def evaluate(self, X: np.ndarray) -> np.ndarray:
-        """``eq3``: the sum over compared outputs of ``||y_c - ŷ_c|| / ||y_c||``; ``ols``:
-        the sum of squares over ``||y||²``. ``inf`` where the FMU fails."""
+        """``eq3``: sum of ``||y_c - ŷ_c|| / ||y_c||``; ``ols``: sum of squares over ``||y||²``."""
         return self.evaluate_with_residuals(X)[0]
 
     def residuals(self, X: np.ndarray) -> np.ndarray:
@@ -286,8 +281,7 @@ class FmuProblem(Problem):
         return out
 
     def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any]:
-        """The measured outputs over their norms (:meth:`fisher_residuals`' units), their
-        names, and each FMU input at the record's samples."""
+        """The measured outputs over their norms, their names, each input at the samples."""
         return {"measured": (self.measured / self.scale[:, None]).reshape(-1),
                 "names": list(self.record.output_names),
                 "inputs": {v.name: self.record.inputs[:, j].copy()

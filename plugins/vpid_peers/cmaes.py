@@ -29,8 +29,7 @@ from .unit_box import to_physical
 
 @dataclass(frozen=True)
 class CMAESParams(OptimizerParams):
-    """``sigma0``: the initial step as a fraction of the box width, in (0, 1]; 0.3 by cma's
-    advice that the optimum lie within ``x0 ± 3 sigma0`` (from anywhere in the cube)."""
+    """``sigma0``: the start step (box fraction); 0.3 as cma advises (optimum in x0 ± 3 sigma0)."""
 
     sigma0: float = 0.3
     popsize: int | Literal["library", "ps"] = "library"
@@ -93,8 +92,7 @@ class CMAES(Optimizer):
         return self._cma.CMAEvolutionStrategy(x0, self._sigma, options)
 
     def _next_search(self) -> None:
-        """The population and step of the next search (IPOP: twice the population; BIPOP:
-        the regime that has used fewer evaluations, see the module)."""
+        """The next search's population and step (IPOP: doubled; BIPOP: the lesser-used regime)."""
         if self.params.restarts == "ipop":
             self._popsize *= 2
             return

@@ -53,8 +53,7 @@ def multistart(
     rng: np.random.Generator,
     first: np.ndarray | None = None,
 ) -> None:
-    """Descents from ``first`` (when given) and then from uniform random points, forever:
-    the budget of the run ends it."""
+    """Descents from ``first`` (when given), then from uniform random points until the budget."""
     check_scaling(params, bounds)
     coords = Coordinates(bounds, params.scaling)
     solver = Solver(evaluate, coords, groups, SolverSettings(

@@ -39,8 +39,7 @@ def nevergrad_registry() -> Any:
 
 
 def check_method(method: str) -> None:
-    """Raise :class:`ConfigError` (one line, the 5 closest names by difflib's ratio, ignoring
-    case) unless ``method`` is in nevergrad's registry."""
+    """Refuse a ``method`` not in nevergrad's registry, naming the 5 closest (difflib)."""
     names = list(nevergrad_registry())
     if method in names:
         return
@@ -56,8 +55,7 @@ def check_method(method: str) -> None:
 
 @dataclass(frozen=True)
 class NevergradParams(OptimizerParams):
-    """``method``: a name of ``nevergrad.optimizers.registry`` (case matters: ``NGOpt``,
-    ``CMA``, ``DE``, ...). ``batch``: candidates per batch, ``library`` (1) or ``ps``."""
+    """``method``: a name in nevergrad's registry (``NGOpt``, ``CMA``, ...); ``batch``: 1 or ps."""
 
     method: str = DEFAULT_METHOD
     batch: Literal["library", "ps"] = "library"

@@ -20,8 +20,7 @@ def sum_of_norms(R: np.ndarray, groups: np.ndarray, n_groups: int) -> np.ndarray
 
 
 def gradient(r: np.ndarray, J: np.ndarray, groups: np.ndarray, n_groups: int) -> np.ndarray:
-    """The gradient of ``F`` for residuals ``r`` (m,) with Jacobian ``J`` (m, n):
-    ``sum_g J_g^T r_g / ||r_g||`` (a group with a zero norm contributes nothing)."""
+    """The gradient of ``F``, ``sum_g J_g^T r_g / ||r_g||`` (a zero-norm group adds nothing)."""
     grad = np.zeros(J.shape[1])
     for g in range(n_groups):
         idx = groups == g

@@ -66,8 +66,7 @@ class BumpConfig:
 
 @dataclass(frozen=True)
 class NewmarkConfig:
-    """Newmark-beta; default the average-acceleration rule. ``gamma`` in [0.5, 1] (below 1/2
-    the scheme adds energy), ``beta`` in [0, 0.5]."""
+    """Newmark-beta (default average acceleration): ``gamma`` in [0.5, 1], ``beta`` in [0, 0.5]."""
 
     gamma: float = 0.5
     beta: float = 0.25
@@ -121,8 +120,7 @@ class ReferenceConfig:
 
 @dataclass(frozen=True)
 class BoundsConfig:
-    """The box ``[lower_factor, upper_factor] x`` the true values; ``bounds.<name>=[lo,hi]``
-    (SI) replaces a row."""
+    """The box ``[lower_factor, upper_factor] x`` the truth; ``bounds.<name>=[lo,hi]`` (SI)."""
 
     lower_factor: float = 0.5
     upper_factor: float = 1.5
@@ -237,8 +235,7 @@ def _choice(key: str, value: str | None, choices: tuple[str, ...], nullable: boo
 
 
 def window(config: VehicleConfig) -> float:
-    """The record length T in s: front tyre meets the bump until the rear one leaves it,
-    ``(L + w) / V``, plus ``record.extra``."""
+    """The record length (s): the front tyre meets the bump until the rear one leaves, + extra."""
     v = config.bump.V / 3.6
     return (config.vehicle.L + config.bump.w) / v + config.record.extra
 
@@ -329,8 +326,7 @@ def _gib(n_bytes: float) -> str:
 
 
 def _blame(config: VehicleConfig, T: float) -> tuple[str, float]:
-    """The key that made the record long: ``problem.dt`` when the step is finer (against 1
-    ms) than the window is long (against 0.48 s), else the window's largest term."""
+    """The key that made the record long: ``dt`` (against 1 ms), else the window's largest term."""
     if 0.001 / config.dt > T / 0.48:
         return "problem.dt", config.dt
     v = config.bump.V / 3.6
@@ -364,8 +360,7 @@ def check_size(config: VehicleConfig, T: float) -> None:
 
 
 def check_reference_file(config: VehicleConfig) -> float:
-    """Read ``problem.reference.file`` at the pre-flight (a bad file fails there, exit 2);
-    its span (s), the window the model integrates over."""
+    """Read ``problem.reference.file`` at the pre-flight; its span (s), the model's window."""
     from .record_file import check_span
     from .reference_io import read_measured
 

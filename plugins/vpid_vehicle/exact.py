@@ -16,8 +16,7 @@ from .road import TIME_TOL, Bump
 def body_accelerations(
     X: np.ndarray, known: KnownConstants, bump: Bump, t: np.ndarray
 ) -> np.ndarray:
-    """Exact z1'' and z2'' (m/s^2) at the times ``t`` (s, increasing from 0, the system at
-    rest at t = 0), shape ``(n, 2, len(t))``."""
+    """Exact z1'', z2'' (m/s^2) ``(n, 2, len(t))`` at the times ``t`` (s), at rest at t = 0."""
     from scipy.linalg import expm  # lazy: keeps the plugin's import chain light
 
     M, C, K = matrices(X, known)

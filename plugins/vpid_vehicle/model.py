@@ -74,16 +74,14 @@ def lagrangian_matrices(X: np.ndarray, known: KnownConstants) -> tuple[np.ndarra
 
 
 def tyre_input(known: KnownConstants) -> np.ndarray:
-    """B_y of ``F = B_y [y1, y2]`` (Eq. 2d): road profile under each tyre (m) to force (N).
-    Shape ``(4, 2)``."""
+    """B_y ``(4, 2)`` of ``F = B_y [y1, y2]`` (Eq. 2d): tyre road profile (m) to force (N)."""
     B = np.zeros((4, 2))
     B[2, 0], B[3, 1] = known.kt1, known.kt2
     return B
 
 
 def response_rows(X: np.ndarray, known: KnownConstants) -> np.ndarray:
-    """R of Eq. (5), ``[z1, z2] = R q``: z1 = x - a1 theta (front), z2 = x + a2 theta (rear).
-    Shape ``(n, 2, 4)``."""
+    """R ``(n, 2, 4)`` of Eq. (5): ``z1 = x - a1 theta`` (front), ``z2 = x + a2 theta`` (rear)."""
     a1 = _columns(X)[8]
     R = np.zeros((a1.size, 2, 4))
     R[:, :, 0] = 1.0
@@ -93,8 +91,7 @@ def response_rows(X: np.ndarray, known: KnownConstants) -> np.ndarray:
 
 
 def physical(X: np.ndarray, known: KnownConstants) -> np.ndarray:
-    """Masses and inertia > 0, stiffness and damping >= 0, all finite, 0 < a1 < L (the others
-    get an infinite objective, no simulation)."""
+    """Masses > 0, stiffness, damping >= 0, finite, 0 < a1 < L (else f = inf, no simulation)."""
     X = np.atleast_2d(np.asarray(X, dtype=float))
     ok = np.all(np.isfinite(X), axis=1)
     ok &= np.all(X[:, :4] > 0, axis=1) & np.all(X[:, 4:8] >= 0, axis=1)

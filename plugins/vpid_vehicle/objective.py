@@ -9,8 +9,7 @@ from vpid_bench import estimators
 
 
 def objective(responses: np.ndarray, reference: np.ndarray) -> np.ndarray:
-    """Eq. (3): ``sum_i ||zr_i - zc_i|| / sum_i ||zr_i||`` with Euclidean norms over the
-    samples; shape ``(n,)``, dimensionless. A candidate with a non-finite response gets inf."""
+    """Eq. (3): ``sum_i ||zr_i - zc_i|| / sum_i ||zr_i||`` ``(n,)``; inf if not finite."""
     responses = np.asarray(responses, dtype=float)
     num = np.sqrt(np.sum((responses - reference[None]) ** 2, axis=2)).sum(axis=1)
     den = float(np.sqrt(np.sum(reference**2, axis=1)).sum())
@@ -68,13 +67,11 @@ class ChannelFit:
         return self.evaluate_with_residuals(X)[0]
 
     def residuals(self, X: np.ndarray) -> np.ndarray:
-        """What a least-squares optimizer minimises (:func:`estimators.residuals_and_value`:
-        Eq. 3's over ``||measured_c||``; ``ml_profiled``'s rescaled per channel)."""
+        """What a least-squares optimizer minimises (:func:`estimators.residuals_and_value`)."""
         return self.evaluate_with_residuals(X)[1]
 
     def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
-        """``(measured_c - computed_c) / ||measured_c||`` whatever the objective (what the
-        intervals and the Cramér–Rao bound differentiate)."""
+        """``(measured_c - computed_c) / ||measured_c||`` whatever the objective."""
         scale = np.linalg.norm(self.measured, axis=1)[None, :, None]
         R = (self.measured[None] - self.computed(X)) / scale
         R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf

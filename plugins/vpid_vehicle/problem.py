@@ -117,8 +117,7 @@ class VehicleProblem(ChannelFit, Problem):
         return add_noise(self.reference_clean, nz.level, nz.model, np.random.default_rng(seed))
 
     def instance(self, index: int) -> VehicleProblem:
-        """Instance ``index``: noise record ``index`` when instances differ, else this problem;
-        shallow copies sharing the simulator, each made once and kept."""
+        """Instance ``index`` (its own noise record when instances differ), made once and kept."""
         if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or index < 0:
             raise ValueError(f"an instance index is an integer >= 0, not {index!r}")
         if not self._instances_differ:
@@ -141,8 +140,7 @@ class VehicleProblem(ChannelFit, Problem):
         return f"noise.seed={self.config.noise.seed}/{self._index}"
 
     def residual_sigma(self) -> np.ndarray | None:
-        """The simulated noise's sigma of each entry of :meth:`fisher_residuals` (m/s^2), or
-        ``None`` for a measured record or no noise."""
+        """The simulated noise's sigma (m/s^2) per entry of :meth:`fisher_residuals`, or None."""
         nz = self.config.noise
         if self.reference_clean is None or nz.level <= 0:
             return None
@@ -172,8 +170,7 @@ class VehicleProblem(ChannelFit, Problem):
 
     @property
     def x_true(self) -> np.ndarray | None:
-        """The configured vehicle; ``None`` for a measured record (``problem.vehicle`` is then
-        only the box's centre, never a truth)."""
+        """The configured vehicle; ``None`` for a measured record (the box's centre, no truth)."""
         return None if self.reference_source == "file" else self._x_true.copy()
 
     def set_threads(self, n: int) -> None:
@@ -214,8 +211,7 @@ class VehicleProblem(ChannelFit, Problem):
             return np.full(X.shape[0], np.inf)
 
     def evaluate_instances(self, X: np.ndarray, instance: np.ndarray) -> np.ndarray:
-        """Eq. (3) of row ``j`` against instance ``instance[j]``'s record, in one kernel call
-        when the instances share this simulator; else instance by instance."""
+        """Eq. (3) of row ``j`` against instance ``instance[j]``, in one kernel call if possible."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         instance = np.asarray(instance, dtype=np.int64).reshape(-1)
         numbers, index = np.unique(instance, return_inverse=True)
@@ -236,8 +232,7 @@ class VehicleProblem(ChannelFit, Problem):
             return super().evaluate_instances(X, instance)
 
     def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
-        """Measured minus computed (m/s^2), z1'' then z2'', whatever the objective (what the
-        Cramér–Rao bound differentiates)."""
+        """Measured minus computed (m/s^2), z1'' then z2'', whatever the objective."""
         R = self.reference[None] - self.responses(X)
         R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
         return R.reshape(R.shape[0], -1)
@@ -249,8 +244,7 @@ class VehicleProblem(ChannelFit, Problem):
         return {"NoRE": nore(x, self._x_true)}
 
     def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``f`` and :meth:`residuals` from one simulation (Eq. 3: the channel norms over the
-        reference's); inf where a candidate is non-physical or fails."""
+        """``f`` and :meth:`residuals` from one simulation; inf where a candidate fails."""
         f, R = super().evaluate_with_residuals(X)
         if self.config.objective == "eq3":
             f = f / float(np.linalg.norm(self.reference, axis=1).sum())

@@ -27,8 +27,7 @@ class Bump:
 
     @classmethod
     def from_geometry(cls, V_kmh: float, h: float, w: float, L: float) -> Bump:
-        """Bump of height ``h`` and width ``w`` (m) crossed at ``V_kmh`` (km/h) by a vehicle
-        of wheelbase ``L`` (m)."""
+        """Bump ``h`` x ``w`` (m) crossed at ``V_kmh`` km/h by a car of wheelbase ``L`` (m)."""
         v = V_kmh / 3.6
         return cls(h=h, front_on=0.0, front_off=w / v, rear_on=L / v, rear_off=(L + w) / v)
 

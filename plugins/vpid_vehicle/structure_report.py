@@ -18,8 +18,7 @@ PROTOCOL = ("ps", "iterations", "budget")
 
 def record_groups(records: Sequence[Mapping[str, Any]]
                   ) -> dict[str, dict[tuple[str, str], list[Mapping[str, Any]]]]:
-    """The ok runs by record (problem, settings but the structure and protocol, instance),
-    then by structure ``(spring, damper)``."""
+    """The ok runs by record (settings but structure and protocol), then by structure."""
     out: dict[str, dict[tuple[str, str], list[Mapping[str, Any]]]] = {}
     for rec in records:
         if rec.get("status") != "ok" or not (rec.get("result") or {}).get("x_best"):

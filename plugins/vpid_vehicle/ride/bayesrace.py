@@ -71,8 +71,7 @@ def check_data(names: list[str], data_dir: str | None) -> None:
 
 @dataclasses.dataclass(frozen=True)
 class BayesraceConfig(ProblemConfig):
-    """``track``: the record fitted (the other held out); ``substeps``: RK4 steps per sample;
-    ``objective`` (``ml`` needs a noise level these records do not state); ``data_dir``."""
+    """``track`` fitted (the other held out), ``substeps``, ``objective``, ``data_dir``."""
 
     track: Literal["ETHZ", "ETHZMobil"] = "ETHZ"
     substeps: int = 10
@@ -157,8 +156,7 @@ class BayesraceProblem(ChannelFit, Problem):
         return self.fit.simulate(X)
 
     def metrics(self, x: np.ndarray) -> dict[str, float]:
-        """``NoRE`` (%), then the held-out track's ``val_rms_r`` (rad/s), ``val_rms_vx``,
-        ``val_rms_vy`` (m/s)."""
+        """``NoRE`` (%), the held-out ``val_rms_r`` (rad/s), ``val_rms_vx``, ``val_rms_vy``."""
         x = np.asarray(x, dtype=float).reshape(-1)
         out = {"NoRE": float(np.linalg.norm(relative_errors_percent(x, self._x_true)))}
         sim = self.held_out.simulate(x[None])[0]

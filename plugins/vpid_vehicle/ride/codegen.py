@@ -128,8 +128,7 @@ def cache_folders() -> list[Path]:
 
 
 def write_source(folder: Path, source: str) -> Path:
-    """The file in ``folder`` that holds ``source``, written whole (temporary name, then
-    renamed into place) unless it already holds it. Raises OSError when it cannot."""
+    """The file holding ``source`` in ``folder``, written whole if needed; OSError if it cannot."""
     path = folder / f"unrolled_{hashlib.sha256(source.encode()).hexdigest()[:16]}.py"
     with contextlib.suppress(OSError):
         if path.read_text(encoding="utf-8") == source:

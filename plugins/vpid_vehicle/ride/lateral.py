@@ -89,8 +89,7 @@ class LateralProblem(RideProblem):
         super().__init__(config, index)
 
     def _record(self, fine_u: np.ndarray, sub: int) -> np.ndarray:
-        """The record; with ``record_model=magic_formula`` the Magic Formula model's (its tyre
-        from :mod:`.magic`, ``B`` from the truth's stiffness ``B C D``, ``D = mu`` x load)."""
+        """The record; the Magic Formula model's with ``record_model=magic_formula``."""
         if self.config.record_model == "linear":
             return super()._record(fine_u, sub)
         Cf, Cr, Iz, lf = self._x_true
@@ -104,8 +103,7 @@ class LateralProblem(RideProblem):
 
 
 def steady_yaw_gain(X: np.ndarray, known: dict[str, float], vx: float) -> np.ndarray:
-    """``r / delta`` in steady state (1/s): ``vx / (L + K vx^2)``, ``K = (m / L) (lr / Cf -
-    lf / Cr)`` (rad per m/s^2), for the rows of ``X``."""
+    """``r / delta`` in steady state (1/s): ``vx / (L + K vx^2)``, ``K`` the understeer gradient."""
     Cf, Cr, _, lf = np.atleast_2d(X).T
     L, m = known["L"], known["m"]
     K = m / L * ((L - lf) / Cf - lf / Cr)

@@ -33,8 +33,7 @@ class Wheel:
 
 
 class RideModel:
-    """A linear ride model: the identified parameters, the published sets (identified and
-    known values), the sensor sets, the wheels and the matrices."""
+    """A linear ride model: parameters, published sets, sensor sets, wheels and matrices."""
 
     names: ClassVar[tuple[str, ...]] = ()
     units: ClassVar[tuple[str, ...]] = ()
@@ -65,8 +64,7 @@ class RideModel:
         """Refuse a record this model cannot use beyond its columns (default: none)."""
 
     def inputs_from_record(self, record: Record, sampler: Sampler) -> np.ndarray:
-        """The input channels ``(steps, r)`` from a record: each wheel's height linearly onto
-        the model's steps, its rate by central differences (as :func:`wheel_inputs`)."""
+        """The input channels from a record's heights, their rates as :func:`wheel_inputs`."""
         h = sampler.onto_steps(record.t, record.inputs)
         return np.concatenate([h, np.gradient(h, sampler.dt, axis=0)], axis=1)
 
@@ -77,8 +75,7 @@ class RideModel:
 
     def system(self, X: np.ndarray, known: dict[str, float], sensors: str
                ) -> linear.LinearSystem:
-        """The linear systems of the rows ``X``; inputs ``[h_1..h_w, h'_1..h'_w]``, outputs
-        the ``sensors`` channels."""
+        """The linear systems of the rows ``X``: inputs ``[h.., h'..]``, the ``sensors`` outputs."""
         raise NotImplementedError
 
     def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
@@ -95,8 +92,7 @@ class RideModel:
 
     def simulate(self, X: np.ndarray, known: dict[str, float], sensors: str, u: np.ndarray,
                  dt: float, solver: str) -> np.ndarray:
-        """The ``sensors`` channels ``(n, N, p)`` driven by ``u`` every ``dt`` from rest, by
-        ``exact`` (the record's solver) or ``newmark`` (the fitted model's)."""
+        """The ``sensors`` channels ``(n, N, p)`` from rest, by ``exact`` or ``newmark``."""
         system = self.system(X, known, sensors)
         if solver == "exact":
             return linear.simulate(linear.exact_foh(system, dt), u)
@@ -105,8 +101,7 @@ class RideModel:
 
 def wheel_inputs(cfg: Any, wheels: tuple[Wheel, ...], dt: float,
                  rng: np.random.Generator) -> np.ndarray:
-    """``[h_1..h_w, h'_1..h'_w]`` (m, m/s) sampled every ``dt`` s over the record,
-    ``(N, 2 w)``."""
+    """``[h_1..h_w, h'_1..h'_w]`` (m, m/s) every ``dt`` s over the record, ``(N, 2 w)``."""
     v = cfg.speed_kmh / 3.6
     t = np.arange(round(cfg.duration_s / dt)) * dt
     tracks = 1 + max(w.track for w in wheels)

@@ -62,16 +62,14 @@ TRUTH_MARGIN = 0.05
 
 
 def instance_streams(seed: int, index: int, name: str) -> list[np.random.SeedSequence]:
-    """The truth's, the road's and the noise's streams of instance ``index`` of the problem
-    registered as ``name``."""
+    """The truth's, road's and noise's streams of instance ``index`` of problem ``name``."""
     root = [seed, INSTANCE_ROOT, zlib.crc32(name.encode("utf-8"))]  # stable per problem name
     return np.random.SeedSequence(root, spawn_key=(index,)).spawn(3)
 
 
 def draw_truth(lower: np.ndarray, upper: np.ndarray, margin: float,
                rng: np.random.Generator) -> np.ndarray:
-    """A truth uniform over the box shrunk by ``margin`` of its width at each side: truths near
-    its faces and corners as often as near its centre."""
+    """A truth uniform over the box less ``margin`` of its width at each side."""
     lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     width = upper - lower
     return lower + width * rng.uniform(margin, 1.0 - margin, lower.size)
@@ -156,8 +154,7 @@ class SuiteConfig(ProblemConfig):
 
 @dataclasses.dataclass(frozen=True)
 class RideConfig(SuiteConfig):
-    """The road (:mod:`.roads`: ``hump``, ``bump``, ``step``, ``iso8608`` of ``road_class``)
-    met at ``speed_kmh``; ``spring``, ``damper``: the suspension (:mod:`.structures`)."""
+    """The road (:mod:`.roads`) at ``speed_kmh``; the suspension structure (:mod:`.structures`)."""
 
     road: str = "hump"
     road_class: str = "C"
@@ -181,16 +178,14 @@ class RideConfig(SuiteConfig):
 
 
 def check_record_file(config: Any, model: RideModel) -> None:
-    """Check the stated quantities and read ``reference.file`` as a config is built: the
-    pre-flight refuses either (exit 2, one line), not the job."""
+    """Check the stated quantities and the record as a config is built (the pre-flight)."""
     knowns.check_config(config, model)
     if config.reference.file is not None:
         read_ride_record(model, config)
 
 
 def read_ride_record(model: RideModel, config: Any) -> Record:
-    """A user's record for ``model``: the sensors' channels by column name (``zs''`` is
-    ``zsdd``), the model's input columns; a :class:`ConfigError` naming what does not fit."""
+    """A user's record for ``model`` (``zs''`` is column ``zsdd``), or a ConfigError."""
     channels = tuple(Column(column_name(c), unit, (c,)) for c, unit in
                      model.sensors[config.sensors])
     record = read_record(config.reference.file, channels, model.record_columns(),
@@ -247,8 +242,7 @@ class RideProblem(ChannelFit, Problem):
                                           1.0 / self.scale[:, None], plug_in)
 
     def _from_file(self, config: RideConfig) -> None:
-        """A user's record: no truth, no noise added; the model at rest at its first row, its
-        inputs from the record or the configuration (docs/own-record.md)."""
+        """A user's record: no truth, no noise added, the model at rest at its first row."""
         record = read_ride_record(self.model, config)
         self.sampler = sampler = Sampler(record.t, config.dt)
         self.input_source = knowns.input_text(config, record.input_names,
@@ -346,8 +340,7 @@ class RideProblem(ChannelFit, Problem):
 
     # --- signals ------------------------------------------------------------------------
     def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any]:
-        """The measured channels over their norms (:meth:`fisher_residuals`' units), their
-        names and the model's inputs at the record's samples (``h``, ``h'`` per wheel)."""
+        """The measured channels over their norms, their names and the model's inputs."""
         u = np.asarray(self.u, dtype=float)
         u = u.T if self.sampler is None else self.sampler.at_record(u.T[None])[0]
         wheels = self.model.wheel_names

@@ -26,8 +26,7 @@ SENSORS: dict[str, tuple[tuple[str, str], ...]] = {
 
 @dataclasses.dataclass(frozen=True)
 class SteeredConfig(SuiteConfig):
-    """The measured channels and the manoeuvre (``steer_deg`` at the road wheels, at
-    ``speed_kmh``); the other keys: :class:`.problem.SuiteConfig`."""
+    """The channels and the manoeuvre (``steer_deg`` at the road wheels, at ``speed_kmh``)."""
 
     sensors: Literal["yaw", "yaw_ay", "yaw_ay_beta"] = "yaw_ay"
     manoeuvre: Literal["step", "sine"] = "sine"
@@ -47,8 +46,7 @@ class SteeredConfig(SuiteConfig):
 
 
 def steer_input(config: Any, dt: float) -> np.ndarray:
-    """The steer angle at the road wheels (rad) of the configured manoeuvre, sampled every
-    ``dt`` s over ``config.duration_s``, ``(N, 1)``."""
+    """The configured manoeuvre's steer angle (rad) at the road wheels, ``(N, 1)``."""
     t = np.arange(round(config.duration_s / dt)) * dt
     amp = np.deg2rad(config.steer_deg)
     if config.manoeuvre == "step":
