@@ -12,8 +12,7 @@ SPREAD = 0.1
 
 
 def sample_cr(rng: np.random.Generator, mu: np.ndarray | float, size: int) -> np.ndarray:
-    """``size`` crossover rates ``CR_i ~ N(mu_i, 0.1)`` clipped to [0, 1]; ``CR_i = 0`` where
-    ``mu_i`` is NaN (L-SHADE's terminal value). ``mu``: a scalar or ``(size,)``."""
+    """``size`` rates ``CR_i ~ N(mu_i, 0.1)`` clipped to [0, 1]; 0 where ``mu_i`` is NaN."""
     mu = np.asarray(mu, dtype=float)
     terminal = np.isnan(mu)
     has_terminal = bool(terminal.any())
@@ -27,8 +26,7 @@ def sample_cr(rng: np.random.Generator, mu: np.ndarray | float, size: int) -> np
 
 
 def sample_f(rng: np.random.Generator, mu: np.ndarray | float, size: int) -> np.ndarray:
-    """``size`` scale factors ``F_i ~ Cauchy(mu_i, 0.1)``: a draw above 1 becomes 1, a draw
-    ``<= 0`` is drawn again (so ``F_i`` is in (0, 1]). ``mu``: a scalar or ``(size,)``."""
+    """``size`` factors ``F_i ~ Cauchy(mu_i, 0.1)``, cut to 1 above, drawn again if <= 0."""
     mu = np.asarray(mu, dtype=float)
     F = mu + SPREAD * rng.standard_cauchy(size)
     bad = F <= 0.0
@@ -39,8 +37,7 @@ def sample_f(rng: np.random.Generator, mu: np.ndarray | float, size: int) -> np.
 
 
 def improvement_weights(delta: np.ndarray) -> np.ndarray:
-    """SHADE's ``w_k = delta_k / sum(delta)``; infinite improvements (a failed parent) share
-    all the weight equally, so the weights stay finite."""
+    """SHADE's ``w_k = delta_k / sum(delta)``; infinite improvements share the weight equally."""
     delta = np.asarray(delta, dtype=float)
     w = np.isinf(delta).astype(float) if np.isinf(delta).any() else delta.copy()
     total = w.sum()
@@ -57,8 +54,7 @@ def weighted_mean(S: np.ndarray, w: np.ndarray | None = None) -> float:
 
 
 def lehmer_mean(S: np.ndarray, w: np.ndarray | None = None) -> float:
-    """Lehmer mean ``sum w_k S_k^2 / sum w_k S_k`` (leans to the larger values, against the
-    draws' pull to small factors); NaN when every ``S_k`` is 0."""
+    """Lehmer mean ``sum w S^2 / sum w S`` (leans to large values); NaN when every S is 0."""
     S = np.asarray(S, dtype=float)
     w = np.ones_like(S) if w is None else np.asarray(w, dtype=float)
     den = np.sum(w * S)
@@ -68,8 +64,8 @@ def lehmer_mean(S: np.ndarray, w: np.ndarray | None = None) -> float:
 def jade_update(
     mu_cr: float, mu_f: float, S_CR: np.ndarray, S_F: np.ndarray, c: float
 ) -> tuple[float, float]:
-    """JADE: ``mu_CR <- (1 - c) mu_CR + c mean_A(S_CR)``, ``mu_F <- (1 - c) mu_F + c
-    mean_L(S_F)`` (arithmetic, Lehmer); unchanged with no success."""
+    """JADE: ``mu_CR``, ``mu_F`` move a fraction ``c`` to the successes' arithmetic, Lehmer
+    means (unchanged with no success)."""
     if len(S_CR) == 0:
         return mu_cr, mu_f
     return ((1.0 - c) * mu_cr + c * weighted_mean(S_CR),

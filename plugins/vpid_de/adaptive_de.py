@@ -40,8 +40,7 @@ MIN_POPULATION = 3
 
 @dataclasses.dataclass(frozen=True)
 class AdaptiveDEParams(OptimizerParams):
-    """``bounds``: the rule for a trial coordinate outside the box; default ``midpoint``
-    (the JADE and SHADE papers' and L-SHADE's code); the others as for DE1-DE8."""
+    """``bounds``: default ``midpoint`` (the JADE and SHADE papers'); others as for DE1-DE8."""
 
     bounds: BoundsRule = "midpoint"
 
@@ -168,7 +167,6 @@ class AdaptiveDE(GenerationalOptimizer):
         self.after_generation()
 
 
-# ------------------------------------------------------------------------------------------------
 # JADE
 
 
@@ -211,7 +209,6 @@ class JADE(AdaptiveDE):
         self.mu_cr, self.mu_f = jade_update(self.mu_cr, self.mu_f, S_CR, S_F, self.params.c)
 
 
-# ------------------------------------------------------------------------------------------------
 # SHADE
 
 
@@ -256,7 +253,6 @@ class SHADE(AdaptiveDE):
         self.memory.update(S_CR, S_F, delta)
 
 
-# ------------------------------------------------------------------------------------------------
 # L-SHADE
 
 
@@ -293,8 +289,7 @@ class LSHADEParams(AdaptiveDEParams):
 
 
 class LSHADE(AdaptiveDE):
-    """L-SHADE: SHADE with Lehmer-mean CR memory, terminal CR value and linear population
-    size reduction over the evaluation budget."""
+    """L-SHADE: SHADE with a Lehmer CR memory, terminal CR and linear population reduction."""
 
     Params = LSHADEParams
     label = "lshade"

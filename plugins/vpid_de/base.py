@@ -60,8 +60,7 @@ class DEParams(OptimizerParams):
 
 
 class DifferentialEvolution(GenerationalOptimizer):
-    """Generational DE with binomial crossover and greedy one-to-one selection; subclasses
-    set ``Params``, ``mutation`` (a key of :data:`vpid_de.kernels.MUTATIONS`), :meth:`factors`."""
+    """Generational DE, binomial crossover, greedy selection (the variants set the rest)."""
 
     Params: ClassVar[type[OptimizerParams]] = DEParams
     mutation: ClassVar[str] = "rand1"
@@ -104,13 +103,11 @@ class DifferentialEvolution(GenerationalOptimizer):
 
     # -- what a variant customises ------------------------------------------------------------
     def factors(self) -> dict[str, Any]:
-        """The kernel's ``F`` (and ``K``) for the generation being built (``self.generation``
-        completed so far)."""
+        """The kernel's ``F`` (and ``K``) for the generation being built."""
         return {"F": self.params.F}
 
     def draw_factor(self, low: float, high: float, draw: str) -> float | np.ndarray:
-        """A factor ~ U(low, high): one scalar per generation, or a ``(ps, 1)`` column with
-        one value per target vector (``draw='vector'``)."""
+        """A factor ~ U(low, high): a scalar, or a ``(ps, 1)`` column with ``draw='vector'``."""
         if draw == "vector":
             return self.rng.uniform(low, high, size=(self.params.ps, 1))
         return float(self.rng.uniform(low, high))

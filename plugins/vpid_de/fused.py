@@ -17,8 +17,7 @@ BOUNDS_IDS = {"reinit": 0, "clip": 1, "reflect": 2, "midpoint": 3}
 
 @njit(cache=True)
 def repaired(v, x, lo, hi, u, bounds_rule):  # pragma: no cover - compiled
-    """A mutant coordinate ``v`` brought inside ``[lo, hi]`` by the bounds rule (``x``: the
-    parent's coordinate, ``u``: the reinit uniform), as the numpy rules compute it."""
+    """A mutant coordinate ``v`` put inside ``[lo, hi]`` as the numpy bounds rules do."""
     if not (v < lo or v > hi):  # inside (a NaN passes through, as before)
         return v
     if bounds_rule == 0:
@@ -36,8 +35,7 @@ def repaired(v, x, lo, hi, u, bounds_rule):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def generation(X, fitness, u, n_random, mutation, F, K, CR, bounds_rule, lower, upper):
-    """One generation's trials ``(ps, dim)``; ``u`` laid out as in
-    :meth:`vpid_de.base.DifferentialEvolution.trials`, ``F`` one per target, ``K``: Eq. 13's."""
+    """One generation's trials ``(ps, dim)`` from the uniforms ``u`` of ``trials()``."""
     ps, dim = X.shape
     best = np.argmin(fitness)
     out = np.empty_like(X)
@@ -83,8 +81,7 @@ def generation(X, fitness, u, n_random, mutation, F, K, CR, bounds_rule, lower, 
 @njit(cache=True)
 def pbest_trials(X, pbest, r1, XA, r2, F, CR, u, bounds_rule, lower, upper, u_reinit
                  ):  # pragma: no cover - compiled
-    """The adaptive DEs' trials from their draws in one loop: current-to-pbest/1, Eq. 8 with
-    ``CR_i`` (``u``: the ``rand_j`` then ``rnbr``), the bounds rule (``u_reinit``)."""
+    """The adaptive DEs' trials from their draws: current-to-pbest/1, Eq. 8, bounds rule."""
     ps, dim = X.shape
     out = np.empty_like(X)
     for i in range(ps):

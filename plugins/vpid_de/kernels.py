@@ -17,7 +17,6 @@ import numpy as np
 #: the choices of the ``bounds`` key (the keys of :data:`BOUNDS_RULES`, in the same order)
 BoundsRule = Literal["reinit", "clip", "reflect", "midpoint"]
 
-# ----------------------------------------------------------------------------------------------
 # Index drawing
 
 
@@ -40,11 +39,8 @@ def draw_indices(rng: np.random.Generator, ps: int, n: int) -> np.ndarray:
     return indices_from_keys(rng.random((ps, ps - 1)), n)
 
 
-# ----------------------------------------------------------------------------------------------
-# Mutation kernels. Signature: kernel(X, best, r, F, K) -> V, shape (ps, dim).
-#   X: population (ps, dim); best: index of the best member of X; r: (ps, n) from draw_indices;
-#   F: scale factor, a scalar or a (ps, 1) column (one factor per target vector);
-#   K: combination factor (only Eq. 13 uses it).
+# Mutation kernels, kernel(X, best, r, F, K) -> V (ps, dim): ``best`` the best member's index,
+# ``r`` (ps, n) from draw_indices, F a scalar or (ps, 1), K Eq. 13's combination factor.
 
 
 def rand1(X: np.ndarray, best: int, r: np.ndarray, F, K=None) -> np.ndarray:
@@ -88,13 +84,12 @@ MUTATIONS: dict[str, tuple[Callable[..., np.ndarray], int]] = {
 }
 
 
-# ----------------------------------------------------------------------------------------------
 # current-to-pbest/1 with an external archive (Zhang and Sanderson 2009; SHADE, L-SHADE)
 
 
 def pbest_indices(rng: np.random.Generator, f: np.ndarray, count: np.ndarray | int) -> np.ndarray:
-    """For every target, one of the ``count`` best members (uniform; may be the target, as
-    in JADE; ties: the lower index first). ``count``: an integer or one per target (SHADE)."""
+    """For every target, one of the ``count`` best, uniform (itself too, as JADE; ties: lower
+    index first); ``count``: an integer or one per target (SHADE)."""
     order = np.argsort(f, kind="stable")
     count = np.asarray(count, dtype=np.intp)
     return order[np.minimum((rng.random(f.shape[0]) * count).astype(np.intp), count - 1)]
@@ -123,7 +118,6 @@ def current_to_pbest1(
     return X + F * (X[pbest] - X) + F * (X[r1] - XA[r2])
 
 
-# ----------------------------------------------------------------------------------------------
 # Crossover and selection
 
 
@@ -141,8 +135,7 @@ def crossover_from_uniforms(
 def binomial_crossover(
     X: np.ndarray, V: np.ndarray, CR: float | np.ndarray, rng: np.random.Generator
 ) -> np.ndarray:
-    """:func:`crossover_from_uniforms` with the uniforms drawn from ``rng``: every trial
-    keeps at least one mutant gene, even with ``CR = 0``."""
+    """:func:`crossover_from_uniforms` drawn from ``rng`` (at least one mutant gene per trial)."""
     ps, dim = X.shape
     u = rng.random((ps, dim + 1))
     return crossover_from_uniforms(X, V, CR, u[:, :dim], u[:, dim])
@@ -158,11 +151,8 @@ def greedy_selection(
     return np.where(better[:, None], U, X), np.where(better, fU, fX)
 
 
-# ----------------------------------------------------------------------------------------------
-# Bounds handling. Signature: rule(U, parent, lower, upper, u) -> U inside [lower, upper], where
-# ``u`` is a (ps, dim) block of uniforms drawn with the generation (only ``reinit`` uses it).
-# Only coordinates outside the box change. Every rule ends with an exact clip, so rounding in
-# ``lower + something`` can never leave a candidate one ulp outside the box.
+# Bounds rules, rule(U, parent, lower, upper, u) -> U inside the box (``u``: uniforms, for
+# ``reinit``): only coordinates outside change, and an exact clip ends each (no ulp outside).
 
 
 def _exact(U: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
@@ -170,8 +160,7 @@ def _exact(U: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
 
 
 def bounds_reinit(U, parent, lower, upper, u: np.ndarray) -> np.ndarray:
-    """A coordinate outside the box gets a fresh uniform value in ``[lower, upper)``, as
-    scipy's ``differential_evolution`` does. Keeps diversity; forgets the mutant's direction."""
+    """Outside coordinates get a fresh uniform value in the box (as scipy's DE): diversity kept."""
     out = (U < lower) | (U > upper)
     if not out.any():
         return U
@@ -185,8 +174,7 @@ def bounds_clip(U, parent, lower, upper, u=None) -> np.ndarray:
 
 
 def bounds_reflect(U, parent, lower, upper, u=None) -> np.ndarray:
-    """Mirror at the violated face (``2 lower - u``), folded repeatedly if a large step
-    crosses the whole box (a triangle wave of period ``2 (upper - lower)``)."""
+    """Mirror at the violated face, folded again if a large step crosses the whole box."""
     out = (U < lower) | (U > upper)
     if not out.any():
         return U
@@ -197,8 +185,7 @@ def bounds_reflect(U, parent, lower, upper, u=None) -> np.ndarray:
 
 
 def bounds_midpoint(U, parent, lower, upper, u=None) -> np.ndarray:
-    """Half way between the parent ``x_i`` (inside the box) and the violated face:
-    ``(x_ij + lower_j) / 2`` below, ``(x_ij + upper_j) / 2`` above."""
+    """Half way between the parent (inside the box) and the violated face."""
     below, above = U < lower, U > upper
     if not (below.any() or above.any()):
         return U

@@ -8,8 +8,7 @@ import numpy as np
 
 
 class Archive:
-    """Parents that lost to their trial (JADE's "inferior solutions"), the second difference
-    vector's source: up to ``capacity`` rows, random rows deleted to fit (JADE's rule)."""
+    """Parents that lost to their trial (JADE), up to ``capacity`` rows (random deletion)."""
 
     def __init__(self, capacity: int, dim: int) -> None:
         self.capacity = int(capacity)
@@ -36,20 +35,17 @@ class Archive:
 
 
 def round_half_up(x: float) -> int:
-    """Round to the nearest integer, halves up (C's ``round`` for the positive values here;
-    Python's ``round`` would send 2.5 to 2)."""
+    """Round half up (C's ``round`` for positive values; Python's sends 2.5 to 2)."""
     return int(math.floor(x + 0.5))
 
 
 def lpsr_size(nfe: int, max_nfe: int, n_init: int, n_min: int) -> int:
-    """L-SHADE's planned size after ``nfe`` of ``max_nfe`` evaluations (Eq. 10): a straight
-    line from ``n_init`` to ``n_min``, rounded, never below ``n_min``."""
+    """L-SHADE's planned size after ``nfe`` of ``max_nfe`` evaluations (Eq. 10), >= n_min."""
     return max(n_min, round_half_up((n_min - n_init) / max_nfe * nfe + n_init))
 
 
 def worst_removed(X: np.ndarray, f: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """The population without its ``len(X) - n`` worst members (ties: the later row goes
-    first), order of the survivors kept."""
+    """The population without its ``len(X) - n`` worst (ties: the later first), order kept."""
     if n >= len(X):
         return X, f
     keep = np.sort(np.argsort(f, kind="stable")[:n])

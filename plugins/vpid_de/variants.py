@@ -17,8 +17,7 @@ Eq15Form = Literal["das", "printed"]
 
 @dataclasses.dataclass(frozen=True)
 class FixedFParams(DEParams):
-    """DE1-DE5: a constant scale factor, Table I's F = 0.6 and CR = 0.9 (the paper gives F's
-    range as 0:2)."""
+    """DE1-DE5: a constant scale factor, Table I's F = 0.6, CR = 0.9 (the paper's range 0:2)."""
 
     F: float = 0.6
 
@@ -86,34 +85,20 @@ def eq15(k: int, k_max: int, r_max: float, r_min: float, form: Eq15Form = "das")
     return r + r_min if form == "das" else r
 
 
-class DE1(DifferentialEvolution):
-    """Eq. 7, rand/1: ``v_i = x_r1 + F (x_r2 - x_r3)``."""
-
-    Params, mutation, label = FixedFParams, "rand1", "de1"
-
-
-class DE2(DifferentialEvolution):
-    """Eq. 9, best/2: ``v_i = x_best + F (x_r1 + x_r2 - x_r3 - x_r4)``."""
-
-    Params, mutation, label = FixedFParams, "best2", "de2"
+def _fixed_f(label: str, mutation: str, doc: str) -> type[DifferentialEvolution]:
+    """A variant with a constant scale factor (DE1-DE5), named by its label."""
+    return type(label.upper(), (DifferentialEvolution,), {
+        "__doc__": doc, "__module__": __name__, "Params": FixedFParams, "mutation": mutation,
+        "label": label})
 
 
-class DE3(DifferentialEvolution):
-    """Eq. 10, best/1: ``v_i = x_best + F (x_r1 - x_r2)``."""
-
-    Params, mutation, label = FixedFParams, "best1", "de3"
-
-
-class DE4(DifferentialEvolution):
-    """Eq. 11, current-to-best/1: ``v_i = x_i + F (x_best - x_i) + F (x_r1 - x_r2)``."""
-
-    Params, mutation, label = FixedFParams, "current_to_best1", "de4"
-
-
-class DE5(DifferentialEvolution):
-    """Eq. 12, rand/2: ``v_i = x_r1 + F (x_r2 - x_r3) + F (x_r4 - x_r5)``."""
-
-    Params, mutation, label = FixedFParams, "rand2", "de5"
+DE1 = _fixed_f("de1", "rand1", "Eq. 7, rand/1: ``v_i = x_r1 + F (x_r2 - x_r3)``.")
+DE2 = _fixed_f("de2", "best2", "Eq. 9, best/2: ``v_i = x_best + F (x_r1 + x_r2 - x_r3 - x_r4)``.")
+DE3 = _fixed_f("de3", "best1", "Eq. 10, best/1: ``v_i = x_best + F (x_r1 - x_r2)``.")
+DE4 = _fixed_f("de4", "current_to_best1", "Eq. 11, current-to-best/1: ``v_i = x_i + F (x_best "
+               "- x_i) + F (x_r1 - x_r2)``.")
+DE5 = _fixed_f("de5", "rand2", "Eq. 12, rand/2: ``v_i = x_r1 + F (x_r2 - x_r3) + F (x_r4 - "
+               "x_r5)``.")
 
 
 class DE6(DifferentialEvolution):

@@ -23,8 +23,7 @@ _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
 @numba.njit(inline="always", error_model="numpy")
 def _from_rest(q0, net, Fv, Fc, b, tau):  # pragma: no cover - compiled
-    """Position and velocity after ``tau`` s starting at rest at ``q0`` under the net force
-    ``net`` (N, the motor's minus the offset)."""
+    """Position and velocity after ``tau`` s from rest at ``q0`` under the net force ``net`` (N)."""
     if abs(net) <= Fc:
         return q0, 0.0
     s = 1.0 if net > 0.0 else -1.0
@@ -35,8 +34,7 @@ def _from_rest(q0, net, Fv, Fc, b, tau):  # pragma: no cover - compiled
 
 @numba.njit(inline="always", error_model="numpy")
 def plant_step(q0, v0, net, Fv, Fc, b, h, g_h):  # pragma: no cover - compiled
-    """The exact position and velocity after ``h`` s from ``(q0, v0)`` under a constant net
-    force ``net`` (N); ``b = Fv / M`` (1/s), ``g_h = 1 - exp(-b h)``."""
+    """Exact position and velocity after ``h`` s under a constant net force ``net`` (N)."""
     if v0 == 0.0:
         return _from_rest(q0, net, Fv, Fc, b, h)
     s = 1.0 if v0 > 0.0 else -1.0

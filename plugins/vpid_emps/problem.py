@@ -53,8 +53,7 @@ def _checked(name: str, size: int, mtime_ns: int) -> None:
 
 
 def check_data() -> None:
-    """Verify both shipped records (once per file state): the pre-flight refuses a damaged
-    installation in one line."""
+    """Verify both shipped records once per file state (the pre-flight refuses a damaged one)."""
     for name in records.SHA256:
         path = records.DATA / name
         stat = path.stat() if path.is_file() else None
@@ -102,8 +101,7 @@ class Loop:
         self.v0 = (q[1] - q[0]) / records.DT
 
     def simulate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Positions (m) and applied voltages (V), each ``(n, N)``, of the rows ``X``; NaN rows
-        where a row is not a rig (``M``, ``Fv`` > 0, ``Fc`` >= 0, all finite)."""
+        """Positions (m) and voltages (V) ``(n, N)``; NaN rows where a row is not a rig."""
         from .loop import closed_loop
 
         X = np.atleast_2d(np.asarray(X, dtype=float))
@@ -119,12 +117,6 @@ class Loop:
         q, u = np.full((X.shape[0], N), np.nan), np.full((X.shape[0], N), np.nan)
         q[ok], u[ok] = y, v
         return q, u
-
-
-def fit_percent(measured: np.ndarray, simulated: np.ndarray) -> float:
-    """``100 (1 - ||y - ŷ|| / ||y - mean(y)||)``, system-identification tools' fit percentage."""
-    y = np.asarray(measured, dtype=float)
-    return float(100.0 * (1.0 - np.linalg.norm(y - simulated) / np.linalg.norm(y - y.mean())))
 
 
 class EmpsProblem(Problem):
@@ -150,8 +142,7 @@ class EmpsProblem(Problem):
 
     # --- objective and residuals --------------------------------------------------------
     def residuals(self, X: np.ndarray) -> np.ndarray:
-        """``(qm - q) / sqrt(N)`` in µm over the estimation record, ``(n, N)``; inf rows where
-        a row is not a rig."""
+        """``(qm - q) / sqrt(N)`` in µm over the estimation record; inf rows where no rig."""
         q, _ = self.estimation.simulate(X)
         R = (self.estimation.record.qm[None] - q) * (UM / np.sqrt(self._m))
         R[~np.all(np.isfinite(R), axis=1)] = np.inf
@@ -180,7 +171,9 @@ class EmpsProblem(Problem):
             return {"val_rms_um": float("inf"), "val_unexplained_pct": float("inf"),
                     "val_voltage_rms_V": float("inf")}
         return {"val_rms_um": float(UM * np.sqrt(np.mean((rec.qm - q[0]) ** 2))),
-                "val_unexplained_pct": 100.0 - fit_percent(rec.qm, q[0]),
+                # 100 minus the fit percentage, 100 (1 - ||y - ŷ|| / ||y - mean(y)||)
+                "val_unexplained_pct": 100.0 - float(100.0 * (1.0 - np.linalg.norm(
+                    rec.qm - q[0]) / np.linalg.norm(rec.qm - rec.qm.mean()))),
                 "val_voltage_rms_V": float(np.sqrt(np.mean((rec.vir - u[0]) ** 2)))}
 
     def comparisons(self) -> dict[str, dict[str, Any]]:
@@ -195,8 +188,7 @@ class EmpsProblem(Problem):
         return {"q": "m", "u": "V", "q validation": "m", "u validation": "V"}
 
     def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        """Measured and simulated position ``q`` and voltage ``u`` on both records (the same
-        1 ms grid)."""
+        """Measured and simulated ``q`` and ``u`` on both records (one 1 ms grid)."""
         x = np.asarray(x, dtype=float).reshape(1, -1)
         out: dict[str, np.ndarray] = {"t": self.estimation.record.t.copy()}
         for loop, tag in ((self.estimation, ""), (self.validation, " validation")):
@@ -227,8 +219,7 @@ class EmpsProblem(Problem):
         }
 
     def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any]:
-        """The measured position in the residuals' units, ``qg`` as the input, and the held-out
-        rms error beside the naive predictor's "the position is its reference" (µm)."""
+        """The measured ``q`` (residual units), ``qg`` as input, held-out vs naive error (µm)."""
         rec = self.estimation.record
         val = self.validation.record
         return {"measured": rec.qm * (UM / np.sqrt(self._m)), "names": ["q"],

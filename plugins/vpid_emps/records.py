@@ -41,8 +41,7 @@ class EmpsRecord:
     kv: float
 
     def controller(self) -> np.ndarray:
-        """The controller's voltage (V) recomputed from the measured positions (the first
-        sample's past taken as itself): the logged one minus it reads the pulses."""
+        """The controller's voltage (V) recomputed from ``qm``: the logged minus it reads pulses."""
         q = self.qm
         qf = 0.5 * (q + np.concatenate([q[:1], q[:-1]]))
         dq = np.diff(qf, prepend=qf[0]) / DT
@@ -72,8 +71,7 @@ def _column(data: dict, key: str, name: str) -> np.ndarray:
 
 @functools.lru_cache(maxsize=4)
 def load(name: str, folder: Path = DATA) -> EmpsRecord:
-    """Record ``name`` (a key of :data:`SHA256`), verified and checked: equal lengths, a 1 ms
-    grid from 0, positive constants."""
+    """Record ``name``, verified and checked: equal lengths, a 1 ms grid from 0, constants > 0."""
     from scipy.io import loadmat
 
     path = verified(name, folder)

@@ -36,8 +36,7 @@ def _interval(intervals: Any, j: int) -> str:
 
 
 def emps_sections(ctx: ReportContext) -> Contribution | None:
-    """One table per context: parameter, the best run's value, its interval, the published
-    estimate and the difference in %; then the validation metrics of the run."""
+    """Per context, the best run's values beside the published estimate, then its metrics."""
     texts: list[str] = []
     rows_csv: list[list[Any]] = []
     for context in ctx.contexts:

@@ -37,8 +37,7 @@ def fail(path: Any, allowed: str) -> ConfigError:
 
 @dataclasses.dataclass(frozen=True)
 class FmuFile:
-    """An FMU's description (fmpy's), its interfaces (``cs``, ``me``) with their model
-    identifiers and this platform's binary member of each."""
+    """An FMU's description, interfaces (``cs``, ``me``), identifiers and this platform's binary."""
 
     path: str
     description: Any
@@ -121,12 +120,6 @@ def _description(path: Path, z: zipfile.ZipFile) -> Any:
         raise fail(path, f"a valid modelDescription.xml (fmpy: {text})") from None
 
 
-def _platform_folder(major: int) -> str:
-    import fmpy
-
-    return fmpy.platform_tuple if major == 3 else fmpy.platform
-
-
 @functools.lru_cache(maxsize=16)
 def _inspect(path: str, size: int, mtime_ns: int) -> FmuFile:
     p = Path(path)
@@ -149,7 +142,7 @@ def _inspect(path: str, size: int, mtime_ns: int) -> FmuFile:
         raise fail(p, "an FMU with a co-simulation or model-exchange interface")
     import fmpy
 
-    folder = _platform_folder(int(version[0]))
+    folder = fmpy.platform_tuple if version[0] == "3" else fmpy.platform
     binaries = {k: f"binaries/{folder}/{ident}{fmpy.sharedLibraryExtension}"
                 for k, ident in identifiers.items()}
     binaries = {k: m for k, m in binaries.items() if m in names}
@@ -166,8 +159,7 @@ def _inspect(path: str, size: int, mtime_ns: int) -> FmuFile:
 
 
 def inspect(path: str | os.PathLike) -> FmuFile:
-    """Check the FMU at ``path`` and read its description (cached per file state); raises
-    :class:`ConfigError` with one line naming what is wrong."""
+    """The checked FMU at ``path`` (cached per file state), or a one-line :class:`ConfigError`."""
     p = Path(path).expanduser()
     if not p.is_file():
         raise fail(p, "an existing FMU file (.fmu)")
@@ -183,8 +175,7 @@ def _remove(folder: Path) -> None:
 
 
 def extracted(path: str | os.PathLike) -> Path:
-    """The folder this process extracted the FMU at ``path`` into (once per file state,
-    removed at exit), every member checked again as it is written."""
+    """The folder this process extracted the FMU into (once per file state), checked again."""
     fmu = inspect(path)
     st = Path(fmu.path).stat()
     key = (fmu.path, st.st_size, st.st_mtime_ns)

@@ -92,7 +92,6 @@ class Simulator:
             self.f_enter = b(lib, "fmi2EnterInitializationMode", c_int, P)
             self.f_exit = b(lib, "fmi2ExitInitializationMode", c_int, P)
             self.f_reset = b(lib, "fmi2Reset", c_int, P)
-            self.f_terminate = b(lib, "fmi2Terminate", c_int, P)
             self.f_set = b(lib, "fmi2SetReal", c_int, P, P, P, P)
             self.f_get = b(lib, "fmi2GetReal", c_int, P, P, P, P)
             if self.kind == "cs":
@@ -117,7 +116,6 @@ class Simulator:
                              c_double, c_bool, c_double)
             self.f_exit = b(lib, "fmi3ExitInitializationMode", c_int, P)
             self.f_reset = b(lib, "fmi3Reset", c_int, P)
-            self.f_terminate = b(lib, "fmi3Terminate", c_int, P)
             self.f_set = b(lib, "fmi3SetFloat64", c_int, P, P, P, P, P)
             self.f_get = b(lib, "fmi3GetFloat64", c_int, P, P, P, P, P)
             self.f_step = b(lib, "fmi3DoStep", c_int, P, c_double, c_double, c_bool, P, P, P, P)
@@ -164,8 +162,7 @@ class Simulator:
 
     def _start(self, vrs: np.ndarray, values: np.ndarray, t0: float, t1: float,
                u0: np.ndarray, vr_in: np.ndarray, tolerance: float | None) -> str | None:
-        """Reset (or create) the instance, set the start values and the first input,
-        initialise. ``None``, or the call that failed."""
+        """Reset (or create), set the start values and first input, initialise; what failed."""
         if not self.c:
             self.instantiate()
         elif not self._fresh and self.f_reset(self.c) > 1:
@@ -194,8 +191,7 @@ class Simulator:
     def simulate(self, vrs: np.ndarray, values: np.ndarray, t: np.ndarray, u: np.ndarray,
                  vr_in: np.ndarray, vr_out: np.ndarray, how: dict[str, Any]
                  ) -> tuple[np.ndarray | None, str | None]:
-        """The outputs ``(N, p)`` at the times ``t`` with the start values ``values`` at
-        ``vrs`` and the inputs ``u`` ``(N, r)``; ``(None, why)`` when the FMU fails."""
+        """The outputs ``(N, p)`` at ``t`` for the start values and inputs, or ``(None, why)``."""
         y = np.empty((t.size, vr_out.size))
         failed = self._start(vrs, values, float(t[0]), float(t[-1]), u[0], vr_in,
                              how.get("rtol") if self.kind == "me" else None)

@@ -31,8 +31,7 @@ _E = _B - np.array([5179 / 57600, 0.0, 7571 / 16695, 393 / 640, -92097 / 339200,
 
 @njit(cache=True)
 def cs2_derivatives(do_step, set_real, set_der, get_real, c, t, u, vr_in, vr_out, order, y):
-    """FMI 2.0 co-simulation given each input's slope over the step (order 1): the input
-    linear between samples. ``u``, ``y`` C-contiguous: rows ``8 r``, ``8 p`` bytes apart."""
+    """FMI 2.0 co-simulation given each input's slope (the input linear between samples)."""
     n, r = u.shape
     p = vr_out.size
     du = np.empty(r)
@@ -62,8 +61,7 @@ def cs2_derivatives(do_step, set_real, set_der, get_real, c, t, u, vr_in, vr_out
 
 @njit(cache=True)
 def cs2_hold(do_step, set_real, get_real, c, t, u, substeps, vr_in, vr_out, y):
-    """FMI 2.0 co-simulation, the input held over ``substeps`` sub-steps per sample at its
-    linear interpolation; the sample's own value set before its outputs are read."""
+    """FMI 2.0 co-simulation, the input held (linearly interpolated) over each sub-step."""
     n, r = u.shape
     p = vr_out.size
     v = np.empty(r)

@@ -65,8 +65,7 @@ def _box_of(name: str, value: Any) -> tuple[float, float]:
 
 @dataclasses.dataclass(frozen=True)
 class Plan:
-    """The identified parameters, their box and its source, the known quantities, the inputs
-    and outputs."""
+    """The identified parameters and their box, the known quantities, the inputs and outputs."""
 
     identified: tuple[Variable, ...]
     lower: np.ndarray
@@ -157,8 +156,7 @@ def _stated(params: dict[str, Variable], chosen: list[str], known: Mapping[str, 
 
 def plan(description: Any, parameters: Sequence[str] | None, bounds: Mapping[str, Any],
          known: Mapping[str, Any]) -> Plan:
-    """The plan of an FMU's description under the config keys (see the module); raises
-    :class:`ConfigError` naming the key."""
+    """The plan of an FMU's description under the config keys, or a :class:`ConfigError`."""
     variables = [v for v in description.modelVariables if v.type in REAL]
     params = {v.name: _variable(v) for v in variables if v.causality == "parameter"
               and v.variability in ("fixed", "tunable")}

@@ -29,8 +29,7 @@ OBJECTIVES = ("eq3", "ols")
 
 
 class FrozenMap(dict):
-    """A read-only mapping that hashes (a problem is cached by its config); lists in it
-    become tuples."""
+    """A read-only mapping that hashes (a problem is cached by its config); lists become tuples."""
 
     def __init__(self, items: Any = ()) -> None:
         super().__init__({str(k): tuple(v) if isinstance(v, (list, tuple)) else v
@@ -61,8 +60,7 @@ def _freeze(config: Any, prefix: str, *names: str) -> None:
 
 @dataclasses.dataclass(frozen=True)
 class ReferenceConfig:
-    """``file``: the record (CSV); ``columns``: FMU names mapped to record columns;
-    ``ignore``: record columns left unused on purpose."""
+    """``file``: the record (CSV); ``columns``: FMU names to record columns; ``ignore``: unused."""
 
     file: str | None = None
     columns: dict[str, str] = added_setting(default_factory=dict, open_keys=True)
@@ -111,19 +109,6 @@ class FmuConfig(ProblemConfig):
         setup(self)
 
 
-@dataclasses.dataclass(frozen=True)
-class Setup:
-    """A config read against its FMU and record (``mode``: the input handling, ``info`` its
-    line)."""
-
-    fmu: archive.FmuFile
-    kind: str
-    plan: plan.Plan
-    record: record.FmuRecord
-    mode: str
-    info: str
-
-
 def _kind(config: FmuConfig, fmu: archive.FmuFile) -> str:
     offered = sorted(fmu.binaries)
     kind = config.interface
@@ -166,15 +151,14 @@ def _mode(config: FmuConfig, fmu: archive.FmuFile, kind: str) -> tuple[str, str]
 
 
 @functools.lru_cache(maxsize=16)
-def _setup(config: FmuConfig, fmu_state: tuple, record_state: tuple) -> Setup:
+def _setup(config: FmuConfig, fmu_state: tuple, record_state: tuple) -> tuple:
     fmu = archive.inspect(config.fmu)
     kind = _kind(config, fmu)
     p = plan.plan(fmu.description, config.parameters, config.bounds, config.known)
     rec = record.read(config.reference.file, [(v.name, v.unit) for v in p.inputs],
                       [(v.name, v.unit) for v in p.outputs], config.reference.columns,
                       config.reference.ignore)
-    mode, info = _mode(config, fmu, kind)
-    return Setup(fmu, kind, p, rec, mode, info)
+    return (fmu, kind, p, rec, *_mode(config, fmu, kind))
 
 
 def _state(path: str) -> tuple:
@@ -183,9 +167,8 @@ def _state(path: str) -> tuple:
     return (str(p), st.st_size if st else -1, st.st_mtime_ns if st else -1)
 
 
-def setup(config: FmuConfig) -> Setup:
-    """Read the FMU's description and the record under ``config`` (cached per config and
-    file states); raises :class:`ConfigError` naming the key."""
+def setup(config: FmuConfig) -> tuple:
+    """``(fmu, kind, plan, record, mode, mode_info)`` of ``config`` (cached), or ConfigError."""
     return _setup(config, _state(config.fmu), _state(config.reference.file))
 
 
@@ -199,9 +182,7 @@ class FmuProblem(Problem):
 
     def __init__(self, config: FmuConfig) -> None:
         super().__init__(config)
-        s = setup(config)
-        self.fmu, self.kind, self.plan, self.record = s.fmu, s.kind, s.plan, s.record
-        self.mode, self.mode_info = s.mode, s.info
+        self.fmu, self.kind, self.plan, self.record, self.mode, self.mode_info = setup(config)
         self.t = self.record.t
         self.measured = self.record.outputs
         self.scale = np.linalg.norm(self.measured, axis=1)
@@ -228,21 +209,17 @@ class FmuProblem(Problem):
                  self.record.rate_text())
 
     # --- simulation ---------------------------------------------------------------------
-    def _simulator(self) -> Any:
+    def responses(self, X: np.ndarray) -> np.ndarray:
+        """The compared outputs ``(n, p, N)``; NaN rows where the FMU fails (three are logged)."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        out = np.full((X.shape[0], self.measured.shape[0], self.t.size), np.nan)
         from .binary import FmuRuntimeError, simulator
 
         try:
-            return simulator(self.fmu, self.kind)
+            sim = simulator(self.fmu, self.kind)
         except FmuRuntimeError as exc:
             raise ConfigError("problem.fmu", self.fmu.path, f"an FMU whose binary runs: "
                               f"{exc}") from None
-
-    def responses(self, X: np.ndarray) -> np.ndarray:
-        """The compared outputs ``(n, p, N)``; NaN rows where the FMU fails (the first three
-        failures logged)."""
-        X = np.atleast_2d(np.asarray(X, dtype=float))
-        out = np.full((X.shape[0], self.measured.shape[0], self.t.size), np.nan)
-        sim = self._simulator()
         for i, x in enumerate(X):
             if not np.all(np.isfinite(x)):
                 continue
@@ -270,8 +247,7 @@ class FmuProblem(Problem):
         return estimators.residuals_and_value(self.config.objective, self._weighted(X))
 
     def evaluate(self, X: np.ndarray) -> np.ndarray:
-        """``eq3``: the sum over compared outputs of ``||y_c - ŷ_c|| / ||y_c||``; ``ols``:
-        the sum of squares over ``||y||²``. ``inf`` where the FMU fails."""
+        """``eq3``: sum of ``||y_c - ŷ_c|| / ||y_c||``; ``ols``: sum of squares over ``||y||²``."""
         return self.evaluate_with_residuals(X)[0]
 
     def residuals(self, X: np.ndarray) -> np.ndarray:
@@ -305,8 +281,7 @@ class FmuProblem(Problem):
         return out
 
     def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any]:
-        """The measured outputs over their norms (:meth:`fisher_residuals`' units), their
-        names, and each FMU input at the record's samples."""
+        """The measured outputs over their norms, their names, each input at the samples."""
         return {"measured": (self.measured / self.scale[:, None]).reshape(-1),
                 "names": list(self.record.output_names),
                 "inputs": {v.name: self.record.inputs[:, j].copy()

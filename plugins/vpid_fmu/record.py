@@ -17,8 +17,7 @@ from vpid_bench import ColumnMap, CsvRecord, CsvTable, RecordColumn
 
 @dataclasses.dataclass(frozen=True)
 class FmuRecord(CsvRecord):
-    """A read record: times ``t`` (s), inputs ``(N, r)`` in the FMU's input order, outputs
-    ``(p, N)`` of the ``output_names`` compared, and which column each came from."""
+    """Times ``t`` (s), inputs ``(N, r)``, compared outputs ``(p, N)`` and their columns."""
 
     inputs: np.ndarray
     outputs: np.ndarray
@@ -29,8 +28,7 @@ class FmuRecord(CsvRecord):
 def read(path: str | Path, inputs: Sequence[tuple[str, str | None]],
          outputs: Sequence[tuple[str, str | None]], columns: Mapping[str, str],
          ignore: Sequence[str] = ()) -> FmuRecord:
-    """Read the record at ``path`` for an FMU with ``inputs`` and ``outputs`` (``(name,
-    unit)`` each); ``columns`` maps FMU names to record columns (others by their own name)."""
+    """Read the record at ``path`` for an FMU's ``(name, unit)`` inputs and outputs."""
     ins = [RecordColumn(n, u) for n, u in inputs]
     outs = [RecordColumn(n, u) for n, u in outputs]
     table = CsvTable(Path(path).expanduser(), ins, outs, ColumnMap(dict(columns), tuple(ignore)))

@@ -30,26 +30,13 @@ def rastrigin(X: np.ndarray) -> np.ndarray:
     return 10.0 * X.shape[1] + np.sum(X * X - 10.0 * np.cos(2.0 * np.pi * X), axis=1)
 
 
-def sphere_residuals(X: np.ndarray) -> np.ndarray:
-    """r = x, so sum(r^2) is the sphere."""
-    return X.copy()
-
-
-def rosenbrock_residuals(X: np.ndarray) -> np.ndarray:
-    """10 (x_{i+1} - x_i^2) then 1 - x_i, so sum(r^2) is Rosenbrock."""
-    return np.hstack([10.0 * (X[:, 1:] - X[:, :-1] ** 2), 1.0 - X[:, :-1]])
-
-
-def rastrigin_residuals(X: np.ndarray) -> np.ndarray:
-    """sqrt(10 + x^2 - 10 cos(2 pi x)) (the radicand is >= x^2 >= 0), so sum(r^2) is
-    Rastrigin."""
-    return np.sqrt(np.maximum(10.0 + X * X - 10.0 * np.cos(2.0 * np.pi * X), 0.0))
-
-
+#: Residuals whose sum of squares is each function: x; 10 (x_{i+1} - x_i^2) then 1 - x_i;
+#: sqrt(10 + x^2 - 10 cos(2 pi x)) (the radicand is >= x^2 >= 0).
 RESIDUALS = {
-    "sphere": sphere_residuals,
-    "rosenbrock": rosenbrock_residuals,
-    "rastrigin": rastrigin_residuals,
+    "sphere": lambda X: X.copy(),
+    "rosenbrock": lambda X: np.hstack([10.0 * (X[:, 1:] - X[:, :-1] ** 2), 1.0 - X[:, :-1]]),
+    "rastrigin": lambda X: np.sqrt(np.maximum(10.0 + X * X - 10.0 * np.cos(2.0 * np.pi * X),
+                                              0.0)),
 }
 
 FUNCTIONS = {

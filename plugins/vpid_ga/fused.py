@@ -11,8 +11,7 @@ from numba import njit
 
 @njit(cache=True)
 def _active(x, lower, upper, tol, active, active_first):  # pragma: no cover - compiled
-    """Mark the coordinates of ``x`` within ``tol`` of a bound; ``active_first`` lists the
-    active ones, then the others (each in coordinate order). Returns how many are active."""
+    """Mark the coordinates within ``tol`` of a bound, active ones first; how many are active."""
     dim = x.shape[0]
     nt = 0
     for j in range(dim):
@@ -30,8 +29,7 @@ def _active(x, lower, upper, tol, active, active_first):  # pragma: no cover - c
 
 @njit(cache=True)
 def _basis(p, below_u, diagonal, order_u, L, basis):  # pragma: no cover - compiled
-    """``P L P^T`` with ``L = tril(round((p + 1) U - 0.5), -1) + diag(diagonal)`` (one row's
-    random numbers) and ``P`` the permutation that sorts ``order_u``."""
+    """``P L P^T`` of one row's random numbers (as :func:`vpid_ga.mutation.box_directions`)."""
     dim = diagonal.shape[0]
     for a in range(dim):
         for b in range(dim):
@@ -49,8 +47,7 @@ def _basis(p, below_u, diagonal, order_u, L, basis):  # pragma: no cover - compi
 @njit(cache=True)
 def _first_feasible(x, step, lower, upper, basis, slot_cols, trial, real, nt, out, mutant
                     ):  # pragma: no cover - compiled
-    """``out`` = ``x + step * sign * direction`` of the first trial inside the box, else ``x``
-    (the trial order, signs and directions as in :func:`vpid_ga.mutation.trial_directions`)."""
+    """``out`` = the first trial inside the box (as :func:`vpid_ga.mutation.trial_directions`)."""
     dim = x.shape[0]
     for k in range(real):
         col = slot_cols[trial[k]]

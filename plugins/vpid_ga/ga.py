@@ -93,7 +93,6 @@ class GeneticAlgorithm(GenerationalOptimizer):
         self.population, self.scores = X, f
 
     def advance(self, X: np.ndarray, f: np.ndarray) -> None:
-        """The evaluated generation replaces the population; the elites' scores are the new
-        ones (``stepGA`` scores them again), which matters only for a noisy objective."""
+        """The evaluated generation replaces the population (``stepGA`` scores the elites again)."""
         self.population, self.scores = X, f
         self.best_history.append(float(np.min(self.scores)))

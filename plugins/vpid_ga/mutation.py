@@ -88,8 +88,7 @@ def first_feasible(
     lower: np.ndarray,
     upper: np.ndarray,
 ) -> np.ndarray:
-    """Per row: ``X[i] + step * trials[i, k]`` for the first valid ``k`` that lies inside
-    ``[lower, upper]`` (bounds included, no tolerance), else a copy of ``X[i]``."""
+    """Per row, ``X[i] + step trials[i, k]`` for the first ``k`` inside the box, else ``X[i]``."""
     mutants = X[:, None, :] + step * trials
     inside = valid & np.all((mutants >= lower) & (mutants <= upper), axis=2)
     first = np.argmax(inside, axis=1)

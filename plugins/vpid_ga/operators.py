@@ -26,8 +26,7 @@ def fitscalingrank(scores: np.ndarray, n_parents: int) -> np.ndarray:
 def selectionstochunif(
     expectation: np.ndarray, n_parents: int, rng: np.random.Generator
 ) -> np.ndarray:
-    """Stochastic uniform selection: ``n_parents`` equally spaced pointers from one uniform
-    offset on the cumulative wheel of the expectations; parent indices in wheel order."""
+    """Stochastic uniform selection: equally spaced pointers from one random offset."""
     wheel = np.cumsum(expectation) / np.sum(expectation)
     positions = (rng.random() + np.arange(n_parents)) / n_parents
     picks = np.searchsorted(wheel, positions, side="right")
@@ -37,8 +36,7 @@ def selectionstochunif(
 def crossoverscattered(
     population: np.ndarray, parents: np.ndarray, rng: np.random.Generator
 ) -> np.ndarray:
-    """Scattered crossover: per pair of ``parents``, each gene from ``p1`` when a uniform is
-    > 0.5, else from ``p2`` (inside the box when the parents are)."""
+    """Scattered crossover: each gene from ``p1`` when a uniform is > 0.5, else from ``p2``."""
     p1, p2 = population[parents[0::2]], population[parents[1::2]]
     return np.where(rng.random(p1.shape) > 0.5, p1, p2)
 

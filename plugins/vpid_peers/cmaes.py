@@ -29,8 +29,7 @@ from .unit_box import to_physical
 
 @dataclass(frozen=True)
 class CMAESParams(OptimizerParams):
-    """``sigma0``: the initial step as a fraction of the box width, in (0, 1]; 0.3 by cma's
-    advice that the optimum lie within ``x0 ± 3 sigma0`` (from anywhere in the cube)."""
+    """``sigma0``: the start step (box fraction); 0.3 as cma advises (optimum in x0 ± 3 sigma0)."""
 
     sigma0: float = 0.3
     popsize: int | Literal["library", "ps"] = "library"
@@ -83,7 +82,7 @@ class CMAES(Optimizer):
             "popsize": self._popsize,
             "bounds": [0.0, 1.0],
             "BoundaryHandler": "BoundTransform",
-            "randn": self._standard_normal,
+            "randn": lambda *shape: self.rng.standard_normal(shape),  # the run's generator
             "seed": float("nan"),  # nan: cma neither reads nor re-seeds numpy's global RNG
             "verbose": -9,
             "verb_log": 0,
@@ -93,8 +92,7 @@ class CMAES(Optimizer):
         return self._cma.CMAEvolutionStrategy(x0, self._sigma, options)
 
     def _next_search(self) -> None:
-        """The population and step of the next search (IPOP: twice the population; BIPOP:
-        the regime that has used fewer evaluations, see the module)."""
+        """The next search's population and step (IPOP: doubled; BIPOP: the lesser-used regime)."""
         if self.params.restarts == "ipop":
             self._popsize *= 2
             return
@@ -108,10 +106,6 @@ class CMAES(Optimizer):
             self._regime = "large"
             self._large_popsize *= 2
             self._popsize, self._sigma = self._large_popsize, self.params.sigma0
-
-    def _standard_normal(self, *shape: int) -> np.ndarray:
-        """cma's ``randn(lam, N)``: standard normal deviates from the run's generator."""
-        return self.rng.standard_normal(shape)
 
     def ask(self) -> np.ndarray:
         if self._pending is None:

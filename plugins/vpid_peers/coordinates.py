@@ -18,8 +18,7 @@ Scaling = Literal["auto", "log", "box"]
 
 
 class Coordinates:
-    """Rows between physical units and the solver's ``u`` (``auto``: ``log`` when every lower
-    bound is positive, else ``box``)."""
+    """Rows between physical units and the solver's ``u`` (``auto``: ``log`` if lower > 0)."""
 
     def __init__(self, bounds: Bounds, kind: Scaling = "auto") -> None:
         positive = bool(np.all(bounds.lower > 0))

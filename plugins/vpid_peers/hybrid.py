@@ -35,10 +35,6 @@ class DELSQParams(LSQParams):
         if not 0.0 <= self.fraction <= 1.0:
             raise ConfigError("optimizer.fraction", self.fraction, "a number in [0, 1]")
 
-    def de_generations(self, budget: int) -> int:
-        """Generations of DE4 after its initial population, within a run of ``budget``."""
-        return max(0, round(self.fraction * budget / self.ps) - 1)
-
 
 class DELeastSquares(LoopOptimizer):
     """DE4 first, least squares from its best vector next."""
@@ -52,7 +48,8 @@ class DELeastSquares(LoopOptimizer):
         check_scaling(params, bounds)
         self._de_class: type[Optimizer] = _first_stage("de4")
         self._de_params = self._de_class.Params(
-            ps=params.ps, iterations=params.de_generations(self.budget), F=params.F, CR=params.CR)
+            ps=params.ps, iterations=max(0, round(params.fraction * self.budget / params.ps) - 1),
+            F=params.F, CR=params.CR)
 
     def minimize(self, evaluate: Callable[[np.ndarray], Any]) -> None:
         de = self._de_class(self._de_params, self.bounds, self.rng)

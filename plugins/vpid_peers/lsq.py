@@ -38,11 +38,6 @@ class LSQParams(OptimizerParams):
         if not 0.0 < self.ftol < 1.0:
             raise ConfigError("optimizer.ftol", self.ftol, "a number in (0, 1)")
 
-    def solver_settings(self) -> SolverSettings:
-        """The descent settings these parameters stand for."""
-        return SolverSettings(fd_step=self.fd_step, inner=self.inner, broyden=self.broyden,
-                              ftol=self.ftol)
-
 
 def check_scaling(params: LSQParams, bounds: Bounds) -> None:
     """``scaling=log`` needs a box with positive lower bounds."""
@@ -58,11 +53,11 @@ def multistart(
     rng: np.random.Generator,
     first: np.ndarray | None = None,
 ) -> None:
-    """Descents from ``first`` (when given) and then from uniform random points, forever:
-    the budget of the run ends it."""
+    """Descents from ``first`` (when given), then from uniform random points until the budget."""
     check_scaling(params, bounds)
     coords = Coordinates(bounds, params.scaling)
-    solver = Solver(evaluate, coords, groups, params.solver_settings())
+    solver = Solver(evaluate, coords, groups, SolverSettings(
+        fd_step=params.fd_step, inner=params.inner, broyden=params.broyden, ftol=params.ftol))
     x0 = first
     while True:
         if x0 is None:

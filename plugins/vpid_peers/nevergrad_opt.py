@@ -38,22 +38,16 @@ def nevergrad_registry() -> Any:
     return ng.optimizers.registry
 
 
-def close_names(name: str, names: list[str], n: int = 5) -> list[str]:
-    """Up to ``n`` of ``names`` closest to ``name``, ignoring case (difflib's ratio)."""
-    by_lower: dict[str, str] = {}
-    for candidate in sorted(names):
-        by_lower.setdefault(candidate.lower(), candidate)
-    matches = difflib.get_close_matches(name.lower(), list(by_lower), n=n, cutoff=0.6)
-    return [by_lower[m] for m in matches]
-
-
 def check_method(method: str) -> None:
-    """Raise :class:`ConfigError` (one line, closest names listed) unless ``method`` is in
-    nevergrad's registry."""
+    """Refuse a ``method`` not in nevergrad's registry, naming the 5 closest (difflib)."""
     names = list(nevergrad_registry())
     if method in names:
         return
-    near = close_names(method, names)
+    by_lower: dict[str, str] = {}
+    for candidate in sorted(names):
+        by_lower.setdefault(candidate.lower(), candidate)
+    near = [by_lower[m] for m in difflib.get_close_matches(method.lower(), list(by_lower),
+                                                           n=5, cutoff=0.6)]
     hint = ("closest: " + ", ".join(near)) if near else "no close name"
     raise ConfigError("optimizer.method", method,
                       f"a name in nevergrad's optimizer registry ({len(names)} names; {hint})")
@@ -61,8 +55,7 @@ def check_method(method: str) -> None:
 
 @dataclass(frozen=True)
 class NevergradParams(OptimizerParams):
-    """``method``: a name of ``nevergrad.optimizers.registry`` (case matters: ``NGOpt``,
-    ``CMA``, ``DE``, ...). ``batch``: candidates per batch, ``library`` (1) or ``ps``."""
+    """``method``: a name in nevergrad's registry (``NGOpt``, ``CMA``, ...); ``batch``: 1 or ps."""
 
     method: str = DEFAULT_METHOD
     batch: Literal["library", "ps"] = "library"
@@ -90,18 +83,15 @@ class NevergradOptimizer(Optimizer):
         self._pending: list[Any] | None = None
         self._told = 0
 
-    def _build(self) -> Any:
-        import nevergrad as ng
-
-        parametrization = ng.p.Array(init=self._x0, lower=0.0, upper=1.0)
-        parametrization.random_state = np.random.RandomState(self._seed)
-        cls = ng.optimizers.registry[self.params.method]
-        return cls(parametrization=parametrization, budget=self.budget,
-                   num_workers=self.params.workers)
-
     def ask(self) -> np.ndarray:
         if self._ng is None:
-            self._ng = self._build()
+            import nevergrad as ng
+
+            parametrization = ng.p.Array(init=self._x0, lower=0.0, upper=1.0)
+            parametrization.random_state = np.random.RandomState(self._seed)
+            self._ng = ng.optimizers.registry[self.params.method](
+                parametrization=parametrization, budget=self.budget,
+                num_workers=self.params.workers)
         if self._pending is None:
             self._pending = [self._ng.ask() for _ in range(self.params.workers)]
         U = np.array([candidate.value for candidate in self._pending], dtype=float)

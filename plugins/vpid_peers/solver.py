@@ -72,8 +72,7 @@ class Solver:
     def jacobian(
         self, u: np.ndarray, r: np.ndarray | None = None
     ) -> tuple[np.ndarray, np.ndarray, float]:
-        """``(J, r, F)``: the forward-difference ``dr/du`` at ``u`` asked as one batch (the
-        point unless ``r`` is given, its neighbours; one leaving the box steps backwards)."""
+        """``(J, r, F)``: the forward-difference ``dr/du`` at ``u``, asked as one batch."""
         n = u.size
         h = np.full(n, self.settings.fd_step)
         h = np.where(u + h > self.coords.upper, -h, h)

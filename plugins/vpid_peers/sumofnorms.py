@@ -10,25 +10,17 @@ from __future__ import annotations
 import numpy as np
 
 
-def group_norms(R: np.ndarray, groups: np.ndarray, n_groups: int) -> np.ndarray:
-    """``||r_g||`` of each row of ``R`` (n, m) and each group: shape (n, n_groups)."""
-    R = np.atleast_2d(R)
-    out = np.empty((R.shape[0], n_groups))
-    for g in range(n_groups):
-        out[:, g] = np.sqrt(np.sum(R[:, groups == g] ** 2, axis=1))
-    return out
-
-
 def sum_of_norms(R: np.ndarray, groups: np.ndarray, n_groups: int) -> np.ndarray:
-    """``F = sum_g ||r_g||`` of each row of ``R``; inf where a residual is not finite."""
-    F = group_norms(R, groups, n_groups).sum(axis=1)
+    """``F = sum_g ||r_g||`` of each row of ``R`` (n, m); inf where a residual is not finite."""
+    R = np.atleast_2d(R)
+    F = np.stack([np.sqrt(np.sum(R[:, groups == g] ** 2, axis=1)) for g in range(n_groups)],
+                 axis=1).sum(axis=1)
     F[~np.isfinite(F)] = np.inf
     return F
 
 
 def gradient(r: np.ndarray, J: np.ndarray, groups: np.ndarray, n_groups: int) -> np.ndarray:
-    """The gradient of ``F`` for residuals ``r`` (m,) with Jacobian ``J`` (m, n):
-    ``sum_g J_g^T r_g / ||r_g||`` (a group with a zero norm contributes nothing)."""
+    """The gradient of ``F``, ``sum_g J_g^T r_g / ||r_g||`` (a zero-norm group adds nothing)."""
     grad = np.zeros(J.shape[1])
     for g in range(n_groups):
         idx = groups == g

@@ -66,8 +66,7 @@ class BumpConfig:
 
 @dataclass(frozen=True)
 class NewmarkConfig:
-    """Newmark-beta; default the average-acceleration rule. ``gamma`` in [0.5, 1] (below 1/2
-    the scheme adds energy), ``beta`` in [0, 0.5]."""
+    """Newmark-beta (default average acceleration): ``gamma`` in [0.5, 1], ``beta`` in [0, 0.5]."""
 
     gamma: float = 0.5
     beta: float = 0.25
@@ -121,8 +120,7 @@ class ReferenceConfig:
 
 @dataclass(frozen=True)
 class BoundsConfig:
-    """The box ``[lower_factor, upper_factor] x`` the true values; ``bounds.<name>=[lo,hi]``
-    (SI) replaces a row."""
+    """The box ``[lower_factor, upper_factor] x`` the truth; ``bounds.<name>=[lo,hi]`` (SI)."""
 
     lower_factor: float = 0.5
     upper_factor: float = 1.5
@@ -171,24 +169,19 @@ class VehicleConfig(ProblemConfig):
 
     def __post_init__(self) -> None:
         knowns.freeze_fields(self, "known")
-        _apply_known(self)
+        # each known.<name> sets its vehicle. or bump. key (a fixed set: nothing freed)
+        for name, value in self.known.items():
+            key = f"problem.known.{name}"
+            if name not in KNOWN_KEYS:
+                raise ConfigError(key, value, "one of " + ", ".join(KNOWN_KEYS) + " (the "
+                                  "stated quantities of problem=vehicle; fixing or freeing a "
+                                  "parameter is offered by problem=ride_half, the same half car)")
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ConfigError(key, value, f"a number in {KNOWN_WHAT[name][0]}")
+            part, field_name = KNOWN_KEYS[name]
+            object.__setattr__(self, part, dataclasses.replace(getattr(self, part),
+                                                               **{field_name: float(value)}))
         validate(self)  # at build time, so the pre-flight refuses a bad value before any job
-
-
-def _apply_known(config: VehicleConfig) -> None:
-    """Set the ``vehicle.``/``bump.`` key of each ``known.<name>`` (this problem identifies
-    a fixed set: nothing freed)."""
-    for name, value in config.known.items():
-        key = f"problem.known.{name}"
-        if name not in KNOWN_KEYS:
-            raise ConfigError(key, value, "one of " + ", ".join(KNOWN_KEYS) + " (the stated "
-                              "quantities of problem=vehicle; fixing or freeing a parameter "
-                              "is offered by problem=ride_half, the same half car)")
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigError(key, value, f"a number in {KNOWN_WHAT[name][0]}")
-        part, field_name = KNOWN_KEYS[name]
-        object.__setattr__(config, part, dataclasses.replace(getattr(config, part),
-                                                             **{field_name: float(value)}))
 
 
 def known_list(config: VehicleConfig) -> list[dict[str, Any]]:
@@ -242,8 +235,7 @@ def _choice(key: str, value: str | None, choices: tuple[str, ...], nullable: boo
 
 
 def window(config: VehicleConfig) -> float:
-    """The record length T in s: front tyre meets the bump until the rear one leaves it,
-    ``(L + w) / V``, plus ``record.extra``."""
+    """The record length (s): the front tyre meets the bump until the rear one leaves, + extra."""
     v = config.bump.V / 3.6
     return (config.vehicle.L + config.bump.w) / v + config.record.extra
 
@@ -333,19 +325,8 @@ def _gib(n_bytes: float) -> str:
     return f"about {n_bytes / 1024**3:.3g} GiB"
 
 
-def estimated_memory(config: VehicleConfig, T: float) -> tuple[float, float, float]:
-    """(model samples, reference steps, estimated bytes) of a job, by :data:`BYTES_PER_STEP`
-    and :data:`BYTES_PER_SAMPLE_CANDIDATE` (no array is made to count them)."""
-    samples = T / config.dt + 1
-    ref_dt = config.reference.dt if config.reference.file is None else None
-    steps = T / ref_dt + 1 if ref_dt else samples
-    n_bytes = (samples + steps) * BYTES_PER_STEP + samples * config.ps * BYTES_PER_SAMPLE_CANDIDATE
-    return samples, steps, n_bytes
-
-
 def _blame(config: VehicleConfig, T: float) -> tuple[str, float]:
-    """The key that made the record long: ``problem.dt`` when the step is finer (against 1
-    ms) than the window is long (against 0.48 s), else the window's largest term."""
+    """The key that made the record long: ``dt`` (against 1 ms), else the window's largest term."""
     if 0.001 / config.dt > T / 0.48:
         return "problem.dt", config.dt
     v = config.bump.V / 3.6
@@ -358,8 +339,12 @@ def _blame(config: VehicleConfig, T: float) -> tuple[str, float]:
 
 def check_size(config: VehicleConfig, T: float) -> None:
     """Refuse a record past :data:`MAX_SAMPLES` samples or a job past :data:`MAX_MEMORY`
-    (estimated), naming the key that made it large and the estimate."""
-    samples, steps, n_bytes = estimated_memory(config, T)
+    (estimated by :data:`BYTES_PER_STEP` and :data:`BYTES_PER_SAMPLE_CANDIDATE`: no array
+    is made to count them), naming the key that made it large and the estimate."""
+    samples = T / config.dt + 1
+    ref_dt = config.reference.dt if config.reference.file is None else None
+    steps = T / ref_dt + 1 if ref_dt else samples
+    n_bytes = (samples + steps) * BYTES_PER_STEP + samples * config.ps * BYTES_PER_SAMPLE_CANDIDATE
     what = (f"this one: T = {T:.4g} s at problem.dt = {config.dt:g} s is {samples:.4g} samples, "
             f"{_gib(n_bytes)} for ps = {config.ps} candidates")
     if samples > MAX_SAMPLES:
@@ -375,8 +360,7 @@ def check_size(config: VehicleConfig, T: float) -> None:
 
 
 def check_reference_file(config: VehicleConfig) -> float:
-    """Read ``problem.reference.file`` at the pre-flight (a bad file fails there, exit 2);
-    its span (s), the window the model integrates over."""
+    """Read ``problem.reference.file`` at the pre-flight; its span (s), the model's window."""
     from .record_file import check_span
     from .reference_io import read_measured
 

@@ -13,17 +13,10 @@ from .model import KnownConstants, matrices, response_rows, tyre_input
 from .road import TIME_TOL, Bump
 
 
-def _pieces(t0: float, t1: float, bump: Bump) -> list[tuple[float, float]]:
-    """``(duration, midpoint)`` of the pieces of ``[t0, t1]`` between bump edges."""
-    cuts = [t0] + [e for e in sorted(bump.edges) if t0 + TIME_TOL < e < t1 - TIME_TOL] + [t1]
-    return [(b - a, 0.5 * (a + b)) for a, b in zip(cuts[:-1], cuts[1:], strict=True)]
-
-
 def body_accelerations(
     X: np.ndarray, known: KnownConstants, bump: Bump, t: np.ndarray
 ) -> np.ndarray:
-    """Exact z1'' and z2'' (m/s^2) at the times ``t`` (s, increasing from 0, the system at
-    rest at t = 0), shape ``(n, 2, len(t))``."""
+    """Exact z1'', z2'' (m/s^2) ``(n, 2, len(t))`` at the times ``t`` (s), at rest at t = 0."""
     from scipy.linalg import expm  # lazy: keeps the plugin's import chain light
 
     M, C, K = matrices(X, known)
@@ -47,9 +40,11 @@ def body_accelerations(
     states = np.empty((len(t), n, 8))
     states[0] = s
     for k in range(1, len(t)):
-        for tau, mid in _pieces(float(t[k - 1]), float(t[k]), bump):
-            Phi, Gamma = propagator(tau)
-            y = bump.value(np.array([mid]))[0]
+        t0, t1 = float(t[k - 1]), float(t[k])  # cut at the bump edges inside the step
+        cuts = [t0, *(e for e in sorted(bump.edges) if t0 + TIME_TOL < e < t1 - TIME_TOL), t1]
+        for a, b in zip(cuts[:-1], cuts[1:], strict=True):
+            Phi, Gamma = propagator(b - a)
+            y = bump.value(np.array([0.5 * (a + b)]))[0]
             s = np.einsum("nij,nj->ni", Phi, s) + Gamma @ y
         states[k] = s
     # acceleration = -M^-1 (K q + C q') (+ M^-1 B_y y, zero in the body rows)

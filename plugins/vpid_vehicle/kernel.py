@@ -65,8 +65,7 @@ def _inverse_spd4(S: np.ndarray, work: np.ndarray, out: np.ndarray) -> None:  # 
 
 @njit(**_OPTS)
 def _physical(x: np.ndarray, L: float) -> bool:  # pragma: no cover - compiled
-    """Masses and inertia > 0, stiffness and damping >= 0, all finite, 0 < a1 < L (the same
-    rule as :func:`vpid_vehicle.model.physical`)."""
+    """The rule of :func:`vpid_vehicle.model.physical`, compiled."""
     ok = x[8] > 0.0 and x[8] < L
     for i in range(9):
         if not np.isfinite(x[i]) or (i < 4 and x[i] <= 0.0) or x[i] < 0.0:
@@ -200,8 +199,7 @@ def _coefficients(
 @njit(**_OPTS)
 def _row(c: np.ndarray, o: int, s0: float, s1: float, s2: float, s3: float, s4: float,
          s5: float, s6: float, s7: float) -> float:  # pragma: no cover - compiled
-    """The 8 state terms of one row of the table applied to one lane (the row's first entry
-    at ``c[o]``, the next terms ``LANES`` apart)."""
+    """The 8 state terms of a table row applied to one lane (terms ``LANES`` apart)."""
     return (((c[o] * s0 + c[o + LANES] * s1) + (c[o + 2 * LANES] * s2 + c[o + 3 * LANES] * s3))
             + ((c[o + 4 * LANES] * s4 + c[o + 5 * LANES] * s5)
                + (c[o + 6 * LANES] * s6 + c[o + 7 * LANES] * s7)))
@@ -212,8 +210,7 @@ def _prepare_block(
     X: np.ndarray, j0: int, L: float, kt1: float, kt2: float, dt: float, gamma: float,
     beta: float, y10: float, y20: float, blk: np.ndarray, ok: np.ndarray, ws: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
-    """Fill ``blk`` with rows ``j0 ... j0 + LANES - 1`` of ``X``; lanes past the end and
-    non-physical rows keep zeros (no NaN in flight), ``ok[l]`` says which are real."""
+    """Fill ``blk`` with rows ``j0 ...`` of ``X``; missing and non-physical lanes stay zero."""
     blk[:] = 0.0
     for lane in range(LANES):
         j = j0 + lane
@@ -224,8 +221,7 @@ def _prepare_block(
 
 @njit(**_OPTS)
 def _step_block(blk: np.ndarray, u1: float, u2: float) -> None:  # pragma: no cover - compiled
-    """One step of every lane: the read-outs get z1'', z2'' now, then ``s <- A s + W y``,
-    the input terms after the state terms and skipped when both inputs are 0 (they add 0)."""
+    """One step of every lane: read-outs now, then ``s <- A s + W y`` (zero inputs skipped)."""
     for lane in range(LANES):
         s = _STATE + lane
         s0, s1, s2, s3 = blk[s], blk[s + LANES], blk[s + 2 * LANES], blk[s + 3 * LANES]
@@ -258,8 +254,7 @@ def objective(
     X: np.ndarray, L: float, kt1: float, kt2: float, y1: np.ndarray, y2: np.ndarray,
     dt: float, gamma: float, beta: float, ref: np.ndarray, f: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
-    """``f[j]`` = Eq. (3) for row ``j`` of ``X`` against ``ref`` (2, N); inf for a
-    non-physical candidate or a non-finite response. No response is stored."""
+    """``f[j]`` = Eq. (3) of row ``j`` against ``ref`` (2, N); inf if non-physical or not finite."""
     n = X.shape[0]
     N = y1.shape[0]
     den = np.sqrt(np.sum(ref[0] ** 2)) + np.sqrt(np.sum(ref[1] ** 2))
@@ -289,8 +284,8 @@ def objective_rows(
     X: np.ndarray, index: np.ndarray, L: float, kt1: float, kt2: float, y1: np.ndarray,
     y2: np.ndarray, dt: float, gamma: float, beta: float, refs: np.ndarray, f: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
-    """:func:`objective` of row ``j`` against ``refs[index[j]]`` (runs in lockstep fitting
-    different noise records); bit-identical to the row against its reference alone (tested)."""
+    """:func:`objective` of row ``j`` against ``refs[index[j]]`` (runs in lockstep), each value
+    bit-identical to the row's against its reference alone (tested)."""
     n = X.shape[0]
     N = y1.shape[0]
     dens = np.empty(refs.shape[0])
@@ -323,8 +318,7 @@ def simulate(
     X: np.ndarray, L: float, kt1: float, kt2: float, y1: np.ndarray, y2: np.ndarray,
     dt: float, gamma: float, beta: float, out: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
-    """``out[j]`` = z1'', z2'' (m/s^2) of row ``j`` of ``X``, shape ``(n, 2, N)``; rows of
-    non-physical candidates are NaN."""
+    """``out[j]`` = z1'', z2'' (m/s^2) of row ``j``, ``(n, 2, N)``; NaN for non-physical rows."""
     n = X.shape[0]
     N = y1.shape[0]
     blk = np.empty(BLOCK)
@@ -354,8 +348,7 @@ def _pool(workers: int) -> ThreadPoolExecutor:
 
 
 def chunks(n: int, threads: int) -> list[tuple[int, int]]:
-    """At most ``threads`` contiguous ``[start, stop)`` ranges of ``n`` candidates, each of at
-    least ``MIN_PER_THREAD`` (one for a small batch: no hand-off)."""
+    """At most ``threads`` ranges of ``n`` candidates, each of ``MIN_PER_THREAD`` or more."""
     parts = max(1, min(int(threads), n // MIN_PER_THREAD))
     edges = [n * i // parts for i in range(parts + 1)]
     return [(edges[i], edges[i + 1]) for i in range(parts)]
@@ -363,8 +356,7 @@ def chunks(n: int, threads: int) -> list[tuple[int, int]]:
 
 def _run_chunked(fn, X: np.ndarray, args: tuple, out: np.ndarray, threads: int,
                  rows: tuple = ()) -> None:
-    """``fn(X[a:b], *(r[a:b] for r in rows), *args, out[a:b])`` over the chunks, in parallel
-    when there are several (the result does not depend on the chunking)."""
+    """``fn`` over the chunks of ``X`` and ``rows``, in parallel when there are several."""
     if threads <= 1 or X.shape[0] < 2 * MIN_PER_THREAD:
         fn(X, *rows, *args, out)
         return
@@ -379,8 +371,7 @@ def _run_chunked(fn, X: np.ndarray, args: tuple, out: np.ndarray, threads: int,
 
 
 def as_kernel_array(A: np.ndarray) -> np.ndarray:
-    """``A`` as a writable C-contiguous float64 array (a copy only if needed): one numba
-    signature for every call, no recompilation."""
+    """``A`` as a writable C-contiguous float64 array: one numba signature, no recompilation."""
     A = np.asarray(A)
     if A.dtype == np.float64 and A.flags.c_contiguous and A.flags.writeable:
         return A
@@ -388,8 +379,7 @@ def as_kernel_array(A: np.ndarray) -> np.ndarray:
 
 
 class Setup:
-    """What a model's simulations share: the known constants, the Newmark settings (``dt`` in
-    s) and the tyre inputs ``y`` ``(N, 2)`` (m) split into columns once."""
+    """What a model's simulations share: known constants, Newmark settings, the tyre inputs."""
 
     def __init__(self, L: float, kt1: float, kt2: float, y: np.ndarray, dt: float,
                  gamma: float, beta: float) -> None:
@@ -423,8 +413,7 @@ class Setup:
 
     def objective_rows(self, X: np.ndarray, refs: np.ndarray, index: np.ndarray,
                        threads: int = 1) -> np.ndarray:
-        """Eq. (3) of row ``j`` of ``X`` against ``refs[index[j]]`` (``refs``: (m, 2, N));
-        bit-identical to :meth:`objective` against that reference alone."""
+        """Eq. (3) of row ``j`` against ``refs[index[j]]``, bit-identical to :meth:`objective`'s."""
         X = as_kernel_array(np.atleast_2d(X))
         refs = as_kernel_array(refs)
         index = np.ascontiguousarray(index, dtype=np.int64)
@@ -439,8 +428,7 @@ class Setup:
         return f
 
     def responses(self, X: np.ndarray, threads: int = 1) -> np.ndarray:
-        """z1'' and z2'' (m/s^2) of every row of ``X``, shape ``(n, 2, N)``; NaN rows for
-        non-physical candidates."""
+        """z1'' and z2'' (m/s^2) ``(n, 2, N)``; NaN rows for non-physical candidates."""
         X = as_kernel_array(np.atleast_2d(X))
         out = np.empty((X.shape[0], 2, self.samples))
         _run_chunked(simulate, X, (*self.consts, self.y1, self.y2, *self.newmark), out, threads)

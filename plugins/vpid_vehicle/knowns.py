@@ -161,8 +161,7 @@ def _check_value(name: str, value: Any, unit: str, geometry_of: dict[str, float]
 
 
 def scale_group(names: Sequence[str], units: Mapping[str, str]) -> list[str]:
-    """The quantities of ``names`` that scale together (masses, inertias, stiffnesses,
-    dampings, forces)."""
+    """The quantities of ``names`` that scale together (masses, stiffnesses, dampings, ...)."""
     return [n for n in names if _kind(n, units[n]) == "scale"]
 
 
@@ -205,8 +204,7 @@ def _boxes(raw: Mapping[str, Any], identified: Sequence[str]) -> dict[str, tuple
 
 
 def plan(config: Any, model: Any, problem: str = "this problem") -> Plan:
-    """The :class:`Plan` of ``config.known`` and ``config.bounds`` for ``model``, or a
-    :class:`ConfigError` naming the key and what is allowed."""
+    """The :class:`Plan` of ``config.known`` and ``config.bounds``, or a :class:`ConfigError`."""
     pset = config.parameter_set
     published = dict(model.sets[pset])
     units = dict(zip(model.names, model.units, strict=True))
@@ -242,11 +240,6 @@ def plan(config: Any, model: Any, problem: str = "this problem") -> Plan:
     return Plan(pset, tuple(model.names), identified, units, values, sources, boxes)
 
 
-def is_default(config: Any) -> bool:
-    """Whether ``config`` states nothing beyond its parameter set (no known, no bounds)."""
-    return not getattr(config, "known", None) and not getattr(config, "bounds", None)
-
-
 class StatedModel:
     """A ride model under a :class:`Plan`: the identified names, the plan's values, the
     user's boxes; ``simulate``, ``system``, ``physical`` take identified rows and call the
@@ -268,8 +261,7 @@ class StatedModel:
 
     def _model_rows(self, X: np.ndarray, known: Mapping[str, float]
                     ) -> list[tuple[np.ndarray, dict[str, float]]]:
-        """The model's own rows with their known values: one group, or one per row where a
-        known quantity is identified."""
+        """The model's rows with their known values: one group, or one per row if one is freed."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         if not self.plan.reparametrised:
             return [(X, dict(known))]
@@ -319,7 +311,7 @@ class StatedModel:
 
 def stated_model(base: Any, config: Any, problem: str) -> Any:
     """``base`` when the config states nothing, else its :class:`StatedModel`."""
-    if is_default(config):
+    if not getattr(config, "known", None) and not getattr(config, "bounds", None):
         return base
     return StatedModel(base, plan(config, base, problem))
 
@@ -354,8 +346,7 @@ def input_text(config: Any, input_names: Sequence[str], columns: Mapping[str, st
 
 
 def info(problem: Any) -> dict[str, Any]:
-    """What a ride problem's ``describe()`` adds: ``known``, ``box`` and, for a user's
-    record, ``input``."""
+    """What a ride problem's ``describe()`` adds: ``known``, ``box`` and, if given, ``input``."""
     model, config = problem.model, problem.config
     p = model.plan if isinstance(model, StatedModel) else plan(config, model)
     lower, upper = model.box(problem.nominal)

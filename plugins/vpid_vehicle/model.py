@@ -57,25 +57,15 @@ def matrices(X: np.ndarray, known: KnownConstants) -> tuple[np.ndarray, np.ndarr
     return M, C, K
 
 
-def elongation_jacobian(a1: np.ndarray, a2: np.ndarray) -> np.ndarray:
-    """``J`` ``(n, 4, 4)`` of ``e = J q``: front and rear suspension (wheel minus body point
-    above it), front and rear tyre (wheel minus road)."""
-    a1 = np.atleast_1d(np.asarray(a1, dtype=float))
-    a2 = np.atleast_1d(np.asarray(a2, dtype=float))
-    n = a1.size
-    J = np.zeros((n, 4, 4))
-    J[:, 0, 0], J[:, 0, 1], J[:, 0, 2] = -1.0, a1, 1.0  # x1 - (x - a1 theta)
-    J[:, 1, 0], J[:, 1, 1], J[:, 1, 3] = -1.0, -a2, 1.0  # x2 - (x + a2 theta)
-    J[:, 2, 2] = 1.0  # x1 - y1
-    J[:, 3, 3] = 1.0  # x2 - y2
-    return J
-
-
 def lagrangian_matrices(X: np.ndarray, known: KnownConstants) -> tuple[np.ndarray, np.ndarray]:
     """C and K from the Lagrangian: potential 1/2 e^T D_k e and Rayleigh dissipation
-    1/2 e'^T D_c e' give K = J^T D_k J and C = J^T D_c J (no tyre damping)."""
+    1/2 e'^T D_c e' give K = J^T D_k J and C = J^T D_c J (no tyre damping), ``e = J q``
+    the front and rear suspension (wheel minus body point) and tyre (wheel minus road)."""
     m, I, m1, m2, k1, k2, c1, c2, a1 = _columns(X)
-    J = elongation_jacobian(a1, known.L - a1)
+    J = np.zeros((m.size, 4, 4))
+    J[:, 0, 0], J[:, 0, 1], J[:, 0, 2] = -1.0, a1, 1.0  # x1 - (x - a1 theta)
+    J[:, 1, 0], J[:, 1, 1], J[:, 1, 3] = -1.0, -(known.L - a1), 1.0  # x2 - (x + a2 theta)
+    J[:, 2, 2] = J[:, 3, 3] = 1.0  # x1 - y1, x2 - y2
     zero = np.zeros_like(m)
     Dk = np.stack([k1, k2, np.full_like(m, known.kt1), np.full_like(m, known.kt2)], axis=1)
     Dc = np.stack([c1, c2, zero, zero], axis=1)
@@ -84,16 +74,14 @@ def lagrangian_matrices(X: np.ndarray, known: KnownConstants) -> tuple[np.ndarra
 
 
 def tyre_input(known: KnownConstants) -> np.ndarray:
-    """B_y of ``F = B_y [y1, y2]`` (Eq. 2d): road profile under each tyre (m) to force (N).
-    Shape ``(4, 2)``."""
+    """B_y ``(4, 2)`` of ``F = B_y [y1, y2]`` (Eq. 2d): tyre road profile (m) to force (N)."""
     B = np.zeros((4, 2))
     B[2, 0], B[3, 1] = known.kt1, known.kt2
     return B
 
 
 def response_rows(X: np.ndarray, known: KnownConstants) -> np.ndarray:
-    """R of Eq. (5), ``[z1, z2] = R q``: z1 = x - a1 theta (front), z2 = x + a2 theta (rear).
-    Shape ``(n, 2, 4)``."""
+    """R ``(n, 2, 4)`` of Eq. (5): ``z1 = x - a1 theta`` (front), ``z2 = x + a2 theta`` (rear)."""
     a1 = _columns(X)[8]
     R = np.zeros((a1.size, 2, 4))
     R[:, :, 0] = 1.0
@@ -103,8 +91,7 @@ def response_rows(X: np.ndarray, known: KnownConstants) -> np.ndarray:
 
 
 def physical(X: np.ndarray, known: KnownConstants) -> np.ndarray:
-    """Masses and inertia > 0, stiffness and damping >= 0, all finite, 0 < a1 < L (the others
-    get an infinite objective, no simulation)."""
+    """Masses > 0, stiffness, damping >= 0, finite, 0 < a1 < L (else f = inf, no simulation)."""
     X = np.atleast_2d(np.asarray(X, dtype=float))
     ok = np.all(np.isfinite(X), axis=1)
     ok &= np.all(X[:, :4] > 0, axis=1) & np.all(X[:, 4:8] >= 0, axis=1)

@@ -56,8 +56,7 @@ def newmark(
 def body_accelerations(
     X: np.ndarray, known: KnownConstants, y: np.ndarray, dt: float, gamma: float, beta: float
 ) -> np.ndarray:
-    """z1'' and z2'' (m/s^2) ``(n, 2, N)`` from the plain Newmark; ``y``: the tyre inputs
-    ``(N, 2)`` (m) as sampled for the integrator."""
+    """z1'', z2'' (m/s^2) ``(n, 2, N)`` by the plain Newmark of the tyre inputs ``y`` (m)."""
     M, C, K = matrices(X, known)
     F = y @ tyre_input(known).T
     _, _, a = newmark(M, C, K, F, dt, gamma, beta)

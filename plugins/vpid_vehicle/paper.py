@@ -28,8 +28,7 @@ def _open_csv() -> Any:
 
 
 def paper_table() -> Any:
-    """The published tables as a DataFrame (columns: table, ps, algorithm, quantity, the nine
-    parameters, nore, note)."""
+    """The published tables as a DataFrame (table, ps, algorithm, quantity, parameters, ...)."""
     import pandas as pd
 
     with _open_csv() as fh:
@@ -46,8 +45,7 @@ def paper_rows() -> tuple[dict[str, str], ...]:
 
 
 def published(table: Any, algorithm: str, ps: int) -> dict[str, Any] | None:
-    """The paper's mean vector, ε (%) and NoRE of ``algorithm`` at ``ps``, or ``None``;
-    ``table``: :func:`paper_table`, or ``None`` (read without pandas)."""
+    """The paper's mean vector, ε (%) and NoRE of ``algorithm`` at ``ps``, or ``None``."""
     rows = paper_rows() if table is None else table.to_dict("records")
     rows = [r for r in rows if r["algorithm"] == algorithm.upper() and int(r["ps"]) == ps]
     mean = next((r for r in rows if r["quantity"] == "mean"), None)

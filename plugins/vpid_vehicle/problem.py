@@ -26,7 +26,7 @@ from .config import (
     window,
 )
 from .model import KnownConstants, physical
-from .objective import add_noise, noise_summary
+from .objective import ChannelFit, add_noise, noise_summary
 from .record_file import Sampler
 from .reference_io import read_measured, write_reference
 from .road import Bump
@@ -35,12 +35,13 @@ from .simulator import Simulator
 log = logging.getLogger(__name__)
 
 
-class VehicleProblem(Problem):
+class VehicleProblem(ChannelFit, Problem):
     """Half-car parameter identification (Gökdağ 2014); see docs/vehicle.md."""
 
     Config = VehicleConfig
     name = "vehicle"
     rows_independent = True  # the kernel's values never depend on the batch (tested)
+    channels = (("z1''", "m/s²"), ("z2''", "m/s²"))
 
     def __init__(self, config: VehicleConfig) -> None:
         super().__init__(config)
@@ -116,8 +117,7 @@ class VehicleProblem(Problem):
         return add_noise(self.reference_clean, nz.level, nz.model, np.random.default_rng(seed))
 
     def instance(self, index: int) -> VehicleProblem:
-        """Instance ``index``: noise record ``index`` when instances differ, else this problem;
-        shallow copies sharing the simulator, each made once and kept."""
+        """Instance ``index`` (its own noise record when instances differ), made once and kept."""
         if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or index < 0:
             raise ValueError(f"an instance index is an integer >= 0, not {index!r}")
         if not self._instances_differ:
@@ -140,12 +140,19 @@ class VehicleProblem(Problem):
         return f"noise.seed={self.config.noise.seed}/{self._index}"
 
     def residual_sigma(self) -> np.ndarray | None:
-        """The simulated noise's sigma of each entry of :meth:`fisher_residuals` (m/s^2), or
-        ``None`` for a measured record or no noise."""
+        """The simulated noise's sigma (m/s^2) per entry of :meth:`fisher_residuals`, or None."""
         nz = self.config.noise
         if self.reference_clean is None or nz.level <= 0:
             return None
         return estimators.noise_sigma(self.reference_clean, nz.level, nz.model).reshape(-1)
+
+    @property
+    def measured(self) -> np.ndarray:
+        return self.reference
+
+    @property
+    def weights(self) -> np.ndarray:
+        return self._weighting()
 
     def _weighting(self) -> np.ndarray:
         """What a raw residual is multiplied by, ``(2, N)``: 1 for Eq. 3 (m/s^2)."""
@@ -163,8 +170,7 @@ class VehicleProblem(Problem):
 
     @property
     def x_true(self) -> np.ndarray | None:
-        """The configured vehicle; ``None`` for a measured record (``problem.vehicle`` is then
-        only the box's centre, never a truth)."""
+        """The configured vehicle; ``None`` for a measured record (the box's centre, no truth)."""
         return None if self.reference_source == "file" else self._x_true.copy()
 
     def set_threads(self, n: int) -> None:
@@ -174,6 +180,9 @@ class VehicleProblem(Problem):
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
             raise ConfigError("threads", n, "an integer >= 1")
         self.model.set_threads(int(n))
+
+    def computed(self, X: np.ndarray) -> np.ndarray:
+        return self.responses(X)
 
     def responses(self, X: np.ndarray) -> np.ndarray:
         """z1'' and z2'' (m/s^2) ``(n, 2, N)``; NaN rows for non-physical candidates."""
@@ -202,8 +211,7 @@ class VehicleProblem(Problem):
             return np.full(X.shape[0], np.inf)
 
     def evaluate_instances(self, X: np.ndarray, instance: np.ndarray) -> np.ndarray:
-        """Eq. (3) of row ``j`` against instance ``instance[j]``'s record, in one kernel call
-        when the instances share this simulator; else instance by instance."""
+        """Eq. (3) of row ``j`` against instance ``instance[j]``, in one kernel call if possible."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         instance = np.asarray(instance, dtype=np.int64).reshape(-1)
         numbers, index = np.unique(instance, return_inverse=True)
@@ -223,25 +231,11 @@ class VehicleProblem(Problem):
         except (ValueError, FloatingPointError, ZeroDivisionError, np.linalg.LinAlgError):
             return super().evaluate_instances(X, instance)
 
-    def _weighted(self, X: np.ndarray) -> np.ndarray:
-        """Measured minus computed times the objective's fixed weights, ``(n, 2, N)``."""
-        return (self.reference[None] - self.responses(X)) * self._weighting()[None]
-
-    def residuals(self, X: np.ndarray) -> np.ndarray:
-        """Measured minus computed times the objective's weights, z1'' then z2'', ``(n, 2 N)``
-        (:func:`estimators.residuals_and_value`); inf rows for non-physical candidates."""
-        return self.evaluate_with_residuals(X)[1]
-
     def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
-        """Measured minus computed (m/s^2), z1'' then z2'', whatever the objective (what the
-        Cramér–Rao bound differentiates)."""
+        """Measured minus computed (m/s^2), z1'' then z2'', whatever the objective."""
         R = self.reference[None] - self.responses(X)
         R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
         return R.reshape(R.shape[0], -1)
-
-    def fisher_groups(self) -> np.ndarray:
-        """0 for the z1'' entries of :meth:`fisher_residuals`, 1 for the z2'' entries."""
-        return np.repeat(np.arange(2), self.t.size)
 
     def metrics(self, x: np.ndarray) -> dict[str, float]:
         """``{"NoRE": ...}`` (%); none for a measured record (no truth)."""
@@ -249,39 +243,15 @@ class VehicleProblem(Problem):
             return {}
         return {"NoRE": nore(x, self._x_true)}
 
-    def signal_units(self) -> dict[str, str]:
-        return {"z1''": "m/s²", "z2''": "m/s²"}
-
-    def residual_groups(self) -> np.ndarray:
-        """Eq. 3: one norm per channel; one group for the sums of squares."""
-        return estimators.groups(self.config.objective, 2, self.t.size)
-
     def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``f`` and :meth:`residuals` from one simulation (Eq. 3: the channel norms over the
-        reference's); inf where a candidate is non-physical or fails."""
-        f, R = estimators.residuals_and_value(self.config.objective, self._weighted(X))
+        """``f`` and :meth:`residuals` from one simulation; inf where a candidate fails."""
+        f, R = super().evaluate_with_residuals(X)
         if self.config.objective == "eq3":
             f = f / float(np.linalg.norm(self.reference, axis=1).sum())
         return f, R
 
-    def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        fitted = self.responses(np.asarray(x, dtype=float).reshape(1, -1))[0]
-        return {
-            "t": self.t.copy(),
-            "z1'':measured": self.reference[0].copy(),
-            "z1'':fitted": fitted[0],
-            "z2'':measured": self.reference[1].copy(),
-            "z2'':fitted": fitted[1],
-        }
-
-    def _f_at_true(self) -> float:
-        """The objective at the true vector: the floor that noise (or a model mismatch) sets."""
-        if not hasattr(self, "_f_true"):
-            self._f_true = float(self.evaluate(self._x_true[None])[0])
-        return self._f_true
-
     def describe(self) -> dict[str, Any]:
-        cfg = self.config
+        cfg, b, own = self.config, self.config.bounds, own_boxes(self.config)
         rear_in = max(0.0, min(self.bump.rear_off, self.T) - self.bump.rear_on)
         info: dict[str, Any] = {
             "samples": int(self.t.size),
@@ -294,10 +264,16 @@ class VehicleProblem(Problem):
             "rear_excited_s": float(rear_in),
             "reference": {"source": self.reference_source},
             "known": known_list(cfg),
-            "box": self._box_info(),
+            "box": [{"name": n, "lower": float(lo), "upper": float(hi), "unit": u,
+                     "source": (f"set by you (problem.bounds.{n})" if n in own else
+                                f"[{b.lower_factor:g}, {b.upper_factor:g}] x the configured "
+                                "vehicle (problem.bounds.lower_factor, upper_factor)")}
+                    for n, u, lo, hi in zip(PARAM_NAMES, PARAM_UNITS, self._bounds.lower,
+                                            self._bounds.upper, strict=True)],
         }
-        if self.reference_source != "file":
-            info.update(f_at_true=self._f_at_true(), metric_units={"NoRE": "%"})
+        if self.reference_source != "file" and not hasattr(self, "_f_true"):
+            # the objective at the truth: the floor noise (or a model mismatch) sets
+            self._f_true = float(self.evaluate(self._x_true[None])[0])
         ref = cfg.reference
         if self.reference_source == "file":
             info["reference"].update(file=str(ref.file), info=self.record_info,
@@ -305,6 +281,7 @@ class VehicleProblem(Problem):
                                          self.sampler is not None and self.sampler.on_steps))
             info["noise"] = {"applied": False}
         else:
+            info.update(f_at_true=self._f_true, metric_units={"NoRE": "%"})
             info["reference"].update(
                 integrator=ref.integrator or cfg.integrator,
                 dt_s=float(ref.dt or cfg.dt),
@@ -320,16 +297,6 @@ class VehicleProblem(Problem):
                 **noise_summary(self.reference_clean, self.reference),
             }
         return info
-
-    def _box_info(self) -> list[dict[str, Any]]:
-        """``problem.info.box``: each parameter's box with its source."""
-        b, own = self.config.bounds, own_boxes(self.config)
-        return [{"name": n, "lower": float(lo), "upper": float(hi), "unit": u,
-                 "source": (f"set by you (problem.bounds.{n})" if n in own else
-                            f"[{b.lower_factor:g}, {b.upper_factor:g}] x the configured "
-                            "vehicle (problem.bounds.lower_factor, upper_factor)")}
-                for n, u, lo, hi in zip(PARAM_NAMES, PARAM_UNITS, self._bounds.lower,
-                                        self._bounds.upper, strict=True)]
 
     def write_artifacts(self, directory: Path) -> list[Path]:
         """``reference.csv``: this problem's clean and noisy record (a job's: instance 0)."""

@@ -49,8 +49,7 @@ class Record(CsvRecord):
 
 
 def column_name(channel: str) -> str:
-    """A channel's CSV column name: ``''`` as ``dd``, ``'`` as ``d``, ``-`` as ``_``
-    (``zs''`` is ``zsdd``, ``theta'`` is ``thetad``, ``zs-zu`` is ``zs_zu``)."""
+    """A channel's CSV column name: ``''`` as ``dd``, ``'`` as ``d``, ``-`` as ``_``."""
     return channel.replace("''", "dd").replace("'", "d").replace("-", "_")
 
 
@@ -84,8 +83,7 @@ def read_record(path: str | Path, outputs: Sequence[Column], inputs: Sequence[Co
 
 
 def check_span(record: Record, dt: float, max_steps: int) -> None:
-    """Refuse a span of fewer than ``CsvTable.MIN_ROWS`` or more than ``max_steps`` model
-    steps of ``dt`` s (a time in ms read as s once asked for hours), naming it."""
+    """Refuse a span of too few or more than ``max_steps`` model steps of ``dt`` s, naming it."""
     steps = record.span / dt + 1
     least = CsvTable.MIN_ROWS
     if steps < least:

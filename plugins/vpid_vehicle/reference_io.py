@@ -27,8 +27,7 @@ CHANNELS = (Column("z1dd", "m/s^2", ("z1dd_noisy", "z1''")),
 def write_reference(
     path: Path, t: np.ndarray, noisy: np.ndarray, clean: np.ndarray | None
 ) -> Path:
-    """Write ``reference.csv`` (``noisy``, ``clean``: ``(2, N)``), atomically (never torn, a
-    planted link replaced, not followed)."""
+    """Write ``reference.csv`` atomically (never torn; a planted link replaced, not followed)."""
     buffer = io.StringIO(newline="")
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(HEADER)
@@ -46,6 +45,5 @@ WRITTEN_ONLY = ("z1dd_clean", "z2dd_clean")
 
 
 def read_measured(path: str | Path, mapping: ColumnMap | None = None) -> Record:
-    """The measured z1'', z2'' ``(2, N)`` (m/s^2) at the record's times, or a one-line
-    :class:`~vpid_bench.api.ConfigError`; no input column (the bump is the design's)."""
+    """The measured z1'', z2'' ``(2, N)`` (m/s^2) at the record's times, or a ConfigError."""
     return read_record(path, CHANNELS, mapping=mapping, extra_ok=WRITTEN_ONLY)

@@ -27,8 +27,7 @@ class Bump:
 
     @classmethod
     def from_geometry(cls, V_kmh: float, h: float, w: float, L: float) -> Bump:
-        """Bump of height ``h`` and width ``w`` (m) crossed at ``V_kmh`` (km/h) by a vehicle
-        of wheelbase ``L`` (m)."""
+        """Bump ``h`` x ``w`` (m) crossed at ``V_kmh`` km/h by a car of wheelbase ``L`` (m)."""
         v = V_kmh / 3.6
         return cls(h=h, front_on=0.0, front_off=w / v, rear_on=L / v, rear_off=(L + w) / v)
 
@@ -61,23 +60,15 @@ def sample_point(bump: Bump, t: np.ndarray) -> np.ndarray:
     return np.stack(cols, axis=-1)
 
 
-def step_means(bump: Bump, t: np.ndarray) -> np.ndarray:
-    """Exact mean of ``y`` over each step ``[t_k, t_{k+1}]``; shape ``(len(t) - 1, 2)`` (m)."""
-    t = np.asarray(t, dtype=float)
-    lo, hi = t[:-1], t[1:]
-    cols = []
-    for a, b in bump.windows:
-        overlap = np.clip(np.minimum(hi, b) - np.maximum(lo, a), 0.0, None)
-        cols.append(bump.h * overlap / (hi - lo))
-    return np.stack(cols, axis=-1).reshape(len(lo), 2)
-
-
 def sample_average(bump: Bump, t: np.ndarray, gamma: float = 0.5) -> np.ndarray:
     """``y_0 = y(0)``, ``y_{k+1} = (mean_k - (1 - gamma) y_k) / gamma``: Newmark's velocity
     update integrates ``dt ((1 - gamma) y_k + gamma y_{k+1})``, the step's exact impulse."""
     if not gamma >= 0.5:
         raise ValueError(f"average sampling needs gamma >= 1/2, got {gamma}")
-    means = step_means(bump, t)
+    t = np.asarray(t, dtype=float)
+    lo, hi = t[:-1], t[1:]  # the exact mean of y over each step, (len(t) - 1, 2)
+    means = np.stack([bump.h * np.clip(np.minimum(hi, b) - np.maximum(lo, a), 0.0, None)
+                      / (hi - lo) for a, b in bump.windows], axis=-1).reshape(len(lo), 2)
     y = np.empty((len(t), 2))
     y[0] = sample_point(bump, np.asarray(t[:1], dtype=float))[0]
     for k in range(len(t) - 1):

@@ -72,8 +72,7 @@ class Simulator:
         return out if self.stride == 1 else out[:, :, :: self.stride]
 
     def objective(self, X: np.ndarray, reference: np.ndarray) -> np.ndarray:
-        """Eq. (3) of the rows of ``X`` against ``reference`` (2, N), inf where a candidate is
-        non-physical or its simulation fails. Newmark with stride 1 runs fully compiled."""
+        """Eq. (3) of the rows of ``X``, inf where one fails (compiled for Newmark at stride 1)."""
         if self.integrator == "newmark" and self.stride == 1:
             return self._kernel_setup().objective(X, reference, self.threads)
         X = np.atleast_2d(np.asarray(X, dtype=float))
@@ -86,8 +85,7 @@ class Simulator:
 
     def objective_rows(self, X: np.ndarray, references: np.ndarray,
                        index: np.ndarray) -> np.ndarray:
-        """Eq. (3) of row ``j`` of ``X`` against ``references[index[j]]`` (runs in lockstep);
-        each value :meth:`objective`'s of the row alone (bit for bit when compiled)."""
+        """Eq. (3) of row ``j`` against ``references[index[j]]`` (runs in lockstep)."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         index = np.asarray(index, dtype=np.int64).reshape(-1)
         if self.integrator == "newmark" and self.stride == 1:

@@ -14,13 +14,11 @@ from vpid_bench import Contribution, ReportContext, Section
 
 #: Settings that shape the search, not the record.
 PROTOCOL = ("ps", "iterations", "budget")
-STRUCTURE = ("spring", "damper")
 
 
 def record_groups(records: Sequence[Mapping[str, Any]]
                   ) -> dict[str, dict[tuple[str, str], list[Mapping[str, Any]]]]:
-    """The ok runs by record (problem, settings but the structure and protocol, instance),
-    then by structure ``(spring, damper)``."""
+    """The ok runs by record (settings but structure and protocol), then by structure."""
     out: dict[str, dict[tuple[str, str], list[Mapping[str, Any]]]] = {}
     for rec in records:
         if rec.get("status") != "ok" or not (rec.get("result") or {}).get("x_best"):

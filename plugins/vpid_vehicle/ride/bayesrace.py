@@ -40,9 +40,9 @@ from vpid_bench import (
     relative_errors_percent,
 )
 
+from ..objective import ChannelFit
 from . import third_party
 from .dynamic_rows import DYNAMIC_ROWS
-from .problem import ChannelFit
 
 #: The simulator's coefficients, ``deep_dynamics.yaml`` of the records' repository (its
 #: PARAMETERS and VEHICLE_SPECS): value, Min, Max. A test reads the shipped file against them.
@@ -71,8 +71,7 @@ def check_data(names: list[str], data_dir: str | None) -> None:
 
 @dataclasses.dataclass(frozen=True)
 class BayesraceConfig(ProblemConfig):
-    """``track``: the record fitted (the other held out); ``substeps``: RK4 steps per sample;
-    ``objective`` (``ml`` needs a noise level these records do not state); ``data_dir``."""
+    """``track`` fitted (the other held out), ``substeps``, ``objective``, ``data_dir``."""
 
     track: Literal["ETHZ", "ETHZMobil"] = "ETHZ"
     substeps: int = 10
@@ -125,6 +124,7 @@ class BayesraceProblem(ChannelFit, Problem):
     name = "bayesrace"
     family = "single-track dynamic, third-party simulator"
     rows_independent: ClassVar[bool] = True
+    channels = CHANNELS
 
     def __init__(self, config: BayesraceConfig) -> None:
         super().__init__(config)
@@ -135,7 +135,7 @@ class BayesraceProblem(ChannelFit, Problem):
         self.held_out = TrackRecord(third_party.read_simulator_record(TRACKS[held_out],
                                                                       config.data_dir),
                                     config.substeps)
-        self.measured = self.fit.record.states
+        self.measured, self.t = self.fit.record.states, self.fit.record.t
         self.weights = estimators.weights(
             config.objective, self.measured,
             1.0 / np.linalg.norm(self.measured, axis=1, keepdims=True), None)
@@ -156,24 +156,13 @@ class BayesraceProblem(ChannelFit, Problem):
         return self.fit.simulate(X)
 
     def metrics(self, x: np.ndarray) -> dict[str, float]:
-        """``NoRE`` (%), then the held-out track's ``val_rms_r`` (rad/s), ``val_rms_vx``,
-        ``val_rms_vy`` (m/s)."""
+        """``NoRE`` (%), the held-out ``val_rms_r`` (rad/s), ``val_rms_vx``, ``val_rms_vy``."""
         x = np.asarray(x, dtype=float).reshape(-1)
         out = {"NoRE": float(np.linalg.norm(relative_errors_percent(x, self._x_true)))}
         sim = self.held_out.simulate(x[None])[0]
         err = np.sqrt(np.mean((self.held_out.record.states - sim) ** 2, axis=1))
         for (name, _), e in zip(CHANNELS, err, strict=True):
             out[f"val_rms_{name}"] = float(e) if np.isfinite(e) else float("inf")
-        return out
-
-    def signal_units(self) -> dict[str, str]:
-        return dict(CHANNELS)
-
-    def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        sim = self.fit.simulate(np.asarray(x, dtype=float).reshape(1, -1))[0]
-        out = {"t": self.fit.record.t.copy()}
-        for c, (name, _) in enumerate(CHANNELS):
-            out[f"{name}:measured"], out[f"{name}:fitted"] = self.measured[c].copy(), sim[c]
         return out
 
     def describe(self) -> dict[str, Any]:

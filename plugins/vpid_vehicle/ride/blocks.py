@@ -8,8 +8,7 @@ import numba
 
 @numba.njit(cache=True, nogil=True)
 def load_block(T, w0, j0, blk, lanes, st):  # pragma: no cover - compiled
-    """Copy candidates ``j0 ... j0 + lanes - 1`` of ``T`` and ``w0`` into ``blk`` (table,
-    then state and output slots from ``st``); lanes past the last get zeros (no NaN)."""
+    """Copy candidates ``j0 ...`` of ``T`` and ``w0`` into ``blk``; lanes past the last: zeros."""
     n, R, S = T.shape
     s = w0.shape[1]
     blk[:] = 0.0

@@ -20,6 +20,11 @@ from . import linear
 from .model import RideModel, Suspension, Wheel
 from .problem import RideConfig, RideProblem
 
+#: Jazar, Vehicle Dynamics (full-car example): yL, yR are the distances from the centre of
+#: gravity to the left and right wheels (track 1.45 m, CG 0.025 m off centre).
+JAZAR = {"m": 840.0, "Ix": 820.0, "Iy": 1100.0, "mf": 53.0, "mr": 76.0, "kf": 10000.0,
+         "kr": 13000.0, "cf": 5000.0, "cr": 5000.0, "a1": 1.4, "a2": 1.47, "yL": 0.7,
+         "yR": 0.75, "kt": 200000.0, "kR": 10000.0}
 #: Wheel order of the degrees of freedom 3..6 and of the inputs.
 WHEELS = ("FL", "FR", "RL", "RR")
 
@@ -73,18 +78,10 @@ class FullCar(RideModel):
     names = ("m", "Ix", "Iy", "mf", "mr", "kf", "kr", "cf", "cr")
     units = ("kg", "kg m²", "kg m²", "kg", "kg", "N/m", "N/m", "N s/m", "N s/m")
     sets = {
-        # Jazar, Vehicle Dynamics (full-car example): yL, yR are the distances from the
-        # centre of gravity to the left and right wheels (track 1.45 m, CG 0.025 m off centre)
-        "jazar": {"m": 840.0, "Ix": 820.0, "Iy": 1100.0, "mf": 53.0, "mr": 76.0,
-                  "kf": 10000.0, "kr": 13000.0, "cf": 5000.0, "cr": 5000.0,
-                  "a1": 1.4, "a2": 1.47, "yL": 0.7, "yR": 0.75, "kt": 200000.0,
-                  "kR": 10000.0},
+        "jazar": JAZAR,
         # the same car with its centre of gravity on the centre line (yL = yR = 0.725 m): it
         # reduces to a half car with per-axle values on identical tracks
-        "jazar_symmetric": {"m": 840.0, "Ix": 820.0, "Iy": 1100.0, "mf": 53.0, "mr": 76.0,
-                            "kf": 10000.0, "kr": 13000.0, "cf": 5000.0, "cr": 5000.0,
-                            "a1": 1.4, "a2": 1.47, "yL": 0.725, "yR": 0.725,
-                            "kt": 200000.0, "kR": 10000.0},
+        "jazar_symmetric": {**JAZAR, "yL": 0.725, "yR": 0.725},
         # CommonRoad vehicle models 3.0.2, parameters_vehicle2.yaml (BMW 320i; DOT vehicle
         # dynamics data; BSD-3): sprung mass, roll and pitch inertia, per-wheel suspension
         # and tyre rates as given; the unsprung mass of an axle (m_uf, m_ur) split between its

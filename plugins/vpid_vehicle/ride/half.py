@@ -14,6 +14,7 @@ import numpy as np
 
 from vpid_bench import added_setting
 
+from ..config import VehicleParams
 from ..model import KnownConstants, matrices, tyre_input
 from . import linear
 from .model import RideModel, Suspension, Wheel
@@ -36,9 +37,7 @@ class HalfCar(RideModel):
     units = ("kg", "kg m²", "kg", "kg", "N/m", "N/m", "N s/m", "N s/m", "m")
     sets = {
         # Gökdağ (2014), the paper's vehicle (the truth of problem=vehicle)
-        "gokdag": {"m": 505.1, "I": 651.0, "m1": 28.58, "m2": 54.3, "k1": 15000.0,
-                   "k2": 15000.0, "c1": 1828.0, "c2": 1828.0, "a1": 1.468,
-                   "L": 2.566, "kt1": 155900.0, "kt2": 155900.0},
+        "gokdag": dataclasses.asdict(VehicleParams()),
         # one side of Jazar's full car (Vehicle Dynamics): half the sprung mass with half its
         # pitch inertia (1100 / 2), per-corner springs, dampers and tyres
         "jazar_half": {"m": 420.0, "I": 550.0, "m1": 53.0, "m2": 76.0, "k1": 10000.0,
@@ -53,10 +52,6 @@ class HalfCar(RideModel):
 
     def wheels(self, known: dict[str, float], speed: float) -> tuple[Wheel, ...]:
         return (Wheel(0, 0.0), Wheel(0, known["L"] / speed))
-
-    def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
-        ok = np.all(np.isfinite(X) & (X > 0), axis=1)
-        return ok & (X[:, 8] < known["L"])
 
     def system(self, X: np.ndarray, known: dict[str, float], sensors: str
                ) -> linear.LinearSystem:

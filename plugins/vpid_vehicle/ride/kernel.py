@@ -113,8 +113,7 @@ def mf_single_track(P, Iz, delta, dt, m, lf, lr, vx, E, y):  # pragma: no cover 
 
 @numba.njit(**_OPTS)
 def _inverse(S, out, work):  # pragma: no cover - compiled
-    """``out`` = the inverse of the square ``S`` by Gauss-Jordan with partial pivoting
-    (``work``: scratch of S's shape). A singular ``S`` gives inf/NaN, never an exception."""
+    """``out`` = ``S``'s inverse by Gauss-Jordan with pivoting (singular: inf/NaN, no raise)."""
     d = S.shape[0]
     work[:, :] = S
     out[:, :] = 0.0
@@ -232,8 +231,7 @@ def newmark_table(M, C, K, F, Pa, Pv, Pq, Pu, dt, gamma, beta, u0, T, w0):  # pr
 
 @numba.njit(**_OPTS)
 def _step_loops(blk, W, s, p, st):  # pragma: no cover - compiled
-    """One step of every lane of a block, as loops (see :func:`run_table_loops`). The next
-    state is built in the scratch slots after the outputs, then copied."""
+    """One step of every lane as loops; the next state built in scratch slots, then copied."""
     scratch = st + (s + p) * LANES
     for lane in range(LANES):
         for row in range(s + p):
@@ -251,8 +249,7 @@ def _step_loops(blk, W, s, p, st):  # pragma: no cover - compiled
 
 @numba.njit(**_OPTS)
 def run_table_loops(T, w0, u, y):  # pragma: no cover - compiled
-    """The outputs ``y[j, k, c]`` of :func:`newmark_table`'s recurrence driven by ``u``:
-    :mod:`.codegen`'s loops for any sizes, as loops (slower; dot products summed in order)."""
+    """The outputs of :func:`newmark_table`'s recurrence: :mod:`.codegen`'s loops, any sizes."""
     n, R, S = T.shape
     s = w0.shape[1]
     p, r = R - s, S - s
@@ -283,15 +280,13 @@ def run_table_loops(T, w0, u, y):  # pragma: no cover - compiled
 
 @numba.njit(inline="always", error_model="numpy")
 def _slip_angle(lateral, vx):  # pragma: no cover - compiled
-    """``atan2(lateral, |vx|)`` (rad) by the vectorisable arc tangent (``|vx|`` floored at
-    1e-12 m/s: the same value wherever the forward speed is not vanishing)."""
+    """``atan2(lateral, |vx|)`` (rad), vectorisable (``|vx|`` floored at 1e-12 m/s)."""
     return vecmath.atan(lateral / max(abs(vx), 1e-12))
 
 
 @numba.njit(error_model="numpy")
 def _dynamic_rates(vx, vy, r, d, sd, cd, delta, P, i, m, lf, lr):  # pragma: no cover
-    """``(vx', vy', r')`` of Bayesrace's equations (:mod:`.bayesrace`); ``sd``, ``cd``: the
-    steer angle's sine and cosine."""
+    """``(vx', vy', r')`` of Bayesrace's equations; ``sd``, ``cd``: the steer's sine, cosine."""
     af = delta - _slip_angle(lf * r + vy, vx) + P[4, i]
     ar = _slip_angle(lr * r - vy, vx) + P[10, i]
     ffy = P[5, i] + _mf(af, P[0, i], P[1, i], P[2, i], P[3, i])
@@ -351,8 +346,7 @@ def _axle_force(alpha, P, i, first, linear):  # pragma: no cover - compiled
 
 @numba.njit(error_model="numpy")
 def _scheduled_rates(vy, r, vx, cd, delta, P, i, linear, m, lf, lr):  # pragma: no cover
-    """``(vy', r')`` of the single-track model at the forward speed ``vx`` (an input);
-    ``cd`` the cosine of the steer angle ``delta``."""
+    """``(vy', r')`` at the forward speed ``vx`` (an input); ``cd``: the steer's cosine."""
     rear = 1 if linear else 3
     ffy = _axle_force(delta - _slip_angle(vy + lf * r, vx), P, i, 0, linear)
     fry = _axle_force(_slip_angle(lr * r - vy, vx), P, i, rear, linear)

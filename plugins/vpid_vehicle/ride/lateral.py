@@ -13,7 +13,7 @@ the record by :mod:`.magic`'s model (imported here, never the reverse).
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 
@@ -21,7 +21,7 @@ from . import linear
 from .magic import CURVATURE, MU, SHAPE, MagicSingleTrack
 from .model import RideModel
 from .problem import RideProblem
-from .steering import SENSORS, SteeredConfig, SteeredRecord, steer_input
+from .steering import SteeredConfig, SteeredRecord
 
 
 class SingleTrack(SteeredRecord, RideModel):
@@ -37,19 +37,10 @@ class SingleTrack(SteeredRecord, RideModel):
         "smart": {"Cf": 70000.0, "Cr": 90000.0, "Iz": 3000.0, "lf": 1.142,
                   "m": 820.0, "L": 1.812},
     }
-    sensors = SENSORS
-
-    def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
-        ok = np.all(np.isfinite(X) & (X > 0), axis=1)
-        return ok & (X[:, 3] < known["L"])
-
-    def inputs(self, config: Any, known: dict[str, float], dt: float,
-               rng: np.random.Generator) -> np.ndarray:
-        """The steer angle at the road wheels (rad) ``(N, 1)`` (:func:`.steering.steer_input`)."""
-        return steer_input(config, dt)
-
     def system(self, X: np.ndarray, known: dict[str, float], sensors: str,
-               vx: float = 20.0) -> linear.LinearSystem:
+               vx: float | None = None) -> linear.LinearSystem:
+        """The systems at ``vx`` m/s (default: the model's speed)."""
+        vx = self.vx if vx is None else vx
         X = np.atleast_2d(X)
         n = X.shape[0]
         Cf, Cr, Iz, lf = X.T
@@ -85,17 +76,6 @@ class LateralConfig(SteeredConfig):
     Model = SingleTrack
 
 
-class _SingleTrackAt(SingleTrack):
-    """The single-track model at one forward speed (the problem's)."""
-
-    def __init__(self, vx: float) -> None:
-        self.vx = vx
-
-    def system(self, X: np.ndarray, known: dict[str, float], sensors: str,
-               vx: float | None = None) -> linear.LinearSystem:
-        return super().system(X, known, sensors, self.vx if vx is None else vx)
-
-
 class LateralProblem(RideProblem):
     """The linear single-track model identified from a steering manoeuvre."""
 
@@ -105,12 +85,11 @@ class LateralProblem(RideProblem):
     model = SingleTrack()
 
     def __init__(self, config: LateralConfig, index: int = 0) -> None:
-        self.model = _SingleTrackAt(config.speed_kmh / 3.6)
+        self.model = SingleTrack(config.speed_kmh / 3.6)
         super().__init__(config, index)
 
     def _record(self, fine_u: np.ndarray, sub: int) -> np.ndarray:
-        """The record; with ``record_model=magic_formula`` the Magic Formula model's (its tyre
-        from :mod:`.magic`, ``B`` from the truth's stiffness ``B C D``, ``D = mu`` x load)."""
+        """The record; the Magic Formula model's with ``record_model=magic_formula``."""
         if self.config.record_model == "linear":
             return super()._record(fine_u, sub)
         Cf, Cr, Iz, lf = self._x_true
@@ -124,8 +103,7 @@ class LateralProblem(RideProblem):
 
 
 def steady_yaw_gain(X: np.ndarray, known: dict[str, float], vx: float) -> np.ndarray:
-    """``r / delta`` in steady state (1/s): ``vx / (L + K vx^2)``, ``K = (m / L) (lr / Cf -
-    lf / Cr)`` (rad per m/s^2), for the rows of ``X``."""
+    """``r / delta`` in steady state (1/s): ``vx / (L + K vx^2)``, ``K`` the understeer gradient."""
     Cf, Cr, _, lf = np.atleast_2d(X).T
     L, m = known["L"], known["m"]
     K = m / L * ((L - lf) / Cf - lf / Cr)

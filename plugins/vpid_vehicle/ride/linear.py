@@ -100,8 +100,7 @@ def _kernel():
 
 
 def simulate(step: tuple[np.ndarray, ...], u: np.ndarray) -> np.ndarray:
-    """The outputs ``(n, N, p)`` of a discretised batch ``step = (A, U, V, Ox, Ou)`` driven by
-    the inputs ``u`` ``(N, r)`` sampled at the step's ``dt``, from rest."""
+    """The outputs ``(n, N, p)`` of ``step = (A, U, V, Ox, Ou)`` driven by ``u`` from rest."""
     A, U, V, Ox, Ou = (np.ascontiguousarray(np.moveaxis(np.asarray(a, dtype=float), 0, -1))
                        for a in step)
     u = np.ascontiguousarray(u, dtype=float)
@@ -111,8 +110,7 @@ def simulate(step: tuple[np.ndarray, ...], u: np.ndarray) -> np.ndarray:
 
 
 def _leading(a: np.ndarray | None, shape: tuple[int, ...]) -> np.ndarray:
-    """``a`` as float64 with a leading batch axis (``(1, ...)`` when shared by every
-    candidate; None: zeros of ``shape``), what the compiled table takes."""
+    """``a`` (float64) with a leading batch axis, ``1`` when shared; None: zeros of ``shape``."""
     if a is None:
         return np.zeros((1, *shape))
     a = np.asarray(a, dtype=float)

@@ -13,13 +13,13 @@ D)`` (the car's small-slip cornering stiffness).
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 
 from .model import RideModel
 from .problem import RideProblem
-from .steering import SENSORS, SteeredConfig, SteeredRecord, steer_input
+from .steering import SteeredConfig, SteeredRecord
 
 G = 9.81  # m/s^2
 #: PAC2002 lateral coefficients of the 185/80R14 tyre file published with Project Chrono:
@@ -40,10 +40,6 @@ class MagicSingleTrack(SteeredRecord, RideModel):
     names = ("Bf", "Cf", "Df", "Br", "Cr", "Dr", "Iz")
     units = ("1/rad", "1", "N", "1/rad", "1", "N", "kg m²")
     sets = {"civic_mf": _civic_mf()}
-    sensors = SENSORS
-
-    def __init__(self, vx: float = 20.0) -> None:
-        self.vx = vx
 
     def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
         """Positive parameters, and shape factors C in (0, 2) (beyond 2 the curve folds)."""
@@ -55,10 +51,6 @@ class MagicSingleTrack(SteeredRecord, RideModel):
         lower, upper = 0.5 * nominal, 1.5 * nominal
         upper[[1, 4]] = np.minimum(upper[[1, 4]], 1.99)
         return lower, upper
-
-    def inputs(self, config: Any, known: dict[str, float], dt: float,
-               rng: np.random.Generator) -> np.ndarray:
-        return steer_input(config, dt)
 
     def simulate(self, X: np.ndarray, known: dict[str, float], sensors: str, u: np.ndarray,
                  dt: float, solver: str) -> np.ndarray:

@@ -33,8 +33,7 @@ class Wheel:
 
 
 class RideModel:
-    """A linear ride model: the identified parameters, the published sets (identified and
-    known values), the sensor sets, the wheels and the matrices."""
+    """A linear ride model: parameters, published sets, sensor sets, wheels and matrices."""
 
     names: ClassVar[tuple[str, ...]] = ()
     units: ClassVar[tuple[str, ...]] = ()
@@ -65,8 +64,7 @@ class RideModel:
         """Refuse a record this model cannot use beyond its columns (default: none)."""
 
     def inputs_from_record(self, record: Record, sampler: Sampler) -> np.ndarray:
-        """The input channels ``(steps, r)`` from a record: each wheel's height linearly onto
-        the model's steps, its rate by central differences (as :func:`wheel_inputs`)."""
+        """The input channels from a record's heights, their rates as :func:`wheel_inputs`."""
         h = sampler.onto_steps(record.t, record.inputs)
         return np.concatenate([h, np.gradient(h, sampler.dt, axis=0)], axis=1)
 
@@ -77,13 +75,16 @@ class RideModel:
 
     def system(self, X: np.ndarray, known: dict[str, float], sensors: str
                ) -> linear.LinearSystem:
-        """The linear systems of the rows ``X``; inputs ``[h_1..h_w, h'_1..h'_w]``, outputs
-        the ``sensors`` channels."""
+        """The linear systems of the rows ``X``: inputs ``[h.., h'..]``, the ``sensors`` outputs."""
         raise NotImplementedError
 
     def physical(self, X: np.ndarray, known: dict[str, float]) -> np.ndarray:
-        """Rows that describe a vehicle (default: every parameter finite and > 0)."""
-        return np.all(np.isfinite(X) & (X > 0), axis=1)
+        """Rows that describe a vehicle: every parameter finite and > 0, an identified centre
+        of gravity (``a1``, ``lf``: behind the front axle) inside the wheelbase ``L``."""
+        ok = np.all(np.isfinite(X) & (X > 0), axis=1)
+        for j in (j for j, name in enumerate(self.names) if name in ("a1", "lf")):
+            ok &= X[:, j] < known["L"]
+        return ok
 
     def box(self, nominal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The search box around the published set (default ``[0.5, 1.5] x`` it)."""
@@ -91,37 +92,25 @@ class RideModel:
 
     def simulate(self, X: np.ndarray, known: dict[str, float], sensors: str, u: np.ndarray,
                  dt: float, solver: str) -> np.ndarray:
-        """The ``sensors`` channels ``(n, N, p)`` driven by ``u`` every ``dt`` from rest, by
-        ``exact`` (the record's solver) or ``newmark`` (the fitted model's)."""
+        """The ``sensors`` channels ``(n, N, p)`` from rest, by ``exact`` or ``newmark``."""
         system = self.system(X, known, sensors)
         if solver == "exact":
             return linear.simulate(linear.exact_foh(system, dt), u)
         return linear.newmark_outputs(system, dt, u)
 
 
-def track_profile(cfg: Any, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """The road height (m) of one track at distances ``x`` (m); the event starts where the
-    front wheels are 0.2 s into the record."""
-    start = 0.2 * cfg.speed_kmh / 3.6
-    if cfg.road == "hump":
-        return roads.hump(x, start)
-    if cfg.road == "bump":
-        return roads.bump(x, start)
-    if cfg.road == "step":
-        return roads.step(x, start)
-    return roads.iso8608(x, cfg.road_class, rng)
-
-
 def wheel_inputs(cfg: Any, wheels: tuple[Wheel, ...], dt: float,
                  rng: np.random.Generator) -> np.ndarray:
-    """``[h_1..h_w, h'_1..h'_w]`` (m, m/s) sampled every ``dt`` s over the record,
-    ``(N, 2 w)``."""
+    """``[h_1..h_w, h'_1..h'_w]`` (m, m/s) every ``dt`` s over the record, ``(N, 2 w)``."""
     v = cfg.speed_kmh / 3.6
     t = np.arange(round(cfg.duration_s / dt)) * dt
     tracks = 1 + max(w.track for w in wheels)
     lead = max(w.delay_s for w in wheels)
     x_track = np.arange(-lead * v - 1.0, v * t[-1] + 1.0, min(roads.ISO8608_DX, v * dt))
-    profiles = [track_profile(cfg, np.maximum(x_track, 0.0), rng) for _ in range(tracks)]
+    x, start = np.maximum(x_track, 0.0), 0.2 * v  # the event 0.2 s into the record
+    event = {"hump": roads.hump, "bump": roads.bump, "step": roads.step}.get(cfg.road)
+    profiles = [event(x, start) if event else roads.iso8608(x, cfg.road_class, rng)
+                for _ in range(tracks)]
     h = np.stack([np.interp(v * (t - w.delay_s), x_track, profiles[w.track]) for w in wheels],
                  axis=1)
     return np.concatenate([h, np.gradient(h, dt, axis=0)], axis=1)

@@ -33,6 +33,7 @@ from vpid_bench import (
 )
 
 from .. import knowns
+from ..objective import ChannelFit
 from ..record_file import (
     Column,
     ColumnMap,
@@ -60,22 +61,15 @@ INSTANCE_ROOT = 0x5EED1
 TRUTH_MARGIN = 0.05
 
 
-def member_key(name: str) -> int:
-    """A stable 32-bit number of a problem's registered name (CRC-32 of its UTF-8 bytes)."""
-    return zlib.crc32(name.encode("utf-8"))
-
-
 def instance_streams(seed: int, index: int, name: str) -> list[np.random.SeedSequence]:
-    """The truth's, the road's and the noise's streams of instance ``index`` of the problem
-    registered as ``name``."""
-    root = [seed, INSTANCE_ROOT, member_key(name)]
+    """The truth's, road's and noise's streams of instance ``index`` of problem ``name``."""
+    root = [seed, INSTANCE_ROOT, zlib.crc32(name.encode("utf-8"))]  # stable per problem name
     return np.random.SeedSequence(root, spawn_key=(index,)).spawn(3)
 
 
 def draw_truth(lower: np.ndarray, upper: np.ndarray, margin: float,
                rng: np.random.Generator) -> np.ndarray:
-    """A truth uniform over the box shrunk by ``margin`` of its width at each side: truths near
-    its faces and corners as often as near its centre."""
+    """A truth uniform over the box less ``margin`` of its width at each side."""
     lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     width = upper - lower
     return lower + width * rng.uniform(margin, 1.0 - margin, lower.size)
@@ -160,8 +154,7 @@ class SuiteConfig(ProblemConfig):
 
 @dataclasses.dataclass(frozen=True)
 class RideConfig(SuiteConfig):
-    """The road (:mod:`.roads`: ``hump``, ``bump``, ``step``, ``iso8608`` of ``road_class``)
-    met at ``speed_kmh``; ``spring``, ``damper``: the suspension (:mod:`.structures`)."""
+    """The road (:mod:`.roads`) at ``speed_kmh``; the suspension structure (:mod:`.structures`)."""
 
     road: str = "hump"
     road_class: str = "C"
@@ -185,16 +178,14 @@ class RideConfig(SuiteConfig):
 
 
 def check_record_file(config: Any, model: RideModel) -> None:
-    """Check the stated quantities and read ``reference.file`` as a config is built: the
-    pre-flight refuses either (exit 2, one line), not the job."""
+    """Check the stated quantities and the record as a config is built (the pre-flight)."""
     knowns.check_config(config, model)
     if config.reference.file is not None:
         read_ride_record(model, config)
 
 
 def read_ride_record(model: RideModel, config: Any) -> Record:
-    """A user's record for ``model``: the sensors' channels by column name (``zs''`` is
-    ``zsdd``), the model's input columns; a :class:`ConfigError` naming what does not fit."""
+    """A user's record for ``model`` (``zs''`` is column ``zsdd``), or a ConfigError."""
     channels = tuple(Column(column_name(c), unit, (c,)) for c, unit in
                      model.sensors[config.sensors])
     record = read_record(config.reference.file, channels, model.record_columns(),
@@ -203,50 +194,6 @@ def read_ride_record(model: RideModel, config: Any) -> Record:
     model.check_record(record)
     check_span(record, config.dt, MAX_STEPS)
     return record
-
-
-class ChannelFit:
-    """The residuals of a problem that fits measured channels ``measured`` ``(p, N)`` with the
-    objective's ``weights`` (:mod:`vpid_bench.estimators`) by :meth:`computed` ``(n, p, N)``
-    (NaN rows where a row is not simulated): channels one after another, inf rows where a
-    simulation fails."""
-
-    measured: np.ndarray
-    weights: np.ndarray
-
-    def computed(self, X: np.ndarray) -> np.ndarray:
-        raise NotImplementedError
-
-    def _weighted(self, X: np.ndarray) -> np.ndarray:
-        """``measured - computed`` times the objective's fixed weights, ``(n, p, N)``."""
-        return (self.measured[None] - self.computed(X)) * self.weights
-
-    def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return estimators.residuals_and_value(self.config.objective, self._weighted(X))
-
-    def evaluate(self, X: np.ndarray) -> np.ndarray:
-        return self.evaluate_with_residuals(X)[0]
-
-    def residuals(self, X: np.ndarray) -> np.ndarray:
-        """What a least-squares optimizer minimises (:func:`estimators.residuals_and_value`:
-        Eq. 3's over ``||measured_c||``; ``ml_profiled``'s rescaled per channel)."""
-        return self.evaluate_with_residuals(X)[1]
-
-    def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
-        """``(measured_c - computed_c) / ||measured_c||`` whatever the objective (what the
-        intervals and the Cramér–Rao bound differentiate)."""
-        scale = np.linalg.norm(self.measured, axis=1)[None, :, None]
-        R = (self.measured[None] - self.computed(X)) / scale
-        R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
-        return R.reshape(R.shape[0], -1)
-
-    def fisher_groups(self) -> np.ndarray:
-        """The channel of each entry of :meth:`fisher_residuals`."""
-        return np.repeat(np.arange(self.measured.shape[0]), self.measured.shape[1])
-
-    def residual_groups(self) -> np.ndarray:
-        """The channels for Eq. 3 (one norm each), one group for the sums of squares."""
-        return estimators.groups(self.config.objective, *self.measured.shape)
 
 
 class RideProblem(ChannelFit, Problem):
@@ -260,8 +207,7 @@ class RideProblem(ChannelFit, Problem):
 
         self.config = config
         self._index = index
-        #: The model in the configured suspension structure (the class's for the linear one),
-        #: then with the quantities the user stated fixed or freed (knowns.py).
+        #: The model in the configured structure, with what the user fixed or freed (knowns.py).
         self.model = structured(self.model, config)
         self.model = knowns.stated_model(self.model, config, type(self).name)
         published = self.model.sets[config.parameter_set]
@@ -291,15 +237,12 @@ class RideProblem(ChannelFit, Problem):
                               "every measured channel moves (one is zero throughout)")
         plug_in = (estimators.plug_in_sigma(self.measured, config.noise_level, "additive")
                    if config.objective == "ml" else None)
-        #: What a raw residual is multiplied by, ``(p, N)``: ``1 / ||measured_c||`` (Eq. 3),
-        #: ``1 / ||measured||`` (ols), ``1 / sigma`` plugged in from the record (ml),
-        #: ``1 / rms(measured_c)`` (ml_profiled).
+        #: What a raw residual is multiplied by, ``(p, N)`` (Eq. 3: ``1 / ||measured_c||``).
         self.weights = estimators.weights(config.objective, self.measured,
                                           1.0 / self.scale[:, None], plug_in)
 
     def _from_file(self, config: RideConfig) -> None:
-        """A user's record: no truth, no noise added; the model at rest at its first row, its
-        inputs from the record or the configuration (docs/own-record.md)."""
+        """A user's record: no truth, no noise added, the model at rest at its first row."""
         record = read_ride_record(self.model, config)
         self.sampler = sampler = Sampler(record.t, config.dt)
         self.input_source = knowns.input_text(config, record.input_names,
@@ -396,20 +339,8 @@ class RideProblem(ChannelFit, Problem):
         return None if self.sampler is not None else f"seed={self.config.seed}/{self._index}"
 
     # --- signals ------------------------------------------------------------------------
-    def signal_units(self) -> dict[str, str]:
-        return dict(self.channels)
-
-    def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        fitted = self.responses(np.asarray(x, dtype=float).reshape(1, -1))[0]
-        out = {"t": self.t.copy()}
-        for c, (name, _) in enumerate(self.channels):
-            out[f"{name}:measured"] = self.measured[c].copy()
-            out[f"{name}:fitted"] = fitted[c]
-        return out
-
     def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any]:
-        """The measured channels over their norms (:meth:`fisher_residuals`' units), their
-        names and the model's inputs at the record's samples (``h``, ``h'`` per wheel)."""
+        """The measured channels over their norms, their names and the model's inputs."""
         u = np.asarray(self.u, dtype=float)
         u = u.T if self.sampler is None else self.sampler.at_record(u.T[None])[0]
         wheels = self.model.wheel_names

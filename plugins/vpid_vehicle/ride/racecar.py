@@ -29,8 +29,8 @@ import numpy as np
 
 from vpid_bench import Bounds, ConfigError, Problem, ProblemConfig, estimators
 
+from ..objective import ChannelFit
 from . import third_party
-from .problem import ChannelFit
 
 #: The car's constants (``deep_dynamics_iac.yaml``, VEHICLE_SPECS; a test reads the file).
 VEHICLE = {"m": 790.0, "lf": 1.248, "lr": 1.7328}
@@ -203,17 +203,14 @@ class RacecarProblem(ChannelFit, Problem):
         """The held-out metrics (the module docstring)."""
         return self._held_out_metrics(self._predict(x, self.held_out)[0])
 
-    def naive_objective(self) -> float:
-        """The objective of the naive predictor on the fitted windows."""
-        naive = self._flat(self.fitted.naive()[None])
-        return float(estimators.value(self.config.objective,
-                                      (self.measured[None] - naive) * self.weights)[0])
-
     def comparisons(self) -> dict[str, dict[str, Any]]:
         """The naive predictor's held-out metrics, the point a model must beat."""
+        naive = self._flat(self.fitted.naive()[None])
+        f = float(estimators.value(self.config.objective,
+                                   (self.measured[None] - naive) * self.weights)[0])
         return {NAIVE: {"metrics": self._held_out_metrics(self.held_out.naive()),
                         "note": f"no model: each window's first logged state held; objective "
-                                f"on the fitted windows {self.naive_objective():.4g}"}}
+                                f"on the fitted windows {f:.4g}"}}
 
     def signal_units(self) -> dict[str, str]:
         return dict(CHANNELS)

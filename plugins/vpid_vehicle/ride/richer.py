@@ -27,8 +27,7 @@ SEAT = {"mass_kg": 80.0, "hz": 4.5, "zeta": 0.3, "x_m": 0.3}
 
 def seated_half(system: linear.LinearSystem, seat: dict[str, float] = SEAT
                 ) -> linear.LinearSystem:
-    """The half cars of ``system`` with a seat mass ``zs`` on a cushion at ``seat["x_m"]``
-    ahead of the centre of gravity (elongation ``zs - (x - s theta)``; no input or output)."""
+    """The half cars of ``system`` with a seat mass on a cushion (a fifth degree of freedom)."""
     n, d = system.M.shape[0], system.dof
     m = seat["mass_kg"]
     w = 2 * math.pi * seat["hz"]
@@ -128,8 +127,7 @@ QUARTER_CHANNELS = {"zs''": 0, "zu''": 1, "zs": 2, "zu": 3, "zs-zu": 4}
 
 def bilinear_quarter(x: np.ndarray, kt: float, ct: float, u: np.ndarray, dt: float,
                      asymmetry: float = DAMPER_ASYMMETRY) -> np.ndarray:
-    """The quarter car ``[ms, mu, ks, cs]`` with the bilinear damper from rest, driven by
-    ``[h, h']`` every ``dt`` s: ``(N, 5)`` (:data:`QUARTER_CHANNELS`) by RK4 at ``dt``."""
+    """The quarter car with the bilinear damper by RK4 at ``dt``: ``(N, 5)`` (QUARTER_CHANNELS)."""
     y = np.empty((u.shape[0], 5))
     _bilinear_rk4(np.ascontiguousarray(x, dtype=float), float(kt), float(ct),
                   float(asymmetry), np.ascontiguousarray(u, dtype=float), float(dt), y)

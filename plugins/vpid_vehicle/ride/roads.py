@@ -27,8 +27,7 @@ def bump(x: np.ndarray, start: float, height: float = 0.04, length: float = 0.10
 
 
 def step(x: np.ndarray, start: float, height: float = 0.10, edge: float = 0.15) -> np.ndarray:
-    """A step of ``height`` m rising from ``start`` to ``start + edge`` m along half a raised
-    cosine (the tyre's envelope of the edge; see the module)."""
+    """A step of ``height`` m rising over ``edge`` m as half a raised cosine (see the module)."""
     s = np.clip((np.asarray(x, dtype=float) - start) / edge, 0.0, 1.0)
     return 0.5 * height * (1.0 - np.cos(np.pi * s))
 

@@ -26,8 +26,7 @@ SENSORS: dict[str, tuple[tuple[str, str], ...]] = {
 
 @dataclasses.dataclass(frozen=True)
 class SteeredConfig(SuiteConfig):
-    """The measured channels and the manoeuvre (``steer_deg`` at the road wheels, at
-    ``speed_kmh``); the other keys: :class:`.problem.SuiteConfig`."""
+    """The channels and the manoeuvre (``steer_deg`` at the road wheels, at ``speed_kmh``)."""
 
     sensors: Literal["yaw", "yaw_ay", "yaw_ay_beta"] = "yaw_ay"
     manoeuvre: Literal["step", "sine"] = "sine"
@@ -47,8 +46,7 @@ class SteeredConfig(SuiteConfig):
 
 
 def steer_input(config: Any, dt: float) -> np.ndarray:
-    """The steer angle at the road wheels (rad) of the configured manoeuvre, sampled every
-    ``dt`` s over ``config.duration_s``, ``(N, 1)``."""
+    """The configured manoeuvre's steer angle (rad) at the road wheels, ``(N, 1)``."""
     t = np.arange(round(config.duration_s / dt)) * dt
     amp = np.deg2rad(config.steer_deg)
     if config.manoeuvre == "step":
@@ -64,10 +62,19 @@ SPEED_TOLERANCE = 0.02
 
 
 class SteeredRecord:
-    """A single-track model's record inputs: ``delta`` at the road wheels (rad) and ``vx``
-    (m/s), else the configured manoeuvre and ``speed_kmh``."""
+    """What the single-track models share: the sensor sets, the forward speed ``vx`` (m/s:
+    the problem's, or a user's record's mean) and the inputs, the configured manoeuvre or a
+    record's ``delta`` at the road wheels (rad) and ``vx``."""
 
-    vx: float
+    sensors = SENSORS
+
+    def __init__(self, vx: float = 20.0) -> None:
+        self.vx = vx
+
+    def inputs(self, config: Any, known: dict[str, float], dt: float,
+               rng: np.random.Generator) -> np.ndarray:
+        """The steer angle at the road wheels (rad) ``(N, 1)`` of the configured manoeuvre."""
+        return steer_input(config, dt)
 
     def record_columns(self) -> tuple[Column, ...]:
         return (Column("delta", "rad"), Column("vx", "m/s"))

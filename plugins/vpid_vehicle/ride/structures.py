@@ -24,8 +24,6 @@ import numpy as np
 from . import linear
 from .model import RideModel
 
-SPRINGS = ("linear", "cubic")
-DAMPERS = ("linear", "bilinear")
 #: The cubic coefficient's reference per unit of the linear rate (m⁻²): 25 % at 50 mm.
 CUBIC_PER_K = 0.25 / 0.05**2
 #: Box of the cubic coefficient as multiples of ``CUBIC_PER_K x k`` (published k).
@@ -36,8 +34,7 @@ REBOUND_BOX = (0.5, 3.0)
 
 
 class StructuredModel:
-    """A ride model with a cubic spring and/or a bilinear damper per axle (the module); its
-    input side (wheels, record columns, inputs) is the base model's."""
+    """A ride model with a cubic spring and/or bilinear damper per axle (see the module)."""
 
     #: What the problem's ``describe()`` names as the fitted model's solver.
     fitted_solver = "RK4 (the suspension structure's nonlinear forces)"
@@ -83,8 +80,7 @@ class StructuredModel:
 
     # --- parameters -----------------------------------------------------------------------
     def split(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The linear rows (the damper at its bump value), each axle's cubic coefficient
-        (N/m³) and rebound minus bump (N s/m), ``(n, axles)`` each."""
+        """The linear rows (bump damping), cubic coefficients (N/m³), rebound - bump (N s/m)."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         col = {name: X[:, i] for i, name in enumerate(self.names)}
         lin = np.stack([col.get(name, col.get(f"{name}_bump")) for name in self.base.names],

@@ -37,8 +37,7 @@ def protocol(base: type, suites: tuple[str, ...]) -> dict[str, Any]:
 
 
 def member(base: type, name: str, suites: tuple[str, ...], **defaults: Any) -> type:
-    """A subclass of ``base`` named ``name`` in ``suites``, its suites' :func:`protocol` and
-    ``defaults`` its Config's defaults."""
+    """A subclass of ``base`` named ``name`` in ``suites``, with its suites' and own defaults."""
     defaults = {**protocol(base, suites), **defaults}
     hints = typing.get_type_hints(base.Config)
     unknown = set(defaults) - set(hints)

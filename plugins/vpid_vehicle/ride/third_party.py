@@ -42,8 +42,7 @@ def _digest(path: str, size: int, mtime_ns: int) -> str:
 
 
 def verified(name: str, data_dir: str | None) -> Path:
-    """The path of ``name`` in ``data_dir`` or the installed distribution, its SHA-256 checked
-    (once per file state); else a :class:`ConfigError` naming the file and the checksum."""
+    """The path of ``name`` in ``data_dir`` or the distribution, SHA-256 checked (once)."""
     expected = SHA256[name]
     folder = Path(data_dir).expanduser() if data_dir else installed_folder()
     if folder is None:
@@ -91,8 +90,7 @@ def read_simulator_record(name: str, data_dir: str | None) -> SimulatorRecord:
 
 @dataclasses.dataclass(frozen=True)
 class RacecarLog:
-    """A racecar log at 25 Hz: ``t`` (s from the first row), ``vx``, ``vy`` (m/s), ``r``
-    (rad/s), the steer angle at the road wheels ``delta`` (rad)."""
+    """A 25 Hz racecar log: ``t`` (s), ``vx``, ``vy`` (m/s), ``r`` (rad/s), ``delta`` (rad)."""
 
     name: str
     t: np.ndarray
