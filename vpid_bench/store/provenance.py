@@ -1,17 +1,10 @@
-"""Provenance: which versions of what produced a record.
-
-Three kinds of facts, each looked up once per process (reading package metadata costs
-milliseconds and a record is written per run):
+"""Provenance: which versions of what produced a record, each looked up once per process.
 
 * :func:`package_versions`: Python and the numerical stack that can change any result;
-* :func:`distribution_provenance`: for a plugin, the distribution that ships it, its version
-  and the installed versions of what it declares it requires. The plugin registry records this
-  when it loads each entry point, so a record can name the exact plugin release, and a resumed
-  job can tell runs made by another release (see :mod:`vpid_bench.experiment`);
-* :func:`code_digest`: a digest of the installed source of the package that defines a
-  plugin's class. A plugin changed and reinstalled under the same version (as one does while
-  developing it) was once served its old records without a word; the digest enters each
-  run's id, so its runs are run again.
+* :func:`distribution_provenance`: a plugin's distribution, version and the installed
+  versions of its requirements (a resumed job tells runs made by another release);
+* :func:`code_digest`: a digest of a plugin's installed source; it enters each run's id, so
+  a plugin changed under the same version (once served its old records) runs again.
 """
 
 from __future__ import annotations
@@ -91,9 +84,8 @@ def library_provenance(dist: str) -> dict[str, str]:
     return {"name": dist, "version": version}
 
 
-#: Source bytes read for a plugin's code digest; past it, the remaining files count by path,
-#: size and modification time (a plugin package is a few hundred kB; a class defined inside
-#: a large library should not cost a read of all of it).
+#: Source bytes read for a plugin's code digest; past it, files count by path, size and
+#: modification time (a class defined inside a large library should not read all of it).
 MAX_CODE_BYTES = 32 * 1024 * 1024
 
 
@@ -119,9 +111,8 @@ def _tree_digest(root: str) -> str:
 
 
 def code_digest(cls: type) -> str | None:
-    """A digest of the installed code of the package that defines ``cls`` (every ``.py``
-    file of its top-level package, or its module's file when that is not a package), or
-    ``None`` when it has no source file (defined interactively, or in a zip)."""
+    """A digest of the installed code of the top-level package (or module) defining ``cls``;
+    ``None`` without a source file (defined interactively, or in a zip)."""
     top = cls.__module__.split(".")[0]
     for name in (top, cls.__module__):
         file = getattr(sys.modules.get(name), "__file__", None)

@@ -16,13 +16,10 @@ record is read whole or not at all). ``t`` (s) is always a column and must incre
 to row; its rate and start are free.
 
 **Refused**, each as one :class:`~vpid_bench.errors.ConfigError` naming the column, row or
-value: no such file, over :attr:`CsvTable.MAX_FILE_BYTES`, not UTF-8 text, not CSV, no
-header, a required column missing, an unused column, a column twice, a unit not allowed, a
-cell of a used column that is not an ASCII number (:data:`NUMBER`: no ``1_000`` nor
-full-width digits, which ``float`` reads), a non-finite value or one beyond
-:data:`MAX_MAGNITUDE` after a unit's conversion, a time that does not increase, fewer than
-:attr:`CsvTable.MIN_ROWS` rows or more than :attr:`CsvTable.MAX_ROWS`, and a measured
-channel zero or denormal throughout or dominated by one sample (:func:`check_channels`).
+value: a file that is missing, too large, not UTF-8 CSV or without header; a column missing,
+unused, twice or in a unit not allowed; a cell that is not an ASCII number (:data:`NUMBER`),
+not finite or beyond :data:`MAX_MAGNITUDE`; a time that does not increase; too few or too
+many rows; a measured channel zero throughout or dominated by one sample.
 """
 
 from __future__ import annotations
@@ -171,7 +168,7 @@ class CsvTable:
         self.time, *self.required = (f for f, _ in got if f is not None)
 
     def fail(self, allowed: str) -> ConfigError:
-        """The error for this file: ``problem.reference.file='<path>' is not allowed: ...``."""
+        """The error for this file (key ``problem.reference.file``)."""
         return ConfigError(KEY, str(self.path), allowed)
 
     def _rows(self) -> list[list[str]]:
@@ -267,11 +264,10 @@ class CsvTable:
     def read(self, measured: Sequence[Found], others: Sequence[Found],
              allowed: Sequence[str] | None = None, extra_ok: Sequence[str] = ()
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Times ``(N,)``, ``measured`` channels ``(p, N)`` (checked by
-        :func:`check_channels`) and ``others`` ``(N, r)``, in their columns' units, after
-        refusing a column not used (``allowed``: the problem's names said in the error,
-        default every column asked for; ``extra_ok``: record columns left unread without a
-        word)."""
+        """Times ``(N,)``, ``measured`` channels ``(p, N)`` (:func:`check_channels`) and
+        ``others`` ``(N, r)``, in their columns' units, after refusing a column not used
+        (``allowed``: the names the error offers, default every column asked for;
+        ``extra_ok``: record columns left unread without a word)."""
         used = [self.time, *measured, *others]
         names = {f.name for f in used}
         allowed = [c.name for c in self.columns] if allowed is None else allowed
