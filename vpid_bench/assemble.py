@@ -41,9 +41,8 @@ if TYPE_CHECKING:  # the job's types; records sit below the job in the layers
 
 def result_section(result: RunResult, derived: Mapping[str, Any],
                    x_true: np.ndarray | None) -> dict[str, Any]:
-    """The ``result`` section: the loop's own best, what the problem said of it (its
-    ``metrics``, and ``intervals`` where the truth is unknown: computed where the run ran,
-    :func:`vpid_bench.job_runs.with_problem_results`) and how far it is from a known truth."""
+    """The ``result`` section: the loop's own best, what the problem said of it (``derived``)
+    and how far it is from a known truth."""
     section: dict[str, Any] = {
         "x_best": result.x_best,
         "f_best": result.f_best,
@@ -73,11 +72,9 @@ def error_section(error: BaseException) -> dict[str, str]:
 
 def make_record(job: Job, run: RunOutcome, rid: str, instance: InstanceFacts,
                 provenance: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
-    """The JSON record of one run of ``job``: status ``ok`` with a result, or ``failed`` with
-    an error. ``instance`` holds the facts of the problem instance the run fitted (read where
-    the problem was built, :mod:`vpid_bench.facts`: no problem code runs here),
-    ``provenance`` the plugins' (``{"problem": {...}, "optimizer": {...}}``). The one place a
-    record is built."""
+    """The one place a run's JSON record is built: ``ok`` with a result, or ``failed`` with
+    an error. ``instance``: the facts of the instance it fitted (no problem code runs here);
+    ``provenance``: ``{"problem": {...}, "optimizer": {...}}``."""
     b = instance.bounds
     result, error = run.result, run.error
     record: dict[str, Any] = {

@@ -21,21 +21,13 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
                 polished: Mapping[str | None, dict[str, Any]] | None = None
                 ) -> dict[int, float]:
     """For a problem with residuals: each instance's optimum (``optima_dir/<key>.json``,
-    shared by the jobs of a sweep; see :mod:`.optimum`), and with a known truth the
-    Cramér–Rao bounds of its design (``job_dir/identifiability.json``: instance 0's, and
-    under ``instances`` each instance's, :func:`.identifiability.per_instance`) and the
-    floors of each estimator where the problem offers the choice (``job_dir/estimators.json``,
-    :mod:`.estimator_floors`); without a truth, the profile-likelihood intervals at the
-    optimum where they run in reasonable time (``job_dir/profile.json``, :mod:`.estimates`);
-    truth or not, the fit diagnostics and both intervals (white-noise and HAC) at the optimum
-    (``job_dir/diagnostics.json``, :func:`.diagnostics.write_diagnostics`).
-    Any problem's fixed comparison rows go to ``job_dir/comparisons.json``. Returns each
-    run's relative gap ``(f_best - f*) / f*`` to its instance's optimum (the absolute gap
-    where ``f* <= 0``).
-
-    ``polished``: the instance optima already made by :func:`polish_share` tasks (keyed by
-    instance id), with the per-problem files: nothing is polished here then, and an
-    instance without one (its task failed) has no gaps."""
+    shared by a sweep's jobs); with a truth, the Cramér–Rao bounds
+    (``identifiability.json``) and the floors per estimator (``estimators.json``); without,
+    the profile-likelihood intervals (``profile.json``); either way the fit diagnostics and
+    both intervals at the optimum (``diagnostics.json``). Any problem's comparison rows go
+    to ``comparisons.json``. Returns each run's relative gap ``(f_best - f*) / f*`` to its
+    instance's optimum (absolute where ``f* <= 0``). ``polished``: the optima already made
+    by :func:`polish_share` tasks, by instance id (nothing is polished here then)."""
     from .analysis.estimates import write_comparisons
 
     write_comparisons(problem, job_dir)  # first: cheap, and wanted whatever follows
@@ -47,10 +39,8 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
 def polish_share(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
                  records: list[dict[str, Any]], indices: list[int] | None
                  ) -> dict[str | None, dict[str, Any]]:
-    """One worker's share of a job's optimum polishes, so that a job's workers polish at
-    once: the optimum of each instance of runs ``indices`` (from ``records``, those runs'
-    records), keyed by instance id; or, with ``indices=None``, the per-problem files (the
-    bounds and the floors per estimator, which polish optima of their own) and ``{}``."""
+    """One worker's share of a job's optimum polishes: the optimum of each instance of runs
+    ``indices``, by instance id; or, with ``indices=None``, the per-problem files and ``{}``."""
     if not offers_residuals(type(problem)):
         return {}
     if indices is None:
@@ -125,9 +115,8 @@ def _residual_analysis(job: Job, problem: Problem, job_dir: Path, optima_dir: Pa
 
 
 def _per_problem_files(job: Job, problem: Problem, job_dir: Path, optima_dir: Path) -> None:
-    """The job's ``identifiability.json`` (instance 0's bounds, and each instance's under
-    ``instances``) and ``estimators.json`` (the floors per estimator), each made once per
-    sweep (:func:`shared_file`): they depend on the problem's data and the runs only."""
+    """The job's ``identifiability.json`` (instance 0's bounds, each instance's under
+    ``instances``) and ``estimators.json``, each made once per sweep (:func:`shared_file`)."""
     from .analysis.estimator_floors import FILE as FLOORS_FILE
     from .analysis.estimator_floors import INSTANCES as FLOORS_INSTANCES
     from .analysis.estimator_floors import estimator_floors
@@ -156,11 +145,10 @@ SHARED_DIR = "per-problem"
 
 def shared_file(optima_dir: Path, name: str, problem: Problem, settings: Mapping[str, Any],
                 more: Any, make: Callable[[], dict[str, Any] | None]) -> dict[str, Any] | None:
-    """A per-job file that depends only on the problem's data (its Cramér–Rao bounds, its
-    floors per estimator), made once per sweep: kept under ``optima_dir/per-problem/`` by a
-    hash of the problem's name, record settings, data digest and ``more``, and copied by
-    every later job of the same problem (a vpid1 build has 19 jobs per problem; the floors
-    polish 15 optima each). A kept file that is not a JSON object is made again."""
+    """A per-job file that depends only on the problem's data, made once per sweep: kept in
+    ``optima_dir/per-problem/`` by a hash of the problem's name, settings, data digest and
+    ``more``, and copied by every later job (a vpid1 build has 19 jobs per problem). A kept
+    file that is not a JSON object is made again."""
     from .analysis.optimum import _locked, optimum_key
 
     key = optimum_key(problem.name, settings, problem.content_digest(), str(more))
@@ -187,10 +175,9 @@ def _run_bests(records: list[dict[str, Any]]) -> dict[int, list[tuple[np.ndarray
 
 
 def job_score(gaps: Mapping[int, float], records: list[dict[str, Any]]) -> float | None:
-    """The job's search score, lower is better: the median relative gap of the runs' best to
-    their instance's optimum where the optimum is known, else the median best objective;
-    ``inf`` counts for a failed run. The command returns it, so an optimizing sweeper (Optuna)
-    can tune on it."""
+    """The job's search score (what an optimizing sweeper tunes on), lower is better: the
+    median gap to the instance optima where known, else the median best objective (``inf``
+    for a failed run)."""
     if gaps:
         values = list(gaps.values())
     else:
