@@ -171,18 +171,12 @@ def fit_diagnostics(residuals: np.ndarray, groups: np.ndarray,
                     lags: int = MAX_LAGS) -> dict[str, Any]:
     """The fit diagnostics of residuals at an identified vector (see the module).
 
-    ``residuals`` ``(m,)`` and ``groups`` ``(m,)`` (the group of each entry; a group's
-    entries in time order); ``measured`` ``(m,)``: the measured values in the residuals'
-    units (``None``: no signal rms); ``sigma``: the noise's sigma per group (``None`` or a
-    non-positive entry: estimated); ``inputs``: ``{name: (T,)}`` each input sampled as the
-    entries of a group of ``T`` entries (a group of another length is not cross-correlated);
-    ``names``: each group's channel name; ``held_out``: ``{"error": e, "naive": e0}`` (same
-    units; optionally their ``unit``) where a validation segment exists.
-
-    Returns ``{"schema", "groups": [per group: "group", "name", and
-    :func:`group_diagnostics`' keys], "held_out": {"error", "naive", "ratio", "unit"} or None,
-    "explained"}``; a group with fewer than :data:`MIN_SAMPLES` entries or a non-finite
-    residual is left out. Raises :class:`ValueError` when the shapes differ."""
+    ``residuals`` and ``groups`` ``(m,)`` (a group's entries in time order); ``measured``
+    ``(m,)`` in the residuals' units; ``sigma`` per group (``None`` or non-positive:
+    estimated); ``inputs`` ``{name: (T,)}`` sampled as a group of ``T`` entries; ``names``:
+    each group's channel; ``held_out``: ``{"error": e, "naive": e0}`` (same units). A group
+    of fewer than :data:`MIN_SAMPLES` entries or a non-finite residual is left out;
+    :class:`ValueError` when the shapes differ."""
     r = np.asarray(residuals, dtype=float).reshape(-1)
     g = np.asarray(groups, dtype=int).reshape(-1)
     if r.shape != g.shape:
@@ -218,19 +212,10 @@ FILE = DIAGNOSTICS
 
 def problem_diagnostics(problem: Any, x: Any) -> dict[str, Any]:
     """The fit diagnostics of ``problem`` (one with residuals) at ``x``: its
-    :meth:`~vpid_bench.api.Problem.fisher_residuals` grouped by
-    :meth:`~vpid_bench.api.Problem.fisher_groups`, the noise sigma it states
-    (:meth:`~vpid_bench.api.Problem.residual_sigma`, per group) and what its optional
-    ``diagnostic_signals(x)`` gives, where it has one; with ``x``, ``f`` (the objective at
-    ``x``) and ``intervals`` (:func:`.intervals.jacobian_intervals`: the white-noise and
-    the robust HAC interval).
-
-    ``diagnostic_signals(x)`` (a method a problem with residuals may define; not yet a
-    member of the contract) returns a dict with any of ``measured`` (``(m,)``: the measured
-    values in the units of ``fisher_residuals``), ``names`` (each group's channel name),
-    ``inputs`` (``{name: (T,)}``: each input the model is driven by, sampled as the ``T``
-    entries of a group) and ``held_out`` (``{"error": e, "naive": e0}``: the error of ``x``
-    on a validation record beside a naive predictor's, same units)."""
+    ``fisher_residuals`` by ``fisher_groups``, its stated ``residual_sigma`` per group and
+    its optional ``diagnostic_signals(x)`` (a dict of :func:`fit_diagnostics`' ``measured``,
+    ``names``, ``inputs``, ``held_out``); with ``x``, ``f`` and both ``intervals``
+    (:func:`.intervals.jacobian_intervals`)."""
     from .intervals import jacobian_intervals
 
     x = np.asarray(x, dtype=float).reshape(-1)
@@ -252,8 +237,7 @@ def problem_diagnostics(problem: Any, x: Any) -> dict[str, Any]:
 
 
 def write_diagnostics(problem: Any, x: Any, job_dir: Any) -> Any:
-    """``job_dir/diagnostics.json`` (:func:`problem_diagnostics` at ``x``), or, where the
-    problem's code fails there, the file with ``status`` ``failed`` and why."""
+    """``job_dir/diagnostics.json`` at ``x``, or with ``status`` ``failed`` and why."""
     from pathlib import Path
 
     from ..store.job_files import write_job_json

@@ -90,12 +90,11 @@ class _Likelihood:
         if sigma is None or centre is None:
             raise ValueError("profiles need a start (the truth or an estimate) and the noise "
                              "sigma (residual_sigma, or estimated from the residuals)")
-        per = entry_sigma(np.asarray(sigma, float),
-                          np.asarray(problem.fisher_groups(), dtype=int))
+        groups = np.asarray(problem.fisher_groups(), dtype=int)
+        per = entry_sigma(np.asarray(sigma, float), groups)
         if per is None:
             raise ValueError("the problem's residual_sigma has neither a per-group nor a "
                              "per-entry shape")
-        groups = np.asarray(problem.fisher_groups(), dtype=int)
         floor = np.array([np.sqrt(np.mean(per[groups == g] ** 2))
                           for g in range(int(groups.max()) + 1)])[groups] * SIGMA_FLOOR
         kept = informative(per, groups)
@@ -151,16 +150,13 @@ def profile_intervals(problem: Problem, crb: dict[str, Any] | None = None,
                       sigma: np.ndarray | None = None,
                       rel_sd: np.ndarray | None = None,
                       limit_s: float | None = None) -> dict[str, Any]:
-    """95 % profile-likelihood intervals of every parameter of ``problem`` (one record: an
-    instance). ``crb``: its :func:`~.identifiability.cramer_rao` when already computed (the
-    first steps along each profile are its bounds; the symmetry test its condition number).
-    Without a truth: ``start`` (an identified vector, physical units) is where the fit of
-    ``θ̂`` starts, ``sigma`` the noise per residual group estimated from the residuals
-    (:func:`.intervals.group_sigma`) and ``rel_sd`` the relative standard errors that set
-    the first steps. ``limit_s``: raise :class:`ProfileTooSlowError` when the first fit says the
-    profile would take longer (``2 d FITS_PER_END`` fits as long as it), or when it has run
-    twice that long. Returns ``{"names", "estimate", "lower", "upper", "classification",
-    "symmetry_ratio"}`` with physical values; an open end is ``None``."""
+    """95 % profile-likelihood intervals of every parameter of ``problem`` (one instance):
+    ``names``, ``estimate``, ``lower``, ``upper`` (physical; an open end ``None``),
+    ``classification``, ``symmetry_ratio``. ``crb``: its Cramér–Rao bounds if computed
+    (the first steps; the symmetry test). Without a truth: ``start`` (an identified vector),
+    ``sigma`` per group estimated from the residuals and ``rel_sd`` (the first steps).
+    ``limit_s``: :class:`ProfileTooSlowError` when the first fit says it would take longer
+    (``2 d FITS_PER_END`` fits), or once it has run twice that long."""
     import time
 
     from scipy.optimize import brentq
