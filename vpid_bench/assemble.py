@@ -1,21 +1,9 @@
 """Assembling a run record (schema 2): what a run was, what it found, what produced it.
 
-Each setting is stored once: the problem's settings (the protocol ``ps``/``iterations``
-included) under ``problem.config``, the optimizer's own settings under ``optimizer.params``,
-the job's ``seed`` under ``seeds`` and the run's ``budget`` at the top. Fields::
-
-    schema, run_id, run_index, status ("ok" | "failed"), error (type, message, traceback)
-    problem     name, plugin (provenance), config, info (the problem's describe())
-    optimizer   name, plugin (provenance), params
-    seeds       seed, spawn_key           budget
-    instance    index (= run index), id (the instance's data; null: all instances identical)
-    parameters  names, units, lower, upper, true (null when unknown)
-    result      x_best, f_best, evaluations, batches, stopped_by, metrics, rel_error_percent,
-                intervals (no truth and residuals: 95 % intervals of x_best, see
-                :mod:`vpid_bench.analysis.intervals`; absent otherwise)
-    trace       evaluations, best         (best-so-far after every evaluated batch)
-    versions    python and the numerical stack
-    timing      started_at, wall_time_s, run_time_s, host   (the only non-deterministic part)
+Each setting is stored once: the problem's (the protocol included) under ``problem.config``,
+the optimizer's own under ``optimizer.params``, ``seed`` under ``seeds``, the run's ``budget``
+at the top. ``result.intervals`` (no truth, residuals: 95 % intervals of ``x_best``) is absent
+otherwise; ``timing`` is the only non-deterministic part.
 """
 
 from __future__ import annotations

@@ -132,7 +132,7 @@ class Output:
         self.started()
         for fd in list(self._streams):
             for _ in range(64):  # at most 4 MB more of a worker that is still writing
-                if fd not in self._streams or not _ready(fd):
+                if fd not in self._streams or not readable(fd):
                     break
                 self.forward(fd)
             if fd in self._streams:
@@ -141,13 +141,13 @@ class Output:
                     os.close(fd)
 
 
-def _ready(fd: int) -> bool:
-    """Whether pipe ``fd`` has something to read now."""
+def readable(fd: int, closed: bool = False) -> bool:
+    """Whether ``fd`` (a pipe, a pidfd) is readable now; ``closed`` when it is not open."""
     import select
 
     with contextlib.suppress(OSError, ValueError):
         return bool(select.select([fd], [], [], 0)[0])
-    return False
+    return closed
 
 
 def redirect(out: Connection, err: Connection) -> None:
@@ -161,4 +161,4 @@ def redirect(out: Connection, err: Connection) -> None:
             stream.reconfigure(line_buffering=True)
 
 
-__all__ = ["Output", "detach", "drop_tracker", "exited", "redirect", "strays"]
+__all__ = ["Output", "detach", "drop_tracker", "exited", "readable", "redirect", "strays"]

@@ -26,13 +26,13 @@ import dataclasses
 import itertools
 import os
 import secrets
-import select
 import signal
 import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
 from .cgroups import Cgroup
+from .process_tree import exited, readable
 
 #: The environment variable that marks a worker's processes (its value: the worker's token).
 MARK = "VPID_BENCH_TREE"
@@ -107,7 +107,7 @@ class _Held:
         """Whether it still runs (a zombie does not)."""
         import psutil
 
-        if self.fd is not None and _readable(self.fd):  # a pidfd is readable once it exits
+        if self.fd is not None and readable(self.fd, closed=True):  # readable once it exits
             return False
         try:
             return self.proc.is_running() and self.proc.status() != psutil.STATUS_ZOMBIE
@@ -162,12 +162,6 @@ def _children(pid: int) -> list[int]:
     return []
 
 
-def _readable(fd: int) -> bool:
-    with contextlib.suppress(OSError, ValueError):
-        return bool(select.select([fd], [], [], 0)[0])
-    return True
-
-
 class Tree(_Held):
     """A worker process just started (not yet reaped), its ``token`` (:func:`marked`) and
     ``cgroup`` (``None``: none could be made), held (see module); its ``fd`` (pidfd,
@@ -194,8 +188,6 @@ class Tree(_Held):
                 return True
         if not self._unreaped():
             return True
-        from .process_tree import exited
-
         return exited(self.pid)  # not reaped: the number is still the worker's
 
     def _unreaped(self) -> bool:

@@ -174,23 +174,16 @@ class _Worker:
 
 
 @dataclasses.dataclass
-class _Busy:
+class _Task:
+    """A task a worker is busy with: when it is killed (``None``: never), its runs left and
+    when they started (or a call's index), and the last phase the worker announced
+    (``None``: still building the problem)."""
     worker: _Worker
-    remaining: list[int]
     deadline: float | None
-    started: str
-    #: The last phase the worker announced (``None``: still building the problem).
+    remaining: list[int] = dataclasses.field(default_factory=list)
+    started: str = ""
     phase: str | None = None
-
-
-@dataclasses.dataclass
-class _Call:
-    """A call a worker is busy with: its task's index, when it is killed (``None``: never),
-    and whether the worker said its problem is built."""
-    index: int
-    worker: _Worker
-    deadline: float | None
-    built: bool = False
+    index: int = 0
 
 
 class Workers:
@@ -369,7 +362,7 @@ class Workers:
         ends or hangs its worker costs that task only."""
         results: list[tuple[Any, Any]] = [(None, None)] * len(tasks)
         pending = deque(range(len(tasks)))
-        busy: dict[Connection, _Call] = {}
+        busy: dict[Connection, _Task] = {}
         try:
             while pending or busy:
                 while pending and len(busy) < max(1, workers):
@@ -390,17 +383,18 @@ class Workers:
 
     def _send_call(self, job: Job, index: int,
                    task: tuple[Callable[..., Any], tuple[Any, ...]], what: str,
-                   limit: float | None) -> _Call | BaseException:
+                   limit: float | None) -> _Task | BaseException:
         worker = self._take()
         try:
             worker.conn.send(("call", job, task))
         except OSError:
             return WorkerDiedError(f"its worker process ended ({self._end(worker)}) before "
                                    f"{what}")
-        return _Call(index, worker, None if limit is None else time.monotonic() + START_S)
+        return _Task(worker, None if limit is None else time.monotonic() + START_S,
+                     index=index)
 
-    def _call_events(self, busy: dict[Connection, _Call], what: str, limit: float | None
-                     ) -> Iterator[tuple[_Call, tuple[Any, Any]]]:
+    def _call_events(self, busy: dict[Connection, _Task], what: str, limit: float | None
+                     ) -> Iterator[tuple[_Task, tuple[Any, Any]]]:
         """The calls among ``busy`` that ended, each with its ``(value, error)``, after one
         wait (a call that announces its problem is built gets ``limit`` from then)."""
         deadlines = [b.deadline for b in busy.values() if b.deadline is not None]
@@ -410,12 +404,12 @@ class Workers:
             msg, ended = self._receive(worker)
             if ended is not None:
                 yield call, (None, WorkerDiedError(
-                    f"{what} ended its worker process ({ended})" if call.built
+                    f"{what} ended its worker process ({ended})" if call.phase
                     else f"its worker process ended ({ended}) while it built the problem"))
             elif _aside(msg):
                 continue
             elif msg[0] == "phase":
-                call.built = True
+                call.phase = "built"
                 call.deadline = None if limit is None else time.monotonic() + limit
             elif msg[0] == "end":
                 _, error, value, strays = msg
@@ -432,7 +426,7 @@ class Workers:
                 yield call, (None, WorkerKilledError(
                     f"{what} did not return within {limit:.0f} s (run_timeout_s + "
                     f"{GRACE_S:.0f} s; blocked in C or ignoring SIGALRM): its worker process "
-                    "was killed" if call.built else f"building the problem took more than "
+                    "was killed" if call.phase else f"building the problem took more than "
                     f"{START_S:.0f} s: its worker process was killed"))
 
     def probe(self, job: Job) -> None:
@@ -448,7 +442,7 @@ class Workers:
         size = max(1, workers)
         pending: deque[list[int]] = deque(_tasks(list(indices), size) if lockstep
                                           else [[i] for i in indices])
-        busy: dict[Connection, _Busy] = {}
+        busy: dict[Connection, _Task] = {}
         try:
             while pending or busy:
                 while pending and len(busy) < size:
@@ -459,7 +453,7 @@ class Workers:
                 self._end(b.worker)
 
     def _hand_out(self, job: Job, runs: list[int], threads: int,
-                  busy: dict[Connection, _Busy]) -> None:
+                  busy: dict[Connection, _Task]) -> None:
         worker = self._take()
         key = _job_key(job)
         fresh = key not in worker.jobs
@@ -468,11 +462,11 @@ class Workers:
         limit = _allowance(job, len(runs))
         limit = START_S if fresh and limit is not None else limit
         deadline = None if limit is None else time.monotonic() + limit
-        busy[worker.conn] = _Busy(worker, list(runs), deadline, now_utc())
+        busy[worker.conn] = _Task(worker, deadline, list(runs), now_utc())
         with contextlib.suppress(OSError):  # a worker already gone: the next wait says so
             worker.conn.send(("runs", job, (runs, len(runs) > 1, threads)))
 
-    def _collect(self, job: Job, busy: dict[Connection, _Busy],
+    def _collect(self, job: Job, busy: dict[Connection, _Task],
                  pending: deque[list[int]]) -> Iterator[RunOutcome]:
         deadlines = [b.deadline for b in busy.values() if b.deadline is not None]
         left = max(0.0, min(deadlines) - time.monotonic()) if deadlines else None
@@ -497,7 +491,7 @@ class Workers:
                     "worker process was killed")
                 yield from _lost(job, b, cause, pending)
 
-    def _handle(self, job: Job, conn: Connection, msg: Any, busy: dict[Connection, _Busy],
+    def _handle(self, job: Job, conn: Connection, msg: Any, busy: dict[Connection, _Task],
                 pending: deque[list[int]]) -> Iterator[RunOutcome]:
         """A worker's message about its runs: progress, an outcome, or the task's end."""
         b = busy[conn]
@@ -534,7 +528,7 @@ class Workers:
             yield from _lost(job, b, cause, pending)
 
 
-def _lost(job: Job, b: _Busy, cause: BaseException, pending: deque[list[int]]
+def _lost(job: Job, b: _Task, cause: BaseException, pending: deque[list[int]]
           ) -> Iterator[RunOutcome]:
     """A task lost its worker: a single run is charged; a group goes again one by one."""
     if len(b.remaining) > 1:

@@ -1,35 +1,21 @@
-"""Fit diagnostics: does the fitted model explain the record? (as system-identification tools
-give them, e.g. MATLAB's ``resid`` and ``compare``).
+"""Fit diagnostics: does the fitted model explain the record? (as MATLAB's ``resid`` and
+``compare`` give them). Per residual group (a channel, entries in time order):
 
-Pure computation on the residuals at an identified vector, truth or not. Per residual group
-(a measured channel), the entries taken in time order (the order the group's entries have in
-the residual vector):
+* ``rms`` beside the measured signal's (``rms_over_signal``) and beside the noise's ``sigma``,
+  stated by the problem or estimated from the second differences (``σ̂² = mean((Δ²r)²) / 6``:
+  exact for white noise and blind to a smooth misfit, which so shows as ``rms_over_sigma``
+  above 1);
+* ``acf`` at lags ``0..lags`` with its 99 % band ``± 2.576 / sqrt(n)``, ``lag1`` and the
+  Ljung–Box test (``Q = n (n+2) Σ ρ_k² / (n-k)`` against χ²);
+* ``cross``: per input the problem exposes, ``corr(r_t, u_{t-k})`` at lags ``-lags..lags``
+  with Bartlett's 99 % band (``var ρ_ru(k) ≈ (1/n) Σ_j ρ_r(j) ρ_u(j)``: a smooth input with
+  white residuals is not flagged) and the share of lags ``outside`` it;
+* flags: ``correlated`` (Ljung–Box p below :data:`ALPHA`), ``input_correlated`` (more than
+  :data:`CROSS_SHARE` of an input's lags outside), ``misfit`` (``rms_over_sigma`` above
+  :data:`MISFIT`).
 
-* ``rms``: the residual's root mean square, beside the measured signal's (``signal_rms``,
-  same units: ``rms_over_signal``) and beside the noise's standard deviation ``sigma``:
-  the one stated by the problem (``sigma_source="stated"``: a simulated record) or, else,
-  estimated from the residual's second differences (``"estimated"``:
-  ``σ̂² = mean((Δ²r)²) / 6``, exact for white noise and blind to a misfit smooth at the
-  sampling scale; so a model error that is smooth shows as ``rms_over_sigma`` above 1);
-* ``acf``: the residual's autocorrelation at lags ``0..lags`` with its 99 % band
-  ``± 2.576 / sqrt(n)`` (white residuals stay inside it at 99 % of the lags), ``lag1`` and
-  the Ljung–Box whiteness test over ``ljung_box_lags`` lags (``Q = n (n+2) Σ ρ_k² / (n-k)``
-  against χ² with that many degrees of freedom; ``ljung_box_p`` below :data:`ALPHA`: the
-  residuals are not white);
-* ``cross``: per input the problem exposes (sampled as the group's entries), the
-  cross-correlation ``corr(r_t, u_{t-k})`` at lags ``-lags..lags`` with its 99 % band. The
-  band allows for the autocorrelation of both series (Bartlett's formula,
-  ``var ρ_ru(k) ≈ (1/n) Σ_j ρ_r(j) ρ_u(j)``), so a smooth input with white residuals is
-  not flagged; ``outside`` is the share of lags beyond it;
-* flags: ``correlated`` (Ljung–Box rejects whiteness at :data:`ALPHA`), ``input_correlated``
-  (more than :data:`CROSS_SHARE` of the cross-correlation lags of an input outside the band),
-  ``misfit`` (``rms_over_sigma`` above :data:`MISFIT`).
-
-A validation segment, where the problem has one, adds ``held_out``: its error beside a naive
-predictor's (``ratio`` below 1: the model predicts better than the naive one).
-
-:func:`fit_diagnostics` returns a JSON-able dict (``schema`` :data:`SCHEMA`); ``explained``
-is false when any group is flagged ``correlated`` or ``input_correlated``. The words are the
+A validation segment adds ``held_out`` (its error beside a naive predictor's). ``explained``
+is false when any group is ``correlated`` or ``input_correlated``; the words are the
 report's (:mod:`vpid_bench.report.diagnostics`).
 """
 

@@ -4,18 +4,9 @@ The report never rebuilds a problem from an (untrusted) record; the job, which h
 problem at hand, writes what a figure needs: the measured and fitted signals of its best run
 (:meth:`~vpid_bench.api.Problem.signals`), with each channel's unit.
 
-``best_signals.csv`` layout (UTF-8)::
-
-    # vpid-bench best signals 1
-    # source: {"run_index": 3, "f_best": 0.046, "ranked_by": "err", "value": 22.3}
-    # units: {"t": "s", "z1''": "m/s^2", "z2''": "m/s^2"}
-    t,z1'':measured,z1'':fitted,z2'':measured,z2'':fitted
-    0.0,0.0,0.0,0.0,0.0
-    ...
-
-The ``#`` lines hold JSON; the rest is a CSV table (one column per signal, ``t`` in s first,
-non-finite values written as ``nan``). :func:`read_best_signals` checks all of it and
-raises :class:`BadArtifactError` (one line naming the file) for anything else.
+``best_signals.csv`` (UTF-8): the line :data:`MAGIC`, then ``# source: {JSON}`` (which run)
+and ``# units: {JSON}``, then a CSV table: ``t`` (s), ``<channel>:measured``,
+``<channel>:fitted``, ... (non-finite values as ``nan``).
 """
 
 from __future__ import annotations

@@ -1,9 +1,6 @@
-"""``job.json``: the status of one job, written atomically into its output directory.
-
-The command reads these after a sweep to tell which jobs failed, whatever launcher (and
-process) ran them. Each status carries the invocation id of the command that wrote it
-(``VPID_BENCH_INVOCATION``), so statuses left by an earlier run of a resumed sweep are not
-mistaken for this one's.
+"""``job.json``: one job's status, read by the command after a sweep whatever process ran
+it; it carries the invocation id of the command that wrote it (``VPID_BENCH_INVOCATION``), so
+an earlier command's statuses are not mistaken for this one's.
 """
 
 from __future__ import annotations
