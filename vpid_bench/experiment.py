@@ -185,17 +185,6 @@ def _refuse_swapped(*folders: Path) -> None:
                               "is written through it (remove the link and --resume)")
 
 
-def _check_artifacts(job_dir: Path, written: Any, problem_name: str) -> None:
-    """Refuse the job when the problem says it wrote an artifact outside its job folder
-    (``write_artifacts`` returning ``../../x`` once went unnoticed)."""
-    root = job_dir.resolve()
-    for path in list(written or []):
-        target = (job_dir / Path(path)).resolve()
-        if target != root and root not in target.parents:
-            raise PluginError(f"problem {problem_name!r}: write_artifacts wrote {path} outside "
-                              f"its job folder {job_dir}; a problem writes only into the folder "
-                              "it is given")
-
 
 def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
             problems: ProblemCache | None = None, optima_dir: Path | None = None,
@@ -336,7 +325,12 @@ def _run_job(job: Job, job_dir: Path, registry: Registry | None, calls: Any,
     job_dir.mkdir(parents=True, exist_ok=True)
     written = calls.call(job, _write_artifacts, job_dir, what="the problem's write_artifacts()",
                          limit=_limit(setup_limit_s(job)))
-    _check_artifacts(job_dir, written, job.problem_name)
+    root = job_dir.resolve()  # a problem writing ../../x once went unnoticed
+    for path in written:
+        if (target := (job_dir / Path(path)).resolve()) != root and root not in target.parents:
+            raise PluginError(f"problem {job.problem_name!r}: write_artifacts wrote {path} "
+                              f"outside its job folder {job_dir}; a problem writes only into "
+                              "the folder it is given")
     spec = job.spec
     summary = JobSummary(job_dir, job.problem_name, job.optimizer_name, spec.runs, 0, 0, [],
                          [], 0.0)
@@ -480,8 +474,10 @@ def _run_missing(job: Job, calls: Any, facts: ProblemFacts, job_dir: Path,
     """Run the runs without a complete record, here or in ``pool``'s workers, writing each
     record as soon as it is over. ``failure``: every run is recorded as failed with it."""
     spec = job.spec
-    bar = _progress_bar(spec.runs, f"{job.optimizer_name} on {job.problem_name}",
-                        enabled=spec.progress)
+    from tqdm import tqdm  # runs done of total, elapsed, rate
+
+    bar = tqdm(total=spec.runs, desc=f"{job.optimizer_name} on {job.problem_name}", unit="run",
+               file=sys.stderr, dynamic_ncols=True, mininterval=0.5, disable=not spec.progress)
     try:
         todo: dict[int, tuple[str, Path]] = {}
         for i in range(spec.runs):
@@ -542,13 +538,6 @@ def _postfix(record: Mapping[str, Any]) -> str:
         text += f" {name}={value:.4g}" if value is not None else f" {name}=inf"
     return text
 
-
-def _progress_bar(total: int, desc: str, enabled: bool) -> Any:
-    """A tqdm bar on stderr (runs done of total, elapsed, rate), or a disabled one."""
-    from tqdm import tqdm
-
-    return tqdm(total=total, desc=desc, unit="run", file=sys.stderr, dynamic_ncols=True,
-                mininterval=0.5, disable=not enabled)
 
 
 __all__ = ["JobSummary", "RunTimeoutError", "run_from_config", "run_job"]

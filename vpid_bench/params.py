@@ -84,10 +84,13 @@ def _coerce_sequence(value: Any, tp: Any, origin: Any, key: str) -> Any:
     return tuple(items) if (origin is tuple or tp is tuple) else items
 
 
-def _to_bool(value: Any, key: str) -> bool:
-    if isinstance(value, bool):
-        return value
-    raise ConfigError(key, value, "true or false")
+def _exactly(tp: type, words: str) -> Any:
+    """A check that a value is of type ``tp``, else ``words`` in the error."""
+    def check(value: Any, key: str) -> Any:
+        if isinstance(value, tp):
+            return value
+        raise ConfigError(key, value, words)
+    return check
 
 
 def _to_int(value: Any, key: str) -> int:
@@ -107,13 +110,8 @@ def _to_float(value: Any, key: str) -> float:
     return value
 
 
-def _to_str(value: Any, key: str) -> str:
-    if isinstance(value, str):
-        return value
-    raise ConfigError(key, value, "a string")
-
-
-_SCALARS = {bool: _to_bool, int: _to_int, float: _to_float, str: _to_str}
+_SCALARS = {bool: _exactly(bool, "true or false"), int: _to_int, float: _to_float,
+            str: _exactly(str, "a string")}
 
 
 def build_dataclass(cls: type[T], mapping: Mapping[str, Any] | None, prefix: str = "") -> T:

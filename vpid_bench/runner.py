@@ -428,14 +428,6 @@ def _ask(r: _Run, alarm: _Alarm, timeout_s: float | None, max_batches: int) -> b
     return True
 
 
-def _lane_by_lane(problem: Problem, runs: list[_Run], alarm: _Alarm,
-                  timeout_s: float | None) -> dict[int, np.ndarray]:
-    """A gathered evaluation that raised, repeated run by run to fail only the culprits."""
-    values: dict[int, np.ndarray] = {}
-    for r in runs:
-        values.update(_gathered_values(problem, [r], alarm, timeout_s))
-    return values
-
 
 def _evaluate_and_tell(problem: Problem, asked: list[_Run], alarm: _Alarm,
                        timeout_s: float | None) -> None:
@@ -492,7 +484,10 @@ def _gathered_values(problem: Problem, runs: list[_Run], alarm: _Alarm,
     except BaseException as exc:  # noqa: BLE001 - find the runs whose rows raise, fail them alone
         if isinstance(exc, KeyboardInterrupt) and interrupts.from_user():
             raise
-        return _lane_by_lane(problem, runs, alarm, timeout_s)
+        values = {}  # run by run, to fail only the culprits
+        for r in runs:
+            values.update(_gathered_values(problem, [r], alarm, timeout_s))
+        return values
     share = (time.perf_counter() - t0) / X.shape[0]
     values = {}
     start = 0

@@ -28,10 +28,11 @@ import os
 import secrets
 import signal
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import Any
 
 from .cgroups import Cgroup
+from .machine import environ
 from .process_tree import exited, readable
 
 #: The environment variable that marks a worker's processes (its value: the worker's token).
@@ -69,19 +70,10 @@ def start_tracker() -> None:
         resource_tracker.ensure_running()
 
 
-@contextlib.contextmanager
-def marked(token: str) -> Iterator[None]:
+def marked(token: str) -> contextlib.AbstractContextManager[None]:
     """Inside: this process's environment carries :data:`MARK` = ``token``, so a worker it
     spawns inherits it (call :func:`start_tracker` first)."""
-    saved = os.environ.get(MARK)
-    os.environ[MARK] = token
-    try:
-        yield
-    finally:
-        if saved is None:
-            os.environ.pop(MARK, None)
-        else:
-            os.environ[MARK] = saved
+    return environ(MARK, token)
 
 
 @dataclasses.dataclass

@@ -21,7 +21,7 @@ import sys
 import threading
 import time
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -114,7 +114,10 @@ class JobTask:
                 self._registry = _load_registry()
             if self._problems is None:
                 self._problems = ProblemCache()
-            if self._pool is None and _basic_launcher(hydra_cfg):
+            # Hydra's basic launcher runs jobs in this process, where the sweep's workers
+            # serve every job; others' processes (joblib's loky) cannot start spawn children
+            basic = str((hydra_cfg.launcher or {}).get("_target_", "")).endswith("BasicLauncher")
+            if self._pool is None and basic:
                 workers = cfg.get("workers")  # checked by the pre-flight: null or >= 1
                 self._pool = Workers(workers if isinstance(workers, int) else available_cores())
                 runs = cfg.get("runs")  # their imports overlap this job's set-up; no more
@@ -151,13 +154,6 @@ class JobTask:
 
 JOB_LOG = "vpid_bench.log"
 
-
-def _basic_launcher(hydra_cfg: Any) -> bool:
-    """Whether jobs run in the command's process (Hydra's basic launcher), where the sweep's
-    workers serve every job (``isolation=auto``); other launchers' processes (joblib's loky)
-    cannot start ``spawn`` children."""
-    target = str((hydra_cfg.launcher or {}).get("_target_", ""))
-    return target.endswith("BasicLauncher")
 
 
 def _write_status(job_dir: Path, status: str, detail: Any) -> None:
@@ -493,9 +489,10 @@ def _run_hydra(args: list[str], task: Any) -> None:
     (``HYDRA_FULL_ERROR``), so one a Ctrl-C caused is told from a refusal and ends the
     command as the Ctrl-C does."""
     from ..interrupts import raise_if_swallowed, seen
+    from ..machine import environ
 
     try:
-        with _hydra_raises():
+        with environ("HYDRA_FULL_ERROR", "1"):  # read by Hydra when an error reaches it
             _hydra_entry(args, task)
         raise_if_swallowed()  # a Ctrl-C a C callback dropped during the last job
     except SystemExit as exc:
@@ -511,19 +508,6 @@ def _run_hydra(args: list[str], task: Any) -> None:
             raise KeyboardInterrupt from None
         _refuse(_with_cause(exc))
 
-
-@contextlib.contextmanager
-def _hydra_raises() -> Iterator[None]:
-    """``HYDRA_FULL_ERROR=1`` while Hydra runs, the user's own value restored after."""
-    saved = os.environ.get("HYDRA_FULL_ERROR")
-    os.environ["HYDRA_FULL_ERROR"] = "1"
-    try:
-        yield
-    finally:
-        if saved is None:
-            os.environ.pop("HYDRA_FULL_ERROR", None)
-        else:
-            os.environ["HYDRA_FULL_ERROR"] = saved
 
 
 def _with_cause(exc: Exception) -> Exception:

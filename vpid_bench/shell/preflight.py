@@ -332,17 +332,11 @@ def check_writable(directory: Path, key: str) -> None:
                           f"a directory you can create and write to ({exc.strerror})") from None
 
 
-def _raw_dir(full_cfg: Any, multirun: bool) -> str:
-    """The output-folder template as written (``outputs/multirun/${now:...}``)."""
-    from omegaconf import OmegaConf
-
-    section = OmegaConf.to_container(full_cfg.hydra.sweep if multirun else full_cfg.hydra.run,
-                                     resolve=False)
-    return str(section.get("dir", ""))
-
 
 def _resume_folder(cmd: CommandLine, full_cfg: Any, key: str) -> Path | None:
     """The folder ``--resume`` continues (None: the one named on the command line)."""
+    from omegaconf import OmegaConf
+
     from .resume import find_previous
 
     if cmd.resume:
@@ -352,7 +346,9 @@ def _resume_folder(cmd: CommandLine, full_cfg: Any, key: str) -> Path | None:
         return folder
     if any(a.startswith(key + "=") for a in cmd.overrides):
         return None  # the folder is named on the command line: that is the one continued
-    root = output_root(_raw_dir(full_cfg, cmd.multirun))
+    section = OmegaConf.to_container(full_cfg.hydra.sweep if cmd.multirun  # as written
+                                     else full_cfg.hydra.run, resolve=False)
+    root = output_root(str(section.get("dir", "")))
     folder = find_previous(root, cmd.overrides, cmd.multirun)
     if folder is None:  # it once started a whole new sweep: asking to resume asks for none
         kind = "sweep" if cmd.multirun else "run"
@@ -435,22 +431,16 @@ def check_sized_jobs(jobs: Sequence[Job]) -> Any:
     wanted = [j for j in jobs if j.spec.target is not None or j.spec.budget_per_dim is not None]
     if not wanted:
         return None
-    firsts: dict[str, Job] = {}
-    for j in wanted:
-        firsts.setdefault(_sized_key(j), j)
+    firsts: dict[str, Job] = {}  # once per what the check depends on (not the optimizer:
+    for j in wanted:  # 323 checks once took 37 s of the vpid1 build's pre-flight)
+        firsts.setdefault(repr((j.problem_cls, j.problem_name, j.problem_settings(),
+                                j.spec.runs, j.spec.budget_per_dim, j.spec.target)), j)
     once = list(firsts.values())
     if all(j.spec.isolation != "none" and can_send(j) is None for j in wanted):
         _check_in_a_worker(once)
         return None
     return _check_here(once)
 
-
-def _sized_key(job: Job) -> str:
-    """What :func:`vpid_bench.targets.check_sized` depends on (not the optimizer: 323
-    checks once took 37 s of the vpid1 build's pre-flight)."""
-    spec = job.spec
-    return repr((job.problem_cls, job.problem_name, job.problem_settings(), spec.runs,
-                 spec.budget_per_dim, spec.target))
 
 
 def _check_in_a_worker(jobs: Sequence[Job]) -> None:
@@ -527,10 +517,6 @@ def refuse_test_instances(jobs: Sequence[Job]) -> None:
                               f"e.g. problem.{key}={value + 1} (docs/protocol.md)")
 
 
-def _is_hydra_key(o: Any) -> bool:
-    key = o.key_or_group
-    return key == "hydra" or key.startswith(("hydra.", "hydra/"))
-
 
 def planned_job_dirs(points: Sequence[Sequence[str]], full_cfg: Any, sweep_dir: Path
                      ) -> list[Path]:
@@ -551,7 +537,8 @@ def planned_job_dirs(points: Sequence[Sequence[str]], full_cfg: Any, sweep_dir: 
     for point in points:
         lines: dict[str, str] = {}  # as Hydra's basic sweeper renders a job: value as a
         for o in parser.parse_overrides(list(point)):  # string (0.000001 -> 1e-06), the
-            if not _is_hydra_key(o):  # last of a repeated key kept in the first's place
+            if not (o.key_or_group == "hydra"  # the last of a repeated key kept in the
+                    or o.key_or_group.startswith(("hydra.", "hydra/"))):  # first's place
                 key = o.get_key_element()
                 value = (o.get_value_element_as_str() if not o.is_sweep_override()
                          else o.input_line.split("=", 1)[1])
