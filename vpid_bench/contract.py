@@ -81,15 +81,11 @@ def check_problem_class(cls: type, name: str | None = None) -> None:
             continue
         missing = [m for m in (cap.anchor, *cap.needs) if m not in done]
         if missing:
-            raise ConfigError("problem", label, _half(cap, done, missing))
-
-
-def _half(cap: Capability, done: list[str], missing: list[str]) -> str:
-    have = ", ".join(f"{m}()" for m in done)
-    lack = " and ".join(f"{m}()" for m in missing)
-    return (f"a problem that offers the {cap.name!r} capability whole ({cap.what}): it "
-            f"implements {have} but not {lack}; implement {lack} too, or none of "
-            f"{', '.join(cap.members)} (see {DOCS})")
+            lack = " and ".join(f"{m}()" for m in missing)
+            raise ConfigError("problem", label, f"a problem that offers the {cap.name!r} "
+                              f"capability whole ({cap.what}): it implements "
+                              f"{', '.join(f'{m}()' for m in done)} but not {lack}; implement "
+                              f"{lack} too, or none of {', '.join(cap.members)} (see {DOCS})")
 
 
 def _check_callable(cls: type, member: str, label: str) -> None:

@@ -185,7 +185,6 @@ def _refuse_swapped(*folders: Path) -> None:
                               "is written through it (remove the link and --resume)")
 
 
-
 def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
             problems: ProblemCache | None = None, optima_dir: Path | None = None,
             pool: Workers | None = None) -> JobSummary:
@@ -473,9 +472,9 @@ def _run_missing(job: Job, calls: Any, facts: ProblemFacts, job_dir: Path,
                  pool: Workers | None, failure: BaseException | None) -> None:
     """Run the runs without a complete record, here or in ``pool``'s workers, writing each
     record as soon as it is over. ``failure``: every run is recorded as failed with it."""
-    spec = job.spec
     from tqdm import tqdm  # runs done of total, elapsed, rate
 
+    spec = job.spec
     bar = tqdm(total=spec.runs, desc=f"{job.optimizer_name} on {job.problem_name}", unit="run",
                file=sys.stderr, dynamic_ncols=True, mininterval=0.5, disable=not spec.progress)
     try:
@@ -537,7 +536,6 @@ def _postfix(record: Mapping[str, Any]) -> str:
     for name, value in list((res.get("metrics") or {}).items())[:1]:
         text += f" {name}={value:.4g}" if value is not None else f" {name}=inf"
     return text
-
 
 
 __all__ = ["JobSummary", "RunTimeoutError", "run_from_config", "run_job"]

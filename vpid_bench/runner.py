@@ -428,7 +428,6 @@ def _ask(r: _Run, alarm: _Alarm, timeout_s: float | None, max_batches: int) -> b
     return True
 
 
-
 def _evaluate_and_tell(problem: Problem, asked: list[_Run], alarm: _Alarm,
                        timeout_s: float | None) -> None:
     """Evaluate this step's batches, then book each run and ``tell`` its optimizer."""

@@ -64,15 +64,6 @@ def entry_sigma(sigma: np.ndarray, groups: np.ndarray) -> np.ndarray | None:
     return out
 
 
-def _group_sigma(given: np.ndarray, per_entry: np.ndarray, groups: np.ndarray) -> list[float]:
-    """Sigma per group as given, or the rms over each group's entries when given per
-    entry."""
-    ngroups = int(groups.max()) + 1
-    if given.size == ngroups:
-        return given.tolist()
-    return [float(np.sqrt(np.mean(per_entry[groups == g] ** 2))) for g in range(ngroups)]
-
-
 def informative(sigma: np.ndarray, groups: np.ndarray) -> np.ndarray:
     """The entries that carry information, ``(m,)`` bool: ``σ_k`` above :data:`ROUNDING`
     times the largest ``σ`` of its group (the others are noise-free or rounding noise)."""
@@ -117,13 +108,15 @@ def cramer_rao(problem: Problem) -> dict[str, Any] | None:
     kept = informative(per_entry, groups)
     crb, Jw = _bounds(J[kept], per_entry[kept], x_true)
     s = np.linalg.svd(Jw * x_true[None], compute_uv=False)
+    given, ngroups = np.asarray(sigma, dtype=float).reshape(-1), int(groups.max()) + 1
     out: dict[str, Any] = {
         "names": list(problem.bounds.names),
         "crb_percent": crb.tolist(),
         "crb_norm_percent": float(np.linalg.norm(crb)),
         "singular_values": s.tolist(),
         "condition_number": float(s[0] / s[-1]) if s[-1] > 0 else float("inf"),
-        "sigma": _group_sigma(np.asarray(sigma, dtype=float).reshape(-1), per_entry, groups),
+        "sigma": given.tolist() if given.size == ngroups else  # per entry: each group's rms
+        [float(np.sqrt(np.mean(per_entry[groups == g] ** 2))) for g in range(ngroups)],
         "excluded_entries": int(np.sum(~kept)),
     }
     varies = any(np.ptp(per_entry[kept & (groups == g)]) > 0 for g in np.unique(groups[kept]))

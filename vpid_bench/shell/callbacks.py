@@ -66,7 +66,6 @@ class _ResolverCallback(Callback):
         ensure_job_dir_resolver()
 
 
-
 class SweepStatus(_ResolverCallback):
     """Prints the sweep folder and the command that resumes it."""
 

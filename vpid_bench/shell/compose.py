@@ -90,17 +90,6 @@ def initialize(source: ConfigSource) -> Any:
     return initialize_config_dir(version_base="1.3", config_dir=source.path)
 
 
-def _check_has_spec(full: Any, source: ConfigSource) -> None:
-    """A user's config must list ``vpid_bench_spec`` in its defaults: it brings every
-    top-level key's default, the report and the job folders' names."""
-    if source == SHIPPED or all(k in full for k in TOP_LEVEL_KEYS):
-        return
-    raise ConfigError("--config-name", source.name or "config",
-                      "a config whose defaults list starts with vpid_bench_spec (e.g. "
-                      "defaults: [vpid_bench_spec, {problem: functions}, {optimizer: random}, "
-                      "_self_]; docs/sweeps.md)")
-
-
 class Composer:
     """Hydra's composition of each distinct set of a sweep's structural overrides, made
     once, without the ``hydra`` node. For the shipped config (which keeps the two groups
@@ -146,7 +135,11 @@ class Composer:
         from omegaconf import OmegaConf
 
         full = _compose(overrides, hydra=True, source=self.source)
-        _check_has_spec(full, self.source)
+        if self.source != SHIPPED and not all(k in full for k in TOP_LEVEL_KEYS):
+            raise ConfigError("--config-name", self.source.name or "config",  # its defaults,
+                              "a config whose defaults list starts with vpid_bench_spec (e.g. "
+                              "defaults: [vpid_bench_spec, {problem: functions}, {optimizer: "
+                              "random}, _self_]; docs/sweeps.md)")  # report, job folders
         if self.first_full is None:
             self.first_full = full
         return OmegaConf.masked_copy(full, [k for k in full if k != "hydra"])

@@ -155,7 +155,6 @@ class JobTask:
 JOB_LOG = "vpid_bench.log"
 
 
-
 def _write_status(job_dir: Path, status: str, detail: Any) -> None:
     """``job.json``, or one line when it cannot be written: the sweep goes on."""
     from ..store.job_status import write_job_status
@@ -506,16 +505,9 @@ def _run_hydra(args: list[str], task: Any) -> None:
     except Exception as exc:  # noqa: BLE001 - a Hydra error outside any job
         if seen():
             raise KeyboardInterrupt from None
-        _refuse(_with_cause(exc))
-
-
-
-def _with_cause(exc: Exception) -> Exception:
-    """A Hydra error with the omegaconf error under it in one message, as Hydra says them."""
-    cause = exc.__cause__
-    if cause is None or str(cause) in str(exc):
-        return exc
-    return VpidBenchError(f"{one_line(exc)}: {one_line(cause)}")
+        cause = exc.__cause__  # the omegaconf error under it, in one message as Hydra says
+        _refuse(exc if cause is None or str(cause) in str(exc)
+                else VpidBenchError(f"{one_line(exc)}: {one_line(cause)}"))
 
 
 if __name__ == "__main__":  # pragma: no cover

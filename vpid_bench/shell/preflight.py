@@ -332,7 +332,6 @@ def check_writable(directory: Path, key: str) -> None:
                           f"a directory you can create and write to ({exc.strerror})") from None
 
 
-
 def _resume_folder(cmd: CommandLine, full_cfg: Any, key: str) -> Path | None:
     """The folder ``--resume`` continues (None: the one named on the command line)."""
     from omegaconf import OmegaConf
@@ -442,7 +441,6 @@ def check_sized_jobs(jobs: Sequence[Job]) -> Any:
     return _check_here(once)
 
 
-
 def _check_in_a_worker(jobs: Sequence[Job]) -> None:
     """The check of each job in one supervised worker; any failure but a
     :class:`ConfigError` is left to the job."""
@@ -515,7 +513,6 @@ def refuse_test_instances(jobs: Sequence[Job]) -> None:
                               "held-out instances when tuning: the default seed's instances "
                               "are the test set a comparison reports on; tune on another, "
                               f"e.g. problem.{key}={value + 1} (docs/protocol.md)")
-
 
 
 def planned_job_dirs(points: Sequence[Sequence[str]], full_cfg: Any, sweep_dir: Path
