@@ -143,8 +143,7 @@ def _set_up(job: Job, calls: Any) -> tuple[Job, ProblemFacts]:
 
 
 def _set_aside(path: Path, why: str) -> Path:
-    """Move the record file ``path`` into ``records/bad/`` (never read as a record; a name
-    taken there gets a number) and say so in one line."""
+    """Move the record file ``path`` into ``records/bad/`` (numbered) and say so."""
     folder = path.parent / BAD_DIR
     _refuse_swapped(folder)
     folder.mkdir(exist_ok=True)
@@ -201,8 +200,7 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
 
 
 class _Here:
-    """Calls into plugin code in this process, as :meth:`Workers.call
-    <vpid_bench.workers.Workers.call>` makes them in a worker."""
+    """Calls into plugin code in this process, as ``Workers.call`` makes them in a worker."""
 
     def __init__(self, job: Job, problems: ProblemCache | None) -> None:
         self.problem = (problems or ProblemCache(size=1)).get(job)
@@ -213,8 +211,7 @@ class _Here:
 
 
 def _choose_workers(job: Job, pool: Workers | None) -> tuple[Workers | None, bool]:
-    """The worker processes the job's runs go to (``None``: this process) and whether the
-    job started them itself (``isolation``)."""
+    """The job's worker processes (``None``: this process) and whether it started them."""
     mode = job.spec.isolation
     if mode == "none" or (mode == "auto" and pool is None):
         return None, False
@@ -365,8 +362,7 @@ def _after_runs(job: Job, calls: Any, name: str, fn: Any, *args: Any, what: str,
 
 
 def _warn_failed(job: Job, name: str, exc: BaseException, what: str) -> None:
-    """One warning line (and a log record): ``name`` failed with ``exc``; ``what`` is
-    missing because of it."""
+    """One warning line and log record: ``name`` failed; ``what`` is missing."""
     kind = getattr(exc, "remote_type", type(exc).__name__)
     text = " ".join(str(exc).split())[:300]
     log.warning("%s failed: %s: %s", name, kind, text)
@@ -509,8 +505,7 @@ def _run_missing(job: Job, calls: Any, facts: ProblemFacts, job_dir: Path,
 
 def _outcomes(job: Job, calls: Any, facts: ProblemFacts, todo: list[int], summary: JobSummary,
               pool: Workers | None, failure: BaseException | None) -> Any:
-    """The outcomes of the runs in ``todo``: from ``pool``'s workers, from this process, or
-    each failed with ``failure``."""
+    """The outcomes of the runs in ``todo``: from ``pool``, here, or failed with ``failure``."""
     if failure is not None:
         started = now_utc()
         return iter([RunOutcome(i, failure, started, 0.0) for i in todo])

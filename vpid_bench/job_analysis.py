@@ -28,12 +28,36 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
     to ``comparisons.json``. Returns each run's relative gap ``(f_best - f*) / f*`` to its
     instance's optimum (absolute where ``f* <= 0``). ``polished``: the optima already made
     by :func:`polish_share` tasks, by instance id (nothing is polished here then)."""
-    from .analysis.estimates import write_comparisons
+    from .analysis.diagnostics import write_diagnostics
+    from .analysis.estimates import write_comparisons, write_profile
 
     write_comparisons(problem, job_dir)  # first: cheap, and wanted whatever follows
     if not offers_residuals(type(problem)):
         return {}
-    return _residual_analysis(job, problem, job_dir, optima_dir, records, polished)
+    truth = problem.x_true is not None
+    if truth and polished is None:
+        _per_problem_files(job, problem, job_dir, Path(optima_dir))
+    bests = _run_bests(records)
+    gaps: dict[int, float] = {}
+    optima = []
+    for inst, runs, indices in _instances(problem, range(job.spec.runs), bests):
+        optimum = (_instance_optimum(job, inst, Path(optima_dir), runs) if polished is None
+                   else polished.get(inst.instance_id()))
+        if optimum is None:
+            continue
+        optima.append((inst, optimum))
+        f_opt = optimum["f_opt"]
+        for i in indices:
+            for _, f in bests.get(i, []):
+                gaps[i] = (f - f_opt) / f_opt if f_opt > 0 else f - f_opt
+    if not getattr(problem, "fits_a_record", True) or not optima:
+        return gaps  # no record: no identified value, profile or fit diagnostics
+    lowest = min(optima, key=lambda o: o[1]["f_opt"])
+    if not truth:
+        write_profile(*lowest, job_dir)
+    inst, optimum = optima[0] if truth else lowest  # with a truth: the first instance's
+    write_diagnostics(inst, optimum["x_opt"], job_dir)
+    return gaps
 
 
 def polish_share(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
@@ -77,41 +101,6 @@ def _instance_optimum(job: Job, inst: Problem, optima_dir: Path,
         return None  # nothing to start a polish from
     return update_instance_optimum(inst, job.problem_settings(), optima_dir, runs)
 
-
-def _residual_analysis(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
-                       records: list[dict[str, Any]],
-                       polished: Mapping[str | None, dict[str, Any]] | None
-                       ) -> dict[int, float]:
-    """:func:`analyse_job` for a problem with residuals."""
-    from .analysis.estimates import write_profile
-
-    truth = problem.x_true is not None
-    if truth and polished is None:
-        _per_problem_files(job, problem, job_dir, Path(optima_dir))
-    bests = _run_bests(records)
-    gaps: dict[int, float] = {}
-    optima = []
-    for inst, runs, indices in _instances(problem, range(job.spec.runs), bests):
-        optimum = (_instance_optimum(job, inst, Path(optima_dir), runs) if polished is None
-                   else polished.get(inst.instance_id()))
-        if optimum is None:
-            continue
-        optima.append((inst, optimum))
-        f_opt = optimum["f_opt"]
-        for i in indices:
-            for _, f in bests.get(i, []):
-                gaps[i] = (f - f_opt) / f_opt if f_opt > 0 else f - f_opt
-    if not getattr(problem, "fits_a_record", True):
-        return gaps  # no record: no identified value, profile or fit diagnostics
-    if not truth and optima:
-        inst, optimum = min(optima, key=lambda o: o[1]["f_opt"])
-        write_profile(inst, optimum, job_dir)
-    if optima:  # truth or not: the first instance's optimum (no truth: the lowest)
-        from .analysis.diagnostics import write_diagnostics
-
-        inst, optimum = optima[0] if truth else min(optima, key=lambda o: o[1]["f_opt"])
-        write_diagnostics(inst, optimum["x_opt"], job_dir)
-    return gaps
 
 
 def _per_problem_files(job: Job, problem: Problem, job_dir: Path, optima_dir: Path) -> None:

@@ -59,8 +59,7 @@ class RunOutcome:
 
 
 def joins_lockstep(job: Job, problem: Problem | ProblemFacts) -> bool:
-    """Whether the runs of ``job`` can run in lockstep (see module), from its problem or its
-    facts."""
+    """Whether the runs of ``job`` can run in lockstep (see module)."""
     cls = job.optimizer_cls
     return (bool(getattr(problem, "rows_independent", False))
             and not getattr(cls, "wants_residuals", False)

@@ -151,8 +151,7 @@ class _Run:
 
 
 def check_proposal(X: object, optimizer: Optimizer, dim: int) -> np.ndarray:
-    """A copy of ``ask()``'s answer as floats, or :class:`OptimizerContractError` saying what
-    is wrong with it."""
+    """A copy of ``ask()``'s answer as floats, or :class:`OptimizerContractError`."""
     name = getattr(optimizer, "name", type(optimizer).__name__)
     if not isinstance(X, np.ndarray):
         raise OptimizerContractError(f"optimizer {name!r}: ask() returned "
@@ -265,8 +264,7 @@ class _Alarm:
 
 @contextlib.contextmanager
 def time_limit(seconds: float | None) -> Iterator[None]:
-    """Raise :class:`RunTimeoutError` in this thread after ``seconds`` of wall time (POSIX main
-    thread only; elsewhere nothing is raised)."""
+    """Raise :class:`RunTimeoutError` after ``seconds`` of wall time (POSIX main thread)."""
     alarm = _Alarm(seconds)
     with alarm, alarm.limit(seconds):
         yield
@@ -461,8 +459,7 @@ def _evaluate_and_tell(problem: Problem, asked: list[_Run], alarm: _Alarm,
 
 def _gathered_values(problem: Problem, runs: list[_Run], alarm: _Alarm,
                      timeout_s: float | None) -> dict[int, np.ndarray]:
-    """The values of the batches of ``runs`` (by ``id``), from one call when several, each
-    charged its rows' share of its time; a run whose rows raise fails."""
+    """The values of ``runs``' batches (by ``id``), from one call, each run charged its share."""
     if len(runs) == 1:  # one run: its own instance evaluates it (no gathering)
         r = runs[0]
         out: dict[int, np.ndarray] = {}

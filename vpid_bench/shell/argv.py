@@ -149,8 +149,7 @@ def _own_flags(argv: Sequence[str]) -> tuple[list[str], str | None, bool]:
 
 
 def parse_command_line(argv: Sequence[str]) -> CommandLine:
-    """Read ``argv`` (without the program name); :class:`ConfigError` for a command line
-    Hydra would refuse or cannot honour."""
+    """Read ``argv``; :class:`ConfigError` for what Hydra would refuse or cannot honour."""
     hydra_args, resume, merge = _own_flags(argv)
     args = _parser(hydra_args).parse_args(hydra_args)
     info = None

@@ -17,8 +17,7 @@ SHIPPED = ConfigSource()
 
 
 def _yaml_error(exc: BaseException) -> ConfigError | None:
-    """A config file that is not YAML, as one line naming the file and the place (None:
-    ``exc`` is not such an error)."""
+    """A config file that is not YAML, as one line naming the place (or None)."""
     import yaml
 
     cause: BaseException | None = exc
@@ -33,8 +32,7 @@ def _yaml_error(exc: BaseException) -> ConfigError | None:
 
 
 def hydra_error(exc: BaseException) -> ConfigError:
-    """A Hydra or OmegaConf composition error as one ConfigError line (the innermost cause
-    that names a key is used)."""
+    """A Hydra or OmegaConf error as one line (the innermost cause that names a key)."""
     from hydra.errors import MissingConfigException
 
     if isinstance(exc, MissingConfigException):
@@ -78,8 +76,7 @@ def _compose(overrides: list[str], hydra: bool, source: ConfigSource = SHIPPED) 
 
 
 def initialize(source: ConfigSource) -> Any:
-    """Hydra's compose API set up as ``hydra.main`` sets itself up for this command: the
-    shipped ``pkg://vpid_bench.conf`` or the folder (or package) of the user's config."""
+    """Hydra's compose API set up as ``hydra.main`` sets itself up for this command."""
     from hydra import initialize_config_dir, initialize_config_module
 
     if source.path is None:

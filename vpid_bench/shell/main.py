@@ -38,8 +38,7 @@ def debug_enabled() -> bool:
 
 
 def one_line(exc: BaseException) -> str:
-    """An exception as one line (others than ours with their type), control characters
-    made visible."""
+    """An exception as one line (not ours: with its type), control characters visible."""
     from ..report.safe import clean
 
     name = getattr(exc, "remote_type", type(exc).__name__)  # carried from a worker process
@@ -167,8 +166,7 @@ def _write_status(job_dir: Path, status: str, detail: Any) -> None:
 
 
 class _JobLogHandler(logging.FileHandler):
-    """Logging's file handler through :func:`~vpid_bench.fileio.open_append`: a link planted
-    at the job's log is replaced, never followed."""
+    """Logging's file handler through ``open_append`` (a planted link is never followed)."""
 
     def _open(self) -> Any:
         return open_append(Path(self.baseFilename))
@@ -250,8 +248,7 @@ def print_versions(registry: Any) -> None:
 
 def _failures(folder: Path | None, multirun: bool,
               planned: Sequence[Path] = (), report_expected: bool = False) -> list[str]:
-    """What went wrong, read from the disk (this invocation's job statuses, a planned job
-    without one, the report's status); prints the sweep summary."""
+    """What went wrong, read from the disk; prints the sweep summary."""
     from .callbacks import REPORT_STATUS, REPORT_SUBDIR
     from .resume import collect_job_statuses
 
@@ -378,8 +375,7 @@ def _main(argv: Sequence[str] | None) -> None:
 
 
 def _prepare_folder(plan: Any, key: str, task: JobTask) -> Any:
-    """The output folder checked, locked (returned) and its job folders made; the task given
-    the lock, the progress line and the problems the pre-flight built."""
+    """The output folder checked, locked (returned) and its job folders made."""
     from . import preflight
     from .resume import FolderLock
 
@@ -424,8 +420,7 @@ def _report_only(plan: Any, task: JobTask, lock: Any, before: set[Any], watch: b
 
 
 def _quick_help(cmd: Any, registry: Any) -> bool:
-    """Print the help page without Hydra's machinery (:mod:`.quick_help`); False when Hydra
-    must build it. A refusal of the overrides: one line, exit 2."""
+    """Print the help page without Hydra's machinery; False when Hydra must build it."""
     from .quick_help import help_text
 
     if cmd.info != "--help":
@@ -441,8 +436,7 @@ def _quick_help(cmd: Any, registry: Any) -> bool:
 
 
 def _sweep_progress(plan: Any) -> Any:
-    """The progress line of a ``-m`` sweep whose jobs the plan knows, unless
-    ``progress=false``."""
+    """The progress line of a ``-m`` sweep whose jobs the plan knows (and progress=true)."""
     from .progress import SweepProgress
 
     if not plan.multirun or not plan.jobs or not all(j.spec.progress for j in plan.jobs):

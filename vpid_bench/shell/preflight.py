@@ -80,8 +80,7 @@ def _raw_value(override: Any) -> str:
 
 
 def _group_names(group: str, registry: Registry, folders: Sequence[str] = ()) -> list[str]:
-    """The choices of ``group``: registered plugins, shipped presets and a user's config
-    folders' ``<group>/<name>.yaml``."""
+    """The choices of ``group``: plugins, presets and ``<folder>/<group>/<name>.yaml``."""
     from .presets import yaml_presets
 
     table = registry.problems if group == "problem" else registry.optimizers
@@ -90,8 +89,7 @@ def _group_names(group: str, registry: Registry, folders: Sequence[str] = ()) ->
 
 
 def _sweep_size(override: Any) -> int | None:
-    """How many values a sweep override stands for, unlisted (None: not a list, e.g.
-    ``interval()``)."""
+    """How many values a sweep override stands for (None: not a list, e.g. interval())."""
     from hydra.core.override_parser.types import ChoiceSweep, Glob, RangeSweep
 
     value = override.value()
@@ -119,8 +117,7 @@ def _refuse_nested_sweep(o: Any, value: Any) -> None:
 
 def _axis(o: Any, multirun: bool, registry: Registry, custom_sweeper: bool,
           folders: Sequence[str] = ()) -> list[str] | None:
-    """The override strings one override contributes (``None``: an optimizing sweeper
-    chooses its values)."""
+    """The override strings one override contributes (``None``: a sweeper's choice)."""
     from hydra.core.override_parser.types import Glob
 
     if not o.is_sweep_override():
@@ -156,8 +153,7 @@ def _axis(o: Any, multirun: bool, registry: Registry, custom_sweeper: bool,
 
 def expand_points(parsed: list[Any], multirun: bool, registry: Registry,
                   custom_sweeper: bool, folders: Sequence[str] = ()) -> list[list[str]]:
-    """The override strings of every job, in the order Hydra's basic sweeper runs them
-    (``folders``: a user's config folders)."""
+    """The override strings of every job, in the order Hydra's basic sweeper runs them."""
     # each override with its own axis (zipping with a shorter list once checked wrong values)
     pairs = [(o, a) for o in parsed
              if (a := _axis(o, multirun, registry, custom_sweeper, folders)) is not None]
@@ -178,8 +174,7 @@ def expand_points(parsed: list[Any], multirun: bool, registry: Registry,
 
 def _check_choice(group: str, name: str, registry: Registry, folders: Sequence[str] = ()
                   ) -> None:
-    """Refuse a problem or optimizer name that is no choice, listing the known names and
-    the plugins that failed to load."""
+    """Refuse a name that is no choice, listing the known ones and the failed plugins."""
     names = _group_names(group, registry, folders)
     if name.strip("'\"") in names:
         return
@@ -236,8 +231,7 @@ def _apply(cfg: Any, o: Any) -> None:
 
 
 def _open_parent(cfg: Any, key: str) -> bool:
-    """Whether ``key`` is a new key of a mapping left open (``added_setting(open_keys=True)``);
-    the plugin checks the name."""
+    """Whether ``key`` is new in a mapping left open (``open_keys``: the plugin checks it)."""
     from omegaconf import DictConfig, OmegaConf
 
     parent = key.rpartition(".")[0]
@@ -274,8 +268,7 @@ def _unknown_key(cfg: Any, key: str, value: Any) -> ConfigError:
 
 def check_points(points: list[list[str]], registry: Registry,
                  source: ConfigSource = SHIPPED) -> tuple[list[Job], Any]:
-    """Compose and parse every point (from ``source``): the jobs and the first point's full
-    config (its ``hydra`` node: the output folder)."""
+    """Compose and parse every point: the jobs and the first point's full config."""
     from omegaconf import OmegaConf, open_dict
     from omegaconf.errors import OmegaConfBaseException
 
@@ -370,8 +363,7 @@ def _check_subdir(key: str, o: Any) -> None:
 
 
 def plan(cmd: CommandLine, registry: Registry) -> Plan:
-    """Check the command line and fix the output folder (``--resume``: an earlier one).
-    Raises :class:`ConfigError` (one line) for anything bad; writes nothing."""
+    """Check the command line and fix the output folder; :class:`ConfigError`, no writes."""
     parsed = parse_overrides(cmd.overrides)
     for o in parsed:
         value = o.value()
@@ -442,8 +434,7 @@ def check_sized_jobs(jobs: Sequence[Job]) -> Any:
 
 
 def _check_in_a_worker(jobs: Sequence[Job]) -> None:
-    """The check of each job in one supervised worker; any failure but a
-    :class:`ConfigError` is left to the job."""
+    """Each job's check in one supervised worker; a failure but ConfigError is the job's."""
     from ..experiment import setup_limit_s
     from ..targets import check_sized
     from ..workers import Workers

@@ -74,8 +74,7 @@ def find_previous(root: Path, overrides: Sequence[str], multirun: bool) -> Path 
 
 
 def earlier_jobs(folder: Path) -> set[Path]:
-    """The job folders an earlier command left in ``folder``: itself (a single run) and each
-    folder below it that holds records or a job status (links not followed)."""
+    """The job folders an earlier command left in ``folder`` (itself, or those below it)."""
     def is_job(p: Path) -> bool:
         return not p.is_symlink() and ((p / "records").is_dir() or (p / JOB_STATUS_FILE).is_file())
 
@@ -160,8 +159,7 @@ class FolderLock:
 
 
 def collect_job_statuses(sweep_dir: Path, invocation: str | None) -> list[dict[str, Any]]:
-    """The ``job.json`` of every job this invocation ran below ``sweep_dir``, each with its
-    ``job_dir``; one written by another command (another invocation id) is left out."""
+    """The ``job.json`` of every job this invocation ran below ``sweep_dir``, with its folder."""
     out = []
     for path in sorted(Path(sweep_dir).rglob(JOB_STATUS_FILE)):
         if path.is_symlink():
