@@ -19,7 +19,6 @@ import hashlib
 import json
 import os
 import shutil
-import signal
 import stat
 import sys
 import tempfile
@@ -27,6 +26,8 @@ from collections.abc import Iterator
 from pathlib import Path
 from types import TracebackType
 from typing import TextIO
+
+from .interrupts import held
 
 #: The largest results file read back (a run record with a long trace is a few MB).
 MAX_READ_BYTES = 64 * 1024 * 1024
@@ -231,7 +232,7 @@ class WholeFolder:
     def _swap(self, new: Path) -> None:
         """``new`` into :attr:`path`'s place; :attr:`_old` names the replaced folder."""
         path = self.path
-        with _signals_held(), _locked(path.parent):
+        with held(), _locked(path.parent):
             if path.is_symlink():  # planted in the folder's place: the link only goes
                 path.unlink()
                 self.links.append(path)
@@ -283,22 +284,6 @@ def _swap_entries(new: Path, path: Path) -> Path:
         os.rename(new / entry, path / entry)
     new.rmdir()
     return old
-
-
-@contextlib.contextmanager
-def _signals_held() -> Iterator[None]:
-    """SIGINT, SIGTERM and SIGHUP held back (delivered when the block ends): a swap of two
-    renames is never cut between them."""
-    sigs = {getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n)}
-    try:
-        before = signal.pthread_sigmask(signal.SIG_BLOCK, sigs)
-    except (AttributeError, OSError, ValueError):  # no signal masks on this platform
-        before = None
-    try:
-        yield
-    finally:
-        if before is not None:
-            signal.pthread_sigmask(signal.SIG_SETMASK, before)
 
 
 @contextlib.contextmanager

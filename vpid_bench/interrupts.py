@@ -17,6 +17,7 @@ import contextlib
 import os
 import signal
 import threading
+from collections.abc import Iterator
 from typing import Any
 
 #: The signals that interrupt the command (those this platform has).
@@ -126,6 +127,33 @@ def seen() -> bool:
 def from_user() -> bool:
     """Whether a ``KeyboardInterrupt`` being handled now is the user's (or cannot be told)."""
     return not _Watch.installed or _Watch.signalled
+
+
+@contextlib.contextmanager
+def held(deliver: bool = True) -> Iterator[None]:
+    """The :data:`SIGNALS` inside the block noted, and delivered when it ends (with
+    ``deliver``; else only noted as the command's interrupt); also blocked, so a process
+    started inside inherits them blocked, and a swap of two renames is never cut between
+    them. Main thread only."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    noted: list[int] = []
+    before = {sig: signal.signal(sig, lambda signum, frame: noted.append(signum))
+              for sig in SIGNALS}
+    mask = (signal.pthread_sigmask(signal.SIG_BLOCK, set(SIGNALS))
+            if hasattr(signal, "pthread_sigmask") else None)
+    try:
+        yield
+    finally:
+        if mask is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        for sig, handler in before.items():
+            signal.signal(sig, handler)
+        if noted and deliver:
+            signal.raise_signal(noted[0])
+        elif noted:
+            note(noted[0])
 
 
 class PluginInterruptError(RuntimeError):

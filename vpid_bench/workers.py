@@ -35,7 +35,6 @@ import logging
 import pickle
 import signal
 import sys
-import threading
 import time
 import weakref
 from collections import deque
@@ -46,7 +45,7 @@ from typing import Any
 
 from . import interrupts
 from .cgroups import Cgroup
-from .interrupts import SIGNALS
+from .interrupts import held as _sigint_held  # (tests use the name)
 from .job_runs import RunOutcome, now_utc
 from .process_tree import Output
 from .runner import RunTimeoutError
@@ -130,33 +129,6 @@ def can_send(job: Job) -> str | None:
     except Exception as exc:  # noqa: BLE001 - any pickling failure means "cannot"
         return f"{type(exc).__name__}: {exc}"
     return None
-
-
-@contextlib.contextmanager
-def _sigint_held(deliver: bool = True) -> Iterator[None]:
-    """The :data:`~.interrupts.SIGNALS` inside the block noted, and delivered when it ends
-    (with ``deliver``; else only noted as the command's interrupt); also blocked, so a
-    process started inside inherits them blocked (released by :func:`~.worker_loop.serve`).
-    Main thread only."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    noted: list[int] = []
-    before = {sig: signal.signal(sig, lambda signum, frame: noted.append(signum))
-              for sig in SIGNALS}
-    mask = (signal.pthread_sigmask(signal.SIG_BLOCK, set(SIGNALS))
-            if hasattr(signal, "pthread_sigmask") else None)
-    try:
-        yield
-    finally:
-        if mask is not None:
-            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
-        for sig, handler in before.items():
-            signal.signal(sig, handler)
-        if noted and deliver:
-            signal.raise_signal(noted[0])
-        elif noted:
-            interrupts.note(noted[0])
 
 
 @dataclasses.dataclass(eq=False)
