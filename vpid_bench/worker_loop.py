@@ -126,8 +126,10 @@ def serve(conn: Connection, out: Connection, err: Connection) -> None:
     root = logging.getLogger()
     root.handlers[:] = [_PipeLog(send)]
     root.setLevel(logging.INFO)
-    threading.excepthook = _thread_exception(send)
-    sys.unraisablehook = _unraisable(send)
+    threading.excepthook = _say(send, interrupts.thread_exception_line)
+    sys.unraisablehook = _say(send, lambda a: (  # a destructor, an at-fork hook a limit cut
+        f"warning: an exception was ignored in {a.object!r}: {a.exc_type.__name__}: "
+        f"{a.exc_value}"))
     state = {"problems": ProblemCache(size=4), "warm": set()}
     me = os.getpid()
     while os.getpid() == me:  # a forked copy that got back here ends below
@@ -141,7 +143,11 @@ def serve(conn: Connection, out: Connection, err: Connection) -> None:
         value, error = None, None
         try:
             if kind == "call":
-                value = _call(job, payload, state, send)
+                fn, args = payload
+                with keep_cwd():
+                    problem = state["problems"].get(job)
+                    send(("phase", "built"))  # the call's own limit starts now
+                    value = fn(job, problem, *args)
             else:
                 _run_task(job, payload, state, send)
         except BaseException as exc:  # noqa: BLE001 - the supervisor records it; keep serving
@@ -159,31 +165,13 @@ def _end(send: Callable[[Any], None], error: RemoteError | None, value: Any) -> 
         send(("end", portable(exc), None, left))
 
 
-def _thread_exception(send: Callable[[Any], None]) -> Any:
-    """The worker's ``threading.excepthook``: one line for a plugin thread's exception."""
+def _say(send: Callable[[Any], None], line: Callable[[Any], str]) -> Any:
+    """A hook (``threading.excepthook``, ``sys.unraisablehook``) that says ``line(args)`` on
+    the command's stderr, one line, no traceback."""
     def hook(args: Any) -> None:
         with contextlib.suppress(Exception):
-            send(("say", interrupts.thread_exception_line(args)))
+            send(("say", line(args)))
     return hook
-
-
-def _unraisable(send: Callable[[Any], None]) -> Any:
-    """The worker's ``sys.unraisablehook``: one line for an exception Python cannot raise
-    (in a destructor, an at-fork hook a time limit interrupted)."""
-    def hook(args: Any) -> None:
-        with contextlib.suppress(Exception):
-            send(("say", f"warning: an exception was ignored in {args.object!r}: "
-                         f"{args.exc_type.__name__}: {args.exc_value}"))
-    return hook
-
-
-def _call(job: Job, payload: tuple[Callable[..., Any], tuple[Any, ...]], state: dict[str, Any],
-          send: Callable[[Any], None]) -> Any:
-    fn, args = payload
-    with keep_cwd():
-        problem = state["problems"].get(job)
-        send(("phase", "built"))  # the call's own limit starts now
-        return fn(job, problem, *args)
 
 
 def _run_task(job: Job, payload: tuple[list[int], bool, int], state: dict[str, Any],

@@ -37,27 +37,20 @@ def package_versions(extra: tuple[str, ...] = ()) -> dict[str, str]:
 _REQUIREMENT_NAME = re.compile(r"^\s*([A-Za-z0-9][A-Za-z0-9._-]*)")
 
 
-def _requirement_names(dist: importlib.metadata.Distribution) -> list[str]:
-    """Names of the distribution's unconditional requirements (extras and markers skipped)."""
-    names = []
-    for req in dist.requires or []:
-        if ";" in req and "extra" in req.split(";", 1)[1]:
-            continue
-        match = _REQUIREMENT_NAME.match(req)
-        if match:
-            names.append(match.group(1))
-    return names
-
-
 @functools.lru_cache(maxsize=64)
 def _provenance_of(dist_name: str) -> tuple[str, str, tuple[tuple[str, str], ...]]:
+    """Name, version and its unconditional requirements' installed versions (extras and
+    markers skipped)."""
     dist = importlib.metadata.distribution(dist_name)
     requires = []
-    for name in _requirement_names(dist):
+    for req in dist.requires or []:
+        match = _REQUIREMENT_NAME.match(req)
+        if match is None or ";" in req and "extra" in req.split(";", 1)[1]:
+            continue
         try:
-            requires.append((name, importlib.metadata.version(name)))
+            requires.append((match.group(1), importlib.metadata.version(match.group(1))))
         except importlib.metadata.PackageNotFoundError:
-            requires.append((name, "not installed"))
+            requires.append((match.group(1), "not installed"))
     return dist.metadata["Name"], dist.version, tuple(sorted(requires))
 
 
