@@ -65,12 +65,16 @@ def problem_node(config: type, name: str) -> Any:
     return out
 
 
-def spec_node() -> dict[str, Any]:
-    """The ``vpid_bench_spec`` node: every top-level key at its default, Hydra's settings for
-    vpid-bench and the job logging without a file handler (see :data:`JOB_LOGGING`)."""
+def hydra_settings() -> dict[str, Any]:
+    """The ``hydra`` node of :data:`HYDRA_SETTINGS` (interpolations unresolved)."""
     from omegaconf import OmegaConf
 
     text = importlib.resources.files(__package__).joinpath(HYDRA_SETTINGS).read_text()
-    hydra = OmegaConf.to_container(OmegaConf.create(text), resolve=False)["hydra"]
+    return OmegaConf.to_container(OmegaConf.create(text), resolve=False)["hydra"]
+
+
+def spec_node() -> dict[str, Any]:
+    """The ``vpid_bench_spec`` node: every top-level key at its default, Hydra's settings for
+    vpid-bench and the job logging without a file handler (see :data:`JOB_LOGGING`)."""
     return {"defaults": [{"override hydra/job_logging": "vpid_bench"}, "_self_"],
-            **dataclass_defaults(JobSpec), "hydra": hydra}
+            **dataclass_defaults(JobSpec), "hydra": hydra_settings()}

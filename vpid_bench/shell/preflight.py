@@ -90,7 +90,7 @@ def _group_names(group: str, registry: Registry, folders: Sequence[str] = ()) ->
 
 def _sweep_size(override: Any) -> int | None:
     """How many values a sweep override stands for (None: not a list, e.g. interval())."""
-    from hydra.core.override_parser.types import ChoiceSweep, Glob, RangeSweep
+    from hydra.core.override_parser.types import ChoiceSweep, RangeSweep
 
     value = override.value()
     if isinstance(value, RangeSweep):
@@ -98,9 +98,7 @@ def _sweep_size(override: Any) -> int | None:
             raise ConfigError(override.key_or_group, _raw_value(override),
                               "range(start, stop[, step]) with a step that is not 0")
         return max(0, math.ceil((value.stop - value.start) / value.step))
-    if isinstance(value, (ChoiceSweep, Glob)):
-        return None if isinstance(value, Glob) else len(value.list)
-    return None
+    return len(value.list) if isinstance(value, ChoiceSweep) else None
 
 
 def _refuse_nested_sweep(o: Any, value: Any) -> None:

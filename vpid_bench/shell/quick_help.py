@@ -6,20 +6,10 @@ A custom config or a sweep's comma list still goes to Hydra.
 
 from __future__ import annotations
 
-import importlib.resources
 from typing import Any
 
 from .argv import CommandLine
-from .config_store import HYDRA_SETTINGS
-
-
-def _settings() -> dict[str, str]:
-    """The ``hydra.help`` header and footer of :data:`HYDRA_SETTINGS`."""
-    from omegaconf import OmegaConf
-
-    text = importlib.resources.files(__package__).joinpath(HYDRA_SETTINGS).read_text()
-    node = OmegaConf.create(text).hydra.help
-    return {"header": str(node.header), "footer": str(node.footer)}
+from .config_store import hydra_settings
 
 
 def choices(registry: Any) -> list[str]:
@@ -40,7 +30,7 @@ def help_text(cmd: CommandLine, registry: Any) -> str | None:
 
     with initialize(SHIPPED):
         cfg = _compose(list(cmd.overrides), hydra=False)
-    text = _settings()
+    text = hydra_settings()["help"]
     return (f"{text['header']}\n== Choices (group=option) ==\n" + "\n".join(choices(registry))
             + "\n\n\n== Config of this selection (override any key: key=value) ==\n"
             + OmegaConf.to_yaml(cfg) + "\n" + text["footer"])
