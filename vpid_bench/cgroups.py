@@ -100,6 +100,3 @@ class Cgroup:
         """Remove the cgroup (possible once no process is in it)."""
         with contextlib.suppress(OSError):
             self.path.rmdir()
-
-
-__all__ = ["ENV", "Cgroup"]

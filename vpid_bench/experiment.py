@@ -531,6 +531,3 @@ def _postfix(record: Mapping[str, Any]) -> str:
     for name, value in list((res.get("metrics") or {}).items())[:1]:
         text += f" {name}={value:.4g}" if value is not None else f" {name}=inf"
     return text
-
-
-__all__ = ["JobSummary", "RunTimeoutError", "run_from_config", "run_job"]

@@ -76,6 +76,3 @@ def problem_facts(problem: Problem, runs: int) -> ProblemFacts:
                         rows_independent=bool(getattr(problem, "rows_independent", False)),
                         content_digest=read("content_digest()", problem.content_digest),
                         instances=tuple(instances))
-
-
-__all__ = ["InstanceFacts", "ProblemFacts", "problem_facts"]

@@ -159,6 +159,3 @@ def redirect(out: Connection, err: Connection) -> None:
     for stream in (sys.stdout, sys.stderr):
         with contextlib.suppress(Exception):
             stream.reconfigure(line_buffering=True)
-
-
-__all__ = ["Output", "detach", "drop_tracker", "exited", "readable", "redirect", "strays"]

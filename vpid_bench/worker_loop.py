@@ -215,6 +215,3 @@ def probe(job: Job, problem: Any) -> None:
     except RunTimeoutError as exc:
         raise RunTimeoutError(f"the optimizer's constructor took longer than "
                               f"run_timeout_s={limit:g} s") from exc
-
-
-__all__ = ["LOST_PIPE_EXIT", "RemoteError", "portable", "portable_outcome", "probe", "serve"]

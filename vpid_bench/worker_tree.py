@@ -292,6 +292,3 @@ class Tree(_Held):
             left.pop(self.pid, None)
             self.cgroup.remove()
         return [f"{pid} ({name})" for pid, name in sorted(left.items())]
-
-
-__all__ = ["MARK", "Tree", "marked", "new_token", "pidfd", "start_tracker"]

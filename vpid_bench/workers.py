@@ -1,30 +1,19 @@
 """Supervised worker processes: a plugin's fault costs its run, never the sweep.
 
-With ``isolation=process`` (the command's default) every call into plugin code (optimizer
-and problem: constructors, ``ask``/``tell``, evaluations, facts, ``metrics()``, the analysis
-and its polish, the best run's signals) runs in long-lived worker processes, through
-:meth:`Workers.outcomes` (runs), :meth:`Workers.calls` (on every worker at once) and
-:meth:`Workers.call`. The sweep's own process never builds a problem: it hands out tasks,
-receives outcomes and writes every file. A worker is reused by every job of the sweep
-(imports paid once), and a job's runs go to several workers at once (``workers``).
-
-What a worker can no longer take down: a run that ends its process (``os._exit``, a
-segfault: recorded as failed with how it ended); a run blocked in C or ignoring SIGALRM past
-``run_timeout_s`` (its worker killed :data:`GRACE_S` s later, the run timed out); a plugin's
-``os.chdir``, threads, signal handlers; processes a plugin starts (the supervisor watches
-each worker's process, not only its pipe, and ends its whole tree, nothing else:
-:mod:`vpid_bench.worker_tree`; their output comes through the supervisor:
-:mod:`vpid_bench.process_tree`); SIGTERM and SIGHUP sent to a worker (left to the
-supervisor, which ends the sweep as on Ctrl-C); a plugin that closes the pipe
-(:mod:`vpid_bench.worker_loop`).
-
-A lockstep group that lost its worker is run again one by one, so only the faulty run is
-charged. Records are bit-identical to ``isolation=none`` (tested).
+With ``isolation=process`` (the command's default) every call into plugin code runs in
+long-lived worker processes, reused by every job of the sweep, several at once
+(:meth:`Workers.outcomes` for runs, :meth:`Workers.call` and :meth:`Workers.calls` for the
+rest); the sweep's own process never builds a problem, it hands out tasks and writes every
+file. A run that ends its process, or is blocked past ``run_timeout_s`` (its worker killed
+:data:`GRACE_S` s later), fails alone; a plugin's ``os.chdir``, threads, signal handlers and
+processes die with its worker (the whole tree and nothing else:
+:mod:`vpid_bench.worker_tree`); SIGTERM and SIGHUP are left to the supervisor. A lockstep
+group that lost its worker runs again one by one. Records are bit-identical to
+``isolation=none`` (tested).
 
 Why :mod:`multiprocessing` and not an executor: on Python 3.11 :mod:`concurrent.futures`
 cannot kill one hung worker, loky is only vendored inside joblib, and neither ends the
-processes a task leaves behind. A worker is a ``spawn``-ed process with one pipe, whose loop
-is :func:`vpid_bench.worker_loop.serve`.
+processes a task leaves behind.
 """
 
 from __future__ import annotations

@@ -1,25 +1,12 @@
 """A user's record as a CSV file (``problem.reference.file``): the one reader of the format,
 for every problem plugin that fits one (docs/own-record.md#the-file describes it for users).
 
-**Format.** A header row names the columns; each data row holds numbers. A column's unit may
-follow its name in square brackets, ``zsdd [m/s^2]``; a name without one is read in the unit
-the problem states for it. A stated unit of another size is converted where the problem
-gives a unit table (unit -> quantity and factor to the quantity's SI unit) and it lists the
-unit under the same quantity; otherwise it must be the problem's unit. The same name twice
-is refused.
-
-**Columns** (:class:`RecordColumn`): the problem's names, matched by name (or an alias), or
-mapped to the record's own with :class:`ColumnMap` (``problem.reference.columns={h: road}``,
-a unit optional: ``'road [mm]'``). **Strict**: every column must be used; an unused one is
-refused naming it and the names allowed, unless ``problem.reference.ignore`` lists it (a
-record is read whole or not at all). ``t`` (s) is always a column and must increase from row
-to row; its rate and start are free.
-
-**Refused**, each as one :class:`~vpid_bench.errors.ConfigError` naming the column, row or
-value: a file that is missing, too large, not UTF-8 CSV or without header; a column missing,
-unused, twice or in a unit not allowed; a cell that is not an ASCII number (:data:`NUMBER`),
-not finite or beyond :data:`MAX_MAGNITUDE`; a time that does not increase; too few or too
-many rows; a measured channel zero throughout or dominated by one sample.
+A header row names the columns, a unit optional in brackets (``zsdd [m/s^2]``; converted
+through the problem's unit table, else it must be the problem's); each data row holds
+numbers. The problem's columns (:class:`RecordColumn`) are matched by name or alias, or
+mapped with :class:`ColumnMap`. **Strict**: every column must be used (or listed in
+``problem.reference.ignore``); ``t`` (s) must increase. Anything else is refused as one
+:class:`~vpid_bench.errors.ConfigError` naming the column, row or value.
 """
 
 from __future__ import annotations
