@@ -121,7 +121,7 @@ def recorded_in_full(jobs: list[Job], job_dirs: list[Path], registry: Registry |
 
 
 def _recorded(job: Job, job_dir: Path, registry: Registry | None, calls: Any) -> bool:
-    """:func:`recorded_in_full` of one job: its run ids made as :func:`_run_job` makes them."""
+    """:func:`recorded_in_full` of one job: its run ids made as :func:`run_job` makes them."""
     if not job.spec.resume:
         return False
     job, facts = _set_up(job, calls)
@@ -193,7 +193,43 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
     pool, own_pool = _choose_workers(job, pool)
     try:
         calls = pool if pool is not None else _Here(job, problems)
-        return _run_job(job, Path(job_dir), registry, calls, optima_dir, pool)
+        job_dir = Path(job_dir)
+        job, facts = _set_up(job, calls)
+        failure = _build_one_optimizer(job, calls)
+        provenance = {kind: (registry.provenance(kind, name) if registry is not None else {})
+                      for kind, name in (("problem", job.problem_name),
+                                         ("optimizer", job.optimizer_name))}
+        job_dir.mkdir(parents=True, exist_ok=True)
+        written = calls.call(job, _write_artifacts, job_dir, what="the problem's write_artifacts()",
+                             limit=_limit(setup_limit_s(job)))
+        root = job_dir.resolve()  # a problem writing ../../x once went unnoticed
+        for path in written:
+            if (target := (job_dir / Path(path)).resolve()) != root and root not in target.parents:
+                raise PluginError(f"problem {job.problem_name!r}: write_artifacts wrote {path} "
+                                  f"outside its job folder {job_dir}; a problem writes only into "
+                                  "the folder it is given")
+        spec = job.spec
+        summary = JobSummary(job_dir, job.problem_name, job.optimizer_name, spec.runs, 0, 0, [],
+                             [], 0.0)
+        start = time.perf_counter()
+        with one_blas_thread():
+            _run_missing(job, calls, facts, job_dir, _job_key(job, registry, facts), provenance,
+                         summary, pool, failure)
+        records = [r for r, _ in map(_valid, summary.record_paths) if r is not None]
+        optima_dir = Path(optima_dir or job_dir / "optima")
+        polished = _polish_at_once(job, pool, facts, job_dir, optima_dir, records)
+        gaps = _after_runs(job, calls, "the optimum / identifiability analysis", _analyse, job_dir,
+                           optima_dir, records, polished, what="its gaps to the optimum are not",
+                           limit=_limit(analysis_limit_s(job))) or {}
+        summary.score = job_score(gaps, records)
+        summary.wall_time_s = time.perf_counter() - start
+        best = best_of(records)
+        if best is not None:  # the best run's own instance: its record is the one it fitted
+            _after_runs(job, calls, "the best run's signals", _signals, job_dir,
+                        int(best[1]["run_index"]), *best,
+                        what="best_signals.csv may be missing or out of date",
+                        limit=_limit(analysis_limit_s(job)))
+        return summary
     finally:
         if own_pool:
             pool.close()
@@ -309,46 +345,6 @@ def _build_one_optimizer(job: Job, calls: Any) -> BaseException | None:
         print(f"error: {text}", file=sys.stderr, flush=True)
         return exc
     return None
-
-
-def _run_job(job: Job, job_dir: Path, registry: Registry | None, calls: Any,
-             optima_dir: Path | None, pool: Workers | None) -> JobSummary:
-    job, facts = _set_up(job, calls)
-    failure = _build_one_optimizer(job, calls)
-    provenance = {kind: (registry.provenance(kind, name) if registry is not None else {})
-                  for kind, name in (("problem", job.problem_name),
-                                     ("optimizer", job.optimizer_name))}
-    job_dir.mkdir(parents=True, exist_ok=True)
-    written = calls.call(job, _write_artifacts, job_dir, what="the problem's write_artifacts()",
-                         limit=_limit(setup_limit_s(job)))
-    root = job_dir.resolve()  # a problem writing ../../x once went unnoticed
-    for path in written:
-        if (target := (job_dir / Path(path)).resolve()) != root and root not in target.parents:
-            raise PluginError(f"problem {job.problem_name!r}: write_artifacts wrote {path} "
-                              f"outside its job folder {job_dir}; a problem writes only into "
-                              "the folder it is given")
-    spec = job.spec
-    summary = JobSummary(job_dir, job.problem_name, job.optimizer_name, spec.runs, 0, 0, [],
-                         [], 0.0)
-    start = time.perf_counter()
-    with one_blas_thread():
-        _run_missing(job, calls, facts, job_dir, _job_key(job, registry, facts), provenance,
-                     summary, pool, failure)
-    records = [r for r, _ in map(_valid, summary.record_paths) if r is not None]
-    optima_dir = Path(optima_dir or job_dir / "optima")
-    polished = _polish_at_once(job, pool, facts, job_dir, optima_dir, records)
-    gaps = _after_runs(job, calls, "the optimum / identifiability analysis", _analyse, job_dir,
-                       optima_dir, records, polished, what="its gaps to the optimum are not",
-                       limit=_limit(analysis_limit_s(job))) or {}
-    summary.score = job_score(gaps, records)
-    summary.wall_time_s = time.perf_counter() - start
-    best = best_of(records)
-    if best is not None:  # the best run's own instance: its record is the one it fitted
-        _after_runs(job, calls, "the best run's signals", _signals, job_dir,
-                    int(best[1]["run_index"]), *best,
-                    what="best_signals.csv may be missing or out of date",
-                    limit=_limit(analysis_limit_s(job)))
-    return summary
 
 
 def _after_runs(job: Job, calls: Any, name: str, fn: Any, *args: Any, what: str,

@@ -112,9 +112,7 @@ def group_diagnostics(r: np.ndarray, measured: np.ndarray | None = None,
                       sigma: float | None = None,
                       inputs: Mapping[str, np.ndarray] | None = None,
                       lags: int = MAX_LAGS) -> dict[str, Any]:
-    """The diagnostics of one group's residuals ``r`` in time order (see the module);
-    ``measured``: the measured signal in the residuals' units, ``sigma``: the stated noise
-    sigma (``None``: estimated), ``inputs``: each input at the group's samples."""
+    """The diagnostics of one group's residuals ``r`` in time order (see the module)."""
     r = np.asarray(r, dtype=float).reshape(-1)
     n = r.size
     lags = max(1, min(lags, n // 4))

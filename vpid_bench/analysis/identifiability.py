@@ -49,9 +49,8 @@ def jacobian(problem: Problem, x: np.ndarray, step: float = STEP) -> np.ndarray:
 
 
 def entry_sigma(sigma: np.ndarray, groups: np.ndarray) -> np.ndarray | None:
-    """The noise's sigma of each residual entry, from ``sigma`` given per group
-    (``(groups,)``) or per entry (``(m,)``, e.g. multiplicative noise); ``None`` when its
-    shape is neither, a value is negative or not finite, or no entry is noisy."""
+    """The noise's sigma of each residual entry, from ``sigma`` per group or per entry;
+    ``None`` for another shape, a negative or non-finite value, or no noise at all."""
     sigma = np.asarray(sigma, dtype=float).reshape(-1)
     if sigma.size == groups.size:
         out = sigma

@@ -119,8 +119,7 @@ def jacobian_intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None
 
 
 def time_positions(groups: np.ndarray) -> np.ndarray:
-    """Each entry's place within its group (its time position: a group's entries are in
-    time order), ``(m,)`` ints."""
+    """Each entry's place within its group (its time position), ``(m,)`` ints."""
     groups = np.asarray(groups, dtype=int).reshape(-1)
     pos = np.empty(groups.size, dtype=int)
     for g in np.unique(groups):

@@ -68,8 +68,7 @@ ARCHIVE_DIR_ENV = "VPID_BENCH_ARCHIVE_DIR"
 
 
 def default_root() -> Path:
-    """The archives shipped with the package (``archive/`` in the source tree), or the folder
-    ``$VPID_BENCH_ARCHIVE_DIR`` names."""
+    """The archives shipped with the package, or the folder ``$VPID_BENCH_ARCHIVE_DIR``."""
     import os
     from importlib.resources import files
 
@@ -232,8 +231,7 @@ class _Bad:
 
 
 def _read_optima(folder: Path, manifest: Mapping[str, Any], bad: _Bad) -> list[Optimum]:
-    """The optimum lines; one instance (problem, instance, settings) given twice refuses
-    the archive: which of two optima counts is not the archive's to leave open."""
+    """The optimum lines; an instance given twice refuses the archive (which counts?)."""
     optima, seen = [], {}
     data = _checked_file(folder, manifest, OPTIMA, MAX_TEXT_BYTES)
     for n, obj, why in _lines(data.splitlines(keepends=True), folder / OPTIMA):
@@ -263,8 +261,7 @@ def is_archive(path: Path) -> bool:
 
 
 def find_archives(root: Path | None = None) -> list[Path]:
-    """The archive folders below ``root`` (default :func:`default_root`): every subfolder
-    with a ``manifest.json``."""
+    """The archive folders below ``root`` (default: :func:`default_root`)."""
     root = default_root() if root is None else Path(root)
     if not root.is_dir():
         return []

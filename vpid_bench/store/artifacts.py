@@ -36,9 +36,8 @@ class BadArtifactError(ValueError):
 
 @dataclass(frozen=True)
 class BestSignals:
-    """The content of a ``best_signals.csv``: times ``t`` (s), per channel the measured and
-    fitted arrays (``channels[name] = (measured, fitted)``, either may be ``None``), units per
-    channel, and ``source`` (which run: ``run_index``, ``f_best``, ``ranked_by``, ``value``)."""
+    """A ``best_signals.csv``: times ``t`` (s), ``channels[name] = (measured, fitted)``
+    (either may be ``None``), units per channel, and ``source`` (which run)."""
 
     t: np.ndarray
     channels: dict[str, tuple[np.ndarray | None, np.ndarray | None]]

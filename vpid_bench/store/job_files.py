@@ -23,9 +23,7 @@ MAX_BYTES = 2_000_000
 
 
 def read_job_json(path: Path) -> tuple[Any, str]:
-    """The JSON value of the job file ``path``: ``(value, "")``, or ``(None, why)`` for a file
-    that is missing, a link, not a regular file, larger than :data:`MAX_BYTES`, not UTF-8 or
-    not JSON."""
+    """The JSON value of the job file ``path``: ``(value, "")``, or ``(None, why)``."""
     try:
         if path.is_symlink():
             return None, "not a regular file"

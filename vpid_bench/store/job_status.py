@@ -18,11 +18,8 @@ JOB_STATUS_FILE = "job.json"
 
 
 def write_job_status(job_dir: Path, status: str, detail: Any) -> Path:
-    """Write ``{"status", "detail", "invocation"}``; ``detail`` is a JobSummary or a message.
-
-    ``status`` is ``ok``, ``failed_runs`` (some runs raised; their records say why),
-    ``error`` (the job stopped before or between runs) or ``interrupted``.
-    """
+    """Write ``{"status", "detail", "invocation"}``: ``ok``, ``failed_runs`` (their records
+    say why), ``error`` or ``interrupted``; ``detail`` a JobSummary or a message."""
     if dataclasses.is_dataclass(detail) and not isinstance(detail, type):
         detail = {k: (str(v) if isinstance(v, Path) else v)
                   for k, v in dataclasses.asdict(detail).items() if k != "record_paths"}

@@ -43,8 +43,7 @@ def _finite(v: Any) -> bool:
 
 
 def check_optimum(data: Any) -> str | None:
-    """The first bad field of a parsed optimum file as ``"<field>: expected ..."``, or
-    ``None`` when every field the report reads is well-typed."""
+    """The first bad field of a parsed optimum file as ``"<field>: expected ..."``, or None."""
     if not isinstance(data, Mapping):
         return "the file: expected a JSON object"
     checks: list[tuple[str, bool, str]] = [
@@ -101,8 +100,7 @@ def write_optimum_file(path: Path, data: Mapping[str, Any]) -> Path:
 
 
 def read_optimum_file(path: Path) -> tuple[Optimum | None, str | None]:
-    """``(optimum, None)`` for a good file, ``(None, why)`` for a bad one
-    (:func:`read_optimum_data`)."""
+    """``(optimum, None)`` for a good file, ``(None, why)`` for a bad one."""
     data, why = read_optimum_data(path)
     return (None, why) if data is None else optimum_from_data(data, path)
 

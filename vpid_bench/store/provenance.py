@@ -84,8 +84,7 @@ MAX_CODE_BYTES = 32 * 1024 * 1024
 
 @functools.lru_cache(maxsize=64)
 def _tree_digest(root: str) -> str:
-    """SHA-256 (16 hex digits) of every ``.py`` file below ``root`` (or of the file
-    ``root``): relative paths and contents, in sorted order."""
+    """SHA-256 (16 hex digits) of every ``.py`` file below ``root`` (or the file), in order."""
     base = Path(root)
     files = [base] if base.is_file() else sorted(
         p for p in base.rglob("*.py") if "__pycache__" not in p.parts and p.is_file())

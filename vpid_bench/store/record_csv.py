@@ -66,8 +66,7 @@ class ColumnMap:
 
 @dataclasses.dataclass(frozen=True)
 class CsvRecord:
-    """A read record's file and times (s, as in the file); a problem's record adds its
-    channels."""
+    """A read record's file and times (s); a problem's record adds its channels."""
 
     path: str
     t: np.ndarray
@@ -88,8 +87,7 @@ class CsvRecord:
 
 @dataclasses.dataclass(frozen=True)
 class Found:
-    """Where a :class:`RecordColumn` is in the file: the record's column name, its index and
-    the factor its values are multiplied by to be in the column's unit."""
+    """Where a :class:`RecordColumn` is: its name in the file, index and unit factor."""
 
     name: str
     index: int
@@ -119,9 +117,8 @@ def _split(cell: str) -> tuple[str, str | None]:
 
 
 class CsvTable:
-    """A record file read and its header checked against the problem's columns: ``TIME``
-    and ``required`` must be found, ``optional`` may be; :meth:`find` locates a column,
-    :meth:`read` reads the used ones as numbers (see the module for the rules)."""
+    """A record file read and its header checked against the problem's columns (``TIME``
+    and ``required`` must be found, ``optional`` may be)."""
 
     #: Fewest rows a record may have (a handful of samples identifies nothing).
     MIN_ROWS = 10

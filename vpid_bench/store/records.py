@@ -79,8 +79,7 @@ def decode_numbers(record: dict[str, Any]) -> dict[str, Any]:
 
 
 def _jsonable(obj: Any) -> Any:
-    """Convert numpy scalars/arrays and non-finite floats (as ``"inf"``, ``"-inf"``, ``"nan"``)
-    into strict-JSON values."""
+    """Numpy scalars and arrays and non-finite floats as strict-JSON values."""
     kind = type(obj)
     if kind is float:  # the common leaves first: a record's traces are long lists of them
         return _float_text(obj)
@@ -135,8 +134,7 @@ def record_path(job_dir: Path, run_index: int, rid: str) -> Path:
 
 
 def parse_record_name(name: str) -> tuple[int, str] | None:
-    """``(run_index, run_id)`` of a file named as :func:`record_path` names records, or
-    ``None`` for any other name."""
+    """``(run_index, run_id)`` of a record's file name (:func:`record_path`), or ``None``."""
     import re
 
     match = re.fullmatch(r"run-(\d+)-(\w+)\.json", name)
