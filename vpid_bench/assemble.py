@@ -50,12 +50,9 @@ def result_section(result: RunResult, derived: Mapping[str, Any],
 def error_section(error: BaseException) -> dict[str, str]:
     """Type, message and traceback of the exception that failed a run."""
     # an exception carried from a worker process keeps its own type name and traceback
-    return {
-        "type": getattr(error, "remote_type", type(error).__name__),
-        "message": str(error),
-        "traceback": (getattr(error, "remote_traceback", None)
-                      or "".join(traceback.format_exception(error))),
-    }
+    return {"type": getattr(error, "remote_type", type(error).__name__), "message": str(error),
+            "traceback": (getattr(error, "remote_traceback", None)
+                          or "".join(traceback.format_exception(error)))}
 
 
 def make_record(job: Job, run: RunOutcome, rid: str, instance: InstanceFacts,

@@ -168,11 +168,10 @@ def _job_key(job: Job, registry: Registry | None, facts: ProblemFacts) -> dict[s
     more: dict[str, Any] = {}
     if job.stop_at:  # only then: the run ids of every job without a target stay as they were
         more["target"] = [job.spec.target, sorted(job.stop_at.items())]
-    return rec.job_key(
-        {**job.problem_settings(), "name": job.problem_name},
-        {**job.optimizer_settings(), "name": job.optimizer_name},
-        job.spec.seed, job.budget, plugins=plugins, data=facts.content_digest, **more,
-    )
+    return rec.job_key({**job.problem_settings(), "name": job.problem_name},
+                       {**job.optimizer_settings(), "name": job.optimizer_name},
+                       job.spec.seed, job.budget, plugins=plugins, data=facts.content_digest,
+                       **more)
 
 
 def _refuse_swapped(*folders: Path) -> None:

@@ -62,10 +62,8 @@ def find_previous(root: Path, overrides: Sequence[str], multirun: bool) -> Path 
     if not root.is_dir():
         return None
     wanted = normalise_overrides(overrides)
-    candidates = sorted(
-        (p for p in root.iterdir() if p.is_dir() and not p.is_symlink()),
-        key=lambda p: p.stat().st_mtime, reverse=True,
-    )
+    candidates = sorted((p for p in root.iterdir() if p.is_dir() and not p.is_symlink()),
+                        key=lambda p: p.stat().st_mtime, reverse=True)
     for folder in candidates:
         saved = _saved_task_overrides(folder, multirun)
         if saved is not None and normalise_overrides(saved) == wanted:

@@ -23,12 +23,9 @@ def write_job_status(job_dir: Path, status: str, detail: Any) -> Path:
     if dataclasses.is_dataclass(detail) and not isinstance(detail, type):
         detail = {k: (str(v) if isinstance(v, Path) else v)
                   for k, v in dataclasses.asdict(detail).items() if k != "record_paths"}
-    payload = {
-        "status": status,
-        "detail": _jsonable(detail),
-        "invocation": os.environ.get("VPID_BENCH_INVOCATION"),
-    }
-    return write_record(Path(job_dir) / JOB_STATUS_FILE, payload)
+    return write_record(Path(job_dir) / JOB_STATUS_FILE, {
+        "status": status, "detail": _jsonable(detail),
+        "invocation": os.environ.get("VPID_BENCH_INVOCATION")})
 
 
 def read_job_status(job_dir: Path) -> dict[str, Any] | None:
