@@ -1,23 +1,12 @@
 """The plugin API in one place: the two interfaces every plugin implements (:class:`Problem`
 and :class:`Optimizer`) and everything a plugin uses with them.
 
-The core knows no particular problem or optimization algorithm. A problem maps a population
-of candidate vectors (rows) to objective values; an optimizer proposes populations (``ask``)
-and learns their values (``tell``). The run loop in :mod:`vpid_bench.runner` sits between the
-two and owns the evaluation budget, so an optimizer can neither overspend nor misreport.
-
-Conventions
------------
-* Candidates are in physical units (kg, N/m, ...), rows of an ``(n, d)`` float array.
-* Randomness is explicit: the optimizer receives a :class:`numpy.random.Generator`.
-* Hyper-parameters are frozen dataclasses (``Optimizer.Params``, ``Problem.Config``), so an
-  unknown or ill-typed key fails when the object is built (see :mod:`vpid_bench.params`).
-
-This module only gathers names; each lives in a small module of its own (``errors``,
-``bounds``, ``problem``, ``optimizer``, ``bridge``, ``fileio``, ``plugins``, and
-``store.record_csv``, the reader of a user's record file), which import
-each other and never this facade, so the package has no import circle.
-``from vpid_bench import ...`` offers the same names (the one import line for plugins).
+A problem maps a population of candidate vectors (rows, in physical units) to objective
+values; an optimizer proposes populations (``ask``) and learns their values (``tell``), with
+its own :class:`numpy.random.Generator`; the run loop between them owns the budget.
+Hyper-parameters are frozen dataclasses (``Optimizer.Params``, ``Problem.Config``), so a bad
+key fails when the object is built. This module only gathers names from the small modules
+(which never import it back); ``from vpid_bench import ...`` offers the same names.
 """
 
 from __future__ import annotations
@@ -40,29 +29,9 @@ from .problem import (
 from .store.record_csv import ColumnMap, CsvRecord, CsvTable, RecordColumn
 
 __all__ = [
-    "FILLED_PARAMS",
-    "PROTOCOL_KEYS",
-    "Bounds",
-    "ColumnMap",
-    "ConfigError",
-    "CsvRecord",
-    "CsvTable",
-    "GenerationalOptimizer",
-    "LoopOptimizer",
-    "Optimizer",
-    "OptimizerContractError",
-    "OptimizerParams",
-    "PluginError",
-    "Problem",
-    "ProblemConfig",
-    "RecordColumn",
-    "VpidBenchError",
-    "added_setting",
-    "check_compatible",
-    "default_budget",
-    "offers_residuals",
-    "registered_optimizer",
-    "relative_errors_percent",
-    "file_sha256",
-    "write_text_atomic",
+    "FILLED_PARAMS", "PROTOCOL_KEYS", "Bounds", "ColumnMap", "ConfigError", "CsvRecord",
+    "CsvTable", "GenerationalOptimizer", "LoopOptimizer", "Optimizer", "OptimizerContractError",
+    "OptimizerParams", "PluginError", "Problem", "ProblemConfig", "RecordColumn",
+    "VpidBenchError", "added_setting", "check_compatible", "default_budget", "offers_residuals",
+    "registered_optimizer", "relative_errors_percent", "file_sha256", "write_text_atomic",
 ]

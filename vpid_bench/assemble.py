@@ -1,21 +1,9 @@
 """Assembling a run record (schema 2): what a run was, what it found, what produced it.
 
-Each setting is stored once: the problem's settings (the protocol ``ps``/``iterations``
-included) under ``problem.config``, the optimizer's own settings under ``optimizer.params``,
-the job's ``seed`` under ``seeds`` and the run's ``budget`` at the top. Fields::
-
-    schema, run_id, run_index, status ("ok" | "failed"), error (type, message, traceback)
-    problem     name, plugin (provenance), config, info (the problem's describe())
-    optimizer   name, plugin (provenance), params
-    seeds       seed, spawn_key           budget
-    instance    index (= run index), id (the instance's data; null: all instances identical)
-    parameters  names, units, lower, upper, true (null when unknown)
-    result      x_best, f_best, evaluations, batches, stopped_by, metrics, rel_error_percent,
-                intervals (no truth and residuals: 95 % intervals of x_best, see
-                :mod:`vpid_bench.analysis.intervals`; absent otherwise)
-    trace       evaluations, best         (best-so-far after every evaluated batch)
-    versions    python and the numerical stack
-    timing      started_at, wall_time_s, run_time_s, host   (the only non-deterministic part)
+Each setting is stored once: the problem's (the protocol included) under ``problem.config``,
+the optimizer's own under ``optimizer.params``, ``seed`` under ``seeds``, the run's ``budget``
+at the top. ``result.intervals`` (no truth, residuals: 95 % intervals of ``x_best``) is absent
+otherwise; ``timing`` is the only non-deterministic part.
 """
 
 from __future__ import annotations
@@ -41,9 +29,8 @@ if TYPE_CHECKING:  # the job's types; records sit below the job in the layers
 
 def result_section(result: RunResult, derived: Mapping[str, Any],
                    x_true: np.ndarray | None) -> dict[str, Any]:
-    """The ``result`` section: the loop's own best, what the problem said of it (its
-    ``metrics``, and ``intervals`` where the truth is unknown: computed where the run ran,
-    :func:`vpid_bench.job_runs.with_problem_results`) and how far it is from a known truth."""
+    """The ``result`` section: the loop's own best, what the problem said of it (``derived``)
+    and how far it is from a known truth."""
     section: dict[str, Any] = {
         "x_best": result.x_best,
         "f_best": result.f_best,
@@ -63,21 +50,16 @@ def result_section(result: RunResult, derived: Mapping[str, Any],
 def error_section(error: BaseException) -> dict[str, str]:
     """Type, message and traceback of the exception that failed a run."""
     # an exception carried from a worker process keeps its own type name and traceback
-    return {
-        "type": getattr(error, "remote_type", type(error).__name__),
-        "message": str(error),
-        "traceback": (getattr(error, "remote_traceback", None)
-                      or "".join(traceback.format_exception(error))),
-    }
+    return {"type": getattr(error, "remote_type", type(error).__name__), "message": str(error),
+            "traceback": (getattr(error, "remote_traceback", None)
+                          or "".join(traceback.format_exception(error)))}
 
 
 def make_record(job: Job, run: RunOutcome, rid: str, instance: InstanceFacts,
                 provenance: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
-    """The JSON record of one run of ``job``: status ``ok`` with a result, or ``failed`` with
-    an error. ``instance`` holds the facts of the problem instance the run fitted (read where
-    the problem was built, :mod:`vpid_bench.facts`: no problem code runs here),
-    ``provenance`` the plugins' (``{"problem": {...}, "optimizer": {...}}``). The one place a
-    record is built."""
+    """The one place a run's JSON record is built: ``ok`` with a result, or ``failed`` with
+    an error. ``instance``: the facts of the instance it fitted (no problem code runs here);
+    ``provenance``: ``{"problem": {...}, "optimizer": {...}}``."""
     b = instance.bounds
     result, error = run.result, run.error
     record: dict[str, Any] = {

@@ -12,11 +12,8 @@ from .errors import ConfigError
 
 @dataclasses.dataclass(frozen=True)
 class Bounds:
-    """A box in parameter space, with names and units for every coordinate.
-
-    ``lower`` and ``upper`` are 1-D float arrays of equal length ``dim`` with
-    ``lower < upper`` element-wise.
-    """
+    """A box in parameter space, with names and units for every coordinate: ``lower`` and
+    ``upper`` 1-D float arrays of length ``dim``, ``lower < upper`` element-wise."""
 
     lower: np.ndarray
     upper: np.ndarray
@@ -29,20 +26,15 @@ class Bounds:
         names = tuple(self.names)
         units = tuple(self.units) if self.units else ("",) * len(names)
         if not (lower.shape == upper.shape and len(names) == lower.size == len(units)):
-            raise ValueError(
-                f"bounds: lower {lower.shape}, upper {upper.shape}, {len(names)} names and "
-                f"{len(units)} units must all have the same length"
-            )
+            raise ValueError(f"bounds: lower {lower.shape}, upper {upper.shape}, {len(names)} "
+                             f"names and {len(units)} units must all have the same length")
         if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
             raise ValueError("bounds: lower and upper must be finite")
         bad = np.flatnonzero(~(lower < upper))
         if bad.size:
             i = int(bad[0])
-            raise ConfigError(
-                f"bounds.{names[i]}",
-                (float(lower[i]), float(upper[i])),
-                "lower bound must be strictly below the upper bound",
-            )
+            raise ConfigError(f"bounds.{names[i]}", (float(lower[i]), float(upper[i])),
+                              "lower bound must be strictly below the upper bound")
         lower.setflags(write=False)
         upper.setflags(write=False)
         object.__setattr__(self, "lower", lower)

@@ -1,23 +1,14 @@
 """The bridge for optimizers that own their loop (``scipy.optimize.minimize`` and friends).
 
-Such a library wants to call ``f`` itself, in its own loop; the run loop of vpid-bench wants
-to ask and tell. :class:`LoopOptimizer` runs the library's loop (``minimize``) in a worker
-thread and hands each batch across, strictly in turn, so exactly one of the two threads works
-at any time and the run stays deterministic:
-
-* the worker calls ``evaluate(X)``: it posts ``X`` and waits;
-* the run loop's ``ask`` returns that ``X``; ``tell`` posts the values and waits for the
-  worker's next message (its next batch, its return value or its exception), so ``done`` is
-  true as soon as ``minimize`` has returned;
-* an exception inside ``minimize`` is raised again by ``tell`` (or ``ask``/``done`` for the
-  first batch) in the run loop's thread: the run fails and the job records it;
-* when the run is over (the budget spent, possibly in the middle of the library's loop, or
-  an error), the run loop calls :meth:`LoopOptimizer.close`: the waiting ``evaluate`` raises
-  an internal ``BaseException`` that unwinds the library's frames, and the thread is joined.
-  Nothing of this reaches the record.
-
-The pattern is the one of nevergrad's "recast" optimizers (a thread and two hand-over
-points); this is an independent implementation with two ``queue.SimpleQueue``.
+Such a library calls ``f`` itself, in its own loop; the run loop asks and tells.
+:class:`LoopOptimizer` runs the library's loop in a worker thread and hands each batch
+across, strictly in turn (one thread works at a time: the run stays deterministic): the
+worker's ``evaluate(X)`` posts ``X`` and waits; ``ask`` returns it; ``tell`` posts the values
+and waits for the worker's next message (a batch, its return value, its exception: raised
+again in the run loop's thread, so the run fails and is recorded). When the run is over, even
+mid-loop, ``close`` makes the waiting ``evaluate`` raise an internal ``BaseException`` that
+unwinds the library's frames, and joins the thread. The pattern is nevergrad's "recast"
+optimizers'; this is an independent implementation with two ``queue.SimpleQueue``.
 """
 
 from __future__ import annotations
@@ -39,8 +30,8 @@ JOIN_TIMEOUT_S = 10.0
 
 
 class _Stop(BaseException):
-    """Raised inside the library's loop to unwind it once the run is over. A BaseException,
-    so that a library's ``except Exception`` cannot swallow it."""
+    """Unwinds the library's loop once the run is over (a library's ``except Exception``
+    cannot swallow it)."""
 
 
 _STOP = object()
@@ -49,13 +40,10 @@ _STOP = object()
 class LoopOptimizer(Optimizer):
     """An optimizer written as one call, ``minimize(evaluate)``, that owns its loop.
 
-    ``evaluate(X)`` takes an ``(n, dim)`` batch of rows inside the bounds and returns their
-    objective values ``f`` (shape ``(n,)``), or ``(f, R)`` with residuals ``R`` (shape
-    ``(n, m)``) when the class sets ``wants_residuals``. The run loop still owns the budget:
-    ``evaluate`` may simply never return (the run is over, the loop is unwound). When
-    ``minimize`` returns, ``done`` becomes true and its return value is kept in ``result``.
-    Randomness comes from ``self.rng``; the worker uses it only while the run loop waits, so
-    a seed gives the same run.
+    ``evaluate(X)`` takes an ``(n, dim)`` batch inside the bounds and returns ``f`` ``(n,)``,
+    or ``(f, R)`` with residuals ``(n, m)`` when ``wants_residuals``; it may never return
+    (the budget is the run loop's). When ``minimize`` returns, ``done`` is true and its value
+    is in ``result``. Randomness from ``self.rng`` (used only while the run loop waits).
     """
 
     def __init__(self, params: OptimizerParams, bounds: Bounds, rng: np.random.Generator) -> None:
@@ -81,9 +69,8 @@ class LoopOptimizer(Optimizer):
             raise _Stop
         X = np.array(X, dtype=float, copy=True)
         if X.ndim != 2 or X.shape[1] != self.bounds.dim:
-            raise ValueError(
-                f"evaluate() takes an (n, {self.bounds.dim}) batch of rows, got shape {X.shape}"
-            )
+            raise ValueError(f"evaluate() takes an (n, {self.bounds.dim}) batch of rows, got "
+                             f"shape {X.shape}")
         if X.shape[0] == 0:
             f0 = np.empty(0)
             return (f0, np.empty((0, 0))) if self.wants_residuals else f0
@@ -121,19 +108,16 @@ class LoopOptimizer(Optimizer):
     def _start(self) -> None:
         if self._thread is not None or self._closed:
             return
-        self._thread = threading.Thread(
-            target=self._work, name=f"vpid-bench loop of {self.name}", daemon=True
-        )
+        self._thread = threading.Thread(target=self._work, name=f"vpid-bench loop of "
+                                        f"{self.name}", daemon=True)
         self._thread.start()
         self._receive()
 
     def ask(self) -> np.ndarray:
         self._start()
         if self._pending is None:
-            raise RuntimeError(
-                f"optimizer {self.name!r}: nothing to ask, its loop has "
-                + ("been closed" if self._closed else "returned")
-            )
+            raise RuntimeError(f"optimizer {self.name!r}: nothing to ask, its loop has "
+                               + ("been closed" if self._closed else "returned"))
         return self._pending.copy()
 
     def tell(self, X: np.ndarray, f: np.ndarray, residuals: np.ndarray | None = None) -> None:
@@ -149,8 +133,8 @@ class LoopOptimizer(Optimizer):
 
     @property
     def done(self) -> bool:
-        """True once ``minimize`` has returned (or ``done`` was set). Reading it starts the
-        library's loop, so that a loop that returns at once is seen before the first ask."""
+        """True once ``minimize`` has returned (or ``done`` was set); reading it starts the
+        loop, so one that returns at once is seen before the first ask."""
         if not (self._done_set or self._closed):
             self._start()
         return self._finished or self._done_set or self._closed
@@ -171,11 +155,8 @@ class LoopOptimizer(Optimizer):
             self._to_worker.put(_STOP)
             thread.join(JOIN_TIMEOUT_S)
             if thread.is_alive():  # pragma: no cover - a library that ignores the stop
-                warnings.warn(
-                    f"optimizer {self.name!r}: its loop did not stop within {JOIN_TIMEOUT_S} s",
-                    RuntimeWarning,
-                    stacklevel=2,
-                )
+                warnings.warn(f"optimizer {self.name!r}: its loop did not stop within "
+                              f"{JOIN_TIMEOUT_S} s", RuntimeWarning, stacklevel=2)
 
     def __enter__(self) -> LoopOptimizer:
         return self

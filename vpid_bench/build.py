@@ -19,12 +19,9 @@ from .spec import Job, check_protocol
 
 
 class ProblemCache:
-    """Problems built in this process, by (class, name, config).
-
-    The jobs of a sweep that share a problem config (ten optimizers at the same ``ps``) share
-    one instance, so a costly set-up (a reference simulation) is done once per process, not
-    once per job. ``evaluate`` is a pure function of the config, so this changes no result.
-    """
+    """Problems built in this process, by (class, name, config): jobs that share a problem
+    config share one instance, so a costly set-up is done once per process (``evaluate`` is
+    a pure function of the config: no result changes)."""
 
     def __init__(self, size: int = 8) -> None:
         self.size = size
@@ -62,16 +59,13 @@ def build_problem(registry: Registry, cfg: Mapping) -> Problem:
 
 
 def optimizer_params(registry: Registry, cfg: Mapping) -> tuple[type[Optimizer], Any]:
-    """The optimizer class named by ``cfg['name']`` and its validated ``Params``. Scripts and
-    tests build optimizers alone, so the keys the job fills in (``ps``, ``iterations``,
-    ``budget``) may be given here; without ``budget`` the optimizer's
-    :attr:`~vpid_bench.api.Optimizer.budget` is the protocol's default."""
+    """The optimizer class named by ``cfg['name']`` and its validated ``Params`` (tests,
+    scripts: the keys the job fills in may be given; ``budget`` defaults to the protocol's)."""
     cls = registry.optimizer(cfg.get("name"))
     return cls, build_dataclass(cls.Params, cfg, prefix="optimizer")
 
 
 def run_rng(seed: int, run_index: int) -> np.random.Generator:
-    """The optimizer's random stream of run ``run_index``: child ``run_index`` of ``seed``
-    (``SeedSequence(seed, spawn_key=(run_index,))``, what ``SeedSequence(seed).spawn`` gives),
-    so runs are independent and any single run can be repeated alone."""
+    """The optimizer's random stream of run ``run_index``: ``SeedSequence(seed,
+    spawn_key=(run_index,))``, so runs are independent and any one can be repeated alone."""
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(run_index,)))

@@ -1,14 +1,11 @@
-"""A Linux cgroup (version 2) per worker process, where this process may create one: every
-process the worker's plugins start is in it, whatever it does (fork, ``setsid``, a daemon's
-double fork, a fork that outlives its worker), and writing ``cgroup.kill`` ends them all at
-once, forks in flight included (the kernel's own guarantee; Linux >= 5.14).
+"""A Linux cgroup (version 2) per worker process, where this process may make one: every
+process the worker's plugins start is in it, whatever it does, and ``cgroup.kill`` ends them
+all at once, forks in flight included (Linux >= 5.14).
 
-Where it is available: a cgroup v2 hierarchy is mounted (``/proc/self/mountinfo``), the
-folder of this process's own cgroup (``/proc/self/cgroup``) may be written (root, or a
-cgroup systemd delegates to the user) and it offers ``cgroup.kill``. Elsewhere
-:meth:`Cgroup.create` returns ``None`` and :mod:`vpid_bench.worker_tree` finds the processes
-by the mark in their environment instead (docs/sweeps.md, crash isolation, says what is
-guaranteed where). ``VPID_BENCH_CGROUPS=0`` turns cgroups off (a test of that path).
+Available where a cgroup v2 hierarchy is mounted, this process's own cgroup folder may be
+written (root, or delegated by systemd) and offers ``cgroup.kill``. Elsewhere
+:meth:`Cgroup.create` returns ``None`` and :mod:`vpid_bench.worker_tree` finds processes by
+their mark. ``VPID_BENCH_CGROUPS=0`` turns cgroups off (a test of that path).
 """
 
 from __future__ import annotations
@@ -52,8 +49,7 @@ class Cgroup:
 
     @classmethod
     def create(cls, name: str) -> Cgroup | None:
-        """A new cgroup ``name`` beside this process's own, or ``None`` where none can be made
-        (see module)."""
+        """A new cgroup ``name`` beside this process's own, or ``None``."""
         base = _own_folder() if os.environ.get(ENV, "1") != "0" else None
         if base is None:
             return None
@@ -68,8 +64,7 @@ class Cgroup:
         return cls(path)
 
     def add(self, pid: int) -> bool:
-        """Move process ``pid`` (a worker just started, before any plugin code) into the
-        cgroup; ``False`` where that is refused (the cgroup is then removed)."""
+        """Move process ``pid`` into the cgroup; ``False`` (the cgroup removed) if refused."""
         try:
             (self.path / "cgroup.procs").write_text(str(pid))
         except OSError:
@@ -94,8 +89,7 @@ class Cgroup:
         return not self.populated()
 
     def populated(self) -> bool:
-        """Whether a living process is still in the cgroup (one that ended leaves it at once,
-        reaped or not)."""
+        """Whether a living process is still in the cgroup."""
         try:
             events = (self.path / "cgroup.events").read_text()
         except OSError:
@@ -106,6 +100,3 @@ class Cgroup:
         """Remove the cgroup (possible once no process is in it)."""
         with contextlib.suppress(OSError):
             self.path.rmdir()
-
-
-__all__ = ["ENV", "Cgroup"]

@@ -1,37 +1,14 @@
 """The problem contract, grouped into capabilities, and the check that refuses half of one.
 
 A :class:`~vpid_bench.api.Problem` is a core (``Config``, ``bounds``, ``evaluate``) plus
-capabilities it may offer. Each capability is all or nothing: a problem that implements part
-of one would be used with the framework's default for the rest, and that gives wrong numbers
-without a word. The known case: a problem with ``instance(i)`` but no ``instance_id()`` fits
-a different record per run while its records say the runs share one; one optimum is polished
-and every run judged against instance 0's. So :func:`check_problem_class` refuses such a
-class before any run (the job spec's parse calls it, so the pre-flight does too), with one
-line naming what is missing.
-
-=============  =====================================================================  =========
-capability     members                                                                anchor
-=============  =====================================================================  =========
-core           Config, bounds, evaluate; optional: x_true, metrics, describe, name,    (always)
-               rows_independent, suites, family, comparisons, fits_a_record
-residuals      residuals, residual_groups, evaluate_with_residuals, fisher_residuals,
-               fisher_groups, residual_sigma                                          residuals
-instances      instance, instance_id, evaluate_instances                              instance
-signals        signals, signal_units                                                  signals
-plumbing       write_artifacts, content_digest, set_threads                           (none)
-=============  =====================================================================  =========
-
-A problem **without a truth** is the core with ``x_true`` left ``None`` (a measured record):
-``metrics`` then gives held-out errors (the headline first, lower is better) and
-``comparisons`` named rows that are not truths (a published estimate, a naive predictor);
-with the residuals capability the framework adds each run's 95 % intervals and the profile
-likelihood (:mod:`vpid_bench.analysis.estimates`). Nothing is measured against nominal
-values.
-
-A capability is offered when its *anchor* is overridden; overriding any other member of it
-without the anchor is refused, and so is ``instance`` without ``instance_id``. A member that
-is a method in :class:`~vpid_bench.api.Problem` must stay a method (``instance_id = "a"`` is
-refused: it would fail as ``'str' object is not callable`` in the middle of a job).
+capabilities it may offer (:data:`CAPABILITIES`; the table: docs/architecture.md, the problem
+contract). Each is all or nothing: a problem implementing part of one would get the
+framework's default for the rest, wrong numbers without a word (``instance(i)`` without
+``instance_id()`` once judged every run against instance 0's optimum). A capability is offered
+when its *anchor* is overridden; overriding another of its members without the anchor is
+refused, and so is ``instance`` without ``instance_id``, and a method of
+:class:`~vpid_bench.api.Problem` replaced by a non-callable (``instance_id = "a"``):
+:func:`check_problem_class`, called by the job spec's parse (so the pre-flight), one line.
 """
 
 from __future__ import annotations
@@ -89,9 +66,8 @@ def offered(cls: type[Problem]) -> list[str]:
 
 
 def check_problem_class(cls: type, name: str | None = None) -> None:
-    """Refuse a problem class that implements part of a capability (see the module), or
-    that replaced a method of the contract by something that is not callable. Raises
-    :class:`~vpid_bench.api.ConfigError` with key ``problem``, one line."""
+    """Refuse (:class:`~vpid_bench.api.ConfigError`, key ``problem``) a problem class that
+    implements part of a capability or replaced a method by a non-callable."""
     label = name or getattr(cls, "name", None) or cls.__name__
     if not (isinstance(cls, type) and issubclass(cls, Problem)):
         raise ConfigError("problem", label, "a subclass of vpid_bench.Problem")
@@ -105,15 +81,11 @@ def check_problem_class(cls: type, name: str | None = None) -> None:
             continue
         missing = [m for m in (cap.anchor, *cap.needs) if m not in done]
         if missing:
-            raise ConfigError("problem", label, _half(cap, done, missing))
-
-
-def _half(cap: Capability, done: list[str], missing: list[str]) -> str:
-    have = ", ".join(f"{m}()" for m in done)
-    lack = " and ".join(f"{m}()" for m in missing)
-    return (f"a problem that offers the {cap.name!r} capability whole ({cap.what}): it "
-            f"implements {have} but not {lack}; implement {lack} too, or none of "
-            f"{', '.join(cap.members)} (see {DOCS})")
+            lack = " and ".join(f"{m}()" for m in missing)
+            raise ConfigError("problem", label, f"a problem that offers the {cap.name!r} "
+                              f"capability whole ({cap.what}): it implements "
+                              f"{', '.join(f'{m}()' for m in done)} but not {lack}; implement "
+                              f"{lack} too, or none of {', '.join(cap.members)} (see {DOCS})")
 
 
 def _check_callable(cls: type, member: str, label: str) -> None:

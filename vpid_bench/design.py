@@ -3,16 +3,12 @@
     vpid-bench-design ride_half --vary sensors=body,body_wheel --vary speed_kmh=20,40
     vpid-bench-design ride_quarter sensors=body --vary speed_kmh=30,60 --floor 10 --profile
 
-A design is the problem with one choice of settings (``key=value`` for every design, each
-``--vary key=a,b`` a factor; designs are all combinations). For each, on instance 0: the
-Cramér–Rao bound's norm (%, for the simulated noise), the condition number, D-optimality
-(``det(F)^(1/d)`` of the Fisher information in relative parameters: higher is better) and
-A-optimality (``trace(F⁻¹)``, the sum of the squared relative bounds: lower is better), the
-parameters it leaves undetermined (bound over 10 %) and a structural symmetry flag. With
-``--floor N``, the measured floor beside the bound: the median metric of each instance's
-optimum of the problem's objective over instances 0..N-1. With ``--profile``, profile-
-likelihood 95 % intervals of instance 0 (:mod:`vpid_bench.analysis.profile`). Prints
-Markdown; progress on stderr.
+A design is the problem with one choice of settings (``key=value`` for all, each ``--vary``
+a factor). For each, on instance 0: the Cramér–Rao bound's norm (%), the condition number,
+D-optimality (``det(F)^(1/d)`` in relative parameters, higher is better), A-optimality
+(``trace(F⁻¹)``, lower is better), the parameters left undetermined (bound over 10 %) and a
+structural symmetry flag; ``--floor N`` adds the median metric of instances 0..N-1's optima,
+``--profile`` instance 0's profile-likelihood intervals. Prints Markdown.
 """
 
 from __future__ import annotations

@@ -1,53 +1,30 @@
 """The estimator as a choice: one record's residuals under four objectives.
 
-An identification problem compares a measured record ``y`` (``p`` channels of ``N_c`` samples)
-with a model's response ``g(θ)``. *Which* distance is minimised is the estimator, and it sets
-the floor a record allows as much as the data do. The four built in (``problem.objective``):
+An identification problem compares a measured record ``y`` (``p`` channels of ``N_c``
+samples) with a model's response ``g(θ)``; *which* distance is minimised is the estimator,
+and it sets the floor a record allows as much as the data do (``problem.objective``):
 
-* ``eq3``: Eq. 3 of the problem's source, a sum of one Euclidean norm per channel, each over a
-  reference norm (the problem says which). Not a likelihood: its floor can sit far above the
-  Cramér–Rao bound of the data.
-* ``ols``: ordinary least squares, ``f = ||y - g||² / ||y||²`` over all channels at once
-  (channels in their own units, unweighted).
-* ``ml``: the Gaussian likelihood of a **stated** noise model (level and kind known),
-  ``f = mean((y - g)² / (2 σ²))`` (the negative log-likelihood per sample without its
-  constant). Additive noise: ``σ_c = level × rms(y_c)``. Multiplicative noise (``σ_k =
-  level × |z_k|``, ``z`` the clean signal) and uniform noise (the same over √3): ``σ_k`` is the
-  noise model's at a *leave-one-out* estimate of ``|z_k|`` from the neighbouring samples
-  (:func:`leave_one_out`: the mean of the two neighbours, not below the smaller one-sided
-  extrapolation, so a jump in the signal is not taken for a zero crossing), floored at
-  ``SIGMA_FLOOR × level × rms(y_c)`` (:func:`plug_in_sigma`). Each sample's weight is then
-  independent of that sample's own noise, so the weighted residuals have mean zero at the truth
-  and the estimator is unbiased (tested on a linear-Gaussian model and on a half car's
-  records); weights from the sample itself (``level × |y_k|``, the rule before round four)
-  favour the samples whose noise made them small and bias the estimates by several standard
-  errors. Why not ``σ`` from the model's prediction ``level × |g_k(θ)|`` with the ``Σ log
-  σ_k(θ)`` term (the exact likelihood)? Its value is unbounded wherever the model's response
-  crosses zero at a sample where the record does not, so every sample adds a wall across the
-  parameter space: a least-squares search from random starts stops far above the optimum,
-  while from the truth it is only slightly more precise than the leave-one-out weights
-  (measured in docs/estimators.md). Uniform
-  noise is treated by its variance (a quasi-likelihood). Needs the noise stated: refused for
-  a record whose noise level is not known (:func:`check_objective`).
-* ``ml_profiled``: the Gaussian likelihood with each channel's σ **unknown** (additive, constant
-  along the channel) and profiled out: ``-log L = Σ_c N_c/2 · log(RSS_c / N_c) + const``. For
-  measured records, where no noise level is known; the value reported is the monotone
-  ``f = Π_c (rms(y_c - g_c) / rms(y_c))^(N_c / N)``, the geometric mean of the channels'
-  relative rms residuals weighted by their samples (dimensionless, > 0; ``-log L = N log f +
-  const``). Its residuals (:func:`residuals_and_value`) are scaled per channel so that their
-  norm is ``√N · f`` and their Gauss–Newton matrix at the optimum is the likelihood's
-  (weights ``N_c / RSS_c``): ``lsq`` minimises it as it is.
+* ``eq3``: Eq. 3 of the problem's source, a sum of one Euclidean norm per channel, each over
+  a reference norm. Not a likelihood: its floor can sit far above the Cramér–Rao bound.
+* ``ols``: ordinary least squares, ``f = ||y - g||² / ||y||²`` over all channels at once.
+* ``ml``: the Gaussian likelihood of a **stated** noise model, ``f = mean((y - g)² / (2 σ²))``.
+  Additive noise: ``σ_c = level × rms(y_c)``; multiplicative (``σ_k = level × |z_k|``) and
+  uniform (the same over √3): the noise model's ``σ_k`` at a *leave-one-out* estimate of
+  ``|z_k|`` from the neighbouring samples (:func:`leave_one_out`), floored at
+  ``SIGMA_FLOOR × level × rms(y_c)``. Each weight is then independent of its sample's own
+  noise, so the estimator is unbiased (tested; why not the exact likelihood or weights from
+  the sample itself: docs/estimators.md). Refused without a stated noise level.
+* ``ml_profiled``: the Gaussian likelihood with each channel's (additive, constant) σ
+  **unknown** and profiled out, ``-log L = Σ_c N_c/2 · log(RSS_c / N_c) + const``, for
+  measured records; reported as ``f = Π_c (rms(y_c - g_c) / rms(y_c))^(N_c / N)``
+  (dimensionless, ``-log L = N log f + const``), its residuals scaled so that their norm is
+  ``√N · f`` and their Gauss–Newton matrix the likelihood's.
 
 **How a problem uses them**: multiply each raw residual ``y - g`` by :func:`weights` (fixed
-for a record: ``eq3_scale``, ``1 / ||y||``, ``1 / σ`` or ``1 / rms(y_c)``), then hand the
-weighted residuals ``(n, p, N)`` to :func:`residuals_and_value`, which returns the objective
-and the residual vectors an optimizer sees (for ``ml_profiled`` a per-candidate rescaling; for
-the others the weighted residuals themselves). :func:`groups` gives the residual groups (the
-channels for ``eq3``, one group otherwise). The weighted residuals *before* the rescaling
-are the problem's ``fisher_residuals`` (their weights do not depend on ``θ``): the
-Cramér–Rao bound differentiates them. A problem that offers the choice validates it with
-:func:`check_objective`, passing ``None`` as the noise level when the noise is not known (a
-measured record).
+for a record), hand the weighted residuals ``(n, p, N)`` to :func:`residuals_and_value` (the
+objective and the residual vectors an optimizer sees); :func:`groups` gives the residual
+groups. The weighted residuals before any rescaling are the problem's ``fisher_residuals``.
+A problem that offers the choice validates it with :func:`check_objective`.
 """
 
 from __future__ import annotations
@@ -102,13 +79,10 @@ def noise_sigma(clean: np.ndarray, level: float, model: str) -> np.ndarray:
 
 
 def leave_one_out(measured: np.ndarray) -> np.ndarray:
-    """Each sample's magnitude estimated from its neighbours only, ``(p, N)``: the mean of the
-    samples before and after it, ``|(y_{k-1} + y_{k+1}) / 2|``, but not below the smaller of
-    the two one-sided linear extrapolations ``|2 y_{k-1} - y_{k-2}|`` and ``|2 y_{k+1} -
-    y_{k+2}|``: next to a jump in the signal (a step input) the mean of the neighbours can pass
-    near zero where the signal does not, and one side's extrapolation is then right. At the
-    ends the one side that exists. Independent of the sample's own noise when the noise is
-    independent from sample to sample. Needs ``N >= 3``."""
+    """Each sample's magnitude from its neighbours only, ``(p, N)``: ``|(y_{k-1} +
+    y_{k+1}) / 2|``, not below the smaller one-sided extrapolation ``|2 y_{k∓1} - y_{k∓2}|``
+    (next to a jump the mean can pass near zero where the signal does not); at the ends the
+    one side that exists. Needs ``N >= 3``."""
     y = np.asarray(measured, dtype=float)
     if y.shape[-1] < 3:
         raise ValueError("a leave-one-out estimate needs at least 3 samples per channel")
@@ -123,11 +97,9 @@ def leave_one_out(measured: np.ndarray) -> np.ndarray:
 
 
 def plug_in_sigma(measured: np.ndarray, level: float, model: str) -> np.ndarray:
-    """The ``σ`` of each sample ``(p, N)`` the ``ml`` objective weighs by: the noise model's
-    (:func:`noise_sigma`) at the leave-one-out estimate of the clean record
-    (:func:`leave_one_out`) for multiplicative and uniform noise, at the record for additive
-    noise (one ``σ`` per channel from its rms); floored at ``SIGMA_FLOOR × level × rms(y_c)``
-    so a sample near zero does not get an infinite weight."""
+    """The ``σ`` ``(p, N)`` the ``ml`` objective weighs by: the noise model's at the
+    leave-one-out estimate of the clean record (at the record for additive noise), floored
+    at ``SIGMA_FLOOR × level × rms(y_c)`` (no infinite weight)."""
     measured = np.asarray(measured, dtype=float)
     rms = np.sqrt(np.mean(measured**2, axis=1, keepdims=True))
     at = measured if model == "additive" else leave_one_out(measured)
@@ -163,13 +135,11 @@ def value(objective: str, weighted: np.ndarray) -> np.ndarray:
 
 def residuals_and_value(objective: str, weighted: np.ndarray
                         ) -> tuple[np.ndarray, np.ndarray]:
-    """The objective ``(n,)`` and the residual vectors an optimizer minimises ``(n, p N)``
-    (channels one after another) of weighted residuals ``(n, p, N)`` (raw residuals times
-    :func:`weights`). ``eq3``: the sum of the channel norms; ``ols``: the sum of squares;
-    ``ml``: half the mean square; the residuals are the weighted ones. ``ml_profiled``:
-    ``f = Π_c (rms_c)^(N_c / N)`` of the channels' rms ``rms_c`` and residuals ``r_c · f /
-    rms_c`` (norm ``√N · f``; a channel fitted exactly gives ``f = 0`` and zero residuals).
-    ``inf`` (value and residuals) where a row is not finite."""
+    """The objective ``(n,)`` and the residual vectors an optimizer minimises ``(n, p N)`` of
+    weighted residuals ``(n, p, N)``: ``eq3`` the sum of channel norms, ``ols`` the sum of
+    squares, ``ml`` half the mean square (residuals as weighted); ``ml_profiled``
+    ``f = Π_c rms_c^(N_c / N)``, residuals ``r_c · f / rms_c``. ``inf`` where a row is not
+    finite."""
     R = np.asarray(weighted, dtype=float)
     if R.ndim != 3:
         raise ValueError(f"weighted residuals are (n, p, N), not {R.shape}")

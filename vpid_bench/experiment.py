@@ -1,27 +1,19 @@
 """Run a job: a parsed job spec, the plugin registry and a folder in; run records out.
 
-:func:`run_from_config` is a plain function of a composed config, so tests call it directly;
-the command's shell (:mod:`vpid_bench.shell`) calls it once per job. The rooms of a job:
+:func:`run_from_config` is a plain function of a composed config (tests call it directly; the
+shell calls it once per job). The problem and each run's generator: :mod:`vpid_bench.build`;
+what the job reads of the problem: :mod:`vpid_bench.facts`; the runs: :mod:`vpid_bench.job_runs`;
+one record per run: :func:`vpid_bench.assemble.make_record`; what the records allow:
+:mod:`vpid_bench.job_analysis`; the best run's signals: :mod:`vpid_bench.store.artifacts`.
 
-* building the problem and each run's generator: :mod:`vpid_bench.build` (run ``i`` draws
-  from ``SeedSequence(seed, spawn_key=(i,))``), and what the job reads of the problem:
-  :mod:`vpid_bench.facts`;
-* the runs themselves, alone or in lockstep, through the one run loop:
-  :mod:`vpid_bench.job_runs`;
-* one record per run: :func:`vpid_bench.assemble.make_record`;
-* what the records allow (bounds, optima, the job's score): :mod:`vpid_bench.job_analysis`;
-* the best run's signals: :func:`vpid_bench.store.artifacts.write_best_signals`.
+Resume: a run whose complete ``ok`` record (same run id) exists is skipped; missing, corrupt
+and failed runs run again. The run id hashes everything that determines a result (plugins'
+versions and code, data files' content), so another plugin release or data file runs again.
 
-Resume: a run whose complete record (status ``ok``, same run id) exists in the job folder is
-skipped; missing, corrupt and failed runs are run again. The run id hashes everything that
-determines a result, the plugins' versions and the content of data files included, so runs
-recorded under another plugin release or another data file are run again, never reused.
-
-Crash isolation: an exception (``SystemExit`` included) inside one run is written into that
-run's record (status ``failed``) and the job goes on; only ``KeyboardInterrupt`` stops it.
-With worker processes every call into plugin code goes through :meth:`Workers.call
-<vpid_bench.workers.Workers.call>` or the runs' tasks, and this process never builds the
-problem (:class:`_Here` makes the same calls in this process when there are no workers).
+Crash isolation: an exception (``SystemExit`` included) inside one run is written into its
+record (status ``failed``) and the job goes on; only ``KeyboardInterrupt`` stops it. With
+worker processes every call into plugin code goes to them and this process never builds the
+problem (:class:`_Here` makes the same calls in this process when there are none).
 """
 
 from __future__ import annotations
@@ -80,44 +72,33 @@ class JobSummary:
 BAD_DIR = "bad"
 
 
-def _existing_ok(path: Path, rid: str) -> bool:
-    """Whether ``path`` holds this run's complete ``ok`` record, which a resume keeps. A file
-    that is not a valid record (unreadable, or a field of the wrong type, such as an
-    ``f_best`` edited to a text while the record still says ``ok``) once failed its job on
-    every resume: it is set aside (:func:`_set_aside`) and its run is run again."""
-    if not path.is_file():
-        return False
+def _valid(path: Path) -> tuple[dict[str, Any] | None, str]:
+    """The valid record at ``path``, or ``(None, why)`` (unreadable, or a bad field)."""
     try:
         record = rec.read_record(path)
     except rec.CorruptRecordError as exc:
-        _set_aside(path, str(exc).removeprefix(f"{path}: "))
-        return False
+        return None, str(exc).removeprefix(f"{path}: ")
     bad = check_record(record, path.name)
-    if bad is not None:
-        _set_aside(path, f"field {bad}")
-        return False
-    return record["run_id"] == rid and record["status"] == "ok"
+    return (record, "") if bad is None else (None, f"field {bad}")
 
 
-def _kept(path: Path, rid: str) -> bool:
-    """Whether ``path`` holds this run's complete ``ok`` record (read only: a bad file is the
-    job's to set aside when it runs)."""
-    try:
-        record = rec.read_record(path) if path.is_file() else None
-    except rec.CorruptRecordError:
+def _kept(path: Path, rid: str, set_aside: bool = False) -> bool:
+    """Whether ``path`` holds this run's complete ``ok`` record, which a resume keeps. With
+    ``set_aside``, a file that is not a valid record (it once failed its job on every
+    resume) is moved aside (:func:`_set_aside`) and its run runs again."""
+    if not path.is_file():
         return False
-    return (record is not None and check_record(record, path.name) is None
-            and record["run_id"] == rid and record["status"] == "ok")
+    record, why = _valid(path)
+    if record is None and set_aside:
+        _set_aside(path, why)
+    return record is not None and record["run_id"] == rid and record["status"] == "ok"
 
 
 def recorded_in_full(jobs: list[Job], job_dirs: list[Path], registry: Registry | None,
                      problems: ProblemCache | None = None) -> bool:
-    """Whether every job of a sweep ended ``ok`` (its ``job.json``) with the complete record
-    of every run under the run ids it would have now (settings, seeds, plugins' code, the
-    problem's data, targets): then running the sweep again would run nothing, and the
-    command writes nothing but the report. The problems' set-up runs as a job's does (in a
-    supervised worker unless ``isolation=none``); any fault there: ``False`` (the jobs then
-    run as usual and say why)."""
+    """Whether every job of a sweep ended ``ok`` with the complete record of every run under
+    the run ids it would have now: then the command writes nothing but the report. The
+    problems' set-up runs as a job's does; any fault there: ``False`` (the jobs say why)."""
     from .store.job_status import read_job_status
 
     if not jobs or len(jobs) != len(job_dirs):
@@ -140,23 +121,29 @@ def recorded_in_full(jobs: list[Job], job_dirs: list[Path], registry: Registry |
 
 
 def _recorded(job: Job, job_dir: Path, registry: Registry | None, calls: Any) -> bool:
-    """:func:`recorded_in_full` of one job: its run ids made as :func:`_run_job` makes them."""
+    """:func:`recorded_in_full` of one job: its run ids made as :func:`run_job` makes them."""
     if not job.spec.resume:
         return False
-    limit = _limit(setup_limit_s(job))
-    facts = calls.call(job, _facts, what="the problem's set-up", limit=limit)
-    job = job.sized(facts.dim)
-    if job.spec.target is not None:
-        job = dataclasses.replace(job, stop_at=calls.call(
-            job, _stops, what="the certified optima's check", limit=limit))
+    job, facts = _set_up(job, calls)
     key = _job_key(job, registry, facts)
     return all(_kept(rec.record_path(job_dir, i, rec.run_id(key, i)), rec.run_id(key, i))
                for i in range(job.spec.runs))
 
 
+def _set_up(job: Job, calls: Any) -> tuple[Job, ProblemFacts]:
+    """The job sized by its problem's facts, with its stopping values (``target=``)."""
+    limit = _limit(setup_limit_s(job))
+    facts = calls.call(job, _facts, what="the problem's set-up (its instances, bounds, "
+                       "x_true, instance_id(), describe(), content_digest())", limit=limit)
+    job = job.sized(facts.dim)
+    if job.spec.target is not None:
+        job = dataclasses.replace(job, stop_at=calls.call(
+            job, _stops, what="the certified optima's check", limit=limit))
+    return job, facts
+
+
 def _set_aside(path: Path, why: str) -> Path:
-    """Move the record file ``path`` into ``records/bad/`` (never read as a record; a name
-    taken there gets a number) and say so in one line."""
+    """Move the record file ``path`` into ``records/bad/`` (numbered) and say so."""
     folder = path.parent / BAD_DIR
     _refuse_swapped(folder)
     folder.mkdir(exist_ok=True)
@@ -181,69 +168,74 @@ def _job_key(job: Job, registry: Registry | None, facts: ProblemFacts) -> dict[s
     more: dict[str, Any] = {}
     if job.stop_at:  # only then: the run ids of every job without a target stay as they were
         more["target"] = [job.spec.target, sorted(job.stop_at.items())]
-    return rec.job_key(
-        {**job.problem_settings(), "name": job.problem_name},
-        {**job.optimizer_settings(), "name": job.optimizer_name},
-        job.spec.seed, job.budget, plugins=plugins, data=facts.content_digest, **more,
-    )
-
-
-def _read_records(paths: list[Path]) -> list[dict[str, Any]]:
-    """The job's valid records (an unreadable or badly typed one is left out: a resume sets
-    it aside and runs it again)."""
-    records = []
-    for path in paths:
-        try:
-            record = rec.read_record(path)
-        except rec.CorruptRecordError:
-            continue
-        if check_record(record, path.name) is None:
-            records.append(record)
-    return records
+    return rec.job_key({**job.problem_settings(), "name": job.problem_name},
+                       {**job.optimizer_settings(), "name": job.optimizer_name},
+                       job.spec.seed, job.budget, plugins=plugins, data=facts.content_digest,
+                       **more)
 
 
 def _refuse_swapped(*folders: Path) -> None:
-    """A job folder or its ``records/`` replaced by a symbolic link while the job runs is
-    refused before the next record is written (records were once written through it, to
-    wherever it pointed)."""
+    """Refuse a job folder or its ``records/`` replaced by a symbolic link while the job runs
+    (records were once written through it)."""
     for folder in folders:
         if Path(folder).is_symlink():
             raise VpidBenchError(f"{folder} became a symbolic link while the job ran; no record "
                               "is written through it (remove the link and --resume)")
 
 
-def _check_artifacts(job_dir: Path, written: Any, problem_name: str) -> None:
-    """Refuse the job when the problem says it wrote an artifact outside its job folder (a
-    plugin's ``write_artifacts`` returning ``../../x`` once wrote there unnoticed)."""
-    root = job_dir.resolve()
-    for path in list(written or []):
-        target = (job_dir / Path(path)).resolve()
-        if target != root and root not in target.parents:
-            raise PluginError(f"problem {problem_name!r}: write_artifacts wrote {path} outside "
-                              f"its job folder {job_dir}; a problem writes only into the folder "
-                              "it is given")
-
-
 def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
             problems: ProblemCache | None = None, optima_dir: Path | None = None,
             pool: Workers | None = None) -> JobSummary:
-    """Run every run of ``job`` and write one record per run into ``job_dir/records``; then
-    write what the records allow (:func:`~vpid_bench.job_analysis.analyse_job`) into
-    ``optima_dir`` (default ``job_dir/optima``). ``pool``: the sweep's worker processes
-    (``isolation=auto`` uses them when given; ``process`` starts its own without)."""
+    """Run every run of ``job``, one record each into ``job_dir/records``, then what the
+    records allow into ``optima_dir`` (default ``job_dir/optima``). ``pool``: the sweep's
+    worker processes (``isolation=auto`` uses them when given; ``process`` starts its own)."""
     pool, own_pool = _choose_workers(job, pool)
     try:
         calls = pool if pool is not None else _Here(job, problems)
-        return _run_job(job, Path(job_dir), registry, calls, optima_dir, pool)
+        job_dir = Path(job_dir)
+        job, facts = _set_up(job, calls)
+        failure = _build_one_optimizer(job, calls)
+        provenance = {kind: (registry.provenance(kind, name) if registry is not None else {})
+                      for kind, name in (("problem", job.problem_name),
+                                         ("optimizer", job.optimizer_name))}
+        job_dir.mkdir(parents=True, exist_ok=True)
+        written = calls.call(job, _write_artifacts, job_dir, what="the problem's write_artifacts()",
+                             limit=_limit(setup_limit_s(job)))
+        root = job_dir.resolve()  # a problem writing ../../x once went unnoticed
+        for path in written:
+            if (target := (job_dir / Path(path)).resolve()) != root and root not in target.parents:
+                raise PluginError(f"problem {job.problem_name!r}: write_artifacts wrote {path} "
+                                  f"outside its job folder {job_dir}; a problem writes only into "
+                                  "the folder it is given")
+        spec = job.spec
+        summary = JobSummary(job_dir, job.problem_name, job.optimizer_name, spec.runs, 0, 0, [],
+                             [], 0.0)
+        start = time.perf_counter()
+        with one_blas_thread():
+            _run_missing(job, calls, facts, job_dir, _job_key(job, registry, facts), provenance,
+                         summary, pool, failure)
+        records = [r for r, _ in map(_valid, summary.record_paths) if r is not None]
+        optima_dir = Path(optima_dir or job_dir / "optima")
+        polished = _polish_at_once(job, pool, facts, job_dir, optima_dir, records)
+        gaps = _after_runs(job, calls, "the optimum / identifiability analysis", _analyse, job_dir,
+                           optima_dir, records, polished, what="its gaps to the optimum are not",
+                           limit=_limit(analysis_limit_s(job))) or {}
+        summary.score = job_score(gaps, records)
+        summary.wall_time_s = time.perf_counter() - start
+        best = best_of(records)
+        if best is not None:  # the best run's own instance: its record is the one it fitted
+            _after_runs(job, calls, "the best run's signals", _signals, job_dir,
+                        int(best[1]["run_index"]), *best,
+                        what="best_signals.csv may be missing or out of date",
+                        limit=_limit(analysis_limit_s(job)))
+        return summary
     finally:
         if own_pool:
             pool.close()
 
 
 class _Here:
-    """Calls into plugin code in this process (no worker processes): :meth:`call` has the
-    signature of :meth:`Workers.call <vpid_bench.workers.Workers.call>`, and the job's problem
-    is built here."""
+    """Calls into plugin code in this process, as ``Workers.call`` makes them in a worker."""
 
     def __init__(self, job: Job, problems: ProblemCache | None) -> None:
         self.problem = (problems or ProblemCache(size=1)).get(job)
@@ -254,8 +246,7 @@ class _Here:
 
 
 def _choose_workers(job: Job, pool: Workers | None) -> tuple[Workers | None, bool]:
-    """The worker processes the job's runs go to (``None``: this process) and whether the
-    job started them itself (``isolation``, see :class:`~vpid_bench.spec.JobSpec`)."""
+    """The job's worker processes (``None``: this process) and whether it started them."""
     mode = job.spec.isolation
     if mode == "none" or (mode == "auto" and pool is None):
         return None, False
@@ -282,11 +273,9 @@ def _choose_workers(job: Job, pool: Workers | None) -> tuple[Workers | None, boo
 
 
 def setup_limit_s(job: Job) -> float | None:
-    """Wall-time limit (s) of each set-up call into the problem (its facts, its artifacts,
-    its certified optima): what all the job's runs together are
-    allowed, ``run_timeout_s x runs``, but at least :data:`~vpid_bench.workers.GRACE_S`, so
-    a tiny limit still lets every run be tried and recorded (``None`` without
-    ``run_timeout_s``)."""
+    """Wall-time limit (s) of each set-up call into the problem: ``run_timeout_s x runs``,
+    at least :data:`~vpid_bench.workers.GRACE_S` (so every run is still tried and recorded);
+    ``None`` without ``run_timeout_s``."""
     limit = analysis_limit_s(job)
     return None if limit is None else max(GRACE_S, limit)
 
@@ -336,15 +325,13 @@ def _signals(job: Job, problem: Any, job_dir: Path, index: int, x: Any,
 
 
 def _limit(limit: float | None) -> float | None:
-    """A worker's allowance for a call limited to ``limit`` s in the worker itself (its
-    in-process limit raises first; past this it is killed)."""
+    """A worker's allowance for a call limited to ``limit`` s in the worker itself."""
     return None if limit is None else limit + GRACE_S
 
 
 def _build_one_optimizer(job: Job, calls: Any) -> BaseException | None:
-    """Build one optimizer up front: a fault in its constructor stops the job before any
-    run. A constructor that passes the run's time limit does not: it is returned, and every
-    run is recorded as failed with it (a job whose runs all time out once recorded none)."""
+    """Build one optimizer up front: a fault in its constructor stops the job; one past the
+    run's time limit is returned, and every run recorded as failed with it."""
     try:
         calls.call(job, probe, what="the optimizer's constructor",
                    limit=_limit(job.spec.run_timeout_s))
@@ -359,51 +346,9 @@ def _build_one_optimizer(job: Job, calls: Any) -> BaseException | None:
     return None
 
 
-def _run_job(job: Job, job_dir: Path, registry: Registry | None, calls: Any,
-             optima_dir: Path | None, pool: Workers | None) -> JobSummary:
-    facts = calls.call(job, _facts, what="the problem's set-up (its instances, bounds, "
-                       "x_true, instance_id(), describe(), content_digest())",
-                       limit=_limit(setup_limit_s(job)))
-    job = job.sized(facts.dim)
-    if job.spec.target is not None:
-        job = dataclasses.replace(job, stop_at=calls.call(
-            job, _stops, what="the certified optima's check", limit=_limit(setup_limit_s(job))))
-    failure = _build_one_optimizer(job, calls)
-    provenance = {kind: (registry.provenance(kind, name) if registry is not None else {})
-                  for kind, name in (("problem", job.problem_name),
-                                     ("optimizer", job.optimizer_name))}
-    job_dir.mkdir(parents=True, exist_ok=True)
-    written = calls.call(job, _write_artifacts, job_dir, what="the problem's write_artifacts()",
-                         limit=_limit(setup_limit_s(job)))
-    _check_artifacts(job_dir, written, job.problem_name)
-    spec = job.spec
-    summary = JobSummary(job_dir, job.problem_name, job.optimizer_name, spec.runs, 0, 0, [],
-                         [], 0.0)
-    start = time.perf_counter()
-    with one_blas_thread():
-        _run_missing(job, calls, facts, job_dir, _job_key(job, registry, facts), provenance,
-                     summary, pool, failure)
-    records = _read_records(summary.record_paths)  # once, for all that follows
-    optima_dir = Path(optima_dir or job_dir / "optima")
-    polished = _polish_at_once(job, pool, facts, job_dir, optima_dir, records)
-    gaps = _after_runs(job, calls, "the optimum / identifiability analysis", _analyse, job_dir,
-                       optima_dir, records, polished, what="its gaps to the optimum are not",
-                       limit=_limit(analysis_limit_s(job))) or {}
-    summary.score = job_score(gaps, records)
-    summary.wall_time_s = time.perf_counter() - start
-    best = best_of(records)
-    if best is not None:  # the best run's own instance: its record is the one it fitted
-        _after_runs(job, calls, "the best run's signals", _signals, job_dir,
-                    int(best[1]["run_index"]), *best,
-                    what="best_signals.csv may be missing or out of date",
-                    limit=_limit(analysis_limit_s(job)))
-    return summary
-
-
 def _after_runs(job: Job, calls: Any, name: str, fn: Any, *args: Any, what: str,
                 limit: float | None) -> Any:
-    """A call after the runs (they are recorded): its value, or ``None`` and one warning
-    line saying what failed and what is missing because of it."""
+    """A call after the runs: its value, or ``None`` and one warning line."""
     try:
         return calls.call(job, fn, *args, what=name, limit=limit)
     except Exception as exc:  # noqa: BLE001 - the runs are recorded; say what failed
@@ -412,8 +357,7 @@ def _after_runs(job: Job, calls: Any, name: str, fn: Any, *args: Any, what: str,
 
 
 def _warn_failed(job: Job, name: str, exc: BaseException, what: str) -> None:
-    """One warning line (and a log record): ``name`` failed with ``exc``; ``what`` is
-    missing because of it."""
+    """One warning line and log record: ``name`` failed; ``what`` is missing."""
     kind = getattr(exc, "remote_type", type(exc).__name__)
     text = " ".join(str(exc).split())[:300]
     log.warning("%s failed: %s: %s", name, kind, text)
@@ -424,11 +368,9 @@ def _warn_failed(job: Job, name: str, exc: BaseException, what: str) -> None:
 def _polish_at_once(job: Job, pool: Workers | None, facts: ProblemFacts, job_dir: Path,
                     optima_dir: Path, records: list[dict[str, Any]]
                     ) -> dict[str | None, dict[str, Any]] | None:
-    """The job's optimum polishes (each instance's, and the per-problem files') shared out
-    to the job's workers at once (:func:`~vpid_bench.job_analysis.polish_share`, one task per
-    instance): the instance optima by instance id. ``None`` where the analysis polishes
-    alone: in this process, on one worker, or for a problem without residuals. They were
-    a quarter of the vpid1 build's wall time in one worker while the other waited."""
+    """The job's optimum polishes shared out to its workers at once (one task per instance,
+    :func:`~vpid_bench.job_analysis.polish_share`): the instance optima by instance id.
+    ``None`` where the analysis polishes alone (in this process, one worker, no residuals)."""
     if pool is None or not offers_residuals(job.problem_cls):
         return None
     groups: dict[str | None, list[int]] = {}
@@ -462,12 +404,9 @@ SUPERSEDED_DIR = "superseded"
 
 def set_aside_superseded(job_dir: Path, key: Mapping[str, Any],
                          provenance: Mapping[str, Mapping[str, Any]] | None = None) -> int:
-    """Move every record of ``job_dir`` whose run id is not the one this job gives its run
-    index (made from superseded data: after ``problem.reference.file`` changed, the old
-    records once stayed beside the new ones and the report counted both; or by another
-    release or another code of a plugin) into ``records/superseded/``. Returns how many;
-    says so in one line, naming what changed where the records tell (:func:`_what_changed`,
-    against the plugins' ``provenance``)."""
+    """Move every record of ``job_dir`` whose run id is not the one this job gives its index
+    (another data file, plugin release or code: the report once counted both) into
+    ``records/superseded/``; say so in one line naming what changed. Returns how many."""
     folder = job_dir / rec.RECORDS_DIR
     moved = []
     for path in sorted(folder.glob("run-*.json")) if folder.is_dir() else []:
@@ -488,10 +427,8 @@ def set_aside_superseded(job_dir: Path, key: Mapping[str, Any],
 
 
 def _what_changed(paths: list[Path], provenance: Mapping[str, Mapping[str, Any]]) -> str:
-    """What made the records at ``paths`` another job's, as far as they record it: another
-    release of a plugin, or its code changed under the same version (the digest of its
-    installed source, :func:`~vpid_bench.store.provenance.code_digest`); else the
-    general words."""
+    """What made the records at ``paths`` another job's, as far as they tell: another
+    release of a plugin, or its code changed under the same version; else general words."""
     found: set[str] = set()
     for path in paths[:20]:  # a few tell; a job folder may hold thousands
         try:
@@ -515,9 +452,8 @@ def _what_changed(paths: list[Path], provenance: Mapping[str, Mapping[str, Any]]
 
 
 def analysis_limit_s(job: Job) -> float | None:
-    """Wall-time limit (s) of the job's analysis after its runs (the optimum polish, bounds,
-    floors): what all its runs together were allowed, ``run_timeout_s x runs`` (``None``
-    without ``run_timeout_s``). A slow problem once made the analysis run for ever."""
+    """Wall-time limit (s) of the job's analysis after its runs: ``run_timeout_s x runs``
+    (``None`` without; a slow problem once made the analysis run for ever)."""
     limit = job.spec.run_timeout_s
     return None if limit is None else limit * max(1, job.spec.runs)
 
@@ -525,20 +461,20 @@ def analysis_limit_s(job: Job) -> float | None:
 def _run_missing(job: Job, calls: Any, facts: ProblemFacts, job_dir: Path,
                  key: Mapping[str, Any], provenance: Mapping[str, Any], summary: JobSummary,
                  pool: Workers | None, failure: BaseException | None) -> None:
-    """Run the runs without a complete record (all of them without ``resume``), here or in
-    ``pool``'s worker processes, and write a record for each as soon as it is over.
-    ``failure``: the job's up-front build timed out, so every run is recorded as failed with
-    it instead of being run."""
+    """Run the runs without a complete record, here or in ``pool``'s workers, writing each
+    record as soon as it is over. ``failure``: every run is recorded as failed with it."""
+    from tqdm import tqdm  # runs done of total, elapsed, rate
+
     spec = job.spec
-    bar = _progress_bar(spec.runs, f"{job.optimizer_name} on {job.problem_name}",
-                        enabled=spec.progress)
+    bar = tqdm(total=spec.runs, desc=f"{job.optimizer_name} on {job.problem_name}", unit="run",
+               file=sys.stderr, dynamic_ncols=True, mininterval=0.5, disable=not spec.progress)
     try:
         todo: dict[int, tuple[str, Path]] = {}
         for i in range(spec.runs):
             rid = rec.run_id(key, i)
             path = rec.record_path(job_dir, i, rid)
             summary.record_paths.append(path)
-            if spec.resume and _existing_ok(path, rid):
+            if spec.resume and _kept(path, rid, set_aside=True):
                 summary.skipped += 1
                 bar.update(1)
             else:
@@ -564,8 +500,7 @@ def _run_missing(job: Job, calls: Any, facts: ProblemFacts, job_dir: Path,
 
 def _outcomes(job: Job, calls: Any, facts: ProblemFacts, todo: list[int], summary: JobSummary,
               pool: Workers | None, failure: BaseException | None) -> Any:
-    """The outcomes of the runs in ``todo``: from ``pool``'s workers, from this process, or
-    each failed with ``failure`` (see :func:`_run_missing`)."""
+    """The outcomes of the runs in ``todo``: from ``pool``, here, or failed with ``failure``."""
     if failure is not None:
         started = now_utc()
         return iter([RunOutcome(i, failure, started, 0.0) for i in todo])
@@ -579,9 +514,8 @@ def _outcomes(job: Job, calls: Any, facts: ProblemFacts, todo: list[int], summar
 def run_from_config(cfg: Any, job_dir: str | Path, registry: Registry | None = None,
                     problems: ProblemCache | None = None, optima_dir: Path | None = None,
                     pool: Workers | None = None) -> JobSummary:
-    """Parse and check the composed config ``cfg`` (:func:`vpid_bench.spec.parse_job`), then
-    run the job into ``job_dir``. Raises :class:`~vpid_bench.api.ConfigError` (before any
-    run) for a bad value."""
+    """Parse and check the composed config ``cfg`` (:func:`vpid_bench.spec.parse_job`; a bad
+    value raises :class:`~vpid_bench.api.ConfigError` before any run), then run the job."""
     registry = registry if registry is not None else Registry()
     return run_job(parse_job(cfg, registry), job_dir, registry, problems, optima_dir, pool)
 
@@ -592,27 +526,3 @@ def _postfix(record: Mapping[str, Any]) -> str:
     for name, value in list((res.get("metrics") or {}).items())[:1]:
         text += f" {name}={value:.4g}" if value is not None else f" {name}=inf"
     return text
-
-
-class _NoBar:
-    def update(self, n: int = 1) -> None:
-        pass
-
-    def set_postfix_str(self, s: str, refresh: bool = True) -> None:
-        pass
-
-    def close(self) -> None:
-        pass
-
-
-def _progress_bar(total: int, desc: str, enabled: bool) -> Any:
-    """A tqdm bar on stderr (runs done of total, elapsed, rate), or a silent stand-in."""
-    if not enabled:
-        return _NoBar()
-    from tqdm import tqdm
-
-    return tqdm(total=total, desc=desc, unit="run", file=sys.stderr, dynamic_ncols=True,
-                mininterval=0.5)
-
-
-__all__ = ["JobSummary", "RunTimeoutError", "run_from_config", "run_job"]

@@ -1,12 +1,9 @@
 """What a job needs to know of its problem, read where the problem was built.
 
-With worker processes (``isolation=process``, the command's default) the sweep's own process
-never builds a problem nor calls its code: a segfault in a problem's ``describe()`` once ended
-the sweep, and every resume the same way. A worker builds the problem and reads these facts
-(:func:`problem_facts`); the job works from them: the dimension that sizes its budget, whether
-its runs may go in lockstep, the digest of its data (in every run id) and, for each run's
-instance, what its record holds (:func:`vpid_bench.assemble.make_record`). Without workers the
-same function reads them in the job's own process.
+With worker processes the sweep's own process never builds a problem nor calls its code (a
+segfault in ``describe()`` once ended the sweep): a worker reads these facts
+(:func:`problem_facts`) and the job works from them: the dimension, whether runs may go in
+lockstep, the data's digest (in every run id) and what each run's record holds.
 """
 
 from __future__ import annotations
@@ -23,8 +20,8 @@ from .problem import Problem, kept_instance
 
 @dataclasses.dataclass(frozen=True)
 class InstanceFacts:
-    """One instance of a problem as a run record holds it: its :meth:`~Problem.instance_id`,
-    box, true parameters (``None``: unknown) and :meth:`~Problem.describe`."""
+    """One instance as a run record holds it: id, box, true parameters (``None``: unknown)
+    and ``describe()``."""
 
     id: str | None
     bounds: Bounds
@@ -34,9 +31,8 @@ class InstanceFacts:
 
 @dataclasses.dataclass(frozen=True)
 class ProblemFacts:
-    """A problem's facts (see module): the dimension of its box, its
-    :attr:`~Problem.rows_independent`, :meth:`~Problem.content_digest`, and the facts of
-    the instance of each run index ``0 .. runs-1``."""
+    """A problem's facts: its dimension, ``rows_independent``, ``content_digest()``, and the
+    facts of each run's instance."""
 
     dim: int
     rows_independent: bool
@@ -49,8 +45,8 @@ class ProblemFacts:
 
 
 def problem_facts(problem: Problem, runs: int) -> ProblemFacts:
-    """Read the facts of ``problem`` and of the instances of runs ``0 .. runs-1``. A problem
-    method that raises is named in a :class:`~vpid_bench.errors.PluginError`."""
+    """The facts of ``problem`` and of runs ``0 .. runs-1``'s instances; a method that
+    raises is named in a :class:`~vpid_bench.errors.PluginError`."""
     name = getattr(problem, "name", "?")
 
     def read(what: str, call: Any) -> Any:
@@ -80,6 +76,3 @@ def problem_facts(problem: Problem, runs: int) -> ProblemFacts:
                         rows_independent=bool(getattr(problem, "rows_independent", False)),
                         content_digest=read("content_digest()", problem.content_digest),
                         instances=tuple(instances))
-
-
-__all__ = ["InstanceFacts", "ProblemFacts", "problem_facts"]

@@ -1,22 +1,14 @@
-"""Writing files safely: atomically, and never through a planted symbolic link.
+"""Reading and writing files safely: atomically, and never through a planted symbolic link.
 
-Every file vpid-bench reads back from a results folder (records, job statuses, artifacts)
-goes through :func:`read_text_limited`: a FIFO, a device or a folder planted under a record's
-name is refused at once instead of blocking the reader, and so is a file over a size limit.
-
-Every file vpid-bench writes (records, job statuses, reports, a problem's artifacts) goes
-through :func:`write_text_atomic`: a crash leaves the old file or the new one, never a torn
-one, and a link at the target path is replaced rather than followed (``os.replace`` renames
-over the link itself). The folders it keeps inside an output folder (``optima``, ``report``)
-are made by :func:`own_folder`, which never follows a link planted in their place.
-
-A folder that must be one thing whole (a report: its pages, tables and ``runs.csv`` belong
-together) is written by :class:`WholeFolder`: everything goes into a new hidden folder beside
-it, which then takes its place in one rename; the old folder stays whole until that moment and
-is removed after it (issue 44, N8: two reports written at once, or one stopped by SIGTERM over
-an older one, once left pages of one and ``runs.csv`` of the other, and stale pages of earlier
-reports were never removed). A link planted in the old folder is removed with it, never
-followed (N6).
+Every results file read back goes through :func:`read_text_limited` (a FIFO, device or
+folder under a record's name refused at once, and a file over a size limit), every JSON not
+just made through :func:`loads_json`. Every file written goes through
+:func:`write_text_atomic` (a crash leaves the old file or the new one; a link at the target
+is replaced, not followed); the folders kept inside an output folder through
+:func:`own_folder`. A folder that must be one thing whole (a report) is written by
+:class:`WholeFolder`: into a new hidden folder that takes its place in one rename (issue 44,
+N8: two reports at once, or one stopped by SIGTERM, once left pages of one and ``runs.csv``
+of the other); a link planted in the old folder is removed with it, never followed (N6).
 """
 
 from __future__ import annotations
@@ -27,7 +19,6 @@ import hashlib
 import json
 import os
 import shutil
-import signal
 import stat
 import sys
 import tempfile
@@ -36,13 +27,15 @@ from pathlib import Path
 from types import TracebackType
 from typing import TextIO
 
+from .interrupts import held
+
 #: The largest results file read back (a run record with a long trace is a few MB).
 MAX_READ_BYTES = 64 * 1024 * 1024
 
 
 def file_sha256(path: Path) -> str:
-    """The SHA-256 of a file's bytes, hex, read in 1 MB blocks: how a plugin checks a data file
-    it ships or is pointed to against the checksum its docs state."""
+    """The SHA-256 of a file's bytes, hex: how a plugin checks a data file it ships or is
+    pointed to."""
     digest = hashlib.sha256()
     with open(path, "rb") as f:
         for block in iter(lambda: f.read(1 << 20), b""):
@@ -50,16 +43,15 @@ def file_sha256(path: Path) -> str:
     return digest.hexdigest()
 
 
-#: The deepest nesting of JSON read from a results folder or an archive (arrays and objects
-#: in one another). What vpid-bench writes nests 6 levels deep (a record's problem config
-#: a few more); a value 900 deep parsed, then ran every recursive reader (the canonical form
-#: of a record, a copy) past Python's recursion limit: a ``RecursionError`` traceback.
+#: The deepest nesting of JSON read from a results folder or an archive. What vpid-bench
+#: writes nests about 6 levels; a value 900 deep once ran every recursive reader past
+#: Python's recursion limit: a ``RecursionError`` traceback.
 MAX_JSON_DEPTH = 64
 
 
 def json_depth(value: object, limit: int = MAX_JSON_DEPTH) -> int:
-    """How deep ``value`` (parsed JSON) nests lists and dicts (a scalar: 0), counted without
-    recursion and only up to ``limit + 1`` (enough to know it is too deep)."""
+    """How deep ``value`` (parsed JSON) nests lists and dicts (a scalar: 0), without
+    recursion and only up to ``limit + 1``."""
     deepest = 0
     stack = [(value, 1)]
     while stack:
@@ -78,10 +70,8 @@ def json_depth(value: object, limit: int = MAX_JSON_DEPTH) -> int:
 
 
 def loads_json(text: str) -> object:
-    """``json.loads`` for untrusted text, the one way vpid-bench parses JSON it did not just
-    make: JSON nested more than :data:`MAX_JSON_DEPTH` levels (a planted ``[[[[...]]]]``)
-    is a ``json.JSONDecodeError`` like any other bad JSON (every reader catches
-    ``ValueError``), never a ``RecursionError`` in the parser or in whatever reads it next."""
+    """``json.loads`` for untrusted text: JSON nested past :data:`MAX_JSON_DEPTH` is a
+    ``json.JSONDecodeError`` like any other bad JSON, never a ``RecursionError``."""
     try:
         value = json.loads(text)
     except RecursionError:
@@ -95,15 +85,13 @@ def loads_json(text: str) -> object:
 
 
 def json_fault(exc: Exception) -> str:
-    """What is wrong with a text :func:`loads_json` refused, for a reader's one line: the
-    parser's words (``nested too deeply (more than 64 levels)``), else the kind of fault."""
+    """What is wrong with a text :func:`loads_json` refused, for a reader's one line."""
     return exc.msg if isinstance(exc, json.JSONDecodeError) else type(exc).__name__
 
 
 def read_text_limited(path: Path, max_bytes: int = MAX_READ_BYTES) -> str:
-    """The UTF-8 text of the regular file ``path`` (links followed). Raises ``OSError`` for
-    anything else (a FIFO or device: opened without blocking, then refused) and for a file
-    over ``max_bytes``; ``UnicodeDecodeError`` for bytes that are not UTF-8."""
+    """The UTF-8 text of the regular file ``path`` (links followed); ``OSError`` for anything
+    else (opened without blocking) or a file over ``max_bytes``."""
     fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
     try:
         info = os.fstat(fd)
@@ -121,11 +109,13 @@ def read_text_limited(path: Path, max_bytes: int = MAX_READ_BYTES) -> str:
 
 
 def _remove_planted_link(path: Path) -> None:
-    """Remove the symbolic link at ``path`` (the link only, never what it points to) with one
-    ``warning:`` line: a link planted where vpid-bench keeps a file or folder of its own."""
+    """Remove a link planted where vpid-bench keeps a file or folder (the link only), with
+    one ``warning:`` line."""
     path.unlink(missing_ok=True)  # another process may have removed it first
     print(f"warning: {path} was a symbolic link; removed (the link only) so that nothing "
           "is written outside the output folder", file=sys.stderr, flush=True)
+
+
 #: The errors of a write the system refused: a file-size limit (``EFBIG``, RLIMIT_FSIZE with
 #: SIGXFSZ ignored), a full disk or quota, a read-only or failing disk.
 WRITE_REFUSED = frozenset(getattr(errno, n) for n in (
@@ -133,10 +123,8 @@ WRITE_REFUSED = frozenset(getattr(errno, n) for n in (
 
 
 def write_refused(exc: BaseException) -> bool:
-    """Whether ``exc`` (or what it was raised from) is a write the system refused
-    (:data:`WRITE_REFUSED`): never a figure's or a plugin's fault, so never swallowed as one
-    (issue 44, N9: under a file-size limit the report once left out every figure and most
-    tables, torn, and said nothing)."""
+    """Whether ``exc`` (or its cause) is a write the system refused: never swallowed as a
+    figure's or plugin's fault (issue 44, N9: a report once left out every figure, torn)."""
     while exc is not None:
         if isinstance(exc, OSError) and exc.errno in WRITE_REFUSED:
             return True
@@ -145,10 +133,8 @@ def write_refused(exc: BaseException) -> bool:
 
 
 def own_folder(path: Path) -> Path:
-    """``path`` as a real folder of vpid-bench's own (created if needed): a symbolic link
-    planted there (a sweep's ``optima`` or ``report`` pointing outside it: the files were
-    once written wherever it pointed) is removed, the link only, with one ``warning:`` line,
-    and a folder made in its place. Nothing is ever written through such a link."""
+    """``path`` as a real folder of vpid-bench's own (created if needed): a link planted
+    there (files were once written wherever it pointed) is removed with one line."""
     path = Path(path)
     if path.is_symlink():
         _remove_planted_link(path)
@@ -163,12 +149,9 @@ _APPEND_FLAGS = (os.O_WRONLY | os.O_APPEND | os.O_CREAT | getattr(os, "O_NOFOLLO
 
 
 def open_append(path: Path) -> TextIO:
-    """``path`` opened to append UTF-8 text (created if missing): a file vpid-bench keeps
-    adding to (a job's log), which :func:`write_text_atomic` cannot write. A symbolic link
-    planted there is removed (the link only) with one ``warning:`` line, as
-    :func:`own_folder` does, and a file made in its place: a link to a file outside (a job
-    folder's ``vpid_bench.log`` pointing elsewhere) was once appended to on every resume.
-    Anything but a regular file (a FIFO, a device, a folder) is an ``OSError``, at once."""
+    """``path`` opened to append UTF-8 text (a job's log): a link planted there is removed
+    with one line (one was once appended to on every resume); anything but a regular file
+    is an ``OSError``, at once."""
     path = Path(path)
     try:
         fd = os.open(path, _APPEND_FLAGS, 0o666)
@@ -188,9 +171,8 @@ def open_append(path: Path) -> TextIO:
 
 
 def write_text_atomic(path: Path, text: str) -> Path:
-    """Write ``text`` to ``path`` atomically: a temporary file in the same folder, fsync, then
-    ``os.replace``. A crash at any moment leaves either no file or a complete one, and a
-    symbolic link planted at ``path`` is replaced, never followed."""
+    """Write ``text`` to ``path`` atomically (a temporary file, fsync, ``os.replace``): a
+    crash leaves no file or a complete one; a link at ``path`` is replaced, never followed."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
@@ -208,31 +190,18 @@ def write_text_atomic(path: Path, text: str) -> Path:
 
 
 class WholeFolder:
-    """A folder written whole or not at all::
-
-        whole = WholeFolder(out)
-        with whole as new:      # a new, empty, hidden folder beside ``out``
-            ...                 # write everything into ``new``
-        # ``out`` is now the new folder; the old one (if any) is gone
-
-    When the block ends without an exception, the new folder takes the place of ``path``
-    in one step (Linux's ``renameat2(RENAME_EXCHANGE)``; elsewhere two renames), with the
-    interrupting signals (SIGINT, SIGTERM, SIGHUP) held back meanwhile and the parent folder
-    locked (``flock``) so that two writers swap one after the other: whatever happens,
-    ``path`` is the old folder or a new one, each whole. The old folder is then removed,
-    never followed through a link it holds (:attr:`links` names them, as they were under
-    ``path``); a link planted in the place of ``path`` itself is replaced, never followed.
-    When the block raises (or is interrupted), the new folder is removed and ``path`` is left
-    as it was. A mount point cannot be renamed: its entries are swapped instead, with the
-    signals held back (not atomic for a reader looking at that moment, nor against SIGKILL).
-    Only SIGKILL or a crash can leave the hidden folder (``.<name>.new-*``) behind.
+    """A folder written whole or not at all: ``with WholeFolder(out) as new:`` write into
+    ``new`` (hidden, beside ``out``); when the block ends without an exception, ``new``
+    takes ``out``'s place in one step (``renameat2(RENAME_EXCHANGE)``; elsewhere two renames)
+    with the interrupting signals held and the parent locked (two writers swap in turn), and
+    the old folder is removed, never followed through a link (:attr:`links` names them). When
+    the block raises, ``new`` is removed. A mount point's entries are swapped instead (not
+    atomic). Only SIGKILL or a crash can leave ``.<name>.new-*`` behind.
     """
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(os.path.abspath(path))  # "." and "x/.." have a name and a parent
-        #: the symbolic links the replaced folder held (and one in its place), as paths
-        #: under :attr:`path`
-        self.links: list[Path] = []
+        self.links: list[Path] = []  # links the replaced folder held, as paths under it
         self._new: Path | None = None
         self._old: Path | None = None
 
@@ -261,10 +230,9 @@ class WholeFolder:
             shutil.rmtree(self._old, ignore_errors=True)
 
     def _swap(self, new: Path) -> None:
-        """``new`` into the place of :attr:`path`; :attr:`_old` names the replaced folder
-        (set before the signals held back can interrupt)."""
+        """``new`` into :attr:`path`'s place; :attr:`_old` names the replaced folder."""
         path = self.path
-        with _signals_held(), _locked(path.parent):
+        with held(), _locked(path.parent):
             if path.is_symlink():  # planted in the folder's place: the link only goes
                 path.unlink()
                 self.links.append(path)
@@ -289,8 +257,8 @@ class WholeFolder:
 
 
 def _exchange(a: Path, b: Path) -> bool:
-    """Swap ``a`` and ``b`` in one step (Linux: ``renameat2`` with ``RENAME_EXCHANGE``);
-    False where the system or the file system cannot (then nothing happened)."""
+    """Swap ``a`` and ``b`` in one step (Linux ``renameat2``); False where the system or
+    file system cannot (nothing happened)."""
     if not sys.platform.startswith("linux"):
         return False
     import ctypes
@@ -306,8 +274,8 @@ def _exchange(a: Path, b: Path) -> bool:
 
 
 def _swap_entries(new: Path, path: Path) -> Path:
-    """The entries of the folder ``path`` (a mount point) moved into a hidden folder in it,
-    those of ``new`` (inside it) moved in; returns the hidden folder of the old entries."""
+    """The entries of the mount point ``path`` moved into a hidden folder in it (returned),
+    those of ``new`` moved in."""
     old = Path(tempfile.mkdtemp(prefix=f".{path.name}.old-", dir=path))
     for entry in os.listdir(path):
         if entry not in (new.name, old.name):
@@ -319,25 +287,8 @@ def _swap_entries(new: Path, path: Path) -> Path:
 
 
 @contextlib.contextmanager
-def _signals_held() -> Iterator[None]:
-    """SIGINT, SIGTERM and SIGHUP held back (delivered when the block ends): a swap of two
-    renames is never cut between them."""
-    sigs = {getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n)}
-    try:
-        before = signal.pthread_sigmask(signal.SIG_BLOCK, sigs)
-    except (AttributeError, OSError, ValueError):  # no signal masks on this platform
-        before = None
-    try:
-        yield
-    finally:
-        if before is not None:
-            signal.pthread_sigmask(signal.SIG_SETMASK, before)
-
-
-@contextlib.contextmanager
 def _locked(folder: Path) -> Iterator[None]:
-    """An exclusive ``flock`` on ``folder`` itself (no lock file left behind), where the
-    system has one: two writers of one folder swap one after the other."""
+    """An exclusive ``flock`` on ``folder`` itself, where the system has one."""
     try:
         import fcntl
 
@@ -354,8 +305,8 @@ def _locked(folder: Path) -> Iterator[None]:
 
 
 def _links_below(folder: Path, shown_as: Path, limit: int = 20) -> list[Path]:
-    """The symbolic links in ``folder`` (never followed), each as the path it had under
-    ``shown_as``; at most ``limit``."""
+    """At most ``limit`` symbolic links in ``folder`` (not followed), as paths under
+    ``shown_as``."""
     found: list[Path] = []
     for root, dirs, files in os.walk(folder):
         for name in [*dirs, *files]:

@@ -38,13 +38,9 @@ def vpid_bench_register_problems(register):  # type: ignore[no-untyped-def]
 def vpid_bench_register_report_sections(register):  # type: ignore[no-untyped-def]
     """Register report sections: call ``register(problem_name, section_function)``.
 
-    ``section_function(ctx)`` receives a read-only
-    :class:`vpid_bench.report.sections.ReportContext` (the tidy runs of that problem, its
-    records, helpers that write tables and figures under safe names inside the report
-    folder, ``short``, ``alpha``) and returns a
-    :class:`vpid_bench.report.sections.Contribution` (sections of title, Markdown text and
-    files, and optional extra headline columns per context and algorithm) or ``None``. It is
-    called only when the records hold runs of ``problem_name``. This is where a problem
-    plugin puts what only it knows: a published paper's tables beside the measured ones,
-    figures of its signals, checks of a protocol.
+    ``section_function(ctx)`` receives a read-only :class:`~vpid_bench.ReportContext` (that
+    problem's runs and records, helpers that write tables and figures safely, ``short``,
+    ``alpha``) and returns a :class:`~vpid_bench.Contribution` or ``None``; called only when
+    the records hold runs of ``problem_name``: what only the plugin knows (a paper's tables,
+    figures of its signals, a protocol's checks).
     """

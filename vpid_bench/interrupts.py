@@ -1,18 +1,14 @@
 """Telling the user's Ctrl-C from a ``KeyboardInterrupt`` that a plugin raises.
 
-Python turns SIGINT into ``KeyboardInterrupt``, and the run loop lets that stop the whole
-sweep (every finished run is kept; ``--resume`` continues). A plugin that raises
-``KeyboardInterrupt`` itself (in ``ask``, ``tell``, its constructor or ``close``) once stopped
-the sweep the same way, and every resume stopped again. The command installs a SIGINT handler
-that notes the signal before raising; a ``KeyboardInterrupt`` seen without that note came from
-code, and fails its run only. Where no handler is installed (a program calling the library, a
-launcher's worker process) every ``KeyboardInterrupt`` counts as the user's.
+The run loop lets ``KeyboardInterrupt`` stop the whole sweep (finished runs kept). A plugin
+raising it itself once stopped every resume too. So the command's handler notes the signal
+before raising; a ``KeyboardInterrupt`` without that note came from code and fails its run
+only. Without the handler (a program calling the library, a launcher's worker) every
+``KeyboardInterrupt`` counts as the user's.
 
-SIGTERM (a scheduler's time limit, ``kill``) and SIGHUP (a closed terminal) end the command as
-SIGINT does (issue 44, N2): they once ended it with status 143 and nothing printed, its
-worker processes and theirs left running. The same handler takes all three (:data:`SIGNALS`):
-every completed run is kept, the same ``interrupted:`` line, every process ended; the status is
-``128 + the signal's number`` (130, 143, 129: :func:`exit_status`), as a shell reports it.
+SIGTERM and SIGHUP end the command as SIGINT does (issue 44, N2: once status 143, nothing
+printed, workers left running): the same handler takes all three (:data:`SIGNALS`), every
+completed run is kept, the status is ``128 + the signal`` (:func:`exit_status`).
 """
 
 from __future__ import annotations
@@ -21,6 +17,7 @@ import contextlib
 import os
 import signal
 import threading
+from collections.abc import Iterator
 from typing import Any
 
 #: The signals that interrupt the command (those this platform has).
@@ -37,19 +34,13 @@ class _Watch:
     signum = int(signal.SIGINT)
 
 
-def _seen(signum: int) -> None:
-    if not _Watch.signalled:
-        _Watch.signum = signum
-    _Watch.signalled = True
-
-
 def _handler(signum: int, frame: Any) -> None:
-    _seen(signum)
+    note(signum)
     raise KeyboardInterrupt
 
 
 def _note(signum: int, frame: Any) -> None:
-    _seen(signum)
+    note(signum)
 
 
 def _set_all(handler: Any) -> None:
@@ -58,10 +49,9 @@ def _set_all(handler: Any) -> None:
 
 
 def defer() -> None:
-    """While the command starts (heavy imports, the plugins' own imports): a SIGINT is only
-    noted, and :func:`install` raises it once the start-up is over. Raised at once, the
-    ``KeyboardInterrupt`` could land inside a library's bare ``except:`` around an import,
-    which swallowed it: the command then ran its whole sweep and exited 0."""
+    """While the command starts (imports): a signal is only noted, and :func:`install` raises
+    it after (raised at once, a library's bare ``except:`` around an import swallowed it and
+    the command ran its whole sweep)."""
     if threading.current_thread() is threading.main_thread():
         already = signal.getsignal(signal.SIGINT) is _note  # a note taken so far stays
         _set_all(_note)
@@ -69,17 +59,17 @@ def defer() -> None:
 
 
 def note(signum: int = signal.SIGINT) -> None:
-    """Record an interrupting signal (:data:`SIGNALS`) that arrived before :func:`defer` (the
-    console command's first module notes it while the package imports)."""
-    _seen(signum)
+    """Record an interrupting signal (one that arrived before :func:`defer`, or in a block
+    that holds them)."""
+    if not _Watch.signalled:
+        _Watch.signum = signum
+    _Watch.signalled = True
 
 
 def raise_if_swallowed() -> None:
     """Raise ``KeyboardInterrupt`` if the command's handler saw a Ctrl-C that never reached
-    the command: a ``KeyboardInterrupt`` raised inside a C callback is dropped by ctypes
-    ("Exception ignored on calling ctypes callback function", e.g. while numba loads
-    compiled code), and the sweep once ran to its end and exited 0. Called between jobs and
-    at the end of the sweep; only where the command's own handler is installed."""
+    the command (ctypes drops one raised inside a C callback, e.g. while numba loads code:
+    the sweep once ran to its end and exited 0). Called between jobs and at the end."""
     if _Watch.signalled and signal.getsignal(signal.SIGINT) is _handler:
         raise KeyboardInterrupt
 
@@ -96,13 +86,10 @@ def install() -> None:
 
 
 def plugin_only() -> None:
-    """In a worker process (:mod:`vpid_bench.workers`): SIGINT is ignored, the user's Ctrl-C
-    is the supervisor's to handle, so every ``KeyboardInterrupt`` seen here is a plugin's.
-    SIGTERM and SIGHUP are the supervisor's too (a batch system's SIGTERM to every process of
-    a job once ended the workers first, and their runs were recorded as failed by the signal):
-    the worker takes them with a handler that does nothing, and a process it forks gets their
-    default back at once (a plugin's pool must still end its children with SIGTERM; a process
-    it execs gets the default anyway)."""
+    """In a worker process: SIGINT ignored (every ``KeyboardInterrupt`` here is a plugin's),
+    SIGTERM and SIGHUP handled by doing nothing (a batch system's SIGTERM to every process
+    once failed the workers' runs): they are the supervisor's. A process forked from it gets
+    their default back (a plugin's pool must still end its children with SIGTERM)."""
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         for sig in SIGNALS:
@@ -125,24 +112,48 @@ def _defaults() -> None:
 
 
 def exit_status() -> int:
-    """The command's exit status once interrupted: 128 + the number of the signal that
-    interrupted it (130 for SIGINT, also when no signal was noted: a program's own
-    ``KeyboardInterrupt``)."""
+    """The command's exit status once interrupted: 128 + the signal's number (130 when none
+    was noted: a program's own ``KeyboardInterrupt``)."""
     return 128 + (_Watch.signum if _Watch.signalled else int(signal.SIGINT))
 
 
 def seen() -> bool:
-    """Whether the command's handler has seen the user's Ctrl-C. An error raised since may be
-    its consequence: the ``KeyboardInterrupt`` can land inside a library's clean-up (an
-    omegaconf flag restored in a ``finally`` while Hydra composed a job's config raised
-    ``ConfigKeyError`` over it, and the command printed Hydra's traceback and exit 1), so
-    the command treats such an error as the interrupt."""
+    """Whether the command's handler has seen the user's Ctrl-C: an error raised since is
+    treated as the interrupt (it can land in a library's clean-up, e.g. Hydra's, which then
+    raised its own error over it)."""
     return _Watch.installed and _Watch.signalled
 
 
 def from_user() -> bool:
     """Whether a ``KeyboardInterrupt`` being handled now is the user's (or cannot be told)."""
     return not _Watch.installed or _Watch.signalled
+
+
+@contextlib.contextmanager
+def held(deliver: bool = True) -> Iterator[None]:
+    """The :data:`SIGNALS` inside the block noted, and delivered when it ends (with
+    ``deliver``; else only noted as the command's interrupt); also blocked, so a process
+    started inside inherits them blocked, and a swap of two renames is never cut between
+    them. Main thread only."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    noted: list[int] = []
+    before = {sig: signal.signal(sig, lambda signum, frame: noted.append(signum))
+              for sig in SIGNALS}
+    mask = (signal.pthread_sigmask(signal.SIG_BLOCK, set(SIGNALS))
+            if hasattr(signal, "pthread_sigmask") else None)
+    try:
+        yield
+    finally:
+        if mask is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        for sig, handler in before.items():
+            signal.signal(sig, handler)
+        if noted and deliver:
+            signal.raise_signal(noted[0])
+        elif noted:
+            note(noted[0])
 
 
 class PluginInterruptError(RuntimeError):
@@ -154,7 +165,6 @@ class PluginInterruptError(RuntimeError):
 
 
 def thread_exception_line(args: Any) -> str:
-    """The one line said for an exception in a plugin's own thread (``threading.excepthook``'s
-    ``args``), in the command's process and in a worker process alike."""
+    """The one line for an exception in a plugin's own thread (``threading.excepthook``)."""
     name = args.thread.name if args.thread is not None else "?"
     return f"warning: thread {name} raised {args.exc_type.__name__}: {args.exc_value}"

@@ -21,36 +21,50 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
                 polished: Mapping[str | None, dict[str, Any]] | None = None
                 ) -> dict[int, float]:
     """For a problem with residuals: each instance's optimum (``optima_dir/<key>.json``,
-    shared by the jobs of a sweep; see :mod:`.optimum`), and with a known truth the
-    Cramér–Rao bounds of its design (``job_dir/identifiability.json``: instance 0's, and
-    under ``instances`` each instance's, :func:`.identifiability.per_instance`) and the
-    floors of each estimator where the problem offers the choice (``job_dir/estimators.json``,
-    :mod:`.estimator_floors`); without a truth, the profile-likelihood intervals at the
-    optimum where they run in reasonable time (``job_dir/profile.json``, :mod:`.estimates`);
-    truth or not, the fit diagnostics and both intervals (white-noise and HAC) at the optimum
-    (``job_dir/diagnostics.json``, :func:`.diagnostics.write_diagnostics`).
-    Any problem's fixed comparison rows go to ``job_dir/comparisons.json``. Returns each
-    run's relative gap ``(f_best - f*) / f*`` to its instance's optimum (the absolute gap
-    where ``f* <= 0``).
-
-    ``polished``: the instance optima already made by :func:`polish_share` tasks (keyed by
-    instance id), with the per-problem files: nothing is polished here then, and an
-    instance without one (its task failed) has no gaps."""
-    from .analysis.estimates import write_comparisons
+    shared by a sweep's jobs); with a truth, the Cramér–Rao bounds
+    (``identifiability.json``) and the floors per estimator (``estimators.json``); without,
+    the profile-likelihood intervals (``profile.json``); either way the fit diagnostics and
+    both intervals at the optimum (``diagnostics.json``). Any problem's comparison rows go
+    to ``comparisons.json``. Returns each run's relative gap ``(f_best - f*) / f*`` to its
+    instance's optimum (absolute where ``f* <= 0``). ``polished``: the optima already made
+    by :func:`polish_share` tasks, by instance id (nothing is polished here then)."""
+    from .analysis.diagnostics import write_diagnostics
+    from .analysis.estimates import write_comparisons, write_profile
 
     write_comparisons(problem, job_dir)  # first: cheap, and wanted whatever follows
     if not offers_residuals(type(problem)):
         return {}
-    return _residual_analysis(job, problem, job_dir, optima_dir, records, polished)
+    truth = problem.x_true is not None
+    if truth and polished is None:
+        _per_problem_files(job, problem, job_dir, Path(optima_dir))
+    bests = _run_bests(records)
+    gaps: dict[int, float] = {}
+    optima = []
+    for inst, runs, indices in _instances(problem, range(job.spec.runs), bests):
+        optimum = (_instance_optimum(job, inst, Path(optima_dir), runs) if polished is None
+                   else polished.get(inst.instance_id()))
+        if optimum is None:
+            continue
+        optima.append((inst, optimum))
+        f_opt = optimum["f_opt"]
+        for i in indices:
+            for _, f in bests.get(i, []):
+                gaps[i] = (f - f_opt) / f_opt if f_opt > 0 else f - f_opt
+    if not getattr(problem, "fits_a_record", True) or not optima:
+        return gaps  # no record: no identified value, profile or fit diagnostics
+    lowest = min(optima, key=lambda o: o[1]["f_opt"])
+    if not truth:
+        write_profile(*lowest, job_dir)
+    inst, optimum = optima[0] if truth else lowest  # with a truth: the first instance's
+    write_diagnostics(inst, optimum["x_opt"], job_dir)
+    return gaps
 
 
 def polish_share(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
                  records: list[dict[str, Any]], indices: list[int] | None
                  ) -> dict[str | None, dict[str, Any]]:
-    """One worker's share of a job's optimum polishes, so that a job's workers polish at
-    once: the optimum of each instance of runs ``indices`` (from ``records``, those runs'
-    records), keyed by instance id; or, with ``indices=None``, the per-problem files (the
-    bounds and the floors per estimator, which polish optima of their own) and ``{}``."""
+    """One worker's share of a job's optimum polishes: the optimum of each instance of runs
+    ``indices``, by instance id; or, with ``indices=None``, the per-problem files and ``{}``."""
     if not offers_residuals(type(problem)):
         return {}
     if indices is None:
@@ -88,46 +102,10 @@ def _instance_optimum(job: Job, inst: Problem, optima_dir: Path,
     return update_instance_optimum(inst, job.problem_settings(), optima_dir, runs)
 
 
-def _residual_analysis(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
-                       records: list[dict[str, Any]],
-                       polished: Mapping[str | None, dict[str, Any]] | None
-                       ) -> dict[int, float]:
-    """:func:`analyse_job` for a problem with residuals."""
-    from .analysis.estimates import write_profile
-
-    truth = problem.x_true is not None
-    if truth and polished is None:
-        _per_problem_files(job, problem, job_dir, Path(optima_dir))
-    bests = _run_bests(records)
-    gaps: dict[int, float] = {}
-    optima = []
-    for inst, runs, indices in _instances(problem, range(job.spec.runs), bests):
-        optimum = (_instance_optimum(job, inst, Path(optima_dir), runs) if polished is None
-                   else polished.get(inst.instance_id()))
-        if optimum is None:
-            continue
-        optima.append((inst, optimum))
-        f_opt = optimum["f_opt"]
-        for i in indices:
-            for _, f in bests.get(i, []):
-                gaps[i] = (f - f_opt) / f_opt if f_opt > 0 else f - f_opt
-    if not getattr(problem, "fits_a_record", True):
-        return gaps  # no record: no identified value, profile or fit diagnostics
-    if not truth and optima:
-        inst, optimum = min(optima, key=lambda o: o[1]["f_opt"])
-        write_profile(inst, optimum, job_dir)
-    if optima:  # truth or not: the first instance's optimum (no truth: the lowest)
-        from .analysis.diagnostics import write_diagnostics
-
-        inst, optimum = optima[0] if truth else min(optima, key=lambda o: o[1]["f_opt"])
-        write_diagnostics(inst, optimum["x_opt"], job_dir)
-    return gaps
-
 
 def _per_problem_files(job: Job, problem: Problem, job_dir: Path, optima_dir: Path) -> None:
-    """The job's ``identifiability.json`` (instance 0's bounds, and each instance's under
-    ``instances``) and ``estimators.json`` (the floors per estimator), each made once per
-    sweep (:func:`shared_file`): they depend on the problem's data and the runs only."""
+    """The job's ``identifiability.json`` (instance 0's bounds, each instance's under
+    ``instances``) and ``estimators.json``, each made once per sweep (:func:`shared_file`)."""
     from .analysis.estimator_floors import FILE as FLOORS_FILE
     from .analysis.estimator_floors import INSTANCES as FLOORS_INSTANCES
     from .analysis.estimator_floors import estimator_floors
@@ -156,11 +134,10 @@ SHARED_DIR = "per-problem"
 
 def shared_file(optima_dir: Path, name: str, problem: Problem, settings: Mapping[str, Any],
                 more: Any, make: Callable[[], dict[str, Any] | None]) -> dict[str, Any] | None:
-    """A per-job file that depends only on the problem's data (its Cramér–Rao bounds, its
-    floors per estimator), made once per sweep: kept under ``optima_dir/per-problem/`` by a
-    hash of the problem's name, record settings, data digest and ``more``, and copied by
-    every later job of the same problem (a vpid1 build has 19 jobs per problem; the floors
-    polish 15 optima each). A kept file that is not a JSON object is made again."""
+    """A per-job file that depends only on the problem's data, made once per sweep: kept in
+    ``optima_dir/per-problem/`` by a hash of the problem's name, settings, data digest and
+    ``more``, and copied by every later job (a vpid1 build has 19 jobs per problem). A kept
+    file that is not a JSON object is made again."""
     from .analysis.optimum import _locked, optimum_key
 
     key = optimum_key(problem.name, settings, problem.content_digest(), str(more))
@@ -187,10 +164,9 @@ def _run_bests(records: list[dict[str, Any]]) -> dict[int, list[tuple[np.ndarray
 
 
 def job_score(gaps: Mapping[int, float], records: list[dict[str, Any]]) -> float | None:
-    """The job's search score, lower is better: the median relative gap of the runs' best to
-    their instance's optimum where the optimum is known, else the median best objective;
-    ``inf`` counts for a failed run. The command returns it, so an optimizing sweeper (Optuna)
-    can tune on it."""
+    """The job's search score (what an optimizing sweeper tunes on), lower is better: the
+    median gap to the instance optima where known, else the median best objective (``inf``
+    for a failed run)."""
     if gaps:
         values = list(gaps.values())
     else:

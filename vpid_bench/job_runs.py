@@ -1,21 +1,15 @@
 """A job's runs: which go together, the warm-up before them, and each run's outcome.
 
-Every run goes through the one run loop, :func:`vpid_bench.runner.run_many`. When the problem's
-values do not depend on the batch (:attr:`~vpid_bench.api.Problem.rows_independent`) and the
-optimizer asks and tells in the run loop's thread (not a
-:class:`~vpid_bench.api.LoopOptimizer`, no residuals), the runs still to do go in lockstep: one
-evaluation call per step for all of them, so small populations fill the kernel and its threads.
-Otherwise they go one at a time. Either way each run keeps its generator, budget and trace, and
-its record is bit-identical (tested). Its time is its own: its optimizer's constructor, ask and
-tell, plus its rows' share of each gathered evaluation.
+Every run goes through :func:`vpid_bench.runner.run_many`. When the problem's values do not
+depend on the batch (:attr:`~vpid_bench.api.Problem.rows_independent`) and the optimizer asks
+and tells in the loop's thread (no :class:`~vpid_bench.api.LoopOptimizer`, no residuals), the
+runs go in lockstep: one evaluation call per step for all; else one at a time. Either way a
+record is bit-identical (tested); a run's time is its own (constructor, ask, tell, its rows'
+share of each evaluation). One untimed warm-up run first compiles the kernels (numba).
 
-Timing: before the first timed run the job makes one untimed warm-up run of at most two
-batches, so compiled kernels (numba) are compiled before any run is timed.
-
-What the problem says of each run's best vector (its :meth:`~vpid_bench.api.Problem.metrics`;
-where the truth is unknown, the parameters' intervals from its residuals) is computed here
-too, where the run ran (a worker process, :mod:`vpid_bench.workers`): problem code that
-raises, passes ``run_timeout_s`` or ends its process there costs its run, never the sweep.
+What the problem says of each run's best vector (:meth:`~vpid_bench.api.Problem.metrics`;
+without a truth, intervals from its residuals) is computed where the run ran, so problem code
+that raises, passes ``run_timeout_s`` or ends its process costs its run only.
 """
 
 from __future__ import annotations
@@ -46,10 +40,8 @@ log = logging.getLogger(__name__)
 
 @dataclasses.dataclass
 class RunOutcome:
-    """How run ``index`` ended: its result or the exception that ended it, when it started
-    (UTC, ISO 8601), its own time in seconds, and what the problem says of its best vector
-    (:func:`with_problem_results`: ``metrics``, and ``intervals`` where the truth is
-    unknown)."""
+    """How run ``index`` ended: its result or exception, when it started (UTC, ISO 8601),
+    its own time (s), and what the problem says of its best vector (``derived``)."""
 
     index: int
     outcome: RunResult | BaseException
@@ -67,8 +59,7 @@ class RunOutcome:
 
 
 def joins_lockstep(job: Job, problem: Problem | ProblemFacts) -> bool:
-    """Whether the runs of ``job`` can run in lockstep (see module), from its problem or the
-    problem's facts (:mod:`vpid_bench.facts`)."""
+    """Whether the runs of ``job`` can run in lockstep (see module)."""
     cls = job.optimizer_cls
     return (bool(getattr(problem, "rows_independent", False))
             and not getattr(cls, "wants_residuals", False)
@@ -76,9 +67,8 @@ def joins_lockstep(job: Job, problem: Problem | ProblemFacts) -> bool:
 
 
 def warm_up(job: Job, problem: Problem, lockstep: bool = False) -> float:
-    """One untimed run of at most two batches, so compilation is not timed (see module); in
-    lockstep also one gathered call over two instances (its own compiled path). Returns its
-    wall time (s). A fault here is left for the timed runs to meet and record."""
+    """One untimed run of at most two batches (in lockstep also one gathered call over two
+    instances); its wall time (s). A fault here is left for the timed runs to record."""
     t0 = time.perf_counter()
     try:
         # its warnings too are left for the timed runs, which say them in one line per group
@@ -97,10 +87,9 @@ def warm_up(job: Job, problem: Problem, lockstep: bool = False) -> float:
 
 def run_outcomes(job: Job, problem: Problem, indices: Sequence[int], lockstep: bool,
                  announce: Callable[[str], None] | None = None) -> Iterator[RunOutcome]:
-    """The outcome of each run in ``indices``, in order, with its metrics: all in one lockstep
-    group, or one at a time (each yielded as soon as it is over). ``announce("metrics")`` is
-    called before each run's metrics are computed (a worker tells its supervisor, which then
-    knows whom to blame if the process ends)."""
+    """The outcome of each run in ``indices``, in order, with its metrics: in one lockstep
+    group or one at a time. ``announce("metrics")`` before each run's metrics (a worker tells
+    its supervisor whom to blame if the process ends)."""
     groups = [list(indices)] if lockstep else [[i] for i in indices]
     for group in groups:
         with warnings.catch_warnings(record=True) as caught:
@@ -114,11 +103,9 @@ def run_outcomes(job: Job, problem: Problem, indices: Sequence[int], lockstep: b
 
 
 def with_problem_results(job: Job, problem: Problem, outcome: RunOutcome) -> RunOutcome:
-    """``outcome`` with what the problem says of its best vector (nothing for a failed run or
-    a non-finite vector): its ``metrics`` and, where the truth is unknown and the problem has
-    residuals, the parameters' ``intervals`` (``None`` where they cannot be computed there),
-    under the run's time limit. Problem code that raises or passes the limit here fails the
-    run, naming it."""
+    """``outcome`` with what the problem says of its (finite) best vector, under the run's
+    time limit: ``metrics`` and, without a truth and with residuals, the parameters'
+    ``intervals``. Problem code that raises or passes the limit here fails the run."""
     result = outcome.result
     if result is None or not np.all(np.isfinite(result.x_best)):
         return outcome
@@ -152,8 +139,7 @@ WARNING_CHARS = 160
 
 def _say_warnings(job: Job, group: Sequence[int], caught: Sequence[warnings.WarningMessage]
                   ) -> None:
-    """One log line for the warnings plugin code raised in a group of runs (numpy's overflow
-    warnings once came raw, dozens of lines between the progress lines)."""
+    """One log line for the warnings plugin code raised in a group of runs (not dozens)."""
     if not caught:
         return
     first = caught[0]
@@ -166,8 +152,7 @@ def _say_warnings(job: Job, group: Sequence[int], caught: Sequence[warnings.Warn
 
 
 def _intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None:
-    """The parameters' intervals at ``x`` (:func:`~vpid_bench.analysis.intervals.
-    jacobian_intervals`), ``None`` where a simulation near ``x`` fails."""
+    """The parameters' intervals at ``x``, ``None`` where a simulation near ``x`` fails."""
     from .analysis.intervals import jacobian_intervals
 
     try:
@@ -182,8 +167,8 @@ def now_utc() -> str:
 
 
 def _group(job: Job, problem: Problem, indices: list[int]) -> list[RunOutcome]:
-    """Build an optimizer per run (a constructor that raises or passes the time limit fails its
-    run alone), then run the group through the one run loop."""
+    """Build an optimizer per run (one that raises or passes the time limit fails its run
+    alone), then run the group through the one run loop."""
     timeout = job.spec.run_timeout_s
     started = now_utc()
     lanes: list[Lane] = []

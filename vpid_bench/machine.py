@@ -20,6 +20,20 @@ def available_cores() -> int:
 
 
 @contextlib.contextmanager
+def environ(name: str, value: str) -> Iterator[None]:
+    """Inside: the environment variable ``name`` is ``value``; the one before restored after."""
+    saved = os.environ.get(name)
+    os.environ[name] = value
+    try:
+        yield
+    finally:
+        if saved is None:
+            os.environ.pop(name, None)
+        else:
+            os.environ[name] = saved
+
+
+@contextlib.contextmanager
 def one_blas_thread() -> Iterator[None]:
     """numpy's and scipy's BLAS/OpenMP pools limited to one thread for the job, unless the
     user set a thread count in the environment: a problem's own threads (``threads``) and the

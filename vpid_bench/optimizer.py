@@ -16,16 +16,10 @@ from .problem import Problem, default_budget, offers_residuals
 
 @dataclasses.dataclass(frozen=True)
 class OptimizerParams:
-    """Base of every optimizer's ``Params``.
-
-    ``ps`` and ``iterations`` are a copy of the problem's protocol and ``budget`` the number of
-    evaluations the run loop will allow this run, all three filled in by the job
-    (:func:`vpid_bench.spec.parse_job`); none is settable on the optimizer. An optimizer that
-    plans over its budget (a population-size schedule, a library's own budget) reads
-    :attr:`Optimizer.budget`, never a formula of its own. ``budget`` is ``None`` only when the
-    Params were built by hand; :attr:`Optimizer.budget` then falls back to the protocol's
-    default (:func:`default_budget`).
-    """
+    """Base of every optimizer's ``Params``: ``ps`` and ``iterations`` (the problem's
+    protocol) and ``budget`` (the evaluations the run loop allows this run), filled in by the
+    job, none settable on the optimizer. ``budget`` is ``None`` only in Params built by hand;
+    an optimizer that plans over its budget reads :attr:`Optimizer.budget`."""
 
     ps: int = 20
     iterations: int = 50
@@ -36,18 +30,12 @@ class Optimizer(abc.ABC):
     """An ask/tell optimizer over a box.
 
     The run loop calls ``ask()`` for a population (rows in physical units, inside
-    ``bounds``), evaluates it, and calls ``tell(X, f)`` with the same rows and their
-    objective values (``inf`` for failed candidates). It stops when the budget is spent or
-    ``done`` is true. ``tell`` is not called for a partial population cut by the budget.
-    An optimizer that has converged ends its run early by writing ``self.done = True``.
-
-    An optimizer that sets ``wants_residuals = True`` gets residual vectors too: the run loop
-    evaluates each batch with :meth:`Problem.evaluate_with_residuals`, calls
-    ``tell(X, f, residuals=R)`` (``R`` of shape ``(n, m)``; each row still one evaluation) and,
-    before the first ``ask``, stores the problem's ``residual_groups()`` in
-    ``self.residual_groups``. A problem without residuals is refused before the run
-    (:func:`check_compatible`). When the run ends, normally or not, the run loop calls
-    :meth:`close`.
+    ``bounds``), evaluates it and calls ``tell(X, f)`` (``inf`` for failed candidates), until
+    the budget is spent or ``done`` is true (``self.done = True`` ends a run early); a
+    population cut by the budget gets no ``tell``. With ``wants_residuals = True`` the loop
+    calls ``tell(X, f, residuals=R)`` (``R`` ``(n, m)``) and sets ``self.residual_groups``
+    before the first ``ask`` (a problem without residuals is refused before the run). When
+    the run ends, however, the loop calls :meth:`close`.
     """
 
     Params: ClassVar[type[OptimizerParams]] = OptimizerParams
@@ -69,9 +57,8 @@ class Optimizer(abc.ABC):
 
     @property
     def budget(self) -> int:
-        """Evaluations the run loop allows this run (``params.budget``; built by hand without
-        one: the protocol's default, :func:`default_budget`). The loop stops the run there
-        whatever the optimizer does; this is for optimizers that plan over it."""
+        """Evaluations the run loop allows this run (``params.budget``, else the protocol's
+        default), for optimizers that plan over it."""
         budget = getattr(self.params, "budget", None)
         if budget is None:
             budget = default_budget(self.params.ps, self.params.iterations)
@@ -80,8 +67,8 @@ class Optimizer(abc.ABC):
     @classmethod
     def check(cls, params: OptimizerParams) -> None:
         """Checks that need the class as well as its ``Params`` (e.g. the smallest population
-        a strategy can work with); raise :class:`ConfigError`. The pre-flight calls it for
-        every job of a sweep before any job runs, so prefer it to checks in ``__init__``."""
+        it works with): raise :class:`ConfigError`. The pre-flight calls it for every job
+        before any runs, so prefer it to checks in ``__init__``."""
         return None
 
     @abc.abstractmethod
@@ -94,14 +81,13 @@ class Optimizer(abc.ABC):
         (and ``residuals=R``, shape ``(n, m)``, when ``wants_residuals``)."""
 
     def close(self) -> None:
-        """Release what the optimizer holds (a worker thread, ...); the run loop calls it once
-        the run is over, however it ended. The default does nothing."""
+        """Release what the optimizer holds (a thread, ...) once the run is over."""
         return None
 
     @property
     def done(self) -> bool:
-        """True when the optimizer wants its run to end; the run loop reads it before every
-        ``ask``. Settable: ``self.done = True`` (e.g. in ``tell``, once converged)."""
+        """True when the optimizer wants its run to end (read before every ``ask``);
+        settable: ``self.done = True``."""
         return self._done
 
     @done.setter
@@ -112,14 +98,11 @@ class Optimizer(abc.ABC):
 class GenerationalOptimizer(Optimizer):
     """An optimizer that proposes whole generations: the shared ask/tell handshake.
 
-    ``ask`` returns the pending generation (asking again before ``tell`` returns the same
-    rows): first the initial population, ``ps`` vectors uniform in the box, then whatever
-    :meth:`next_generation` builds. ``tell`` must receive that whole generation; it hands the
-    proposed rows and their values to :meth:`start` (the initial population) or
-    :meth:`advance` (every later generation, which also counts ``generation``). ``done`` is
-    true after ``params.iterations`` generations, so a run uses the initial population plus
-    ``iterations`` generations of evaluations; a subclass may end it sooner with
-    ``self.done = True``.
+    ``ask`` returns the pending generation (the same rows until ``tell``): first ``ps``
+    vectors uniform in the box, then :meth:`next_generation`'s. ``tell`` takes that whole
+    generation and hands it to :meth:`start` (the initial one) or :meth:`advance` (later
+    ones, counted in ``generation``). ``done`` after ``params.iterations`` generations (or
+    ``self.done = True``).
     """
 
     def __init__(self, params: OptimizerParams, bounds: Bounds, rng: np.random.Generator) -> None:
@@ -164,8 +147,7 @@ class GenerationalOptimizer(Optimizer):
 
     @Optimizer.done.getter
     def done(self) -> bool:
-        """True after ``params.iterations`` generations, or once a subclass set
-        ``self.done = True`` (the setter is the base class's)."""
+        """True after ``params.iterations`` generations, or once ``self.done = True``."""
         return self._done or (self._started and self.generation >= self.params.iterations)
 
 
@@ -173,12 +155,9 @@ def check_compatible(
     problem: Problem | type[Problem], optimizer: type[Optimizer] | Optimizer,
     name: str | None = None, problem_name: str | None = None,
 ) -> None:
-    """Refuse an optimizer that wants residuals on a problem that has none, before any run.
-
-    ``problem`` and ``optimizer`` are classes or instances; ``name`` and ``problem_name`` the
-    names the user typed (default: their ``name``). Raises :class:`ConfigError` with key
-    ``optimizer``, naming both. The pre-flight calls it with the classes, the run loop again.
-    """
+    """Refuse (:class:`ConfigError`, key ``optimizer``) an optimizer that wants residuals on
+    a problem that has none. Classes or instances; ``name`` and ``problem_name``: the names
+    the user typed (default: their ``name``)."""
     if not getattr(optimizer, "wants_residuals", False) or offers_residuals(problem):
         return
     if name is None:
@@ -187,9 +166,6 @@ def check_compatible(
             name = optimizer.__name__ if isinstance(optimizer, type) else type(optimizer).__name__
     if problem_name is None:
         problem_name = getattr(problem, "name", type(problem).__name__)
-    raise ConfigError(
-        "optimizer",
-        name,
-        f"optimizer {name!r} fits residual vectors and problem {problem_name!r} has none "
-        "(it does not implement residuals()); pick an optimizer that needs only f",
-    )
+    raise ConfigError("optimizer", name, f"optimizer {name!r} fits residual vectors and "
+                      f"problem {problem_name!r} has none (it does not implement "
+                      "residuals()); pick an optimizer that needs only f")

@@ -84,10 +84,13 @@ def _coerce_sequence(value: Any, tp: Any, origin: Any, key: str) -> Any:
     return tuple(items) if (origin is tuple or tp is tuple) else items
 
 
-def _to_bool(value: Any, key: str) -> bool:
-    if isinstance(value, bool):
-        return value
-    raise ConfigError(key, value, "true or false")
+def _exactly(tp: type, words: str) -> Any:
+    """A check that a value is of type ``tp``, else ``words`` in the error."""
+    def check(value: Any, key: str) -> Any:
+        if isinstance(value, tp):
+            return value
+        raise ConfigError(key, value, words)
+    return check
 
 
 def _to_int(value: Any, key: str) -> int:
@@ -107,22 +110,14 @@ def _to_float(value: Any, key: str) -> float:
     return value
 
 
-def _to_str(value: Any, key: str) -> str:
-    if isinstance(value, str):
-        return value
-    raise ConfigError(key, value, "a string")
-
-
-_SCALARS = {bool: _to_bool, int: _to_int, float: _to_float, str: _to_str}
+_SCALARS = {bool: _exactly(bool, "true or false"), int: _to_int, float: _to_float,
+            str: _exactly(str, "a string")}
 
 
 def build_dataclass(cls: type[T], mapping: Mapping[str, Any] | None, prefix: str = "") -> T:
-    """Instantiate the dataclass ``cls`` from ``mapping``, validating keys and value types.
-
-    Keys missing from ``mapping`` take the field default. ``prefix`` is the dotted config path
-    used in error messages (``optimizer``, ``problem.noise``). Keys starting with ``_`` and
-    the key ``name`` are metadata of the config node and are ignored.
-    """
+    """Instantiate the dataclass ``cls`` from ``mapping``, checking keys and value types
+    (missing keys: the field default; ``name`` and ``_``-keys, the node's metadata, ignored).
+    ``prefix``: the dotted config path of error messages (``problem.noise``)."""
     mapping = dict(mapping or {})
     hints = typing.get_type_hints(cls)
     fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
@@ -152,15 +147,10 @@ OPEN_KEYS = "vpid_bench_open_keys"
 def added_setting(default: Any = dataclasses.MISSING,
                   default_factory: Any = dataclasses.MISSING, open_keys: bool = False) -> Any:
     """A config field added after runs and archives were recorded, whose default reproduces
-    the problem as it was (``reference: RecordFileConfig = added_setting(default_factory=
-    RecordFileConfig)``). At its default it is left out of a job's settings
-    (:func:`settings_of`): records, run ids and instance optima made before the key existed
-    stay valid, and so do archives; any other value is recorded as usual.
-
-    ``open_keys=True``: a mapping whose keys the user names on the command line
-    (``problem.known.kt=210000`` without Hydra's ``+``); its Hydra node is left open
-    (:func:`open_key_paths`), and the problem checks the names itself, listing the allowed
-    ones."""
+    the problem as it was: at its default it is left out of a job's settings, so earlier
+    records, run ids, optima and archives stay valid. ``open_keys=True``: a mapping whose
+    keys the user names (``problem.known.kt=210000`` without Hydra's ``+``); the problem
+    checks the names itself."""
     return dataclasses.field(default=default, default_factory=default_factory,
                              metadata={ADDED_SETTING: True, OPEN_KEYS: open_keys})
 
@@ -216,10 +206,8 @@ def dataclass_defaults(cls: type) -> dict[str, Any]:
     out: dict[str, Any] = {}
     hints = typing.get_type_hints(cls)
     for f in dataclasses.fields(cls):
-        if f.default is not dataclasses.MISSING:
-            out[f.name] = to_plain(f.default)
-        elif f.default_factory is not dataclasses.MISSING:
-            out[f.name] = to_plain(f.default_factory())
+        if (default := _default_of(f)) is not dataclasses.MISSING:
+            out[f.name] = to_plain(default)
         elif _is_dataclass_type(hints[f.name]):
             out[f.name] = dataclass_defaults(hints[f.name])
         else:
@@ -228,10 +216,8 @@ def dataclass_defaults(cls: type) -> dict[str, Any]:
 
 
 def hydra_node(cls: type, name: str, exclude: tuple[str, ...] = ()) -> dict[str, Any]:
-    """The Hydra config node of a plugin: ``{"name": name, **defaults}`` without the keys in
-    ``exclude`` (an optimizer's protocol copy ``ps``/``iterations``, which the job fills in
-    from the problem), so a third-party plugin needs no YAML to be usable as ``<group>=<name>``.
-    """
+    """The Hydra config node of a plugin, ``{"name": name, **defaults}`` without ``exclude``
+    (what the job fills in): a third-party plugin needs no YAML."""
     node: dict[str, Any] = {"name": name}
     node.update({k: v for k, v in dataclass_defaults(cls).items() if k not in exclude})
     return node

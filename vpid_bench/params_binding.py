@@ -19,29 +19,17 @@ import textwrap
 from .errors import ConfigError
 
 
-def _own_sources(cls: type) -> list[str]:
-    """The source of ``cls`` and of its bases outside vpid-bench's own interface module
-    (what a plugin author wrote); a class without readable source gives nothing."""
-    out = []
+@functools.lru_cache(maxsize=256)
+def params_read(cls: type) -> frozenset[str]:
+    """The attribute names the code of ``cls`` and of its bases outside vpid-bench (what a
+    plugin author wrote) reads from ``self.params`` or ``params`` (once per class)."""
+    names: set[str] = set()
     for klass in cls.__mro__:
         if klass.__module__ in ("builtins", "abc", "vpid_bench.optimizer"):
             continue
         try:
-            out.append(textwrap.dedent(inspect.getsource(klass)))
-        except (OSError, TypeError):
-            continue
-    return out
-
-
-@functools.lru_cache(maxsize=256)
-def params_read(cls: type) -> frozenset[str]:
-    """The attribute names the class's own code reads from ``self.params`` or ``params``
-    (read once per class: a sweep parses hundreds of jobs)."""
-    names: set[str] = set()
-    for source in _own_sources(cls):
-        try:
-            tree = ast.parse(source)
-        except SyntaxError:
+            tree = ast.parse(textwrap.dedent(inspect.getsource(klass)))
+        except (OSError, TypeError, SyntaxError):  # no readable source: nothing to read
             continue
         for node in ast.walk(tree):
             if not isinstance(node, ast.Attribute) or not isinstance(node.ctx, ast.Load):

@@ -1,23 +1,12 @@
-"""A worker process and every process its plugins start: one session, output through the
-supervisor, and the end of the whole tree.
+"""A worker process's own session, its output through the supervisor, its copy of the
+resource-tracker pipe closed.
 
-A plugin may start processes: ``os.fork`` (both copies going on, or a child left sleeping),
-``subprocess``, a pool, a daemon. Round four's attack found what that did to the sweep: a
-forked child kept the worker's pipe open, so the sweep learned of its worker's death only when
-the child ended; an orphan kept the command's standard output open, so ``vpid-bench ... |
-tail`` waited for it after the command had exited. So each worker
-
-* starts its own session (:func:`detach`): it and every process it starts form one process
-  group; on Linux it is also a *child subreaper*, so a grandchild its parent left (a daemon's
-  double fork, even one that started a session of its own) becomes the worker's child rather
-  than init's and is still found among its descendants (:func:`strays`);
-* closes its copy of the command's multiprocessing resource-tracker pipe (:func:`drop_tracker`);
-* writes its standard output and error into pipes that the supervisor reads and copies to its
-  own (:class:`Output`): no process a plugin starts holds the command's streams, whatever it
-  does.
-
-Ending the whole tree, and never anything else, is :mod:`vpid_bench.worker_tree`'s job (a
-cgroup per worker, a mark in the environment, pidfds).
+Round four found that a forked child kept the worker's pipe open (the sweep learned of its
+worker's death only when the child ended) and that an orphan kept the command's standard
+output open (``vpid-bench ... | tail`` waited for it). So each worker starts its own session
+and, on Linux, is the child subreaper of its descendants (:func:`detach`); closes its copy of
+the resource-tracker pipe (:func:`drop_tracker`); and writes its output into pipes the
+supervisor copies (:class:`Output`). Ending the tree is :mod:`vpid_bench.worker_tree`'s job.
 """
 
 from __future__ import annotations
@@ -36,9 +25,8 @@ CHUNK = 65536
 
 
 def detach() -> None:
-    """In a new worker process, before any plugin code: a session of its own and, on Linux,
-    the child subreaper of its descendants (see module). Best effort: where either is not
-    available, less of the tree is found."""
+    """In a new worker, before any plugin code: a session of its own and, on Linux, the
+    child subreaper of its descendants (best effort)."""
     with contextlib.suppress(OSError):
         os.setsid()
     if sys.platform.startswith("linux"):
@@ -49,11 +37,10 @@ def detach() -> None:
 
 
 def drop_tracker() -> None:
-    """In a new worker process, before any plugin code: close its copy of the write end of
-    the command's multiprocessing resource tracker pipe. The tracker ends when every copy is
-    closed, and it holds the command's standard output and error: a daemon a plugin started
-    kept the copy it inherited, and ``vpid-bench ... | tail`` waited for it (issue 44, N3).
-    Should a plugin need a tracker, the worker starts its own (its child, ended with it)."""
+    """In a new worker, before any plugin code: close its copy of the command's resource
+    tracker pipe (the tracker holds the command's output and ends when every copy is closed:
+    a daemon holding one made ``vpid-bench ... | tail`` wait, issue 44 N3). A plugin that
+    needs a tracker gets the worker's own."""
     from multiprocessing import resource_tracker
 
     tracker = resource_tracker._resource_tracker
@@ -65,9 +52,8 @@ def drop_tracker() -> None:
 
 
 def strays(process: Any) -> list[Any]:
-    """The living descendants of ``process`` (a :class:`psutil.Process` or a process id;
-    zombies, already ended, left out), as :class:`psutil.Process` objects; empty when it is
-    gone."""
+    """The living descendants (no zombies) of ``process`` (a :class:`psutil.Process` or a
+    process id), as :class:`psutil.Process` objects."""
     import psutil
 
     try:
@@ -85,7 +71,7 @@ def strays(process: Any) -> list[Any]:
 
 def exited(pid: int) -> bool:
     """Whether the child process ``pid`` has ended, without reaping it (its number stays its
-    own until it is reaped: see :mod:`vpid_bench.worker_tree`)."""
+    own until then)."""
     try:
         return os.waitid(os.P_PID, pid, os.WEXITED | os.WNOHANG | os.WNOWAIT) is not None
     except ChildProcessError:  # already reaped
@@ -93,10 +79,9 @@ def exited(pid: int) -> bool:
 
 
 class Output:
-    """A worker's standard output and error: two pipes it writes (:meth:`child_ends`, handed
-    to it at its start) and this process reads (:meth:`forward`), copying the text to its own
-    ``sys.stdout`` and ``sys.stderr``. The read ends are non-blocking: a descendant that keeps
-    a write end open never blocks the supervisor."""
+    """A worker's standard output and error: two pipes it writes (:meth:`child_ends`) and
+    this process copies to its own (:meth:`forward`). The read ends never block (a
+    descendant may keep a write end open)."""
 
     def __init__(self) -> None:
         self._streams: dict[int, tuple[str, Any]] = {}
@@ -124,8 +109,7 @@ class Output:
         return list(self._streams)
 
     def forward(self, fd: int) -> None:
-        """Copy what is waiting in pipe ``fd`` to this process's stream of the same name; at
-        the end of the pipe, close it."""
+        """Copy what is waiting in pipe ``fd`` to this process's stream; at its end, close it."""
         try:
             data = os.read(fd, CHUNK)
         except BlockingIOError:
@@ -148,7 +132,7 @@ class Output:
         self.started()
         for fd in list(self._streams):
             for _ in range(64):  # at most 4 MB more of a worker that is still writing
-                if fd not in self._streams or not _ready(fd):
+                if fd not in self._streams or not readable(fd):
                     break
                 self.forward(fd)
             if fd in self._streams:
@@ -157,24 +141,21 @@ class Output:
                     os.close(fd)
 
 
-def _ready(fd: int) -> bool:
-    """Whether pipe ``fd`` has something to read now."""
+def readable(fd: int, closed: bool = False) -> bool:
+    """Whether ``fd`` (a pipe, a pidfd) is readable now; ``closed`` when it is not open."""
     import select
 
     with contextlib.suppress(OSError, ValueError):
         return bool(select.select([fd], [], [], 0)[0])
-    return False
+    return closed
 
 
 def redirect(out: Connection, err: Connection) -> None:
-    """In the worker: its standard output and error go into the pipes ``out`` and ``err``
-    (:class:`Output`), line-buffered so a plugin's lines arrive as it prints them."""
+    """In the worker: its standard output and error into the pipes ``out`` and ``err``,
+    line-buffered so a plugin's lines arrive as it prints them."""
     for end, fd in ((out, 1), (err, 2)):
         os.dup2(end.fileno(), fd)
         end.close()
     for stream in (sys.stdout, sys.stderr):
         with contextlib.suppress(Exception):
             stream.reconfigure(line_buffering=True)
-
-
-__all__ = ["Output", "detach", "drop_tracker", "exited", "redirect", "strays"]

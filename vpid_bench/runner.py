@@ -1,36 +1,27 @@
 """The one run loop. It owns the budget, the best-so-far and the trace.
 
-An optimizer only proposes candidates; this loop decides what gets evaluated and what gets
-recorded. It
+An optimizer only proposes candidates; this loop decides what gets evaluated and recorded. It
+checks every proposal (2-D, ``dim`` columns, at least one row, finite, inside the box);
+evaluates at most ``budget`` candidates in all (a proposal larger than what is left is cut,
+its first rows evaluated, the run ended without a ``tell``); maps NaN values to ``inf``; for
+an optimizer that ``wants_residuals``, refuses a problem without residuals and tells
+``tell(X, f, residuals=R)``; keeps each run's books in one :class:`Ledger` (an optimizer's own
+claim about its best is never used); times each run; and calls ``optimizer.close()`` however
+the run ended.
 
-* checks every proposal (2-D, ``dim`` columns, at least one row, finite, inside the box),
-* evaluates at most ``budget`` candidates in total: a proposal larger than what is left is
-  cut, its first rows evaluated and the run ended (the optimizer gets no ``tell`` for it),
-* maps NaN objective values to ``inf``,
-* for an optimizer that ``wants_residuals``: refuses a problem without residuals before any
-  evaluation, evaluates each batch with ``problem.evaluate_with_residuals`` and tells
-  ``tell(X, f, residuals=R)`` (each row still one evaluation),
-* keeps the books of every run in one :class:`Ledger` (evaluations used, batches, its own best
-  vector and value, a trace of (evaluations used, best so far) after every batch); an
-  optimizer's own claim about its best is never used,
-* times each run with a monotonic clock,
-* calls ``optimizer.close()`` when the run is over, however it ended (a loop-owning
-  optimizer's worker thread is stopped there).
-
-There is one loop, :func:`run_many`, for one run or several. Several runs go *in lockstep*:
-every step it asks each unfinished run for its batch, evaluates the batches of the runs that
-need only values in one call (:meth:`Problem.evaluate_instances`, each row against its own
-run's instance) and hands every run its rows back. Each run keeps its own optimizer (so its
-own generator), ledger and time, and goes through exactly the steps it takes alone, so its
-result is bit-identical to running it alone when the problem's values do not depend on which
-other rows share a call (:attr:`Problem.rows_independent`). :func:`run` is the loop with one
-run, raising what ended it.
+:func:`run_many` is the one loop, for one run or several *in lockstep*: each step it asks
+each unfinished run for its batch, evaluates the batches that need only values in one call
+(:meth:`Problem.evaluate_instances`) and hands every run its rows back. Each run keeps its own
+optimizer, ledger and time, so its result is bit-identical to running it alone when the
+problem's rows are independent (:attr:`Problem.rows_independent`). :func:`run` is the loop
+with one run, raising what ended it.
 """
 
 from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import os
 import signal
 import threading
@@ -69,11 +60,7 @@ class RunTimeoutError(Exception):
 
 @dataclasses.dataclass
 class Ledger:
-    """The books of one run: the only place where evaluations are counted and the best kept.
-
-    ``admit`` cuts a checked proposal to what is left of the budget; ``book`` takes in the
-    values of the admitted rows; ``result`` is the run as a :class:`RunResult`.
-    """
+    """The books of one run: the only place where evaluations are counted and the best kept."""
 
     budget: int
     dim: int
@@ -131,15 +118,9 @@ class Ledger:
 
 @dataclasses.dataclass
 class Lane:
-    """One run of :func:`run_many`.
-
-    ``problem`` is the instance the run fits (checks, residuals and error messages use it),
-    ``instance`` its index for the group problem's
-    :meth:`~vpid_bench.api.Problem.evaluate_instances`. ``elapsed_s``: seconds the run has
-    spent before the loop (building its optimizer), counted against its time limit.
-    ``stop_at``: the run ends (``stopped_by="target"``) after the batch whose best value is
-    at most this: the final target, when the instance's optimum is known in advance.
-    """
+    """One run of :func:`run_many`: ``problem`` the instance it fits, ``instance`` its index
+    for :meth:`~vpid_bench.api.Problem.evaluate_instances`, ``elapsed_s`` the seconds spent
+    before the loop (counted against its limit), ``stop_at`` its final target's value."""
 
     problem: Problem
     optimizer: Optimizer
@@ -170,18 +151,15 @@ class _Run:
 
 
 def check_proposal(X: object, optimizer: Optimizer, dim: int) -> np.ndarray:
-    """A copy of ``ask()``'s answer as floats, or :class:`OptimizerContractError` saying what
-    is wrong with it (not an array, wrong shape, not finite, outside the box)."""
+    """A copy of ``ask()``'s answer as floats, or :class:`OptimizerContractError`."""
     name = getattr(optimizer, "name", type(optimizer).__name__)
     if not isinstance(X, np.ndarray):
-        raise OptimizerContractError(
-            f"optimizer {name!r}: ask() returned {type(X).__name__}, expected a numpy array "
-            f"of shape (n, {dim})"
-        )
+        raise OptimizerContractError(f"optimizer {name!r}: ask() returned "
+                                     f"{type(X).__name__}, expected a numpy array of shape "
+                                     f"(n, {dim})")
     if X.ndim != 2 or X.shape[1] != dim or X.shape[0] < 1:
-        raise OptimizerContractError(
-            f"optimizer {name!r}: ask() returned shape {X.shape}, expected (n, {dim}) with n >= 1"
-        )
+        raise OptimizerContractError(f"optimizer {name!r}: ask() returned shape {X.shape}, "
+                                     f"expected (n, {dim}) with n >= 1")
     X = X.astype(float, copy=True)
     bounds = optimizer.bounds
     if ((X >= bounds.lower) & (X <= bounds.upper)).all():  # the usual case, in one pass
@@ -191,9 +169,8 @@ def check_proposal(X: object, optimizer: Optimizer, dim: int) -> np.ndarray:
     inside = bounds.contains(X)
     if not np.all(inside):
         row = int(np.flatnonzero(~inside)[0])
-        raise OptimizerContractError(
-            f"optimizer {name!r}: ask() returned candidate {row} outside the bounds: {X[row]}"
-        )
+        raise OptimizerContractError(f"optimizer {name!r}: ask() returned candidate {row} "
+                                     f"outside the bounds: {X[row]}")
     return X
 
 
@@ -202,9 +179,8 @@ def _values(problem: Problem, f: Any, n: int) -> np.ndarray:
     refused (it would be ranked best of every run: a broken problem, not a result)."""
     f = np.asarray(f, dtype=float).reshape(-1)
     if f.shape != (n,):
-        raise ValueError(
-            f"problem {problem.name!r}: evaluate() returned {f.shape}, expected ({n},)"
-        )
+        raise ValueError(f"problem {problem.name!r}: evaluate() returned {f.shape}, "
+                         f"expected ({n},)")
     if np.isfinite(f.sum()):  # the usual case, in one pass: no NaN, no inf
         return f.copy()  # never the problem's own buffer (it may reuse it)
     if np.any(f == -np.inf):
@@ -221,26 +197,18 @@ def _with_residuals(problem: Problem, X: np.ndarray, groups: np.ndarray
     f, R = problem.evaluate_with_residuals(X)
     R = np.asarray(R, dtype=float)
     if R.ndim != 2 or R.shape[0] != n:
-        raise ValueError(
-            f"problem {problem.name!r}: evaluate_with_residuals() returned residuals of "
-            f"shape {R.shape}, expected ({n}, m)"
-        )
+        raise ValueError(f"problem {problem.name!r}: evaluate_with_residuals() returned "
+                         f"residuals of shape {R.shape}, expected ({n}, m)")
     if R.shape[1] != groups.size:
-        raise ValueError(
-            f"problem {problem.name!r}: {R.shape[1]} residuals per row but "
-            f"residual_groups() has {groups.size} entries"
-        )
+        raise ValueError(f"problem {problem.name!r}: {R.shape[1]} residuals per row but "
+                         f"residual_groups() has {groups.size} entries")
     return _values(problem, f, n), R
 
 
 def run(problem: Problem, optimizer: Optimizer, budget: int, max_batches: int = 10**7) -> RunResult:
     """Run ``optimizer`` on ``problem`` until ``budget`` evaluations are used or it is done;
-    raise whatever ended the run otherwise (:func:`run_many` with one lane).
-
-    ``max_batches`` guards against an optimizer that is never done and asks for nothing new;
-    the budget normally ends the run long before. Raises :class:`~vpid_bench.api.ConfigError`
-    before any evaluation when the optimizer wants residuals the problem does not have.
-    """
+    raise whatever else ended the run. ``max_batches`` guards against an optimizer that is
+    never done and asks for nothing new."""
     if budget < 1:
         raise ValueError(f"budget must be at least 1, got {budget}")
     outcome = run_many(problem, [Lane(problem, optimizer, budget)], max_batches=max_batches)[0]
@@ -251,8 +219,8 @@ def run(problem: Problem, optimizer: Optimizer, budget: int, max_batches: int = 
 
 class _Alarm:
     """A hard wall-time limit on one call: ``with alarm.limit(seconds):`` raises
-    :class:`RunTimeoutError` inside the call once ``seconds`` have passed (SIGALRM: POSIX main
-    thread only; elsewhere only the soft check between steps of :func:`run_many` applies)."""
+    :class:`RunTimeoutError` inside it once ``seconds`` have passed (SIGALRM: POSIX main
+    thread only; elsewhere only the soft check between steps applies)."""
 
     def __init__(self, limit: float | None) -> None:
         self.limit_s = limit
@@ -296,8 +264,7 @@ class _Alarm:
 
 @contextlib.contextmanager
 def time_limit(seconds: float | None) -> Iterator[None]:
-    """Raise :class:`RunTimeoutError` in this thread after ``seconds`` of wall time (POSIX main
-    thread only; elsewhere nothing is raised)."""
+    """Raise :class:`RunTimeoutError` after ``seconds`` of wall time (POSIX main thread)."""
     alarm = _Alarm(seconds)
     with alarm, alarm.limit(seconds):
         yield
@@ -313,14 +280,12 @@ def run_many(problem: Problem, lanes: Sequence[Lane], timeout_s: float | None = 
     """Run every lane in lockstep (see module); one outcome per lane, in order: its
     :class:`RunResult`, or the exception that ended it.
 
-    ``problem`` evaluates the gathered rows of the lanes that need only values
-    (``problem.evaluate_instances(X, instance)``); a lane that wants residuals is evaluated
-    alone by its own instance. A lane that raises (in its optimizer, a proposal check or its
-    rows' evaluation) fails alone: a gathered evaluation that raises is repeated lane by lane
-    with each lane's own ``problem.evaluate`` to find the culprit. ``timeout_s`` limits each
-    run's own time (its ``ask``/``tell`` plus its share of the gathered evaluations, in
-    proportion to its rows); a run past it ends with :class:`RunTimeoutError`.
-    ``KeyboardInterrupt`` stops the whole group (every optimizer is closed first).
+    ``problem`` evaluates the gathered rows of the lanes that need only values; a lane that
+    wants residuals is evaluated alone by its instance. A lane that raises fails alone (a
+    gathered evaluation that raises is repeated lane by lane to find the culprit).
+    ``timeout_s`` limits each run's own time (its ``ask``/``tell`` and its rows' share of the
+    gathered evaluations): past it, :class:`RunTimeoutError`. ``KeyboardInterrupt`` stops the
+    whole group (every optimizer closed first).
     """
     runs = [_start(lane, problem.bounds.dim) for lane in lanes]
     with _Alarm(timeout_s) as alarm:
@@ -387,8 +352,8 @@ def _close(r: _Run, alarm: _Alarm, timeout_s: float | None) -> None:
 
 @contextlib.contextmanager
 def keep_cwd() -> Iterator[None]:
-    """Put the working folder back if a plugin's call changed it (``os.chdir`` in a plugin
-    once sent a relative sweep's records, job status and report into the plugin's folder)."""
+    """Put the working folder back if a plugin's call changed it (a plugin's ``os.chdir``
+    once sent a relative sweep's files into the plugin's folder)."""
     before = os.getcwd()
     try:
         yield
@@ -402,10 +367,9 @@ def _remaining(r: _Run, timeout_s: float | None) -> float | None:
 
 
 def _guarded(r: _Run, alarm: _Alarm, timeout_s: float | None, fn: Callable[[], None]) -> bool:
-    """Call ``fn()`` as run ``r`` (its time counted, its limit applied, the working folder put
-    back if a plugin changed it: see :func:`keep_cwd`); an exception ends the run (its
-    outcome) and returns False. Written out rather than with context managers: it runs
-    three times per batch, and two generator-based ones cost a quarter of DE's overhead."""
+    """Call ``fn()`` as run ``r`` (its time counted, its limit applied, the working folder
+    kept); an exception ends the run and returns False. Written out rather than with context
+    managers: it runs three times per batch, and those cost a quarter of DE's overhead."""
     t0 = time.perf_counter()
     cwd = os.getcwd()
     try:
@@ -462,15 +426,6 @@ def _ask(r: _Run, alarm: _Alarm, timeout_s: float | None, max_batches: int) -> b
     return True
 
 
-def _lane_by_lane(problem: Problem, runs: list[_Run], alarm: _Alarm,
-                  timeout_s: float | None) -> dict[int, np.ndarray]:
-    """A gathered evaluation that raised, repeated run by run to fail only the culprits."""
-    values: dict[int, np.ndarray] = {}
-    for r in runs:
-        values.update(_gathered_values(problem, [r], alarm, timeout_s))
-    return values
-
-
 def _evaluate_and_tell(problem: Problem, asked: list[_Run], alarm: _Alarm,
                        timeout_s: float | None) -> None:
     """Evaluate this step's batches, then book each run and ``tell`` its optimizer."""
@@ -498,22 +453,13 @@ def _evaluate_and_tell(problem: Problem, asked: list[_Run], alarm: _Alarm,
         if r.cut or r.ledger.reached:
             r.finish()
             continue
-        _tell(r, alarm, timeout_s, f, R)
-
-
-def _tell(r: _Run, alarm: _Alarm, timeout_s: float | None, f: np.ndarray,
-          R: np.ndarray | None) -> None:
-    opt, X = r.lane.optimizer, r.X  # f is the loop's own copy (_values): booked already
-    if R is None:
-        _guarded(r, alarm, timeout_s, lambda: opt.tell(X, f))
-    else:
-        _guarded(r, alarm, timeout_s, lambda: opt.tell(X, f, residuals=R))
+        kw = {} if R is None else {"residuals": R}  # f: the loop's own copy, booked already
+        _guarded(r, alarm, timeout_s, functools.partial(r.lane.optimizer.tell, r.X, f, **kw))
 
 
 def _gathered_values(problem: Problem, runs: list[_Run], alarm: _Alarm,
                      timeout_s: float | None) -> dict[int, np.ndarray]:
-    """The values of the batches of ``runs`` (by ``id``), from one call when they are several;
-    each run is charged its rows' share of that call's time. A run whose rows raise fails."""
+    """The values of ``runs``' batches (by ``id``), from one call, each run charged its share."""
     if len(runs) == 1:  # one run: its own instance evaluates it (no gathering)
         r = runs[0]
         out: dict[int, np.ndarray] = {}
@@ -531,12 +477,13 @@ def _gathered_values(problem: Problem, runs: list[_Run], alarm: _Alarm,
     try:
         with alarm.limit(limit):
             f_all = _values(problem, problem.evaluate_instances(X, index), X.shape[0])
-    except KeyboardInterrupt:
-        if interrupts.from_user():
+    except BaseException as exc:  # noqa: BLE001 - find the runs whose rows raise, fail them alone
+        if isinstance(exc, KeyboardInterrupt) and interrupts.from_user():
             raise
-        return _lane_by_lane(problem, runs, alarm, timeout_s)
-    except BaseException:  # noqa: BLE001 - find the runs whose rows raise, fail them alone
-        return _lane_by_lane(problem, runs, alarm, timeout_s)
+        values = {}  # run by run, to fail only the culprits
+        for r in runs:
+            values.update(_gathered_values(problem, [r], alarm, timeout_s))
+        return values
     share = (time.perf_counter() - t0) / X.shape[0]
     values = {}
     start = 0

@@ -1,23 +1,14 @@
 """The job spec: every top-level setting of a job, typed, and the one function that checks it.
 
-A *job* is ``runs`` independent runs of one optimizer on one problem. Everything a job needs
-comes from one composed config, and :func:`parse_job` is the only place that turns that config
-into typed objects: the job calls it, and the command's pre-flight calls it for every point of
-a sweep before the first job starts, so a bad value anywhere stops the whole command before any
-work, with one line naming the key, the value and what is allowed.
+A *job* is ``runs`` independent runs of one optimizer on one problem, all from one composed
+config. :func:`parse_job` is the only place that turns that config into typed objects: the job
+calls it, and the pre-flight calls it for every point of a sweep before the first job starts,
+so a bad value anywhere stops the command before any work, in one line.
 
-The protocol
-------------
-A problem's config carries the benchmark protocol of that problem, stated once, here:
-
-* ``problem.ps``: the population size, i.e. how many candidates an optimizer proposes per
-  generation (an optimizer that has no population uses it as its batch size);
-* ``problem.iterations``: the number of generations after the initial population.
-
-The default budget of a run is :func:`~vpid_bench.api.default_budget`,
-``ps * (iterations + 1)`` evaluations (``budget`` overrides it). Optimizers receive ``ps``,
+The protocol is the problem's (``problem.ps``, ``problem.iterations``; the default budget
+:func:`~vpid_bench.api.default_budget`, ``budget`` overrides it). Optimizers receive ``ps``,
 ``iterations`` and the run's ``budget`` in their ``Params``; none can be set on the optimizer
-(``optimizer.ps=7`` is refused: it would silently decouple the budget from the population).
+(``optimizer.ps=7`` would silently decouple the budget from the population).
 """
 
 from __future__ import annotations
@@ -42,8 +33,6 @@ MAX_BUDGET = 10**9
 #: Longest run time limit (s), a week: larger ones overflow the OS timers (1e10 once failed
 #: every run with "timestamp too large").
 MAX_RUN_TIMEOUT_S = 7 * 24 * 3600.0
-
-
 #: Values of the ``isolation`` key (see :class:`JobSpec`).
 ISOLATION = ("auto", "process", "none")
 
@@ -52,26 +41,17 @@ ISOLATION = ("auto", "process", "none")
 class JobSpec:
     """The top-level keys of a job (``vpid-bench seed=3 runs=10 ...``).
 
-    ``seed``: the optimizer's randomness; run ``i`` uses ``SeedSequence(seed, spawn_key=(i,))``.
-    ``runs``: independent runs per job. ``budget``: evaluations per run (null: the protocol's
-    ``ps * (iterations + 1)``). ``budget_per_dim``: evaluations per run as a multiple of the
-    problem's dimension ``D`` (the budget ladder: ``-m budget_per_dim=10,100,1000``; one
-    suite sweep then gives each problem the same budget per parameter). ``resume``: skip runs
-    whose complete record already exists.
-    ``progress``: a progress bar on stderr. ``report``: write a report at the end of a job or
-    a sweep. ``archive``: rank the archived built-in optimizers of a suite beside this
-    job's or sweep's runs on the suite's problems, without running them (docs/protocol.md).
-    ``threads``: threads a problem may use to evaluate a batch (null: every core);
-    results never depend on it. ``run_timeout_s``: wall-time limit of one run in seconds (null:
-    none); a run past it is recorded as failed. ``isolation``: where the optimizer's code and
-    the evaluations run: ``process`` in supervised worker processes (a crash, ``os._exit`` or
-    a run blocked in C costs that run only; :mod:`vpid_bench.workers`), ``none`` in this
-    process, ``auto`` (default) ``process`` under the ``vpid-bench`` command and ``none`` for a
-    program calling the library. ``target``: stop at the final target, as COCO does: a run
-    ends once its relative gap to its instance's optimum, certified in advance (shipped in the
-    archive of the problem's suite), is at most this (e.g. ``1e-8``; null: every run uses its
-    budget). ``workers``: worker processes running a job's runs at once
-    (null: every core; with a process launcher on one machine set 1). Neither changes a result.
+    ``seed``: run ``i`` draws from ``SeedSequence(seed, spawn_key=(i,))``. ``runs``: runs per
+    job. ``budget``: evaluations per run (null: the protocol's). ``budget_per_dim``: the
+    budget as a multiple of the problem's dimension (the budget ladder). ``resume``: skip runs
+    already recorded. ``progress``: a progress bar. ``report``: a report at the end.
+    ``archive``: rank a suite's archived built-in optimizers beside these runs. ``threads``:
+    threads a problem may use (null: every core). ``run_timeout_s``: wall-time limit of a run
+    (s; null: none). ``isolation``: ``process`` (supervised worker processes), ``none`` (this
+    process) or ``auto`` (``process`` under the command). ``target``: stop a run within this
+    relative gap of its instance's optimum certified in advance (null: use the budget).
+    ``workers``: worker processes per job (null: every core). :data:`OPERATIONAL_KEYS` never
+    change a result.
     """
 
     seed: int = 0
@@ -151,8 +131,8 @@ class Job:
     stop_at: Mapping[int, float] = dataclasses.field(default_factory=dict)
 
     def sized(self, dim: int) -> Job:
-        """This job with ``budget_per_dim x dim`` evaluations per run when ``budget_per_dim``
-        is set (the dimension is known once the problem is built), else itself."""
+        """This job with ``budget_per_dim x dim`` evaluations per run when that is set (the
+        dimension is known once the problem is built), else itself."""
         per = self.spec.budget_per_dim
         if per is None:
             return self
@@ -202,9 +182,8 @@ def _group(config: Mapping[str, Any], group: str) -> tuple[str, dict[str, Any]]:
 
 
 def parse_job(cfg: Any, registry: Registry) -> Job:
-    """Check a composed config and build the job it describes (no simulation, no file I/O
-    beyond what a plugin's config checks do). Raises :class:`ConfigError` naming the first
-    bad key."""
+    """Check a composed config and build its job (no simulation, no file I/O beyond a
+    plugin's config checks); :class:`ConfigError` names the first bad key."""
     config = plain_config(cfg)
     unknown = sorted(set(config) - {*TOP_LEVEL_KEYS, "problem", "optimizer"})
     if unknown:

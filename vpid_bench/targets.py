@@ -1,18 +1,13 @@
 """Stop at the final target (the job key ``target``), as COCO does.
 
-A run may end before its budget once it is within the final target of its instance's optimum,
-but only where that optimum is known *in advance*: the archive of the problem's suite ships
-each instance's optimum (``optima.jsonl``: the value, the vector, and how many polished
-starts found it). An archive is untrusted: before a job trusts an optimum, the installed
-problem evaluates its objective at the optimum's vector and must find its value; archives
-that disagree on an instance's optimum are refused. A run of instance ``i`` then stops
-after the batch whose best value is at most ``f_opt + target * |f_opt|`` (``target`` itself
-where ``f_opt`` is 0), recorded as ``stopped_by: "target"``.
+A run may end once within the final target of its instance's optimum, where that optimum is
+known *in advance*: the suite's archive ships each instance's (``optima.jsonl``). An archive
+is untrusted: the installed problem must find the optimum's value at its vector, and archives
+that disagree are refused. A run then stops after the batch whose best value is at most
+``f_opt + target * |f_opt|`` (``target`` where ``f_opt`` is 0): ``stopped_by: "target"``.
 
-The fixed-target results (hits, ECDF, ERT, AUC) are unchanged by the stop: the report's
-targets (relative gaps 1 to 1e-6) are all hit before a final target of 1e-8 is. What changes
-is what a fixed-budget column means: ``evaluations`` are those used until the stop, and
-``f_best`` and the metrics are those at the stop (within ``target`` of the optimum's).
+Fixed-target results (hits, ECDF, ERT, AUC) are unchanged: the report's targets (1 to 1e-6)
+are hit before a final target of 1e-8. Fixed-budget columns then mean "at the stop".
 """
 
 from __future__ import annotations
@@ -54,10 +49,9 @@ def _refused(job: Job, run: int, instance: Problem, why: str) -> ConfigError:
 
 
 def _certify(job: Job, run: int, instance: Problem, found: list[Any]) -> Any:
-    """The optimum of run ``run``'s instance that the archives agree on and the installed
-    problem confirms: the objective at its point (inside the box) is its value, and it is no
-    higher than the objective at the truth when the truth is known. A forged ``f_opt`` once
-    stopped every run after a few evaluations, recorded ``ok``."""
+    """The optimum of run ``run``'s instance the archives agree on and the installed problem
+    confirms (its value at its point inside the box, no higher than at a known truth): a
+    forged ``f_opt`` once stopped every run after a few evaluations."""
     opt = min(found, key=lambda o: o.f_opt)
     for other in found:
         if not _close(other.f_opt, opt.f_opt):
@@ -84,11 +78,9 @@ def _certify(job: Job, run: int, instance: Problem, found: list[Any]) -> Any:
 
 
 def certified_optima(job: Job, problem: Problem, root: Path | None = None) -> dict[int, Any]:
-    """Per run index of ``job``, the optimum of its instance found in the archives below
-    ``root`` (default: those shipped with the package), matched as the report matches an
-    optimum file (problem, instance id, data settings, dimension) and confirmed by the
-    installed problem (:func:`_certify`; :class:`ConfigError` when it is not); runs without
-    one are left out."""
+    """Per run index of ``job``, its instance's optimum in the archives below ``root``,
+    matched as the report matches one and confirmed (:func:`_certify`); runs without one are
+    left out."""
     from .store.archive import archive_optima
     from .store.optimum import OptimaIndex, matching_optima
 
@@ -134,6 +126,5 @@ def with_stops(job: Job, problem: Problem, root: Path | None = None) -> Job:
 
 def check_sized(job: Job, problem: Problem) -> None:
     """What a job's ``budget_per_dim`` and ``target`` need of its built problem, checked
-    (:meth:`Job.sized`, :func:`with_stops`): :class:`ConfigError` for a bad value. The
-    pre-flight calls it for every job that sets either, before any job runs."""
+    (:class:`ConfigError`): the pre-flight's check of every job that sets either."""
     with_stops(job.sized(problem.bounds.dim), problem)

@@ -1,22 +1,16 @@
-"""Inside a worker process (:mod:`vpid_bench.workers` is the supervisor's side): the loop that
-takes one task at a time from the supervisor's pipe and answers on it.
+"""Inside a worker process (:mod:`vpid_bench.workers` is the supervisor's side): one task
+at a time from the supervisor's pipe, answered on it.
 
-A task is ``("runs", job, (indices, lockstep, threads))``: run those runs of the job, sending
-each run's outcome as it ends; or ``("call", job, (fn, args))``: ``fn(job, problem, *args)``
-with the job's problem (built once per worker and kept), sending its value. Either ends with
-one ``("end", error, value, strays)`` message, ``strays`` being how many processes the
-task's plugin code left running (the supervisor then ends this worker with them). On the
-way: ``("phase", name)`` (progress: the supervisor's clock restarts; ``"built"`` once the
-problem is built, ``"metrics"`` before a run's metrics), ``("outcome", RunOutcome)``, and a
-plugin's log records and lines for the terminal.
+A task is ``("runs", job, (indices, lockstep, threads))``, each run's outcome sent as it
+ends, or ``("call", job, (fn, args))``: ``fn(job, problem, *args)`` with the job's problem
+(built once per worker and kept). Either ends with ``("end", error, value, strays)``,
+``strays`` counting the processes the task left running (the supervisor then ends this
+worker with them). On the way: ``("phase", name)`` (the supervisor's clock restarts),
+``("outcome", RunOutcome)``, and a plugin's log records and lines for the terminal.
 
-What a plugin can do to this loop, and what it costs (round four's attack):
-
-* fork (both copies going on, or a child left behind): the child's copy of the pipe is
-  closed at the fork and nothing it sends reaches the supervisor, so its outcomes are never
-  counted twice; the task ends with the child among its ``strays``;
-* close the pipe (``os.closerange``): the worker ends at once with exit code
-  :data:`LOST_PIPE_EXIT` (no traceback on the terminal), and the run fails with that reason.
+A plugin that forks: the child's copy of the pipe is closed at the fork, so nothing it sends
+arrives. A plugin that closes the pipe: the worker ends at once with
+:data:`LOST_PIPE_EXIT`, no traceback, and the run fails with that reason.
 """
 
 from __future__ import annotations
@@ -81,9 +75,9 @@ class _PipeLog(logging.Handler):
 
 
 def _sender(conn: Connection) -> Callable[[Any], None]:
-    """``send(message)`` to the supervisor, from any thread of this worker only: in a process
-    a plugin forked from it, nothing is sent; when the pipe is gone (a plugin closed it, or
-    its descriptor now names another file) the worker ends with :data:`LOST_PIPE_EXIT`."""
+    """``send(message)`` to the supervisor, from any thread of this worker only (not from a
+    process forked from it); with the pipe gone (closed, or its descriptor reused) the worker
+    ends with :data:`LOST_PIPE_EXIT`."""
     me = os.getpid()
     lock = threading.Lock()
     fd = conn.fileno()
@@ -132,8 +126,10 @@ def serve(conn: Connection, out: Connection, err: Connection) -> None:
     root = logging.getLogger()
     root.handlers[:] = [_PipeLog(send)]
     root.setLevel(logging.INFO)
-    threading.excepthook = _thread_exception(send)
-    sys.unraisablehook = _unraisable(send)
+    threading.excepthook = _say(send, interrupts.thread_exception_line)
+    sys.unraisablehook = _say(send, lambda a: (  # a destructor, an at-fork hook a limit cut
+        f"warning: an exception was ignored in {a.object!r}: {a.exc_type.__name__}: "
+        f"{a.exc_value}"))
     state = {"problems": ProblemCache(size=4), "warm": set()}
     me = os.getpid()
     while os.getpid() == me:  # a forked copy that got back here ends below
@@ -147,7 +143,11 @@ def serve(conn: Connection, out: Connection, err: Connection) -> None:
         value, error = None, None
         try:
             if kind == "call":
-                value = _call(job, payload, state, send)
+                fn, args = payload
+                with keep_cwd():
+                    problem = state["problems"].get(job)
+                    send(("phase", "built"))  # the call's own limit starts now
+                    value = fn(job, problem, *args)
             else:
                 _run_task(job, payload, state, send)
         except BaseException as exc:  # noqa: BLE001 - the supervisor records it; keep serving
@@ -165,32 +165,13 @@ def _end(send: Callable[[Any], None], error: RemoteError | None, value: Any) -> 
         send(("end", portable(exc), None, left))
 
 
-def _thread_exception(send: Callable[[Any], None]) -> Any:
-    """The worker's ``threading.excepthook``: one line on the command's stderr for an
-    exception in a plugin's own thread (as in the command's own process), no traceback."""
+def _say(send: Callable[[Any], None], line: Callable[[Any], str]) -> Any:
+    """A hook (``threading.excepthook``, ``sys.unraisablehook``) that says ``line(args)`` on
+    the command's stderr, one line, no traceback."""
     def hook(args: Any) -> None:
         with contextlib.suppress(Exception):
-            send(("say", interrupts.thread_exception_line(args)))
+            send(("say", line(args)))
     return hook
-
-
-def _unraisable(send: Callable[[Any], None]) -> Any:
-    """The worker's ``sys.unraisablehook``: one line for an exception Python cannot raise
-    (in a destructor, an at-fork hook a run's time limit interrupted), no traceback."""
-    def hook(args: Any) -> None:
-        with contextlib.suppress(Exception):
-            send(("say", f"warning: an exception was ignored in {args.object!r}: "
-                         f"{args.exc_type.__name__}: {args.exc_value}"))
-    return hook
-
-
-def _call(job: Job, payload: tuple[Callable[..., Any], tuple[Any, ...]], state: dict[str, Any],
-          send: Callable[[Any], None]) -> Any:
-    fn, args = payload
-    with keep_cwd():
-        problem = state["problems"].get(job)
-        send(("phase", "built"))  # the call's own limit starts now
-        return fn(job, problem, *args)
 
 
 def _run_task(job: Job, payload: tuple[list[int], bool, int], state: dict[str, Any],
@@ -219,8 +200,8 @@ def portable_outcome(outcome: RunOutcome) -> RunOutcome:
 
 
 def probe(job: Job, problem: Any) -> None:
-    """Build one optimizer of ``job`` (run 0's), under the run's time limit: a fault in its
-    constructor stops the job before any run. Raises what the constructor raised."""
+    """Build run 0's optimizer of ``job`` under the run's time limit; raise what its
+    constructor raised (a fault there stops the job before any run)."""
     from .build import run_rng
 
     limit = job.spec.run_timeout_s
@@ -234,6 +215,3 @@ def probe(job: Job, problem: Any) -> None:
     except RunTimeoutError as exc:
         raise RunTimeoutError(f"the optimizer's constructor took longer than "
                               f"run_timeout_s={limit:g} s") from exc
-
-
-__all__ = ["LOST_PIPE_EXIT", "RemoteError", "portable", "portable_outcome", "probe", "serve"]

@@ -1,42 +1,22 @@
 """A worker process and every process its plugins start, held so that ending them never
 signals anything else (issue 44: N1, N3, N4).
 
-Round five's attack found three ways the tree kill failed:
+Round five found three ways the tree kill failed: N1, the worker's bare process id was
+signalled after it died and was reaped, so a reused number got SIGKILL; N3, a daemon (double
+fork, ``setsid``) went to init, out of reach, holding the resource tracker's pipe (so
+``vpid-bench ... | tail`` hung; the worker now closes its copy: :mod:`.worker_loop`); N4, a
+process forking and calling ``setsid`` in a loop slipped between listing and kill.
 
-* N1: it signalled the worker's bare process id (``os.killpg``) after the worker had died and
-  been reaped while idle: once the number was handed out again, ``close()`` SIGKILLed an
-  unrelated process. Now every signal goes through what this process still holds: a pidfd
-  (Linux >= 5.3) opened while the worker was its unreaped child, or opened on a process found
-  and checked to be the same one (its start time) before it is signalled. The worker's process
-  group is signalled through its pidfd (Linux >= 6.9), or by number only while the worker is
-  not reaped (the number cannot be handed out again then). Without pidfds (macOS, older
-  Linux) psutil's handles are used: they check the start time before each signal.
-* N3: a daemon (double fork, ``setsid``) whose worker then exited went to init, out of
-  reach; it also held multiprocessing's resource-tracker pipe, so the tracker (which holds
-  the command's standard output) never ended and ``vpid-bench ... | tail`` hung (the worker
-  now closes its copy of that pipe before any plugin code: :mod:`vpid_bench.worker_loop`).
-* N4: a process that keeps forking and calling ``setsid`` while its worker lives slipped
-  between the listing of the worker's descendants and their kill.
-
-So each worker is started
-
-* in a cgroup of its own where this process may make one (:mod:`vpid_bench.cgroups`):
-  ending the worker ends every process in its cgroup at once (the kernel's guarantee, forks
-  in flight included);
-* with a mark in its environment (:data:`MARK`, a token of that worker only), which every
-  process it forks, or execs without clearing its environment, carries.
-
-and ended (:meth:`Tree.end`) in this order: its cgroup killed; the worker stopped
-(``SIGSTOP``: it is the child subreaper of its tree, so every orphan of it keeps coming to
-it); then round after round, until two rounds running find nothing new, its descendants
-(read from the kernel's own lists of children, fast enough to see the one living process of
-a chain that forks every millisecond) and the processes carrying its mark (wherever they
-went, init included) are held and stopped (a stopped process forks no more); then all of
-them and the worker are killed.
-
-What still runs after that (a process that cleared its environment *and* left the cgroup, or
-where there is no cgroup) is returned by :meth:`Tree.end` and named by the supervisor in one
-``warning:`` line. docs/sweeps.md (crash isolation) says what is guaranteed where.
+So every signal goes through what this process holds: a pidfd (Linux >= 5.3) opened while
+the worker was its unreaped child, or on a process checked to be the tree's before it is
+signalled (psutil's handles, which check the start time, without pidfds). Each worker is
+started in a cgroup of its own where one can be made (:mod:`vpid_bench.cgroups`: killed
+whole, forks in flight included) and with a mark in its environment (:data:`MARK`) that its
+descendants carry. :meth:`Tree.end` kills the cgroup, stops the worker (the child subreaper
+of its tree, so orphans keep coming to it), then round after round, until two rounds find
+nothing new, holds and stops its descendants and every process carrying its mark, then kills
+them all. What still runs (it cleared its environment *and* left the cgroup) is returned and
+named in one ``warning:`` line (docs/sweeps.md, crash isolation).
 """
 
 from __future__ import annotations
@@ -46,13 +26,14 @@ import dataclasses
 import itertools
 import os
 import secrets
-import select
 import signal
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import Any
 
 from .cgroups import Cgroup
+from .machine import environ
+from .process_tree import exited, readable
 
 #: The environment variable that marks a worker's processes (its value: the worker's token).
 MARK = "VPID_BENCH_TREE"
@@ -80,36 +61,24 @@ def pidfd(pid: int) -> int | None:
 
 
 def start_tracker() -> None:
-    """Start multiprocessing's resource tracker now, if it is not running: before a worker is
-    marked (the tracker is the command's, not the worker's: it must not carry the mark and be
-    ended with it), and before SIGINT, SIGTERM and SIGHUP are held for a worker's start
-    (starting the tracker unblocks SIGINT and SIGTERM, so the first worker once started with
-    them unblocked, and a SIGTERM then ended it)."""
+    """Start multiprocessing's resource tracker now if it is not running: before a worker is
+    marked (the tracker is the command's: it must not carry the mark), and before the signals
+    are held for a worker's start (starting it unblocks SIGINT and SIGTERM)."""
     from multiprocessing import resource_tracker
 
     with contextlib.suppress(Exception):
         resource_tracker.ensure_running()
 
 
-@contextlib.contextmanager
-def marked(token: str) -> Iterator[None]:
-    """Inside: this process's environment carries :data:`MARK` = ``token``, so a process it
-    starts (a spawned worker) inherits it (call :func:`start_tracker` first)."""
-    saved = os.environ.get(MARK)
-    os.environ[MARK] = token
-    try:
-        yield
-    finally:
-        if saved is None:
-            os.environ.pop(MARK, None)
-        else:
-            os.environ[MARK] = saved
+def marked(token: str) -> contextlib.AbstractContextManager[None]:
+    """Inside: this process's environment carries :data:`MARK` = ``token``, so a worker it
+    spawns inherits it (call :func:`start_tracker` first)."""
+    return environ(MARK, token)
 
 
 @dataclasses.dataclass
 class _Held:
-    """One process found and held: its pidfd (``None`` without pidfds: then its psutil
-    handle, which checks the start time before a signal), its id and name."""
+    """One process held: its pidfd (``None`` without pidfds: its psutil handle then)."""
 
     pid: int
     fd: int | None
@@ -120,17 +89,17 @@ class _Held:
         if self.fd is not None:
             with contextlib.suppress(OSError):
                 signal.pidfd_send_signal(self.fd, sig)
-            return
-        import psutil
+        elif self.proc is not None:
+            import psutil
 
-        with contextlib.suppress(psutil.Error):
-            self.proc.send_signal(sig)
+            with contextlib.suppress(psutil.Error):
+                self.proc.send_signal(sig)
 
     def alive(self) -> bool:
         """Whether it still runs (a zombie does not)."""
         import psutil
 
-        if self.fd is not None and _readable(self.fd):  # a pidfd is readable once it exits
+        if self.fd is not None and readable(self.fd, closed=True):  # readable once it exits
             return False
         try:
             return self.proc.is_running() and self.proc.status() != psutil.STATUS_ZOMBIE
@@ -145,10 +114,9 @@ class _Held:
 
 
 def _hold(pid: int, belongs: Callable[[Any], bool]) -> _Held | None:
-    """Process ``pid`` held by a pidfd, once the process the pidfd names is checked to be
-    one of the tree's (``belongs``, asked of its :class:`psutil.Process`: its parent is in
-    the tree, or it carries the mark), so that a number handed out again in between is never
-    held; ``None`` if it is gone, a zombie or not the tree's."""
+    """Process ``pid`` held by a pidfd, once checked to be the tree's (``belongs``, asked of
+    its :class:`psutil.Process`), so a number handed out again is never held; ``None`` if it
+    is gone, a zombie or not the tree's."""
     import psutil
 
     fd = pidfd(pid)
@@ -164,9 +132,8 @@ def _hold(pid: int, belongs: Callable[[Any], bool]) -> _Held | None:
 
 
 def _children(pid: int) -> list[int]:
-    """The children of process ``pid`` (zombies included), read from the kernel's own list
-    (``/proc/<pid>/task/<tid>/children``, one read: fast enough to see the one living process
-    of a chain that forks every millisecond), or from psutil where there is none."""
+    """The children of process ``pid`` (zombies included), from the kernel's own lists
+    (fast enough to see a chain that forks every millisecond), or psutil's."""
     try:
         tids = os.listdir(f"/proc/{pid}/task")
     except OSError:
@@ -187,27 +154,20 @@ def _children(pid: int) -> list[int]:
     return []
 
 
-def _readable(fd: int) -> bool:
-    with contextlib.suppress(OSError, ValueError):
-        return bool(select.select([fd], [], [], 0)[0])
-    return True
-
-
-class Tree:
-    """A worker process just started (a :class:`multiprocessing.Process`, not yet reaped:
-    this is called right after ``start()``), with its ``token`` (:func:`marked`) and its
-    ``cgroup`` (``None``: none could be made), held (see module)."""
+class Tree(_Held):
+    """A worker process just started (not yet reaped), its ``token`` (:func:`marked`) and
+    ``cgroup`` (``None``: none could be made), held (see module); its ``fd`` (pidfd,
+    ``None`` without pidfds) is readable once it ended. :meth:`close` lets go of it."""
 
     def __init__(self, process: Any, token: str, cgroup: Cgroup | None) -> None:
         import psutil
 
-        self.process, self.pid, self.token = process, process.pid, token
-        #: The worker's pidfd, readable once it ended (``None``: no pidfds here).
+        self.process, self.pid, self.token, self.name = process, process.pid, token, "worker"
         self.fd = pidfd(self.pid)
         try:
-            self.handle: Any = psutil.Process(self.pid)
+            self.proc: Any = psutil.Process(self.pid)
         except psutil.Error:
-            self.handle = None
+            self.proc = None
         self.cgroup = cgroup if cgroup is not None and cgroup.add(self.pid) else None
 
     def ended(self) -> bool:
@@ -220,8 +180,6 @@ class Tree:
                 return True
         if not self._unreaped():
             return True
-        from .process_tree import exited
-
         return exited(self.pid)  # not reaped: the number is still the worker's
 
     def _unreaped(self) -> bool:
@@ -233,16 +191,6 @@ class Tree:
                 return False
             return True
         return getattr(getattr(self.process, "_popen", None), "returncode", 0) is None
-
-    def _signal_worker(self, sig: int) -> None:
-        if self.fd is not None:
-            with contextlib.suppress(OSError):
-                signal.pidfd_send_signal(self.fd, sig)
-        elif self.handle is not None:
-            import psutil
-
-            with contextlib.suppress(psutil.Error):
-                self.handle.send_signal(sig)
 
     def _signal_group(self, sig: int) -> None:
         """Signal the worker's process group (it leads one): through its pidfd, or by number
@@ -260,12 +208,9 @@ class Tree:
                 os.killpg(self.pid, sig)
 
     def _descendants(self, held: dict[int, _Held], seen: set[int]) -> tuple[list[_Held], bool]:
-        """The worker's descendants not held yet (the worker is stopped, not dead: as the
-        child subreaper of its tree, it adopts every orphan of it), and whether any number
-        not ``seen`` before was listed (held or not: a process that ended as it was held
-        still shows that the tree is forking)."""
-        # only numbers still held: the worker's while it is not reaped, the others' while
-        # their pidfd says they run (a number handed out again is never walked)
+        """The worker's descendants not held yet, and whether any number not ``seen`` before
+        was listed (a process that ended as it was held still shows the tree is forking)."""
+        # only numbers still held (a number handed out again is never walked)
         roots = [pid for pid, h in held.items() if h.alive()]
         roots += [self.pid] if self._unreaped() else []
         tree = {self.pid, *held}
@@ -286,9 +231,8 @@ class Tree:
         return new, fresh
 
     def _marked(self, held: dict[int, _Held], checked: set[int]) -> list[_Held]:
-        """The processes carrying the worker's mark not held yet (wherever they went: adopted
-        by init included); ``checked``: the numbers already read (only new ones are read, so
-        a round after the first is fast)."""
+        """The processes carrying the worker's mark not held yet (wherever they went);
+        ``checked``: the numbers already read (only new ones are read)."""
         import psutil
 
         def marked(proc: Any) -> bool:
@@ -307,9 +251,8 @@ class Tree:
         return new
 
     def _stop_all(self) -> dict[int, _Held]:
-        """Find and stop (``SIGSTOP``) every process of the tree (see module), round after
-        round until two rounds running find none new and list no new child (at most
-        :data:`ROUNDS` rounds and :data:`WAIT_S` seconds)."""
+        """Find and stop every process of the tree, until two rounds running find none new
+        (at most :data:`ROUNDS` rounds and :data:`WAIT_S` seconds)."""
         held: dict[int, _Held] = {}
         checked: set[int] = set()
         seen: set[int] = set()
@@ -327,13 +270,13 @@ class Tree:
         return held
 
     def end(self) -> list[str]:
-        """Kill the worker and every process of its tree (see module); ``"<pid> (<name>)"`` of
-        each process still running afterwards. Nothing but what it holds is signalled."""
+        """Kill the worker and its tree; ``"<pid> (<name>)"`` of each process still running
+        afterwards. Nothing but what it holds is signalled."""
         if self.cgroup is not None:
             self.cgroup.kill(WAIT_S)
-        self._signal_worker(signal.SIGSTOP)  # it starts no more; its orphans stay its own
+        self.signal(signal.SIGSTOP)  # it starts no more; its orphans stay its own
         held = self._stop_all()
-        self._signal_worker(signal.SIGKILL)
+        self.signal(signal.SIGKILL)
         self._signal_group(signal.SIGKILL)
         for h in held.values():
             h.signal(signal.SIGKILL)
@@ -349,13 +292,3 @@ class Tree:
             left.pop(self.pid, None)
             self.cgroup.remove()
         return [f"{pid} ({name})" for pid, name in sorted(left.items())]
-
-    def close(self) -> None:
-        """Let go of the worker's pidfd (once it is reaped)."""
-        if self.fd is not None:
-            with contextlib.suppress(OSError):
-                os.close(self.fd)
-            self.fd = None
-
-
-__all__ = ["MARK", "Tree", "marked", "new_token", "pidfd", "start_tracker"]

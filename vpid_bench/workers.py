@@ -1,48 +1,19 @@
 """Supervised worker processes: a plugin's fault costs its run, never the sweep.
 
 With ``isolation=process`` (the command's default) every call into plugin code runs in
-long-lived worker processes: the optimizer's (its constructor, ``ask``, ``tell``, ``close``)
-and the problem's (its constructor, evaluations, ``describe()`` and the other facts a record
-holds, :mod:`vpid_bench.facts`; ``metrics()``; the analysis after the runs and its optimum
-polish; the best run's signals), through :meth:`Workers.outcomes` (runs),
-:meth:`Workers.calls` (a job's optimum polishes, on every worker at once) and
-:meth:`Workers.call` (everything else). The sweep's own process never builds a problem: it
-hands out tasks, receives their outcomes and writes every record, job status and report. A
-worker is started once and reused by every job of the sweep (imports and compiled kernels are
-paid once per worker), and runs of one job go to several workers at once (``workers``, default
-every core), so one machine's cores work on a study.
+long-lived worker processes, reused by every job of the sweep, several at once
+(:meth:`Workers.outcomes` for runs, :meth:`Workers.call` and :meth:`Workers.calls` for the
+rest); the sweep's own process never builds a problem, it hands out tasks and writes every
+file. A run that ends its process, or is blocked past ``run_timeout_s`` (its worker killed
+:data:`GRACE_S` s later), fails alone; a plugin's ``os.chdir``, threads, signal handlers and
+processes die with its worker (the whole tree and nothing else:
+:mod:`vpid_bench.worker_tree`); SIGTERM and SIGHUP are left to the supervisor. A lockstep
+group that lost its worker runs again one by one. Records are bit-identical to
+``isolation=none`` (tested).
 
-What a worker can no longer take down:
-
-* a run that ends its process (``os._exit``, ``os.abort``, a segfault in a C extension): the
-  run is recorded as failed with how the process ended; a fresh worker takes the next run;
-* a run blocked in C code or ignoring SIGALRM past ``run_timeout_s``: the in-process limit
-  (SIGALRM, Python code only) cannot stop it, so the supervisor kills its worker
-  :data:`GRACE_S` seconds after the limit and records the run as timed out;
-* a plugin's ``os.chdir``, lingering threads, signal handlers and ``KeyboardInterrupt``: they
-  live and die with the worker;
-* processes a plugin starts (a fork whose copies both go on, a child left sleeping, a daemon):
-  the supervisor watches each worker's process, not only its pipe (a child holding the pipe
-  open once hid its worker's death), and each worker's whole tree (its cgroup where one can
-  be made, every process carrying its mark, its descendants) is ended when its task fails
-  or leaves a process running, and nothing but that tree is ever signalled
-  (:mod:`vpid_bench.worker_tree`); no descendant holds the command's standard streams (a
-  worker's output comes through the supervisor; :mod:`vpid_bench.process_tree`);
-* SIGTERM and SIGHUP sent to a worker (a batch system's, to every process of the job): the
-  worker leaves them to the supervisor, which ends the sweep as on Ctrl-C;
-* a plugin that closes the worker's pipe: the worker ends quietly and the run fails with that
-  reason (:mod:`vpid_bench.worker_loop`).
-
-Runs that went together (a lockstep group) and lost their worker are run again one by one, so
-only the run that caused the fault is charged. Records are bit-identical to ``isolation=none``
-(tested): every run draws from its own generator and evaluations do not depend on the batch.
-
-Why :mod:`multiprocessing` and not an executor: on Python 3.11, :mod:`concurrent.futures`
-cannot kill one hung worker (only break the whole pool), and loky's reusable executor is
-available here only as a copy vendored inside joblib, not as a public package; and neither
-ends the processes a task leaves behind. A worker is a ``spawn``-ed
-:class:`multiprocessing.Process` with one :func:`multiprocessing.Pipe`, whose loop is
-:func:`vpid_bench.worker_loop.serve`.
+Why :mod:`multiprocessing` and not an executor: on Python 3.11 :mod:`concurrent.futures`
+cannot kill one hung worker, loky is only vendored inside joblib, and neither ends the
+processes a task leaves behind.
 """
 
 from __future__ import annotations
@@ -53,7 +24,6 @@ import logging
 import pickle
 import signal
 import sys
-import threading
 import time
 import weakref
 from collections import deque
@@ -64,7 +34,7 @@ from typing import Any
 
 from . import interrupts
 from .cgroups import Cgroup
-from .interrupts import SIGNALS
+from .interrupts import held as _sigint_held  # (tests use the name)
 from .job_runs import RunOutcome, now_utc
 from .process_tree import Output
 from .runner import RunTimeoutError
@@ -74,16 +44,14 @@ from .worker_tree import Tree, marked, new_token, start_tracker
 
 log = logging.getLogger(__name__)
 
-#: Seconds allowed to a worker new to a job for what comes before any optimizer code: its
-#: start-up, imports and building the problem (then the runs' own limits apply).
+#: Seconds for a worker new to a job to start, import and build the problem.
 START_S = 120.0
 #: Seconds past ``run_timeout_s`` before the supervisor kills a worker that has not answered.
 GRACE_S = 10.0
 #: Runs per task of a lockstep job, at most (a lost task costs at most this many re-runs).
 LOCKSTEP_CHUNK = 10
-#: Memory one worker process takes (MB, resident): 227 MB measured for a worker after a job of
-#: the default problem (docs/sweeps.md), rounded up. :func:`worker_cap` allows one worker per
-#: this much of the memory available.
+#: Memory one worker takes (MB, resident): 227 MB measured after a job of the default
+#: problem (docs/sweeps.md), rounded up.
 WORKER_MB = 250
 #: File descriptors the supervisor holds per worker (its pipe, its multiprocessing sentinel,
 #: its pidfd, two output pipes), and how many it keeps free for everything else.
@@ -125,9 +93,8 @@ def is_timeout(exc: BaseException) -> bool:
 
 
 def worker_cap() -> tuple[int, str]:
-    """The most worker processes this machine holds at once, and why: one per
-    :data:`WORKER_MB` of the memory available now, and no more than the open-file limit
-    allows the supervisor (:data:`FDS_PER_WORKER` each); at least one."""
+    """The most workers this machine holds at once, and why: one per :data:`WORKER_MB` of
+    the memory available, no more than the open-file limit allows; at least one."""
     import resource
 
     import psutil
@@ -144,8 +111,8 @@ def worker_cap() -> tuple[int, str]:
 
 
 def can_send(job: Job) -> str | None:
-    """Why ``job`` cannot be sent to a worker (its classes or settings do not pickle, e.g. a
-    class defined inside a function), or ``None`` when it can."""
+    """Why ``job`` cannot be sent to a worker (it does not pickle, e.g. a class defined
+    inside a function), or ``None``."""
     try:
         pickle.dumps(job)
     except Exception as exc:  # noqa: BLE001 - any pickling failure means "cannot"
@@ -153,77 +120,36 @@ def can_send(job: Job) -> str | None:
     return None
 
 
-@contextlib.contextmanager
-def _sigint_held(deliver: bool = True) -> Iterator[None]:
-    """A Ctrl-C (or SIGTERM, SIGHUP: :data:`~.interrupts.SIGNALS`) inside the block is noted
-    and delivered (to the handler in place before) when the block ends (with ``deliver``;
-    without, only noted as the command's interrupt). They are also blocked
-    for this thread, so a process started inside inherits them blocked (released by
-    :func:`~.worker_loop.serve`). Main thread only (elsewhere a no-op: Python runs signal
-    handlers on the main thread)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    noted: list[int] = []
-    before = {sig: signal.signal(sig, lambda signum, frame: noted.append(signum))
-              for sig in SIGNALS}
-    mask = (signal.pthread_sigmask(signal.SIG_BLOCK, set(SIGNALS))
-            if hasattr(signal, "pthread_sigmask") else None)
-    try:
-        yield
-    finally:
-        if mask is not None:
-            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
-        for sig, handler in before.items():
-            signal.signal(sig, handler)
-        if noted and deliver:
-            signal.raise_signal(noted[0])
-        elif noted:
-            interrupts.note(noted[0])
-
-
 @dataclasses.dataclass(eq=False)
 class _Worker:
     process: Any
     conn: Connection
     output: Output
-    #: The process and everything it starts, held (:class:`~.worker_tree.Tree`).
+    #: The process and everything it starts; its ``fd`` (pidfd) is readable once it ended.
     tree: Tree
     jobs: set[str] = dataclasses.field(default_factory=set)
 
-    @property
-    def watch(self) -> int | None:
-        """Readable once the process ended (its pidfd), or ``None``: ask :meth:`ended`."""
-        return self.tree.fd
-
     def ended(self) -> bool:
-        """Whether the process has ended (without reaping it: see :meth:`Workers._end`)."""
+        """Whether the process has ended (without reaping it)."""
         return self.tree.ended()
 
 
 @dataclasses.dataclass
-class _Busy:
+class _Task:
+    """A task a worker is busy with: when it is killed (``None``: never), its runs left and
+    when they started (or a call's index), and the last phase the worker announced
+    (``None``: still building the problem)."""
     worker: _Worker
-    remaining: list[int]
     deadline: float | None
-    started: str
-    #: The last phase the worker announced (``None``: still building the problem).
+    remaining: list[int] = dataclasses.field(default_factory=list)
+    started: str = ""
     phase: str | None = None
-
-
-@dataclasses.dataclass
-class _Call:
-    """A call (:meth:`Workers.calls`) a worker is busy with: the task's place in the list,
-    when it is killed (``None``: never), and whether the worker said its problem is built."""
-    index: int
-    worker: _Worker
-    deadline: float | None
-    built: bool = False
+    index: int = 0
 
 
 class Workers:
-    """A supervised set of worker processes, reused by every job given to it (see module).
-    ``size``: how many run a job's runs at once unless the job's ``workers`` key says."""
+    """A supervised set of worker processes, reused by every job (see module). ``size``: how
+    many run a job's runs at once unless its ``workers`` key says."""
 
     def __init__(self, size: int) -> None:
         if size < 1:
@@ -240,12 +166,9 @@ class Workers:
     # --- workers
 
     def _start(self) -> _Worker:
-        """A new worker, started with SIGINT held back: a Ctrl-C in the middle of
-        ``start()`` once cut the start-up data the child reads from its pipe, and the child
-        printed Python's traceback of the truncated pickle (the Ctrl-C, still pending, is
-        raised as soon as the worker is started and tracked). The child inherits the held
-        SIGINT and releases it once it ignores SIGINT (:func:`~.worker_loop.serve`). Its
-        standard output and error come through this process (:class:`~.process_tree.Output`)."""
+        """A new worker, started with the signals held back (a Ctrl-C inside ``start()`` once
+        cut the child's start-up pickle: a traceback); the child releases them once it
+        ignores SIGINT (:func:`~.worker_loop.serve`)."""
         token = new_token()
         cgroup = Cgroup.create(f"vpid-bench-{token}")  # None where none can be made
         start_tracker()  # not inside the block: it unblocks SIGINT and SIGTERM
@@ -263,16 +186,14 @@ class Workers:
         return worker
 
     def prestart(self, count: int | None = None) -> None:
-        """Start ``count`` workers now (default and at most :attr:`size`; a job never uses
-        more than its runs), so their start-up (imports) overlaps the sweep's own set-up
-        instead of delaying the first runs."""
+        """Start ``count`` workers now (at most :attr:`size`), so their imports overlap the
+        sweep's own set-up."""
         while len(self._all) < min(self.size, self.size if count is None else count):
             self._idle.append(self._start())
 
     def how_many(self, requested: int, tasks: int) -> int:
-        """How many workers run a job's ``tasks`` at once when ``requested`` (its ``workers``
-        key, or the set's size): never more than its tasks nor than :attr:`cap`. When that is
-        fewer than requested because of the cap, one line says so (once per requested value)."""
+        """How many workers run a job's ``tasks`` at once when ``requested``: never more than
+        its tasks nor :attr:`cap` (fewer by the cap: one line, once per requested value)."""
         count = max(1, min(requested, tasks, self.cap))
         if requested > self.cap and requested not in self._said:  # the job's runs, polishes
             self._said.add(requested)
@@ -290,9 +211,8 @@ class Workers:
         return self._start()
 
     def _end(self, worker: _Worker) -> str:
-        """End ``worker`` and every process it started (:meth:`~.worker_tree.Tree.end`),
-        copy what it printed, close its pipes and forget it; how it ended, for a record.
-        What could not be ended is named in one ``warning:`` line."""
+        """End ``worker`` and its tree, copy what it printed, close its pipes and forget it;
+        how it ended, for a record. What could not be ended: one ``warning:`` line."""
         left = worker.tree.end()  # before reaping it (join): see worker_tree
         end = time.monotonic() + 5.0
         while not worker.ended() and time.monotonic() < end:
@@ -315,9 +235,8 @@ class Workers:
         return describe_exit(worker.process.exitcode)
 
     def _release(self, worker: _Worker, left: int, who: str) -> None:
-        """A worker whose task is over goes back to the idle ones, unless the task left
-        processes running: then it is ended with them (no process a plugin starts outlives
-        the task that started it)."""
+        """A worker whose task is over goes back to the idle ones, or is ended with the
+        processes its task left running."""
         if left:
             log.warning("%s left %d process(es) running after its task; ended with its worker "
                         "process", who, left)
@@ -326,9 +245,8 @@ class Workers:
             self._idle.append(worker)
 
     def close(self) -> None:
-        """End every worker and every process they started. A second interrupt meanwhile
-        (SIGTERM, Ctrl-C) does not cut it short: it is delivered once all are ended, or only
-        noted when the command is already ending from one."""
+        """End every worker and its tree; an interrupt meanwhile is delivered after (or only
+        noted when the command is already ending from one)."""
         with _sigint_held(deliver=not interrupts.seen()):
             for worker in list(self._all):
                 self._end(worker)
@@ -337,17 +255,16 @@ class Workers:
     # --- waiting
 
     def _events(self, workers: Sequence[_Worker], timeout: float | None) -> list[_Worker]:
-        """The workers among ``workers`` with a message waiting or whose process ended,
-        waiting at most ``timeout`` seconds (``None``: for ever; an empty list: none by
-        then). What they print meanwhile is copied to this process's streams."""
+        """The workers among ``workers`` with a message waiting or whose process ended, after
+        at most ``timeout`` s (``None``: for ever), copying what they print meanwhile."""
         end = None if timeout is None else time.monotonic() + timeout
-        unwatched = [w for w in workers if w.watch is None]
+        unwatched = [w for w in workers if w.tree.fd is None]
         while True:
             handles: dict[Any, Any] = {}
             for w in workers:
                 handles[w.conn] = w
-                if w.watch is not None:
-                    handles[w.watch] = w
+                if w.tree.fd is not None:
+                    handles[w.tree.fd] = w
                 handles.update({fd: (w.output, fd) for fd in w.output.fds})
             left = None if end is None else max(0.0, end - time.monotonic())
             if unwatched:
@@ -363,10 +280,9 @@ class Workers:
                 return hits
 
     def _receive(self, worker: _Worker) -> tuple[Any, str | None]:
-        """The worker's next message, or ``(None, how it ended)`` when its process is gone
-        or sent what cannot be read (it is then ended, its tree too): the one place both
-        calls and runs learn that a worker died. Its liveness, not its pipe, decides: a
-        process a plugin forked may keep the pipe open long after the worker died."""
+        """The worker's next message, or ``(None, how it ended)`` when its process is gone or
+        sent what cannot be read (it is then ended): the one place a worker's death is
+        learnt. Its liveness, not its pipe, decides (a forked child may hold the pipe)."""
         try:
             if worker.conn.poll():
                 msg = worker.conn.recv()
@@ -391,11 +307,10 @@ class Workers:
 
     def call(self, job: Job, fn: Callable[..., Any], *args: Any, what: str,
              limit: float | None) -> Any:
-        """``fn(job, problem, *args)`` in a worker (``fn`` a module-level function; the
-        problem of ``job`` built there once and kept), and its value; raises what it raised,
-        or :class:`WorkerDiedError` / :class:`WorkerKilledError` naming ``what`` when it
-        ended its worker or did not return. :data:`START_S` to build the problem, then
-        ``limit`` seconds (``None``: no limit)."""
+        """``fn(job, problem, *args)`` in a worker (``fn`` module-level; the problem built
+        there once and kept), and its value; raises what it raised, or
+        :class:`WorkerDiedError` / :class:`WorkerKilledError` naming ``what``.
+        :data:`START_S` to build the problem, then ``limit`` seconds (``None``: none)."""
         [(value, error)] = self.calls(job, [(fn, args)], what=what, limit=limit, workers=1)
         if error is not None:
             raise error
@@ -403,15 +318,12 @@ class Workers:
 
     def calls(self, job: Job, tasks: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]],
               what: str, limit: float | None, workers: int) -> list[tuple[Any, Any]]:
-        """Each ``(fn, args)`` of ``tasks`` run as :meth:`call` runs it, on up to ``workers``
-        workers at once (the job's optimum polishes, one task per instance, keep both cores
-        busy): ``(value, None)`` or ``(None, the exception)`` per task, in the order of
-        ``tasks``. Each task has its own ``limit``; a task that ends or hangs its worker
-        costs that task only. Interrupted, the busy workers are ended (their state is
-        unknown)."""
+        """Each ``(fn, args)`` of ``tasks`` as :meth:`call` runs it, on up to ``workers`` at
+        once: ``(value, None)`` or ``(None, the exception)`` per task, in order. A task that
+        ends or hangs its worker costs that task only."""
         results: list[tuple[Any, Any]] = [(None, None)] * len(tasks)
         pending = deque(range(len(tasks)))
-        busy: dict[Connection, _Call] = {}
+        busy: dict[Connection, _Task] = {}
         try:
             while pending or busy:
                 while pending and len(busy) < max(1, workers):
@@ -432,32 +344,33 @@ class Workers:
 
     def _send_call(self, job: Job, index: int,
                    task: tuple[Callable[..., Any], tuple[Any, ...]], what: str,
-                   limit: float | None) -> _Call | BaseException:
+                   limit: float | None) -> _Task | BaseException:
         worker = self._take()
         try:
             worker.conn.send(("call", job, task))
         except OSError:
             return WorkerDiedError(f"its worker process ended ({self._end(worker)}) before "
                                    f"{what}")
-        return _Call(index, worker, None if limit is None else time.monotonic() + START_S)
+        return _Task(worker, None if limit is None else time.monotonic() + START_S,
+                     index=index)
 
-    def _call_events(self, busy: dict[Connection, _Call], what: str, limit: float | None
-                     ) -> Iterator[tuple[_Call, tuple[Any, Any]]]:
+    def _call_events(self, busy: dict[Connection, _Task], what: str, limit: float | None
+                     ) -> Iterator[tuple[_Task, tuple[Any, Any]]]:
         """The calls among ``busy`` that ended, each with its ``(value, error)``, after one
         wait (a call that announces its problem is built gets ``limit`` from then)."""
-        deadlines = [c.deadline for c in busy.values() if c.deadline is not None]
+        deadlines = [b.deadline for b in busy.values() if b.deadline is not None]
         left = max(0.0, min(deadlines) - time.monotonic()) if deadlines else None
-        for worker in self._events([c.worker for c in busy.values()], left):
+        for worker in self._events([b.worker for b in busy.values()], left):
             call = busy[worker.conn]
             msg, ended = self._receive(worker)
             if ended is not None:
                 yield call, (None, WorkerDiedError(
-                    f"{what} ended its worker process ({ended})" if call.built
+                    f"{what} ended its worker process ({ended})" if call.phase
                     else f"its worker process ended ({ended}) while it built the problem"))
             elif _aside(msg):
                 continue
             elif msg[0] == "phase":
-                call.built = True
+                call.phase = "built"
                 call.deadline = None if limit is None else time.monotonic() + limit
             elif msg[0] == "end":
                 _, error, value, strays = msg
@@ -474,7 +387,7 @@ class Workers:
                 yield call, (None, WorkerKilledError(
                     f"{what} did not return within {limit:.0f} s (run_timeout_s + "
                     f"{GRACE_S:.0f} s; blocked in C or ignoring SIGALRM): its worker process "
-                    "was killed" if call.built else f"building the problem took more than "
+                    "was killed" if call.phase else f"building the problem took more than "
                     f"{START_S:.0f} s: its worker process was killed"))
 
     def probe(self, job: Job) -> None:
@@ -490,7 +403,7 @@ class Workers:
         size = max(1, workers)
         pending: deque[list[int]] = deque(_tasks(list(indices), size) if lockstep
                                           else [[i] for i in indices])
-        busy: dict[Connection, _Busy] = {}
+        busy: dict[Connection, _Task] = {}
         try:
             while pending or busy:
                 while pending and len(busy) < size:
@@ -501,7 +414,7 @@ class Workers:
                 self._end(b.worker)
 
     def _hand_out(self, job: Job, runs: list[int], threads: int,
-                  busy: dict[Connection, _Busy]) -> None:
+                  busy: dict[Connection, _Task]) -> None:
         worker = self._take()
         key = _job_key(job)
         fresh = key not in worker.jobs
@@ -510,11 +423,11 @@ class Workers:
         limit = _allowance(job, len(runs))
         limit = START_S if fresh and limit is not None else limit
         deadline = None if limit is None else time.monotonic() + limit
-        busy[worker.conn] = _Busy(worker, list(runs), deadline, now_utc())
+        busy[worker.conn] = _Task(worker, deadline, list(runs), now_utc())
         with contextlib.suppress(OSError):  # a worker already gone: the next wait says so
             worker.conn.send(("runs", job, (runs, len(runs) > 1, threads)))
 
-    def _collect(self, job: Job, busy: dict[Connection, _Busy],
+    def _collect(self, job: Job, busy: dict[Connection, _Task],
                  pending: deque[list[int]]) -> Iterator[RunOutcome]:
         deadlines = [b.deadline for b in busy.values() if b.deadline is not None]
         left = max(0.0, min(deadlines) - time.monotonic()) if deadlines else None
@@ -539,7 +452,7 @@ class Workers:
                     "worker process was killed")
                 yield from _lost(job, b, cause, pending)
 
-    def _handle(self, job: Job, conn: Connection, msg: Any, busy: dict[Connection, _Busy],
+    def _handle(self, job: Job, conn: Connection, msg: Any, busy: dict[Connection, _Task],
                 pending: deque[list[int]]) -> Iterator[RunOutcome]:
         """A worker's message about its runs: progress, an outcome, or the task's end."""
         b = busy[conn]
@@ -576,7 +489,7 @@ class Workers:
             yield from _lost(job, b, cause, pending)
 
 
-def _lost(job: Job, b: _Busy, cause: BaseException, pending: deque[list[int]]
+def _lost(job: Job, b: _Task, cause: BaseException, pending: deque[list[int]]
           ) -> Iterator[RunOutcome]:
     """A task lost its worker: a single run is charged; a group goes again one by one."""
     if len(b.remaining) > 1:
@@ -591,9 +504,9 @@ def _lost(job: Job, b: _Busy, cause: BaseException, pending: deque[list[int]]
 
 
 def _tasks(indices: list[int], workers: int) -> list[list[int]]:
-    """A lockstep job's runs cut into tasks of at most :data:`LOCKSTEP_CHUNK` runs, as many
-    tasks as a multiple of ``workers`` (so the workers finish together: 30 runs on 2 workers go
-    as 8, 7, 7, 8 rather than 10, 10, 10), sizes differing by one at most."""
+    """A lockstep job's runs cut into tasks of at most :data:`LOCKSTEP_CHUNK` runs, a
+    multiple of ``workers`` of them, sizes differing by one at most (30 runs on 2 workers go
+    as 8, 7, 7, 8, so the workers finish together)."""
     n = len(indices)
     tasks = min(n, workers * -(-n // (workers * LOCKSTEP_CHUNK)))
     bounds = [round(k * n / tasks) for k in range(tasks + 1)] if tasks else [0]
@@ -602,7 +515,7 @@ def _tasks(indices: list[int], workers: int) -> list[list[int]]:
 
 def _allowance(job: Job, runs: int) -> float | None:
     """Seconds a worker may take for ``runs`` runs (a warm-up counts as one) before it is
-    killed (``None``: no limit)."""
+    killed (``None``: none)."""
     limit = job.spec.run_timeout_s
     return None if limit is None else limit * max(runs, 1) + GRACE_S
 
@@ -636,9 +549,8 @@ def _end_all(workers: list[_Worker]) -> None:
 
 def outcomes_isolated(pool: Workers, job: Job, indices: Sequence[int], lockstep: bool
                       ) -> Iterator[RunOutcome]:
-    """:meth:`Workers.outcomes` with the job's ``workers`` and ``threads`` keys applied
-    (:meth:`Workers.how_many`): each worker's problem gets an equal share of the cores unless
-    ``threads`` is set."""
+    """:meth:`Workers.outcomes` with the job's ``workers`` and ``threads`` keys applied (each
+    worker's problem gets an equal share of the cores unless ``threads`` is set)."""
     from .machine import available_cores
 
     requested = job.spec.workers or pool.size

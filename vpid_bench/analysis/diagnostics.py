@@ -1,35 +1,21 @@
-"""Fit diagnostics: does the fitted model explain the record? (as system-identification tools
-give them, e.g. MATLAB's ``resid`` and ``compare``).
+"""Fit diagnostics: does the fitted model explain the record? (as MATLAB's ``resid`` and
+``compare`` give them). Per residual group (a channel, entries in time order):
 
-Pure computation on the residuals at an identified vector, truth or not. Per residual group
-(a measured channel), the entries taken in time order (the order the group's entries have in
-the residual vector):
+* ``rms`` beside the measured signal's (``rms_over_signal``) and beside the noise's ``sigma``,
+  stated by the problem or estimated from the second differences (``σ̂² = mean((Δ²r)²) / 6``:
+  exact for white noise and blind to a smooth misfit, which so shows as ``rms_over_sigma``
+  above 1);
+* ``acf`` at lags ``0..lags`` with its 99 % band ``± 2.576 / sqrt(n)``, ``lag1`` and the
+  Ljung–Box test (``Q = n (n+2) Σ ρ_k² / (n-k)`` against χ²);
+* ``cross``: per input the problem exposes, ``corr(r_t, u_{t-k})`` at lags ``-lags..lags``
+  with Bartlett's 99 % band (``var ρ_ru(k) ≈ (1/n) Σ_j ρ_r(j) ρ_u(j)``: a smooth input with
+  white residuals is not flagged) and the share of lags ``outside`` it;
+* flags: ``correlated`` (Ljung–Box p below :data:`ALPHA`), ``input_correlated`` (more than
+  :data:`CROSS_SHARE` of an input's lags outside), ``misfit`` (``rms_over_sigma`` above
+  :data:`MISFIT`).
 
-* ``rms``: the residual's root mean square, beside the measured signal's (``signal_rms``,
-  same units: ``rms_over_signal``) and beside the noise's standard deviation ``sigma``:
-  the one stated by the problem (``sigma_source="stated"``: a simulated record) or, else,
-  estimated from the residual's second differences (``"estimated"``:
-  ``σ̂² = mean((Δ²r)²) / 6``, exact for white noise and blind to a misfit smooth at the
-  sampling scale; so a model error that is smooth shows as ``rms_over_sigma`` above 1);
-* ``acf``: the residual's autocorrelation at lags ``0..lags`` with its 99 % band
-  ``± 2.576 / sqrt(n)`` (white residuals stay inside it at 99 % of the lags), ``lag1`` and
-  the Ljung–Box whiteness test over ``ljung_box_lags`` lags (``Q = n (n+2) Σ ρ_k² / (n-k)``
-  against χ² with that many degrees of freedom; ``ljung_box_p`` below :data:`ALPHA`: the
-  residuals are not white);
-* ``cross``: per input the problem exposes (sampled as the group's entries), the
-  cross-correlation ``corr(r_t, u_{t-k})`` at lags ``-lags..lags`` with its 99 % band. The
-  band allows for the autocorrelation of both series (Bartlett's formula,
-  ``var ρ_ru(k) ≈ (1/n) Σ_j ρ_r(j) ρ_u(j)``), so a smooth input with white residuals is
-  not flagged; ``outside`` is the share of lags beyond it;
-* flags: ``correlated`` (Ljung–Box rejects whiteness at :data:`ALPHA`), ``input_correlated``
-  (more than :data:`CROSS_SHARE` of the cross-correlation lags of an input outside the band),
-  ``misfit`` (``rms_over_sigma`` above :data:`MISFIT`).
-
-A validation segment, where the problem has one, adds ``held_out``: its error beside a naive
-predictor's (``ratio`` below 1: the model predicts better than the naive one).
-
-:func:`fit_diagnostics` returns a JSON-able dict (``schema`` :data:`SCHEMA`); ``explained``
-is false when any group is flagged ``correlated`` or ``input_correlated``. The words are the
+A validation segment adds ``held_out`` (its error beside a naive predictor's). ``explained``
+is false when any group is ``correlated`` or ``input_correlated``; the words are the
 report's (:mod:`vpid_bench.report.diagnostics`).
 """
 
@@ -126,9 +112,7 @@ def group_diagnostics(r: np.ndarray, measured: np.ndarray | None = None,
                       sigma: float | None = None,
                       inputs: Mapping[str, np.ndarray] | None = None,
                       lags: int = MAX_LAGS) -> dict[str, Any]:
-    """The diagnostics of one group's residuals ``r`` in time order (see the module);
-    ``measured``: the measured signal in the residuals' units, ``sigma``: the stated noise
-    sigma (``None``: estimated), ``inputs``: each input at the group's samples."""
+    """The diagnostics of one group's residuals ``r`` in time order (see the module)."""
     r = np.asarray(r, dtype=float).reshape(-1)
     n = r.size
     lags = max(1, min(lags, n // 4))
@@ -171,18 +155,12 @@ def fit_diagnostics(residuals: np.ndarray, groups: np.ndarray,
                     lags: int = MAX_LAGS) -> dict[str, Any]:
     """The fit diagnostics of residuals at an identified vector (see the module).
 
-    ``residuals`` ``(m,)`` and ``groups`` ``(m,)`` (the group of each entry; a group's
-    entries in time order); ``measured`` ``(m,)``: the measured values in the residuals'
-    units (``None``: no signal rms); ``sigma``: the noise's sigma per group (``None`` or a
-    non-positive entry: estimated); ``inputs``: ``{name: (T,)}`` each input sampled as the
-    entries of a group of ``T`` entries (a group of another length is not cross-correlated);
-    ``names``: each group's channel name; ``held_out``: ``{"error": e, "naive": e0}`` (same
-    units; optionally their ``unit``) where a validation segment exists.
-
-    Returns ``{"schema", "groups": [per group: "group", "name", and
-    :func:`group_diagnostics`' keys], "held_out": {"error", "naive", "ratio", "unit"} or None,
-    "explained"}``; a group with fewer than :data:`MIN_SAMPLES` entries or a non-finite
-    residual is left out. Raises :class:`ValueError` when the shapes differ."""
+    ``residuals`` and ``groups`` ``(m,)`` (a group's entries in time order); ``measured``
+    ``(m,)`` in the residuals' units; ``sigma`` per group (``None`` or non-positive:
+    estimated); ``inputs`` ``{name: (T,)}`` sampled as a group of ``T`` entries; ``names``:
+    each group's channel; ``held_out``: ``{"error": e, "naive": e0}`` (same units). A group
+    of fewer than :data:`MIN_SAMPLES` entries or a non-finite residual is left out;
+    :class:`ValueError` when the shapes differ."""
     r = np.asarray(residuals, dtype=float).reshape(-1)
     g = np.asarray(groups, dtype=int).reshape(-1)
     if r.shape != g.shape:
@@ -218,19 +196,10 @@ FILE = DIAGNOSTICS
 
 def problem_diagnostics(problem: Any, x: Any) -> dict[str, Any]:
     """The fit diagnostics of ``problem`` (one with residuals) at ``x``: its
-    :meth:`~vpid_bench.api.Problem.fisher_residuals` grouped by
-    :meth:`~vpid_bench.api.Problem.fisher_groups`, the noise sigma it states
-    (:meth:`~vpid_bench.api.Problem.residual_sigma`, per group) and what its optional
-    ``diagnostic_signals(x)`` gives, where it has one; with ``x``, ``f`` (the objective at
-    ``x``) and ``intervals`` (:func:`.intervals.jacobian_intervals`: the white-noise and
-    the robust HAC interval).
-
-    ``diagnostic_signals(x)`` (a method a problem with residuals may define; not yet a
-    member of the contract) returns a dict with any of ``measured`` (``(m,)``: the measured
-    values in the units of ``fisher_residuals``), ``names`` (each group's channel name),
-    ``inputs`` (``{name: (T,)}``: each input the model is driven by, sampled as the ``T``
-    entries of a group) and ``held_out`` (``{"error": e, "naive": e0}``: the error of ``x``
-    on a validation record beside a naive predictor's, same units)."""
+    ``fisher_residuals`` by ``fisher_groups``, its stated ``residual_sigma`` per group and
+    its optional ``diagnostic_signals(x)`` (a dict of :func:`fit_diagnostics`' ``measured``,
+    ``names``, ``inputs``, ``held_out``); with ``x``, ``f`` and both ``intervals``
+    (:func:`.intervals.jacobian_intervals`)."""
     from .intervals import jacobian_intervals
 
     x = np.asarray(x, dtype=float).reshape(-1)
@@ -252,8 +221,7 @@ def problem_diagnostics(problem: Any, x: Any) -> dict[str, Any]:
 
 
 def write_diagnostics(problem: Any, x: Any, job_dir: Any) -> Any:
-    """``job_dir/diagnostics.json`` (:func:`problem_diagnostics` at ``x``), or, where the
-    problem's code fails there, the file with ``status`` ``failed`` and why."""
+    """``job_dir/diagnostics.json`` at ``x``, or with ``status`` ``failed`` and why."""
     from pathlib import Path
 
     from ..store.job_files import write_job_json

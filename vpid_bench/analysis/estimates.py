@@ -1,16 +1,13 @@
 """What a job leaves about the answer itself where no truth is known, and the problem's fixed
 comparison rows.
 
-* ``profile.json`` (a problem with residuals and no truth): the 95 % profile-likelihood
-  intervals (:func:`.profile.profile_intervals`) started at the instance's optimum, under
-  Gaussian noise whose σ per residual group is estimated from the residuals there
-  (:func:`.intervals.group_sigma`), when the first fit says they take at most
-  :data:`PROFILE_LIMIT_S`; otherwise the file says why they were skipped. Each run's own
-  Jacobian intervals are in its record (``result.intervals``).
-* ``comparisons.json`` (a problem whose :meth:`~vpid_bench.api.Problem.comparisons` gives
-  rows): each named row (a published estimate, a naive predictor...) with its objective and
-  metrics computed here where it gives a vector. These rows are never truths: the report
-  prints them beside the ranking, not as a reference for errors.
+* ``profile.json`` (residuals, no truth): the 95 % profile-likelihood intervals started at the
+  instance's optimum, σ per group estimated from the residuals there, when the first fit says
+  they take at most :data:`PROFILE_LIMIT_S` (else the file says why not). Each run's own
+  Jacobian intervals are in its record.
+* ``comparisons.json``: each row :meth:`~vpid_bench.api.Problem.comparisons` gives (a
+  published estimate, a naive predictor...) with its objective and metrics computed here.
+  Never truths: the report prints them beside the ranking.
 """
 
 from __future__ import annotations
@@ -63,10 +60,9 @@ def write_profile(problem: Problem, optimum: dict[str, Any], job_dir: Path,
 
 
 def comparison_rows(problem: Problem) -> list[dict[str, Any]]:
-    """The problem's fixed comparison rows as JSON-able rows: ``name``, ``x`` (physical
-    units, or ``None``), ``f`` (the objective at ``x``), ``metrics`` (the problem's metrics
-    of ``x``, updated by the ones the row gives), ``note``. A row whose ``x`` has the wrong
-    length is refused with :class:`ValueError` naming it."""
+    """The problem's comparison rows as JSON: ``name``, ``x`` (physical or ``None``), ``f``
+    at ``x``, ``metrics`` (the problem's at ``x``, updated by the row's), ``note``; a row
+    whose ``x`` has the wrong length: :class:`ValueError`."""
     given = problem.comparisons() or {}
     if len(given) > MAX_COMPARISONS:
         raise ValueError(f"problem {problem.name!r}: comparisons() gave {len(given)} rows, "

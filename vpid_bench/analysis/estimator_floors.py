@@ -1,12 +1,10 @@
 """Floors per estimator: where each objective's optimum of the same records lies.
 
-A problem that offers the choice of estimator declares a Config field ``objective`` taking the
-values of :data:`vpid_bench.estimators.OBJECTIVES`. For such a problem the job polishes, on its
-first :data:`INSTANCES` instances, the optimum of every objective from the truth
-(:func:`.optimum.polish`) and records the headline metric of each (e.g. a parameter error):
-"what Eq. 3 allows", "what least squares allows", "what the likelihood allows", beside the
-Cramér–Rao bound of the same records. An objective the problem refuses (``ml`` without noise)
-is left out.
+A problem that offers the choice of estimator has a Config field ``objective`` taking the
+values of :data:`vpid_bench.estimators.OBJECTIVES`. The job polishes, on its first
+:data:`INSTANCES` instances, every objective's optimum from the truth and records its headline
+metric: what Eq. 3, least squares and the likelihood allow, beside the Cramér–Rao bound. An
+objective the problem refuses (``ml`` without noise) is left out.
 """
 
 from __future__ import annotations
@@ -34,9 +32,8 @@ def offers_objectives(problem: Problem) -> bool:
 
 
 def truth_optima_metric(problem: Problem, n: int) -> tuple[str, list[float]] | None:
-    """The problem's headline metric (its first) of the optimum of each of instances
-    0 .. n-1, polished from the truth: the floor of its objective on those records. ``None``
-    when the problem reports no metric."""
+    """The problem's first metric at the optimum of each of instances 0 .. n-1 polished
+    from the truth (its objective's floor there); ``None`` without a metric."""
     from .optimum import polish
 
     metric: str | None = None

@@ -1,30 +1,22 @@
 """Identifiability: what a record design can determine, as Cramér–Rao bounds.
 
 For residuals ``r(θ) = y - g(θ)`` with independent Gaussian noise of standard deviation ``σ_c``
-in residual group (channel) ``c`` (or ``σ_k`` per entry, e.g. multiplicative noise), the Fisher
-information at the truth is ``F = Jᵀ diag(1/σ²) J`` with ``J = ∂g/∂θ``, and any unbiased
-estimator has covariance at least ``F⁻¹``. The bound is reported per parameter as a relative
-standard deviation in percent, ``100 sqrt((F⁻¹)_jj) / |θ_j|``, and as the norm of those
-(comparable to a norm of relative errors). ``J`` is a central-difference Jacobian of the
-problem's :meth:`~vpid_bench.problem.Problem.fisher_residuals` at the truth (weights fixed, so
-the reference cancels: it is the Jacobian of the clean responses). The singular values of
-``J`` scaled by the true values and by ``σ`` show how many parameter combinations the record
-pins down.
+per group (or ``σ_k`` per entry, e.g. multiplicative noise), the Fisher information at the
+truth is ``F = Jᵀ diag(1/σ²) J`` with ``J = ∂g/∂θ`` (central differences of
+:meth:`~vpid_bench.problem.Problem.fisher_residuals`, whose weights are fixed), and any
+unbiased estimator has covariance at least ``F⁻¹``. The bound is reported per parameter as a
+relative standard deviation in percent, ``100 sqrt((F⁻¹)_jj) / |θ_j|``, and as their norm;
+the singular values of ``J`` scaled by the truth and ``σ`` show how many parameter
+combinations the record pins down. The noise is the problem's
+(:meth:`Problem.residual_sigma`).
 
-**Rounding-level samples are left out.** An entry whose ``σ`` is at most :data:`ROUNDING`
-(1e-12) times the largest ``σ`` of its residual group is the noise of a value that is zero in
-exact arithmetic (a body acceleration at t = 0 computed as −1.4e-17 m/s², a ``σ`` of 7e-19
-under multiplicative noise) and is left out, with the entries where ``σ = 0``: with it the one
-sample adds spurious information (docs/estimators.md gives an example).
+**Rounding-level samples are left out**: an entry whose ``σ`` is at most :data:`ROUNDING`
+times its group's largest is the noise of an exact zero (a body acceleration at t = 0 of
+−1.4e-17 m/s²) and would add spurious information (docs/estimators.md).
 
-**Sensitivity to a σ floor.** Where ``σ`` varies along a group (multiplicative noise), the
-bound rests on the few samples near the signal's zero crossings, where the noise is nearly
-nil. :data:`FLOOR_FRACTIONS` gives the bound again with every ``σ_k`` floored at that
-fraction of its group's rms ``σ`` (0, 1e-3 and 1e-2): how much of the bound a small additive
-noise, present in any real sensor, would take away.
-
-The noise convention is the problem's (:meth:`Problem.residual_sigma`), e.g. the
-equivalent additive noise ``σ_c = level * rms(clean channel c)``.
+**Sensitivity to a σ floor**: under multiplicative noise the bound rests on the samples near
+zero crossings; :data:`FLOOR_FRACTIONS` gives it again with each ``σ_k`` floored at that
+fraction of its group's rms ``σ``: what a small additive noise would take away.
 """
 
 from __future__ import annotations
@@ -57,9 +49,8 @@ def jacobian(problem: Problem, x: np.ndarray, step: float = STEP) -> np.ndarray:
 
 
 def entry_sigma(sigma: np.ndarray, groups: np.ndarray) -> np.ndarray | None:
-    """The noise's sigma of each residual entry, from ``sigma`` given per group
-    (``(groups,)``) or per entry (``(m,)``, e.g. multiplicative noise); ``None`` when its
-    shape is neither, a value is negative or not finite, or no entry is noisy."""
+    """The noise's sigma of each residual entry, from ``sigma`` per group or per entry;
+    ``None`` for another shape, a negative or non-finite value, or no noise at all."""
     sigma = np.asarray(sigma, dtype=float).reshape(-1)
     if sigma.size == groups.size:
         out = sigma
@@ -70,15 +61,6 @@ def entry_sigma(sigma: np.ndarray, groups: np.ndarray) -> np.ndarray | None:
     if not np.all(np.isfinite(out) & (out >= 0)) or not np.any(out > 0):
         return None
     return out
-
-
-def _group_sigma(given: np.ndarray, per_entry: np.ndarray, groups: np.ndarray) -> list[float]:
-    """Sigma per group as given, or the rms over each group's entries when given per
-    entry."""
-    ngroups = int(groups.max()) + 1
-    if given.size == ngroups:
-        return given.tolist()
-    return [float(np.sqrt(np.mean(per_entry[groups == g] ** 2))) for g in range(ngroups)]
 
 
 def informative(sigma: np.ndarray, groups: np.ndarray) -> np.ndarray:
@@ -109,13 +91,11 @@ def _bounds(J: np.ndarray, sigma: np.ndarray, x_true: np.ndarray
 
 
 def cramer_rao(problem: Problem) -> dict[str, Any] | None:
-    """Bounds at the truth (see the module), or ``None`` when the problem lacks the truth,
-    residuals or a noise level. Keys: ``names``, ``crb_percent`` (per parameter),
-    ``crb_norm_percent``, ``singular_values`` (of the scaled Jacobian, descending),
-    ``condition_number``, ``sigma`` (per group; the rms over the group's entries when given
-    per entry), ``excluded_entries`` (entries left out: no or rounding-level noise) and, where
-    ``σ`` varies within a group, ``sigma_floor_sensitivity``: one ``{"fraction",
-    "crb_percent", "crb_norm_percent"}`` per fraction of :data:`FLOOR_FRACTIONS`."""
+    """Bounds at the truth (see the module), or ``None`` without a truth, residuals or a
+    noise level: ``crb_percent`` per parameter, its norm, the scaled Jacobian's
+    ``singular_values`` and ``condition_number``, ``sigma`` per group (rms when given per
+    entry), ``excluded_entries`` and, where ``σ`` varies within a group,
+    ``sigma_floor_sensitivity`` (one entry per :data:`FLOOR_FRACTIONS`)."""
     x_true, sigma = problem.x_true, problem.residual_sigma()
     if x_true is None or sigma is None:
         return None
@@ -127,13 +107,15 @@ def cramer_rao(problem: Problem) -> dict[str, Any] | None:
     kept = informative(per_entry, groups)
     crb, Jw = _bounds(J[kept], per_entry[kept], x_true)
     s = np.linalg.svd(Jw * x_true[None], compute_uv=False)
+    given, ngroups = np.asarray(sigma, dtype=float).reshape(-1), int(groups.max()) + 1
     out: dict[str, Any] = {
         "names": list(problem.bounds.names),
         "crb_percent": crb.tolist(),
         "crb_norm_percent": float(np.linalg.norm(crb)),
         "singular_values": s.tolist(),
         "condition_number": float(s[0] / s[-1]) if s[-1] > 0 else float("inf"),
-        "sigma": _group_sigma(np.asarray(sigma, dtype=float).reshape(-1), per_entry, groups),
+        "sigma": given.tolist() if given.size == ngroups else  # per entry: each group's rms
+        [float(np.sqrt(np.mean(per_entry[groups == g] ** 2))) for g in range(ngroups)],
         "excluded_entries": int(np.sum(~kept)),
     }
     varies = any(np.ptp(per_entry[kept & (groups == g)]) > 0 for g in np.unique(groups[kept]))
@@ -148,12 +130,9 @@ def cramer_rao(problem: Problem) -> dict[str, Any] | None:
 
 
 def per_instance(problem: Problem, runs: int) -> list[dict[str, Any]]:
-    """The bounds of each instance that runs ``0 .. runs-1`` fit (each its own truth and
-    record; runs that fit the same instance share an entry): ``{"instance"`` (its
-    ``instance_id``, ``None`` when every run fits the same data), ``"runs"`` (the run
-    indices), ``"crb_percent"``, ``"crb_norm_percent"`` and, where ``σ`` varies along a
-    channel, ``"sigma_floor_norms"`` (the bound's norm with ``σ`` floored at each of
-    :data:`FLOOR_FRACTIONS`)``}``; an instance without a bound is left out."""
+    """The bounds of each instance runs ``0 .. runs-1`` fit (runs of one instance share an
+    entry): ``instance`` (id), ``runs``, ``crb_percent``, ``crb_norm_percent`` and, where
+    ``σ`` varies along a channel, ``sigma_floor_norms``; an instance without one is left out."""
     out: list[dict[str, Any]] = []
     by_id: dict[str | None, dict[str, Any]] = {}
     for i in range(runs):

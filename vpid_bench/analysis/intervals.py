@@ -1,56 +1,28 @@
 """Intervals of identified parameters on a record without a truth (a measured record).
 
 Where no truth is known, accuracy cannot be measured; what the record says about the answer
-can. For an identified vector ``x̂`` (physical units) of a problem with residuals
-``r(θ)`` (:meth:`Problem.fisher_residuals`: weights that depend neither on ``θ`` nor on the
-objective; by default the residuals) grouped by channel (:meth:`Problem.fisher_groups`):
+can. For an identified vector ``x̂`` (physical units) of a problem with residuals ``r(θ)``
+(:meth:`Problem.fisher_residuals`) grouped by channel (:meth:`Problem.fisher_groups`):
 
-* the noise's standard deviation of each group ``g`` is estimated from the residuals at
-  ``x̂``: ``σ̂_g² = RSS_g / (m_g − d m_g / m)`` (``m_g`` entries of ``m`` in the group, ``d``
-  parameters: the degrees of freedom shared out between the groups by size; for one group
-  this is the textbook ``RSS / (m − d)``). Whatever misfit the model leaves (model error) is
-  counted as noise here, so an interval widens with it;
-* the covariance of ``x̂`` is ``(Jᵀ W J)⁻¹`` with ``J`` the central-difference Jacobian of the
-  residuals at ``x̂`` and ``W = diag(1 / σ̂_g²)``: the Gauss–Newton (Wald) approximation;
-* the 95 % interval of parameter ``j`` is ``x̂_j ± 1.96 sqrt(cov_jj)`` (asymptotic: with the
-  thousands of samples of a record the Student ``t`` quantile differs by under 0.1 %). It is
-  not clipped to the search box; a parameter the record cannot determine (a vanishing
-  singular value of the whitened Jacobian in which it takes part) gets an unbounded one.
+* each group's noise sigma from the residuals at ``x̂``: ``σ̂_g² = RSS_g / (m_g − d m_g / m)``
+  (``m_g`` entries of ``m``, ``d`` parameters: for one group the textbook ``RSS / (m − d)``);
+  model error counts as noise here, so an interval widens with it;
+* the covariance of ``x̂``, ``(Jᵀ W J)⁻¹``, ``J`` the central-difference Jacobian at ``x̂``
+  and ``W = diag(1 / σ̂_g²)`` (Gauss–Newton, Wald);
+* the 95 % interval ``x̂_j ± 1.96 sqrt(cov_jj)``, not clipped to the box; a parameter in a
+  vanishing singular direction of the whitened Jacobian gets an unbounded one.
 
-For a model linear in ``θ`` with one group this is the ordinary least-squares confidence
-interval (tested against the closed form). The profile likelihood
-(:func:`.profile.profile_intervals` with ``sigma`` from here) drops the linearisation.
-
-That interval **assumes white residuals**: it counts every sample as independent. Where the
-model misses dynamics the record holds (model error), the residuals are correlated over many
-samples and it is too narrow. Beside it, ``robust`` is the sandwich (Huber–White) covariance
-``A⁻¹ B A⁻¹`` (``A = Jᵀ W J``) with a heteroscedasticity-and-autocorrelation-consistent (HAC)
-estimate ``B`` of the scores' long-run covariance (:func:`hac_covariance`). The scores
-``s_t`` sum the whitened scores ``J_i r_i / σ̂_i²`` of the entries at time position ``t``
-(each group's entries are in time order; position ``t`` is an entry's place within its group).
-
-``B`` is Andrews and Monahan's (1992) *prewhitened* Newey–West estimate: a VAR(1)
-``s_t = Φ s_{t−1} + u_t`` is fitted by least squares (its singular values capped at
-:data:`MAX_AR`, their rule, so ``I − Φ`` stays invertible), the Bartlett-kernel estimate
-``B_u = Σ_{|l|≤L} (1 − |l|/(L+1)) Σ_t u_t u_{t−l}ᵀ`` of the innovations is taken, and then
-recoloured, ``B = (I − Φ)⁻¹ B_u (I − Φ)⁻ᵀ``. ``L`` is Andrews' (1991) automatic bandwidth
-for the Bartlett kernel from the innovations' lag-1 autocorrelation ``ρ`` (``L = 1.1447 (α
-T)^{1/3}``, ``α = 4ρ² / ((1−ρ)² (1+ρ)²)``, at most ``T/4``).
-
-Why prewhitened: model error leaves residuals whose lag-1 autocorrelation is 0.9 to 0.99 at
-the rates records are taken at. The plain Bartlett estimate with Andrews' bandwidth is known
-to fall far short there (its kernel downweights the very lags that carry the persistence:
-for an AR(1) with ρ = 0.95 over 10,000 points it recovers about a third of the long-run
-variance, tested), so its interval was only 2 to 3 times the white one where the true ratio
-is about ``sqrt((1+ρ)/(1−ρ)) ≈ 6``. The VAR(1) takes up the persistence in closed form and
-the kernel only the remainder (recovered to within a few per cent, tested). Past the cap
-(lag-1 above 0.97: a slow or periodic misfit) the recolouring counts the persistence as
-0.97, and there the plain estimate, whose bandwidth grows with ρ, recovers more (87 % of an
-AR(1)'s at ρ = 0.99, the capped prewhitened one 14 %). So each parameter's robust variance is
-the larger of the two sandwiches (the prewhitened and the plain Newey–West): both are
-consistent, and the larger errs on the side of a wider interval. With white residuals
-``Φ ≈ 0`` and ``B ≈ A`` for both: the robust interval equals the Jacobian one. It needs no
-refit (why this and not a block bootstrap: docs/estimators.md).
+For a model linear in ``θ`` with one group this is the ordinary least-squares interval
+(tested against the closed form). It **assumes white residuals**; where model error leaves
+them correlated it is too narrow. Beside it, ``robust`` is the sandwich ``A⁻¹ B A⁻¹``
+(``A = Jᵀ W J``) with a HAC estimate ``B`` of the long-run covariance of the scores ``s_t``
+(the whitened scores ``J_i r_i / σ̂_i²`` of the entries at time position ``t``, summed):
+Andrews and Monahan's (1992) *prewhitened* Newey–West (a VAR(1) ``s_t = Φ s_{t−1} + u_t``,
+its singular values capped at :data:`MAX_AR`; the Bartlett estimate of the innovations with
+Andrews' (1991) bandwidth ``L = 1.1447 (α T)^{1/3}``, ``α = 4ρ² / ((1−ρ)² (1+ρ)²)``;
+recoloured, ``B = (I − Φ)⁻¹ B_u (I − Φ)⁻ᵀ``). Each parameter's robust variance is the larger
+of the prewhitened and the plain Newey–West sandwich (why, and why not a block bootstrap:
+docs/estimators.md). With white residuals both equal the Jacobian interval.
 """
 
 from __future__ import annotations
@@ -88,10 +60,9 @@ def group_sigma(residuals: np.ndarray, groups: np.ndarray, dim: int) -> np.ndarr
 
 def jacobian_intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None:
     """95 % intervals of the parameters at ``x`` (see the module), or ``None`` when a
-    residual at ``x`` is not finite or every residual is zero. Keys: ``method``
-    (``"jacobian"``), ``level`` (0.95), ``lower``, ``upper``, ``se`` (standard errors,
-    physical units; ``None``: an undetermined parameter, unbounded), ``sigma`` (``σ̂`` per residual
-    group, in the residuals' units), ``dof`` (``m − d``)."""
+    residual at ``x`` is not finite or all are zero: ``lower``, ``upper``, ``se`` (physical
+    units; ``None``: undetermined, unbounded), ``sigma`` (``σ̂`` per group, the residuals'
+    units), ``dof`` (``m − d``) and the same under ``robust``."""
     from .identifiability import jacobian
 
     x = np.asarray(x, dtype=float).reshape(-1)
@@ -148,8 +119,7 @@ def jacobian_intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None
 
 
 def time_positions(groups: np.ndarray) -> np.ndarray:
-    """Each entry's place within its group (its time position: a group's entries are in
-    time order), ``(m,)`` ints."""
+    """Each entry's place within its group (its time position), ``(m,)`` ints."""
     groups = np.asarray(groups, dtype=int).reshape(-1)
     pos = np.empty(groups.size, dtype=int)
     for g in np.unique(groups):
@@ -169,12 +139,10 @@ def andrews_lags(rho: float, t: int) -> int:
 
 def hac_covariance(scores: np.ndarray, groups: np.ndarray, lags: int | None = None,
                    prewhiten: bool = True) -> tuple[np.ndarray, int]:
-    """The long-run covariance ``B`` of ``scores`` ``(m, d)`` (one row per residual entry), the
-    entries at the same time position (:func:`time_positions`) summed first: Newey–West
-    (Bartlett kernel) over the innovations of a VAR(1), recoloured (``prewhiten``, see the
-    module), or over the summed scores themselves (``prewhiten=False``: statsmodels'
-    ``S_hac_simple``). ``lags=None``: :func:`andrews_lags` from the pooled lag-1
-    autocorrelation of what the kernel sums. Returns ``(B, lags)``."""
+    """The long-run covariance ``B`` of ``scores`` ``(m, d)`` (the entries at one time
+    position summed first) and its lags: Newey–West over a VAR(1)'s innovations, recoloured
+    (``prewhiten``), or over the scores themselves (statsmodels' ``S_hac_simple``).
+    ``lags=None``: :func:`andrews_lags` of the pooled lag-1 autocorrelation."""
     scores = np.asarray(scores, dtype=float)
     pos = time_positions(groups)
     t = int(pos.max()) + 1 if pos.size else 0
@@ -209,9 +177,8 @@ def var1(S: np.ndarray) -> np.ndarray:
 
 def _convolve_same(S: np.ndarray, w: np.ndarray) -> np.ndarray:
     """Each column of ``S`` ``(t, d)`` convolved with the odd-length kernel ``w``, the
-    central ``t`` samples (scipy's ``fftconvolve(..., mode="same")``) by numpy's FFT:
-    importing scipy.signal costs about a second, which a run's time limit once paid when its
-    intervals were computed at its best vector (the fault-matrix tests, run_timeout_s=1)."""
+    central ``t`` samples (``fftconvolve(..., mode="same")``) by numpy's FFT: importing
+    scipy.signal costs about a second of a run's time limit."""
     t, k = S.shape[0], w.size
     n = 1 << max(1, int(t + k - 1 - 1).bit_length())
     full = np.fft.irfft(np.fft.rfft(S, n, axis=0) * np.fft.rfft(w, n)[:, None], n, axis=0)

@@ -1,21 +1,19 @@
 """Each instance's attainable optimum: the lowest objective value its record allows.
 
-On a noisy record the objective's minimum is not at the true parameters; how well an
-optimizer *searches* is judged against that minimum ``f*`` (the gap ``f_best - f*``), and how
-well the record *identifies* the parameters by where the minimum ``x*`` lies.
+On a noisy record the objective's minimum is not at the true parameters: an optimizer's
+*search* is judged against that minimum ``f*`` (the gap ``f_best - f*``), the record's
+*identification* by where the minimum ``x*`` lies.
 
-:func:`polish` is a deterministic local minimisation of a sum of residual-group norms
-(one norm per measured channel; a least-squares sum for one group) by iteratively reweighted least
-squares: each round weights group ``g`` by ``1 / ||r_g||`` at the current point and solves
-the weighted least-squares problem with scipy's trust-region reflective method inside the
-box; the fixed point is a stationary point of the sum of norms. It never returns a point
-worse than where it started.
+:func:`polish` is a deterministic local minimisation of a sum of residual-group norms (one
+per measured channel) by iteratively reweighted least squares: each round weights group ``g``
+by ``1 / ||r_g||`` at the current point and solves the weighted problem with scipy's
+trust-region reflective method inside the box; its fixed point is a stationary point of the
+sum of norms. It never returns a point worse than where it started.
 
 :func:`update_instance_optimum` keeps one JSON file per instance in an ``optima`` folder
-shared by the jobs of a sweep: the polish from the truth is done once, and again from the best
-vector of any run that ends below the optimum known so far or near it (within 1 %: it may sit
-in another basin, whose minimum is lower; not from a run best at the optimum's own point,
-:data:`SAME_POINT`), keeping the lowest. So ``f*`` is never above the
+shared by a sweep's jobs: polished once from the truth, and again from the best of any run
+below the known optimum or within 1 % of it (another basin may be lower; not from a run at
+the optimum's own point, :data:`SAME_POINT`), keeping the lowest: ``f*`` is never above the
 best of any run analysed with it.
 """
 
@@ -38,12 +36,9 @@ from ..store.records import stable_hash
 #: A run whose best is within this factor of the known optimum is polished too: it may sit in
 #: another basin whose minimum is lower.
 POLISH_NEAR = 1.01
-#: ... unless its best is not below the known optimum and lies within this distance of the
-#: optimum's point on every parameter, as a share of the box's width: it is in the optimum's
-#: basin, and a local polish from it ends where the optimum's did. With stop at the final
-#: target most runs end there (a one-instance slice of the vpid1 build polished 233 run bests,
-#: 175 of them within 1e-3 of the optimum), and each polish of a 9-parameter member takes a
-#: sizeable share of a second in the command's own process, while the workers wait.
+#: ... unless its best is not below the known optimum and lies within this share of the box's
+#: width of the optimum's point on every parameter: in the optimum's basin, a polish ends where
+#: the optimum's did (with a final target, 175 of 233 run bests of a vpid1 slice were there).
 SAME_POINT = 1e-3
 #: scipy's xtol/ftol/gtol for each weighted least-squares step. 1e-10 makes a polish 2.2x
 #: cheaper than 1e-15 and moves f* by at most 4.3e-13 (relative) from DE1 run bests and the
@@ -59,12 +54,9 @@ def _f_of(problem: Problem, x: np.ndarray) -> float:
 def polish(problem: Problem, x0: np.ndarray, rounds: int = 30, tol: float = 1e-13,
            inner_tol: float = INNER_TOL) -> tuple[np.ndarray, float]:
     """A local minimum of ``problem`` near ``x0`` (physical units) and its objective value,
-    by IRLS on the residual groups (see the module). Never worse than ``x0``.
-
-    The Jacobian of each weighted least-squares step is a forward difference whose ``d``
-    shifted points go to the problem in one batch (a batch costs little more than a single
-    candidate on a vectorised problem), which makes the polish several times cheaper than
-    scipy's point-by-point differences."""
+    by IRLS on the residual groups (see the module); never worse than ``x0``. Each step's
+    Jacobian goes to the problem as one batch of ``d + 1`` points (several times cheaper
+    than scipy's point-by-point differences)."""
     from scipy.optimize import least_squares
 
     b = problem.bounds
@@ -128,17 +120,15 @@ def _forward_jacobian(problem: Problem, z: np.ndarray, scale: np.ndarray, w: np.
 
 
 def record_settings(settings: Mapping[str, Any]) -> dict[str, Any]:
-    """The problem settings that define a record: all but the benchmark protocol (``ps``,
-    ``iterations``), which changes how optimizers search, never the data they fit. So the
-    jobs of a sweep at ``ps`` 20 and 30 share each instance's optimum."""
+    """The problem settings that define a record: all but the protocol (``ps``,
+    ``iterations``), so jobs at ``ps`` 20 and 30 share each instance's optimum."""
     return {str(k): v for k, v in settings.items() if k not in PROTOCOL_KEYS}
 
 
 def optimum_key(problem_name: str, settings: Mapping[str, Any], data: str | None,
                 instance_id: str | None) -> str:
-    """The file stem of an instance's optimum: a hash of everything that defines its record
-    (the problem's name, its settings without the protocol, its data digest, the instance's
-    id). The report recomputes it from a run record (:func:`find_optimum`)."""
+    """The file stem of an instance's optimum: a hash of what defines its record (problem
+    name, settings without the protocol, data digest, instance id)."""
     return stable_hash({"problem": problem_name, "settings": record_settings(settings),
                         "data": data, "instance": instance_id})
 
@@ -148,17 +138,9 @@ def instance_key(problem: Problem, settings: Mapping[str, Any]) -> str:
     return optimum_key(problem.name, settings, problem.content_digest(), problem.instance_id())
 
 
-def read_optimum(path: Path) -> dict[str, Any] | None:
-    """An optimum file, checked (:func:`vpid_bench.store.optimum.read_optimum_data`, the
-    format's one reader); ``None`` when missing or not a valid optimum file (untrusted
-    input: it is recomputed then)."""
-    return read_optimum_data(Path(path))[0]
-
-
 def load_optima(folders: Iterable[Path]) -> dict[str, dict[str, Any]]:
-    """Every valid optimum file in ``folders`` (e.g. ``<sweep>/optima``, ``<job>/optima``),
-    by file stem; the first folder that holds a stem wins. Invalid files are left out (see
-    :func:`read_optimum`; files from a results folder are untrusted)."""
+    """Every valid optimum file in ``folders`` (e.g. ``<sweep>/optima``), by file stem; the
+    first folder that holds a stem wins; invalid (untrusted) files are left out."""
     out: dict[str, dict[str, Any]] = {}
     for folder in folders:
         folder = Path(folder)
@@ -166,7 +148,7 @@ def load_optima(folders: Iterable[Path]) -> dict[str, dict[str, Any]]:
             continue
         for path in sorted(folder.glob("*.json")):
             if path.stem not in out and path.is_file():
-                data = read_optimum(path)
+                data = read_optimum_data(path)[0]
                 if data is not None:
                     out[path.stem] = data
     return out
@@ -175,9 +157,8 @@ def load_optima(folders: Iterable[Path]) -> dict[str, dict[str, Any]]:
 def find_optimum(record: Mapping[str, Any], optima: Mapping[str, Mapping[str, Any]]
                  ) -> Mapping[str, Any] | None:
     """The optimum (from :func:`load_optima`) of the instance a run record fitted, or
-    ``None``. It counts only when the key recomputed from the record (its problem name,
-    settings and instance id) with the file's data digest is the file's name and its
-    ``x_opt`` has the record's dimension."""
+    ``None``: the key recomputed from the record with the file's data digest must be the
+    file's name, and its ``x_opt`` of the record's dimension."""
     try:
         name = record["problem"]["name"]
         settings = record["problem"]["config"]
@@ -238,7 +219,7 @@ def _locked(path: Path) -> Iterator[None]:
 
 def _update(problem: Problem, settings: Mapping[str, Any], path: Path, x_start: np.ndarray,
             run_bests: Iterable[tuple[np.ndarray, float]]) -> dict[str, Any]:
-    known = read_optimum(path)
+    known = read_optimum_data(path)[0]  # a bad (untrusted) file is recomputed
     if known is None or len(known["x_opt"]) != problem.bounds.dim:
         x_opt, f_opt = polish(problem, x_start)
         known = {"starts": 1}

@@ -1,25 +1,15 @@
-"""Profile-likelihood intervals: what one record determines, without the linearisation of the
-Cramér–Rao bound.
+"""Profile-likelihood intervals: what one record determines, without the Cramér–Rao bound's
+linearisation.
 
-The likelihood is that of the simulated noise (Gaussian, standard deviation ``σ`` per residual
-entry from :meth:`Problem.residual_sigma`, whatever objective the problem minimises): ``NLL(θ)
-= ½ Σ_k (r_k(θ) / σ_k)²``, with each ``σ_k`` floored at ``SIGMA_FLOOR`` times its group's rms
-(as the ``ml`` objective's weights: under multiplicative noise a sample at a round-off-sized
-value is otherwise weighted by ``1e14`` and the fit cannot move). For parameter ``j`` the
-profile ``PL_j(t)`` is the least NLL over the other parameters with ``θ_j = t`` (bounded least
-squares inside the box, warm started along the profile); the 95 % interval is where ``2
-(PL_j(t) − NLL(θ̂)) ≤ χ²(0.95, 1) = 3.84`` (``θ̂`` the maximum-likelihood estimate). A parameter is
-
-* **identifiable** when both ends of the interval are found inside the box;
-* **practically non-identifiable** when the profile stays under the threshold up to a box
-  edge (the interval is open there: the record does not bound it);
-* **structurally non-identifiable** when the record is blind to a combination of the
-  parameters (:func:`structural_symmetry`: the smallest singular value of the whitened
-  Jacobian in log-parameters at most ``1e-6`` of the largest) in which this parameter takes
-  part, and its profile is flat.
-
-For a model linear in ``θ`` the interval is ``θ̂_j ± 1.96 sqrt((F⁻¹)_jj)``, the Cramér–Rao
-interval (tested).
+The likelihood is the simulated noise's (Gaussian, ``σ`` per entry from
+:meth:`Problem.residual_sigma`, each floored at ``SIGMA_FLOOR`` times its group's rms as the
+``ml`` weights are): ``NLL(θ) = ½ Σ_k (r_k(θ) / σ_k)²``. The profile ``PL_j(t)`` is the least
+NLL with ``θ_j = t`` (bounded least squares, warm started); the 95 % interval is where ``2
+(PL_j(t) − NLL(θ̂)) ≤ χ²(0.95, 1) = 3.84``. A parameter is **identifiable** when both ends are
+inside the box, **practically non-identifiable** when the profile stays under the threshold
+up to a box edge, **structurally non-identifiable** when it takes part in a combination the
+record is blind to (:func:`structural_symmetry`) and its profile is flat. For a model linear
+in ``θ`` the interval is the Cramér–Rao one (tested).
 """
 
 from __future__ import annotations
@@ -90,12 +80,11 @@ class _Likelihood:
         if sigma is None or centre is None:
             raise ValueError("profiles need a start (the truth or an estimate) and the noise "
                              "sigma (residual_sigma, or estimated from the residuals)")
-        per = entry_sigma(np.asarray(sigma, float),
-                          np.asarray(problem.fisher_groups(), dtype=int))
+        groups = np.asarray(problem.fisher_groups(), dtype=int)
+        per = entry_sigma(np.asarray(sigma, float), groups)
         if per is None:
             raise ValueError("the problem's residual_sigma has neither a per-group nor a "
                              "per-entry shape")
-        groups = np.asarray(problem.fisher_groups(), dtype=int)
         floor = np.array([np.sqrt(np.mean(per[groups == g] ** 2))
                           for g in range(int(groups.max()) + 1)])[groups] * SIGMA_FLOOR
         kept = informative(per, groups)
@@ -151,16 +140,13 @@ def profile_intervals(problem: Problem, crb: dict[str, Any] | None = None,
                       sigma: np.ndarray | None = None,
                       rel_sd: np.ndarray | None = None,
                       limit_s: float | None = None) -> dict[str, Any]:
-    """95 % profile-likelihood intervals of every parameter of ``problem`` (one record: an
-    instance). ``crb``: its :func:`~.identifiability.cramer_rao` when already computed (the
-    first steps along each profile are its bounds; the symmetry test its condition number).
-    Without a truth: ``start`` (an identified vector, physical units) is where the fit of
-    ``θ̂`` starts, ``sigma`` the noise per residual group estimated from the residuals
-    (:func:`.intervals.group_sigma`) and ``rel_sd`` the relative standard errors that set
-    the first steps. ``limit_s``: raise :class:`ProfileTooSlowError` when the first fit says the
-    profile would take longer (``2 d FITS_PER_END`` fits as long as it), or when it has run
-    twice that long. Returns ``{"names", "estimate", "lower", "upper", "classification",
-    "symmetry_ratio"}`` with physical values; an open end is ``None``."""
+    """95 % profile-likelihood intervals of every parameter of ``problem`` (one instance):
+    ``names``, ``estimate``, ``lower``, ``upper`` (physical; an open end ``None``),
+    ``classification``, ``symmetry_ratio``. ``crb``: its Cramér–Rao bounds if computed
+    (the first steps; the symmetry test). Without a truth: ``start`` (an identified vector),
+    ``sigma`` per group estimated from the residuals and ``rel_sd`` (the first steps).
+    ``limit_s``: :class:`ProfileTooSlowError` when the first fit says it would take longer
+    (``2 d FITS_PER_END`` fits), or once it has run twice that long."""
     import time
 
     from scipy.optimize import brentq

@@ -1,27 +1,18 @@
 """Which model structure does a record support? Candidate structures fitted to one record and
-compared as system identification compares them (issue 43, item 2; MATLAB's ``compare``,
-``aic``, ``resid``): held-out error, AIC, BIC and a residual whiteness test, with each
-structure's identified values and their intervals.
+compared as system identification does (issue 43; MATLAB's ``compare``, ``aic``, ``resid``),
+through the core interface only (``fisher_residuals``, ``fisher_groups``, ``bounds``):
 
-Works through the core problem interface only (:meth:`fisher_residuals`, :meth:`fisher_groups`,
-:attr:`bounds`), so any problem whose residuals are channels in time order can use it.
-
-* **Segments.** Each channel's first ``fit_fraction`` of samples is the *fit segment*, the
-  rest the *validation segment*. The model is simulated over the whole record from rest, so
-  its validation samples are a prediction no parameter was fitted to.
-* **Fit.** Least squares on the fit segment (each channel over its norm on the record, as
-  the Cramér-Rao residuals), from ``x0`` inside the box (scipy's ``least_squares``, ``trf``).
-* **Held-out error**: ``sum_c ||measured_c - computed_c||`` over the validation samples over
-  ``||measured_c||`` over the record (the sum of channel norms, on the samples no fit saw).
-* **AIC, BIC**: Gaussian likelihood with each channel's variance profiled out,
-  ``-2 log L = sum_c n_c log(RSS_c / n_c)`` (constants dropped), plus ``2 k`` (AIC) or
-  ``k log n`` (BIC); ``k`` the structure's parameters, ``n`` the fit samples.
-* **Whiteness**: the Ljung-Box test (statsmodels' ``acorr_ljungbox``) of each channel's fit
-  residuals at :data:`LAGS` lags; the structure passes when the smallest p-value times the
-  number of channels (Bonferroni) is at least ``alpha``.
-* **Intervals**: ``x ± z sqrt(diag((Jw^T Jw)^-1))`` with ``Jw`` the Jacobian of the residuals
-  each divided by its channel's fitted sigma (Gauss-Newton; ``z`` = 1.96 for 95 %); a
-  parameter the fit leaves on a bound of the box gets none (NaN: it is held there).
+* **Segments**: each channel's first ``fit_fraction`` of samples is fitted, the rest held out
+  (the model is simulated over the whole record: the rest is a prediction);
+* **Fit**: least squares on the fit segment from ``x0`` inside the box (``trf``);
+* **Held-out error**: ``sum_c ||measured_c - computed_c||`` over the held-out samples, each
+  over ``||measured_c||`` on the record;
+* **AIC, BIC**: ``-2 log L = sum_c n_c log(RSS_c / n_c)`` (each channel's variance profiled
+  out) plus ``2 k`` or ``k log n`` (``k`` parameters, ``n`` fit samples);
+* **Whiteness**: Ljung-Box of each channel's fit residuals at :data:`LAGS` lags, passed when
+  the smallest p-value times the channels (Bonferroni) is at least ``alpha``;
+* **Intervals**: ``x ± z sqrt(diag((Jw^T Jw)^-1))``, ``Jw`` whitened by each channel's fitted
+  sigma; a parameter left on a bound of the box gets none (NaN).
 """
 
 from __future__ import annotations

@@ -1,10 +1,6 @@
 """The command line as vpid-bench reads it: Hydra's flags plus ``--resume``, ``--merge`` and
-``--version``.
-
-Hydra parses the command line again when it runs; this module only learns what the command
-asks for (run, sweep, show information), so that the pre-flight can check it first. It mirrors
-Hydra 1.3's flags with the standard library's argparse; a command line Hydra's parser would
-refuse is refused here, in one line.
+``--version``, mirrored with argparse so that the pre-flight knows what the command asks for
+(run, sweep, information) and a command line Hydra would refuse is refused here, in one line.
 """
 
 from __future__ import annotations
@@ -19,28 +15,22 @@ from ..errors import ConfigError
 RESUME_FLAG = "--resume"
 #: Add this command's jobs to an output folder that holds another command's jobs.
 MERGE_FLAG = "--merge"
-
-
 #: The shipped configs' place in Hydra's search path.
 SHIPPED_CONFIGS = "pkg://vpid_bench.conf"
 
 
 @dataclasses.dataclass(frozen=True)
 class ConfigSource:
-    """Where the primary config comes from, resolved from ``-cp``/``-cn``/``-cd``: ``path``
-    the folder (absolute) or package (``pkg://``) that holds it (None: the shipped
-    :data:`SHIPPED_CONFIGS`), ``name`` its name (None: ``config``), and ``search`` one more
-    entry of Hydra's search path after it (a ``-cd`` folder, or the shipped configs when
-    the primary config is the user's). The pre-flight and Hydra's run are both set up from
-    it, so they compose the same config."""
+    """Where the primary config comes from (``-cp``/``-cn``/``-cd``): ``path`` its folder or
+    ``pkg://`` package (None: the shipped one), ``name`` (None: ``config``), ``search`` one
+    more search-path entry after it. The pre-flight and Hydra are both set up from it."""
 
     path: str | None = None
     name: str | None = None
     search: str | None = None
 
     def search_override(self) -> list[str]:
-        """The override that puts :attr:`search` in Hydra's search path (public API:
-        ``hydra.searchpath``), or nothing."""
+        """The override that puts :attr:`search` in ``hydra.searchpath``, or nothing."""
         if self.search is None:
             return []
         quoted = self.search.replace("\\", "\\\\").replace('"', '\\"')
@@ -63,9 +53,7 @@ class CommandLine:
     info: str | None  # the information-only flag used (--help, --cfg, ...), else None
     hydra_args: list[str]  # the command line for Hydra (ours removed, folders made absolute)
     config: ConfigSource = dataclasses.field(default_factory=ConfigSource)
-    #: ``--merge``: the output folder may hold jobs of another command (see
-    #: :func:`~vpid_bench.shell.resume.check_reuse`)
-    merge: bool = False
+    merge: bool = False  # the output folder may hold another command's jobs
 
     @property
     def custom_config(self) -> bool:
@@ -103,15 +91,11 @@ def _parser(argv: Sequence[str]) -> _Parser:
 
 
 def _config_source(args: argparse.Namespace, overrides: Sequence[str]) -> ConfigSource:
-    """The config source of ``-cp``/``-cn``/``-cd``; folders must exist and are read from
-    the current folder (Hydra reads a relative ``-cp`` from the folder of the Python file that
-    declares the app, inside the installed package: meaningless to a user).
-
-    ``-cd DIR`` comes *before* the shipped configs: a ``DIR/<name>.yaml`` (``config.yaml``
-    without ``-cn``) is the primary config, the shipped configs searched after DIR. Hydra's
-    own ``-cd`` searches DIR last, so the shipped ``config.yaml`` silently won over the
-    user's (once ``runs: 3`` gave 30 runs). Without such a file, DIR adds choices (e.g.
-    ``DIR/optimizer/mine.yaml``) to the shipped config."""
+    """The config source of ``-cp``/``-cn``/``-cd``, folders existing and read from the
+    current folder (Hydra reads a relative ``-cp`` from inside the installed package).
+    ``-cd DIR`` comes *before* the shipped configs: a ``DIR/<name>.yaml`` is the primary
+    config (Hydra's own ``-cd`` searches DIR last: the shipped ``config.yaml`` silently won,
+    ``runs: 3`` gave 30 runs); without one, DIR adds choices to the shipped config."""
     def folder(flag: str, value: str | None) -> str | None:
         if value is None or value.startswith("pkg://"):
             return value
@@ -165,8 +149,7 @@ def _own_flags(argv: Sequence[str]) -> tuple[list[str], str | None, bool]:
 
 
 def parse_command_line(argv: Sequence[str]) -> CommandLine:
-    """Read ``argv`` (without the program name). Raises :class:`ConfigError` for a command
-    line Hydra would refuse, and for flag combinations Hydra cannot honour."""
+    """Read ``argv``; :class:`ConfigError` for what Hydra would refuse or cannot honour."""
     hydra_args, resume, merge = _own_flags(argv)
     args = _parser(hydra_args).parse_args(hydra_args)
     info = None
@@ -193,13 +176,5 @@ def parse_command_line(argv: Sequence[str]) -> CommandLine:
     source = _config_source(args, args.overrides or [])
     hydra_args = [*source.hydra_flags(), *_without_config_flags(hydra_args),
                   *source.search_override()]
-    return CommandLine(
-        overrides=list(args.overrides or []),
-        multirun=bool(args.multirun),
-        resume=resume,
-        version=bool(args.version),
-        info=info,
-        hydra_args=hydra_args,
-        config=source,
-        merge=merge,
-    )
+    return CommandLine(list(args.overrides or []), bool(args.multirun), resume,
+                       bool(args.version), info, hydra_args, source, merge)

@@ -1,13 +1,9 @@
 """Hydra callbacks (listed in ``conf/config.yaml``). They write their outcome to disk, never
-into process-global state: the command reads the disk when Hydra returns, whatever launcher
-(and process) ran the jobs.
-
-* :class:`SweepStatus` prints the sweep folder and the exact command that resumes it.
-* :class:`ReportCallback` writes the report at the end of a sweep (full) and of a single job
-  (short), and its outcome into ``report/status.json``.
-* Both make sure the ``vpid_bench_job_dir`` resolver exists in the process that resolves job
-  folder names (they are constructed, or unpickled, in every launcher's worker before its
-  jobs start): it turns ``hydra.job.override_dirname`` into a safe folder name.
+into process-global state, so the command reads it whatever process ran the jobs.
+:class:`SweepStatus` prints the sweep folder and the command that resumes it;
+:class:`ReportCallback` writes the report (full after a sweep, short after a job) and
+``report/status.json``. Both register the ``vpid_bench_job_dir`` resolver (safe job folder
+names) in every process that resolves job folders.
 """
 
 from __future__ import annotations
@@ -70,17 +66,13 @@ class _ResolverCallback(Callback):
         ensure_job_dir_resolver()
 
 
-def _command_text(argv: list[str]) -> str:
-    return " ".join(["vpid-bench", *(shlex.quote(a) for a in argv)])
-
-
 class SweepStatus(_ResolverCallback):
     """Prints the sweep folder and the command that resumes it."""
 
     def on_multirun_start(self, config: Any, **kwargs: Any) -> None:
         sweep_dir = Path(str(config.hydra.sweep.dir))
         args = [a for a in sys.argv[1:] if not a.startswith("hydra.sweep.dir=")]
-        hint = _command_text([*args, f"hydra.sweep.dir={sweep_dir}"])
+        hint = shlex.join(["vpid-bench", *args, f"hydra.sweep.dir={sweep_dir}"])
         print(f"sweep folder: {sweep_dir}\n"
               f"  if this sweep stops, resume it (only missing runs are run) with:\n  {hint}\n"
               "  (or run the same command with --resume: it finds the newest sweep like it)",
@@ -95,11 +87,9 @@ def _enabled(config: Any, key: str = "report") -> bool:
 
 
 def write_report(folder: Path, short: bool, archive: bool = True) -> bool:
-    """Build the report of ``folder`` into ``folder/report``, print the headline and where it
-    is, and write the outcome into ``folder/report/status.json``. Never raises. The report
-    takes the folder's place whole once written (:func:`~vpid_bench.report.build.build_report`):
-    one that fails (a full disk, a file-size limit) is one ``warning:`` line, and the folder
-    keeps the previous report; a link planted in it is removed, never followed."""
+    """Build the report of ``folder`` into ``folder/report`` (whole, or the previous one
+    kept with one ``warning:`` line), print the headline and where it is, and write the
+    outcome into ``report/status.json``. Never raises."""
     from ..progress import Stages
     from ..report.build import NoRecordsError, build_report
     from ..report.safe import clean  # every line may quote records or archives

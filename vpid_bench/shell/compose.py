@@ -17,8 +17,7 @@ SHIPPED = ConfigSource()
 
 
 def _yaml_error(exc: BaseException) -> ConfigError | None:
-    """A config file that is not YAML, as one line naming the file and the place (None:
-    ``exc`` is not such an error)."""
+    """A config file that is not YAML, as one line naming the place (or None)."""
     import yaml
 
     cause: BaseException | None = exc
@@ -33,8 +32,7 @@ def _yaml_error(exc: BaseException) -> ConfigError | None:
 
 
 def hydra_error(exc: BaseException) -> ConfigError:
-    """A Hydra or OmegaConf composition error as one ConfigError line (the innermost cause
-    that names a key is used)."""
+    """A Hydra or OmegaConf error as one line (the innermost cause that names a key)."""
     from hydra.errors import MissingConfigException
 
     if isinstance(exc, MissingConfigException):
@@ -78,8 +76,7 @@ def _compose(overrides: list[str], hydra: bool, source: ConfigSource = SHIPPED) 
 
 
 def initialize(source: ConfigSource) -> Any:
-    """Hydra's compose API set up as ``hydra.main`` sets itself up for this command: the
-    shipped ``pkg://vpid_bench.conf`` or the folder (or package) of the user's config."""
+    """Hydra's compose API set up as ``hydra.main`` sets itself up for this command."""
     from hydra import initialize_config_dir, initialize_config_module
 
     if source.path is None:
@@ -90,30 +87,13 @@ def initialize(source: ConfigSource) -> Any:
     return initialize_config_dir(version_base="1.3", config_dir=source.path)
 
 
-def _check_has_spec(full: Any, source: ConfigSource) -> None:
-    """A user's config must list ``vpid_bench_spec`` in its defaults: it brings every
-    top-level key's default, the report and the job folders' names."""
-    if source == SHIPPED or all(k in full for k in TOP_LEVEL_KEYS):
-        return
-    raise ConfigError("--config-name", source.name or "config",
-                      "a config whose defaults list starts with vpid_bench_spec (e.g. "
-                      "defaults: [vpid_bench_spec, {problem: functions}, {optimizer: random}, "
-                      "_self_]; docs/sweeps.md)")
-
-
 class Composer:
-    """Hydra's composition of each distinct set of structural overrides of a sweep (its
-    config-group choices and Hydra settings), made once, without the ``hydra`` node.
-
-    For the shipped config, a sweep over problems and optimizers composes each problem once
-    and each optimizer once: the task config of (problem P, optimizer O) is P's composition
-    with O's ``optimizer`` node. That is what Hydra composes, because the shipped config keeps
-    the two groups apart (its defaults list names each once, its own keys set neither, and a
-    registered plugin's node or a shipped preset extends only its own group;
-    ``tests/sweeps/test_preflight_compose.py`` compares both ways). Composing every point
-    took 28 s of the vpid1 archive build's pre-flight (323 points, about 0.09 s each); a
-    user's own config (``-cp``/``-cd``, a ``hydra.searchpath``) or an override with a
-    package or of another group is composed whole, point by point."""
+    """Hydra's composition of each distinct set of a sweep's structural overrides, made
+    once, without the ``hydra`` node. For the shipped config (which keeps the two groups
+    apart), the task config of (problem P, optimizer O) is P's composition with O's
+    ``optimizer`` node (tests/sweeps/test_preflight_compose.py compares): each composed once
+    (323 points took 28 s). A user's config, or an override with a package or of another
+    group, is composed point by point."""
 
     def __init__(self, source: ConfigSource) -> None:
         self.source = source
@@ -152,7 +132,11 @@ class Composer:
         from omegaconf import OmegaConf
 
         full = _compose(overrides, hydra=True, source=self.source)
-        _check_has_spec(full, self.source)
+        if self.source != SHIPPED and not all(k in full for k in TOP_LEVEL_KEYS):
+            raise ConfigError("--config-name", self.source.name or "config",  # its defaults,
+                              "a config whose defaults list starts with vpid_bench_spec (e.g. "
+                              "defaults: [vpid_bench_spec, {problem: functions}, {optimizer: "
+                              "random}, _self_]; docs/sweeps.md)")  # report, job folders
         if self.first_full is None:
             self.first_full = full
         return OmegaConf.masked_copy(full, [k for k in full if k != "hydra"])

@@ -1,15 +1,10 @@
 """Hydra config nodes built from dataclasses: the job spec and every registered plugin.
 
-Called once at start-up (never at import). The job spec's defaults become the primary
-config's top-level keys (``conf/config.yaml`` lists ``vpid_bench_spec`` in its defaults), so
-the keys are declared once, in :class:`vpid_bench.spec.JobSpec`. The same node carries
-Hydra's settings for vpid-bench (``hydra_settings.yaml`` beside this module: the report
-callback, the job folders' names, the logging), so a user's own config (``-cp``/``-cd``/
-``-cn``) that lists ``vpid_bench_spec`` first behaves like the shipped one. Each optimizer
-becomes a choice of the ``optimizer`` group and each problem of the ``problem`` group, so
-``optimizer=<name>`` works for a third-party optimizer that ships no YAML. An optimizer's
-node leaves out the protocol keys (``ps``, ``iterations``): the job copies them from the
-problem.
+Called once at start-up. The spec node (``vpid_bench_spec``, first in a config's defaults)
+declares the top-level keys once, from :class:`vpid_bench.spec.JobSpec`, with Hydra's settings
+for vpid-bench (``hydra_settings.yaml``), so a user's own config behaves like the shipped one.
+Each plugin becomes a choice of its group (a third-party optimizer needs no YAML); an
+optimizer's node leaves out what the job fills in.
 """
 
 from __future__ import annotations
@@ -25,9 +20,8 @@ from ..spec import JobSpec
 SPEC_NODE = "vpid_bench_spec"
 #: Hydra's settings (a YAML file of this package), merged into the spec node.
 HYDRA_SETTINGS = "hydra_settings.yaml"
-#: Hydra's default job logging without its file handler: Hydra configures logging before our
-#: task runs, so a job folder it cannot write would stop the whole sweep; the task opens the
-#: job's log file itself (``vpid_bench.log``, see :mod:`.main`), inside its error handling.
+#: Hydra's job logging without its file handler (opened outside our task, a folder it cannot
+#: write would stop the sweep): the task opens ``vpid_bench.log`` itself (:mod:`.main`).
 JOB_LOGGING = {
     "version": 1,
     "formatters": {"simple": {"format": "[%(asctime)s][%(name)s][%(levelname)s] - %(message)s"}},
@@ -57,9 +51,8 @@ def register_configs(registry: Registry) -> None:
 
 
 def problem_node(config: type, name: str) -> Any:
-    """A problem's node: :func:`~vpid_bench.params.hydra_node`, with the mappings whose keys
-    the user names (``added_setting(open_keys=True)``: ``problem.known.kt=210000``) left open
-    to new keys; the problem checks those names itself."""
+    """A problem's node, its ``added_setting(open_keys=True)`` mappings left open to new
+    keys (the problem checks those names itself)."""
     node = hydra_node(config, name)
     paths = open_key_paths(config)
     if not paths:
@@ -72,12 +65,16 @@ def problem_node(config: type, name: str) -> Any:
     return out
 
 
-def spec_node() -> dict[str, Any]:
-    """The ``vpid_bench_spec`` node: every top-level key at its default, Hydra's settings for
-    vpid-bench and the job logging without a file handler (see :data:`JOB_LOGGING`)."""
+def hydra_settings() -> dict[str, Any]:
+    """The ``hydra`` node of :data:`HYDRA_SETTINGS` (interpolations unresolved)."""
     from omegaconf import OmegaConf
 
     text = importlib.resources.files(__package__).joinpath(HYDRA_SETTINGS).read_text()
-    hydra = OmegaConf.to_container(OmegaConf.create(text), resolve=False)["hydra"]
+    return OmegaConf.to_container(OmegaConf.create(text), resolve=False)["hydra"]
+
+
+def spec_node() -> dict[str, Any]:
+    """The ``vpid_bench_spec`` node: every top-level key at its default, Hydra's settings for
+    vpid-bench and the job logging without a file handler (see :data:`JOB_LOGGING`)."""
     return {"defaults": [{"override hydra/job_logging": "vpid_bench"}, "_self_"],
-            **dataclass_defaults(JobSpec), "hydra": hydra}
+            **dataclass_defaults(JobSpec), "hydra": hydra_settings()}

@@ -1,19 +1,15 @@
 """The ``vpid-bench`` command: read the command line, check everything, hand over to Hydra.
 
-1. Read the command line (:mod:`.argv`); ``--version`` prints vpid-bench's version and every
-   plugin's, and stops.
-2. Load the plugins and store a Hydra config node per plugin and for the job spec.
-3. Pre-flight (:mod:`.preflight`): every point of the sweep composed and parsed by the same
-   function the job uses; the output folder resolved once, locked against a second command,
-   and proven writable. Anything wrong: one line, exit 2, nothing written.
-4. Hydra runs the jobs (any launcher). Each job writes its ``job.json``; the report callback
-   writes ``report/status.json``. When Hydra returns, the exit code is decided from those
-   files, so it is right whatever process ran the jobs.
+The command line (:mod:`.argv`; ``--version`` prints every plugin's version); the plugins
+loaded, a Hydra node stored per plugin and for the job spec; the pre-flight
+(:mod:`.preflight`: every point composed and parsed as the job will, the output folder
+resolved, locked and proven writable; anything wrong: one line, exit 2, nothing written);
+then Hydra runs the jobs (any launcher), each writing its ``job.json``, the report callback
+``report/status.json``: the exit code is read from those files, whatever process ran them.
 
-Exit status: 0 all runs ok; 1 some run, job or report failed (records and ``job.json`` say
-why); 2 refused before anything ran; 130 interrupted by SIGINT (Ctrl-C), 143 by SIGTERM, 129 by
-SIGHUP (the same for all three: every completed run is kept, every worker process ended).
-``VPID_BENCH_DEBUG=1`` shows tracebacks.
+Exit status: 0 all runs ok; 1 some run, job or report failed; 2 refused before anything ran;
+130, 143, 129 interrupted by SIGINT, SIGTERM, SIGHUP (every completed run kept, every worker
+ended). ``VPID_BENCH_DEBUG=1`` shows tracebacks.
 """
 
 from __future__ import annotations
@@ -25,7 +21,7 @@ import sys
 import threading
 import time
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -42,8 +38,7 @@ def debug_enabled() -> bool:
 
 
 def one_line(exc: BaseException) -> str:
-    """An exception as one line: our own errors as they are, others with their type; any
-    control character its text quotes (from a record, a path, a plugin) made visible."""
+    """An exception as one line (not ours: with its type), control characters visible."""
     from ..report.safe import clean
 
     name = getattr(exc, "remote_type", type(exc).__name__)  # carried from a worker process
@@ -61,10 +56,9 @@ def _refuse(exc: BaseException) -> NoReturn:
 
 
 class JobTask:
-    """Hydra's task function: runs one job, writes its ``job.json``, never raises (one failed
-    job must not stop the sweep). The registry, the problem cache and the worker processes
-    (:mod:`vpid_bench.workers`, shared by the sweep's jobs) are rebuilt in a launcher's
-    worker process (they are not pickled)."""
+    """Hydra's task function: runs one job, writes its ``job.json``, never raises. The
+    registry, problem cache and worker processes are rebuilt in a launcher's process (they
+    are not pickled)."""
 
     __module__ = __name__
 
@@ -72,14 +66,9 @@ class JobTask:
         self._registry = registry
         self._problems: Any = None
         self._pool: Any = None
-        #: The output folder's lock (:class:`~.resume.FolderLock`), in the command's process.
-        self.lock: Any = None
-        #: Jobs of this process that failed or had failed runs (the exit status of a command
-        #: without a pre-flight plan: a custom config).
-        self.not_ok = 0
-        #: The sweep's progress line (:class:`~.progress.SweepProgress`), in the command's
-        #: process for a ``-m`` sweep with a known plan; ``None`` elsewhere.
-        self.progress: Any = None
+        self.lock: Any = None  # the output folder's FolderLock, in the command's process
+        self.not_ok = 0  # jobs of this process that failed or had failed runs
+        self.progress: Any = None  # a planned -m sweep's SweepProgress, in the command
 
     def __getstate__(self) -> dict[str, Any]:
         return {"_registry": None, "_problems": None, "_pool": None, "lock": None, "not_ok": 0,
@@ -124,7 +113,10 @@ class JobTask:
                 self._registry = _load_registry()
             if self._problems is None:
                 self._problems = ProblemCache()
-            if self._pool is None and _basic_launcher(hydra_cfg):
+            # Hydra's basic launcher runs jobs in this process, where the sweep's workers
+            # serve every job; others' processes (joblib's loky) cannot start spawn children
+            basic = str((hydra_cfg.launcher or {}).get("_target_", "")).endswith("BasicLauncher")
+            if self._pool is None and basic:
                 workers = cfg.get("workers")  # checked by the pre-flight: null or >= 1
                 self._pool = Workers(workers if isinstance(workers, int) else available_cores())
                 runs = cfg.get("runs")  # their imports overlap this job's set-up; no more
@@ -162,18 +154,8 @@ class JobTask:
 JOB_LOG = "vpid_bench.log"
 
 
-def _basic_launcher(hydra_cfg: Any) -> bool:
-    """Whether jobs run one at a time in the command's process (Hydra's basic launcher): the
-    sweep's worker processes then serve every job (``isolation=auto``). Other launchers run
-    jobs in their own processes (joblib's loky workers cannot start ``spawn`` children), so
-    there ``auto`` runs each job in the launcher's process."""
-    target = str((hydra_cfg.launcher or {}).get("_target_", ""))
-    return target.endswith("BasicLauncher")
-
-
 def _write_status(job_dir: Path, status: str, detail: Any) -> None:
-    """``job.json``, or one line on stderr (and a note for the summary) when it cannot be
-    written (a read-only folder, a full disk): the sweep goes on."""
+    """``job.json``, or one line when it cannot be written: the sweep goes on."""
     from ..store.job_status import write_job_status
 
     try:
@@ -184,18 +166,15 @@ def _write_status(job_dir: Path, status: str, detail: Any) -> None:
 
 
 class _JobLogHandler(logging.FileHandler):
-    """Logging's file handler, opening through :func:`~vpid_bench.fileio.open_append`: a
-    link planted at the job's log (on a resume) is replaced, never followed, as every other
-    file of a job folder is."""
+    """Logging's file handler through ``open_append`` (a planted link is never followed)."""
 
     def _open(self) -> Any:
         return open_append(Path(self.baseFilename))
 
 
 def _open_job_log(job_dir: Path) -> logging.Handler | None:
-    """The job's log file ``vpid_bench.log`` (what Hydra's default file handler wrote), added
-    here so that a folder that cannot be written fails its job, not the whole sweep (Hydra
-    configures its handlers before the task runs, outside any ``try``)."""
+    """The job's log ``vpid_bench.log``, opened here so a folder that cannot be written fails
+    its job, not the sweep (Hydra opens its handlers outside any ``try``)."""
     try:
         handler = _JobLogHandler(job_dir / JOB_LOG, encoding="utf-8")
     except OSError:
@@ -207,9 +186,8 @@ def _open_job_log(job_dir: Path) -> logging.Handler | None:
 
 
 def _save_job_config(cfg: Any, job_dir: Path) -> None:
-    """``.hydra/config.yaml``, ``hydra.yaml`` and ``overrides.yaml`` as Hydra saves them, but
-    written atomically and inside the job's error handling (``hydra.output_subdir`` is null
-    in our config so that Hydra does not write them before the task runs)."""
+    """``.hydra/config.yaml``, ``hydra.yaml`` and ``overrides.yaml`` as Hydra saves them,
+    atomically and inside the job's error handling (our ``hydra.output_subdir`` is null)."""
     from hydra.core.hydra_config import HydraConfig
     from omegaconf import OmegaConf
 
@@ -269,9 +247,7 @@ def print_versions(registry: Any) -> None:
 
 def _failures(folder: Path | None, multirun: bool,
               planned: Sequence[Path] = (), report_expected: bool = False) -> list[str]:
-    """What went wrong, read from the disk: job statuses of this invocation and the report's
-    status; a planned job folder without a status of this invocation counts as failed (its
-    folder could not be written). Prints the sweep summary."""
+    """What went wrong, read from the disk; prints the sweep summary."""
     from .callbacks import REPORT_STATUS, REPORT_SUBDIR
     from .resume import collect_job_statuses
 
@@ -311,9 +287,8 @@ def _failures(folder: Path | None, multirun: bool,
 
 
 def main(argv: Sequence[str] | None = None) -> None:
-    """The command ``vpid-bench`` (entered through ``vpid_bench_command.main``, which notes
-    a Ctrl-C while this package imports). Ctrl-C at any moment is one line and status 130:
-    while the heavy imports and the pre-flight run it once printed a 35-54-line traceback."""
+    """The command ``vpid-bench``: a Ctrl-C at any moment is one line and status 130 (once
+    a 35-54-line traceback during the imports and the pre-flight)."""
     if argv is None:  # the console command: a Ctrl-C while it starts is noted, not lost
         from .. import interrupts
 
@@ -399,9 +374,7 @@ def _main(argv: Sequence[str] | None) -> None:
 
 
 def _prepare_folder(plan: Any, key: str, task: JobTask) -> Any:
-    """The output folder checked, locked (the lock returned) and its job folders made; the
-    task given the lock, the sweep's progress line and the problems the pre-flight built (not
-    built twice)."""
+    """The output folder checked, locked (returned) and its job folders made."""
     from . import preflight
     from .resume import FolderLock
 
@@ -414,8 +387,7 @@ def _prepare_folder(plan: Any, key: str, task: JobTask) -> Any:
 
 
 def _nothing_to_run(plan: Any, registry: Any, task: JobTask) -> bool:
-    """Whether the sweep has nothing to run (:func:`~vpid_bench.experiment.recorded_in_full`);
-    when it has, its first progress line, before any work: about how long it takes."""
+    """Whether the sweep has nothing to run; else its first progress line (how long)."""
     from ..experiment import recorded_in_full
     from ..store.archive import evaluation_seconds
     from .progress import first_line
@@ -428,10 +400,8 @@ def _nothing_to_run(plan: Any, registry: Any, task: JobTask) -> bool:
 
 
 def _report_only(plan: Any, task: JobTask, lock: Any, before: set[Any], watch: bool) -> None:
-    """A sweep whose every run is recorded (:func:`~vpid_bench.experiment.recorded_in_full`):
-    say so, write its report again (archives or the report's code may have changed) and
-    nothing else: no job is started and Hydra writes none of its files; then end the command
-    (status 1 when the report failed)."""
+    """A sweep whose every run is recorded: say so and write its report again (archives or
+    the report's code may have changed), nothing else; status 1 when the report failed."""
     from .callbacks import write_report
 
     runs = sum(j.spec.runs for j in plan.jobs)
@@ -449,9 +419,7 @@ def _report_only(plan: Any, task: JobTask, lock: Any, before: set[Any], watch: b
 
 
 def _quick_help(cmd: Any, registry: Any) -> bool:
-    """Print the help page without Hydra's help machinery (:mod:`.quick_help`); False when
-    Hydra must build it (or the flag is not ``--help``). A refusal of the overrides is one
-    line, exit 2, as for a run."""
+    """Print the help page without Hydra's machinery; False when Hydra must build it."""
     from .quick_help import help_text
 
     if cmd.info != "--help":
@@ -467,8 +435,7 @@ def _quick_help(cmd: Any, registry: Any) -> bool:
 
 
 def _sweep_progress(plan: Any) -> Any:
-    """The progress line of a ``-m`` sweep whose jobs the plan knows (not an optimizing
-    sweeper's), unless ``progress=false``; else ``None``."""
+    """The progress line of a ``-m`` sweep whose jobs the plan knows (and progress=true)."""
     from .progress import SweepProgress
 
     if not plan.multirun or not plan.jobs or not all(j.spec.progress for j in plan.jobs):
@@ -476,21 +443,14 @@ def _sweep_progress(plan: Any) -> Any:
     return SweepProgress(len(plan.jobs), sum(j.spec.runs for j in plan.jobs))
 
 
-#: How long (s) the process may take to end after the command, before threads a plugin
-#: left running are abandoned.
+#: Seconds the process may take to end before threads a plugin left running are abandoned.
 THREAD_GRACE_S = 10.0
 
 
 def _leave(code: int, before: set[Any], watch: bool) -> None:
-    """End the command with ``code``. A thread a plugin started during the command and left
-    running (not a daemon; threads alive before the command, ``before``, are not its) would
-    keep the process alive forever after the sweep, since Python waits for such threads at
-    exit. With ``watch`` (the console command, not a call from another program), a daemon
-    watchdog gives the normal shutdown :data:`THREAD_GRACE_S` (libraries stop their own
-    pools then) and, if the process is still alive, names the threads and ends it with
-    ``code`` (every record is written by then)."""
-    import threading
-
+    """End the command with ``code``. A non-daemon thread a plugin left running (not one of
+    ``before``) would keep the process alive for ever: with ``watch`` (the console command),
+    a watchdog gives the shutdown :data:`THREAD_GRACE_S`, then names them and exits."""
     mine = [t for t in threading.enumerate() if t is not threading.main_thread()
             and not t.daemon and t not in before]
     if watch and mine:
@@ -517,14 +477,14 @@ def _thread_exception(args: Any) -> None:
 
 
 def _run_hydra(args: list[str], task: Any) -> None:
-    """Hydra's run; its own refusals become one line, exit 2. Hydra is asked to raise its
-    errors (``HYDRA_FULL_ERROR``) instead of printing them with their traceback and exiting
-    1, so that an error a Ctrl-C caused inside Hydra's composition is told from a refusal
-    (:func:`~vpid_bench.interrupts.seen`) and ends the command as the Ctrl-C does."""
+    """Hydra's run; its refusals become one line, exit 2. Hydra raises its errors
+    (``HYDRA_FULL_ERROR``), so one a Ctrl-C caused is told from a refusal and ends the
+    command as the Ctrl-C does."""
     from ..interrupts import raise_if_swallowed, seen
+    from ..machine import environ
 
     try:
-        with _hydra_raises():
+        with environ("HYDRA_FULL_ERROR", "1"):  # read by Hydra when an error reaches it
             _hydra_entry(args, task)
         raise_if_swallowed()  # a Ctrl-C a C callback dropped during the last job
     except SystemExit as exc:
@@ -538,30 +498,9 @@ def _run_hydra(args: list[str], task: Any) -> None:
     except Exception as exc:  # noqa: BLE001 - a Hydra error outside any job
         if seen():
             raise KeyboardInterrupt from None
-        _refuse(_with_cause(exc))
-
-
-@contextlib.contextmanager
-def _hydra_raises() -> Iterator[None]:
-    """``HYDRA_FULL_ERROR=1`` while Hydra runs (Hydra reads it when an error reaches it), the
-    user's own value restored after."""
-    saved = os.environ.get("HYDRA_FULL_ERROR")
-    os.environ["HYDRA_FULL_ERROR"] = "1"
-    try:
-        yield
-    finally:
-        if saved is None:
-            os.environ.pop("HYDRA_FULL_ERROR", None)
-        else:
-            os.environ["HYDRA_FULL_ERROR"] = saved
-
-
-def _with_cause(exc: Exception) -> Exception:
-    """A Hydra error with the omegaconf error under it in one message, as Hydra says them."""
-    cause = exc.__cause__
-    if cause is None or str(cause) in str(exc):
-        return exc
-    return VpidBenchError(f"{one_line(exc)}: {one_line(cause)}")
+        cause = exc.__cause__  # the omegaconf error under it, in one message as Hydra says
+        _refuse(exc if cause is None or str(cause) in str(exc)
+                else VpidBenchError(f"{one_line(exc)}: {one_line(cause)}"))
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,22 +1,14 @@
 """Pre-flight: every point of the command checked before any job runs.
 
-Hydra composes a job's config only when that job starts, so a bad value in the tenth point
-of a sweep would stop the sweep after nine jobs ran. The pre-flight expands the sweep exactly
-as Hydra's basic sweeper does (the cartesian product of the sweep overrides, the first
-outermost), composes each point and parses it with :func:`vpid_bench.spec.parse_job`, the
-function the job itself calls, so a plugin's own range checks in its dataclasses run too.
-Any bad value anywhere stops the command with one line naming the key, the value and what is
-allowed (exit 2), before any folder is written.
-
-Composition costs a fraction of a second, so points that differ only in plain ``key=value``
-settings share one composition per combination of config-group choices (and, for the shipped
-config, each problem and each optimizer is composed once: :class:`.compose.Composer`); their
-values are then set on a copy as Hydra would set them (struct mode: an unknown key is
-refused).
-
-The pre-flight also fixes the output folder: it resolves ``hydra.sweep.dir`` (or
-``hydra.run.dir``) once and hands the concrete folder to Hydra, so the command knows where its
-jobs write without asking Hydra afterwards.
+Hydra composes a job's config only when that job starts, so a bad value in the tenth point of
+a sweep once stopped it after nine jobs. The pre-flight expands the sweep exactly as Hydra's
+basic sweeper does (the cartesian product of the sweep overrides, the first outermost),
+composes each point and parses it with :func:`vpid_bench.spec.parse_job`, the function the job
+calls (a plugin's own range checks included): anything bad stops the command with one line,
+exit 2, before any folder is written. Points that differ only in plain ``key=value`` settings
+share one composition (:class:`.compose.Composer`), their values set on a copy as Hydra sets
+them (struct mode: an unknown key is refused). It also resolves the output folder once and
+hands it to Hydra.
 """
 
 from __future__ import annotations
@@ -48,17 +40,16 @@ OWN_FOLDERS = ("optima", "report")
 
 @dataclasses.dataclass
 class Plan:
-    """What the pre-flight decided: the command line for Hydra, the output folder, the jobs."""
+    """What the pre-flight decided: the command line for Hydra, the output folder, the jobs,
+    each job's folder as Hydra's basic sweeper will name it (empty when unknown in advance)
+    and the problems it built (a :class:`~vpid_bench.build.ProblemCache`, or None)."""
 
     hydra_args: list[str]
     output_dir: Path | None
     multirun: bool
     jobs: list[Job]
     points: list[list[str]]
-    #: The folder of every job of a sweep, as Hydra's basic sweeper will name them (empty for a
-    #: single run, an optimizing sweeper or a custom ``hydra.sweep.subdir``).
     job_dirs: list[Path] = dataclasses.field(default_factory=list)
-    #: The problems the pre-flight built (a :class:`~vpid_bench.build.ProblemCache`), or None.
     problems: Any = None
 
 
@@ -89,8 +80,7 @@ def _raw_value(override: Any) -> str:
 
 
 def _group_names(group: str, registry: Registry, folders: Sequence[str] = ()) -> list[str]:
-    """The choices of ``group``: registered plugins, shipped YAML presets and the YAML files
-    of a user's config folders (``<folder>/<group>/<name>.yaml``)."""
+    """The choices of ``group``: plugins, presets and ``<folder>/<group>/<name>.yaml``."""
     from .presets import yaml_presets
 
     table = registry.problems if group == "problem" else registry.optimizers
@@ -99,9 +89,8 @@ def _group_names(group: str, registry: Registry, folders: Sequence[str] = ()) ->
 
 
 def _sweep_size(override: Any) -> int | None:
-    """How many values a sweep override stands for, without listing them (None: not a list
-    of values, e.g. ``interval()``, which only an optimizing sweeper can use)."""
-    from hydra.core.override_parser.types import ChoiceSweep, Glob, RangeSweep
+    """How many values a sweep override stands for (None: not a list, e.g. interval())."""
+    from hydra.core.override_parser.types import ChoiceSweep, RangeSweep
 
     value = override.value()
     if isinstance(value, RangeSweep):
@@ -109,15 +98,12 @@ def _sweep_size(override: Any) -> int | None:
             raise ConfigError(override.key_or_group, _raw_value(override),
                               "range(start, stop[, step]) with a step that is not 0")
         return max(0, math.ceil((value.stop - value.start) / value.step))
-    if isinstance(value, (ChoiceSweep, Glob)):
-        return None if isinstance(value, Glob) else len(value.list)
-    return None
+    return len(value.list) if isinstance(value, ChoiceSweep) else None
 
 
 def _refuse_nested_sweep(o: Any, value: Any) -> None:
-    """A sweep function inside a list sweep (``a,choice(b,c)``, ``a,range(1,3)``,
-    ``a,glob(x*)``) is one ConfigError line: Hydra cannot expand it (omegaconf raised a
-    20-line ``ValidationError`` on ``a,choice(-1,1)``, round five's N19)."""
+    """Refuse a sweep function inside a list sweep (``a,choice(b,c)``): Hydra cannot expand
+    it (a 20-line ``ValidationError`` once, round five's N19)."""
     from hydra.core.override_parser.types import Glob, Sweep
 
     for item in getattr(value, "list", None) or ():
@@ -129,8 +115,7 @@ def _refuse_nested_sweep(o: Any, value: Any) -> None:
 
 def _axis(o: Any, multirun: bool, registry: Registry, custom_sweeper: bool,
           folders: Sequence[str] = ()) -> list[str] | None:
-    """The override strings one override contributes to the sweep (``None``: none, an
-    optimizing sweeper chooses its values)."""
+    """The override strings one override contributes (``None``: a sweeper's choice)."""
     from hydra.core.override_parser.types import Glob
 
     if not o.is_sweep_override():
@@ -166,11 +151,8 @@ def _axis(o: Any, multirun: bool, registry: Registry, custom_sweeper: bool,
 
 def expand_points(parsed: list[Any], multirun: bool, registry: Registry,
                   custom_sweeper: bool, folders: Sequence[str] = ()) -> list[list[str]]:
-    """The override strings of every job, in the order Hydra's basic sweeper runs them
-    (``folders``: a user's config folders, whose ``<group>/*.yaml`` are choices too)."""
-
-    # each override with its own axis (an optimizing sweeper's interval() has none: zipping
-    # the overrides with the shorter list of axes once checked the wrong values)
+    """The override strings of every job, in the order Hydra's basic sweeper runs them."""
+    # each override with its own axis (zipping with a shorter list once checked wrong values)
     pairs = [(o, a) for o in parsed
              if (a := _axis(o, multirun, registry, custom_sweeper, folders)) is not None]
     axes = [a for _, a in pairs]
@@ -190,8 +172,7 @@ def expand_points(parsed: list[Any], multirun: bool, registry: Registry,
 
 def _check_choice(group: str, name: str, registry: Registry, folders: Sequence[str] = ()
                   ) -> None:
-    """A problem or optimizer name must be registered (or a YAML preset); the error lists
-    the known names and the plugins that failed to load."""
+    """Refuse a name that is no choice, listing the known ones and the failed plugins."""
     names = _group_names(group, registry, folders)
     if name.strip("'\"") in names:
         return
@@ -204,8 +185,7 @@ def _check_choice(group: str, name: str, registry: Registry, folders: Sequence[s
 
 
 def did_you_mean(given: str, known: Sequence[str]) -> str:
-    """`` (did you mean de4?)`` for a near miss of one of ``known`` (difflib's ratio at
-    least 0.6), else ``""``."""
+    """`` (did you mean de4?)`` for a near miss (difflib ratio >= 0.6), else ``""``."""
     import difflib
 
     close = difflib.get_close_matches(given, list(known), n=1, cutoff=0.6)
@@ -248,8 +228,7 @@ def _apply(cfg: Any, o: Any) -> None:
 
 
 def _open_parent(cfg: Any, key: str) -> bool:
-    """Whether ``key`` is a new key of a mapping left open to new keys (a plugin's
-    ``added_setting(open_keys=True)``, e.g. ``problem.known``); the plugin checks the name."""
+    """Whether ``key`` is new in a mapping left open (``open_keys``: the plugin checks it)."""
     from omegaconf import DictConfig, OmegaConf
 
     parent = key.rpartition(".")[0]
@@ -286,9 +265,7 @@ def _unknown_key(cfg: Any, key: str, value: Any) -> ConfigError:
 
 def check_points(points: list[list[str]], registry: Registry,
                  source: ConfigSource = SHIPPED) -> tuple[list[Job], Any]:
-    """Compose and parse every point (from the config ``source``: the shipped one by
-    default); returns the jobs and the first point's full config (with its ``hydra`` node,
-    for the output folder)."""
+    """Compose and parse every point: the jobs and the first point's full config."""
     from omegaconf import OmegaConf, open_dict
     from omegaconf.errors import OmegaConfBaseException
 
@@ -345,18 +322,10 @@ def check_writable(directory: Path, key: str) -> None:
                           f"a directory you can create and write to ({exc.strerror})") from None
 
 
-def _raw_dir(full_cfg: Any, multirun: bool) -> str:
-    """The output-folder template as written (``outputs/multirun/${now:...}``)."""
+def _resume_folder(cmd: CommandLine, full_cfg: Any, key: str) -> Path | None:
+    """The folder ``--resume`` continues (None: the one named on the command line)."""
     from omegaconf import OmegaConf
 
-    section = OmegaConf.to_container(full_cfg.hydra.sweep if multirun else full_cfg.hydra.run,
-                                     resolve=False)
-    return str(section.get("dir", ""))
-
-
-def _resume_folder(cmd: CommandLine, full_cfg: Any, key: str) -> Path | None:
-    """The folder ``--resume`` continues (None: the one named on the command line);
-    :class:`VpidBenchError` when there is none to continue."""
     from .resume import find_previous
 
     if cmd.resume:
@@ -366,7 +335,9 @@ def _resume_folder(cmd: CommandLine, full_cfg: Any, key: str) -> Path | None:
         return folder
     if any(a.startswith(key + "=") for a in cmd.overrides):
         return None  # the folder is named on the command line: that is the one continued
-    root = output_root(_raw_dir(full_cfg, cmd.multirun))
+    section = OmegaConf.to_container(full_cfg.hydra.sweep if cmd.multirun  # as written
+                                     else full_cfg.hydra.run, resolve=False)
+    root = output_root(str(section.get("dir", "")))
     folder = find_previous(root, cmd.overrides, cmd.multirun)
     if folder is None:  # it once started a whole new sweep: asking to resume asks for none
         kind = "sweep" if cmd.multirun else "run"
@@ -377,8 +348,8 @@ def _resume_folder(cmd: CommandLine, full_cfg: Any, key: str) -> Path | None:
 
 
 def _check_subdir(key: str, o: Any) -> None:
-    """A job folder stays inside its sweep: ``hydra.sweep.subdir`` may not be absolute nor
-    climb out with ``..`` (a job once ran outside and the sweep then counted 0 jobs)."""
+    """``hydra.sweep.subdir`` may not be absolute nor climb out with ``..`` (a job once ran
+    outside, and the sweep counted 0 jobs)."""
     values = ([str(v) for v in o.sweep_string_iterator()] if o.is_sweep_override()
               else [str(o.value())])
     for value in values:
@@ -389,8 +360,7 @@ def _check_subdir(key: str, o: Any) -> None:
 
 
 def plan(cmd: CommandLine, registry: Registry) -> Plan:
-    """Check the command line and fix the output folder (``--resume``: an earlier one).
-    Raises :class:`ConfigError` (one line) for anything bad; writes nothing."""
+    """Check the command line and fix the output folder; :class:`ConfigError`, no writes."""
     parsed = parse_overrides(cmd.overrides)
     for o in parsed:
         value = o.value()
@@ -440,25 +410,19 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
 
 
 def check_sized_jobs(jobs: Sequence[Job]) -> Any:
-    """The checks a job makes once its problem is built, made here for every job that needs
-    them: ``budget_per_dim`` against the problem's dimension (:meth:`Job.sized`) and
-    ``target`` against the optima certified for its runs' instances, confirmed by the
-    problem (:func:`vpid_bench.targets.check_sized`). A bad value there once stopped its job
-    only when it started (exit 1, two lines); now it is one line before any job runs.
-
-    The problems are built in a supervised worker process, like every call into plugin code
-    of the jobs (a crash there costs nothing but the check: the job runs it again and says
-    why); with ``isolation=none``, or a job that cannot be sent to a worker, here, and the
-    problems built are returned (a :class:`~vpid_bench.build.ProblemCache`) for the jobs to
-    reuse (``None`` otherwise)."""
+    """The checks a job makes once its problem is built (``budget_per_dim``, ``target``:
+    :func:`vpid_bench.targets.check_sized`), made for every job before any runs. In a
+    supervised worker (a crash costs only the check: the job says why); with
+    ``isolation=none`` here, the problems built returned for the jobs (else ``None``)."""
     from ..workers import can_send
 
     wanted = [j for j in jobs if j.spec.target is not None or j.spec.budget_per_dim is not None]
     if not wanted:
         return None
-    firsts: dict[str, Job] = {}
-    for j in wanted:
-        firsts.setdefault(_sized_key(j), j)
+    firsts: dict[str, Job] = {}  # once per what the check depends on (not the optimizer:
+    for j in wanted:  # 323 checks once took 37 s of the vpid1 build's pre-flight)
+        firsts.setdefault(repr((j.problem_cls, j.problem_name, j.problem_settings(),
+                                j.spec.runs, j.spec.budget_per_dim, j.spec.target)), j)
     once = list(firsts.values())
     if all(j.spec.isolation != "none" and can_send(j) is None for j in wanted):
         _check_in_a_worker(once)
@@ -466,18 +430,8 @@ def check_sized_jobs(jobs: Sequence[Job]) -> Any:
     return _check_here(once)
 
 
-def _sized_key(job: Job) -> str:
-    """What :func:`vpid_bench.targets.check_sized` depends on: the problem, its settings and
-    the runs, budget and target, not the optimizer. The 19 optimizers of a vpid1 member are
-    checked once (323 checks took 37 s of the archive build's pre-flight, one at a time)."""
-    spec = job.spec
-    return repr((job.problem_cls, job.problem_name, job.problem_settings(), spec.runs,
-                 spec.budget_per_dim, spec.target))
-
-
 def _check_in_a_worker(jobs: Sequence[Job]) -> None:
-    """:func:`vpid_bench.targets.check_sized` of each job in one supervised worker process;
-    its :class:`ConfigError` as one line; any other failure is left to the job."""
+    """Each job's check in one supervised worker; a failure but ConfigError is the job's."""
     from ..experiment import setup_limit_s
     from ..targets import check_sized
     from ..workers import Workers
@@ -514,10 +468,9 @@ def _check_here(jobs: Sequence[Job]) -> Any:
 
 def _globs_listed(hydra_args: Sequence[str], parsed: Sequence[Any], registry: Registry,
                   folders: Sequence[str]) -> list[str]:
-    """The command line with each ``glob()`` over problem or optimizer names replaced by the
-    names it matched here. Hydra's sweeper lists a group's choices before it reads
-    ``hydra.searchpath`` (how a ``-cd`` folder is passed), so it would miss that folder's
-    choices and run fewer jobs than were planned and checked."""
+    """The command line with each ``glob()`` over names replaced by the names it matched
+    (Hydra's sweeper lists choices before it reads ``hydra.searchpath``: it would miss a
+    ``-cd`` folder's)."""
     from hydra.core.override_parser.types import Glob
 
     listed = {}
@@ -530,11 +483,9 @@ def _globs_listed(hydra_args: Sequence[str], parsed: Sequence[Any], registry: Re
 
 
 def refuse_test_instances(jobs: Sequence[Job]) -> None:
-    """Tuning sees held-out instances only (docs/protocol.md): an optimizing sweeper (Optuna)
-    tunes, so a job of it whose problem draws its instances at the default seed (every
-    config key named ``seed`` at its default: the test set a comparison reports on) is
-    refused, naming the key to change. A problem without a seed key has no instance set to
-    hold out and is let through."""
+    """Tuning sees held-out instances only (docs/protocol.md): an optimizing sweeper's job
+    whose problem's ``seed`` keys are all at their default (the test set) is refused,
+    naming the key to change."""
     from ..params import to_plain
     from ..report.load import flatten
 
@@ -552,18 +503,11 @@ def refuse_test_instances(jobs: Sequence[Job]) -> None:
                               f"e.g. problem.{key}={value + 1} (docs/protocol.md)")
 
 
-def _is_hydra_key(o: Any) -> bool:
-    key = o.key_or_group
-    return key == "hydra" or key.startswith(("hydra.", "hydra/"))
-
-
 def planned_job_dirs(points: Sequence[Sequence[str]], full_cfg: Any, sweep_dir: Path
                      ) -> list[Path]:
-    """The job folders of a basic-sweeper sweep, named exactly as Hydra will name them: each
-    point of :func:`expand_points` (a job's override strings, sweeps such as ``glob()``
-    already expanded) through Hydra's ``override_dirname`` and our
-    :func:`~vpid_bench.shell.callbacks.job_dir_name`. Empty when ``hydra.sweep.subdir`` is
-    not the default, so the names cannot be known in advance."""
+    """The job folders of a basic-sweeper sweep, named as Hydra will name them (each point
+    through ``override_dirname`` and :func:`~.callbacks.job_dir_name`); empty when
+    ``hydra.sweep.subdir`` is not the default."""
     from hydra._internal.config_loader_impl import get_overrides_dirname
     from omegaconf import OmegaConf
 
@@ -578,7 +522,8 @@ def planned_job_dirs(points: Sequence[Sequence[str]], full_cfg: Any, sweep_dir: 
     for point in points:
         lines: dict[str, str] = {}  # as Hydra's basic sweeper renders a job: value as a
         for o in parser.parse_overrides(list(point)):  # string (0.000001 -> 1e-06), the
-            if not _is_hydra_key(o):  # last of a repeated key kept in the first's place
+            if not (o.key_or_group == "hydra"  # the last of a repeated key kept in the
+                    or o.key_or_group.startswith(("hydra.", "hydra/"))):  # first's place
                 key = o.get_key_element()
                 value = (o.get_value_element_as_str() if not o.is_sweep_override()
                          else o.input_line.split("=", 1)[1])
@@ -591,13 +536,9 @@ def planned_job_dirs(points: Sequence[Sequence[str]], full_cfg: Any, sweep_dir: 
 
 
 def create_job_dirs(plan: Plan) -> None:
-    """Create every planned job folder before the first job starts, so no job's set-up
-    (Hydra creates the folder before our task runs) can fail on it mid-sweep. A folder that
-    cannot be created (a file in its place, a full disk) refuses the command; one that exists
-    but cannot be written is left to its job, which fails alone and is reported. A symbolic
-    link planted at the sweep's ``multirun.yaml`` (Hydra writes it, following links) is
-    removed first, so nothing is written through it, and so is one planted in place of a
-    folder the command keeps in the output folder (:data:`OWN_FOLDERS`), with a warning."""
+    """Create every planned job folder before the first job (Hydra makes it outside our
+    task): one that cannot be created refuses the command; one that cannot be written fails
+    its job alone. Links planted at ``multirun.yaml`` or :data:`OWN_FOLDERS` are removed."""
     planted = plan.output_dir / "multirun.yaml"
     if plan.multirun and planted.is_symlink():
         planted.unlink()

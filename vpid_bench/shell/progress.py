@@ -1,7 +1,6 @@
-"""The progress of a whole ``-m`` sweep: after each job, one line with the jobs and runs done
-of the sweep's total, the time spent and an estimate of the time left, beside each job's own
-progress bar. Shown where the jobs run in the command's process (Hydra's basic launcher, the
-default); other launchers run jobs elsewhere and show only the jobs' own lines."""
+"""The progress of a whole ``-m`` sweep: after each job, one line with the jobs and runs done,
+the time spent and an estimate of the time left (where the jobs run in the command's process,
+Hydra's basic launcher)."""
 
 from __future__ import annotations
 
@@ -15,10 +14,8 @@ from ..progress import duration
 
 
 class SweepProgress:
-    """Counts a sweep's jobs and runs as they end. ``jobs`` and ``runs``: the sweep's totals
-    (from the pre-flight's plan). The estimate of the time left is the time per run this
-    command ran so far (runs found already recorded by a resume cost nothing and are not
-    counted) times the runs still to do."""
+    """Counts a sweep's jobs and runs as they end (``jobs``, ``runs``: its totals); the time
+    left is the time per run this command ran so far times the runs still to do."""
 
     def __init__(self, jobs: int, runs: int, clock: Callable[[], float] = time.monotonic,
                  stream: TextIO | None = None) -> None:
@@ -31,8 +28,8 @@ class SweepProgress:
         self.runs_run = 0  # runs this command ran (what the estimate is made from)
 
     def job_done(self, ran: int, skipped: int, not_run: int = 0) -> str:
-        """Count one job (``ran`` runs run now, ``skipped`` found recorded, ``not_run`` never
-        run because the job failed) and return the line (also printed on the stream)."""
+        """Count one job (runs run now, found recorded, never run as the job failed); print
+        and return the line."""
         self.jobs_done += 1
         self.runs_done += ran + skipped + not_run
         self.runs_run += ran
@@ -57,16 +54,13 @@ class SweepProgress:
                 f"done, {duration(self.clock() - self.start)} elapsed, {eta}")
 
 
-#: Above this estimate (s) the first line points to the quicker first steps of placing a new
-#: optimizer (docs/plugins.md).
+#: Above this estimate (s) the first line points to quicker first steps (docs/plugins.md).
 QUICK_PATH_S = 600.0
 
 
 def first_line(jobs: Sequence[Any], per_evaluation: Mapping[str, float]) -> str:
-    """The sweep's line before any work: its jobs and runs, and about how long they take at
-    the time per evaluation its problems took in the archives' builds (``per_evaluation``,
-    :func:`vpid_bench.store.archive.evaluation_seconds`) times each run's budget; the jobs
-    whose problem no archive timed are counted apart."""
+    """The sweep's line before any work: its jobs and runs and about how long they take
+    (each run's budget times ``per_evaluation`` of its problem, from the archives' builds)."""
     runs = sum(j.spec.runs for j in jobs)
     timed = [j for j in jobs if j.problem_name in per_evaluation]
     seconds = sum(j.spec.runs * j.budget * per_evaluation[j.problem_name] for j in timed)

@@ -1,34 +1,19 @@
-"""``vpid-bench --help`` answered without Hydra's help machinery.
-
-Hydra's own ``--help`` builds a config repository once per config group (67 groups with
-every plugin stored), deep-copying the whole config store each time: 4-9 s of CPU before a
-word is printed (issue 46). The same page is built here from what is already known: the
-header and footer of ``hydra_settings.yaml``, the choices of the plugin registry and one
-composition of the selected config (the same compose API the pre-flight uses). A custom
-config (``-cp``/``-cn``/``-cd``) or a sweep's comma list still goes to Hydra.
+"""``vpid-bench --help`` answered without Hydra's help machinery (it deep-copies the config
+store once per config group: 4-9 s before a word, issue 46): the header and footer of
+``hydra_settings.yaml``, the registry's choices and one composition of the selected config.
+A custom config or a sweep's comma list still goes to Hydra.
 """
 
 from __future__ import annotations
 
-import importlib.resources
 from typing import Any
 
 from .argv import CommandLine
-from .config_store import HYDRA_SETTINGS
-
-
-def _settings() -> dict[str, str]:
-    """The ``hydra.help`` header and footer of :data:`HYDRA_SETTINGS`."""
-    from omegaconf import OmegaConf
-
-    text = importlib.resources.files(__package__).joinpath(HYDRA_SETTINGS).read_text()
-    node = OmegaConf.create(text).hydra.help
-    return {"header": str(node.header), "footer": str(node.footer)}
+from .config_store import hydra_settings
 
 
 def choices(registry: Any) -> list[str]:
-    """One ``group: name, name, ...`` line per group, every registered plugin listed (with
-    the shipped YAML presets, as Hydra lists them)."""
+    """One ``group: name, name, ...`` line per group (plugins and presets)."""
     from .preflight import _group_names
 
     return [f"{group}: " + ", ".join(_group_names(group, registry))
@@ -36,8 +21,7 @@ def choices(registry: Any) -> list[str]:
 
 
 def help_text(cmd: CommandLine, registry: Any) -> str | None:
-    """The help page for ``cmd``, or ``None`` when only Hydra can build it (a custom
-    config, a sweep list or an override the quick path does not read)."""
+    """The help page for ``cmd``, or ``None`` when only Hydra can build it."""
     if cmd.custom_config or any("," in o for o in cmd.overrides):
         return None
     from omegaconf import OmegaConf
@@ -46,7 +30,7 @@ def help_text(cmd: CommandLine, registry: Any) -> str | None:
 
     with initialize(SHIPPED):
         cfg = _compose(list(cmd.overrides), hydra=False)
-    text = _settings()
+    text = hydra_settings()["help"]
     return (f"{text['header']}\n== Choices (group=option) ==\n" + "\n".join(choices(registry))
             + "\n\n\n== Config of this selection (override any key: key=value) ==\n"
             + OmegaConf.to_yaml(cfg) + "\n" + text["footer"])

@@ -1,16 +1,12 @@
 """Sweeps that survive: finding an earlier sweep, one command per folder, the jobs' statuses.
 
-* :func:`find_previous` implements ``vpid-bench --resume``: the newest earlier sweep (or single
-  run) whose command-line overrides match the current ones, ignoring ``hydra.*`` (launcher
-  choice, ...) and the keys that change no result (``progress``, ``report``, ``resume``,
-  ``threads``).
-* :func:`check_reuse` keeps an earlier command's jobs in an output folder from being merged
-  with this command's without a word: refused, unless ``--merge`` asks for it.
-* :class:`FolderLock` keeps two commands out of one output folder: the second is refused in
-  one line instead of running everything twice.
-* :func:`collect_job_statuses` reads the ``job.json`` each job wrote, tagged with this
-  command's invocation id (environment variable ``VPID_BENCH_INVOCATION``, inherited by
-  launcher workers), so statuses left by an earlier command are not mistaken for this one's.
+* :func:`find_previous` (``--resume``): the newest earlier sweep or run whose overrides match
+  these, ``hydra.*`` and the keys that change no result left out;
+* :func:`check_reuse`: an earlier command's jobs in the output folder are refused, unless
+  ``--merge``;
+* :class:`FolderLock`: a second command in one output folder is refused in one line;
+* :func:`collect_job_statuses`: the ``job.json`` of this invocation's jobs (its id in
+  ``VPID_BENCH_INVOCATION``, inherited by launcher workers).
 """
 
 from __future__ import annotations
@@ -66,10 +62,8 @@ def find_previous(root: Path, overrides: Sequence[str], multirun: bool) -> Path 
     if not root.is_dir():
         return None
     wanted = normalise_overrides(overrides)
-    candidates = sorted(
-        (p for p in root.iterdir() if p.is_dir() and not p.is_symlink()),
-        key=lambda p: p.stat().st_mtime, reverse=True,
-    )
+    candidates = sorted((p for p in root.iterdir() if p.is_dir() and not p.is_symlink()),
+                        key=lambda p: p.stat().st_mtime, reverse=True)
     for folder in candidates:
         saved = _saved_task_overrides(folder, multirun)
         if saved is not None and normalise_overrides(saved) == wanted:
@@ -78,9 +72,7 @@ def find_previous(root: Path, overrides: Sequence[str], multirun: bool) -> Path 
 
 
 def earlier_jobs(folder: Path) -> set[Path]:
-    """The job folders an earlier command left in ``folder``: the folder itself when it is a
-    job's (a single run), and each folder directly below it that holds records or a job
-    status (a sweep's jobs; links are not followed)."""
+    """The job folders an earlier command left in ``folder`` (itself, or those below it)."""
     def is_job(p: Path) -> bool:
         return not p.is_symlink() and ((p / "records").is_dir() or (p / JOB_STATUS_FILE).is_file())
 
@@ -93,14 +85,10 @@ def earlier_jobs(folder: Path) -> set[Path]:
 
 def check_reuse(folder: Path, planned: Sequence[Path], overrides: Sequence[str],
                 multirun: bool, merge: bool, key: str) -> str | None:
-    """Whether this command may write into ``folder``, which may hold an earlier command's
-    jobs. A second sweep into a finished sweep's folder was once merged into it without a
-    word (the terminal said 2 jobs, the report ranked 4 optimizers). Jobs there that this
-    command does not plan (``planned``: its job folders; a single run's is ``folder``) are
-    another command's: refused with :class:`ConfigError`, unless ``merge`` (``--merge``) asks
-    for it, when the returned line says so. Re-running the same jobs (a resume) or adding
-    jobs to them is no merge. Without ``planned`` (an optimizing sweeper, a custom
-    ``hydra.sweep.subdir``) the earlier command's saved overrides must equal these."""
+    """Whether this command may write into ``folder`` (a second sweep was once merged into a
+    finished one without a word). Jobs there it does not plan (``planned``) are another
+    command's: :class:`ConfigError`, unless ``merge``, when the returned line says so.
+    Without ``planned`` the earlier command's saved overrides must equal these."""
     earlier = earlier_jobs(folder)
     if not earlier:
         return None
@@ -122,11 +110,8 @@ def check_reuse(folder: Path, planned: Sequence[Path], overrides: Sequence[str],
 
 
 class FolderLock:
-    """An exclusive advisory lock on an output folder, held for the life of the command.
-
-    ``acquire`` raises :class:`ConfigError` when another command holds it. The lock file
-    stays behind (harmless); the lock itself ends with the process, even on ``kill -9``.
-    """
+    """An exclusive advisory lock on an output folder for the life of the command (ends with
+    the process, even on ``kill -9``); ``acquire`` refuses a second command."""
 
     def __init__(self, folder: Path, key: str) -> None:
         self.folder, self.key = Path(folder), key
@@ -153,9 +138,8 @@ class FolderLock:
         self._fd = fd
 
     def still_here(self) -> bool:
-        """Whether the locked folder is still where it was (a sweep folder renamed or removed
-        mid-sweep was once re-created, unlocked, by the next job, splitting the sweep in
-        two without a word): the lock file at the folder's path is the one we hold."""
+        """Whether the lock file at the folder's path is the one held (a sweep folder renamed
+        mid-sweep was once re-created, unlocked, by the next job)."""
         if self._fd is None:
             return True
         try:
@@ -173,8 +157,7 @@ class FolderLock:
 
 
 def collect_job_statuses(sweep_dir: Path, invocation: str | None) -> list[dict[str, Any]]:
-    """The ``job.json`` of every job this invocation ran below ``sweep_dir``, each with its
-    ``job_dir``; one written by another command (another invocation id) is left out."""
+    """The ``job.json`` of every job this invocation ran below ``sweep_dir``, with its folder."""
     out = []
     for path in sorted(Path(sweep_dir).rglob(JOB_STATUS_FILE)):
         if path.is_symlink():
@@ -191,10 +174,8 @@ def collect_job_statuses(sweep_dir: Path, invocation: str | None) -> list[dict[s
 
 
 def resume_command(argv: Sequence[str], output_dir: Path, key: str) -> str:
-    """The exact command that continues an interrupted command ``argv`` (without the program
-    name): every override as given, and the folder: ``--resume`` alone when ``key``
-    (``hydra.sweep.dir`` or ``hydra.run.dir``) is on the command line (that folder is the
-    one continued), else ``--resume=<output_dir>``. Quoted for a POSIX shell."""
+    """The command that continues ``argv``, quoted for a POSIX shell: ``--resume`` alone
+    when ``key`` (the output folder) is on the command line, else ``--resume=<output_dir>``."""
     import shlex
 
     args = [a for a in argv if a != "--resume" and not a.startswith("--resume=")]

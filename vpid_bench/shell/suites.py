@@ -1,9 +1,5 @@
-"""``suite=<name>`` on the command line: the sweep of every problem of a named suite.
-
-A suite is what its problems declare (``Problem.suites``); ``-m suite=smoke`` becomes
-``-m problem=<each problem of smoke>`` before the pre-flight and Hydra see the command line,
-so every member runs with its own defaults and everything else (optimizers, keys, resume)
-works as for any problem sweep.
+"""``suite=<name>``: ``-m suite=smoke`` becomes ``-m problem=<each problem of smoke>`` (a
+suite is what its problems declare, ``Problem.suites``) before the pre-flight and Hydra see it.
 """
 
 from __future__ import annotations
@@ -16,9 +12,8 @@ from .argv import CommandLine
 
 
 def expand_suites(cmd: CommandLine, registry: Registry) -> CommandLine:
-    """``cmd`` with a ``suite=a[,b]`` override replaced by ``problem=<members>``. Refused in
-    one line: an unknown suite (naming the known ones), a suite without ``-m``, a suite
-    together with ``problem=``."""
+    """``cmd`` with ``suite=a[,b]`` replaced by ``problem=<members>``; an unknown suite, one
+    without ``-m`` or with ``problem=`` refused in one line."""
     given = [o for o in cmd.overrides if o.startswith("suite=")]
     if not given:
         return cmd

@@ -10,9 +10,8 @@ The layout (``<root>/<suite>/``; written by :mod:`.archive_pack`, its runs read 
                         :mod:`vpid_bench.store.optimum`)
     summary.csv, ioh.zip, jobs/<problem>/<file>
 
-Everything in an archive is untrusted input. ``target=`` reads an archive's optima through
-:func:`archive_optima` without the report; the report reads the runs too
-(:func:`.archive_records.read_archive`), through the same checks.
+Everything in an archive is untrusted. ``target=`` reads its optima through
+:func:`archive_optima`; the report reads the runs too, through the same checks.
 """
 
 from __future__ import annotations
@@ -34,44 +33,27 @@ from .records import canonical_json
 
 SCHEMA = "vpid-bench/archive/1"
 MANIFEST = "manifest.json"
-
-
 RECORDS = "records.jsonl.gz"
 OPTIMA = "optima.jsonl"
-
-
 SUMMARY = "summary.csv"
 IOH = "ioh.zip"
-
-
 #: Per problem, the files a job writes once for all its runs (the report's bounds and floors
 #: per estimator), shipped as ``jobs/<problem>/<name>``.
 JOB_FILES = (IDENTIFIABILITY, ESTIMATORS)
 JOBS = "jobs"
-
-
 #: Largest manifest and optima file read (bytes).
 MAX_TEXT_BYTES = 4 * 1024 * 1024
-
-
 #: Largest compressed records file read, and the most its lines may hold uncompressed (bytes):
-#: ten times the shipped smoke archive's 12 MB; read as a stream, line by line, so a gzip bomb
-#: (500 KB that expand to 500 MB) stops at the first limit it meets, in memory and in time.
+#: ten times the shipped smoke archive's 12 MB; read line by line, so a gzip bomb (500 KB
+#: that expand to 500 MB) stops at the first limit it meets, in memory and in time.
 MAX_GZ_BYTES = 64 * 1024 * 1024
 MAX_RECORDS_BYTES = 128 * 1024 * 1024
-
-
 #: The most lines a records or optima file may hold, blank ones included (the smoke archive
 #: holds 2,850), and the longest line (bytes; a record with a long trace is a few hundred KB).
 MAX_LINES = 200_000
 MAX_LINE_BYTES = 16 * 1024 * 1024
-
-
-#: An archive with more bad lines than this is refused as a whole (it is not an archive with
-#: a few damaged lines, and checking each costs time).
+#: An archive with more bad lines than this is refused as a whole.
 MAX_BAD_LINES = 1_000
-
-
 #: The most files a manifest may list.
 MAX_FILES = 1_000
 
@@ -86,8 +68,7 @@ ARCHIVE_DIR_ENV = "VPID_BENCH_ARCHIVE_DIR"
 
 
 def default_root() -> Path:
-    """The archives shipped with the package (``archive/`` in the source tree), or the folder
-    ``$VPID_BENCH_ARCHIVE_DIR`` names."""
+    """The archives shipped with the package, or the folder ``$VPID_BENCH_ARCHIVE_DIR``."""
     import os
     from importlib.resources import files
 
@@ -129,10 +110,8 @@ def runs_root() -> Path | None:
 
 
 def located(folder: Path, name: str) -> Path:
-    """The file ``name`` of the archive in ``folder``: beside its manifest when it is there
-    (any archive a user or a test makes), else, for a run file (:data:`RUN_FILES`) of an
-    archive shipped with the package, in the archive runs' data distribution
-    (:func:`runs_root`)."""
+    """The file ``name`` of the archive in ``folder``: beside its manifest when there, else,
+    for a run file of a shipped archive, in the runs' data distribution (:func:`runs_root`)."""
     path = folder / name
     if name not in RUN_FILES or path.exists() or path.is_symlink():
         return path
@@ -189,10 +168,9 @@ def _checked_file(folder: Path, manifest: Mapping[str, Any], name: str, limit: i
 
 
 def _gz_lines(data: bytes, folder: Path) -> Iterator[bytes]:
-    """The lines of the gzip data ``data``, decompressed one at a time: lines of at most
-    :data:`MAX_LINE_BYTES` (a longer one comes in pieces, which :func:`_lines` refuses),
-    :data:`MAX_RECORDS_BYTES` in all (:class:`ArchiveError` past it; the whole file is never
-    in memory)."""
+    """The lines of the gzip ``data``, decompressed one at a time (a line longer than
+    :data:`MAX_LINE_BYTES` comes in pieces, which :func:`_lines` refuses), at most
+    :data:`MAX_RECORDS_BYTES` in all."""
     total = 0
     try:
         with gzip.GzipFile(fileobj=io.BytesIO(data)) as fh:
@@ -209,9 +187,8 @@ def _gz_lines(data: bytes, folder: Path) -> Iterator[bytes]:
 
 def _lines(lines: Iterable[bytes], where: Path) -> Iterator[tuple[int, Any, str | None]]:
     """``(line number, parsed JSON, None)`` of each non-blank line, or ``(line number, None,
-    why)`` for one that is not JSON (:func:`~vpid_bench.fileio.loads_json`: nested too deeply
-    too), within :data:`MAX_LINES` and :data:`MAX_LINE_BYTES` (``where``: the file, for the
-    error)."""
+    why)`` for one that is not JSON, within :data:`MAX_LINES` and :data:`MAX_LINE_BYTES`
+    (``where``: the file, for the error)."""
     for n, line in enumerate(lines, 1):
         if n > MAX_LINES:
             raise ArchiveError(f"archive {where.parent}: {where.name} holds more than "
@@ -254,8 +231,7 @@ class _Bad:
 
 
 def _read_optima(folder: Path, manifest: Mapping[str, Any], bad: _Bad) -> list[Optimum]:
-    """The optimum lines; one instance (problem, instance, settings) given twice refuses
-    the archive: which of two optima counts is not the archive's to leave open."""
+    """The optimum lines; an instance given twice refuses the archive (which counts?)."""
     optima, seen = [], {}
     data = _checked_file(folder, manifest, OPTIMA, MAX_TEXT_BYTES)
     for n, obj, why in _lines(data.splitlines(keepends=True), folder / OPTIMA):
@@ -285,8 +261,7 @@ def is_archive(path: Path) -> bool:
 
 
 def find_archives(root: Path | None = None) -> list[Path]:
-    """The archive folders below ``root`` (default :func:`default_root`): every subfolder
-    with a ``manifest.json``."""
+    """The archive folders below ``root`` (default: :func:`default_root`)."""
     root = default_root() if root is None else Path(root)
     if not root.is_dir():
         return []
@@ -295,11 +270,10 @@ def find_archives(root: Path | None = None) -> list[Path]:
 
 def archive_optima(root: Path | None = None, problems: Iterable[str] | None = None
                    ) -> tuple[list[Optimum], list[str]]:
-    """The optima of every usable archive below ``root`` (default :func:`default_root`) whose
-    manifest lists one of ``problems`` (all when ``None``), and one line per such archive
-    that cannot be used. Each archive is checked as the report checks it (manifest, job
-    files and records file against their SHA-256, every optimum line), its records not
-    read line by line: what ``target=`` needs, in the pre-flight and in every job."""
+    """The optima of every usable archive below ``root`` whose manifest lists one of
+    ``problems`` (all when ``None``), and one line per such archive that cannot be used;
+    checked as the report checks them (files against their SHA-256, every optimum line),
+    the records not read line by line."""
     optima: list[Optimum] = []
     bad: list[str] = []
     wanted = None if problems is None else set(problems)
@@ -324,12 +298,10 @@ MAX_SUMMARY_BYTES = 1_000_000
 
 
 def evaluation_seconds(root: Path | None = None) -> dict[str, float]:
-    """Per problem of the archives below ``root`` (default: the shipped ones), the seconds one
-    evaluation took in their builds: the median over the optimizers of each one's median run
-    time over its median evaluations, from ``summary.csv`` (the box centre's single
-    evaluation left out). What a sweep's first estimate of its time is made from
-    (``vpid_bench.shell.progress``). Unreadable files and odd rows are left out: an estimate
-    is not worth a refusal."""
+    """Per problem of the archives below ``root``, the seconds one evaluation took in their
+    builds (median over optimizers of median run time / median evaluations, ``summary.csv``):
+    a sweep's first estimate of its time. Unreadable files, odd rows and single evaluations
+    (the box centre's) are left out."""
     per: dict[str, list[float]] = {}
     for folder in find_archives(root):
         try:

@@ -1,23 +1,12 @@
 """Files a job writes beside its run records for the report: ``best_signals.csv``.
 
-The report never rebuilds a problem from a record (records and result folders are untrusted
-input: a record's config could name any file or a huge size). Instead the job, which has
-the problem at hand, writes what a figure needs: the measured and fitted signals of its best
-run (:meth:`vpid_bench.api.Problem.signals`), with the unit of each channel
-(:meth:`vpid_bench.api.Problem.signal_units`).
+The report never rebuilds a problem from an (untrusted) record; the job, which has the
+problem at hand, writes what a figure needs: the measured and fitted signals of its best run
+(:meth:`~vpid_bench.api.Problem.signals`), with each channel's unit.
 
-``best_signals.csv`` layout (UTF-8)::
-
-    # vpid-bench best signals 1
-    # source: {"run_index": 3, "f_best": 0.046, "ranked_by": "err", "value": 22.3}
-    # units: {"t": "s", "z1''": "m/s^2", "z2''": "m/s^2"}
-    t,z1'':measured,z1'':fitted,z2'':measured,z2'':fitted
-    0.0,0.0,0.0,0.0,0.0
-    ...
-
-The ``#`` lines hold JSON; the rest is a CSV table (one column per signal, ``t`` in s first,
-non-finite values written as ``nan``). :func:`read_best_signals` checks all of it and
-raises :class:`BadArtifactError` (one line naming the file) for anything else.
+``best_signals.csv`` (UTF-8): the line :data:`MAGIC`, then ``# source: {JSON}`` (which run)
+and ``# units: {JSON}``, then a CSV table: ``t`` (s), ``<channel>:measured``,
+``<channel>:fitted``, ... (non-finite values as ``nan``).
 """
 
 from __future__ import annotations
@@ -26,8 +15,6 @@ import csv
 import io
 import json
 import math
-import os
-import tempfile
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from ..fileio import loads_json, read_text_limited
+from ..fileio import loads_json, read_text_limited, write_text_atomic
 
 BEST_SIGNALS = "best_signals.csv"
 MAGIC = "# vpid-bench best signals 1"
@@ -49,9 +36,8 @@ class BadArtifactError(ValueError):
 
 @dataclass(frozen=True)
 class BestSignals:
-    """The content of a ``best_signals.csv``: times ``t`` (s), per channel the measured and
-    fitted arrays (``channels[name] = (measured, fitted)``, either may be ``None``), units per
-    channel, and ``source`` (which run: ``run_index``, ``f_best``, ``ranked_by``, ``value``)."""
+    """A ``best_signals.csv``: times ``t`` (s), ``channels[name] = (measured, fitted)``
+    (either may be ``None``), units per channel, and ``source`` (which run)."""
 
     t: np.ndarray
     channels: dict[str, tuple[np.ndarray | None, np.ndarray | None]]
@@ -73,13 +59,10 @@ def best_vector(record_paths: Iterable[Path]) -> tuple[np.ndarray, dict[str, Any
 
 
 def best_of(records: Iterable[Mapping[str, Any]]) -> tuple[np.ndarray, dict[str, Any]] | None:
-    """The best identified vector among the ok ``records`` (as read by
-    :func:`vpid_bench.store.records.read_record`) and where it comes from (``run_index``,
-    ``f_best``, ``ranked_by``, ``value``), or ``None``.
-
-    Best means the lowest first metric (``result.metrics``) when every ok record has it,
-    else the lowest objective ``f_best``; records with a non-finite vector are passed over.
-    """
+    """The best vector among the ok ``records`` and where it comes from (``run_index``,
+    ``f_best``, ``ranked_by``, ``value``), or ``None``: the lowest first metric when every ok
+    record has it, else the lowest ``f_best``; a record without a numeric vector is passed
+    over."""
     runs = []
     for r in records:
         res = r.get("result")
@@ -108,9 +91,8 @@ def best_of(records: Iterable[Mapping[str, Any]]) -> tuple[np.ndarray, dict[str,
 
 def write_best_signals(job_dir: Path, problem: Any, x: np.ndarray,
                        source: Mapping[str, Any] | None = None) -> Path | None:
-    """Write ``job_dir/best_signals.csv`` from ``problem.signals(x)`` atomically (a temporary
-    file, then ``os.replace``); ``None`` (nothing written) when the problem has no signals.
-    ``source`` says which run ``x`` is (see :func:`best_vector`)."""
+    """Write ``job_dir/best_signals.csv`` from ``problem.signals(x)`` atomically; ``None``
+    (nothing written) when the problem has no signals. ``source``: which run ``x`` is."""
     sig = problem.signals(np.asarray(x, dtype=float))
     if not sig or "t" not in sig:
         return None
@@ -128,33 +110,12 @@ def write_best_signals(job_dir: Path, problem: Any, x: np.ndarray,
     writer.writerow(["t", *keys])
     for row in np.column_stack(cols):
         writer.writerow([repr(float(v)) for v in row])
-    path = Path(job_dir) / BEST_SIGNALS
-    _atomic_write(path, buf.getvalue())
-    return path
-
-
-def _atomic_write(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    return write_text_atomic(Path(job_dir) / BEST_SIGNALS, buf.getvalue())
 
 
 def read_best_signals(path: Path, max_bytes: int = MAX_BYTES) -> BestSignals:
-    """Read and check a ``best_signals.csv`` (untrusted: it may come from anywhere).
-
-    Raises :class:`BadArtifactError` naming the file for a missing, oversized or malformed
-    file (wrong header, a non-number, rows of different lengths, a column that is neither
-    ``t`` nor ``<channel>:measured`` / ``<channel>:fitted``).
-    """
+    """Read and check a (untrusted) ``best_signals.csv``: :class:`BadArtifactError` naming
+    the file for a missing, oversized or malformed one."""
     path = Path(path)
 
     def bad(why: str) -> BadArtifactError:
@@ -197,9 +158,5 @@ def read_best_signals(path: Path, max_bytes: int = MAX_BYTES) -> BestSignals:
             raise bad(f"column {name!r} is not <channel>:measured or <channel>:fitted")
         channels.setdefault(channel, {})[kind] = data[:, j]
     units = {str(k): str(v) for k, v in meta["units"].items() if isinstance(v, str)}
-    return BestSignals(
-        t=data[:, 0],
-        channels={c: (d.get("measured"), d.get("fitted")) for c, d in channels.items()},
-        units=units,
-        source=meta["source"],
-    )
+    return BestSignals(data[:, 0], {c: (d.get("measured"), d.get("fitted"))
+                                    for c, d in channels.items()}, units, meta["source"])

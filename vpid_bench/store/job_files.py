@@ -1,12 +1,7 @@
-"""A job's JSON files: what the job computes once its runs are in, written beside its records
-for the report to read (the fit diagnostics, the bounds, the floors per estimator, the profile
-and comparisons of estimates) and the per-problem copies a sweep shares between jobs.
-
-One home for their names, their one size cap, their reader and their writer. The reader
-never follows a planted link, opens nothing but a regular file, refuses a file over
-:data:`MAX_BYTES` and JSON that is not JSON (nested past the recursion limit included), and
-says why in a few words; each file's content is checked by :mod:`.job_checks` (a report
-never trusts what a job folder holds).
+"""A job's JSON files (diagnostics, bounds, floors per estimator, profile, comparisons),
+written beside its records for the report: their names, one size cap, reader and writer.
+The reader never follows a link, opens only a regular file, refuses one over
+:data:`MAX_BYTES` or not JSON, and says why; each file's content is checked by :mod:`.job_checks`.
 """
 
 from __future__ import annotations
@@ -28,9 +23,7 @@ MAX_BYTES = 2_000_000
 
 
 def read_job_json(path: Path) -> tuple[Any, str]:
-    """The JSON value of the job file ``path``: ``(value, "")``, or ``(None, why)`` for a file
-    that is missing, a link, not a regular file, larger than :data:`MAX_BYTES`, not UTF-8 or
-    not JSON."""
+    """The JSON value of the job file ``path``: ``(value, "")``, or ``(None, why)``."""
     try:
         if path.is_symlink():
             return None, "not a regular file"

@@ -1,9 +1,6 @@
-"""``job.json``: the status of one job, written atomically into its output directory.
-
-The command reads these after a sweep to tell which jobs failed, whatever launcher (and
-process) ran them. Each status carries the invocation id of the command that wrote it
-(``VPID_BENCH_INVOCATION``), so statuses left by an earlier run of a resumed sweep are not
-mistaken for this one's.
+"""``job.json``: one job's status, read by the command after a sweep whatever process ran
+it; it carries the invocation id of the command that wrote it (``VPID_BENCH_INVOCATION``), so
+an earlier command's statuses are not mistaken for this one's.
 """
 
 from __future__ import annotations
@@ -21,20 +18,14 @@ JOB_STATUS_FILE = "job.json"
 
 
 def write_job_status(job_dir: Path, status: str, detail: Any) -> Path:
-    """Write ``{"status", "detail", "invocation"}``; ``detail`` is a JobSummary or a message.
-
-    ``status`` is ``ok``, ``failed_runs`` (some runs raised; their records say why),
-    ``error`` (the job stopped before or between runs) or ``interrupted``.
-    """
+    """Write ``{"status", "detail", "invocation"}``: ``ok``, ``failed_runs`` (their records
+    say why), ``error`` or ``interrupted``; ``detail`` a JobSummary or a message."""
     if dataclasses.is_dataclass(detail) and not isinstance(detail, type):
         detail = {k: (str(v) if isinstance(v, Path) else v)
                   for k, v in dataclasses.asdict(detail).items() if k != "record_paths"}
-    payload = {
-        "status": status,
-        "detail": _jsonable(detail),
-        "invocation": os.environ.get("VPID_BENCH_INVOCATION"),
-    }
-    return write_record(Path(job_dir) / JOB_STATUS_FILE, payload)
+    return write_record(Path(job_dir) / JOB_STATUS_FILE, {
+        "status": status, "detail": _jsonable(detail),
+        "invocation": os.environ.get("VPID_BENCH_INVOCATION")})
 
 
 def read_job_status(job_dir: Path) -> dict[str, Any] | None:

@@ -1,11 +1,6 @@
 """The instance-optimum file (``optima/<key>.json``, and a line of an archive's
-``optima.jsonl``): its one schema string, its one size cap, its one reader and check, and
-which optimum a run record's instance has.
-
-A file is written by :func:`vpid_bench.analysis.optimum.update_instance_optimum`; every
-reader (the job's re-polish, the report, ``target=``) reads it through
-:func:`read_optimum_file` or :func:`optimum_from_data`, which check every field (result
-folders and archives are untrusted input).
+``optima.jsonl``): its schema string, size cap, one reader and check (every field: result
+folders and archives are untrusted), and which optimum a run record's instance has.
 """
 
 from __future__ import annotations
@@ -48,8 +43,7 @@ def _finite(v: Any) -> bool:
 
 
 def check_optimum(data: Any) -> str | None:
-    """The first bad field of a parsed optimum file as ``"<field>: expected ..."``, or
-    ``None`` when every field the report reads is well-typed."""
+    """The first bad field of a parsed optimum file as ``"<field>: expected ..."``, or None."""
     if not isinstance(data, Mapping):
         return "the file: expected a JSON object"
     checks: list[tuple[str, bool, str]] = [
@@ -81,9 +75,8 @@ def check_optimum(data: Any) -> str | None:
 
 
 def read_optimum_data(path: Path) -> tuple[dict[str, Any] | None, str | None]:
-    """``(data, None)`` for a good optimum file (its parsed JSON, every field checked by
-    :func:`check_optimum`), ``(None, why)`` for a bad one: not a regular file, larger than
-    :data:`MAX_BYTES`, unreadable, or a bad field. The one reader of the format."""
+    """``(data, None)`` for a good optimum file (every field checked), ``(None, why)`` for a
+    bad one: not a regular file, over :data:`MAX_BYTES`, unreadable, or a bad field."""
     try:
         path = Path(path)
         if path.is_symlink() or not path.is_file():
@@ -98,9 +91,8 @@ def read_optimum_data(path: Path) -> tuple[dict[str, Any] | None, str | None]:
 
 
 def write_optimum_file(path: Path, data: Mapping[str, Any]) -> Path:
-    """Write the optimum ``data`` to ``path`` atomically, after the checks its reader applies
-    (:func:`check_optimum`): a file this writes is always one the reader takes. The one writer
-    of the format."""
+    """Write the optimum ``data`` to ``path`` atomically, after the reader's checks (a file
+    this writes is always one the reader takes)."""
     bad = check_optimum(data)
     if bad:
         raise ValueError(f"not an optimum file: field {bad}")
@@ -108,15 +100,14 @@ def write_optimum_file(path: Path, data: Mapping[str, Any]) -> Path:
 
 
 def read_optimum_file(path: Path) -> tuple[Optimum | None, str | None]:
-    """``(optimum, None)`` for a good file, ``(None, why)`` for a bad one
-    (:func:`read_optimum_data`)."""
+    """``(optimum, None)`` for a good file, ``(None, why)`` for a bad one."""
     data, why = read_optimum_data(path)
     return (None, why) if data is None else optimum_from_data(data, path)
 
 
 def optimum_from_data(data: Any, path: Path) -> tuple[Optimum | None, str | None]:
-    """``(optimum, None)`` for parsed optimum data that passes :func:`check_optimum` (from a
-    file, or a line of the archive named by ``path``), ``(None, why)`` otherwise."""
+    """``(optimum, None)`` for parsed data that passes :func:`check_optimum` (from a file,
+    or a line of the archive named by ``path``), ``(None, why)`` otherwise."""
     bad = check_optimum(data)
     if bad:
         return None, f"field {bad}"
@@ -145,10 +136,9 @@ def _data_settings(settings: Mapping[str, Any] | None) -> str | None:
 
 
 def matching_optima(record: Mapping[str, Any], index: OptimaIndex) -> list[Optimum]:
-    """Every optimum of a record's instance: files with the record's problem, instance id,
-    data settings (the protocol keys ``ps``/``iterations`` do not change a record's data) and
-    dimension. A file without settings matches only by a non-null instance id (the id names
-    the data)."""
+    """Every optimum of a record's instance: the same problem, instance id, data settings
+    (protocol keys left out) and dimension; a file without settings matches only by a
+    non-null instance id."""
     problem = record["problem"]["name"]
     inst = (record.get("instance") or {}).get("id") if isinstance(
         record.get("instance"), Mapping) else None
@@ -169,7 +159,6 @@ def matching_optima(record: Mapping[str, Any], index: OptimaIndex) -> list[Optim
 
 
 def match_optimum(record: Mapping[str, Any], index: OptimaIndex) -> Optimum | None:
-    """The optimum of a record's instance (:func:`matching_optima`). Several files (e.g. one
-    per population size of a sweep on the same record) hold optima of the same instance: the
-    lowest is the best known."""
+    """The lowest of :func:`matching_optima` (several files may hold optima of one instance,
+    e.g. one per population size of a sweep), the best known."""
     return min(matching_optima(record, index), key=lambda o: o.f_opt, default=None)

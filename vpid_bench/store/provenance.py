@@ -1,17 +1,10 @@
-"""Provenance: which versions of what produced a record.
-
-Three kinds of facts, each looked up once per process (reading package metadata costs
-milliseconds and a record is written per run):
+"""Provenance: which versions of what produced a record, each looked up once per process.
 
 * :func:`package_versions`: Python and the numerical stack that can change any result;
-* :func:`distribution_provenance`: for a plugin, the distribution that ships it, its version
-  and the installed versions of what it declares it requires. The plugin registry records this
-  when it loads each entry point, so a record can name the exact plugin release, and a resumed
-  job can tell runs made by another release (see :mod:`vpid_bench.experiment`);
-* :func:`code_digest`: a digest of the installed source of the package that defines a
-  plugin's class. A plugin changed and reinstalled under the same version (as one does while
-  developing it) was once served its old records without a word; the digest enters each
-  run's id, so its runs are run again.
+* :func:`distribution_provenance`: a plugin's distribution, version and the installed
+  versions of its requirements (a resumed job tells runs made by another release);
+* :func:`code_digest`: a digest of a plugin's installed source; it enters each run's id, so
+  a plugin changed under the same version (once served its old records) runs again.
 """
 
 from __future__ import annotations
@@ -44,27 +37,20 @@ def package_versions(extra: tuple[str, ...] = ()) -> dict[str, str]:
 _REQUIREMENT_NAME = re.compile(r"^\s*([A-Za-z0-9][A-Za-z0-9._-]*)")
 
 
-def _requirement_names(dist: importlib.metadata.Distribution) -> list[str]:
-    """Names of the distribution's unconditional requirements (extras and markers skipped)."""
-    names = []
-    for req in dist.requires or []:
-        if ";" in req and "extra" in req.split(";", 1)[1]:
-            continue
-        match = _REQUIREMENT_NAME.match(req)
-        if match:
-            names.append(match.group(1))
-    return names
-
-
 @functools.lru_cache(maxsize=64)
 def _provenance_of(dist_name: str) -> tuple[str, str, tuple[tuple[str, str], ...]]:
+    """Name, version and its unconditional requirements' installed versions (extras and
+    markers skipped)."""
     dist = importlib.metadata.distribution(dist_name)
     requires = []
-    for name in _requirement_names(dist):
+    for req in dist.requires or []:
+        match = _REQUIREMENT_NAME.match(req)
+        if match is None or ";" in req and "extra" in req.split(";", 1)[1]:
+            continue
         try:
-            requires.append((name, importlib.metadata.version(name)))
+            requires.append((match.group(1), importlib.metadata.version(match.group(1))))
         except importlib.metadata.PackageNotFoundError:
-            requires.append((name, "not installed"))
+            requires.append((match.group(1), "not installed"))
     return dist.metadata["Name"], dist.version, tuple(sorted(requires))
 
 
@@ -91,16 +77,14 @@ def library_provenance(dist: str) -> dict[str, str]:
     return {"name": dist, "version": version}
 
 
-#: Source bytes read for a plugin's code digest; past it, the remaining files count by path,
-#: size and modification time (a plugin package is a few hundred kB; a class defined inside
-#: a large library should not cost a read of all of it).
+#: Source bytes read for a plugin's code digest; past it, files count by path, size and
+#: modification time (a class defined inside a large library should not read all of it).
 MAX_CODE_BYTES = 32 * 1024 * 1024
 
 
 @functools.lru_cache(maxsize=64)
 def _tree_digest(root: str) -> str:
-    """SHA-256 (16 hex digits) of every ``.py`` file below ``root`` (or of the file
-    ``root``): relative paths and contents, in sorted order."""
+    """SHA-256 (16 hex digits) of every ``.py`` file below ``root`` (or the file), in order."""
     base = Path(root)
     files = [base] if base.is_file() else sorted(
         p for p in base.rglob("*.py") if "__pycache__" not in p.parts and p.is_file())
@@ -119,9 +103,8 @@ def _tree_digest(root: str) -> str:
 
 
 def code_digest(cls: type) -> str | None:
-    """A digest of the installed code of the package that defines ``cls`` (every ``.py``
-    file of its top-level package, or its module's file when that is not a package), or
-    ``None`` when it has no source file (defined interactively, or in a zip)."""
+    """A digest of the installed code of the top-level package (or module) defining ``cls``;
+    ``None`` without a source file (defined interactively, or in a zip)."""
     top = cls.__module__.split(".")[0]
     for name in (top, cls.__module__):
         file = getattr(sys.modules.get(name), "__file__", None)

@@ -1,28 +1,12 @@
 """A user's record as a CSV file (``problem.reference.file``): the one reader of the format,
 for every problem plugin that fits one (docs/own-record.md#the-file describes it for users).
 
-**Format.** A header row names the columns; each data row holds numbers. A column's unit may
-follow its name in square brackets, ``zsdd [m/s^2]``; a name without one is read in the unit
-the problem states for it. A stated unit of another size is converted where the problem
-gives a unit table (unit -> quantity and factor to the quantity's SI unit) and it lists the
-unit under the same quantity; otherwise it must be the problem's unit. The same name twice
-is refused.
-
-**Columns** (:class:`RecordColumn`): the problem's names, matched by name (or an alias), or
-mapped to the record's own with :class:`ColumnMap` (``problem.reference.columns={h: road}``,
-a unit optional: ``'road [mm]'``). **Strict**: every column must be used; an unused one is
-refused naming it and the names allowed, unless ``problem.reference.ignore`` lists it (a
-record is read whole or not at all). ``t`` (s) is always a column and must increase from row
-to row; its rate and start are free.
-
-**Refused**, each as one :class:`~vpid_bench.errors.ConfigError` naming the column, row or
-value: no such file, over :attr:`CsvTable.MAX_FILE_BYTES`, not UTF-8 text, not CSV, no
-header, a required column missing, an unused column, a column twice, a unit not allowed, a
-cell of a used column that is not an ASCII number (:data:`NUMBER`: no ``1_000`` nor
-full-width digits, which ``float`` reads), a non-finite value or one beyond
-:data:`MAX_MAGNITUDE` after a unit's conversion, a time that does not increase, fewer than
-:attr:`CsvTable.MIN_ROWS` rows or more than :attr:`CsvTable.MAX_ROWS`, and a measured
-channel zero or denormal throughout or dominated by one sample (:func:`check_channels`).
+A header row names the columns, a unit optional in brackets (``zsdd [m/s^2]``; converted
+through the problem's unit table, else it must be the problem's); each data row holds
+numbers. The problem's columns (:class:`RecordColumn`) are matched by name or alias, or
+mapped with :class:`ColumnMap`. **Strict**: every column must be used (or listed in
+``problem.reference.ignore``); ``t`` (s) must increase. Anything else is refused as one
+:class:`~vpid_bench.errors.ConfigError` naming the column, row or value.
 """
 
 from __future__ import annotations
@@ -82,8 +66,7 @@ class ColumnMap:
 
 @dataclasses.dataclass(frozen=True)
 class CsvRecord:
-    """A read record's file and times (s, as in the file); a problem's record adds its
-    channels."""
+    """A read record's file and times (s); a problem's record adds its channels."""
 
     path: str
     t: np.ndarray
@@ -104,8 +87,7 @@ class CsvRecord:
 
 @dataclasses.dataclass(frozen=True)
 class Found:
-    """Where a :class:`RecordColumn` is in the file: the record's column name, its index and
-    the factor its values are multiplied by to be in the column's unit."""
+    """Where a :class:`RecordColumn` is: its name in the file, index and unit factor."""
 
     name: str
     index: int
@@ -135,9 +117,8 @@ def _split(cell: str) -> tuple[str, str | None]:
 
 
 class CsvTable:
-    """A record file read and its header checked against the problem's columns: ``TIME``
-    and ``required`` must be found, ``optional`` may be; :meth:`find` locates a column,
-    :meth:`read` reads the used ones as numbers (see the module for the rules)."""
+    """A record file read and its header checked against the problem's columns (``TIME``
+    and ``required`` must be found, ``optional`` may be)."""
 
     #: Fewest rows a record may have (a handful of samples identifies nothing).
     MIN_ROWS = 10
@@ -171,7 +152,7 @@ class CsvTable:
         self.time, *self.required = (f for f, _ in got if f is not None)
 
     def fail(self, allowed: str) -> ConfigError:
-        """The error for this file: ``problem.reference.file='<path>' is not allowed: ...``."""
+        """The error for this file (key ``problem.reference.file``)."""
         return ConfigError(KEY, str(self.path), allowed)
 
     def _rows(self) -> list[list[str]]:
@@ -267,11 +248,10 @@ class CsvTable:
     def read(self, measured: Sequence[Found], others: Sequence[Found],
              allowed: Sequence[str] | None = None, extra_ok: Sequence[str] = ()
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Times ``(N,)``, ``measured`` channels ``(p, N)`` (checked by
-        :func:`check_channels`) and ``others`` ``(N, r)``, in their columns' units, after
-        refusing a column not used (``allowed``: the problem's names said in the error,
-        default every column asked for; ``extra_ok``: record columns left unread without a
-        word)."""
+        """Times ``(N,)``, ``measured`` channels ``(p, N)`` (:func:`check_channels`) and
+        ``others`` ``(N, r)``, in their columns' units, after refusing a column not used
+        (``allowed``: the names the error offers, default every column asked for;
+        ``extra_ok``: record columns left unread without a word)."""
         used = [self.time, *measured, *others]
         names = {f.name for f in used}
         allowed = [c.name for c in self.columns] if allowed is None else allowed

@@ -1,19 +1,13 @@
 """Run records on disk: the schema version, atomic JSON writes, reading and checking.
 
 A record says everything needed to repeat a run (config, seeds, versions) and to judge it
-(best vector in physical units, objective, metrics and relative errors where true values are
-known, evaluations, trace, time). It is plain, strict JSON (no pickle); a non-finite float is
-written as the string ``"inf"``, ``"-inf"`` or ``"nan"`` (strict JSON has no such numbers), so
-its sign survives, and :func:`read_record` turns those strings in the numeric fields back into
-floats.
+(best vector in physical units, objective, metrics, errors, evaluations, trace, time). It is
+strict JSON; a non-finite float is written as the string ``"inf"``, ``"-inf"`` or ``"nan"``,
+and :func:`read_record` turns those back into floats in the numeric fields.
 
-Determinism: two runs of the same config and seed produce records that are identical except
-for the ``timing`` section (wall time, start time, host). :func:`fingerprint` drops that
-section, and tests compare fingerprints.
-
-File name: ``records/run-<index>-<run_id>.json`` inside the job's output directory. The
-``run_id`` is a hash of what determines the result (problem config, optimizer name and
-parameters, seed, budget, run index), so a re-run of the same job recognises its records.
+Two runs of the same config and seed give records identical but for ``timing``
+(:func:`fingerprint` drops it). File name: ``records/run-<index>-<run_id>.json``; the
+``run_id`` hashes what determines the result, so a re-run of the job recognises its records.
 """
 
 from __future__ import annotations
@@ -43,8 +37,7 @@ class OldRecordError(CorruptRecordError):
     """A complete record written by an earlier vpid-bench (an older schema version)."""
 
 
-#: How a non-finite float is written (strict JSON has no inf or nan) and read back.
-NONFINITE_TEXT = {"inf": "inf", "-inf": "-inf", "nan": "nan"}
+#: How a non-finite float is read back (strict JSON has no inf or nan).
 NONFINITE_VALUE = {"inf": math.inf, "-inf": -math.inf, "nan": math.nan}
 #: The numeric fields of a record: (section, key); ``*`` marks a list or a mapping of numbers.
 NUMERIC_FIELDS = (
@@ -54,21 +47,21 @@ NUMERIC_FIELDS = (
 )
 
 
-def _nonfinite_kind(value: float) -> str:
+def _float_text(value: float) -> float | str:
+    """A float as strict JSON: itself, or ``"nan"``, ``"inf"``, ``"-inf"``."""
+    if math.isfinite(value):
+        return value
     return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
 
 
 def decode_number(value: Any) -> Any:
-    """``"inf"``, ``"-inf"``, ``"nan"`` (how a record stores non-finite floats) as floats;
-    anything else unchanged (a reader's type check then judges it)."""
-    if isinstance(value, str) and value in NONFINITE_VALUE:
-        return NONFINITE_VALUE[value]
-    return value
+    """``"inf"``, ``"-inf"``, ``"nan"`` as floats; anything else unchanged."""
+    return NONFINITE_VALUE[value] if isinstance(value, str) and value in NONFINITE_VALUE \
+        else value
 
 
 def decode_numbers(record: dict[str, Any]) -> dict[str, Any]:
-    """``record`` with the non-finite markers of its numeric fields turned into floats
-    (in place; returned for convenience)."""
+    """``record`` with its numeric fields' non-finite markers made floats (in place)."""
     for section, key in NUMERIC_FIELDS:
         node = record.get(section)
         many = key.endswith("*")
@@ -86,11 +79,10 @@ def decode_numbers(record: dict[str, Any]) -> dict[str, Any]:
 
 
 def _jsonable(obj: Any) -> Any:
-    """Convert numpy scalars/arrays and non-finite floats (as ``"inf"``, ``"-inf"``, ``"nan"``)
-    into strict-JSON values."""
+    """Numpy scalars and arrays and non-finite floats as strict-JSON values."""
     kind = type(obj)
     if kind is float:  # the common leaves first: a record's traces are long lists of them
-        return obj if math.isfinite(obj) else NONFINITE_TEXT[_nonfinite_kind(obj)]
+        return _float_text(obj)
     if kind is int or kind is str or kind is bool or obj is None:
         return obj
     if kind is list or kind is tuple:
@@ -106,8 +98,7 @@ def _jsonable(obj: Any) -> Any:
             return obj.tolist()
         return [_jsonable(v) for v in obj.tolist()]
     if isinstance(obj, (np.floating, float)):
-        value = float(obj)
-        return value if math.isfinite(value) else NONFINITE_TEXT[_nonfinite_kind(value)]
+        return _float_text(float(obj))
     if isinstance(obj, np.integer):
         return int(obj)
     if isinstance(obj, np.bool_):
@@ -143,8 +134,7 @@ def record_path(job_dir: Path, run_index: int, rid: str) -> Path:
 
 
 def parse_record_name(name: str) -> tuple[int, str] | None:
-    """``(run_index, run_id)`` of a file named as :func:`record_path` names records, or
-    ``None`` for any other name."""
+    """``(run_index, run_id)`` of a record's file name (:func:`record_path`), or ``None``."""
     import re
 
     match = re.fullmatch(r"run-(\d+)-(\w+)\.json", name)
@@ -157,27 +147,11 @@ def write_json_atomic(path: Path, obj: Any) -> Path:
     return write_text_atomic(path, text)
 
 
-def write_record(path: Path, record: Mapping[str, Any]) -> Path:
-    """Write a run record atomically (see :func:`write_json_atomic`)."""
-    return write_json_atomic(path, record)
+#: Written as every JSON file of a job is.
+write_record = write_json_atomic
 
-
-REQUIRED_KEYS = (
-    "schema",
-    "run_id",
-    "run_index",
-    "status",
-    "problem",
-    "optimizer",
-    "seeds",
-    "instance",
-    "budget",
-    "parameters",
-    "result",
-    "trace",
-    "versions",
-    "timing",
-)
+REQUIRED_KEYS = ("schema", "run_id", "run_index", "status", "problem", "optimizer", "seeds",
+                 "instance", "budget", "parameters", "result", "trace", "versions", "timing")
 
 
 def read_record(path: Path) -> dict[str, Any]:
@@ -193,18 +167,15 @@ def read_record(path: Path) -> dict[str, Any]:
 def parse_record(record: Any, where: str) -> dict[str, Any]:
     """Check one parsed record (from a file, or a line of an archive named by ``where``):
     :class:`CorruptRecordError` names ``where`` and the fault."""
-    path = where
     schema = record.get("schema") if isinstance(record, dict) else None
     if schema in OLD_SCHEMAS:
-        raise OldRecordError(
-            f"{path}: written by an older vpid-bench ({schema}); this version reads {SCHEMA}: "
-            "run the job again to include it"
-        )
+        raise OldRecordError(f"{where}: written by an older vpid-bench ({schema}); this "
+                             f"version reads {SCHEMA}: run the job again to include it")
     if schema != SCHEMA:
-        raise CorruptRecordError(f"{path}: not a vpid-bench run record (schema != {SCHEMA!r})")
+        raise CorruptRecordError(f"{where}: not a vpid-bench run record (schema != {SCHEMA!r})")
     missing = [k for k in REQUIRED_KEYS if k not in record]
     if missing:
-        raise CorruptRecordError(f"{path}: incomplete run record, missing {', '.join(missing)}")
+        raise CorruptRecordError(f"{where}: incomplete run record, missing {', '.join(missing)}")
     return decode_numbers(record)
 
 
