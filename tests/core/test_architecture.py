@@ -233,8 +233,10 @@ def test_the_store_sits_below_analysis_targets_and_the_report():
              "vpid_bench.spec", "vpid_bench.workers", "vpid_bench.job_runs",
              "vpid_bench.assemble", "vpid_bench.job_analysis", "vpid_bench.runner",
              "vpid_bench.plugins", "vpid_bench.worker_loop")
+    facade = ("vpid_bench", "vpid_bench.api")  # they import the registry (the archive's
+    # writer once took vpid-bench's version from the package: an arrow back up)
     bad = [f"{p.name} -> {m}" for p in _files(CORE / "store") for m in _imports(p)
-           if m.startswith(above)]
+           if m.startswith(above) or m in facade]
     assert bad == []
 
 

@@ -10,6 +10,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from .. import __version__
 from ..store.archive_pack import write_archive
 from .compute import compute
 from .optima import REACHED, load_optima
@@ -23,7 +24,7 @@ def pack(sweep_dir: Path, suite: str, out: Path, *, command: str, commit: str | 
     optima = load_optima([sweep_dir], data.loaded.records).optima
     return write_archive(out, suite, data.loaded.records, data.rows, optima,
                          summary_rows(data.rows), command=command, commit=commit,
-                         made_at=made_at, optima_only=optima_only)
+                         made_at=made_at, version=__version__, optima_only=optima_only)
 
 
 def _median(values: Sequence[float]) -> float:

@@ -85,14 +85,13 @@ def compact_trace(record: Mapping[str, Any]) -> dict[str, Any]:
 def write_archive(out: Path, suite: str, records: Sequence[Mapping[str, Any]],
                   rows: Sequence[Mapping[str, Any]], optima: Sequence[Optimum],
                   summary: Sequence[Sequence[Any]], *, command: str, commit: str | None,
-                  made_at: str, optima_only: bool = False) -> dict[str, Any]:
+                  made_at: str, version: str, optima_only: bool = False) -> dict[str, Any]:
     """Write the archive of a sweep's ``records`` (as loaded, with their job folders) into
     ``out`` and return its manifest: the lowest of ``optima`` per instance, the
     ``summary`` rows (:data:`SUMMARY_HEADERS`) and the IOHprofiler export of the report's
     ``rows``. ``optima_only``: ship the instance optima alone (no runs to rank beside a
-    report's, the optima that ``target=`` stops at)."""
-    from .. import __version__
-
+    report's, the optima that ``target=`` stops at). ``version``: vpid-bench's, for the
+    manifest (given by the caller: the store imports nothing above it)."""
     out.mkdir(parents=True, exist_ok=True)
     found = sorted(records, key=lambda r: (
         r["problem"]["name"], r["optimizer"]["name"], r["run_index"]))
@@ -118,7 +117,7 @@ def write_archive(out: Path, suite: str, records: Sequence[Mapping[str, Any]],
                                                    for k in ("distribution", "version")}})
     manifest = {
         "schema": SCHEMA, "suite": suite, "made_at": made_at, "command": command,
-        "vpid_bench_version": __version__, "commit": commit,
+        "vpid_bench_version": version, "commit": commit,
         "optimizers": sorted({r["optimizer"]["name"] for r in runs}),
         "runs": len(runs), "problems": problems, "optima_only": optima_only,
         "files": {name: {"sha256": _sha256((out / name).read_bytes()),
