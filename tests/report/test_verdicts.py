@@ -235,7 +235,8 @@ def test_across_the_suite_needs_two_distinct_problems(tmp_path, problems, ps, sh
 
 def test_the_terminal_never_breaks_a_line_inside_a_name():
     """A name's own words never start a terminal line (a hostile name could look like a
-    table row there); the text has no trace of the marks that keep names whole."""
+    table row there); the text has no trace of the marks that keep names whole, nor of the
+    Markdown escapes that keep it inert in report.md (the terminal once showed ``\\|``)."""
     name = "forged | row with many words inside"
     methods = [Method(name, 30, 1.0, "a"), Method("random", 30, 9.0, "b")]
     v = vd.decide(_evidence(methods, [_pair(name, "random", name)], refs=("random",)))
@@ -246,7 +247,7 @@ def test_the_terminal_never_breaks_a_line_inside_a_name():
         assert not any(line.startswith(("row", "with", "many", "words", "inside", "spaces"))
                        for line in lines), lines
         flat = " ".join(" ".join(lines).split())
-        assert "use forged \\| row with many words inside" in flat
+        assert "use forged | row with many words inside" in flat  # the name as given
         assert "\x02" not in flat and "\x03" not in flat and "\u00a0" not in flat
     assert "\x02" not in res.verdict and "use forged \\| row with" in res.verdict
 

@@ -17,7 +17,7 @@ from ..estimators import DESCRIPTION
 from . import anytime, assumed, verdicts
 from .body import verdict_short
 from .render import PROSE_WIDTH, fmt, markdown, para, terminal
-from .safe import clean, escape
+from .safe import clean, escape, shown
 from .tables import pair_detail
 from .verdicts import Verdict
 
@@ -548,13 +548,14 @@ _GLUE = "\u00a0"
 
 
 def _wrap(text: str, width: int) -> str:
-    return textwrap.fill(clean(" ".join(text.split())), width=width, break_long_words=False,
-                         break_on_hyphens=False)
+    """Markdown prose for the terminal: as a reader sees it (:func:`.safe.shown`), wrapped."""
+    return textwrap.fill(clean(shown(" ".join(text.split()))), width=width,
+                         break_long_words=False, break_on_hyphens=False)
 
 
 def _wrap_glued(marked: str, width: int) -> str:
     """A marked verdict wrapped at ``width`` without breaking inside a marked name."""
-    glued = re.sub(r"[ \t\n]+", " ", _unmarked(marked, _GLUE))
+    glued = re.sub(r"[ \t\n]+", " ", shown(_unmarked(marked, _GLUE)))
     lines = textwrap.wrap(glued, width=width, break_long_words=False, break_on_hyphens=False)
     return clean("\n".join(lines).replace(_GLUE, " "), keep_newlines=True)
 

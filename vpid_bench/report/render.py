@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from ..store import csv_table
-from .safe import clean, escape
+from .safe import clean, escape, shown
 
 #: The widest line a person reads in ``report.md`` (characters).
 MAX_WIDTH = 120
@@ -167,9 +167,10 @@ def markdown(headers: Sequence[str], rows: Sequence[Sequence[Any]], *, keep: int
 
 def terminal(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4) -> str:
     """A plain-text table for the terminal: columns separated by two spaces, every cell and
-    header one line of printable text (:func:`.safe.clean`)."""
-    headers = [clean(h) for h in headers]
-    text = [[clean(c) for c in r] for r in cells(headers, rows, digits)]
+    header one line of printable text (:func:`.safe.clean`), Markdown escapes undone
+    (:func:`.safe.shown`)."""
+    headers = [clean(shown(h)) for h in headers]
+    text = [[clean(shown(c)) for c in r] for r in cells(headers, rows, digits)]
     numeric = _numeric_columns(rows, len(headers))
     widths = [max([len(h), *(len(r[j]) for r in text)]) for j, h in enumerate(headers)]
 

@@ -69,6 +69,17 @@ def escape(text: object) -> str:
     return clean(_inert_autolinks("".join(_MD_ESCAPES.get(c, c) for c in s)))
 
 
+#: A Markdown backslash escape (of ASCII punctuation) or one of the entities :func:`escape` writes.
+_MD_SHOWN = re.compile(r"\\([!-/:-@\[-`{-~])|&(amp|lt|gt);")
+
+
+def shown(markdown: str) -> str:
+    """Markdown text as a reader sees it, for the terminal: the backslash escapes and the
+    entities :func:`escape` writes undone (``\\[0.5, 1.5\\]`` shows as ``[0.5, 1.5]``)."""
+    return _MD_SHOWN.sub(lambda m: m.group(1) or {"amp": "&", "lt": "<", "gt": ">"}[m.group(2)],
+                         markdown)
+
+
 #: A backslash escape already in Markdown (kept as it is), or a character that starts a
 #: link, an image, a reference, HTML or an autolink (escaped).
 _MD_ACTIVE = re.compile(r"\\[!-/:-@\[-`{-~]|[\[\]<]")
