@@ -14,11 +14,14 @@ $(BIN)/python:
 
 # records-gpl/: third-party records under GPL-3.0, a separate data distribution (docs/measured.md)
 # archive-runs/: the shipped archives' runs, a data distribution apart from the wheel
-# (docs/sweeps.md), editable so that a rebuilt archive needs no reinstall
+# (docs/sweeps.md), editable so that a rebuilt archive needs no reinstall.
+# vpid-bench-compile: every plugin's numba loops compiled once into numba's cache (about 2
+# min on 2 cores), so that no first run pays it (docs/usage.md)
 $(VENV)/.installed: $(BIN)/python pyproject.toml records-gpl/pyproject.toml archive-runs/pyproject.toml
 	$(BIN)/python -m pip install -e ".[test,ioh,joblib,submitit,peers,tune,fmu]"
 	$(BIN)/python -m pip install ./records-gpl
 	$(BIN)/python -m pip install -e ./archive-runs
+	$(BIN)/vpid-bench-compile
 	touch $@
 
 install: $(VENV)/.installed

@@ -348,6 +348,17 @@ def shipped():
 
 
 @needs_archive_runs
+def test_the_runs_of_named_problems_are_the_same_read_alone(shipped):
+    """What a report beside one job reads: the archive's runs of its problems only, each the
+    same record as in the whole archive."""
+    alone = read_archive(arch.default_root() / "smoke", problems={"smoke_quarter"})
+    mine = [r for r in shipped.records if r["problem"]["name"] == "smoke_quarter"]
+    assert 0 < len(alone.records) == len(mine) < len(shipped.records)
+    assert [r["run_id"] for r in alone.records] == [r["run_id"] for r in mine]
+    assert alone.optima == shipped.optima
+
+
+@needs_archive_runs
 def test_the_shipped_archive_holds_every_builtin_on_every_smoke_member(shipped, registry):
     builtins = {n for n in registry.optimizers
                 if registry.provenance("optimizer", n).get("distribution") == "vpid-bench"}
