@@ -1,7 +1,7 @@
 """``vpid-bench-compile``: compile the installed plugins' numba loops once, into numba's
 on-disk cache, so that no run pays the compile.
 
-Why. The vehicle models, the DE and GA generations and the FMU loops are numba functions
+Why. The built-in models, the DE and GA generations and the FMU loops are numba functions
 cached on disk (``cache=True``). A cold cache costs the first run of a problem 5-45 s of
 compiling (the full car's ride loop most) before its first evaluation: on a fresh install,
 the README's first command and the first of every test process paid it. ``make install``
