@@ -10,9 +10,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from vpid_bench import ConfigError, ProblemConfig, added_setting, estimators
-
-from . import knowns
+from vpid_bench import ConfigError, ProblemConfig, added_setting, estimators, freeze_fields
 
 #: The unknowns of Eq. (4), in order, with their units.
 PARAM_NAMES: tuple[str, ...] = ("m", "I", "m1", "m2", "k1", "k2", "c1", "c2", "a1")
@@ -109,7 +107,7 @@ class ReferenceConfig:
     ignore: tuple[str, ...] = added_setting(default=())
 
     def __post_init__(self) -> None:
-        knowns.freeze_fields(self, "columns", prefix="problem.reference.")
+        freeze_fields(self, "columns", prefix="problem.reference.")
 
     def mapping(self) -> Any:
         """The record reader's view of the mapping keys."""
@@ -168,7 +166,7 @@ class VehicleConfig(ProblemConfig):
     known: dict[str, Any] = added_setting(default_factory=dict, open_keys=True)
 
     def __post_init__(self) -> None:
-        knowns.freeze_fields(self, "known")
+        freeze_fields(self, "known")
         # each known.<name> sets its vehicle. or bump. key (a fixed set: nothing freed)
         for name, value in self.known.items():
             key = f"problem.known.{name}"

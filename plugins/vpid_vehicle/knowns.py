@@ -50,45 +50,6 @@ SCALE_UNITS = frozenset({"kg", "kg m²", "kg m^2", "N/m", "N s/m", "N/rad", "N",
 MAY_BE_ZERO = frozenset({"N s/m", "N m/rad", "1"})
 
 
-def _freeze(value: Any) -> Any:
-    if isinstance(value, Mapping):
-        return FrozenMap(value)
-    if isinstance(value, (list, tuple)) or (hasattr(value, "__iter__")
-                                            and not isinstance(value, (str, bytes))):
-        return tuple(_freeze(v) for v in value)
-    return value
-
-
-class FrozenMap(dict):
-    """A read-only mapping that hashes (a problem is cached by its config), values frozen."""
-
-    def __init__(self, items: Any = ()) -> None:
-        super().__init__({str(k): _freeze(v) for k, v in dict(items).items()})
-
-    def __hash__(self) -> int:  # type: ignore[override]
-        return hash(tuple(sorted(self.items())))
-
-    def __reduce__(self) -> Any:
-        return (FrozenMap, (dict(self),))
-
-    def _read_only(self, *args: Any, **kwargs: Any) -> Any:
-        raise TypeError("a config mapping is read-only")
-
-    __setitem__ = __delitem__ = update = pop = popitem = clear = setdefault = _read_only  # type: ignore[assignment]
-
-
-def freeze_fields(config: Any, *names: str, prefix: str = "problem.") -> None:
-    """Make the mapping fields ``names`` of a frozen config :class:`FrozenMap`."""
-    for name in names:
-        value = getattr(config, name)
-        if value is None:
-            value = {}
-        if not isinstance(value, Mapping):
-            raise ConfigError(f"{prefix}{name}", value, "a mapping of names, e.g. "
-                              f"{prefix}{name}.<name>=...")
-        object.__setattr__(config, name, FrozenMap(value))
-
-
 def _kind(name: str, unit: str) -> str:
     if name in QUANTITIES:
         return QUANTITIES[name][1]

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from vpid_bench import Bounds, Problem, estimators, relative_errors_percent
+from vpid_bench import Bounds, ChannelFit, Problem, estimators, relative_errors_percent
 
 from .config import (
     PARAM_NAMES,
@@ -26,7 +26,7 @@ from .config import (
     window,
 )
 from .model import KnownConstants, physical
-from .objective import ChannelFit, add_noise, noise_summary
+from .objective import add_noise, noise_summary
 from .record_file import Sampler
 from .reference_io import read_measured, write_reference
 from .road import Bump

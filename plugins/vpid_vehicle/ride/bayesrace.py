@@ -33,6 +33,7 @@ import numpy as np
 
 from vpid_bench import (
     Bounds,
+    ChannelFit,
     ConfigError,
     Problem,
     ProblemConfig,
@@ -40,7 +41,6 @@ from vpid_bench import (
     relative_errors_percent,
 )
 
-from ..objective import ChannelFit
 from . import third_party
 from .dynamic_rows import DYNAMIC_ROWS
 

@@ -24,16 +24,17 @@ import numpy as np
 
 from vpid_bench import (
     Bounds,
+    ChannelFit,
     ConfigError,
     Problem,
     ProblemConfig,
     added_setting,
     estimators,
+    freeze_fields,
     relative_errors_percent,
 )
 
 from .. import knowns
-from ..objective import ChannelFit
 from ..record_file import (
     Column,
     ColumnMap,
@@ -94,7 +95,7 @@ class RecordFileConfig:
     input: str = added_setting(default="record")
 
     def __post_init__(self) -> None:
-        knowns.freeze_fields(self, "columns", prefix="problem.reference.")
+        freeze_fields(self, "columns", prefix="problem.reference.")
 
     def mapping(self) -> ColumnMap:
         """The record reader's view of the mapping keys."""
@@ -127,7 +128,7 @@ class SuiteConfig(ProblemConfig):
     bounds: dict[str, Any] = added_setting(default_factory=dict, open_keys=True)
 
     def __post_init__(self) -> None:
-        knowns.freeze_fields(self, "known", "bounds")
+        freeze_fields(self, "known", "bounds")
         # a user's record states no noise level (noise_level is what simulated records add)
         estimators.check_objective(self.objective, self.noise_level
                                    if self.reference.file is None else None)

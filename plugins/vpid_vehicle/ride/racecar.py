@@ -27,9 +27,8 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 
-from vpid_bench import Bounds, ConfigError, Problem, ProblemConfig, estimators
+from vpid_bench import Bounds, ChannelFit, ConfigError, Problem, ProblemConfig, estimators
 
-from ..objective import ChannelFit
 from . import third_party
 
 #: The car's constants (``deep_dynamics_iac.yaml``, VEHICLE_SPECS; a test reads the file).
