@@ -1,13 +1,10 @@
 """``optimizer=nevergrad``: any optimizer of nevergrad's registry, ``optimizer.method=<name>``
-(docs/optimizers.md); an unknown name is refused in one line listing the closest ones.
-
-Built with the run's budget and ``num_workers`` 1 (``batch=library``, nevergrad's default) or
-``ps``; on the first ``ask``, so a method that fails fails its run, not the job. It searches an
-``ng.p.Array`` bounded to the unit cube from a uniform random start (nevergrad's default is
-the centre: the vehicle's truth), with a ``RandomState`` seeded from the run's generator, and
-through nevergrad's public API only: a run costs what it costs a user (its CMA: about 0.8 ms
-per candidate of its own, ``benchmarks/bench_nevergrad_cma.py``). ``import nevergrad`` (about
-3 s) happens when the parameters are checked, never when the plugin is registered.
+(an unknown name refused in one line listing the closest), built on the first ``ask`` with
+the run's budget (a method that fails fails its run, not the job), searching the unit cube
+from a uniform random start (nevergrad's default is the centre: the vehicle's truth) with a
+``RandomState`` seeded from the run's generator, through nevergrad's public API only
+(docs/optimizers.md, "optimizer=nevergrad"). ``import nevergrad`` (about 3 s) happens when
+the parameters are checked, never when the plugin is registered.
 """
 
 from __future__ import annotations

@@ -1,16 +1,10 @@
-"""Known quantities and boxes: what a vehicle problem states rather than identifies. The
-answer depends on them (the ride models are unchanged when every mass, stiffness and damping
-is scaled by one factor: a tyre stated 25 % too soft makes every identified value 25 % too
-small with no worse fit), so they are explicit and settable (SI units):
-
-* ``problem.known.<name>=value`` states a known quantity or fixes an identified one;
-  ``=free`` identifies a known one, only where some quantity of the scaling group
-  (:func:`scale_group`) stays stated; geometry is never freed;
-* ``problem.bounds.<name>=[lo,hi]``: an identified quantity's box (default: the model's).
-
-:func:`plan` checks the keys (one ``ConfigError`` line) into a :class:`Plan`;
-:class:`StatedModel` presents a ride model under it to the ride problem. The run record keeps
-:meth:`Plan.known_list` and :meth:`Plan.box_list` (``problem.info``), the report's "Assumed".
+"""Known quantities and boxes: what a vehicle problem states rather than identifies, explicit
+and settable because the answer depends on them (scaling every mass, stiffness and damping by
+one factor leaves a ride record unchanged): ``problem.known.<name>=value`` states a quantity
+or fixes an identified one, ``=free`` identifies a known one, ``problem.bounds.<name>=[lo,hi]``
+sets a box (SI units; docs/own-record.md). :func:`plan` checks the keys into a :class:`Plan`;
+:class:`StatedModel` presents a ride model under it; the records keep
+:meth:`Plan.known_list` and :meth:`Plan.box_list` (the report's "Assumed").
 """
 
 from __future__ import annotations

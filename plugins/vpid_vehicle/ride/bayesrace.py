@@ -1,27 +1,11 @@
 """``problem=bayesrace``: a 1:43 race car's tyre, drive and yaw coefficients from records
-somebody else's simulator made (Bayesrace, published with Deep Dynamics; docs/measured.md).
-
-**Records** (:mod:`.third_party`, GPL-3.0): ``DYN-PP-ETHZ.npz``, ``DYN-PP-ETHZMobil.npz``, 20 s at
-50 Hz; their states are the simulator's **explicit Euler step at 50 Hz** of the equations
-below with the true coefficients (one step reproduces the next to 1e-15, tested), at the edge
-of stability for this car: the record is not the continuous system's response. No noise is
-added: what the fit cannot explain is model error.
-
-**Model** (SI units, :func:`.kernel.dynamic_single_track`): states ``vx, vy, r``, inputs the
-drive ``d`` and steer ``delta`` held over each 20 ms;
-
-    af = delta - atan2(lf r + vy, |vx|) + Shf,      ar = atan2(lr r - vy, |vx|) + Shr
-    Ffy = Svf + Df sin(Cf atan(Bf af - Ef (Bf af - atan(Bf af))))    (Fry likewise)
-    Frx = (Cm1 - Cm2 vx) d - Cr0 - Cr2 vx^2
-    vx' = (Frx - Ffy sin delta) / m + vy r,    vy' = (Fry + Ffy cos delta) / m - vx r
-    r'  = (Ffy lf cos delta - Fry lr) / Iz
-
-by classical RK4 at ``20 ms / substeps`` (10: within 2e-6 of each channel's rms of the
-solution at 40) from the record's first state. **Identified**: ``Bf, Cf, Df, Br, Cr, Dr, Cm1,
-Cm2, Cr0, Iz`` in the simulator's ranges (``deep_dynamics.yaml``); **known**, at the
-simulator's values: ``m``, ``lf``, ``lr``, ``Ef, Er, Cr2`` (practically non-identifiable
-here) and the shifts. **Objective**: ``ml_profiled`` by default, ``eq3`` or ``ols``.
-**Metrics**: NoRE (%) against the simulator's coefficients, the held-out track's rms errors.
+somebody else's simulator made (Bayesrace, published with Deep Dynamics; GPL-3.0, read by
+:mod:`.third_party`). The records are the simulator's explicit Euler step at 50 Hz, not the
+continuous system's response, and no noise is added: what the fit cannot explain is model
+error. The model is the simulator's equations in continuous time (SI units,
+:func:`.kernel.dynamic_single_track`) by RK4 at ``20 ms / substeps`` from the record's first
+state. The equations, what is identified and known, the objective and the metrics:
+docs/measured.md, "Bayesrace".
 """
 
 from __future__ import annotations

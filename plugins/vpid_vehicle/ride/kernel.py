@@ -59,7 +59,6 @@ def run(A, U, V, Ox, Ou, u, y):  # pragma: no cover - compiled
         x[:, :] = nxt
 
 
-
 @numba.njit(inline="always", error_model="numpy")
 def _mf(alpha, B, C, D, E):  # pragma: no cover - compiled
     """Magic Formula lateral force (N) at slip angle ``alpha`` (rad)."""
@@ -274,8 +273,6 @@ def run_table_loops(T, w0, u, y):  # pragma: no cover - compiled
             for j in range(p):
                 for lane in range(min(LANES, n - j0)):
                     y[j, k, j0 + lane] = blk[st + (s + j) * LANES + lane]
-
-
 
 
 @numba.njit(inline="always", error_model="numpy")

@@ -15,9 +15,11 @@ or another estimator (:mod:`vpid_bench.estimators`); metric: NoRE (%) against th
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import logging
 import types
 import zlib
+from pathlib import Path
 from typing import Any, ClassVar, Literal
 
 import numpy as np
@@ -218,24 +220,30 @@ class RideProblem(ChannelFit, Problem):
         self.sampler: Sampler | None = None
         if config.reference.file is not None:
             self._from_file(config)
-            return
-        streams = instance_streams(config.seed, index, type(self).name)
-        truth_rng, road_rng, noise_rng = (np.random.default_rng(s) for s in streams)
-        self._x_true = (draw_truth(*self.model.box(self.nominal), config.truth_margin,
-                                   truth_rng) if config.truth == "random"
-                        else self.nominal.copy())
-        sub = config.record_substeps if config.record == "exact" else 1
-        fine = self.model.inputs(config, self.known, config.dt / sub, road_rng)
-        self.u = fine[::sub].copy()  # a copy: a view would keep the fine input (10x larger) alive
-        self.t = np.arange(self.u.shape[0]) * config.dt
-        self.clean = self._record(fine, sub)
-        self.sigma = config.noise_level * np.sqrt(np.mean(self.clean**2, axis=1))
-        self.measured = self.clean + self.sigma[:, None] * noise_rng.standard_normal(
-            self.clean.shape)
+        else:
+            streams = instance_streams(config.seed, index, type(self).name)
+            truth_rng, road_rng, noise_rng = (np.random.default_rng(s) for s in streams)
+            self._x_true = (draw_truth(*self.model.box(self.nominal), config.truth_margin,
+                                       truth_rng) if config.truth == "random"
+                            else self.nominal.copy())
+            sub = config.record_substeps if config.record == "exact" else 1
+            fine = self.model.inputs(config, self.known, config.dt / sub, road_rng)
+            self.u = fine[::sub].copy()  # a view would keep the fine input (10x larger) alive
+            self.t = np.arange(self.u.shape[0]) * config.dt
+            self.clean = self._record(fine, sub)
+            self.sigma = config.noise_level * np.sqrt(np.mean(self.clean**2, axis=1))
+            self.measured = self.clean + self.sigma[:, None] * noise_rng.standard_normal(
+                self.clean.shape)
         self.scale = np.linalg.norm(self.measured, axis=1)
         if np.any(self.scale <= 0):
-            raise ConfigError("problem.duration_s", config.duration_s, "a record in which "
-                              "every measured channel moves (one is zero throughout)")
+            if self.sampler is None:
+                raise ConfigError("problem.duration_s", config.duration_s, "a record in "
+                                  "which every measured channel moves (one is zero throughout)")
+            c = self.channels[int(np.flatnonzero(self.scale <= 0)[0])][0]
+            raise ConfigError("problem.reference.file", config.reference.file,
+                              f"a record in which every measured channel moves (column "
+                              f"{column_name(c)} is zero throughout)")
+        # ml is refused for a user's record (no stated noise): no plug-in sigma there
         plug_in = (estimators.plug_in_sigma(self.measured, config.noise_level, "additive")
                    if config.objective == "ml" else None)
         #: What a raw residual is multiplied by, ``(p, N)`` (Eq. 3: ``1 / ||measured_c||``).
@@ -261,15 +269,6 @@ class RideProblem(ChannelFit, Problem):
         self.clean = None
         self.sigma = None
         self.measured = record.outputs
-        self.scale = np.linalg.norm(self.measured, axis=1)
-        if np.any(self.scale <= 0):
-            c = self.channels[int(np.flatnonzero(self.scale <= 0)[0])][0]
-            raise ConfigError("problem.reference.file", config.reference.file,
-                              f"a record in which every measured channel moves (column "
-                              f"{column_name(c)} is zero throughout)")
-        # ml is refused for a user's record (no stated noise): no plug-in sigma
-        self.weights = estimators.weights(config.objective, self.measured,
-                                          1.0 / self.scale[:, None], None)
 
     def _record(self, fine_u: np.ndarray, sub: int) -> np.ndarray:
         """The true vehicle's clean channels ``(p, N)`` sampled every ``dt``."""
@@ -324,9 +323,6 @@ class RideProblem(ChannelFit, Problem):
         """The SHA-256 of a user's record (an edited record runs again on resume), else ``None``."""
         if self.sampler is None:
             return None
-        import hashlib
-        from pathlib import Path
-
         return hashlib.sha256(Path(self.config.reference.file).read_bytes()).hexdigest()
 
     # --- instances ----------------------------------------------------------------------

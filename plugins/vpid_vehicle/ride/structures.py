@@ -1,17 +1,9 @@
-"""Richer suspension structures nested with the linear one (issue 43, item 1; docs/suite.md):
-per axle, on each element's elongation ``e = J q`` (body point minus wheel, m):
-
-* ``spring=cubic``: ``k e + k3 e^3``, parameter ``<k>_cubic`` (N/m³) in ``[0, 2] x``
-  :data:`CUBIC_PER_K` ``x k`` (``k3 = 0``: the linear spring). :data:`CUBIC_PER_K` = 100 m⁻²
-  (25 % of the linear force at 50 mm: a stated choice for a progressive or bump-stop-assisted
-  spring; Dixon, *The Shock Absorber Handbook*, 2nd ed., 2007, ch. 1; Reimpell et al., *The
-  Automotive Chassis*, 2001, sec. 5.3);
-* ``damper=bilinear``: ``<c>_bump`` (``e' < 0``) and ``<c>_rebound`` (N s/m) for ``<c>``, in
-  :data:`BUMP_BOX` and :data:`REBOUND_BOX` ``x c``: the symmetric damper and rebound/bump
-  ratios 1:1 to 4:1 and beyond (Dixon 2007, ch. 5: 2:1 to 4:1 usual).
-
-The linear structure is the model itself (its kernel); a richer one runs RK4 at ``dt``, the
-road linear between samples, its record at ``dt / record_substeps``.
+"""Richer suspension structures nested with the linear one (issue 43, item 1), per axle, on
+each element's elongation ``e = J q`` (body point minus wheel, m): ``spring=cubic`` adds
+``<k>_cubic`` (N/m³, force ``k e + k3 e^3``), ``damper=bilinear`` replaces ``<c>`` by
+``<c>_bump`` (``e' < 0``) and ``<c>_rebound`` (N s/m). The linear structure is the model
+itself (its kernel); a richer one runs RK4 at ``dt``, the road linear between samples. The
+boxes and their sources: docs/suite.md, "Richer suspension structures".
 """
 
 from __future__ import annotations
@@ -24,7 +16,8 @@ import numpy as np
 from . import linear
 from .model import RideModel
 
-#: The cubic coefficient's reference per unit of the linear rate (m⁻²): 25 % at 50 mm.
+#: The cubic coefficient's reference per unit of the linear rate (m⁻²): 25 % of the linear
+#: force at 50 mm (a progressive or bump-stop-assisted spring).
 CUBIC_PER_K = 0.25 / 0.05**2
 #: Box of the cubic coefficient as multiples of ``CUBIC_PER_K x k`` (published k).
 CUBIC_BOX = (0.0, 2.0)
