@@ -1,11 +1,8 @@
 """``problem=fmu``: the parameters of any FMU (FMI 2.0 or 3.0, co-simulation or model
-exchange) identified from a record it should reproduce; no truth. The keys, the input
-handling between samples and the refusals: docs/fmu.md.
-
-The FMU starts at the record's first time with the known and identified start values and the
-first row's inputs; its outputs are read at every row's time. Checking a config reads the zip
-and its description only (:mod:`.archive`); the binary is loaded, instantiated once and reset
-between simulations where the problem evaluates (a supervised worker, :mod:`.binary`).
+exchange) identified from a record it should reproduce; no truth. The keys, the start, the
+input handling between samples and the refusals: docs/fmu.md. Checking a config reads the zip
+and its description only (:mod:`.archive`); the binary is loaded where the problem evaluates
+(a supervised worker, :mod:`.binary`).
 """
 
 from __future__ import annotations
@@ -84,7 +81,7 @@ class FmuConfig(ProblemConfig):
         if self.reference.file is None:
             raise ConfigError("problem.reference.file", None, "the path of the record (CSV) "
                               "the FMU is fitted to (docs/fmu.md)")
-        setup(self)
+        setup(self)  # the pre-flight reads the FMU and the record
 
 
 def _kind(config: FmuConfig, fmu: archive.FmuFile) -> str:

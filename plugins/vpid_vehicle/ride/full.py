@@ -2,11 +2,9 @@
 
 ``q = [z, phi, theta, zFL, zFR, zRL, zRR]``: bounce (m), roll (rad, left side up), pitch
 (rad, rear up) and the wheel hops (m); a body point ``x`` ahead of and ``y`` left of the
-centre of gravity moves as ``z - x theta + y phi``. With elongations ``e = J q``, ``K = J^T
-diag(k) J``, ``C = J^T diag(c) J``; a front anti-roll bar ``kR`` (N m/rad) resists ``phi -
-(zFL - zFR) / (yL + yR)``. Known: ``a1``, ``a2``, ``yL``, ``yR``, ``kt``, ``kR``. Identified
-(per wheel, left = right): ``m, Ix, Iy, mf, mr, kf, kr, cf, cr``. The rear wheels follow
-``(a1 + a2) / speed`` after the front ones, each on its side's track.
+centre of gravity moves as ``z - x theta + y phi``. ``K = J^T diag(k) J``, ``C = J^T diag(c)
+J`` on the elongations ``e = J q``, with a front anti-roll bar ``kR`` (N m/rad) on ``phi -
+(zFL - zFR) / (yL + yR)``.
 """
 
 from __future__ import annotations

@@ -1,11 +1,9 @@
 """One simulation core for linear systems driven by road inputs (SI units; docs/suite.md):
 ``M q'' + C q' + K q = F u(t)`` per candidate, from rest, outputs ``y = Pa q'' + Pv q' + Pq q
 + Pu u``, discretised as ``x_{k+1} = A x_k + U u_k + V u_{k+1}``, ``y_k = Ox x_k + Ou u_k`` on
-``x = [q, q']`` by :func:`newmark` (the fitted model; average acceleration by default) or
-:func:`exact_foh` (the record: exact for an input linear between samples); :func:`simulate`
-iterates either. :func:`newmark_outputs`, the fitted model's path, is compiled end to end
-(the table per candidate, then :mod:`.codegen`'s loops): the same outputs to rounding, at the
-paper's kernel's speed (``benchmarks/bench_ride_core.py``).
+``x = [q, q']`` by :func:`newmark` (the fitted model) or :func:`exact_foh` (the record);
+:func:`simulate` iterates either; :func:`newmark_outputs`, the fitted model's path, is
+compiled end to end (the table per candidate, then :mod:`.codegen`'s loops).
 """
 
 from __future__ import annotations
@@ -120,8 +118,7 @@ def _leading(a: np.ndarray | None, shape: tuple[int, ...]) -> np.ndarray:
 def newmark_outputs(system: LinearSystem, dt: float, u: np.ndarray, gamma: float = 0.5,
                     beta: float = 0.25) -> np.ndarray:
     """The outputs ``(n, N, p)`` of Newmark-beta at ``dt`` s driven by ``u`` ``(N, r)`` from
-    rest: ``simulate(newmark(system, dt, gamma, beta), u)`` to rounding, compiled end to end
-    (see the module docstring)."""
+    rest: ``simulate(newmark(system, dt, gamma, beta), u)`` to rounding, compiled."""
     from . import kernel
     from .codegen import runs
 

@@ -1,15 +1,10 @@
-"""What every ride problem of the suite shares (docs/suite.md): the record, its noise, the
-instances, the objective and the residuals; a model adds only its matrices.
-
-**Record**: the true vehicle by the exact first-order-hold solution at ``dt /
-record_substeps``, sampled every ``dt``; the fitted model is Newmark at ``dt`` (no inverse
-crime; ``record=newmark`` commits it on purpose). **Noise**: additive Gaussian per channel,
-``sigma_c = noise_level x rms(clean_c)``. **Instances**: run ``i`` fits instance ``i``,
-drawn from ``SeedSequence([seed, INSTANCE_ROOT, crc32(name)], spawn_key=(i,))`` (never an
-optimizer's stream, one root per problem): the truth (:func:`draw_truth`, or the published
-set with ``truth=set``), the random roads' phases, the noise. The box is ``[0.5, 1.5] x`` the
-published set (a model may cap it). **Objective**: Eq. 3 by default (one norm per channel)
-or another estimator (:mod:`vpid_bench.estimators`); metric: NoRE (%) against the truth.
+"""What every ride problem of the suite shares: the record, its noise, the instances, the
+objective and the residuals; a model adds only its matrices (docs/suite.md). The record is the
+true vehicle's by the exact first-order hold at ``dt / record_substeps`` (``record=newmark``:
+the fitted model's, an inverse crime on purpose), with additive Gaussian noise per channel;
+instance ``i`` (run ``i``'s) draws its truth, random roads and noise from
+``SeedSequence([seed, INSTANCE_ROOT, crc32(name)], spawn_key=(i,))``, never an optimizer's
+stream. Objective: Eq. 3 by default or another estimator; metric: NoRE (%).
 """
 
 from __future__ import annotations
@@ -106,11 +101,9 @@ class RecordFileConfig:
 
 @dataclasses.dataclass(frozen=True)
 class SuiteConfig(ProblemConfig):
-    """Keys every problem of the suite shares (the module docstring; a model's Config adds
-    ``parameter_set``, ``sensors`` and its input): ``duration_s``, ``dt`` (s), ``noise_level``
-    (a fraction of each clean channel's rms), ``seed``, ``truth`` (``random``, ``set``),
-    ``truth_margin``, ``record`` (``exact``, ``newmark``), ``record_substeps``, ``objective``
-    (``eq3``, ``ols``, ``ml``, ``ml_profiled``)."""
+    """Keys every problem of the suite shares (docs/suite.md; a model's Config adds
+    ``parameter_set``, ``sensors`` and its input); ``noise_level``: a fraction of each clean
+    channel's rms."""
 
     duration_s: float = 3.0
     dt: float = 0.001

@@ -1,10 +1,8 @@
 """The named suites (docs/suite.md): each member a problem of its own (a ride or lateral
-problem with its defaults, which the command line may still change), registered under a
-stable name with its suites, so ``vpid-bench -m suite=smoke optimizer=...`` sweeps them.
-``smoke``: every family once, short; ``structures``: richer structures fitted to the records
-they made (not archived); ``vpid1``: the suite proper, at the archive's protocol (a default
-budget of 1,000·D evaluations), so ``suite=vpid1 optimizer=<yours>`` is ranked among
-``archive/vpid1``.
+problem with its defaults, which the command line may still change) registered under a stable
+name with its suites (``vpid-bench -m suite=smoke optimizer=...`` sweeps them): ``smoke``
+(every family once, short), ``structures`` (richer structures on the records they made),
+``vpid1`` (the suite proper, at the archive's protocol: 1,000·D evaluations by default).
 """
 
 from __future__ import annotations
