@@ -16,7 +16,7 @@ import numpy as np
 
 from vpid_bench import Bounds, ConfigError, Optimizer, OptimizerParams
 
-from .unit_box import to_physical
+from .coordinates import to_physical
 
 
 @dataclass(frozen=True)

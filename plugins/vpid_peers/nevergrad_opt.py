@@ -17,7 +17,7 @@ import numpy as np
 
 from vpid_bench import Bounds, ConfigError, Optimizer, OptimizerParams
 
-from .unit_box import to_physical
+from .coordinates import to_physical
 
 #: CMA, what NGOpt (nevergrad's recommendation) picks at the paper's protocol (identical runs);
 #: NGOpt itself fails at small budgets in nevergrad 1.0.12 on numpy 2.x (a TypeError in its

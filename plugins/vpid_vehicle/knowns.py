@@ -87,15 +87,6 @@ class Plan:
                 for n, lo, hi in zip(self.identified, lower, upper, strict=True)]
 
 
-def _mapping(value: Any, key: str) -> dict[str, Any]:
-    if value is None:
-        return {}
-    if not isinstance(value, Mapping):
-        raise ConfigError(key, value, "a mapping of names to values, e.g. "
-                          f"{key}.kt=210000")
-    return {str(k): v for k, v in value.items()}
-
-
 def _number(value: Any) -> float | None:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return None
@@ -159,13 +150,14 @@ def _boxes(raw: Mapping[str, Any], identified: Sequence[str]) -> dict[str, tuple
 
 
 def plan(config: Any, model: Any, problem: str = "this problem") -> Plan:
-    """The :class:`Plan` of ``config.known`` and ``config.bounds``, or a :class:`ConfigError`."""
+    """The :class:`Plan` of ``config.known`` and ``config.bounds`` (frozen by
+    :func:`~vpid_bench.freeze_fields`), or a :class:`ConfigError`."""
     pset = config.parameter_set
     published = dict(model.sets[pset])
     units = dict(zip(model.names, model.units, strict=True))
     units.update({n: QUANTITIES[n][0] if n in QUANTITIES else "" for n in published
                   if n not in units})
-    raw = _mapping(getattr(config, "known", None), "problem.known")
+    raw = dict(config.known)  # a FrozenMap (freeze_fields): names are strings
     values, sources = dict(published), {n: f"parameter set {pset}" for n in published}
     fixed, freed = [], []
     for name, value in raw.items():
@@ -186,7 +178,7 @@ def plan(config: Any, model: Any, problem: str = "this problem") -> Plan:
             fixed.append(name)
     identified = tuple([n for n in model.names if n not in fixed] + freed)
     _check_identifiable(problem, identified, values, units, freed)
-    boxes = _boxes(_mapping(getattr(config, "bounds", None), "problem.bounds"), identified)
+    boxes = _boxes(dict(config.bounds), identified)
     for name in freed:
         if values[name] == 0 and name not in boxes:
             raise ConfigError(f"problem.known.{name}", FREE, f"a box for it too: its value in "

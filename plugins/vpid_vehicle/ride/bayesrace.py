@@ -26,7 +26,12 @@ from vpid_bench import (
 )
 
 from . import third_party
-from .dynamic_rows import DYNAMIC_ROWS
+
+#: The rows of :func:`.kernel.dynamic_single_track`'s parameter block: each axle's Magic
+#: Formula (``B, C, D, E``, the shifts ``Sh``, ``Sv``), the drive (``Cm1, Cm2``), the
+#: resistance (``Cr0, Cr2``) and the yaw inertia.
+DYNAMIC_ROWS = ("Bf", "Cf", "Df", "Ef", "Shf", "Svf", "Br", "Cr", "Dr", "Er", "Shr", "Svr",
+                "Cm1", "Cm2", "Cr0", "Cr2", "Iz")
 
 #: The simulator's coefficients, ``deep_dynamics.yaml`` of the records' repository (its
 #: PARAMETERS and VEHICLE_SPECS): value, Min, Max. A test reads the shipped file against them.

@@ -295,7 +295,7 @@ def _dynamic_rates(vx, vy, r, d, sd, cd, delta, P, i, m, lf, lr):  # pragma: no 
 
 @numba.njit(**_OPTS)
 def dynamic_single_track(P, drive, steer, dt, sub, m, lf, lr, x0, y):  # pragma: no cover
-    """The dynamic single-track model (``P`` rows :data:`.dynamic_rows.DYNAMIC_ROWS`) driven
+    """The dynamic single-track model (``P`` rows :data:`.bayesrace.DYNAMIC_ROWS`) driven
     by ``drive`` and ``steer`` (rad) held over each interval, by RK4 at ``dt / sub`` from
     ``x0``: ``y[k, :, i] = (vx, vy, r)`` (m/s, m/s, rad/s)."""
     n, N = P.shape[1], y.shape[0]
