@@ -170,10 +170,6 @@ def inspect(path: str | os.PathLike) -> FmuFile:
 _FOLDERS: dict[tuple[str, int, int], Path] = {}
 
 
-def _remove(folder: Path) -> None:
-    shutil.rmtree(folder, ignore_errors=True)
-
-
 def extracted(path: str | os.PathLike) -> Path:
     """The folder this process extracted the FMU into (once per file state), checked again."""
     fmu = inspect(path)
@@ -182,7 +178,7 @@ def extracted(path: str | os.PathLike) -> Path:
     if key in _FOLDERS:
         return _FOLDERS[key]
     folder = Path(tempfile.mkdtemp(prefix="vpid-fmu-"))
-    atexit.register(_remove, folder)
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
     root = folder.resolve()
     total = 0
     with zipfile.ZipFile(fmu.path) as z:

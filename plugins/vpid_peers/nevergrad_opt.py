@@ -25,19 +25,15 @@ from .coordinates import to_physical
 DEFAULT_METHOD = "CMA"
 
 
-def nevergrad_registry() -> Any:
-    """nevergrad's optimizer registry (imports nevergrad: about 3 s the first time)."""
+def check_method(method: str) -> None:
+    """Refuse a ``method`` not in nevergrad's registry (imported here: about 3 s the first
+    time), naming the 5 closest (difflib)."""
     try:
         import nevergrad as ng
     except ImportError as exc:  # pragma: no cover - the plugin registers only when it is found
         raise ConfigError("optimizer", "nevergrad", "install the extra: "
                           "pip install 'vpid-bench[peers]'") from exc
-    return ng.optimizers.registry
-
-
-def check_method(method: str) -> None:
-    """Refuse a ``method`` not in nevergrad's registry, naming the 5 closest (difflib)."""
-    names = list(nevergrad_registry())
+    names = list(ng.optimizers.registry)
     if method in names:
         return
     by_lower: dict[str, str] = {}

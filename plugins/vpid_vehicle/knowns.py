@@ -106,14 +106,9 @@ def _check_value(name: str, value: Any, unit: str, geometry_of: dict[str, float]
     return x
 
 
-def scale_group(names: Sequence[str], units: Mapping[str, str]) -> list[str]:
-    """The quantities of ``names`` that scale together (masses, stiffnesses, dampings, ...)."""
-    return [n for n in names if _kind(n, units[n]) == "scale"]
-
-
 def _check_identifiable(problem: str, identified: Sequence[str], values: Mapping[str, float],
                         units: Mapping[str, str], freed: Sequence[str]) -> None:
-    group = scale_group(list(values), units)
+    group = [n for n in values if _kind(n, units[n]) == "scale"]  # they scale together
     stated = [n for n in group if n not in identified and values[n] != 0]
     if freed and not stated:
         name = freed[0]
