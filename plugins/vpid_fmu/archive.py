@@ -37,12 +37,11 @@ def fail(path: Any, allowed: str) -> ConfigError:
 
 @dataclasses.dataclass(frozen=True)
 class FmuFile:
-    """An FMU's description, interfaces (``cs``, ``me``), identifiers and this platform's binary."""
+    """An FMU's description and, per interface (``cs``, ``me``), this platform's binary."""
 
     path: str
     description: Any
     version: str
-    identifiers: dict[str, str]
     binaries: dict[str, str]
     token: str
 
@@ -155,7 +154,7 @@ def _inspect(path: str, size: int, mtime_ns: int) -> FmuFile:
                                    for i in identifiers.values()}))
         raise fail(p, f"an FMU with a binary for this platform ({folder}): {want}; {has}")
     token = md.guid if md.guid is not None else getattr(md, "instantiationToken", "")
-    return FmuFile(str(p), md, version, identifiers, binaries, token or "")
+    return FmuFile(str(p), md, version, binaries, token or "")
 
 
 def inspect(path: str | os.PathLike) -> FmuFile:

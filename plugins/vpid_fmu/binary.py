@@ -151,14 +151,12 @@ class Simulator:
         if vrs.size == 0:
             return 0
         v = np.ascontiguousarray(values, dtype=float)
-        if self.major == 2:
-            return self.f_set(self.c, vrs.ctypes.data, vrs.size, v.ctypes.data)
-        return self.f_set(self.c, vrs.ctypes.data, vrs.size, v.ctypes.data, vrs.size)
+        count = () if self.major == 2 else (vrs.size,)  # FMI 3.0 takes the values' count too
+        return self.f_set(self.c, vrs.ctypes.data, vrs.size, v.ctypes.data, *count)
 
     def _get(self, vrs: np.ndarray, out: np.ndarray) -> int:
-        if self.major == 2:
-            return self.f_get(self.c, vrs.ctypes.data, vrs.size, out.ctypes.data)
-        return self.f_get(self.c, vrs.ctypes.data, vrs.size, out.ctypes.data, vrs.size)
+        count = () if self.major == 2 else (vrs.size,)
+        return self.f_get(self.c, vrs.ctypes.data, vrs.size, out.ctypes.data, *count)
 
     def _start(self, vrs: np.ndarray, values: np.ndarray, t0: float, t1: float,
                u0: np.ndarray, vr_in: np.ndarray, tolerance: float | None) -> str | None:

@@ -21,33 +21,27 @@ from vpid_bench import ConfigError
 #: The value of ``problem.known.<name>`` that identifies a known quantity instead.
 FREE = "free"
 
-#: Known quantities: unit (SI), kind (``scale``: scales with the others, leaving a record
-#: unchanged; ``geometry``: a length or shape factor, never freed) and what they are.
-QUANTITIES: dict[str, tuple[str, str, str]] = {
-    "kt": ("N/m", "scale", "tyre stiffness"),
-    "ct": ("N s/m", "scale", "tyre damping"),
-    "kt1": ("N/m", "scale", "front tyre stiffness"),
-    "kt2": ("N/m", "scale", "rear tyre stiffness"),
-    "kR": ("N m/rad", "scale", "front anti-roll bar"),
-    "m": ("kg", "scale", "vehicle mass (weighed)"),
-    "L": ("m", "geometry", "wheelbase"),
-    "a1": ("m", "geometry", "centre of gravity to the front axle"),
-    "a2": ("m", "geometry", "centre of gravity to the rear axle"),
-    "yL": ("m", "geometry", "centre of gravity to the left wheels"),
-    "yR": ("m", "geometry", "centre of gravity to the right wheels"),
-    "lf": ("m", "geometry", "centre of gravity to the front axle"),
-    "E": ("1", "geometry", "tyre curvature factor (Magic Formula)"),
+#: Known quantities: unit (SI) and what they are.
+QUANTITIES: dict[str, tuple[str, str]] = {
+    "kt": ("N/m", "tyre stiffness"),
+    "ct": ("N s/m", "tyre damping"),
+    "kt1": ("N/m", "front tyre stiffness"),
+    "kt2": ("N/m", "rear tyre stiffness"),
+    "kR": ("N m/rad", "front anti-roll bar"),
+    "m": ("kg", "vehicle mass (weighed)"),
+    "L": ("m", "wheelbase"),
+    "a1": ("m", "centre of gravity to the front axle"),
+    "a2": ("m", "centre of gravity to the rear axle"),
+    "yL": ("m", "centre of gravity to the left wheels"),
+    "yR": ("m", "centre of gravity to the right wheels"),
+    "lf": ("m", "centre of gravity to the front axle"),
+    "E": ("1", "tyre curvature factor (Magic Formula)"),
 }
-#: Units of quantities that scale together (every other unit is geometry or a shape).
+#: Units of quantities that scale together, leaving a record unchanged (masses, stiffnesses,
+#: dampings); every other unit is geometry (a length or shape factor, never freed).
 SCALE_UNITS = frozenset({"kg", "kg m²", "kg m^2", "N/m", "N s/m", "N/rad", "N", "N m/rad"})
 #: Units of quantities that may be zero (a damping, an anti-roll bar, a curvature factor).
 MAY_BE_ZERO = frozenset({"N s/m", "N m/rad", "1"})
-
-
-def _kind(name: str, unit: str) -> str:
-    if name in QUANTITIES:
-        return QUANTITIES[name][1]
-    return "scale" if unit in SCALE_UNITS else "geometry"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -76,7 +70,7 @@ class Plan:
         """The stated quantities as ``problem.info.known`` keeps them."""
         return [{"name": n, "value": float(self.values[n]), "unit": self.units[n],
                  "source": self.sources[n],
-                 "what": QUANTITIES[n][2] if n in QUANTITIES else "fixed by you"}
+                 "what": QUANTITIES[n][1] if n in QUANTITIES else "fixed by you"}
                 for n in self.values if n not in self.identified]
 
     def box_list(self, lower: Sequence[float], upper: Sequence[float]) -> list[dict[str, Any]]:
@@ -108,7 +102,7 @@ def _check_value(name: str, value: Any, unit: str, geometry_of: dict[str, float]
 
 def _check_identifiable(problem: str, identified: Sequence[str], values: Mapping[str, float],
                         units: Mapping[str, str], freed: Sequence[str]) -> None:
-    group = [n for n in values if _kind(n, units[n]) == "scale"]  # they scale together
+    group = [n for n in values if units[n] in SCALE_UNITS]
     stated = [n for n in group if n not in identified and values[n] != 0]
     if freed and not stated:
         name = freed[0]
@@ -152,17 +146,16 @@ def plan(config: Any, model: Any, problem: str = "this problem") -> Plan:
     units = dict(zip(model.names, model.units, strict=True))
     units.update({n: QUANTITIES[n][0] if n in QUANTITIES else "" for n in published
                   if n not in units})
-    raw = dict(config.known)  # a FrozenMap (freeze_fields): names are strings
     values, sources = dict(published), {n: f"parameter set {pset}" for n in published}
     fixed, freed = [], []
-    for name, value in raw.items():
+    for name, value in config.known.items():
         if name not in published:
             raise ConfigError(f"problem.known.{name}", value, "one of "
                               + ", ".join(published) + f" (the quantities of {problem})")
         if value == FREE:
             if name in model.names:
                 continue  # identified already
-            if _kind(name, units[name]) != "scale":
+            if units[name] not in SCALE_UNITS:
                 raise ConfigError(f"problem.known.{name}", value, f"a value ({units[name]}):"
                                   f" {name} is geometry {problem} states and cannot identify")
             freed.append(name)

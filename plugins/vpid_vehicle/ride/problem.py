@@ -114,7 +114,7 @@ class SuiteConfig(ProblemConfig):
     record: str = "exact"
     record_substeps: int = 10
     objective: str = "eq3"
-    #: The model a user's record is read for, at the pre-flight (:func:`check_record_file`).
+    #: The model whose stated quantities and user's record are checked at the pre-flight.
     Model: ClassVar[type[RideModel] | None] = None
     reference: RecordFileConfig = added_setting(default_factory=RecordFileConfig)
     #: Stated quantities and boxes (:mod:`..knowns`): ``known.kt=210000``, ``known.ms=250``
@@ -142,7 +142,10 @@ class SuiteConfig(ProblemConfig):
                               "at most 200000 samples (duration_s / dt)")
         self._check_own()
         if self.Model is not None:
-            check_record_file(self, self.Model())
+            model = self.Model()
+            knowns.check_config(self, model)
+            if self.reference.file is not None:
+                read_ride_record(model, self)
 
     def _check_own(self) -> None:
         """A family's own keys, checked before a user's record is read."""
@@ -171,13 +174,6 @@ class RideConfig(SuiteConfig):
             _check([("record_model", getattr(self, "record_model", "linear") == "linear",
                      "linear when problem.spring or problem.damper is not linear (a richer "
                      "structure's record is its own)")], self)
-
-
-def check_record_file(config: Any, model: RideModel) -> None:
-    """Check the stated quantities and the record as a config is built (the pre-flight)."""
-    knowns.check_config(config, model)
-    if config.reference.file is not None:
-        read_ride_record(model, config)
 
 
 def read_ride_record(model: RideModel, config: Any) -> Record:
