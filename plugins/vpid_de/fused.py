@@ -1,6 +1,6 @@
-"""One DE generation in one compiled loop (numba), for speed only: the same trials as the
-numpy reference of :mod:`vpid_de.kernels` from the same uniforms, bit for bit (tested). At ps
-= 20 the numpy path's 30 calls cost a fifth of the vehicle objective. Imported lazily.
+"""One DE generation in one compiled loop (numba), for speed only (at ps = 20 the numpy path's
+30 calls cost a fifth of the vehicle objective): the same trials as :mod:`vpid_de.kernels`
+from the same uniforms, bit for bit (tested). Imported lazily.
 """
 
 from __future__ import annotations

@@ -1,11 +1,9 @@
 """The compiled step loops of one simulation: numba calling the binary's functions through
-ctypes function pointers passed as arguments (each loop compiles once per signature, cached
-on disk, whatever binary it calls). Why numba and ctypes, and the speed against a C loop:
-docs/fmu.md. Pointer arguments are ``size_t`` (a pointer's width, an integer numba passes).
-
-Each loop writes the outputs ``y`` ``(N, p)`` at the times ``t`` (``y[0]`` is the caller's)
-and returns ``(status, k)``: the first status above warning (2 discard, 3 error, 4 fatal)
-and its sample, or ``(0, N)``.
+ctypes function pointers passed as arguments, pointers as ``size_t`` (each loop compiles once
+per signature, cached, whatever binary it calls; why and how fast: docs/fmu.md). Each writes
+the outputs ``y`` ``(N, p)`` at the times ``t`` (``y[0]`` is the caller's) and returns
+``(status, k)``: the first status above warning (2 discard, 3 error, 4 fatal) and its
+sample, or ``(0, N)``.
 """
 
 from __future__ import annotations

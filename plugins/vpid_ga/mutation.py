@@ -103,8 +103,8 @@ def mutationadaptfeasible(
     engine: str = "numba",
 ) -> np.ndarray:
     """MATLAB's adaptive-feasible mutation for a box: one child inside it per row index of
-    ``parents`` (``step`` in parameter units). ``engine``: ``numba`` (:mod:`vpid_ga.fused`)
-    or ``numpy`` (the reference above); identical children (tested)."""
+    ``parents`` (``step`` in parameter units), by :mod:`vpid_ga.fused` or, ``engine="numpy"``,
+    the reference above (identical children, tested)."""
     X = population[parents]
     if engine == "numpy":
         basis, active = box_directions(X, step, lower, upper, rng, tol)

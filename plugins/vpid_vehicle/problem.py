@@ -22,7 +22,6 @@ from .config import (
     VehicleConfig,
     known_list,
     own_boxes,
-    validate,
     window,
 )
 from .model import KnownConstants, physical
@@ -44,8 +43,7 @@ class VehicleProblem(ChannelFit, Problem):
     channels = (("z1''", "m/s²"), ("z2''", "m/s²"))
 
     def __init__(self, config: VehicleConfig) -> None:
-        super().__init__(config)
-        validate(config)
+        super().__init__(config)  # the config validated itself when it was built
         p = config.vehicle
         self.known = KnownConstants(L=p.L, kt1=p.kt1, kt2=p.kt2)
         self.bump = Bump.from_geometry(config.bump.V, config.bump.h, config.bump.w, p.L)

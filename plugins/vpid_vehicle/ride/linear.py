@@ -53,11 +53,9 @@ def newmark(system: LinearSystem, dt: float, gamma: float = 0.5, beta: float = 0
     """``(A, U, V, Ox, Ou)`` of Newmark-beta's step at ``dt`` s (see the module docstring)."""
     M, C, K, F = system.M, system.C, system.K, system.F
     d = system.dof
-    _, _, Ox, Ou = system.continuous()
+    Ac, Bc, Ox, Ou = system.continuous()
     eye = np.eye(d)
-    Minv = np.linalg.inv(M)
-    G = -np.concatenate([Minv @ K, Minv @ C], axis=2)
-    H = Minv @ F
+    G, H = Ac[:, d:, :], Bc[:, d:, :]  # a = G x + H u
     # predictor [q_p; v_p] = P x_k + Q u_k
     base = np.block([[eye, dt * eye], [np.zeros((d, d)), eye]])
     pred = np.concatenate([(0.5 - beta) * dt**2 * eye, (1.0 - gamma) * dt * eye], axis=0)

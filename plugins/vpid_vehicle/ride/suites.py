@@ -95,9 +95,7 @@ MEMBERS: tuple[type, ...] = (
     member(LateralProblem, "vpid1_l_civic_model_error", ("vpid1",), record_model="magic_formula",
            steer_deg=4.0),
     member(LateralMFProblem, "vpid1_mf_civic_sine", ("vpid1",)),
-    # the richer suspension structures (issue 43) fitted to records they made: the richer
-    # structure recovering the truth of records the linear model misfits (a suite of its own,
-    # not in vpid1's archive)
+    # the richer structures (issue 43) on the records they made, which the linear model misfits
     member(RideQuarterProblem, "structures_q_golden_bilinear", ("structures",),
            damper="bilinear"),
     member(RideHalfProblem, "structures_h_gokdag_bilinear", ("structures",),
