@@ -21,6 +21,8 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
+from vpid_bench import write_text_atomic
+
 #: ``(s, p, r)``: states (2 x degrees of freedom), outputs, inputs of each built-in linear
 #: model and sensor set: quarter car (4, 1-3, 2), single-track lateral (4, 1-3, 1), half car
 #: (8, 2-4, 4) and the paper's half car through the core (8, 2, 2), full car (14, 4/6/8, 8).
@@ -123,24 +125,14 @@ def cache_folders() -> list[Path]:
 
 
 def write_source(folder: Path, source: str) -> Path:
-    """The file holding ``source`` in ``folder``, written whole if needed (under a temporary
-    name renamed into place: processes writing it at once never read half of it; a file with
-    other content is rewritten); OSError if it cannot."""
+    """The file holding ``source`` in ``folder``, written whole if needed (atomically:
+    processes writing it at once never read half of it; a file with other content is
+    rewritten); OSError if it cannot."""
     path = folder / f"unrolled_{hashlib.sha256(source.encode()).hexdigest()[:16]}.py"
     with contextlib.suppress(OSError):
         if path.read_text(encoding="utf-8") == source:
             return path
-    folder.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".unrolled-", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(source)
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
-    return path
+    return write_text_atomic(path, source)
 
 
 @functools.cache
