@@ -103,8 +103,7 @@ class AdaptiveDE(GenerationalOptimizer):
 
     # -- GenerationalOptimizer --------------------------------------------------------------------
     def initial_population(self) -> np.ndarray:
-        U = self.bounds.sample(self.rng, self.initial_size())
-        return np.minimum(np.maximum(U, self.bounds.lower), self.bounds.upper)
+        return self.bounds.sample(self.rng, self.initial_size())
 
     def start(self, X: np.ndarray, f: np.ndarray) -> None:
         self.population, self.fitness = X.copy(), f.copy()

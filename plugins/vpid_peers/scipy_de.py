@@ -56,7 +56,7 @@ class ScipyDE(LoopOptimizer):
 
         p, b = self.params, self.bounds
         if p.popsize == "ps":
-            init: Any = np.clip(b.sample(self.rng, p.ps), b.lower, b.upper)
+            init: Any = b.sample(self.rng, p.ps)
             maxiter, popsize = p.iterations, 15  # scipy sizes the population from init
         else:  # scipy's defaults; the budget (the bridge) ends the run
             init, popsize = "latinhypercube", 15
