@@ -108,8 +108,8 @@ class DifferentialEvolution(GenerationalOptimizer):
             return self.rng.uniform(low, high, size=(self.params.ps, 1))
         return float(self.rng.uniform(low, high))
 
-    # -- ask/tell -----------------------------------------------------------------------------
-    def trials(self) -> np.ndarray:
+    # -- GenerationalOptimizer: the handshake lives in the core, generation and selection here
+    def next_generation(self) -> np.ndarray:
         """One generation of trials (mutation, Eq. 8 crossover, bounds rule) from the factors
         (DE6, DE7), then ONE block of ``ps x (ps + 2 dim)`` uniforms, per row the index keys
         (ps - 1), ``rand_j`` (dim), ``rnbr`` (1), the reinit values (dim)."""
@@ -138,10 +138,6 @@ class DifferentialEvolution(GenerationalOptimizer):
         c = ps - 1
         U = crossover_from_uniforms(X, V, self.params.CR, u[:, c : c + dim], u[:, c + dim])
         return self._repair(U, X, self._lower, self._upper, u[:, c + dim + 1 :])
-
-    # -- GenerationalOptimizer: the handshake lives in the core, only selection is here ----------
-    def next_generation(self) -> np.ndarray:
-        return self.trials()
 
     def start(self, X: np.ndarray, f: np.ndarray) -> None:
         self.population, self.fitness = X, f

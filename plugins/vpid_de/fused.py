@@ -35,7 +35,7 @@ def repaired(v, x, lo, hi, u, bounds_rule):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def generation(X, fitness, u, n_random, mutation, F, K, CR, bounds_rule, lower, upper):
-    """One generation's trials ``(ps, dim)`` from the uniforms ``u`` of ``trials()``."""
+    """One generation's trials ``(ps, dim)`` from the uniforms ``u`` of ``next_generation()``."""
     ps, dim = X.shape
     best = np.argmin(fitness)
     out = np.empty_like(X)
