@@ -142,6 +142,7 @@ class RacecarProblem(ChannelFit, Problem):
     name = "racecar"
     family = "single-track lateral, measured"
     rows_independent: ClassVar[bool] = True
+    channels = CHANNELS
 
     def __init__(self, config: RacecarConfig) -> None:
         super().__init__(config)
@@ -198,9 +199,6 @@ class RacecarProblem(ChannelFit, Problem):
         return {NAIVE: {"metrics": self._held_out_metrics(self.held_out.naive()),
                         "note": f"no model: each window's first logged state held; objective "
                                 f"on the fitted windows {f:.4g}"}}
-
-    def signal_units(self) -> dict[str, str]:
-        return dict(CHANNELS)
 
     def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
         """Logged and predicted ``vy``, ``r`` over the held-out windows, one after another."""
