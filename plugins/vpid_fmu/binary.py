@@ -230,7 +230,7 @@ class Simulator:
             fns = (self.f_time, self.f_set, self.f_states, self.f_deriv, self.f_get,
                    self.f_completed)
             return kernels.me2_dopri5(fns, self.c, t, u, x, vr_in, vr_out, y, how["rtol"],
-                                      how["atol"], kernels.tables())
+                                      how["atol"], kernels.TABLEAU)
         if self.major == 3:
             flags = np.zeros(16, dtype=np.uint8)
             return kernels.cs3_hold(self.f_step, self.f_set, self.f_get, self.c, t, u,
