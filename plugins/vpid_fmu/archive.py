@@ -1,8 +1,7 @@
 """An FMU file read with limits (a zip someone else made; what is refused: docs/fmu.md): its
 members checked before anything is read, sizes counted again while extracting, its
-``modelDescription.xml`` parsed by fmpy, and, in a worker only, the zip extracted into a
-private folder of the process. Nothing here loads the binary (:mod:`.binary` does, in the
-supervised workers).
+``modelDescription.xml`` parsed by fmpy and, in a worker only, the zip extracted into a
+private folder of the process; the binary is loaded by :mod:`.binary`.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """``problem=functions``: sphere, Rosenbrock and Rastrigin in ``dim`` dimensions, cheap, and
 proof that the core knows no vehicle. ``x_true`` only where no coordinate is zero (NoRE is
-undefined there; Rosenbrock's is all ones). Each is a sum of squares whose terms
-``residuals`` returns (one group), so least-squares optimizers run here too.
+undefined there); each a sum of squares whose terms ``residuals`` returns (one group), for
+least-squares optimizers.
 """
 
 from __future__ import annotations
