@@ -244,13 +244,6 @@ class StatedModel:
                                for rows, k in self._model_rows(X, known)])
 
 
-def stated_model(base: Any, config: Any, problem: str) -> Any:
-    """``base`` when the config states nothing, else its :class:`StatedModel`."""
-    if not getattr(config, "known", None) and not getattr(config, "bounds", None):
-        return base
-    return StatedModel(base, plan(config, base, problem))
-
-
 def check_config(config: Any, model: Any) -> Plan:
     """:func:`plan` of a ride config as it is built (the pre-flight refuses a bad key); no
     quantity fixed or freed for a richer model's simulated record (made from the model's

@@ -195,13 +195,17 @@ class RideProblem(ChannelFit, Problem):
     rows_independent = True
 
     def __init__(self, config: RideConfig, index: int = 0) -> None:
-        from .structures import structured
+        from .structures import StructuredModel
 
         self.config = config
         self._index = index
         #: The model in the configured structure, with what the user fixed or freed (knowns.py).
-        self.model = structured(self.model, config)
-        self.model = knowns.stated_model(self.model, config, type(self).name)
+        structure = (getattr(config, "spring", "linear"), getattr(config, "damper", "linear"))
+        if structure != ("linear", "linear"):
+            self.model = StructuredModel(self.model, *structure)
+        if config.known or config.bounds:
+            self.model = knowns.StatedModel(self.model, knowns.plan(config, self.model,
+                                                                    type(self).name))
         published = self.model.sets[config.parameter_set]
         self.nominal = np.array([published[k] for k in self.model.names])
         self.known = {k: v for k, v in published.items() if k not in self.model.names}

@@ -129,15 +129,6 @@ class StructuredModel:
                                    k3, dc, u, dt)
 
 
-def structured(base: RideModel, config: Any) -> RideModel:
-    """``base`` for the linear structure, else its :class:`StructuredModel`."""
-    spring = getattr(config, "spring", "linear")
-    damper = getattr(config, "damper", "linear")
-    if spring == "linear" and damper == "linear":
-        return base
-    return StructuredModel(base, spring, damper)
-
-
 def _full(a: np.ndarray | None, n: int, shape: tuple[int, ...]) -> np.ndarray:
     """``a`` broadcast to ``(n, *shape)`` float64 (None: zeros)."""
     if a is None:
