@@ -246,8 +246,13 @@ def validate(config: VehicleConfig) -> None:
     # a measured record states no noise level (noise.level is what synthetic records add)
     estimators.check_objective(config.objective, config.noise.level
                                if config.reference.file is None else None)
-    if config.reference.file is not None:
-        T = check_reference_file(config)
+    if config.reference.file is not None:  # read at the pre-flight: its span is the window
+        from .record_file import check_span
+        from .reference_io import read_measured
+
+        record = read_measured(config.reference.file, config.reference.mapping())
+        check_span(record, config.dt, MAX_SAMPLES)
+        T = record.span
     check_size(config, T)
     _validate_bounds(config)
 
@@ -352,13 +357,3 @@ def check_size(config: VehicleConfig, T: float) -> None:
     if n_bytes > MAX_MEMORY:
         raise ConfigError("problem.ps", config.ps, f"a job of at most {_gib(MAX_MEMORY)} "
                           f"({what})")
-
-
-def check_reference_file(config: VehicleConfig) -> float:
-    """Read ``problem.reference.file`` at the pre-flight; its span (s), the model's window."""
-    from .record_file import check_span
-    from .reference_io import read_measured
-
-    record = read_measured(config.reference.file, config.reference.mapping())
-    check_span(record, config.dt, MAX_SAMPLES)
-    return record.span
