@@ -121,12 +121,30 @@ class StructuredModel:
 
     def simulate(self, X: np.ndarray, known: dict[str, float], sensors: str, u: np.ndarray,
                  dt: float, solver: str) -> np.ndarray:
-        """The ``sensors`` channels ``(n, N, p)`` by RK4 at ``dt`` from rest (any ``solver``)."""
+        """The ``sensors`` channels ``(n, N, p)`` by RK4 at ``dt`` from rest (any ``solver``,
+        ``u`` linear between samples) of ``M q'' + C q' + K q + J^T g(J q, J q') = F u``,
+        ``g = k3 e^3 + dc max(e', 0)`` per element."""
         lin, k3, dc = self.split(X)
-        return simulate_structured(self.base.system(lin, known, sensors),
-                                   self.suspension.elongations(lin, known),
-                                   np.asarray(self.suspension.axle_of, dtype=np.int64),
-                                   k3, dc, u, dt)
+        system = self.base.system(lin, known, sensors)
+        J = self.suspension.elongations(lin, known)
+        n, d = system.M.shape[0], system.dof
+        r, p = system.F.shape[-1], system.Pq.shape[-2]
+        Minv = np.linalg.inv(system.M)
+        # q'' = G u - A q - B v - H g: the linear part and the elements' forces through M^-1
+        A = Minv @ _full(system.K, n, (d, d))
+        B = Minv @ _full(system.C, n, (d, d))
+        G = Minv @ _full(system.F, n, (d, r))
+        H = Minv @ np.swapaxes(J, 1, 2)
+        u = np.ascontiguousarray(u, dtype=float)
+        y = np.empty((n, u.shape[0], p))
+        _rk4(np.ascontiguousarray(A), np.ascontiguousarray(B), np.ascontiguousarray(G),
+             np.ascontiguousarray(H), np.ascontiguousarray(J, dtype=float),
+             _full(system.Pa, n, (p, d)), _full(system.Pv, n, (p, d)),
+             _full(system.Pq, n, (p, d)), _full(system.Pu, n, (p, r)),
+             np.asarray(self.suspension.axle_of, dtype=np.int64),
+             np.ascontiguousarray(k3, dtype=float), np.ascontiguousarray(dc, dtype=float),
+             u, float(dt), y)
+        return y
 
 
 def _full(a: np.ndarray | None, n: int, shape: tuple[int, ...]) -> np.ndarray:
@@ -134,30 +152,6 @@ def _full(a: np.ndarray | None, n: int, shape: tuple[int, ...]) -> np.ndarray:
     if a is None:
         return np.zeros((n, *shape))
     return np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), (n, *shape)))
-
-
-def simulate_structured(system: linear.LinearSystem, J: np.ndarray, axle_of: np.ndarray,
-                        k3: np.ndarray, dc: np.ndarray, u: np.ndarray, dt: float
-                        ) -> np.ndarray:
-    """``M q'' + C q' + K q + J^T g(J q, J q') = F u``, ``g = k3 e^3 + dc max(e', 0)`` per
-    element, from rest by RK4 at ``dt`` (``u`` linear between samples): ``y`` ``(n, N, p)``."""
-    n, d = system.M.shape[0], system.dof
-    r, p = system.F.shape[-1], system.Pq.shape[-2]
-    Minv = np.linalg.inv(system.M)
-    # q'' = G u - A q - B v - H g: the linear part and the elements' forces through M^-1
-    A = Minv @ _full(system.K, n, (d, d))
-    B = Minv @ _full(system.C, n, (d, d))
-    G = Minv @ _full(system.F, n, (d, r))
-    H = Minv @ np.swapaxes(J, 1, 2)
-    u = np.ascontiguousarray(u, dtype=float)
-    y = np.empty((n, u.shape[0], p))
-    _rk4(np.ascontiguousarray(A), np.ascontiguousarray(B), np.ascontiguousarray(G),
-         np.ascontiguousarray(H), np.ascontiguousarray(J, dtype=float),
-         _full(system.Pa, n, (p, d)), _full(system.Pv, n, (p, d)),
-         _full(system.Pq, n, (p, d)), _full(system.Pu, n, (p, r)), axle_of,
-         np.ascontiguousarray(k3, dtype=float), np.ascontiguousarray(dc, dtype=float),
-         u, float(dt), y)
-    return y
 
 
 @numba.njit(cache=True, inline="always")
