@@ -53,11 +53,6 @@ CHANNELS = (("vx", "m/s"), ("vy", "m/s"), ("r", "rad/s"))
 DT = 0.02
 
 
-def check_data(names: list[str], data_dir: str | None) -> None:
-    for name in names:
-        third_party.verified(name, data_dir)
-
-
 @dataclasses.dataclass(frozen=True)
 class BayesraceConfig(ProblemConfig):
     """``track`` fitted (the other held out), ``substeps``, ``objective``, ``data_dir``."""
@@ -73,7 +68,8 @@ class BayesraceConfig(ProblemConfig):
             raise ConfigError("problem.track", self.track, "ETHZ or ETHZMobil")
         if not (isinstance(self.substeps, int) and 1 <= self.substeps <= 100):
             raise ConfigError("problem.substeps", self.substeps, "an integer in [1, 100]")
-        check_data(list(TRACKS.values()), self.data_dir)
+        for name in TRACKS.values():
+            third_party.verified(name, self.data_dir)
 
 
 class TrackRecord:
