@@ -350,13 +350,16 @@ def _scheduled_rates(vy, r, vx, cd, delta, P, i, linear, m, lf, lr):  # pragma: 
     return (fry + ffy * cd) / m - vx * r, (lf * ffy * cd - lr * fry) / P[P.shape[0] - 1, i]
 
 
-@numba.njit(error_model="numpy")
-def _scheduled(P, linear, vx, delta, starts, H, sub, dt, m, lf, lr, x0,
-               y):  # pragma: no cover - compiled
+@numba.njit(**_OPTS)
+def scheduled_single_track(P, linear, vx, delta, starts, H, sub, dt, m, lf, lr, x0,
+                           y):  # pragma: no cover - compiled
     """The single-track model, ``vx`` an input, over prediction windows: ``P`` ``[Cf, Cr,
     Iz]`` (``linear``, N/rad) or ``[Bf, Cf, Df, Br, Cr, Dr, Iz]``; ``vx`` (m/s), ``delta``
     (rad) linear between samples; window ``w`` from ``x0[w] = (vy, r)`` at ``starts[w]`` for
-    ``H`` samples by RK4 at ``dt / sub``: ``y[w, j, :, i] = (vy, r)``."""
+    ``H`` samples by RK4 at ``dt / sub``: ``y[w, j, :, i] = (vy, r)``. Its helpers are called,
+    not inlined by numba: inlined (the tyre model a constant in each branch) the first call
+    compiled for 46 s and the linear tyres ran 11 % faster; called, 5 s (same results to the
+    bit; measured side by side, numba 0.68, 64 candidates on the racecar record)."""
     n, W = P.shape[1], starts.shape[0]
     vy, r = np.empty(n), np.empty(n)
     avy, ar = np.empty((4, n)), np.empty((4, n))  # stage rates
@@ -396,13 +399,3 @@ def _scheduled(P, linear, vx, delta, starts, H, sub, dt, m, lf, lr, x0,
                         linear, m, lf, lr)
                     vy[i] += h / 6.0 * (avy[0, i] + 2 * avy[1, i] + 2 * avy[2, i] + avy[3, i])
                     r[i] += h / 6.0 * (ar[0, i] + 2 * ar[1, i] + 2 * ar[2, i] + ar[3, i])
-
-
-@numba.njit(**_OPTS)
-def scheduled_single_track(P, linear, vx, delta, starts, H, sub, dt, m, lf, lr, x0,
-                           y):  # pragma: no cover - compiled
-    """:func:`_scheduled`, compiled and cached. Its helpers are called, not inlined by numba:
-    inlined (the tyre model a constant in each branch) the first call compiled for 46 s and
-    the linear tyres ran 11 % faster; called, 5 s (same results to the bit; measured side by
-    side, numba 0.68, 64 candidates on the racecar record)."""
-    _scheduled(P, linear, vx, delta, starts, H, sub, dt, m, lf, lr, x0, y)
