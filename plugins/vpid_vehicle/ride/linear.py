@@ -9,7 +9,6 @@ compiled end to end (the table per candidate, then :mod:`.codegen`'s loops).
 from __future__ import annotations
 
 import dataclasses
-import functools
 
 import numpy as np
 
@@ -87,21 +86,14 @@ def exact_foh(system: LinearSystem, dt: float) -> tuple[np.ndarray, ...]:
     return E11, E12 - E13 / dt, E13 / dt, Ox, Ou
 
 
-@functools.cache
-def _kernel():
-    """The compiled recurrence (:mod:`.kernel`, imported on first use)."""
-    from .kernel import run
-
-    return run
-
-
 def simulate(step: tuple[np.ndarray, ...], u: np.ndarray) -> np.ndarray:
     """The outputs ``(n, N, p)`` of ``step = (A, U, V, Ox, Ou)`` driven by ``u`` from rest."""
+    from .kernel import run  # compiled: imported on first use
     A, U, V, Ox, Ou = (np.ascontiguousarray(np.moveaxis(np.asarray(a, dtype=float), 0, -1))
                        for a in step)
     u = np.ascontiguousarray(u, dtype=float)
     y = np.empty((Ox.shape[0], u.shape[0], A.shape[2]))
-    _kernel()(A, U, V, Ox, Ou, u, y)
+    run(A, U, V, Ox, Ou, u, y)
     return y.transpose(2, 1, 0)
 
 
