@@ -85,9 +85,7 @@ class FunctionsProblem(Problem):
 
     @property
     def x_true(self) -> np.ndarray | None:
-        if self._opt == 0.0:
-            return None
-        return np.full(self.config.dim, self._opt)
+        return None if self._opt == 0.0 else np.full(self.config.dim, self._opt)
 
     def evaluate(self, X: np.ndarray) -> np.ndarray:
         return self._f(np.atleast_2d(np.asarray(X, dtype=float)))

@@ -44,9 +44,7 @@ def seated_half(system: linear.LinearSystem, seat: dict[str, float] = SEAT
     F = np.concatenate([system.F, np.zeros((n, 1, system.F.shape[2]))], axis=1)
 
     def out_map(a: np.ndarray | None) -> np.ndarray | None:
-        if a is None:
-            return None
-        return np.concatenate([a, np.zeros((*a.shape[:-1], 1))], axis=-1)
+        return None if a is None else np.concatenate([a, np.zeros((*a.shape[:-1], 1))], axis=-1)
 
     return dataclasses.replace(system, M=M, C=C, K=K, F=F, Pa=out_map(system.Pa),
                                Pq=out_map(system.Pq), Pv=out_map(system.Pv))
