@@ -26,12 +26,14 @@ from .problem import (
     default_budget,
     offers_residuals,
 )
+from .problem_kit import ChannelFit, FrozenMap, freeze_fields
 from .store.record_csv import ColumnMap, CsvRecord, CsvTable, RecordColumn
 
 __all__ = [
-    "FILLED_PARAMS", "PROTOCOL_KEYS", "Bounds", "ColumnMap", "ConfigError", "CsvRecord",
-    "CsvTable", "GenerationalOptimizer", "LoopOptimizer", "Optimizer", "OptimizerContractError",
-    "OptimizerParams", "PluginError", "Problem", "ProblemConfig", "RecordColumn",
-    "VpidBenchError", "added_setting", "check_compatible", "default_budget", "offers_residuals",
-    "registered_optimizer", "relative_errors_percent", "file_sha256", "write_text_atomic",
+    "FILLED_PARAMS", "PROTOCOL_KEYS", "Bounds", "ChannelFit", "ColumnMap", "ConfigError",
+    "CsvRecord", "CsvTable", "FrozenMap", "GenerationalOptimizer", "LoopOptimizer", "Optimizer",
+    "OptimizerContractError", "OptimizerParams", "PluginError", "Problem", "ProblemConfig",
+    "RecordColumn", "VpidBenchError", "added_setting", "check_compatible", "default_budget",
+    "freeze_fields", "offers_residuals", "registered_optimizer", "relative_errors_percent",
+    "file_sha256", "write_text_atomic",
 ]

@@ -1,6 +1,6 @@
-"""Control-parameter adaptation of JADE, SHADE and L-SHADE (pure functions, each tested on
-hand-built success histories). A success is a trial that strictly improved on its parent;
-``S_CR``, ``S_F`` are the rates and factors the successes used, ``delta`` their improvements.
+"""Control-parameter adaptation of JADE, SHADE and L-SHADE (pure functions): a success is a
+trial that strictly improved on its parent; ``S_CR``, ``S_F`` the rates and factors the
+successes used, ``delta`` their improvements.
 """
 
 from __future__ import annotations
@@ -73,11 +73,9 @@ def jade_update(
 
 
 class SuccessHistory:
-    """SHADE's memories: ``H`` entries of ``M_CR``, ``M_F`` (0.5 at first). Each target
-    samples around a uniformly drawn entry; after a generation with a success, entry ``k``
-    takes the improvement-weighted means and ``k`` moves on cyclically. ``lehmer_cr``: a
-    Lehmer ``M_CR`` mean (L-SHADE). ``terminal``: L-SHADE's terminal value (NaN, CR = 0), for
-    an entry whose successes all had ``CR = 0`` or that was terminal."""
+    """SHADE's memories: ``H`` entries of ``M_CR``, ``M_F`` (0.5 at first), entry ``k``
+    rewritten after each generation with a success, ``k`` moving on cyclically.
+    ``lehmer_cr``, ``terminal`` (NaN: CR = 0 once every success had CR = 0): L-SHADE's."""
 
     def __init__(self, H: int, lehmer_cr: bool = False, terminal: bool = False) -> None:
         self.M_CR = np.full(H, 0.5)

@@ -1,14 +1,8 @@
-"""``optimizer=jade``, ``shade``, ``lshade``: the success-history adaptive DE family.
-
-* JADE (Zhang and Sanderson 2009): current-to-pbest/1 with an optional archive; each target
-  draws ``CR_i ~ N(mu_CR, 0.1)``, ``F_i ~ Cauchy(mu_F, 0.1)``; after each generation the means
-  move a fraction ``c`` towards the successes' mean CR and Lehmer mean F.
-* SHADE (Tanabe and Fukunaga 2013): ``H`` memory entries instead of one pair, rewritten by
-  improvement-weighted means, and a random p-best fraction ``p_i ~ U[2/N, 0.2]``.
-* L-SHADE (Tanabe and Fukunaga 2014): SHADE whose population shrinks linearly with the
-  evaluations spent, and whose CR memory can become terminal (CR = 0).
-
-Defaults are the papers'; where the protocol enters (``ps``, the budget) each ``Params`` says.
+"""``optimizer=jade``, ``shade``, ``lshade``: the success-history adaptive DE family, JADE
+(Zhang and Sanderson 2009), SHADE (Tanabe and Fukunaga 2013) and L-SHADE (2014): one
+generation shared, each member's adaptation of ``CR_i``, ``F_i`` and ``pbest`` its own. The
+steps, the keys (the papers' defaults) and where the protocol enters: docs/optimizers.md,
+"The adaptive DE family".
 """
 
 from __future__ import annotations
@@ -58,12 +52,9 @@ def _check_unit(key: str, value: float, closed_low: bool = False) -> None:
 
 
 class AdaptiveDE(GenerationalOptimizer):
-    """The generation shared by JADE, SHADE and L-SHADE; subclasses say how ``CR_i``, ``F_i``
-    and the p-best counts are drawn and learnt. Per target ``i``: ``CR_i``, ``F_i``, ``pbest``
-    among the :meth:`pbest_counts` best, ``r1 != i``, ``r2 != i, r1`` (population and
-    archive), current-to-pbest/1, Eq. 8, the bounds rule. :meth:`advance` keeps a better trial
-    (``ties``: or equal), archives the parents that lost and hands the strict improvements to
-    :meth:`adapt`; ``nfe`` counts evaluations told."""
+    """The generation shared by JADE, SHADE and L-SHADE (current-to-pbest/1 with the archive,
+    Eq. 8, the bounds rule, selection); subclasses say how ``CR_i``, ``F_i`` and the p-best
+    counts are drawn and learnt. ``nfe`` counts evaluations told."""
 
     label: ClassVar[str] = "adaptive_de"
     #: replace a member by an equally good trial (SHADE, L-SHADE) or only a better one (JADE)
@@ -112,8 +103,7 @@ class AdaptiveDE(GenerationalOptimizer):
 
     # -- GenerationalOptimizer --------------------------------------------------------------------
     def initial_population(self) -> np.ndarray:
-        U = self.bounds.sample(self.rng, self.initial_size())
-        return np.minimum(np.maximum(U, self.bounds.lower), self.bounds.upper)
+        return self.bounds.sample(self.rng, self.initial_size())
 
     def start(self, X: np.ndarray, f: np.ndarray) -> None:
         self.population, self.fitness = X.copy(), f.copy()
@@ -167,15 +157,10 @@ class AdaptiveDE(GenerationalOptimizer):
         self.after_generation()
 
 
-# JADE
-
-
 @dataclasses.dataclass(frozen=True)
 class JADEParams(AdaptiveDEParams):
-    """JADE (Zhang and Sanderson 2009), ``N = ps``; a run is ``iterations`` generations as
-    DE1-DE8's. ``c``: the means' learning rate (paper: 0.1); ``p``: ``pbest`` from the
-    ``max(1, round(p N))`` best (paper: 0.05); ``archive``: keep up to ``N`` replaced parents
-    ("JADE with archive", the paper's recommendation). ``mu_CR``, ``mu_F`` start at 0.5."""
+    """JADE, ``N = ps``: ``c`` the means' learning rate, ``pbest`` from the ``max(1, round(p
+    N))`` best, ``archive``: keep up to ``N`` replaced parents."""
 
     c: float = 0.1
     p: float = 0.05
@@ -209,14 +194,24 @@ class JADE(AdaptiveDE):
         self.mu_cr, self.mu_f = jade_update(self.mu_cr, self.mu_f, S_CR, S_F, self.params.c)
 
 
-# SHADE
+class HistoryDE(AdaptiveDE):
+    """SHADE's and L-SHADE's shared part: ``CR_i``, ``F_i`` drawn around and learnt into a
+    success-history memory (``self.memory``), equal trials kept."""
+
+    ties = True
+    memory: SuccessHistory
+
+    def parameter_means(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        return self.memory.means(self.rng, n)
+
+    def adapt(self, S_CR: np.ndarray, S_F: np.ndarray, delta: np.ndarray) -> None:
+        self.memory.update(S_CR, S_F, delta)
 
 
 @dataclasses.dataclass(frozen=True)
 class SHADEParams(AdaptiveDEParams):
-    """SHADE (Tanabe and Fukunaga 2013), ``N = ps``, archive of up to ``N`` parents (paper:
-    ``|A| = N``). ``H``: memory entries (paper: 100, with N = 100); ``p_max``: the upper end
-    of ``p_i ~ U[2/N, p_max]`` (paper: 0.2; ``p_i = 2/N`` when that is larger)."""
+    """SHADE, ``N = ps``, an archive of up to ``N`` parents: ``H`` memory entries, ``p_i ~
+    U[2/N, p_max]``."""
 
     H: int = 100
     p_max: float = 0.2
@@ -228,12 +223,11 @@ class SHADEParams(AdaptiveDEParams):
         _check_unit("p_max", self.p_max)
 
 
-class SHADE(AdaptiveDE):
+class SHADE(HistoryDE):
     """SHADE: success-history memories, improvement-weighted means, random p-best fraction."""
 
     Params = SHADEParams
     label = "shade"
-    ties = True
 
     def __init__(self, params: SHADEParams, bounds: Bounds, rng: np.random.Generator) -> None:
         super().__init__(params, bounds, rng)
@@ -241,32 +235,18 @@ class SHADE(AdaptiveDE):
         self.archive = Archive(params.ps, bounds.dim)
         self.memory = SuccessHistory(params.H)
 
-    def parameter_means(self, n: int) -> tuple[np.ndarray, np.ndarray]:
-        return self.memory.means(self.rng, n)
-
     def pbest_counts(self, n: int) -> np.ndarray:
         p_min = 2.0 / n
         p = self.rng.uniform(p_min, max(p_min, self.params.p_max), size=n)
         return np.minimum(np.maximum(np.floor(p * n + 0.5).astype(np.intp), 1), n)
 
-    def adapt(self, S_CR: np.ndarray, S_F: np.ndarray, delta: np.ndarray) -> None:
-        self.memory.update(S_CR, S_F, delta)
-
-
-# L-SHADE
-
 
 @dataclasses.dataclass(frozen=True)
 class LSHADEParams(AdaptiveDEParams):
-    """L-SHADE (Tanabe and Fukunaga 2014). ``N_init``: ``ps`` (default: the population of
-    every other optimizer of a comparison) or ``paper``, ``round(N_init_rate D)`` with the
-    paper's 18 (tuned for 10,000 D evaluations: at the protocol's budget it spends a sixth of
-    it on the initial population, ``benchmarks/bench_adaptive_de.py``). ``N_min``: the final
-    population (paper: 4). The worst members go as the evaluations are spent, down to
-    ``N_min`` at the run's budget; ``iterations`` plays no part (the last generation is cut
-    to the budget). ``H``: memory entries (paper: 6); ``p``: ``pbest`` from the
-    ``max(2, round(p N))`` best (paper: 0.11); ``r_arc``: archive of ``round(r_arc N)``
-    parents (paper: 2.6)."""
+    """L-SHADE: ``N_init`` ``ps`` (the population of every other optimizer of a comparison)
+    or ``paper`` (``round(N_init_rate D)``), shrinking to ``N_min`` at the run's budget
+    (``iterations`` plays no part); ``H`` memory entries; ``pbest`` from the ``max(2, round(p
+    N))`` best; an archive of ``round(r_arc N)`` parents."""
 
     N_init: Literal["ps", "paper"] = "ps"
     N_init_rate: float = 18.0
@@ -288,12 +268,11 @@ class LSHADEParams(AdaptiveDEParams):
             raise ConfigError("optimizer.r_arc", self.r_arc, "a number >= 0")
 
 
-class LSHADE(AdaptiveDE):
+class LSHADE(HistoryDE):
     """L-SHADE: SHADE with a Lehmer CR memory, terminal CR and linear population reduction."""
 
     Params = LSHADEParams
     label = "lshade"
-    ties = True
 
     def __init__(self, params: LSHADEParams, bounds: Bounds, rng: np.random.Generator) -> None:
         super().__init__(params, bounds, rng)
@@ -318,14 +297,8 @@ class LSHADE(AdaptiveDE):
     def trial_count(self) -> int:
         return min(len(self.population), self.max_nfe - self.nfe)
 
-    def parameter_means(self, n: int) -> tuple[np.ndarray, np.ndarray]:
-        return self.memory.means(self.rng, n)
-
     def pbest_counts(self, n: int) -> int:
         return min(n, max(2, round_half_up(self.params.p * n)))
-
-    def adapt(self, S_CR: np.ndarray, S_F: np.ndarray, delta: np.ndarray) -> None:
-        self.memory.update(S_CR, S_F, delta)
 
     def after_generation(self) -> None:
         planned = lpsr_size(self.nfe, self.max_nfe, self.n_init, self.params.N_min)

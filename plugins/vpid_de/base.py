@@ -1,9 +1,7 @@
 """The generational DE loop shared by DE1-DE8 (a variant names its mutation kernel and its
-factors ``F``, ``K``: :mod:`vpid_de.variants`).
-
-The first ``ask`` returns ``ps`` uniform vectors in the box; every later one a generation of
-``ps`` trials built from the *current* population only (no trial sees a member replaced in
-the same generation). A run uses exactly ``ps * (iterations + 1)`` evaluations.
+factors ``F``, ``K``: :mod:`vpid_de.variants`): ``ps`` uniform vectors, then generations of
+``ps`` trials built from the current population only, ``ps * (iterations + 1)`` evaluations
+(docs/optimizers.md, "The DE family").
 """
 
 from __future__ import annotations
@@ -44,9 +42,7 @@ Draw = Literal["generation", "vector"]
 @dataclasses.dataclass(frozen=True)
 class DEParams(OptimizerParams):
     """``CR``: Eq. 8's crossover constant in [0, 1]. ``bounds``: the rule for a trial
-    coordinate outside the box (the paper is silent): ``reinit`` (default: a fresh uniform
-    value, as scipy's ``differential_evolution``), ``clip``, ``reflect`` or ``midpoint``
-    (half way between the parent and the face)."""
+    coordinate outside the box (the paper is silent; ``reinit`` as scipy's DE)."""
 
     CR: float = 0.9
     bounds: BoundsRule = "reinit"
@@ -112,13 +108,11 @@ class DifferentialEvolution(GenerationalOptimizer):
             return self.rng.uniform(low, high, size=(self.params.ps, 1))
         return float(self.rng.uniform(low, high))
 
-    # -- ask/tell -----------------------------------------------------------------------------
-    def trials(self) -> np.ndarray:
-        """One generation of trials (mutation, Eq. 8 crossover, bounds rule). Randomness, in
-        order: the factors (DE6, DE7), then ONE block of ``ps x (ps + 2 dim)`` uniforms, per
-        row the index keys (ps - 1), ``rand_j`` (dim), ``rnbr`` (1), the reinit values (dim).
-        ``engine``: ``numba`` (one compiled loop, :mod:`vpid_de.fused`) or ``numpy`` (the
-        reference kernels); identical vectors (tested)."""
+    # -- GenerationalOptimizer: the handshake lives in the core, generation and selection here
+    def next_generation(self) -> np.ndarray:
+        """One generation of trials (mutation, Eq. 8 crossover, bounds rule) from the factors
+        (DE6, DE7), then ONE block of ``ps x (ps + 2 dim)`` uniforms, per row the index keys
+        (ps - 1), ``rand_j`` (dim), ``rnbr`` (1), the reinit values (dim)."""
         X, f, ps, dim = self.population, self.fitness, self.params.ps, self._dim
         factors = self.factors()
         u = self.rng.random((ps, ps + 2 * dim))
@@ -144,10 +138,6 @@ class DifferentialEvolution(GenerationalOptimizer):
         c = ps - 1
         U = crossover_from_uniforms(X, V, self.params.CR, u[:, c : c + dim], u[:, c + dim])
         return self._repair(U, X, self._lower, self._upper, u[:, c + dim + 1 :])
-
-    # -- GenerationalOptimizer: the handshake lives in the core, only selection is here ----------
-    def next_generation(self) -> np.ndarray:
-        return self.trials()
 
     def start(self, X: np.ndarray, f: np.ndarray) -> None:
         self.population, self.fitness = X, f

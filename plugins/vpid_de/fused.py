@@ -1,6 +1,6 @@
-"""One DE generation in one compiled loop (numba), for speed only: the same trials as the
-numpy reference of :mod:`vpid_de.kernels` from the same uniforms, bit for bit (tested). At ps
-= 20 the numpy path's 30 calls cost a fifth of the vehicle objective. Imported lazily.
+"""One DE generation in one compiled loop (numba), for speed only (at ps = 20 the numpy path's
+30 calls cost a fifth of the vehicle objective): the same trials as :mod:`vpid_de.kernels`
+from the same uniforms, bit for bit (tested). Imported lazily.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ def repaired(v, x, lo, hi, u, bounds_rule):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def generation(X, fitness, u, n_random, mutation, F, K, CR, bounds_rule, lower, upper):
-    """One generation's trials ``(ps, dim)`` from the uniforms ``u`` of ``trials()``."""
+    """One generation's trials ``(ps, dim)`` from the uniforms ``u`` of ``next_generation()``."""
     ps, dim = X.shape
     best = np.argmin(fitness)
     out = np.empty_like(X)

@@ -1,10 +1,7 @@
 """The pieces of differential evolution, vectorised over the population ``X`` ``(ps, dim)``
-(physical units): pure functions of arrays and of a generator or of uniforms drawn beforehand,
-each tested alone on a hand-built population. Index draws (``r1 != r2 != ... != i``), one
-mutation kernel per equation of Gökdağ (2014), Eqs. 7, 9-14, and current-to-pbest/1 (JADE,
-SHADE, L-SHADE), Eq. 8 crossover, the bounds rules and one-to-one selection. DE1-DE8 draw one
-block of uniforms per generation (:mod:`vpid_de.fused` mirrors them); the adaptive family draws
-from the generator as it goes.
+(physical units), pure and each tested alone: index draws, one mutation kernel per equation
+of Gökdağ (2014) and current-to-pbest/1, Eq. 8 crossover, the bounds rules, one-to-one
+selection. :mod:`vpid_de.fused` mirrors DE1-DE8's use of them.
 """
 
 from __future__ import annotations
@@ -34,8 +31,6 @@ def indices_from_keys(keys: np.ndarray, n: int) -> np.ndarray:
 
 def draw_indices(rng: np.random.Generator, ps: int, n: int) -> np.ndarray:
     """:func:`indices_from_keys` with keys drawn from ``rng``."""
-    if n > ps - 1:
-        raise ValueError(f"cannot draw {n} distinct indices besides i from a population of {ps}")
     return indices_from_keys(rng.random((ps, ps - 1)), n)
 
 

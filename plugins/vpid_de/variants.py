@@ -29,10 +29,8 @@ class FixedFParams(DEParams):
 
 @dataclasses.dataclass(frozen=True)
 class DE6Params(DEParams):
-    """DE6, Eq. 13 (Karaboğa and Ökdem): K = 0.5, CR = 0.8, F ~ U(F_min, F_max) = U(-2, 2).
-
-    ``draw``: ``generation`` (default, the paper: "a random value between -2 and 2 at each
-    iteration") or ``vector`` (a fresh F for every target vector)."""
+    """DE6, Eq. 13 (Karaboğa and Ökdem): K = 0.5, CR = 0.8, F ~ U(F_min, F_max) = U(-2, 2)
+    drawn per ``draw``: ``generation`` (the paper) or ``vector`` (per target vector)."""
 
     CR: float = 0.8
     K: float = 0.5
@@ -49,10 +47,7 @@ class DE6Params(DEParams):
 @dataclasses.dataclass(frozen=True)
 class DE7Params(DEParams):
     """DE7, Eq. 14 (Das et al., random scale factor): CR = 0.9, R ~ U(R_min, R_max) =
-    U(0.5, 1).
-
-    ``draw``: ``generation`` (default, the paper's "at each iteration") or ``vector`` (Das et
-    al.'s original: a fresh R for every target vector)."""
+    U(0.5, 1) drawn per ``draw``: ``generation`` (the paper) or ``vector`` (Das et al.'s)."""
 
     R_min: float = 0.5
     R_max: float = 1.0
@@ -66,13 +61,8 @@ class DE7Params(DEParams):
 
 @dataclasses.dataclass(frozen=True)
 class DE8Params(DEParams):
-    """DE8, Eq. 14 with Eq. 15 (Das et al., time-varying scale factor): CR = 0.9,
-    R_max = 1.2, R_min = 0.4.
-
-    ``eq15``: ``das`` (default) ``R_k = (R_max - R_min)(K_max - k)/K_max + R_min``, linear from
-    R_max down towards R_min as Das et al. (2005) intend; ``printed`` drops the ``+ R_min``
-    as the paper prints Eq. 15 (R then runs from 0.8 towards 0). ``k`` = generations
-    completed (0 for the first generation), ``K_max`` = ``iterations``."""
+    """DE8, Eq. 14 with Eq. 15 (Das et al., time-varying scale factor): CR = 0.9, R_max =
+    1.2, R_min = 0.4; ``eq15``: :func:`eq15`'s form."""
 
     R_max: float = 1.2
     R_min: float = 0.4
@@ -80,7 +70,9 @@ class DE8Params(DEParams):
 
 
 def eq15(k: int, k_max: int, r_max: float, r_min: float, form: Eq15Form = "das") -> float:
-    """Eq. 15's scale factor at generation ``k`` (0-based) of ``k_max``."""
+    """Eq. 15's scale factor after ``k`` generations of ``k_max`` (``iterations``): ``das``
+    ``(r_max - r_min)(k_max - k)/k_max + r_min`` (Das et al. 2005), ``printed`` without the
+    ``+ r_min`` (as the paper prints it: 0.8 towards 0)."""
     r = (r_max - r_min) * (k_max - k) / k_max
     return r + r_min if form == "das" else r
 

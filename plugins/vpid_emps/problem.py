@@ -1,23 +1,9 @@
 """``problem=emps``: the mass and friction of a measured positioning rig, from its motor
-position in closed loop (the EMPS data set, 1 kHz, no truth; docs/measured.md).
-
-Model (SI units) ``M q'' = gtau u - Fv q' - Fc sign(q') - offset``, simulated in the rig's
-closed loop (:mod:`.loop`) driven by the record's reference position ``qg``; output error on
-the motor position ``qm``. **Identified**: ``M`` (kg), ``Fv`` (N s/m), ``Fc`` (N), ``offset``
-(N), in a box holding the published estimate with a factor of about 2.5 either side (Coulomb
-friction down to none; the offset up to a tenth of the loop's largest force in the estimation
-record, 152 N): a prior about the rig. **Known** (the record and ``Simulink_EMPS_Rigide.slx``):
-``gtau``, ``kp``, ``kv``, the 1 ms period, the position filter, the ±10 V limit.
-``controller_delay``: 0 by default, as the logged voltage shows (the Simulink loop has 1; 0
-fits and predicts better). The held-out record's pulses add the logged 5.07 V (median) to the
-controller's voltage; ``fit_record=pulses`` swaps the records (``estimation`` and
-``validation`` below then mean the fitted and the judged one).
-
-**Objective**: the mean square of ``qm - q`` in µm² (residuals ``(qm - q) / sqrt(N)`` µm, one
-group; noise additive white, sigma unknown). **Metrics** (held out, lower is better):
-``val_rms_um`` (µm, the headline: names sort alphabetically in records), ``val_unexplained_pct``
-(100 minus the fit percentage) and ``val_voltage_rms_V`` (V). The published IDIM-LS estimate
-is a comparison row, never a truth.
+position in closed loop (the EMPS data set, 1 kHz, no truth). The model ``M q'' = gtau u - Fv
+q' - Fc sign(q') - offset`` (SI units) is simulated in the rig's loop (:mod:`.loop`) driven by
+the record's reference position; output error on the motor position. The box, the known
+constants, the controller delay, the pulses, the objective (µm²) and the held-out metrics:
+docs/measured.md, "EMPS". The published IDIM-LS estimate is a comparison row, never a truth.
 """
 
 from __future__ import annotations
@@ -164,7 +150,8 @@ class EmpsProblem(Problem):
 
     # --- judged on the validation record ------------------------------------------------
     def metrics(self, x: np.ndarray) -> dict[str, float]:
-        """The validation record's metrics (the module docstring)."""
+        """The held-out record's metrics (docs/measured.md); ``val_rms_um`` (µm), the headline,
+        sorts first (records keep metrics by name)."""
         q, u = self.validation.simulate(np.asarray(x, dtype=float).reshape(1, -1))
         rec = self.validation.record
         if not np.all(np.isfinite(q)):

@@ -1,7 +1,6 @@
 """The two EMPS records shipped with this plugin (the EMPS data set of Janot, Gautier and
-Brunot, byte for byte from forgi86/sysid-neural-continuous at 956aa7ec,
-``examples/EMPS/data/``, Apache-2.0: ``data/LICENSE``), each verified against its SHA-256
-before it is read (nothing is downloaded).
+Brunot, byte for byte from forgi86/sysid-neural-continuous at 956aa7ec, Apache-2.0:
+``data/LICENSE``), each verified against its SHA-256 before it is read.
 """
 
 from __future__ import annotations

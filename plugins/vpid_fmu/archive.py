@@ -1,8 +1,7 @@
 """An FMU file read with limits (a zip someone else made; what is refused: docs/fmu.md): its
 members checked before anything is read, sizes counted again while extracting, its
-``modelDescription.xml`` parsed by fmpy, and, in a worker only, the zip extracted into a
-private folder of the process. Nothing here loads the binary (:mod:`.binary` does, in the
-supervised workers).
+``modelDescription.xml`` parsed by fmpy and, in a worker only, the zip extracted into a
+private folder of the process; the binary is loaded by :mod:`.binary`.
 """
 
 from __future__ import annotations
@@ -37,12 +36,11 @@ def fail(path: Any, allowed: str) -> ConfigError:
 
 @dataclasses.dataclass(frozen=True)
 class FmuFile:
-    """An FMU's description, interfaces (``cs``, ``me``), identifiers and this platform's binary."""
+    """An FMU's description and, per interface (``cs``, ``me``), this platform's binary."""
 
     path: str
     description: Any
     version: str
-    identifiers: dict[str, str]
     binaries: dict[str, str]
     token: str
 
@@ -155,7 +153,7 @@ def _inspect(path: str, size: int, mtime_ns: int) -> FmuFile:
                                    for i in identifiers.values()}))
         raise fail(p, f"an FMU with a binary for this platform ({folder}): {want}; {has}")
     token = md.guid if md.guid is not None else getattr(md, "instantiationToken", "")
-    return FmuFile(str(p), md, version, identifiers, binaries, token or "")
+    return FmuFile(str(p), md, version, binaries, token or "")
 
 
 def inspect(path: str | os.PathLike) -> FmuFile:
@@ -170,10 +168,6 @@ def inspect(path: str | os.PathLike) -> FmuFile:
 _FOLDERS: dict[tuple[str, int, int], Path] = {}
 
 
-def _remove(folder: Path) -> None:
-    shutil.rmtree(folder, ignore_errors=True)
-
-
 def extracted(path: str | os.PathLike) -> Path:
     """The folder this process extracted the FMU into (once per file state), checked again."""
     fmu = inspect(path)
@@ -182,7 +176,7 @@ def extracted(path: str | os.PathLike) -> Path:
     if key in _FOLDERS:
         return _FOLDERS[key]
     folder = Path(tempfile.mkdtemp(prefix="vpid-fmu-"))
-    atexit.register(_remove, folder)
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
     root = folder.resolve()
     total = 0
     with zipfile.ZipFile(fmu.path) as z:

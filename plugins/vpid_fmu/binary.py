@@ -151,14 +151,12 @@ class Simulator:
         if vrs.size == 0:
             return 0
         v = np.ascontiguousarray(values, dtype=float)
-        if self.major == 2:
-            return self.f_set(self.c, vrs.ctypes.data, vrs.size, v.ctypes.data)
-        return self.f_set(self.c, vrs.ctypes.data, vrs.size, v.ctypes.data, vrs.size)
+        count = () if self.major == 2 else (vrs.size,)  # FMI 3.0 takes the values' count too
+        return self.f_set(self.c, vrs.ctypes.data, vrs.size, v.ctypes.data, *count)
 
     def _get(self, vrs: np.ndarray, out: np.ndarray) -> int:
-        if self.major == 2:
-            return self.f_get(self.c, vrs.ctypes.data, vrs.size, out.ctypes.data)
-        return self.f_get(self.c, vrs.ctypes.data, vrs.size, out.ctypes.data, vrs.size)
+        count = () if self.major == 2 else (vrs.size,)
+        return self.f_get(self.c, vrs.ctypes.data, vrs.size, out.ctypes.data, *count)
 
     def _start(self, vrs: np.ndarray, values: np.ndarray, t0: float, t1: float,
                u0: np.ndarray, vr_in: np.ndarray, tolerance: float | None) -> str | None:
@@ -232,7 +230,7 @@ class Simulator:
             fns = (self.f_time, self.f_set, self.f_states, self.f_deriv, self.f_get,
                    self.f_completed)
             return kernels.me2_dopri5(fns, self.c, t, u, x, vr_in, vr_out, y, how["rtol"],
-                                      how["atol"], kernels.tables())
+                                      how["atol"], kernels.TABLEAU)
         if self.major == 3:
             flags = np.zeros(16, dtype=np.uint8)
             return kernels.cs3_hold(self.f_step, self.f_set, self.f_get, self.c, t, u,

@@ -1,12 +1,9 @@
 """Build the example quarter-car FMU (docs/fmu.md's worked example, the tests' model) from
 ``sources/quarter_car.c`` with gcc and the FMI headers fmpy ships: ``python -m
 vpid_fmu.example quarter_car.fmu`` (FMI 2.0, both interfaces; ``--fmi 3``: FMI 3.0
-co-simulation). Test variants: ``crash`` (a null-pointer write at t >= 0.5 s), ``hang``,
-``binary=False``, ``interpolate=False``, ``binary_guid`` (a binary with another token).
-
-Parameters ``ms, mu, ks, cs`` (with min and max: identified) and ``kt`` (known), input ``h``
-(m), outputs ``zsdd``, ``zudd`` (m/s²), ``stroke`` (m); start values: ``problem=ride_quarter``'s
-golden car.
+co-simulation), and test variants (a crash, a hang, no binary, no input interpolation,
+another token). Parameters ``ms, mu, ks, cs`` (identified) and ``kt`` (known), input ``h``
+(m), outputs ``zsdd``, ``zudd`` (m/s²), ``stroke`` (m); start values: the golden car.
 """
 
 from __future__ import annotations

@@ -1,11 +1,9 @@
 """The compiled step loops of one simulation: numba calling the binary's functions through
-ctypes function pointers passed as arguments (each loop compiles once per signature, cached
-on disk, whatever binary it calls). Why numba and ctypes, and the speed against a C loop:
-docs/fmu.md. Pointer arguments are ``size_t`` (a pointer's width, an integer numba passes).
-
-Each loop writes the outputs ``y`` ``(N, p)`` at the times ``t`` (``y[0]`` is the caller's)
-and returns ``(status, k)``: the first status above warning (2 discard, 3 error, 4 fatal)
-and its sample, or ``(0, N)``.
+ctypes function pointers passed as arguments, pointers as ``size_t`` (each loop compiles once
+per signature, cached, whatever binary it calls; why and how fast: docs/fmu.md). Each writes
+the outputs ``y`` ``(N, p)`` at the times ``t`` (``y[0]`` is the caller's) and returns
+``(status, k)``: the first status above warning (2 discard, 3 error, 4 fatal) and its
+sample, or ``(0, N)``.
 """
 
 from __future__ import annotations
@@ -27,6 +25,8 @@ _A = np.array([
 _B = np.array([35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0.0])
 _E = _B - np.array([5179 / 57600, 0.0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100,
                     1 / 40])
+#: The tableau ``(A, B, E, C)`` as :func:`me2_dopri5` takes it.
+TABLEAU = (_A, _B, _E, _C)
 
 
 @njit(cache=True)
@@ -219,8 +219,3 @@ def me2_dopri5(fns, c, t, u, x, vr_in, vr_out, y, rtol, atol, tables):
             return s, k
         y[k + 1] = buf
     return 0, n
-
-
-def tables() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The Dormand–Prince tableau ``(A, B, E, C)`` for :func:`me2_dopri5`."""
-    return _A, _B, _E, _C

@@ -1,8 +1,7 @@
-"""What a config makes of an FMU's variables. **Identified** (``problem.parameters``): by
-default every real parameter (causality ``parameter``, variability ``fixed`` or ``tunable``:
-both settable before initialisation, when a simulation sets them) with a ``min`` and a
-``max``, each boxed by them or by ``problem.bounds.<name>``. **Known**: every other real
-parameter at its start value or ``problem.known.<name>``, listed with its source.
+"""What a config makes of an FMU's variables: **identified** (``problem.parameters``; by
+default every real parameter, ``fixed`` or ``tunable``, with a ``min`` and a ``max``), each
+boxed by them or by ``problem.bounds.<name>``; **known**, every other real parameter at its
+start value or ``problem.known.<name>``, listed with its source.
 """
 
 from __future__ import annotations

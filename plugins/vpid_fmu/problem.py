@@ -1,11 +1,8 @@
 """``problem=fmu``: the parameters of any FMU (FMI 2.0 or 3.0, co-simulation or model
-exchange) identified from a record it should reproduce; no truth. The keys, the input
-handling between samples and the refusals: docs/fmu.md.
-
-The FMU starts at the record's first time with the known and identified start values and the
-first row's inputs; its outputs are read at every row's time. Checking a config reads the zip
-and its description only (:mod:`.archive`); the binary is loaded, instantiated once and reset
-between simulations where the problem evaluates (a supervised worker, :mod:`.binary`).
+exchange) identified from a record it should reproduce; no truth. The keys, the start, the
+input handling between samples and the refusals: docs/fmu.md. Checking a config reads the zip
+and its description only (:mod:`.archive`); the binary is loaded where the problem evaluates
+(a supervised worker, :mod:`.binary`).
 """
 
 from __future__ import annotations
@@ -14,48 +11,26 @@ import dataclasses
 import functools
 import hashlib
 import logging
-from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from vpid_bench import Bounds, ConfigError, Problem, ProblemConfig, added_setting, estimators
+from vpid_bench import (
+    Bounds,
+    ChannelFit,
+    ConfigError,
+    Problem,
+    ProblemConfig,
+    added_setting,
+    estimators,
+    freeze_fields,
+)
 
 from . import archive, plan, record
 
 log = logging.getLogger(__name__)
 OBJECTIVES = ("eq3", "ols")
-
-
-class FrozenMap(dict):
-    """A read-only mapping that hashes (a problem is cached by its config); lists become tuples."""
-
-    def __init__(self, items: Any = ()) -> None:
-        super().__init__({str(k): tuple(v) if isinstance(v, (list, tuple)) else v
-                          for k, v in dict(items).items()})
-
-    def __hash__(self) -> int:  # type: ignore[override]
-        return hash(tuple(sorted(self.items())))
-
-    def __reduce__(self) -> Any:
-        return (FrozenMap, (dict(self),))
-
-    def _read_only(self, *args: Any, **kwargs: Any) -> Any:
-        raise TypeError("a config mapping is read-only")
-
-    __setitem__ = __delitem__ = update = pop = popitem = clear = setdefault = _read_only  # type: ignore[assignment]
-
-
-def _freeze(config: Any, prefix: str, *names: str) -> None:
-    for name in names:
-        value = getattr(config, name)
-        if value is None:
-            value = {}
-        if not isinstance(value, Mapping):
-            raise ConfigError(f"{prefix}.{name}", value, f"a mapping, e.g. {prefix}.{name}."
-                              "<name>=...")
-        object.__setattr__(config, name, FrozenMap(value))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -67,7 +42,7 @@ class ReferenceConfig:
     ignore: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
-        _freeze(self, "problem.reference", "columns")
+        freeze_fields(self, "columns", prefix="problem.reference.")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -87,7 +62,7 @@ class FmuConfig(ProblemConfig):
     objective: str = "eq3"
 
     def __post_init__(self) -> None:
-        _freeze(self, "problem", "bounds", "known")
+        freeze_fields(self, "bounds", "known")
         checks = [
             ("interface", self.interface in ("auto", "cs", "me"), "one of auto, cs, me"),
             ("inputs", self.inputs in ("auto", "derivatives", "hold"),
@@ -106,7 +81,7 @@ class FmuConfig(ProblemConfig):
         if self.reference.file is None:
             raise ConfigError("problem.reference.file", None, "the path of the record (CSV) "
                               "the FMU is fitted to (docs/fmu.md)")
-        setup(self)
+        setup(self)  # the pre-flight reads the FMU and the record
 
 
 def _kind(config: FmuConfig, fmu: archive.FmuFile) -> str:
@@ -172,7 +147,7 @@ def setup(config: FmuConfig) -> tuple:
     return _setup(config, _state(config.fmu), _state(config.reference.file))
 
 
-class FmuProblem(Problem):
+class FmuProblem(ChannelFit, Problem):
     """An FMU's parameters from a record (see the module docstring)."""
 
     Config = FmuConfig
@@ -192,6 +167,7 @@ class FmuProblem(Problem):
                               tuple(v.name for v in self.plan.identified),
                               tuple(v.unit or "1" for v in self.plan.identified))
         by_name = {v.name: v for v in self.plan.outputs}
+        self.channels = tuple((n, by_name[n].unit or "") for n in self.record.output_names)
         self._vr_out = np.array([by_name[n].vr for n in self.record.output_names],
                                 dtype=np.uint32)
         self._vr_in = np.array([v.vr for v in self.plan.inputs], dtype=np.uint32)
@@ -208,8 +184,7 @@ class FmuProblem(Problem):
                  Path(self.record.path).name, self.t.size, self.t[0], self.t[-1],
                  self.record.rate_text())
 
-    # --- simulation ---------------------------------------------------------------------
-    def responses(self, X: np.ndarray) -> np.ndarray:
+    def computed(self, X: np.ndarray) -> np.ndarray:
         """The compared outputs ``(n, p, N)``; NaN rows where the FMU fails (three are logged)."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         out = np.full((X.shape[0], self.measured.shape[0], self.t.size), np.nan)
@@ -235,50 +210,9 @@ class FmuProblem(Problem):
             out[i] = y.T
         return out
 
-    # --- core and residuals -------------------------------------------------------------
     @property
     def bounds(self) -> Bounds:
         return self._bounds
-
-    def _weighted(self, X: np.ndarray) -> np.ndarray:
-        return (self.measured[None] - self.responses(X)) * self.weights[None]
-
-    def evaluate_with_residuals(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return estimators.residuals_and_value(self.config.objective, self._weighted(X))
-
-    def evaluate(self, X: np.ndarray) -> np.ndarray:
-        """``eq3``: sum of ``||y_c - ŷ_c|| / ||y_c||``; ``ols``: sum of squares over ``||y||²``."""
-        return self.evaluate_with_residuals(X)[0]
-
-    def residuals(self, X: np.ndarray) -> np.ndarray:
-        """The weighted residuals, outputs one after another, ``(n, p N)``."""
-        return self.evaluate_with_residuals(X)[1]
-
-    def residual_groups(self) -> np.ndarray:
-        """The output of each residual (``eq3``), one group for ``ols``."""
-        return estimators.groups(self.config.objective, self.measured.shape[0], self.t.size)
-
-    def fisher_residuals(self, X: np.ndarray) -> np.ndarray:
-        """``(y_c - ŷ_c) / ||y_c||``, outputs one after another, whatever the objective."""
-        R = (self.measured[None] - self.responses(X)) / self.scale[None, :, None]
-        R[~np.all(np.isfinite(R), axis=(1, 2))] = np.inf
-        return R.reshape(R.shape[0], -1)
-
-    def fisher_groups(self) -> np.ndarray:
-        return np.repeat(np.arange(self.measured.shape[0]), self.t.size)
-
-    # --- signals and description --------------------------------------------------------
-    def signal_units(self) -> dict[str, str]:
-        units = {v.name: v.unit or "" for v in self.plan.outputs}
-        return {n: units[n] for n in self.record.output_names}
-
-    def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
-        fitted = self.responses(np.asarray(x, dtype=float).reshape(1, -1))[0]
-        out = {"t": self.t.copy()}
-        for c, name in enumerate(self.record.output_names):
-            out[f"{name}:measured"] = self.measured[c].copy()
-            out[f"{name}:fitted"] = fitted[c]
-        return out
 
     def diagnostic_signals(self, x: np.ndarray) -> dict[str, Any]:
         """The measured outputs over their norms, their names, each input at the samples."""

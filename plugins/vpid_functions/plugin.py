@@ -1,7 +1,7 @@
 """``problem=functions``: sphere, Rosenbrock and Rastrigin in ``dim`` dimensions, cheap, and
 proof that the core knows no vehicle. ``x_true`` only where no coordinate is zero (NoRE is
-undefined there; Rosenbrock's is all ones). Each is a sum of squares whose terms
-``residuals`` returns (one group), so least-squares optimizers run here too.
+undefined there); each a sum of squares whose terms ``residuals`` returns (one group), for
+least-squares optimizers.
 """
 
 from __future__ import annotations
@@ -85,9 +85,7 @@ class FunctionsProblem(Problem):
 
     @property
     def x_true(self) -> np.ndarray | None:
-        if self._opt == 0.0:
-            return None
-        return np.full(self.config.dim, self._opt)
+        return None if self._opt == 0.0 else np.full(self.config.dim, self._opt)
 
     def evaluate(self, X: np.ndarray) -> np.ndarray:
         return self._f(np.atleast_2d(np.asarray(X, dtype=float)))

@@ -1,6 +1,6 @@
-"""The adaptive-feasible mutation in one compiled loop (numba), for speed only: the numpy
-reference of :mod:`vpid_ga.mutation` costs about 5 µs per evaluation at 9 parameters (the
-vehicle objective: 3). The same children from the same random numbers, bit for bit (tested).
+"""The adaptive-feasible mutation in one compiled loop (numba), for speed only (the numpy
+reference of :mod:`vpid_ga.mutation` costs about 5 µs per evaluation at 9 parameters, the
+vehicle objective 3): the same children from the same random numbers, bit for bit (tested).
 """
 
 from __future__ import annotations

@@ -1,10 +1,7 @@
-"""``optimizer=ga``: MATLAB R2014b's ``ga`` with default options on a bounded problem.
-
-One generation (``stepGA``): ``n_xover = round(CrossoverFraction (ps - n_elite))``,
-``n_mutate`` the rest; ``2 n_xover + n_mutate`` parents by rank scaling and stochastic uniform
-selection, shuffled; the next population is ``[elites; crossover children; mutation
-children]``, all of it scored (elites too, as ``stepGA``): ``ps * (iterations + 1)``
-evaluations, like the DE variants. The initial population is uniform (``gacreationuniform``).
+"""``optimizer=ga``: MATLAB R2014b's ``ga`` with default options on a bounded problem, one
+generation as ``stepGA``: ``[elites; crossover children; mutation children]``, all of it
+scored (elites too), ``ps * (iterations + 1)`` evaluations like the DE variants
+(docs/optimizers.md, "The GA").
 """
 
 from __future__ import annotations

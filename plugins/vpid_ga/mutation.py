@@ -1,10 +1,6 @@
-"""The GA's two mutation operators for a bounded problem (``optimizer.mutation``).
-
-``adaptfeasible`` (default): MATLAB's ``mutationadaptfeasible`` for bound constraints, as
-public derivatives of MathWorks' file show it (docs/optimizers.md): a random mesh-adaptive
-basis plus the tangent cone of the active bounds, every direction twice in a random order
-with MATLAB's signs, the child ``x + step d`` for the first trial inside the box (else the
-parent). ``scaled_halving``: the project's earlier operator.
+"""The GA's two mutation operators for a bounded problem (``optimizer.mutation``):
+``adaptfeasible`` (default), MATLAB's ``mutationadaptfeasible`` for bound constraints, and
+``scaled_halving``, the project's earlier operator (docs/optimizers.md, "The mutation").
 """
 
 from __future__ import annotations
@@ -107,8 +103,8 @@ def mutationadaptfeasible(
     engine: str = "numba",
 ) -> np.ndarray:
     """MATLAB's adaptive-feasible mutation for a box: one child inside it per row index of
-    ``parents`` (``step`` in parameter units). ``engine``: ``numba`` (:mod:`vpid_ga.fused`)
-    or ``numpy`` (the reference above); identical children (tested)."""
+    ``parents`` (``step`` in parameter units), by :mod:`vpid_ga.fused` or, ``engine="numpy"``,
+    the reference above (identical children, tested)."""
     X = population[parents]
     if engine == "numpy":
         basis, active = box_directions(X, step, lower, upper, rng, tol)

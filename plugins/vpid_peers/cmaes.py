@@ -1,17 +1,9 @@
-"""``optimizer=cmaes``: CMA-ES from the ``cma`` package (Hansen), as an ask/tell optimizer
-(docs/optimizers.md).
-
-The search runs in the unit cube (one ``sigma0``, a fraction of the box width, fits every
-parameter), from a uniform random start (the vehicle's box is centred on the truth), inside
-the box by cma's ``BoundTransform``. Population (``popsize``): ``library`` (cma's
-``4 + 3 ln(dim)``), ``ps`` or a number. ``restarts``: ``none``, ``ipop`` (IPOP-CMA-ES, Auger
-and Hansen 2005: twice the population at each restart) or ``bipop`` (BIPOP-CMA-ES, Hansen
-2009: the large regime alternates with a small one of population
-``floor(l0 (l_large / (2 l0)) ** (u ** 2))`` and step ``sigma0 10 ** (-2 v)``, ``u``, ``v``
-uniform from the run's generator). cma's normal deviates come from the run's generator
-(``randn``; its ``seed`` would re-seed numpy's global one). Done when cma's termination
-criteria fire or the run's budget is used (counted here: cma's ``maxfevals`` fires a
-generation late); ``stop_reasons`` keeps what ended it. cma prints and writes nothing.
+"""``optimizer=cmaes``: CMA-ES from the ``cma`` package (Hansen), as an ask/tell optimizer:
+in the unit cube (one ``sigma0`` fits every parameter) from a uniform random start, inside
+the box by cma's ``BoundTransform``, its normal deviates from the run's generator, done when
+cma's criteria fire (``stop_reasons``) or the budget is spent (counted here: cma's
+``maxfevals`` fires a generation late). The keys (``popsize``, ``restarts``: IPOP, BIPOP):
+docs/optimizers.md, "optimizer=cmaes".
 """
 
 from __future__ import annotations
@@ -24,7 +16,7 @@ import numpy as np
 
 from vpid_bench import Bounds, ConfigError, Optimizer, OptimizerParams
 
-from .unit_box import to_physical
+from .coordinates import to_physical
 
 
 @dataclass(frozen=True)

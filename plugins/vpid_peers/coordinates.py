@@ -1,9 +1,8 @@
-"""The coordinates the least-squares solver steps in: logarithmic or box-scaled.
-
-The vehicle's parameters span five decades (kg to N/m) and its box is ``[0.5, 1.5]`` times
-the truth, so a step in physical units is badly scaled. ``log``: ``u = ln(x / x_mid)`` with
-``x_mid`` the geometric mean of the bounds (a step of 0.01 is a 1 % change of the parameter;
-needs a box with ``lower > 0``). ``box``: ``u = (x - lower) / (upper - lower)`` in [0, 1].
+"""The coordinates the peers step in: the vehicle's parameters span five decades (kg to N/m)
+and its box is ``[0.5, 1.5]`` times the truth, so a step in physical units is badly scaled.
+The least-squares solver's :class:`Coordinates`: ``log``, ``u = ln(x / x_mid)`` (``x_mid`` the
+geometric mean of the bounds: a step of 0.01 is a 1 % change; needs ``lower > 0``), or
+``box``, ``u = (x - lower) / (upper - lower)``; the libraries' unit cube, :func:`to_physical`.
 """
 
 from __future__ import annotations
@@ -48,3 +47,10 @@ class Coordinates:
         else:
             X = self.bounds.lower + U * self.bounds.width
         return np.clip(X, self.bounds.lower, self.bounds.upper)
+
+
+def to_physical(U: np.ndarray, bounds: Bounds) -> np.ndarray:
+    """The unit cube's rows (a library's step means the same for every parameter) in
+    physical units, ``lower + U width``, clipped (``U = 1`` may round one ulp outside)."""
+    X = bounds.lower + np.asarray(U, dtype=float) * bounds.width
+    return np.minimum(np.maximum(X, bounds.lower), bounds.upper)

@@ -1,7 +1,7 @@
 """``optimizer=lsq``: multistart trust-region least squares on the residuals, reweighted to
-minimise a sum of group norms (the vehicle's Eq. 3). Each start is uniform in the box (its
-centre is the vehicle's truth); descents (:mod:`vpid_peers.solver`) follow one another until
-the budget ends the run, every evaluation (Jacobians included) counted by the run loop.
+minimise a sum of group norms (the vehicle's Eq. 3): descents (:mod:`vpid_peers.solver`) from
+uniform starts in the box (its centre is the vehicle's truth) until the budget ends the run,
+every evaluation (Jacobians included) counted by the run loop.
 """
 
 from __future__ import annotations
@@ -20,9 +20,8 @@ from .solver import Solver, SolverSettings
 
 @dataclasses.dataclass(frozen=True)
 class LSQParams(OptimizerParams):
-    """``scaling``: the solver's coordinates (:mod:`vpid_peers.coordinates`); ``broyden``,
-    ``inner``, ``fd_step``, ``ftol``: :class:`~vpid_peers.solver.SolverSettings`. ``ps`` and
-    ``iterations`` are not used."""
+    """``scaling`` (:mod:`vpid_peers.coordinates`), ``broyden``, ``inner``, ``fd_step``,
+    ``ftol`` (:class:`~vpid_peers.solver.SolverSettings`); ``ps``, ``iterations`` unused."""
 
     scaling: Scaling = "auto"
     broyden: bool = True

@@ -1,13 +1,10 @@
 """``optimizer=nevergrad``: any optimizer of nevergrad's registry, ``optimizer.method=<name>``
-(docs/optimizers.md); an unknown name is refused in one line listing the closest ones.
-
-Built with the run's budget and ``num_workers`` 1 (``batch=library``, nevergrad's default) or
-``ps``; on the first ``ask``, so a method that fails fails its run, not the job. It searches an
-``ng.p.Array`` bounded to the unit cube from a uniform random start (nevergrad's default is
-the centre: the vehicle's truth), with a ``RandomState`` seeded from the run's generator, and
-through nevergrad's public API only: a run costs what it costs a user (its CMA: about 0.8 ms
-per candidate of its own, ``benchmarks/bench_nevergrad_cma.py``). ``import nevergrad`` (about
-3 s) happens when the parameters are checked, never when the plugin is registered.
+(an unknown name refused in one line listing the closest), built on the first ``ask`` with
+the run's budget (a method that fails fails its run, not the job), searching the unit cube
+from a uniform random start (nevergrad's default is the centre: the vehicle's truth) with a
+``RandomState`` seeded from the run's generator, through nevergrad's public API only
+(docs/optimizers.md, "optimizer=nevergrad"). ``import nevergrad`` (about 3 s) happens when
+the parameters are checked, never when the plugin is registered.
 """
 
 from __future__ import annotations
@@ -20,7 +17,7 @@ import numpy as np
 
 from vpid_bench import Bounds, ConfigError, Optimizer, OptimizerParams
 
-from .unit_box import to_physical
+from .coordinates import to_physical
 
 #: CMA, what NGOpt (nevergrad's recommendation) picks at the paper's protocol (identical runs);
 #: NGOpt itself fails at small budgets in nevergrad 1.0.12 on numpy 2.x (a TypeError in its
@@ -28,19 +25,15 @@ from .unit_box import to_physical
 DEFAULT_METHOD = "CMA"
 
 
-def nevergrad_registry() -> Any:
-    """nevergrad's optimizer registry (imports nevergrad: about 3 s the first time)."""
+def check_method(method: str) -> None:
+    """Refuse a ``method`` not in nevergrad's registry (imported here: about 3 s the first
+    time), naming the 5 closest (difflib)."""
     try:
         import nevergrad as ng
     except ImportError as exc:  # pragma: no cover - the plugin registers only when it is found
         raise ConfigError("optimizer", "nevergrad", "install the extra: "
                           "pip install 'vpid-bench[peers]'") from exc
-    return ng.optimizers.registry
-
-
-def check_method(method: str) -> None:
-    """Refuse a ``method`` not in nevergrad's registry, naming the 5 closest (difflib)."""
-    names = list(nevergrad_registry())
+    names = list(ng.optimizers.registry)
     if method in names:
         return
     by_lower: dict[str, str] = {}

@@ -1,8 +1,6 @@
 """``optimizer=scipy_de``: ``scipy.optimize.differential_evolution`` through the bridge, one
-generation per batch (``vectorized=True``, hence deferred updating), ``tol=0`` (the budget
-ends the run), ``polish=False``; docs/peers.md says why. ``popsize``: ``library`` (scipy's 15
-D from its Latin hypercube) or ``ps`` (``ps`` uniform rows from the run's generator as
-``init``, ``maxiter = iterations``: the DE1-DE8 budget). scipy draws from the run's generator.
+generation per batch (``vectorized=True``), drawing from the run's generator; the keys and the
+four settings that differ from scipy's defaults, and why: docs/peers.md.
 """
 
 from __future__ import annotations
@@ -24,11 +22,8 @@ Strategy = Literal[
 
 @dataclasses.dataclass(frozen=True)
 class ScipyDEParams(OptimizerParams):
-    """``strategy``: scipy's name (default ``best1bin``, scipy's). ``F``: the mutation
-    factor, or with ``F_max`` the lower end of scipy's dithering (a factor drawn from
-    U(F, F_max) each generation; scipy's default 0.5 to 1); ``F_max: null`` keeps ``F``
-    constant. ``CR``: scipy's ``recombination`` (default 0.7). ``tol``: scipy's relative
-    convergence tolerance (0: run every generation, the same budget as DE1-DE8)."""
+    """scipy's keys and defaults (``strategy``, ``F`` or dithered in ``[F, F_max]``, ``CR``
+    its ``recombination``) but ``tol`` (0: run every generation, as DE1-DE8)."""
 
     popsize: Literal["library", "ps"] = "library"
     strategy: Strategy = "best1bin"
@@ -61,7 +56,7 @@ class ScipyDE(LoopOptimizer):
 
         p, b = self.params, self.bounds
         if p.popsize == "ps":
-            init: Any = np.clip(b.sample(self.rng, p.ps), b.lower, b.upper)
+            init: Any = b.sample(self.rng, p.ps)
             maxiter, popsize = p.iterations, 15  # scipy sizes the population from init
         else:  # scipy's defaults; the budget (the bridge) ends the run
             init, popsize = "latinhypercube", 15

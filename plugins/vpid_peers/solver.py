@@ -1,12 +1,8 @@
 """A bounded trust-region (Levenberg-Marquardt) descent on ``F = sum_g ||r_g||`` (the
-vehicle's Eq. 3 up to a factor), from ``evaluate(X) -> (f, R)`` on physical rows.
-
-A descent asks the point and its ``n`` forward-difference neighbours as ONE batch, then per
-iteration ONE trial row: the damped step inside the box on the local model
-``sum_g ||r_g + J_g p||`` reweighted by IRLS (:mod:`vpid_peers.sumofnorms`). Accepted when
-``F`` decreases (Nielsen's damping rule); Broyden's rank-one update after every trial, finite
-differences again when a step fails with an updated Jacobian, after ``refresh`` updates or
-before convergence (a predicted relative decrease below ``ftol``).
+vehicle's Eq. 3 up to a factor), from ``evaluate(X) -> (f, R)`` on physical rows: the point
+and its forward-difference neighbours as ONE batch, then ONE trial row per iteration, the
+damped IRLS step inside the box (:mod:`vpid_peers.sumofnorms`), Broyden's updates between
+finite-difference Jacobians (docs/peers.md, "optimizer=lsq").
 """
 
 from __future__ import annotations
@@ -24,10 +20,9 @@ Evaluate = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 @dataclasses.dataclass(frozen=True)
 class SolverSettings:
-    """``fd_step``: forward-difference step in solver coordinates (relative in ``log``);
-    ``inner``: IRLS sweeps per iteration; ``broyden``: secant updates between
-    finite-difference Jacobians; ``refresh``: a fresh Jacobian after this many updates (0:
-    when a step fails); ``ftol``: the relative decrease of convergence."""
+    """``fd_step``, ``inner``, ``broyden``, ``ftol``: ``optimizer=lsq``'s keys
+    (docs/peers.md); ``refresh``: a fresh Jacobian after this many updates (0: when a step
+    fails)."""
 
     fd_step: float = 1e-7
     inner: int = 1

@@ -1,8 +1,7 @@
 """The local model of ``F = sum_g ||r_g||`` (the vehicle's Eq. 3; one group is a sum of
-squares): ``M(p) = sum_g ||r_g + J_g p||``, convex, from the per-group Gram quantities
-``A_g = J_g^T J_g``, ``b_g = J_g^T r_g``, ``c_g = r_g^T r_g`` (a step costs
-``O(groups n^3)`` whatever the number of residuals). IRLS: with ``w_g = 1/||r_g||`` the
-weighted sum of squares has the gradient of ``F``, so its stationary points are ``F``'s.
+squares), ``M(p) = sum_g ||r_g + J_g p||``, from the per-group Gram quantities (a step costs
+``O(groups n^3)`` whatever the number of residuals), and its IRLS step: with ``w_g =
+1/||r_g||`` the weighted sum of squares has the gradient of ``F``.
 """
 
 from __future__ import annotations

@@ -10,9 +10,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from vpid_bench import ConfigError, ProblemConfig, added_setting, estimators
-
-from . import knowns
+from vpid_bench import ConfigError, ProblemConfig, added_setting, estimators, freeze_fields
 
 #: The unknowns of Eq. (4), in order, with their units.
 PARAM_NAMES: tuple[str, ...] = ("m", "I", "m1", "m2", "k1", "k2", "c1", "c2", "a1")
@@ -109,7 +107,7 @@ class ReferenceConfig:
     ignore: tuple[str, ...] = added_setting(default=())
 
     def __post_init__(self) -> None:
-        knowns.freeze_fields(self, "columns", prefix="problem.reference.")
+        freeze_fields(self, "columns", prefix="problem.reference.")
 
     def mapping(self) -> Any:
         """The record reader's view of the mapping keys."""
@@ -135,13 +133,11 @@ class BoundsConfig:
     a1: tuple[float, ...] | None = added_setting(None)
 
 
-#: ``problem.known.<name>`` of ``problem=vehicle``: the config key each one sets.
-KNOWN_KEYS = {"L": ("vehicle", "L"), "kt1": ("vehicle", "kt1"), "kt2": ("vehicle", "kt2"),
-              "V": ("bump", "V"), "h": ("bump", "h"), "w": ("bump", "w")}
-#: Units and meaning of the stated quantities of ``problem=vehicle``.
-KNOWN_WHAT = {"L": ("m", "wheelbase"), "kt1": ("N/m", "front tyre stiffness"),
-              "kt2": ("N/m", "rear tyre stiffness"), "V": ("km/h", "bump speed"),
-              "h": ("m", "bump height"), "w": ("m", "bump width")}
+#: ``problem.known.<name>`` of ``problem=vehicle``: the part whose key ``<name>`` it sets,
+#: its unit and what it is.
+KNOWN = {"L": ("vehicle", "m", "wheelbase"), "kt1": ("vehicle", "N/m", "front tyre stiffness"),
+         "kt2": ("vehicle", "N/m", "rear tyre stiffness"), "V": ("bump", "km/h", "bump speed"),
+         "h": ("bump", "m", "bump height"), "w": ("bump", "m", "bump width")}
 
 
 @dataclass(frozen=True)
@@ -164,36 +160,35 @@ class VehicleConfig(ProblemConfig):
                                  metadata={"vpid_bench_open_keys": True})
     objective: str = "eq3"
     #: Stated quantities by name (``known.kt1=170000``): each sets its ``vehicle.`` or
-    #: ``bump.`` key (:data:`KNOWN_KEYS`).
+    #: ``bump.`` key (:data:`KNOWN`).
     known: dict[str, Any] = added_setting(default_factory=dict, open_keys=True)
 
     def __post_init__(self) -> None:
-        knowns.freeze_fields(self, "known")
+        freeze_fields(self, "known")
         # each known.<name> sets its vehicle. or bump. key (a fixed set: nothing freed)
         for name, value in self.known.items():
             key = f"problem.known.{name}"
-            if name not in KNOWN_KEYS:
-                raise ConfigError(key, value, "one of " + ", ".join(KNOWN_KEYS) + " (the "
+            if name not in KNOWN:
+                raise ConfigError(key, value, "one of " + ", ".join(KNOWN) + " (the "
                                   "stated quantities of problem=vehicle; fixing or freeing a "
                                   "parameter is offered by problem=ride_half, the same half car)")
             if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise ConfigError(key, value, f"a number in {KNOWN_WHAT[name][0]}")
-            part, field_name = KNOWN_KEYS[name]
+                raise ConfigError(key, value, f"a number in {KNOWN[name][1]}")
+            part = KNOWN[name][0]
             object.__setattr__(self, part, dataclasses.replace(getattr(self, part),
-                                                               **{field_name: float(value)}))
+                                                               **{name: float(value)}))
         validate(self)  # at build time, so the pre-flight refuses a bad value before any job
 
 
 def known_list(config: VehicleConfig) -> list[dict[str, Any]]:
     """``problem.info.known``: each stated quantity with its value, unit and source."""
     out = []
-    for name, (part, field_name) in KNOWN_KEYS.items():
-        value = getattr(getattr(config, part), field_name)
-        default = getattr(type(getattr(config, part))(), field_name)
+    for name, (part, unit, what) in KNOWN.items():
+        value = getattr(getattr(config, part), name)
+        default = getattr(type(getattr(config, part))(), name)
         source = (f"set by you (problem.known.{name})" if name in config.known else
-                  f"set by you (problem.{part}.{field_name})" if value != default else
+                  f"set by you (problem.{part}.{name})" if value != default else
                   "the paper's vehicle and test (Gökdağ 2014)")
-        unit, what = KNOWN_WHAT[name]
         out.append({"name": name, "value": float(value), "unit": unit, "source": source,
                     "what": what})
     return out
@@ -251,8 +246,13 @@ def validate(config: VehicleConfig) -> None:
     # a measured record states no noise level (noise.level is what synthetic records add)
     estimators.check_objective(config.objective, config.noise.level
                                if config.reference.file is None else None)
-    if config.reference.file is not None:
-        T = check_reference_file(config)
+    if config.reference.file is not None:  # read at the pre-flight: its span is the window
+        from .record_file import check_span
+        from .reference_io import read_measured
+
+        record = read_measured(config.reference.file, config.reference.mapping())
+        check_span(record, config.dt, MAX_SAMPLES)
+        T = record.span
     check_size(config, T)
     _validate_bounds(config)
 
@@ -357,13 +357,3 @@ def check_size(config: VehicleConfig, T: float) -> None:
     if n_bytes > MAX_MEMORY:
         raise ConfigError("problem.ps", config.ps, f"a job of at most {_gib(MAX_MEMORY)} "
                           f"({what})")
-
-
-def check_reference_file(config: VehicleConfig) -> float:
-    """Read ``problem.reference.file`` at the pre-flight; its span (s), the model's window."""
-    from .record_file import check_span
-    from .reference_io import read_measured
-
-    record = read_measured(config.reference.file, config.reference.mapping())
-    check_span(record, config.dt, MAX_SAMPLES)
-    return record.span

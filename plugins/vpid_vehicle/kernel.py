@@ -1,14 +1,8 @@
-"""The fast path: Newmark-beta for the 4-DOF half-car as a structure-of-arrays kernel (numba).
-
-How and why it is fast: docs/vehicle.md, "Speed". Newmark keeps equilibrium at every step,
-so a step is the linear recurrence ``x_{k+1} = A x_k + U y_k + V y_{k+1}`` (``x = [d, v]``,
-``y`` the two tyre inputs, m), iterated as ``s_{k+1} = A s_k + W y_k`` with ``s_k = x_k - V
-y_k``, ``W = A V + U``, and ``z1''``, ``z2''`` two more rows. The population sits in blocks of
-``LANES`` candidates, the candidate the innermost contiguous axis at compile-time offsets, so
-the compiler vectorises across them. Eq. (3) is accumulated on the fly. Within 1e-10 of the
-plain numpy Newmark; no fast-math, so results are bit-identical for any batch and thread
-count (tested). Batches of at least ``2 MIN_PER_THREAD`` may be cut into chunks run by a small
-thread pool (the compiled code releases the GIL). Imported on the first evaluation; cached.
+"""The fast path: Newmark-beta for the 4-DOF half-car as a structure-of-arrays kernel (numba),
+``s_{k+1} = A s_k + W y_k`` per candidate (``y`` the two tyre inputs, m) with z1'', z2'' two
+more rows, the candidates in blocks of ``LANES`` (the innermost, contiguous axis), Eq. (3)
+accumulated on the fly; no fast-math, so bit-identical for any batch and thread count
+(tested). How and why: docs/vehicle.md, "Speed". Imported on the first evaluation; cached.
 """
 
 from __future__ import annotations
@@ -28,8 +22,7 @@ N_ROWS = 10
 N_TERMS = 10
 _ROW = N_TERMS * LANES  # floats between two rows of the table in a block
 _STATE = N_ROWS * _ROW  # offset of the state (8 slots), then the read-outs (2 slots)
-#: Floats per block: table, state, read-outs; everything a lane touches in the time loop is
-#: in this one flat array at compile-time offsets, so the compiler sees that nothing aliases.
+#: Floats per block: table, state, read-outs, at compile-time offsets (nothing aliases).
 BLOCK = _STATE + 10 * LANES
 _Z1 = _STATE + 8 * LANES  # read-out slots
 _Z2 = _STATE + 9 * LANES
@@ -42,9 +35,8 @@ _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
 @njit(**_OPTS)
 def _inverse_spd4(S: np.ndarray, work: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
-    """Inverse of a 4x4 matrix by Gauss-Jordan without pivoting (S is SPD for a physical
-    candidate; a non-positive pivot gives inf/NaN, which the caller turns into f = inf).
-    ``work`` is 4x4 scratch."""
+    """Inverse of a 4x4 SPD matrix by Gauss-Jordan without pivoting (a non-positive pivot
+    gives inf/NaN: f = inf); ``work`` is 4x4 scratch."""
     for i in range(4):
         for j in range(4):
             work[i, j] = S[i, j]
@@ -334,17 +326,11 @@ def simulate(
 
 
 def available_threads() -> int:
-    """Cores this process may run on (its CPU affinity where the OS reports it)."""
+    """Cores this process may run on (its CPU affinity where the OS reports it; benchmarks)."""
     try:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - not on Linux
         return os.cpu_count() or 1
-
-
-@functools.cache
-def _pool(workers: int) -> ThreadPoolExecutor:
-    """A pool of ``workers`` threads, made on first use and kept (the caller takes a chunk)."""
-    return ThreadPoolExecutor(max_workers=workers, thread_name_prefix="vpid-kernel")
 
 
 def chunks(n: int, threads: int) -> list[tuple[int, int]]:
@@ -361,13 +347,19 @@ def _run_chunked(fn, X: np.ndarray, args: tuple, out: np.ndarray, threads: int,
         fn(X, *rows, *args, out)
         return
     parts = chunks(X.shape[0], threads)
-    pool = _pool(len(parts) - 1)
+    pool = _pool(len(parts) - 1)  # the caller's thread takes the first chunk
     futures = [pool.submit(fn, X[a:b], *(r[a:b] for r in rows), *args, out[a:b])
                for a, b in parts[1:]]
     a, b = parts[0]
     fn(X[a:b], *(r[a:b] for r in rows), *args, out[a:b])
     for fut in futures:
         fut.result()
+
+
+@functools.cache
+def _pool(workers: int) -> ThreadPoolExecutor:
+    """A pool of ``workers`` threads, made on first use and kept."""
+    return ThreadPoolExecutor(max_workers=workers, thread_name_prefix="vpid-kernel")
 
 
 def as_kernel_array(A: np.ndarray) -> np.ndarray:

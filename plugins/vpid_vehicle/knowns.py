@@ -1,16 +1,10 @@
-"""Known quantities and boxes: what a vehicle problem states rather than identifies. The
-answer depends on them (the ride models are unchanged when every mass, stiffness and damping
-is scaled by one factor: a tyre stated 25 % too soft makes every identified value 25 % too
-small with no worse fit), so they are explicit and settable (SI units):
-
-* ``problem.known.<name>=value`` states a known quantity or fixes an identified one;
-  ``=free`` identifies a known one, only where some quantity of the scaling group
-  (:func:`scale_group`) stays stated; geometry is never freed;
-* ``problem.bounds.<name>=[lo,hi]``: an identified quantity's box (default: the model's).
-
-:func:`plan` checks the keys (one ``ConfigError`` line) into a :class:`Plan`;
-:class:`StatedModel` presents a ride model under it to the ride problem. The run record keeps
-:meth:`Plan.known_list` and :meth:`Plan.box_list` (``problem.info``), the report's "Assumed".
+"""Known quantities and boxes: what a vehicle problem states rather than identifies, explicit
+and settable because the answer depends on them (scaling every mass, stiffness and damping by
+one factor leaves a ride record unchanged): ``problem.known.<name>=value`` states a quantity
+or fixes an identified one, ``=free`` identifies a known one, ``problem.bounds.<name>=[lo,hi]``
+sets a box (SI units; docs/own-record.md). :func:`plan` checks the keys into a :class:`Plan`;
+:class:`StatedModel` presents a ride model under it; the records keep
+:meth:`Plan.known_list` and :meth:`Plan.box_list` (the report's "Assumed").
 """
 
 from __future__ import annotations
@@ -27,72 +21,27 @@ from vpid_bench import ConfigError
 #: The value of ``problem.known.<name>`` that identifies a known quantity instead.
 FREE = "free"
 
-#: Known quantities: unit (SI), kind (``scale``: scales with the others, leaving a record
-#: unchanged; ``geometry``: a length or shape factor, never freed) and what they are.
-QUANTITIES: dict[str, tuple[str, str, str]] = {
-    "kt": ("N/m", "scale", "tyre stiffness"),
-    "ct": ("N s/m", "scale", "tyre damping"),
-    "kt1": ("N/m", "scale", "front tyre stiffness"),
-    "kt2": ("N/m", "scale", "rear tyre stiffness"),
-    "kR": ("N m/rad", "scale", "front anti-roll bar"),
-    "m": ("kg", "scale", "vehicle mass (weighed)"),
-    "L": ("m", "geometry", "wheelbase"),
-    "a1": ("m", "geometry", "centre of gravity to the front axle"),
-    "a2": ("m", "geometry", "centre of gravity to the rear axle"),
-    "yL": ("m", "geometry", "centre of gravity to the left wheels"),
-    "yR": ("m", "geometry", "centre of gravity to the right wheels"),
-    "lf": ("m", "geometry", "centre of gravity to the front axle"),
-    "E": ("1", "geometry", "tyre curvature factor (Magic Formula)"),
+#: Known quantities: unit (SI) and what they are.
+QUANTITIES: dict[str, tuple[str, str]] = {
+    "kt": ("N/m", "tyre stiffness"),
+    "ct": ("N s/m", "tyre damping"),
+    "kt1": ("N/m", "front tyre stiffness"),
+    "kt2": ("N/m", "rear tyre stiffness"),
+    "kR": ("N m/rad", "front anti-roll bar"),
+    "m": ("kg", "vehicle mass (weighed)"),
+    "L": ("m", "wheelbase"),
+    "a1": ("m", "centre of gravity to the front axle"),
+    "a2": ("m", "centre of gravity to the rear axle"),
+    "yL": ("m", "centre of gravity to the left wheels"),
+    "yR": ("m", "centre of gravity to the right wheels"),
+    "lf": ("m", "centre of gravity to the front axle"),
+    "E": ("1", "tyre curvature factor (Magic Formula)"),
 }
-#: Units of quantities that scale together (every other unit is geometry or a shape).
+#: Units of quantities that scale together, leaving a record unchanged (masses, stiffnesses,
+#: dampings); every other unit is geometry (a length or shape factor, never freed).
 SCALE_UNITS = frozenset({"kg", "kg m²", "kg m^2", "N/m", "N s/m", "N/rad", "N", "N m/rad"})
 #: Units of quantities that may be zero (a damping, an anti-roll bar, a curvature factor).
 MAY_BE_ZERO = frozenset({"N s/m", "N m/rad", "1"})
-
-
-def _freeze(value: Any) -> Any:
-    if isinstance(value, Mapping):
-        return FrozenMap(value)
-    if isinstance(value, (list, tuple)) or (hasattr(value, "__iter__")
-                                            and not isinstance(value, (str, bytes))):
-        return tuple(_freeze(v) for v in value)
-    return value
-
-
-class FrozenMap(dict):
-    """A read-only mapping that hashes (a problem is cached by its config), values frozen."""
-
-    def __init__(self, items: Any = ()) -> None:
-        super().__init__({str(k): _freeze(v) for k, v in dict(items).items()})
-
-    def __hash__(self) -> int:  # type: ignore[override]
-        return hash(tuple(sorted(self.items())))
-
-    def __reduce__(self) -> Any:
-        return (FrozenMap, (dict(self),))
-
-    def _read_only(self, *args: Any, **kwargs: Any) -> Any:
-        raise TypeError("a config mapping is read-only")
-
-    __setitem__ = __delitem__ = update = pop = popitem = clear = setdefault = _read_only  # type: ignore[assignment]
-
-
-def freeze_fields(config: Any, *names: str, prefix: str = "problem.") -> None:
-    """Make the mapping fields ``names`` of a frozen config :class:`FrozenMap`."""
-    for name in names:
-        value = getattr(config, name)
-        if value is None:
-            value = {}
-        if not isinstance(value, Mapping):
-            raise ConfigError(f"{prefix}{name}", value, "a mapping of names, e.g. "
-                              f"{prefix}{name}.<name>=...")
-        object.__setattr__(config, name, FrozenMap(value))
-
-
-def _kind(name: str, unit: str) -> str:
-    if name in QUANTITIES:
-        return QUANTITIES[name][1]
-    return "scale" if unit in SCALE_UNITS else "geometry"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -121,7 +70,7 @@ class Plan:
         """The stated quantities as ``problem.info.known`` keeps them."""
         return [{"name": n, "value": float(self.values[n]), "unit": self.units[n],
                  "source": self.sources[n],
-                 "what": QUANTITIES[n][2] if n in QUANTITIES else "fixed by you"}
+                 "what": QUANTITIES[n][1] if n in QUANTITIES else "fixed by you"}
                 for n in self.values if n not in self.identified]
 
     def box_list(self, lower: Sequence[float], upper: Sequence[float]) -> list[dict[str, Any]]:
@@ -130,15 +79,6 @@ class Plan:
                  "source": (f"set by you (problem.bounds.{n})" if n in self.boxes else
                             f"[0.5, 1.5] x parameter set {self.parameter_set}")}
                 for n, lo, hi in zip(self.identified, lower, upper, strict=True)]
-
-
-def _mapping(value: Any, key: str) -> dict[str, Any]:
-    if value is None:
-        return {}
-    if not isinstance(value, Mapping):
-        raise ConfigError(key, value, "a mapping of names to values, e.g. "
-                          f"{key}.kt=210000")
-    return {str(k): v for k, v in value.items()}
 
 
 def _number(value: Any) -> float | None:
@@ -160,14 +100,9 @@ def _check_value(name: str, value: Any, unit: str, geometry_of: dict[str, float]
     return x
 
 
-def scale_group(names: Sequence[str], units: Mapping[str, str]) -> list[str]:
-    """The quantities of ``names`` that scale together (masses, stiffnesses, dampings, ...)."""
-    return [n for n in names if _kind(n, units[n]) == "scale"]
-
-
 def _check_identifiable(problem: str, identified: Sequence[str], values: Mapping[str, float],
                         units: Mapping[str, str], freed: Sequence[str]) -> None:
-    group = scale_group(list(values), units)
+    group = [n for n in values if units[n] in SCALE_UNITS]
     stated = [n for n in group if n not in identified and values[n] != 0]
     if freed and not stated:
         name = freed[0]
@@ -204,23 +139,23 @@ def _boxes(raw: Mapping[str, Any], identified: Sequence[str]) -> dict[str, tuple
 
 
 def plan(config: Any, model: Any, problem: str = "this problem") -> Plan:
-    """The :class:`Plan` of ``config.known`` and ``config.bounds``, or a :class:`ConfigError`."""
+    """The :class:`Plan` of ``config.known`` and ``config.bounds`` (frozen by
+    :func:`~vpid_bench.freeze_fields`), or a :class:`ConfigError`."""
     pset = config.parameter_set
     published = dict(model.sets[pset])
     units = dict(zip(model.names, model.units, strict=True))
     units.update({n: QUANTITIES[n][0] if n in QUANTITIES else "" for n in published
                   if n not in units})
-    raw = _mapping(getattr(config, "known", None), "problem.known")
     values, sources = dict(published), {n: f"parameter set {pset}" for n in published}
     fixed, freed = [], []
-    for name, value in raw.items():
+    for name, value in config.known.items():
         if name not in published:
             raise ConfigError(f"problem.known.{name}", value, "one of "
                               + ", ".join(published) + f" (the quantities of {problem})")
         if value == FREE:
             if name in model.names:
                 continue  # identified already
-            if _kind(name, units[name]) != "scale":
+            if units[name] not in SCALE_UNITS:
                 raise ConfigError(f"problem.known.{name}", value, f"a value ({units[name]}):"
                                   f" {name} is geometry {problem} states and cannot identify")
             freed.append(name)
@@ -231,7 +166,7 @@ def plan(config: Any, model: Any, problem: str = "this problem") -> Plan:
             fixed.append(name)
     identified = tuple([n for n in model.names if n not in fixed] + freed)
     _check_identifiable(problem, identified, values, units, freed)
-    boxes = _boxes(_mapping(getattr(config, "bounds", None), "problem.bounds"), identified)
+    boxes = _boxes(dict(config.bounds), identified)
     for name in freed:
         if values[name] == 0 and name not in boxes:
             raise ConfigError(f"problem.known.{name}", FREE, f"a box for it too: its value in "
@@ -307,13 +242,6 @@ class StatedModel:
                  dt: float, solver: str) -> np.ndarray:
         return np.concatenate([self.base.simulate(rows, k, sensors, u, dt, solver)
                                for rows, k in self._model_rows(X, known)])
-
-
-def stated_model(base: Any, config: Any, problem: str) -> Any:
-    """``base`` when the config states nothing, else its :class:`StatedModel`."""
-    if not getattr(config, "known", None) and not getattr(config, "bounds", None):
-        return base
-    return StatedModel(base, plan(config, base, problem))
 
 
 def check_config(config: Any, model: Any) -> Plan:

@@ -1,10 +1,8 @@
-"""The half-car model of Gökdağ (2014), Eq. (2) and (5), for a whole population at once.
-
-``q = [x, theta, x1, x2]``: bounce (m), pitch (rad, positive when the rear goes up), front
-and rear wheel hop (m). Candidates are rows ``[m, I, m1, m2, k1, k2, c1, c2, a1]`` (Eq. 4);
-``L``, ``kt1``, ``kt2`` are known, ``a2 = L - a1``. :func:`matrices` is Eq. (2) with the
-erratum K[3,1] = -a2 k2 fixed; :func:`lagrangian_matrices` derives C and K independently
-(``J^T D J``), which the tests compare.
+"""The half-car model of Gökdağ (2014), Eq. (2) and (5), for a whole population at once:
+``q = [x, theta, x1, x2]`` (bounce m, pitch rad with the rear up, front and rear wheel hop
+m), candidates rows ``[m, I, m1, m2, k1, k2, c1, c2, a1]`` (Eq. 4), ``L``, ``kt1``, ``kt2``
+known, ``a2 = L - a1``. :func:`matrices` is Eq. (2) with the erratum K[3,1] = -a2 k2 fixed;
+:func:`lagrangian_matrices` derives C and K independently, for the tests.
 """
 
 from __future__ import annotations

@@ -11,15 +11,6 @@ from typing import Any
 from vpid_bench import Contribution, ReportContext, Section
 
 
-def _instances(ctx: ReportContext) -> list[int]:
-    return sorted({int((r.get("instance") or {}).get("index", 0)) for r in ctx.records})
-
-
-def _seed(ctx: ReportContext) -> Any:
-    seeds = {((r.get("problem") or {}).get("config") or {}).get("seed") for r in ctx.records}
-    return seeds.pop() if len(seeds) == 1 else None
-
-
 def model_error_sections(ctx: ReportContext) -> Contribution | None:
     """The section (see the module); ``None`` for a problem without model error."""
     from .ride.model_error import read_ratios
@@ -36,12 +27,14 @@ def model_error_sections(ctx: ReportContext) -> Contribution | None:
             f"model error. The richer fitted structure: {ctx.escape(fit_with)}. From "
             "plugins/vpid_vehicle/ride/model_error_ratios.json (`python -m "
             "vpid_vehicle.ride.model_error --write`).")
-    if _seed(ctx) != entry["seed"]:
+    seeds = {((r.get("problem") or {}).get("config") or {}).get("seed") for r in ctx.records}
+    if seeds != {entry["seed"]}:
         return Contribution(sections=(Section("Model error", ctx.para(
             head + f" Not computed for these runs' seed (the file's is {entry['seed']}): "
             f"`python -m vpid_vehicle.ride.model_error {ctx.problem}` prints instance 0's."),),))
     at_fit, at_truth = entry["ratio_at_fit"], entry["ratio_at_truth"]
-    rows = [[i, at_fit[i], at_truth[i]] for i in _instances(ctx) if i < len(at_fit)]
+    instances = {int((r.get("instance") or {}).get("index", 0)) for r in ctx.records}
+    rows = [[i, at_fit[i], at_truth[i]] for i in sorted(instances) if i < len(at_fit)]
     headers = ["instance", "model error / noise (at the fit)", "at the truth"]
     files = ctx.write_table("model_error", headers, rows)
     return Contribution(sections=(Section(

@@ -1,9 +1,8 @@
-"""The published results: Tables II (PS = 20) and III (PS = 30) of H. Gökdağ, "Vehicle
-Parameter Identification Using DE Algorithms", JMEST 1(5), 2014, in ``data/paper_tables.csv``:
-per table and algorithm the mean identified vector (``quantity = mean``), each parameter's
-relative error (%) with the NoRE (``eps_percent``), the optimum values (``algorithm = OV``).
-Table III's DE2 row is repaired (the text lost three decimal points: 53, 42, -73 are 0.53,
-0.42, -0.73, as the listed means give; its ``note`` says so).
+"""The published results: Tables II (PS = 20) and III (PS = 30) of Gökdağ (2014) in
+``data/paper_tables.csv``, per table and algorithm the mean identified vector (``quantity =
+mean``), each parameter's relative error (%) with the NoRE (``eps_percent``), the optimum
+values (``algorithm = OV``). Table III's DE2 row is repaired (three lost decimal points, as the
+listed means give; its ``note`` says so).
 """
 
 from __future__ import annotations

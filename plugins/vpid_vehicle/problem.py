@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from vpid_bench import Bounds, Problem, estimators, relative_errors_percent
+from vpid_bench import Bounds, ChannelFit, Problem, estimators, relative_errors_percent
 
 from .config import (
     PARAM_NAMES,
@@ -22,11 +22,10 @@ from .config import (
     VehicleConfig,
     known_list,
     own_boxes,
-    validate,
     window,
 )
 from .model import KnownConstants, physical
-from .objective import ChannelFit, add_noise, noise_summary
+from .objective import add_noise, noise_summary
 from .record_file import Sampler
 from .reference_io import read_measured, write_reference
 from .road import Bump
@@ -44,8 +43,7 @@ class VehicleProblem(ChannelFit, Problem):
     channels = (("z1''", "m/s²"), ("z2''", "m/s²"))
 
     def __init__(self, config: VehicleConfig) -> None:
-        super().__init__(config)
-        validate(config)
+        super().__init__(config)  # the config validated itself when it was built
         p = config.vehicle
         self.known = KnownConstants(L=p.L, kt1=p.kt1, kt2=p.kt2)
         self.bump = Bump.from_geometry(config.bump.V, config.bump.h, config.bump.w, p.L)

@@ -1,11 +1,9 @@
 """A vehicle's own record (``problem.reference.file``, docs/own-record.md#the-file) through
 vpid-bench's one CSV reader: the channels' column names, the units a vehicle logger writes
-(converted to SI), and the inputs (read from the record, or the configured input where
-``problem.reference.input=config`` says so; never a silent fallback).
-
-**Time.** The first row is the model's t = 0 (at rest). The model integrates at its own
-``dt`` past the last row and is read at the record's times, exactly where they fall on its
-steps, else linearly between the two around each (:class:`Sampler`).
+(converted to SI), the inputs (from the record, or the configured input where
+``problem.reference.input=config`` says so; never a silent fallback), and how the model,
+at rest at the first row and integrating at its own ``dt``, is read at the record's times
+(:class:`Sampler`).
 """
 
 from __future__ import annotations

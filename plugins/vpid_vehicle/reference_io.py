@@ -1,9 +1,7 @@
-"""``problem=vehicle``'s records as CSV. Written (``reference.csv``): ``t`` (s), ``z1dd_clean``,
-``z2dd_clean``, ``z1dd_noisy``, ``z2dd_noisy`` (m/s^2, Eq. 5's front and rear body
-accelerations; the clean columns empty for a measured record). Read
-(``problem.reference.file``): ``t``, ``z1dd``, ``z2dd`` (or a written reference.csv's noisy
-columns), any rate and start, units optional; its first row is the model's t = 0, the front
-tyre at the bump's leading edge.
+"""``problem=vehicle``'s records as CSV: ``reference.csv`` written (``t`` in s, then the clean
+and noisy z1'', z2'' in m/s^2, the clean columns empty for a measured record) and
+``problem.reference.file`` read (``t``, ``z1dd``, ``z2dd`` or a written file's noisy columns;
+its first row is the model's t = 0, the front tyre at the bump's leading edge).
 """
 
 from __future__ import annotations

@@ -110,12 +110,13 @@ def _published(mv: Mapping[str, Any]) -> dict[str, Any] | None:
             "eps": [pub["eps"][p] for p in mv["names"]]}
 
 
-def _mean_vector_section(ctx: ReportContext) -> tuple[Section | None, list[HeadlineColumn]]:
+def vehicle_sections(ctx: ReportContext) -> Contribution:
+    """The vehicle's report section (see the module docstring)."""
     from . import paper
 
     mvs = _mean_vectors(ctx)
     if not mvs:
-        return None, []
+        return Contribution()
     csv_rows: list[list[Any]] = []
     mine: dict[tuple[str, str], Any] = {}
     theirs: dict[tuple[str, str], Any] = {}
@@ -175,14 +176,6 @@ def _mean_vector_section(ctx: ReportContext) -> tuple[Section | None, list[Headl
     columns = [HeadlineColumn("mean-vec NoRE", mine)]
     if theirs:
         columns.append(HeadlineColumn("paper NoRE", theirs))
-    return Section("The mean identified vector (the paper's Tables II and III)",
-                   "\n".join(text), files), columns
-
-
-def vehicle_sections(ctx: ReportContext) -> Contribution:
-    """The vehicle's report sections (see the module docstring)."""
-    sections = []
-    mean_section, columns = _mean_vector_section(ctx)
-    if mean_section is not None:
-        sections.append(mean_section)
-    return Contribution(sections=tuple(sections), headline=tuple(columns))
+    return Contribution(sections=(Section("The mean identified vector (the paper's Tables II "
+                                          "and III)", "\n".join(text), files),),
+                        headline=tuple(columns))

@@ -60,9 +60,15 @@ def sample_point(bump: Bump, t: np.ndarray) -> np.ndarray:
     return np.stack(cols, axis=-1)
 
 
-def sample_average(bump: Bump, t: np.ndarray, gamma: float = 0.5) -> np.ndarray:
-    """``y_0 = y(0)``, ``y_{k+1} = (mean_k - (1 - gamma) y_k) / gamma``: Newmark's velocity
-    update integrates ``dt ((1 - gamma) y_k + gamma y_{k+1})``, the step's exact impulse."""
+def sample(bump: Bump, t: np.ndarray, mode: str, gamma: float = 0.5) -> np.ndarray:
+    """The input as Newmark sees it, ``(len(t), 2)`` (m): ``point`` (:func:`sample_point`) or
+    ``average``, ``y_0 = y(0)``, ``y_{k+1} = (mean_k - (1 - gamma) y_k) / gamma`` (Newmark's
+    velocity update integrates ``dt ((1 - gamma) y_k + gamma y_{k+1})``: the step's exact
+    impulse)."""
+    if mode == "point":
+        return sample_point(bump, t)
+    if mode != "average":
+        raise ValueError(f"unknown sampling {mode!r}: expected 'point' or 'average'")
     if not gamma >= 0.5:
         raise ValueError(f"average sampling needs gamma >= 1/2, got {gamma}")
     t = np.asarray(t, dtype=float)
@@ -74,12 +80,3 @@ def sample_average(bump: Bump, t: np.ndarray, gamma: float = 0.5) -> np.ndarray:
     for k in range(len(t) - 1):
         y[k + 1] = (means[k] - (1.0 - gamma) * y[k]) / gamma
     return y
-
-
-def sample(bump: Bump, t: np.ndarray, mode: str, gamma: float = 0.5) -> np.ndarray:
-    """The input as Newmark sees it: ``point`` or ``average`` sampling, ``(len(t), 2)``."""
-    if mode == "point":
-        return sample_point(bump, t)
-    if mode == "average":
-        return sample_average(bump, t, gamma)
-    raise ValueError(f"unknown sampling {mode!r}: expected 'point' or 'average'")

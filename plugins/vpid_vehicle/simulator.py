@@ -1,6 +1,6 @@
-"""One way of computing the body accelerations on a time grid: integrator, step, sampling.
-The model and the reference each get one; they differ when the user studies the "inverse
-crime" (``problem.reference.*``). Newmark runs the compiled kernel, imported on first use.
+"""One way of computing the body accelerations on a time grid (integrator, step, sampling):
+the model's and the reference's, which differ when the user studies the "inverse crime"
+(``problem.reference.*``).
 """
 
 from __future__ import annotations

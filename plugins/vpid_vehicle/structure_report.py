@@ -1,7 +1,6 @@
 """The report's "Which structure does the record support?" section (issue 43, item 2): runs
-of one ride record (settings equal but ``spring``, ``damper`` and the protocol) under two or
-more structures, each refitted on the first two thirds from its best run and compared on the
-rest (``vpid_bench.fit_structure``, ``structure_summary``).
+of one ride record under two or more structures, each refitted on the first two thirds from
+its best run and compared on the rest (``vpid_bench.fit_structure``, ``structure_summary``).
 """
 
 from __future__ import annotations

@@ -106,7 +106,7 @@ def test_the_job_refuses_it_before_any_run(registry_of, tmp_path):
 
         @hook
         def vpid_bench_register_optimizers(self, register):
-            from vpid_baselines.random_search import RandomSearch
+            from vpid_baselines.plugin import RandomSearch
 
             register("random", RandomSearch)
 

@@ -294,7 +294,7 @@ def test_one_plus_one_follows_the_one_fifth_rule_and_stops(example):
 
 
 def test_one_plus_one_beats_random_search_on_a_sphere_and_stops(example):
-    from vpid_baselines.random_search import RandomSearch
+    from vpid_baselines.plugin import RandomSearch
     from vpid_functions.plugin import FunctionsConfig, FunctionsProblem
 
     es, _ = example

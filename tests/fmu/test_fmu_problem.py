@@ -60,16 +60,16 @@ def test_the_quarter_car_fmu_matches_ride_quarter(example_fmu, ride_record):
     exact first-order-hold record (relative rms per channel), and its model exchange
     (Dormand-Prince, rtol 1e-6) within 1e-4."""
     path, clean = ride_record
-    cs = make(example_fmu("fmi2"), path).responses(GOLDEN[None])[0]
+    cs = make(example_fmu("fmi2"), path).computed(GOLDEN[None])[0]
     assert np.all(_rel_rms(cs, clean) < 1e-7), _rel_rms(cs, clean)
-    me = make(example_fmu("fmi2"), path, interface="me").responses(GOLDEN[None])[0]
+    me = make(example_fmu("fmi2"), path, interface="me").computed(GOLDEN[None])[0]
     assert np.all(_rel_rms(me, clean) < 1e-4), _rel_rms(me, clean)
 
 
 def _noise_ratio(problem: FmuProblem) -> np.ndarray:
     """Each compared channel's rms residual at the truth over the record's noise sigma."""
     y = problem.measured
-    fitted = problem.responses(X_TRUE[None])[0]
+    fitted = problem.computed(X_TRUE[None])[0]
     clean_rms = np.sqrt(np.mean(y**2, axis=1) / (1 + NOISE**2))
     return np.sqrt(np.mean((y - fitted) ** 2, axis=1)) / (NOISE * clean_rms)
 
@@ -100,7 +100,7 @@ def test_fmi3_co_simulation_equals_fmi2_with_the_input_held(example_fmu, record)
     three = make(example_fmu("fmi3"), record)
     assert three.mode == "hold" and "FMI 3.0" in three.mode_info
     two = make(example_fmu("fmi2"), record, inputs="hold")
-    a, b = three.responses(X_TRUE[None]), two.responses(X_TRUE[None])
+    a, b = three.computed(X_TRUE[None]), two.computed(X_TRUE[None])
     assert np.all(np.isfinite(a)) and np.max(np.abs(a - b)) <= 1e-12 * np.max(np.abs(b))
 
 

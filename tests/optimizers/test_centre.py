@@ -4,7 +4,7 @@ record says so."""
 from __future__ import annotations
 
 import numpy as np
-from vpid_baselines.centre import Centre, CentreParams
+from vpid_baselines.plugin import Centre, CentreParams
 
 from vpid_bench import Bounds
 from vpid_bench.runner import run

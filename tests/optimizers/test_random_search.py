@@ -8,7 +8,7 @@ records of the same seed are unchanged), and the run's best must be the best of 
 from __future__ import annotations
 
 import numpy as np
-from vpid_baselines.random_search import RandomSearch, RandomSearchParams
+from vpid_baselines.plugin import RandomSearch, RandomSearchParams
 
 from vpid_bench.api import Bounds, Problem
 from vpid_bench.runner import run

@@ -321,7 +321,7 @@ def _fake_distribution(site: Path, name: str, entry_points: dict[str, str],
 
 DUPLICATE = """
 from vpid_bench import hookimpl
-from vpid_baselines.random_search import RandomSearch
+from vpid_baselines.plugin import RandomSearch
 
 @hookimpl
 def vpid_bench_register_optimizers(register):

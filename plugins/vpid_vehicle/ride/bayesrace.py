@@ -1,27 +1,11 @@
 """``problem=bayesrace``: a 1:43 race car's tyre, drive and yaw coefficients from records
-somebody else's simulator made (Bayesrace, published with Deep Dynamics; docs/measured.md).
-
-**Records** (:mod:`.third_party`, GPL-3.0): ``DYN-PP-ETHZ.npz``, ``DYN-PP-ETHZMobil.npz``, 20 s at
-50 Hz; their states are the simulator's **explicit Euler step at 50 Hz** of the equations
-below with the true coefficients (one step reproduces the next to 1e-15, tested), at the edge
-of stability for this car: the record is not the continuous system's response. No noise is
-added: what the fit cannot explain is model error.
-
-**Model** (SI units, :func:`.kernel.dynamic_single_track`): states ``vx, vy, r``, inputs the
-drive ``d`` and steer ``delta`` held over each 20 ms;
-
-    af = delta - atan2(lf r + vy, |vx|) + Shf,      ar = atan2(lr r - vy, |vx|) + Shr
-    Ffy = Svf + Df sin(Cf atan(Bf af - Ef (Bf af - atan(Bf af))))    (Fry likewise)
-    Frx = (Cm1 - Cm2 vx) d - Cr0 - Cr2 vx^2
-    vx' = (Frx - Ffy sin delta) / m + vy r,    vy' = (Fry + Ffy cos delta) / m - vx r
-    r'  = (Ffy lf cos delta - Fry lr) / Iz
-
-by classical RK4 at ``20 ms / substeps`` (10: within 2e-6 of each channel's rms of the
-solution at 40) from the record's first state. **Identified**: ``Bf, Cf, Df, Br, Cr, Dr, Cm1,
-Cm2, Cr0, Iz`` in the simulator's ranges (``deep_dynamics.yaml``); **known**, at the
-simulator's values: ``m``, ``lf``, ``lr``, ``Ef, Er, Cr2`` (practically non-identifiable
-here) and the shifts. **Objective**: ``ml_profiled`` by default, ``eq3`` or ``ols``.
-**Metrics**: NoRE (%) against the simulator's coefficients, the held-out track's rms errors.
+somebody else's simulator made (Bayesrace, published with Deep Dynamics; GPL-3.0, read by
+:mod:`.third_party`). The records are the simulator's explicit Euler step at 50 Hz, not the
+continuous system's response, and no noise is added: what the fit cannot explain is model
+error. The model is the simulator's equations in continuous time (SI units,
+:func:`.kernel.dynamic_single_track`) by RK4 at ``20 ms / substeps`` from the record's first
+state. The equations, what is identified and known, the objective and the metrics:
+docs/measured.md, "Bayesrace".
 """
 
 from __future__ import annotations
@@ -33,6 +17,7 @@ import numpy as np
 
 from vpid_bench import (
     Bounds,
+    ChannelFit,
     ConfigError,
     Problem,
     ProblemConfig,
@@ -40,9 +25,13 @@ from vpid_bench import (
     relative_errors_percent,
 )
 
-from ..objective import ChannelFit
 from . import third_party
-from .dynamic_rows import DYNAMIC_ROWS
+
+#: The rows of :func:`.kernel.dynamic_single_track`'s parameter block: each axle's Magic
+#: Formula (``B, C, D, E``, the shifts ``Sh``, ``Sv``), the drive (``Cm1, Cm2``), the
+#: resistance (``Cr0, Cr2``) and the yaw inertia.
+DYNAMIC_ROWS = ("Bf", "Cf", "Df", "Ef", "Shf", "Svf", "Br", "Cr", "Dr", "Er", "Shr", "Svr",
+                "Cm1", "Cm2", "Cr0", "Cr2", "Iz")
 
 #: The simulator's coefficients, ``deep_dynamics.yaml`` of the records' repository (its
 #: PARAMETERS and VEHICLE_SPECS): value, Min, Max. A test reads the shipped file against them.
@@ -64,11 +53,6 @@ CHANNELS = (("vx", "m/s"), ("vy", "m/s"), ("r", "rad/s"))
 DT = 0.02
 
 
-def check_data(names: list[str], data_dir: str | None) -> None:
-    for name in names:
-        third_party.verified(name, data_dir)
-
-
 @dataclasses.dataclass(frozen=True)
 class BayesraceConfig(ProblemConfig):
     """``track`` fitted (the other held out), ``substeps``, ``objective``, ``data_dir``."""
@@ -84,7 +68,8 @@ class BayesraceConfig(ProblemConfig):
             raise ConfigError("problem.track", self.track, "ETHZ or ETHZMobil")
         if not (isinstance(self.substeps, int) and 1 <= self.substeps <= 100):
             raise ConfigError("problem.substeps", self.substeps, "an integer in [1, 100]")
-        check_data(list(TRACKS.values()), self.data_dir)
+        for name in TRACKS.values():
+            third_party.verified(name, self.data_dir)
 
 
 class TrackRecord:

@@ -1,16 +1,12 @@
 """The shared core's time loop written out for fixed sizes, generated at first use.
 
-Why. With run-time sizes the compiler cannot prove that the state it writes and the table it
-reads do not overlap, and does not vectorise: about 5x slower than the paper's hand-written
-kernel. For fixed ``(s, p, r)`` every offset is a constant, the state lives in locals, each
-dot product is a pairwise tree, and the compiler vectorises across a block's ``LANES``
-candidates. Other sizes run :func:`.kernel.run_table_loops` (the same to rounding, slower).
-
-Where. :func:`runs` writes :func:`module_source` to ``unrolled_<sha256[:16]>.py`` (numba
-caches only functions with a source file) in the first folder of :func:`cache_folders` it
-can write (docs/suite.md), else a private temporary one (a read-only install: compiled anew
-in each process); whole, under a temporary name renamed into place, so processes writing it
-at once never read half of it; a file with other content is rewritten.
+Why: with run-time sizes the compiler cannot prove that the state it writes and the table it
+reads do not overlap, and does not vectorise (about 5x slower than the paper's kernel); for
+fixed ``(s, p, r)`` every offset is a constant, the state lives in locals, each dot product is
+a pairwise tree, and a block's ``LANES`` candidates vectorise. Other sizes run
+:func:`.kernel.run_table_loops` (the same to rounding, slower). Where the generated file is
+written (numba caches only functions with a source file): :func:`cache_folders`,
+docs/suite.md.
 """
 
 from __future__ import annotations
@@ -24,6 +20,8 @@ import sys
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
+
+from vpid_bench import write_text_atomic
 
 #: ``(s, p, r)``: states (2 x degrees of freedom), outputs, inputs of each built-in linear
 #: model and sensor set: quarter car (4, 1-3, 2), single-track lateral (4, 1-3, 1), half car
@@ -117,8 +115,7 @@ def module_source() -> str:
 
 def cache_folders() -> list[Path]:
     """The folders :func:`runs` tries, in order: ``$NUMBA_CACHE_DIR/vpid_vehicle`` when set,
-    the user's cache folder (``$XDG_CACHE_HOME`` or ``~/.cache``; ``%LOCALAPPDATA%`` on
-    Windows) ``/vpid-bench``, ``__pycache__`` beside this module."""
+    the user's cache folder ``/vpid-bench``, ``__pycache__`` beside this module."""
     home = (os.environ.get("LOCALAPPDATA") if os.name == "nt"
             else os.environ.get("XDG_CACHE_HOME")) or Path.home() / ".cache"
     folders = [Path(home) / "vpid-bench", Path(__file__).with_name("__pycache__")]
@@ -128,29 +125,21 @@ def cache_folders() -> list[Path]:
 
 
 def write_source(folder: Path, source: str) -> Path:
-    """The file holding ``source`` in ``folder``, written whole if needed; OSError if it cannot."""
+    """The file holding ``source`` in ``folder``, written whole if needed (atomically:
+    processes writing it at once never read half of it; a file with other content is
+    rewritten); OSError if it cannot."""
     path = folder / f"unrolled_{hashlib.sha256(source.encode()).hexdigest()[:16]}.py"
     with contextlib.suppress(OSError):
         if path.read_text(encoding="utf-8") == source:
             return path
-    folder.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".unrolled-", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(source)
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
-    return path
+    return write_text_atomic(path, source)
 
 
 @functools.cache
 def runs() -> dict[tuple[int, int, int], Callable[..., None]]:
     """``(s, p, r)`` -> the compiled time loop ``run(T, w0, u, y)`` for those sizes, from the
-    generated module (written in the first folder of :func:`cache_folders` that takes it,
-    else a private temporary folder), imported once per process."""
+    generated module (in the first folder of :func:`cache_folders` that takes it, else a
+    private temporary one: compiled anew in each process), imported once per process."""
     source = module_source()
     for folder in cache_folders():
         try:

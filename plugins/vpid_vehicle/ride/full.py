@@ -2,11 +2,9 @@
 
 ``q = [z, phi, theta, zFL, zFR, zRL, zRR]``: bounce (m), roll (rad, left side up), pitch
 (rad, rear up) and the wheel hops (m); a body point ``x`` ahead of and ``y`` left of the
-centre of gravity moves as ``z - x theta + y phi``. With elongations ``e = J q``, ``K = J^T
-diag(k) J``, ``C = J^T diag(c) J``; a front anti-roll bar ``kR`` (N m/rad) resists ``phi -
-(zFL - zFR) / (yL + yR)``. Known: ``a1``, ``a2``, ``yL``, ``yR``, ``kt``, ``kR``. Identified
-(per wheel, left = right): ``m, Ix, Iy, mf, mr, kf, kr, cf, cr``. The rear wheels follow
-``(a1 + a2) / speed`` after the front ones, each on its side's track.
+centre of gravity moves as ``z - x theta + y phi``. ``K = J^T diag(k) J``, ``C = J^T diag(c)
+J`` on the elongations ``e = J q``, with a front anti-roll bar ``kR`` (N m/rad) on ``phi -
+(zFL - zFR) / (yL + yR)``.
 """
 
 from __future__ import annotations
@@ -82,11 +80,8 @@ class FullCar(RideModel):
         # the same car with its centre of gravity on the centre line (yL = yR = 0.725 m): it
         # reduces to a half car with per-axle values on identical tracks
         "jazar_symmetric": {**JAZAR, "yL": 0.725, "yR": 0.725},
-        # CommonRoad vehicle models 3.0.2, parameters_vehicle2.yaml (BMW 320i; DOT vehicle
-        # dynamics data; BSD-3): sprung mass, roll and pitch inertia, per-wheel suspension
-        # and tyre rates as given; the unsprung mass of an axle (m_uf, m_ur) split between its
-        # two wheels; the mean of the front and rear tracks (1.387, 1.364 m) for both axles;
-        # no anti-roll bar (the set's auxiliary torsion roll stiffness is another element)
+        # CommonRoad vehicle models 3.0.2, parameters_vehicle2.yaml (BMW 320i; BSD-3), read
+        # as docs/suite.md's table of the sets says
         "bmw320i": {"m": 965.7108, "Ix": 207.2652, "Iy": 1565.8179, "mf": 31.8961,
                     "mr": 31.8961, "kf": 24453.1379, "kr": 19635.5047, "cf": 1786.2441,
                     "cr": 1649.0833, "a1": 1.1562, "a2": 1.4227, "yL": 0.68771,

@@ -1,8 +1,6 @@
 """``problem=ride_half``: the paper's half car (``q = [x, theta, x1, x2]``, M, C, K of Eq. 2,
 :func:`vpid_vehicle.model.matrices`) with the suite's record, noise, random truth, roads and
-sensors (docs/suite.md). ``L``, ``kt1``, ``kt2`` known; ``m, I, m1, m2, k1, k2, c1, c2, a1``
-identified; the rear wheel on the front's track ``L / speed`` later. ``record_model=seat``: the
-record's car carries a seat the fitted one lacks (:mod:`.richer`).
+sensors (docs/suite.md); the rear wheel on the front's track ``L / speed`` later.
 """
 
 from __future__ import annotations

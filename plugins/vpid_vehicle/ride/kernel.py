@@ -59,7 +59,6 @@ def run(A, U, V, Ox, Ou, u, y):  # pragma: no cover - compiled
         x[:, :] = nxt
 
 
-
 @numba.njit(inline="always", error_model="numpy")
 def _mf(alpha, B, C, D, E):  # pragma: no cover - compiled
     """Magic Formula lateral force (N) at slip angle ``alpha`` (rad)."""
@@ -276,8 +275,6 @@ def run_table_loops(T, w0, u, y):  # pragma: no cover - compiled
                     y[j, k, j0 + lane] = blk[st + (s + j) * LANES + lane]
 
 
-
-
 @numba.njit(inline="always", error_model="numpy")
 def _slip_angle(lateral, vx):  # pragma: no cover - compiled
     """``atan2(lateral, |vx|)`` (rad), vectorisable (``|vx|`` floored at 1e-12 m/s)."""
@@ -298,7 +295,7 @@ def _dynamic_rates(vx, vy, r, d, sd, cd, delta, P, i, m, lf, lr):  # pragma: no 
 
 @numba.njit(**_OPTS)
 def dynamic_single_track(P, drive, steer, dt, sub, m, lf, lr, x0, y):  # pragma: no cover
-    """The dynamic single-track model (``P`` rows :data:`.dynamic_rows.DYNAMIC_ROWS`) driven
+    """The dynamic single-track model (``P`` rows :data:`.bayesrace.DYNAMIC_ROWS`) driven
     by ``drive`` and ``steer`` (rad) held over each interval, by RK4 at ``dt / sub`` from
     ``x0``: ``y[k, :, i] = (vx, vy, r)`` (m/s, m/s, rad/s)."""
     n, N = P.shape[1], y.shape[0]
@@ -353,13 +350,16 @@ def _scheduled_rates(vy, r, vx, cd, delta, P, i, linear, m, lf, lr):  # pragma: 
     return (fry + ffy * cd) / m - vx * r, (lf * ffy * cd - lr * fry) / P[P.shape[0] - 1, i]
 
 
-@numba.njit(error_model="numpy")
-def _scheduled(P, linear, vx, delta, starts, H, sub, dt, m, lf, lr, x0,
-               y):  # pragma: no cover - compiled
+@numba.njit(**_OPTS)
+def scheduled_single_track(P, linear, vx, delta, starts, H, sub, dt, m, lf, lr, x0,
+                           y):  # pragma: no cover - compiled
     """The single-track model, ``vx`` an input, over prediction windows: ``P`` ``[Cf, Cr,
     Iz]`` (``linear``, N/rad) or ``[Bf, Cf, Df, Br, Cr, Dr, Iz]``; ``vx`` (m/s), ``delta``
     (rad) linear between samples; window ``w`` from ``x0[w] = (vy, r)`` at ``starts[w]`` for
-    ``H`` samples by RK4 at ``dt / sub``: ``y[w, j, :, i] = (vy, r)``."""
+    ``H`` samples by RK4 at ``dt / sub``: ``y[w, j, :, i] = (vy, r)``. Its helpers are called,
+    not inlined by numba: inlined (the tyre model a constant in each branch) the first call
+    compiled for 46 s and the linear tyres ran 11 % faster; called, 5 s (same results to the
+    bit; measured side by side, numba 0.68, 64 candidates on the racecar record)."""
     n, W = P.shape[1], starts.shape[0]
     vy, r = np.empty(n), np.empty(n)
     avy, ar = np.empty((4, n)), np.empty((4, n))  # stage rates
@@ -399,13 +399,3 @@ def _scheduled(P, linear, vx, delta, starts, H, sub, dt, m, lf, lr, x0,
                         linear, m, lf, lr)
                     vy[i] += h / 6.0 * (avy[0, i] + 2 * avy[1, i] + 2 * avy[2, i] + avy[3, i])
                     r[i] += h / 6.0 * (ar[0, i] + 2 * ar[1, i] + 2 * ar[2, i] + ar[3, i])
-
-
-@numba.njit(**_OPTS)
-def scheduled_single_track(P, linear, vx, delta, starts, H, sub, dt, m, lf, lr, x0,
-                           y):  # pragma: no cover - compiled
-    """:func:`_scheduled`, compiled and cached. Its helpers are called, not inlined by numba:
-    inlined (the tyre model a constant in each branch) the first call compiled for 46 s and
-    the linear tyres ran 11 % faster; called, 5 s (same results to the bit; measured side by
-    side, numba 0.68, 64 candidates on the racecar record)."""
-    _scheduled(P, linear, vx, delta, starts, H, sub, dt, m, lf, lr, x0, y)

@@ -1,13 +1,11 @@
 """``problem=lateral``: a car's cornering stiffnesses, yaw inertia and centre of gravity from
-a steering manoeuvre (the linear single-track model; docs/suite.md). SI units, small angles,
-constant ``vx``, ``af = delta - (vy + lf r) / vx``, ``ar = -(vy - lr r) / vx``:
+a steering manoeuvre (docs/suite.md): the linear single-track model at constant ``vx``, ``af
+= delta - (vy + lf r) / vx``, ``ar = -(vy - lr r) / vx`` (SI units, small angles),
 
     m (vy' + vx r) = Cf af + Cr ar,      Iz r' = lf Cf af - lr Cr ar
 
-on the core's form with ``q' = [vy, r]`` (``K = 0``). Outputs ``r`` (rad/s), ``ay = vy' + vx
-r`` (m/s^2), ``beta = vy / vx`` (rad). Known: ``m`` (weighed) and ``L``, which break the
-scaling of ``m, Iz, Cf, Cr``; identified: ``Cf, Cr, Iz, lf``. ``record_model=magic_formula``:
-the record by :mod:`.magic`'s model (imported here, never the reverse).
+on the core's form with ``q' = [vy, r]`` (``K = 0``); outputs ``r``, ``ay = vy' + vx r``,
+``beta = vy / vx``. ``record_model=magic_formula``: the record by :mod:`.magic`'s model.
 """
 
 from __future__ import annotations

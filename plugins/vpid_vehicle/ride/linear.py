@@ -1,17 +1,14 @@
 """One simulation core for linear systems driven by road inputs (SI units; docs/suite.md):
 ``M q'' + C q' + K q = F u(t)`` per candidate, from rest, outputs ``y = Pa q'' + Pv q' + Pq q
 + Pu u``, discretised as ``x_{k+1} = A x_k + U u_k + V u_{k+1}``, ``y_k = Ox x_k + Ou u_k`` on
-``x = [q, q']`` by :func:`newmark` (the fitted model; average acceleration by default) or
-:func:`exact_foh` (the record: exact for an input linear between samples); :func:`simulate`
-iterates either. :func:`newmark_outputs`, the fitted model's path, is compiled end to end
-(the table per candidate, then :mod:`.codegen`'s loops): the same outputs to rounding, at the
-paper's kernel's speed (``benchmarks/bench_ride_core.py``).
+``x = [q, q']`` by :func:`newmark` (the fitted model) or :func:`exact_foh` (the record);
+:func:`simulate` iterates either; :func:`newmark_outputs`, the fitted model's path, is
+compiled end to end (the table per candidate, then :mod:`.codegen`'s loops).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import functools
 
 import numpy as np
 
@@ -55,11 +52,9 @@ def newmark(system: LinearSystem, dt: float, gamma: float = 0.5, beta: float = 0
     """``(A, U, V, Ox, Ou)`` of Newmark-beta's step at ``dt`` s (see the module docstring)."""
     M, C, K, F = system.M, system.C, system.K, system.F
     d = system.dof
-    _, _, Ox, Ou = system.continuous()
+    Ac, Bc, Ox, Ou = system.continuous()
     eye = np.eye(d)
-    Minv = np.linalg.inv(M)
-    G = -np.concatenate([Minv @ K, Minv @ C], axis=2)
-    H = Minv @ F
+    G, H = Ac[:, d:, :], Bc[:, d:, :]  # a = G x + H u
     # predictor [q_p; v_p] = P x_k + Q u_k
     base = np.block([[eye, dt * eye], [np.zeros((d, d)), eye]])
     pred = np.concatenate([(0.5 - beta) * dt**2 * eye, (1.0 - gamma) * dt * eye], axis=0)
@@ -91,21 +86,14 @@ def exact_foh(system: LinearSystem, dt: float) -> tuple[np.ndarray, ...]:
     return E11, E12 - E13 / dt, E13 / dt, Ox, Ou
 
 
-@functools.cache
-def _kernel():
-    """The compiled recurrence (:mod:`.kernel`, imported on first use)."""
-    from .kernel import run
-
-    return run
-
-
 def simulate(step: tuple[np.ndarray, ...], u: np.ndarray) -> np.ndarray:
     """The outputs ``(n, N, p)`` of ``step = (A, U, V, Ox, Ou)`` driven by ``u`` from rest."""
+    from .kernel import run  # compiled: imported on first use
     A, U, V, Ox, Ou = (np.ascontiguousarray(np.moveaxis(np.asarray(a, dtype=float), 0, -1))
                        for a in step)
     u = np.ascontiguousarray(u, dtype=float)
     y = np.empty((Ox.shape[0], u.shape[0], A.shape[2]))
-    _kernel()(A, U, V, Ox, Ou, u, y)
+    run(A, U, V, Ox, Ou, u, y)
     return y.transpose(2, 1, 0)
 
 
@@ -120,8 +108,7 @@ def _leading(a: np.ndarray | None, shape: tuple[int, ...]) -> np.ndarray:
 def newmark_outputs(system: LinearSystem, dt: float, u: np.ndarray, gamma: float = 0.5,
                     beta: float = 0.25) -> np.ndarray:
     """The outputs ``(n, N, p)`` of Newmark-beta at ``dt`` s driven by ``u`` ``(N, r)`` from
-    rest: ``simulate(newmark(system, dt, gamma, beta), u)`` to rounding, compiled end to end
-    (see the module docstring)."""
+    rest: ``simulate(newmark(system, dt, gamma, beta), u)`` to rounding, compiled."""
     from . import kernel
     from .codegen import runs
 

@@ -1,13 +1,8 @@
 """``problem=lateral_mf``: the single-track model with a Magic Formula tyre per axle,
-``Fy = D sin(C atan(B a - E (B a - atan(B a))))`` (several basins expected; docs/suite.md),
-by RK4 (:func:`.kernel.mf_single_track`); the record at ``dt / record_substeps``, the fit at
-``dt`` (``record=newmark``: the fitted step, on purpose). Known: ``m``, ``L``, ``lf``, ``E``;
-identified ``Bf, Cf, Df, Br, Cr, Dr, Iz``; the box's shape factors capped at 1.99 (``C < 2``).
-
-**Parameter set** ``civic_mf`` (ours, derived and stated as such): :mod:`.lateral`'s openpilot
-car with ``C``, ``mu`` and ``E`` of the PAC2002 file of a 185/80R14 tyre published with
-Project Chrono (PCY1, PDY1, PEY1), ``D = mu`` x the static axle load and ``B = C_alpha / (C
-D)`` (the car's small-slip cornering stiffness).
+``Fy = D sin(C atan(B a - E (B a - atan(B a))))``, by RK4 (:func:`.kernel.mf_single_track`).
+Known: ``m``, ``L``, ``lf``, ``E``; identified ``Bf, Cf, Df, Br, Cr, Dr, Iz``, the shape factors
+capped at 1.99 (``C < 2``). The parameter set ``civic_mf`` is ours, derived from
+:mod:`.lateral`'s car and a published tyre file (docs/suite.md, "problem=lateral_mf").
 """
 
 from __future__ import annotations

@@ -1,11 +1,8 @@
-"""How large a member's model error is against its noise: ``python -m
-vpid_vehicle.ride.model_error [member ...]`` (docs/suite.md). Per instance, ``σ_c`` the noise:
-
-* ``ratio``: the rms of ``(clean_c − fitted_c(θ̂)) / σ_c`` at the fitted model's best fit
-  ``θ̂`` to the *clean* record: the misfit no parameter removes (``≥ 1``: as large as the
-  noise; a member without model error: its discretisation error, far below 1);
-* ``ratio_at_truth``: the same at the truth (larger: the fit absorbs part of it);
-* ``bias_nore``: the NoRE (%) of ``θ̂``, the error model error alone leaves.
+"""How large a member's model error is against its noise ``σ_c``: ``python -m
+vpid_vehicle.ride.model_error [member ...]`` (docs/suite.md, "Model error"): per instance the
+rms of ``(clean_c − fitted_c(θ̂)) / σ_c`` at the fitted model's best fit ``θ̂`` to the clean
+record (``ratio``: the misfit no parameter removes), the same at the truth and the NoRE (%)
+of ``θ̂``.
 """
 
 from __future__ import annotations

@@ -1,39 +1,37 @@
-"""What every ride problem of the suite shares (docs/suite.md): the record, its noise, the
-instances, the objective and the residuals; a model adds only its matrices.
-
-**Record**: the true vehicle by the exact first-order-hold solution at ``dt /
-record_substeps``, sampled every ``dt``; the fitted model is Newmark at ``dt`` (no inverse
-crime; ``record=newmark`` commits it on purpose). **Noise**: additive Gaussian per channel,
-``sigma_c = noise_level x rms(clean_c)``. **Instances**: run ``i`` fits instance ``i``,
-drawn from ``SeedSequence([seed, INSTANCE_ROOT, crc32(name)], spawn_key=(i,))`` (never an
-optimizer's stream, one root per problem): the truth (:func:`draw_truth`, or the published
-set with ``truth=set``), the random roads' phases, the noise. The box is ``[0.5, 1.5] x`` the
-published set (a model may cap it). **Objective**: Eq. 3 by default (one norm per channel)
-or another estimator (:mod:`vpid_bench.estimators`); metric: NoRE (%) against the truth.
+"""What every ride problem of the suite shares: the record, its noise, the instances, the
+objective and the residuals; a model adds only its matrices (docs/suite.md). The record is the
+true vehicle's by the exact first-order hold at ``dt / record_substeps`` (``record=newmark``:
+the fitted model's, an inverse crime on purpose), with additive Gaussian noise per channel;
+instance ``i`` (run ``i``'s) draws its truth, random roads and noise from
+``SeedSequence([seed, INSTANCE_ROOT, crc32(name)], spawn_key=(i,))``, never an optimizer's
+stream. Objective: Eq. 3 by default or another estimator; metric: NoRE (%).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import logging
 import types
 import zlib
+from pathlib import Path
 from typing import Any, ClassVar, Literal
 
 import numpy as np
 
 from vpid_bench import (
     Bounds,
+    ChannelFit,
     ConfigError,
     Problem,
     ProblemConfig,
     added_setting,
     estimators,
+    freeze_fields,
     relative_errors_percent,
 )
 
 from .. import knowns
-from ..objective import ChannelFit
 from ..record_file import (
     Column,
     ColumnMap,
@@ -94,7 +92,7 @@ class RecordFileConfig:
     input: str = added_setting(default="record")
 
     def __post_init__(self) -> None:
-        knowns.freeze_fields(self, "columns", prefix="problem.reference.")
+        freeze_fields(self, "columns", prefix="problem.reference.")
 
     def mapping(self) -> ColumnMap:
         """The record reader's view of the mapping keys."""
@@ -103,11 +101,9 @@ class RecordFileConfig:
 
 @dataclasses.dataclass(frozen=True)
 class SuiteConfig(ProblemConfig):
-    """Keys every problem of the suite shares (the module docstring; a model's Config adds
-    ``parameter_set``, ``sensors`` and its input): ``duration_s``, ``dt`` (s), ``noise_level``
-    (a fraction of each clean channel's rms), ``seed``, ``truth`` (``random``, ``set``),
-    ``truth_margin``, ``record`` (``exact``, ``newmark``), ``record_substeps``, ``objective``
-    (``eq3``, ``ols``, ``ml``, ``ml_profiled``)."""
+    """Keys every problem of the suite shares (docs/suite.md; a model's Config adds
+    ``parameter_set``, ``sensors`` and its input); ``noise_level``: a fraction of each clean
+    channel's rms."""
 
     duration_s: float = 3.0
     dt: float = 0.001
@@ -118,7 +114,7 @@ class SuiteConfig(ProblemConfig):
     record: str = "exact"
     record_substeps: int = 10
     objective: str = "eq3"
-    #: The model a user's record is read for, at the pre-flight (:func:`check_record_file`).
+    #: The model whose stated quantities and user's record are checked at the pre-flight.
     Model: ClassVar[type[RideModel] | None] = None
     reference: RecordFileConfig = added_setting(default_factory=RecordFileConfig)
     #: Stated quantities and boxes (:mod:`..knowns`): ``known.kt=210000``, ``known.ms=250``
@@ -127,7 +123,7 @@ class SuiteConfig(ProblemConfig):
     bounds: dict[str, Any] = added_setting(default_factory=dict, open_keys=True)
 
     def __post_init__(self) -> None:
-        knowns.freeze_fields(self, "known", "bounds")
+        freeze_fields(self, "known", "bounds")
         # a user's record states no noise level (noise_level is what simulated records add)
         estimators.check_objective(self.objective, self.noise_level
                                    if self.reference.file is None else None)
@@ -146,7 +142,10 @@ class SuiteConfig(ProblemConfig):
                               "at most 200000 samples (duration_s / dt)")
         self._check_own()
         if self.Model is not None:
-            check_record_file(self, self.Model())
+            model = self.Model()
+            knowns.check_config(self, model)
+            if self.reference.file is not None:
+                read_ride_record(model, self)
 
     def _check_own(self) -> None:
         """A family's own keys, checked before a user's record is read."""
@@ -177,13 +176,6 @@ class RideConfig(SuiteConfig):
                      "structure's record is its own)")], self)
 
 
-def check_record_file(config: Any, model: RideModel) -> None:
-    """Check the stated quantities and the record as a config is built (the pre-flight)."""
-    knowns.check_config(config, model)
-    if config.reference.file is not None:
-        read_ride_record(model, config)
-
-
 def read_ride_record(model: RideModel, config: Any) -> Record:
     """A user's record for ``model`` (``zs''`` is column ``zsdd``), or a ConfigError."""
     channels = tuple(Column(column_name(c), unit, (c,)) for c, unit in
@@ -203,13 +195,17 @@ class RideProblem(ChannelFit, Problem):
     rows_independent = True
 
     def __init__(self, config: RideConfig, index: int = 0) -> None:
-        from .structures import structured
+        from .structures import StructuredModel
 
         self.config = config
         self._index = index
         #: The model in the configured structure, with what the user fixed or freed (knowns.py).
-        self.model = structured(self.model, config)
-        self.model = knowns.stated_model(self.model, config, type(self).name)
+        structure = (getattr(config, "spring", "linear"), getattr(config, "damper", "linear"))
+        if structure != ("linear", "linear"):
+            self.model = StructuredModel(self.model, *structure)
+        if config.known or config.bounds:
+            self.model = knowns.StatedModel(self.model, knowns.plan(config, self.model,
+                                                                    type(self).name))
         published = self.model.sets[config.parameter_set]
         self.nominal = np.array([published[k] for k in self.model.names])
         self.known = {k: v for k, v in published.items() if k not in self.model.names}
@@ -217,24 +213,30 @@ class RideProblem(ChannelFit, Problem):
         self.sampler: Sampler | None = None
         if config.reference.file is not None:
             self._from_file(config)
-            return
-        streams = instance_streams(config.seed, index, type(self).name)
-        truth_rng, road_rng, noise_rng = (np.random.default_rng(s) for s in streams)
-        self._x_true = (draw_truth(*self.model.box(self.nominal), config.truth_margin,
-                                   truth_rng) if config.truth == "random"
-                        else self.nominal.copy())
-        sub = config.record_substeps if config.record == "exact" else 1
-        fine = self.model.inputs(config, self.known, config.dt / sub, road_rng)
-        self.u = fine[::sub].copy()  # a copy: a view would keep the fine input (10x larger) alive
-        self.t = np.arange(self.u.shape[0]) * config.dt
-        self.clean = self._record(fine, sub)
-        self.sigma = config.noise_level * np.sqrt(np.mean(self.clean**2, axis=1))
-        self.measured = self.clean + self.sigma[:, None] * noise_rng.standard_normal(
-            self.clean.shape)
+        else:
+            streams = instance_streams(config.seed, index, type(self).name)
+            truth_rng, road_rng, noise_rng = (np.random.default_rng(s) for s in streams)
+            self._x_true = (draw_truth(*self.model.box(self.nominal), config.truth_margin,
+                                       truth_rng) if config.truth == "random"
+                            else self.nominal.copy())
+            sub = config.record_substeps if config.record == "exact" else 1
+            fine = self.model.inputs(config, self.known, config.dt / sub, road_rng)
+            self.u = fine[::sub].copy()  # a view would keep the fine input (10x larger) alive
+            self.t = np.arange(self.u.shape[0]) * config.dt
+            self.clean = self._record(fine, sub)
+            self.sigma = config.noise_level * np.sqrt(np.mean(self.clean**2, axis=1))
+            self.measured = self.clean + self.sigma[:, None] * noise_rng.standard_normal(
+                self.clean.shape)
         self.scale = np.linalg.norm(self.measured, axis=1)
         if np.any(self.scale <= 0):
-            raise ConfigError("problem.duration_s", config.duration_s, "a record in which "
-                              "every measured channel moves (one is zero throughout)")
+            if self.sampler is None:
+                raise ConfigError("problem.duration_s", config.duration_s, "a record in "
+                                  "which every measured channel moves (one is zero throughout)")
+            c = self.channels[int(np.flatnonzero(self.scale <= 0)[0])][0]
+            raise ConfigError("problem.reference.file", config.reference.file,
+                              f"a record in which every measured channel moves (column "
+                              f"{column_name(c)} is zero throughout)")
+        # ml is refused for a user's record (no stated noise): no plug-in sigma there
         plug_in = (estimators.plug_in_sigma(self.measured, config.noise_level, "additive")
                    if config.objective == "ml" else None)
         #: What a raw residual is multiplied by, ``(p, N)`` (Eq. 3: ``1 / ||measured_c||``).
@@ -260,15 +262,6 @@ class RideProblem(ChannelFit, Problem):
         self.clean = None
         self.sigma = None
         self.measured = record.outputs
-        self.scale = np.linalg.norm(self.measured, axis=1)
-        if np.any(self.scale <= 0):
-            c = self.channels[int(np.flatnonzero(self.scale <= 0)[0])][0]
-            raise ConfigError("problem.reference.file", config.reference.file,
-                              f"a record in which every measured channel moves (column "
-                              f"{column_name(c)} is zero throughout)")
-        # ml is refused for a user's record (no stated noise): no plug-in sigma
-        self.weights = estimators.weights(config.objective, self.measured,
-                                          1.0 / self.scale[:, None], None)
 
     def _record(self, fine_u: np.ndarray, sub: int) -> np.ndarray:
         """The true vehicle's clean channels ``(p, N)`` sampled every ``dt``."""
@@ -323,9 +316,6 @@ class RideProblem(ChannelFit, Problem):
         """The SHA-256 of a user's record (an edited record runs again on resume), else ``None``."""
         if self.sampler is None:
             return None
-        import hashlib
-        from pathlib import Path
-
         return hashlib.sha256(Path(self.config.reference.file).read_bytes()).hexdigest()
 
     # --- instances ----------------------------------------------------------------------

@@ -1,11 +1,8 @@
-"""``problem=ride_quarter``: a quarter car from what it records on a road (docs/suite.md).
+"""``problem=ride_quarter``: a quarter car from what it records on a road (docs/suite.md), SI
+units, the tyre ``kt``, ``ct`` known:
 
     ms zs'' + cs (zs' - zu') + ks (zs - zu) = 0
     mu zu'' - cs (zs' - zu') - ks (zs - zu) + ct zu' + kt zu = kt h + ct h'
-
-(SI units). The tyre ``kt``, ``ct`` is known (scaling every mass, stiffness and damping leaves
-the record unchanged); ``ms, mu, ks, cs`` are identified. ``record_model=bilinear_damper``: the
-record's damper is bilinear (:mod:`.richer`).
 """
 
 from __future__ import annotations

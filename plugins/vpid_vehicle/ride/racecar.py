@@ -1,23 +1,13 @@
 """``problem=racecar``: a full-scale autonomous racecar's tyres and yaw inertia from its logs
-(measured, no truth; docs/measured.md), judged by held-out prediction against a naive one.
-
-**Logs** (:mod:`.third_party`, GPL-3.0): an Indy Autonomous Challenge car at Putnam Park
-(``putnam``) and Las Vegas Motor Speedway (``lvms``), 25 Hz, published with Deep Dynamics:
-``vx``, ``vy``, ``r`` and the steer angle at the road wheels (how estimated on the car is not
-documented). **Model** (SI units, :func:`.kernel.scheduled_single_track`), ``vx`` an input:
-
-    af = delta - atan((vy + lf r) / vx),         ar = atan((lr r - vy) / vx)
-    vy' = (Fry + Ffy cos delta) / m - vx r,      r' = (lf Ffy cos delta - lr Fry) / Iz
-
-``tyres=linear`` (``Fy = C a``: ``Cf, Cr`` N/rad, ``Iz``) or ``magic_formula`` (``D sin(C
-atan(B a))``: ``Bf, Cf, Df, Br, Cr, Dr, Iz``), RK4 at ``40 ms / substeps``. **Known**
-(``deep_dynamics_iac.yaml``): ``m``, ``lf``, ``lr``; ``steer_delay_s``. **Box**: the yaml's
-ranges; linear stiffnesses 10,000-400,000 N/rad (about 2 to 90 times each axle's static load
-per radian). **Windows** of ``horizon_s`` where ``vx >= min_speed``, each predicted from its
-first logged ``(vy, r)``; the **naive predictor** holds that value. **Objective**:
-``ml_profiled`` by default, ``eq3`` or ``ols``, over the samples after each window's first.
-**Metrics** (held out): ``val_rel_naive`` (the model's rms over the naive one's, mean over
-``vy``, ``r``: below 1 beats it), ``val_rms_r``, ``val_rms_vy``.
+(measured, no truth; GPL-3.0, read by :mod:`.third_party`), judged by held-out prediction
+against a naive one. The single-track model with ``vx`` an input
+(:func:`.kernel.scheduled_single_track`, SI units), linear or Magic Formula tyres
+(:data:`TYRES`: names, units, box), predicts windows of ``horizon_s`` where ``vx >=
+min_speed``, each from its first logged ``(vy, r)``; the **naive predictor** holds that
+value. The objective compares the samples after each window's first; the held-out metrics
+are ``val_rel_naive`` (the model's rms over the naive one's, mean over ``vy``, ``r``: below 1
+beats it), ``val_rms_r``, ``val_rms_vy``. The equations, the logs and the box:
+docs/measured.md, "Racecar".
 """
 
 from __future__ import annotations
@@ -27,10 +17,10 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 
-from vpid_bench import Bounds, ConfigError, Problem, ProblemConfig, estimators
+from vpid_bench import Bounds, ChannelFit, ConfigError, Problem, ProblemConfig, estimators
 
-from ..objective import ChannelFit
 from . import third_party
+from .problem import _check
 
 #: The car's constants (``deep_dynamics_iac.yaml``, VEHICLE_SPECS; a test reads the file).
 VEHICLE = {"m": 790.0, "lf": 1.248, "lr": 1.7328}
@@ -70,7 +60,7 @@ class RacecarConfig(ProblemConfig):
 
     def __post_init__(self) -> None:
         estimators.check_objective(self.objective, None)
-        checks = [
+        _check([
             ("tyres", self.tyres in TYRES, "linear or magic_formula"),
             ("fit", self.fit in PARTS, "one of " + ", ".join(PARTS)),
             ("validate", self.validate in PARTS, "one of " + ", ".join(PARTS)),
@@ -82,10 +72,7 @@ class RacecarConfig(ProblemConfig):
              "an integer in [1, 50]"),
             ("steer_delay_s", isinstance(self.steer_delay_s, (int, float)) and
              0 <= self.steer_delay_s <= 1, "a delay in [0, 1] s"),
-        ]
-        for key, ok, allowed in checks:
-            if not ok:
-                raise ConfigError(f"problem.{key}", getattr(self, key), allowed)
+        ], self)
         if _log_of(self.fit) == _log_of(self.validate) and (
                 self.fit == self.validate or _log_of(self.fit) in (self.fit, self.validate)):
             raise ConfigError("problem.validate", self.validate, f"a part that does not "
@@ -155,6 +142,7 @@ class RacecarProblem(ChannelFit, Problem):
     name = "racecar"
     family = "single-track lateral, measured"
     rows_independent: ClassVar[bool] = True
+    channels = CHANNELS
 
     def __init__(self, config: RacecarConfig) -> None:
         super().__init__(config)
@@ -211,9 +199,6 @@ class RacecarProblem(ChannelFit, Problem):
         return {NAIVE: {"metrics": self._held_out_metrics(self.held_out.naive()),
                         "note": f"no model: each window's first logged state held; objective "
                                 f"on the fitted windows {f:.4g}"}}
-
-    def signal_units(self) -> dict[str, str]:
-        return dict(CHANNELS)
 
     def signals(self, x: np.ndarray) -> dict[str, np.ndarray]:
         """Logged and predicted ``vy``, ``r`` over the held-out windows, one after another."""

@@ -1,11 +1,7 @@
 """Records made by richer models than the fitted ones (``record_model``): a misfit no parameter
-vector removes, as on a measured record (how large: :mod:`.model_error`, docs/suite.md).
-
-* ``bilinear_damper`` (quarter car): ``F = cs (1 + a) v`` in rebound (``v = zs' - zu' > 0``),
-  ``cs (1 - a) v`` otherwise, ``a`` = :data:`DAMPER_ASYMMETRY` (3:1; passenger cars 2:1 to
-  4:1), by RK4 at the record's fine step (:func:`bilinear_quarter`);
-* ``seat`` (half car): a driver and seat (:data:`SEAT`) on a cushion, a fifth degree of freedom
-  the fitted half car lacks, by the exact first-order hold (:func:`seated_half`).
+vector removes, as on a measured record (how large: :mod:`.model_error`): a bilinear damper
+for the quarter car (:func:`bilinear_quarter`, RK4 at the record's fine step), a seat for the
+half car (:func:`seated_half`, the exact first-order hold); :data:`DESCRIPTIONS` says each.
 """
 
 from __future__ import annotations
@@ -48,9 +44,7 @@ def seated_half(system: linear.LinearSystem, seat: dict[str, float] = SEAT
     F = np.concatenate([system.F, np.zeros((n, 1, system.F.shape[2]))], axis=1)
 
     def out_map(a: np.ndarray | None) -> np.ndarray | None:
-        if a is None:
-            return None
-        return np.concatenate([a, np.zeros((*a.shape[:-1], 1))], axis=-1)
+        return None if a is None else np.concatenate([a, np.zeros((*a.shape[:-1], 1))], axis=-1)
 
     return dataclasses.replace(system, M=M, C=C, K=K, F=F, Pa=out_map(system.Pa),
                                Pq=out_map(system.Pq), Pv=out_map(system.Pv))

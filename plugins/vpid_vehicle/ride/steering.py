@@ -1,7 +1,6 @@
 """What the two single-track models share (so :mod:`.lateral` imports :mod:`.magic`, never
-the reverse): the sensor sets and the manoeuvres, ``step`` (to ``steer_deg`` over 0.2 s from
-0.5 s, held) or ``sine`` (``steer_deg`` at ``sine_hz`` from 0.5 s), at the road wheels; or a
-user's record's steer angle and speed (:class:`SteeredRecord`).
+the reverse): the sensor sets, the manoeuvres at the road wheels, or a user's record's steer
+angle and speed (:class:`SteeredRecord`).
 """
 
 from __future__ import annotations
@@ -15,13 +14,6 @@ from vpid_bench import ConfigError
 
 from ..record_file import Column, Record, Sampler
 from .problem import SuiteConfig, _check
-
-#: The measured channels of each sensor set, with their units.
-SENSORS: dict[str, tuple[tuple[str, str], ...]] = {
-    "yaw": (("r", "rad/s"),),
-    "yaw_ay": (("r", "rad/s"), ("ay", "m/s²")),
-    "yaw_ay_beta": (("r", "rad/s"), ("ay", "m/s²"), ("beta", "rad")),
-}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -45,17 +37,6 @@ class SteeredConfig(SuiteConfig):
         ], self)
 
 
-def steer_input(config: Any, dt: float) -> np.ndarray:
-    """The configured manoeuvre's steer angle (rad) at the road wheels, ``(N, 1)``."""
-    t = np.arange(round(config.duration_s / dt)) * dt
-    amp = np.deg2rad(config.steer_deg)
-    if config.manoeuvre == "step":
-        delta = amp * np.clip((t - 0.5) / 0.2, 0.0, 1.0)
-    else:
-        delta = np.where(t >= 0.5, amp * np.sin(2 * np.pi * config.sine_hz * (t - 0.5)), 0)
-    return delta[:, None]
-
-
 #: How far a record's speed may stray from its mean (fraction): both single-track models hold
 #: the forward speed constant.
 SPEED_TOLERANCE = 0.02
@@ -66,15 +47,28 @@ class SteeredRecord:
     the problem's, or a user's record's mean) and the inputs, the configured manoeuvre or a
     record's ``delta`` at the road wheels (rad) and ``vx``."""
 
-    sensors = SENSORS
+    #: The measured channels of each sensor set, with their units.
+    sensors: ClassVar[dict[str, tuple[tuple[str, str], ...]]] = {
+        "yaw": (("r", "rad/s"),),
+        "yaw_ay": (("r", "rad/s"), ("ay", "m/s²")),
+        "yaw_ay_beta": (("r", "rad/s"), ("ay", "m/s²"), ("beta", "rad")),
+    }
 
     def __init__(self, vx: float = 20.0) -> None:
         self.vx = vx
 
     def inputs(self, config: Any, known: dict[str, float], dt: float,
                rng: np.random.Generator) -> np.ndarray:
-        """The steer angle at the road wheels (rad) ``(N, 1)`` of the configured manoeuvre."""
-        return steer_input(config, dt)
+        """The steer angle at the road wheels (rad) ``(N, 1)`` of the configured manoeuvre:
+        ``step`` to ``steer_deg`` over 0.2 s from 0.5 s, held, or ``sine`` at ``sine_hz`` from
+        0.5 s."""
+        t = np.arange(round(config.duration_s / dt)) * dt
+        amp = np.deg2rad(config.steer_deg)
+        if config.manoeuvre == "step":
+            delta = amp * np.clip((t - 0.5) / 0.2, 0.0, 1.0)
+        else:
+            delta = np.where(t >= 0.5, amp * np.sin(2 * np.pi * config.sine_hz * (t - 0.5)), 0)
+        return delta[:, None]
 
     def record_columns(self) -> tuple[Column, ...]:
         return (Column("delta", "rad"), Column("vx", "m/s"))

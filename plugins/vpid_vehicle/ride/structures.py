@@ -1,17 +1,9 @@
-"""Richer suspension structures nested with the linear one (issue 43, item 1; docs/suite.md):
-per axle, on each element's elongation ``e = J q`` (body point minus wheel, m):
-
-* ``spring=cubic``: ``k e + k3 e^3``, parameter ``<k>_cubic`` (N/m³) in ``[0, 2] x``
-  :data:`CUBIC_PER_K` ``x k`` (``k3 = 0``: the linear spring). :data:`CUBIC_PER_K` = 100 m⁻²
-  (25 % of the linear force at 50 mm: a stated choice for a progressive or bump-stop-assisted
-  spring; Dixon, *The Shock Absorber Handbook*, 2nd ed., 2007, ch. 1; Reimpell et al., *The
-  Automotive Chassis*, 2001, sec. 5.3);
-* ``damper=bilinear``: ``<c>_bump`` (``e' < 0``) and ``<c>_rebound`` (N s/m) for ``<c>``, in
-  :data:`BUMP_BOX` and :data:`REBOUND_BOX` ``x c``: the symmetric damper and rebound/bump
-  ratios 1:1 to 4:1 and beyond (Dixon 2007, ch. 5: 2:1 to 4:1 usual).
-
-The linear structure is the model itself (its kernel); a richer one runs RK4 at ``dt``, the
-road linear between samples, its record at ``dt / record_substeps``.
+"""Richer suspension structures nested with the linear one (issue 43, item 1), per axle, on
+each element's elongation ``e = J q`` (body point minus wheel, m): ``spring=cubic`` adds
+``<k>_cubic`` (N/m³, force ``k e + k3 e^3``), ``damper=bilinear`` replaces ``<c>`` by
+``<c>_bump`` (``e' < 0``) and ``<c>_rebound`` (N s/m). The linear structure is the model
+itself (its kernel); a richer one runs RK4 at ``dt``, the road linear between samples. The
+boxes and their sources: docs/suite.md, "Richer suspension structures".
 """
 
 from __future__ import annotations
@@ -24,7 +16,8 @@ import numpy as np
 from . import linear
 from .model import RideModel
 
-#: The cubic coefficient's reference per unit of the linear rate (m⁻²): 25 % at 50 mm.
+#: The cubic coefficient's reference per unit of the linear rate (m⁻²): 25 % of the linear
+#: force at 50 mm (a progressive or bump-stop-assisted spring).
 CUBIC_PER_K = 0.25 / 0.05**2
 #: Box of the cubic coefficient as multiples of ``CUBIC_PER_K x k`` (published k).
 CUBIC_BOX = (0.0, 2.0)
@@ -128,21 +121,30 @@ class StructuredModel:
 
     def simulate(self, X: np.ndarray, known: dict[str, float], sensors: str, u: np.ndarray,
                  dt: float, solver: str) -> np.ndarray:
-        """The ``sensors`` channels ``(n, N, p)`` by RK4 at ``dt`` from rest (any ``solver``)."""
+        """The ``sensors`` channels ``(n, N, p)`` by RK4 at ``dt`` from rest (any ``solver``,
+        ``u`` linear between samples) of ``M q'' + C q' + K q + J^T g(J q, J q') = F u``,
+        ``g = k3 e^3 + dc max(e', 0)`` per element."""
         lin, k3, dc = self.split(X)
-        return simulate_structured(self.base.system(lin, known, sensors),
-                                   self.suspension.elongations(lin, known),
-                                   np.asarray(self.suspension.axle_of, dtype=np.int64),
-                                   k3, dc, u, dt)
-
-
-def structured(base: RideModel, config: Any) -> RideModel:
-    """``base`` for the linear structure, else its :class:`StructuredModel`."""
-    spring = getattr(config, "spring", "linear")
-    damper = getattr(config, "damper", "linear")
-    if spring == "linear" and damper == "linear":
-        return base
-    return StructuredModel(base, spring, damper)
+        system = self.base.system(lin, known, sensors)
+        J = self.suspension.elongations(lin, known)
+        n, d = system.M.shape[0], system.dof
+        r, p = system.F.shape[-1], system.Pq.shape[-2]
+        Minv = np.linalg.inv(system.M)
+        # q'' = G u - A q - B v - H g: the linear part and the elements' forces through M^-1
+        A = Minv @ _full(system.K, n, (d, d))
+        B = Minv @ _full(system.C, n, (d, d))
+        G = Minv @ _full(system.F, n, (d, r))
+        H = Minv @ np.swapaxes(J, 1, 2)
+        u = np.ascontiguousarray(u, dtype=float)
+        y = np.empty((n, u.shape[0], p))
+        _rk4(np.ascontiguousarray(A), np.ascontiguousarray(B), np.ascontiguousarray(G),
+             np.ascontiguousarray(H), np.ascontiguousarray(J, dtype=float),
+             _full(system.Pa, n, (p, d)), _full(system.Pv, n, (p, d)),
+             _full(system.Pq, n, (p, d)), _full(system.Pu, n, (p, r)),
+             np.asarray(self.suspension.axle_of, dtype=np.int64),
+             np.ascontiguousarray(k3, dtype=float), np.ascontiguousarray(dc, dtype=float),
+             u, float(dt), y)
+        return y
 
 
 def _full(a: np.ndarray | None, n: int, shape: tuple[int, ...]) -> np.ndarray:
@@ -150,30 +152,6 @@ def _full(a: np.ndarray | None, n: int, shape: tuple[int, ...]) -> np.ndarray:
     if a is None:
         return np.zeros((n, *shape))
     return np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), (n, *shape)))
-
-
-def simulate_structured(system: linear.LinearSystem, J: np.ndarray, axle_of: np.ndarray,
-                        k3: np.ndarray, dc: np.ndarray, u: np.ndarray, dt: float
-                        ) -> np.ndarray:
-    """``M q'' + C q' + K q + J^T g(J q, J q') = F u``, ``g = k3 e^3 + dc max(e', 0)`` per
-    element, from rest by RK4 at ``dt`` (``u`` linear between samples): ``y`` ``(n, N, p)``."""
-    n, d = system.M.shape[0], system.dof
-    r, p = system.F.shape[-1], system.Pq.shape[-2]
-    Minv = np.linalg.inv(system.M)
-    # q'' = G u - A q - B v - H g: the linear part and the elements' forces through M^-1
-    A = Minv @ _full(system.K, n, (d, d))
-    B = Minv @ _full(system.C, n, (d, d))
-    G = Minv @ _full(system.F, n, (d, r))
-    H = Minv @ np.swapaxes(J, 1, 2)
-    u = np.ascontiguousarray(u, dtype=float)
-    y = np.empty((n, u.shape[0], p))
-    _rk4(np.ascontiguousarray(A), np.ascontiguousarray(B), np.ascontiguousarray(G),
-         np.ascontiguousarray(H), np.ascontiguousarray(J, dtype=float),
-         _full(system.Pa, n, (p, d)), _full(system.Pv, n, (p, d)),
-         _full(system.Pq, n, (p, d)), _full(system.Pu, n, (p, r)), axle_of,
-         np.ascontiguousarray(k3, dtype=float), np.ascontiguousarray(dc, dtype=float),
-         u, float(dt), y)
-    return y
 
 
 @numba.njit(cache=True, inline="always")

@@ -1,10 +1,8 @@
 """The named suites (docs/suite.md): each member a problem of its own (a ride or lateral
-problem with its defaults, which the command line may still change), registered under a
-stable name with its suites, so ``vpid-bench -m suite=smoke optimizer=...`` sweeps them.
-``smoke``: every family once, short; ``structures``: richer structures fitted to the records
-they made (not archived); ``vpid1``: the suite proper, at the archive's protocol (a default
-budget of 1,000·D evaluations), so ``suite=vpid1 optimizer=<yours>`` is ranked among
-``archive/vpid1``.
+problem with its defaults, which the command line may still change) registered under a stable
+name with its suites (``vpid-bench -m suite=smoke optimizer=...`` sweeps them): ``smoke``
+(every family once, short), ``structures`` (richer structures on the records they made),
+``vpid1`` (the suite proper, at the archive's protocol: 1,000·D evaluations by default).
 """
 
 from __future__ import annotations
@@ -97,9 +95,7 @@ MEMBERS: tuple[type, ...] = (
     member(LateralProblem, "vpid1_l_civic_model_error", ("vpid1",), record_model="magic_formula",
            steer_deg=4.0),
     member(LateralMFProblem, "vpid1_mf_civic_sine", ("vpid1",)),
-    # the richer suspension structures (issue 43) fitted to records they made: the richer
-    # structure recovering the truth of records the linear model misfits (a suite of its own,
-    # not in vpid1's archive)
+    # the richer structures (issue 43) on the records they made, which the linear model misfits
     member(RideQuarterProblem, "structures_q_golden_bilinear", ("structures",),
            damper="bilinear"),
     member(RideHalfProblem, "structures_h_gokdag_bilinear", ("structures",),

@@ -1,7 +1,6 @@
 """The third-party records of :mod:`.bayesrace` and :mod:`.racecar` (linklab-uva/deep-dynamics
-at 88c85653, GPL-3.0): not in vpid-bench (MIT) but in the data distribution ``records-gpl/``
-(``make install``) or a folder named by ``problem.data_dir``; each checked against its
-SHA-256 before it is read (one error line otherwise; nothing is downloaded).
+at 88c85653, GPL-3.0), from the data distribution ``records-gpl/`` (``make install``) or a
+folder named by ``problem.data_dir``, each checked against its SHA-256 before it is read.
 """
 
 from __future__ import annotations
