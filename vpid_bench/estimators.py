@@ -29,13 +29,10 @@ A problem that offers the choice validates it with :func:`check_objective`.
 
 from __future__ import annotations
 
-from typing import Literal
-
 import numpy as np
 
 from .errors import ConfigError
 
-Objective = Literal["eq3", "ols", "ml", "ml_profiled"]
 OBJECTIVES: tuple[str, ...] = ("eq3", "ols", "ml", "ml_profiled")
 #: The smallest plug-in sigma of a multiplicative model, as a fraction of ``level × rms``.
 SIGMA_FLOOR = 1e-3

@@ -1,10 +1,7 @@
 """Run a job: a parsed job spec, the plugin registry and a folder in; run records out.
 
 :func:`run_from_config` is a plain function of a composed config (tests call it directly; the
-shell calls it once per job). The problem and each run's generator: :mod:`vpid_bench.build`;
-what the job reads of the problem: :mod:`vpid_bench.facts`; the runs: :mod:`vpid_bench.job_runs`;
-one record per run: :func:`vpid_bench.assemble.make_record`; what the records allow:
-:mod:`vpid_bench.job_analysis`; the best run's signals: :mod:`vpid_bench.store.artifacts`.
+shell calls it once per job).
 
 Resume: a run whose complete ``ok`` record (same run id) exists is skipped; missing, corrupt
 and failed runs run again. The run id hashes everything that determines a result (plugins'
@@ -12,8 +9,7 @@ versions and code, data files' content), so another plugin release or data file 
 
 Crash isolation: an exception (``SystemExit`` included) inside one run is written into its
 record (status ``failed``) and the job goes on; only ``KeyboardInterrupt`` stops it. With
-worker processes every call into plugin code goes to them and this process never builds the
-problem (:class:`_Here` makes the same calls in this process when there are none).
+worker processes every call into plugin code goes to them (:class:`_Here`: in this process).
 """
 
 from __future__ import annotations
@@ -84,8 +80,7 @@ def _valid(path: Path) -> tuple[dict[str, Any] | None, str]:
 
 def _kept(path: Path, rid: str, set_aside: bool = False) -> bool:
     """Whether ``path`` holds this run's complete ``ok`` record, which a resume keeps. With
-    ``set_aside``, a file that is not a valid record (it once failed its job on every
-    resume) is moved aside (:func:`_set_aside`) and its run runs again."""
+    ``set_aside``, an invalid file (it once failed its job on every resume) is moved aside."""
     if not path.is_file():
         return False
     record, why = _valid(path)
@@ -217,8 +212,9 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
         records = [r for r, _ in map(_valid, summary.record_paths) if r is not None]
         optima_dir = Path(optima_dir or job_dir / "optima")
         polished = _polish_at_once(job, pool, facts, job_dir, optima_dir, records)
-        gaps = _after_runs(job, calls, "the optimum / identifiability analysis", _analyse, job_dir,
-                           optima_dir, records, polished, what="its gaps to the optimum are not",
+        gaps = _after_runs(job, calls, "the optimum / identifiability analysis", _analysis,
+                           analyse_job, job_dir, optima_dir, records, polished,
+                           what="its gaps to the optimum are not",
                            limit=_limit(analysis_limit_s(job))) or {}
         summary.score = job_score(gaps, records)
         summary.wall_time_s = time.perf_counter() - start
@@ -306,16 +302,10 @@ def _write_artifacts(job: Job, problem: Any, job_dir: Path) -> list[Any]:
         return list(problem.write_artifacts(job_dir) or [])
 
 
-def _analyse(job: Job, problem: Any, job_dir: Path, optima_dir: Path,
-             records: list[dict[str, Any]], polished: Any) -> dict[int, float]:
+def _analysis(job: Job, problem: Any, fn: Any, *args: Any) -> Any:
+    """``fn(job, problem, *args)`` (the analysis or a share of its polish), time-limited."""
     with time_limit(analysis_limit_s(job)), one_blas_thread():
-        return analyse_job(job, problem, job_dir, optima_dir, records, polished)
-
-
-def _polish_share(job: Job, problem: Any, job_dir: Path, optima_dir: Path,
-                  records: list[dict[str, Any]], indices: list[int] | None) -> Any:
-    with time_limit(analysis_limit_s(job)), one_blas_thread():
-        return polish_share(job, problem, job_dir, optima_dir, records, indices)
+        return fn(job, problem, *args)
 
 
 def _signals(job: Job, problem: Any, job_dir: Path, index: int, x: Any,
@@ -379,9 +369,9 @@ def _polish_at_once(job: Job, pool: Workers | None, facts: ProblemFacts, job_dir
     workers = pool.how_many(job.spec.workers or pool.size, len(groups) + 1)
     if workers < 2:
         return None
-    tasks = [(_polish_share, (job_dir, optima_dir, [], None))]
-    tasks += [(_polish_share, (job_dir, optima_dir,
-                               [r for r in records if r.get("run_index") in indices], indices))
+    tasks = [(_analysis, (polish_share, job_dir, optima_dir, [], None))]
+    tasks += [(_analysis, (polish_share, job_dir, optima_dir,
+                           [r for r in records if r.get("run_index") in indices], indices))
               for indices in groups.values()]
     polished: dict[str | None, dict[str, Any]] = {}
     name = "the optimum / identifiability analysis"

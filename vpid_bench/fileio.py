@@ -24,7 +24,6 @@ import sys
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
-from types import TracebackType
 from typing import TextIO
 
 from .interrupts import held
@@ -214,8 +213,7 @@ class WholeFolder:
         os.chmod(self._new, 0o777 & ~_umask())  # mkdtemp makes 0700; a report is shared
         return self._new
 
-    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
-                 tb: TracebackType | None) -> None:
+    def __exit__(self, exc_type: type[BaseException] | None, *_: object) -> None:
         assert self._new is not None, "WholeFolder used without entering it"
         if exc_type is not None:
             shutil.rmtree(self._new, ignore_errors=True)

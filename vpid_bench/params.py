@@ -3,10 +3,8 @@
 ``build_dataclass(Params, mapping, prefix="optimizer")`` checks every key against the
 dataclass fields (nested dataclasses included) and every value against the field's type, so
 that ``optimizer.FF=0.8`` or ``problem.noise.level=abc`` fails with one line naming the key,
-the bad value and what is allowed, before any work is done.
-
-``hydra_node(cls, name, interpolations)`` builds the Hydra config node of a plugin from its
-dataclass, so a third-party optimizer needs no YAML to be usable as ``optimizer=<name>``.
+the bad value and what is allowed, before any work is done. :func:`hydra_node` builds a
+plugin's Hydra config node from its dataclass (a third-party plugin needs no YAML).
 """
 
 from __future__ import annotations

@@ -157,11 +157,9 @@ class Job:
 def plain_config(cfg: Any) -> dict[str, Any]:
     """A composed config (OmegaConf node or mapping) as plain data, interpolations resolved,
     the ``hydra`` node dropped. An interpolation that cannot be resolved is a ConfigError."""
-    try:
-        from omegaconf import DictConfig, OmegaConf
-        from omegaconf.errors import OmegaConfBaseException
-    except ImportError:  # pragma: no cover - hydra is a base dependency
-        return {k: v for k, v in to_plain(cfg).items() if k != "hydra"}
+    from omegaconf import DictConfig, OmegaConf
+    from omegaconf.errors import OmegaConfBaseException
+
     if isinstance(cfg, DictConfig):
         try:
             plain = OmegaConf.to_container(cfg, resolve=True)

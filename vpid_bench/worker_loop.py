@@ -29,7 +29,7 @@ from typing import Any
 
 from . import interrupts
 from .errors import VpidBenchError
-from .job_runs import RunOutcome, run_outcomes, warm_up
+from .job_runs import run_outcomes, warm_up
 from .machine import one_blas_thread
 from .process_tree import detach, drop_tracker, redirect, strays
 from .runner import RunTimeoutError, keep_cwd, time_limit
@@ -189,14 +189,9 @@ def _run_task(job: Job, payload: tuple[list[int], bool, int], state: dict[str, A
             send(("phase", "warmed"))
         for outcome in run_outcomes(job, problem, indices, lockstep,
                                     announce=lambda phase: send(("phase", phase))):
-            send(("outcome", portable_outcome(outcome)))
-
-
-def portable_outcome(outcome: RunOutcome) -> RunOutcome:
-    """``outcome`` with its error as a :class:`RemoteError` (always picklable)."""
-    if outcome.error is None:
-        return outcome
-    return dataclasses.replace(outcome, outcome=portable(outcome.error))
+            if outcome.error is not None:  # as a RemoteError: always picklable
+                outcome = dataclasses.replace(outcome, outcome=portable(outcome.error))
+            send(("outcome", outcome))
 
 
 def probe(job: Job, problem: Any) -> None:

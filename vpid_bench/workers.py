@@ -39,7 +39,7 @@ from .job_runs import RunOutcome, now_utc
 from .process_tree import Output
 from .runner import RunTimeoutError
 from .spec import Job
-from .worker_loop import LOST_PIPE_EXIT, RemoteError, portable, probe, serve
+from .worker_loop import LOST_PIPE_EXIT, RemoteError, portable, serve
 from .worker_tree import Tree, marked, new_token, start_tracker
 
 log = logging.getLogger(__name__)
@@ -389,10 +389,6 @@ class Workers:
                     f"{GRACE_S:.0f} s; blocked in C or ignoring SIGALRM): its worker process "
                     "was killed" if call.phase else f"building the problem took more than "
                     f"{START_S:.0f} s: its worker process was killed"))
-
-    def probe(self, job: Job) -> None:
-        """Build one optimizer of ``job`` in a worker; raise what its constructor raised."""
-        self.call(job, probe, what="the optimizer's constructor", limit=_allowance(job, 1))
 
     # --- runs
 

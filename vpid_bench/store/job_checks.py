@@ -34,6 +34,10 @@ def finite(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
+def _positive(v: Any) -> bool:
+    return finite(v) and v >= 0
+
+
 def read_identifiability(path: Path, names: Sequence[str]) -> tuple[dict[str, Any] | None, str]:
     """A job's ``identifiability.json``, checked against the records' parameter ``names``:
     ``(data, "")``, or ``(None, why)``."""
@@ -45,15 +49,12 @@ def read_identifiability(path: Path, names: Sequence[str]) -> tuple[dict[str, An
         return None, "not a JSON object"
     checks = (
         ("names", data.get("names") == list(names), f"the records' parameter names {names}"),
-        ("crb_percent", isinstance(data.get("crb_percent"), list)
-         and len(data["crb_percent"]) == d
-         and all(finite(v) and v >= 0 for v in data["crb_percent"]),
+        ("crb_percent", _bounds_ok(data.get("crb_percent"), d),
          f"a list of {d} finite numbers >= 0"),
-        ("crb_norm_percent", finite(data.get("crb_norm_percent"))
-         and data["crb_norm_percent"] >= 0, "a finite number >= 0"),
+        ("crb_norm_percent", _positive(data.get("crb_norm_percent")), "a finite number >= 0"),
         ("singular_values", isinstance(data.get("singular_values"), list)
          and 1 <= len(data["singular_values"]) <= d
-         and all(finite(v) and v >= 0 for v in data["singular_values"]),
+         and all(map(_positive, data["singular_values"])),
          f"a list of 1 to {d} finite numbers >= 0"),
         ("condition_number", data.get("condition_number") is None
          or (finite(data["condition_number"]) and data["condition_number"] >= 1),
@@ -68,13 +69,12 @@ def read_identifiability(path: Path, names: Sequence[str]) -> tuple[dict[str, An
 
 
 def _bounds_ok(v: Any, d: int) -> bool:
-    return (isinstance(v, list) and len(v) == d and all(finite(b) and b >= 0 for b in v))
+    return isinstance(v, list) and len(v) == d and all(map(_positive, v))
 
 
 def _floor_entry_ok(e: Any, d: int) -> bool:
-    return (isinstance(e, dict) and finite(e.get("fraction")) and e["fraction"] >= 0
-            and finite(e.get("crb_norm_percent")) and e["crb_norm_percent"] >= 0
-            and _bounds_ok(e.get("crb_percent"), d))
+    return (isinstance(e, dict) and _positive(e.get("fraction"))
+            and _positive(e.get("crb_norm_percent")) and _bounds_ok(e.get("crb_percent"), d))
 
 
 def _instance_entry_ok(e: Any, d: int) -> bool:
@@ -84,10 +84,9 @@ def _instance_entry_ok(e: Any, d: int) -> bool:
             and isinstance(e.get("runs"), list) and 1 <= len(e["runs"]) <= MAX_INSTANCES
             and all(isinstance(i, int) and not isinstance(i, bool) and i >= 0
                     for i in e["runs"])
-            and _bounds_ok(e.get("crb_percent"), d)
-            and finite(e.get("crb_norm_percent")) and e["crb_norm_percent"] >= 0
+            and _bounds_ok(e.get("crb_percent"), d) and _positive(e.get("crb_norm_percent"))
             and (norms is None or (isinstance(norms, list) and len(norms) <= 10
-                                   and all(finite(v) and v >= 0 for v in norms))))
+                                   and all(map(_positive, norms)))))
 
 
 def _optional_checks(data: Mapping[str, Any], d: int) -> list[tuple[str, bool, str]]:
@@ -110,10 +109,6 @@ def _optional_checks(data: Mapping[str, Any], d: int) -> list[tuple[str, bool, s
                        f"a list of at most {MAX_INSTANCES} {{instance, runs, crb_percent "
                        f"({d} numbers), crb_norm_percent[, sigma_floor_norms]}}"))
     return checks
-
-
-def _positive(v: Any) -> bool:
-    return finite(v) and v >= 0
 
 
 def read_estimator_floors(path: Path) -> tuple[dict[str, Any] | None, str]:
@@ -175,13 +170,10 @@ def _group(g: Any) -> dict[str, Any] | None:
 
 def _intervals(iv: Any, d: int) -> dict[str, Any] | None:
     """The white and robust standard errors, checked (``None`` where unusable)."""
-    def se(v: Any) -> bool:
-        return isinstance(v, list) and len(v) == d and all(x is None or finite(x) for x in v)
-
-    if not isinstance(iv, Mapping) or not se(iv.get("se")):
+    if not isinstance(iv, Mapping) or not interval_ends(iv.get("se"), d):
         return None
     rob = iv.get("robust")
-    if not isinstance(rob, Mapping) or not se(rob.get("se")):
+    if not isinstance(rob, Mapping) or not interval_ends(rob.get("se"), d):
         return None
     return {"se": iv["se"], "robust_se": rob["se"],
             "lags": int(rob["lags"]) if finite(rob.get("lags")) else None}
