@@ -5,7 +5,9 @@ composed as the command composes it, and the timers. Imported as ``_shared`` (a 
 from __future__ import annotations
 
 import os
+import resource
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -53,9 +55,6 @@ def compose(overrides: list[str]) -> Any:
 def run_timed(cmd: list[str], cwd: Any = None, check: bool = True) -> tuple[float, float]:
     """Wall and CPU seconds (user + system of the child: a shared machine moves them less) of
     ``cmd`` run in ``cwd``; with ``check`` it must succeed, else exit with its stderr's end."""
-    import resource
-    import subprocess
-
     def children_cpu() -> float:
         r = resource.getrusage(resource.RUSAGE_CHILDREN)
         return r.ru_utime + r.ru_stime

@@ -19,6 +19,7 @@ import statistics
 import subprocess
 import tempfile
 import time
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -65,8 +66,6 @@ def main() -> None:
         (folder / "h.bin").write_bytes(h.astype("<f8").tobytes())
         lib = folder / "lib" / "quarter_car.so"
         lib.parent.mkdir()
-        import zipfile
-
         with zipfile.ZipFile(fmu) as z:
             lib.write_bytes(z.read("binaries/linux64/quarter_car.so"))
         unzipped = fmpy.extract(str(fmu), str(folder / "fmpy"))

@@ -19,6 +19,8 @@ side with the runs they report on; or an archive's report.
 from __future__ import annotations
 
 import argparse
+import gzip
+import json
 import os
 import statistics
 import tempfile
@@ -32,17 +34,12 @@ PAPER_SWEEP = ["-m", "optimizer=de1,de2,de3,de4,de5,de6,de7,de8,ga", "problem.ps
                "runs=30", "progress=false", "report=false"]
 
 
-def timed(cmd: list[str]) -> float:
-    """Wall seconds of ``cmd`` in a child process (it must succeed)."""
-    return run_timed(cmd)[0]
-
-
 def full_report(records: Path | None, repeats: int, tmp: Path) -> None:
     sweep_s = None
     if records is None:
         records = tmp / "sweep"
-        sweep_s = timed([*CLI, *PAPER_SWEEP, f"hydra.sweep.dir={records}"])
-    times = [timed([*REPORT, str(records), "-o", str(tmp / f"report-{i}")])
+        sweep_s = run_timed([*CLI, *PAPER_SWEEP, f"hydra.sweep.dir={records}"])[0]
+    times = [run_timed([*REPORT, str(records), "-o", str(tmp / f"report-{i}")])[0]
              for i in range(repeats)]
     print(f"full report of {records} ({repeats} repeats): median "
           f"{statistics.median(times):.2f} s  (all: {', '.join(f'{t:.2f}' for t in times)})")
@@ -54,9 +51,9 @@ def short_report(repeats: int, tmp: Path) -> None:
     times: dict[bool, list[float]] = {True: [], False: []}
     for i in range(repeats):
         for report in (True, False):
-            times[report].append(timed([*CLI, "runs=30", "progress=false",
-                                        f"report={str(report).lower()}",
-                                        f"hydra.run.dir={tmp / f'job-{report}-{i}'}"]))
+            times[report].append(run_timed([*CLI, "runs=30", "progress=false",
+                                            f"report={str(report).lower()}",
+                                            f"hydra.run.dir={tmp / f'job-{report}-{i}'}"])[0])
     on, off = statistics.median(times[True]), statistics.median(times[False])
     print(f"single job, runs=30 ({repeats} repeats each): report=true median {on:.2f} s, "
           f"report=false median {off:.2f} s; the short report adds {on - off:+.2f} s")
@@ -65,9 +62,6 @@ def short_report(repeats: int, tmp: Path) -> None:
 def scaled_archive(archive: Path, instances: int, tmp: Path) -> Path:
     """An archive of the runs of ``archive`` copied to ``instances`` instances each (see the
     module), packed by the real packer from a sweep folder written here."""
-    import gzip
-    import json
-
     import numpy as np
 
     from vpid_bench.analysis.optimum import optimum_key, record_settings

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import resource
 import sys
 import time
 from collections import defaultdict
@@ -46,8 +47,6 @@ from _shared import kernel_us  # noqa: E402  (the benchmarks' timer, one home)
 
 def cpu_seconds() -> float:
     """CPU seconds (user + system) of this process and of its children that ended."""
-    import resource
-
     own, kids = resource.getrusage(resource.RUSAGE_SELF), \
         resource.getrusage(resource.RUSAGE_CHILDREN)
     return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
 import sys
 import tempfile
 from pathlib import Path
@@ -49,8 +50,6 @@ def write_record(path: Path, p) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    import dataclasses
-
     from vpid_vehicle.ride.problem import RecordFileConfig
     from vpid_vehicle.ride.suites import MEMBERS
 

@@ -22,6 +22,8 @@ from typing import Any
 import numpy as np
 
 from .errors import ConfigError, VpidBenchError
+from .params import build_dataclass
+from .plugins import Registry
 
 UNDETERMINED_PERCENT = 10.0
 
@@ -48,8 +50,6 @@ def build(registry: Any, name: str, settings: list[tuple[str, str]]) -> Any:
     """The problem ``name`` with ``settings`` (dotted keys, YAML values), checked as the
     command line checks them."""
     from omegaconf import OmegaConf
-
-    from .params import build_dataclass
 
     try:
         cls = registry.problem(name)
@@ -118,8 +118,6 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--profile", action="store_true",
                     help="profile-likelihood 95 %% intervals of instance 0")
     args = ap.parse_args(argv)
-    from .plugins import Registry
-
     try:
         if not 0 <= args.floor <= 1000:
             raise ConfigError("--floor", args.floor, "an integer in [0, 1000]")

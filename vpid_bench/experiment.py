@@ -37,6 +37,7 @@ from .runner import RunTimeoutError, time_limit
 from .spec import Job, parse_job
 from .store import records as rec
 from .store.artifacts import best_of, write_best_signals
+from .store.job_status import read_job_status
 from .store.record_check import check_record
 from .targets import with_stops
 from .worker_loop import probe
@@ -94,8 +95,6 @@ def recorded_in_full(jobs: list[Job], job_dirs: list[Path], registry: Registry |
     """Whether every job of a sweep ended ``ok`` with the complete record of every run under
     the run ids it would have now: then the command writes nothing but the report. The
     problems' set-up runs as a job's does; any fault there: ``False`` (the jobs say why)."""
-    from .store.job_status import read_job_status
-
     if not jobs or len(jobs) != len(job_dirs):
         return False
     for job_dir in job_dirs:

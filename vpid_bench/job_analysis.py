@@ -10,10 +10,16 @@ from typing import Any
 
 import numpy as np
 
+from .analysis.diagnostics import write_diagnostics
+from .analysis.estimates import write_comparisons, write_profile
+from .analysis.estimator_floors import INSTANCES as FLOORS_INSTANCES
+from .analysis.estimator_floors import estimator_floors
+from .analysis.identifiability import cramer_rao, per_instance
+from .analysis.optimum import _locked, optimum_key, update_instance_optimum
 from .fileio import own_folder
 from .problem import Problem, kept_instance, offers_residuals
 from .spec import Job
-from .store.job_files import IDENTIFIABILITY, read_job_json, write_job_json
+from .store.job_files import ESTIMATORS, IDENTIFIABILITY, read_job_json, write_job_json
 
 
 def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
@@ -28,9 +34,6 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
     to ``comparisons.json``. Returns each run's relative gap ``(f_best - f*) / f*`` to its
     instance's optimum (absolute where ``f* <= 0``). ``polished``: the optima already made
     by :func:`polish_share` tasks, by instance id (nothing is polished here then)."""
-    from .analysis.diagnostics import write_diagnostics
-    from .analysis.estimates import write_comparisons, write_profile
-
     write_comparisons(problem, job_dir)  # first: cheap, and wanted whatever follows
     if not offers_residuals(type(problem)):
         return {}
@@ -95,22 +98,14 @@ def _instance_optimum(job: Job, inst: Problem, optima_dir: Path,
                       runs: list[tuple[np.ndarray, float]]) -> dict[str, Any] | None:
     """The instance's optimum, polished as far as ``runs`` ask (:mod:`.optimum`); ``None``
     without a truth and without a run to start from."""
-    from .analysis.optimum import update_instance_optimum
-
     if inst.x_true is None and not runs:
         return None  # nothing to start a polish from
     return update_instance_optimum(inst, job.problem_settings(), optima_dir, runs)
 
 
-
 def _per_problem_files(job: Job, problem: Problem, job_dir: Path, optima_dir: Path) -> None:
     """The job's ``identifiability.json`` (instance 0's bounds, each instance's under
     ``instances``) and ``estimators.json``, each made once per sweep (:func:`shared_file`)."""
-    from .analysis.estimator_floors import FILE as FLOORS_FILE
-    from .analysis.estimator_floors import INSTANCES as FLOORS_INSTANCES
-    from .analysis.estimator_floors import estimator_floors
-    from .analysis.identifiability import cramer_rao, per_instance
-
     def bounds() -> dict[str, Any] | None:
         crb = cramer_rao(problem)
         if crb is not None:
@@ -121,7 +116,7 @@ def _per_problem_files(job: Job, problem: Problem, job_dir: Path, optima_dir: Pa
     n_floors = max(1, min(FLOORS_INSTANCES, job.spec.runs))  # what the floors depend on
     for name, make, more in (
             (IDENTIFIABILITY, bounds, job.spec.runs),
-            (FLOORS_FILE, lambda: estimator_floors(problem, job.spec.runs), n_floors)):
+            (ESTIMATORS, lambda: estimator_floors(problem, job.spec.runs), n_floors)):
         if not (job_dir / name).is_file():
             data = shared_file(optima_dir, name, problem, settings, more, make)
             if data is not None:
@@ -138,8 +133,6 @@ def shared_file(optima_dir: Path, name: str, problem: Problem, settings: Mapping
     ``optima_dir/per-problem/`` by a hash of the problem's name, settings, data digest and
     ``more``, and copied by every later job (a vpid1 build has 19 jobs per problem). A kept
     file that is not a JSON object is made again."""
-    from .analysis.optimum import _locked, optimum_key
-
     key = optimum_key(problem.name, settings, problem.content_digest(), str(more))
     path = own_folder(own_folder(optima_dir) / SHARED_DIR) / f"{Path(name).stem}-{key}.json"
     with _locked(path):  # launcher workers share the folder

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from . import interrupts
+from .analysis.intervals import jacobian_intervals
 from .bridge import LoopOptimizer
 from .build import run_rng
 from .errors import PluginError
@@ -153,8 +154,6 @@ def _say_warnings(job: Job, group: Sequence[int], caught: Sequence[warnings.Warn
 
 def _intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None:
     """The parameters' intervals at ``x``, ``None`` where a simulation near ``x`` fails."""
-    from .analysis.intervals import jacobian_intervals
-
     try:
         return jacobian_intervals(problem, x)
     except (ValueError, FloatingPointError, np.linalg.LinAlgError):

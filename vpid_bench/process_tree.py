@@ -1,12 +1,8 @@
-"""A worker process's own session, its output through the supervisor, its copy of the
-resource-tracker pipe closed.
-
-Round four found that a forked child kept the worker's pipe open (the sweep learned of its
-worker's death only when the child ended) and that an orphan kept the command's standard
-output open (``vpid-bench ... | tail`` waited for it). So each worker starts its own session
-and, on Linux, is the child subreaper of its descendants (:func:`detach`); closes its copy of
-the resource-tracker pipe (:func:`drop_tracker`); and writes its output into pipes the
-supervisor copies (:class:`Output`). Ending the tree is :mod:`vpid_bench.worker_tree`'s job.
+"""A worker process's own session and subreaping (:func:`detach`), its copy of the
+resource-tracker pipe closed (:func:`drop_tracker`), its output through pipes the supervisor
+copies (:class:`Output`): an orphan once kept the command's standard output open and
+``vpid-bench ... | tail`` waited for it (docs/sweeps.md, crash isolation). Ending the tree
+is :mod:`vpid_bench.worker_tree`'s job.
 """
 
 from __future__ import annotations
@@ -14,6 +10,7 @@ from __future__ import annotations
 import codecs
 import contextlib
 import os
+import select
 import sys
 from multiprocessing.connection import Connection
 from typing import Any
@@ -143,8 +140,6 @@ class Output:
 
 def readable(fd: int, closed: bool = False) -> bool:
     """Whether ``fd`` (a pipe, a pidfd) is readable now; ``closed`` when it is not open."""
-    import select
-
     with contextlib.suppress(OSError, ValueError):
         return bool(select.select([fd], [], [], 0)[0])
     return closed

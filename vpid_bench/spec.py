@@ -71,23 +71,19 @@ class JobSpec:
     def __post_init__(self) -> None:
         _check_int("seed", self.seed, 0, 2**63 - 1)
         _check_int("runs", self.runs, 1, MAX_RUNS)
-        if self.budget is not None:
-            _check_int("budget", self.budget, 1, MAX_BUDGET, nullable=True)
-        if self.budget_per_dim is not None:
-            _check_int("budget_per_dim", self.budget_per_dim, 1, MAX_BUDGET, nullable=True)
-            if self.budget is not None:
-                raise ConfigError("budget_per_dim", self.budget_per_dim,
-                                  "either budget= or budget_per_dim=, not both")
-        if self.threads is not None:
-            _check_int("threads", self.threads, 1, 1024, nullable=True)
+        _check_int("budget", self.budget, 1, MAX_BUDGET, nullable=True)
+        _check_int("budget_per_dim", self.budget_per_dim, 1, MAX_BUDGET, nullable=True)
+        if self.budget_per_dim is not None and self.budget is not None:
+            raise ConfigError("budget_per_dim", self.budget_per_dim,
+                              "either budget= or budget_per_dim=, not both")
+        _check_int("threads", self.threads, 1, 1024, nullable=True)
         if self.run_timeout_s is not None and not 0 < self.run_timeout_s <= MAX_RUN_TIMEOUT_S:
             raise ConfigError("run_timeout_s", self.run_timeout_s,
                               f"a positive number of seconds up to {MAX_RUN_TIMEOUT_S:g} "
                               "(a week) or null")
         if self.isolation not in ISOLATION:
             raise ConfigError("isolation", self.isolation, " | ".join(ISOLATION))
-        if self.workers is not None:
-            _check_int("workers", self.workers, 1, 1024, nullable=True)
+        _check_int("workers", self.workers, 1, 1024, nullable=True)
         if self.target is not None and not 0.0 <= self.target <= 1.0:
             raise ConfigError("target", self.target, "a relative gap from 0 to 1 (e.g. 1e-8) "
                               "or null")
@@ -100,7 +96,10 @@ OPERATIONAL_KEYS = ("resume", "progress", "report", "archive", "threads", "isola
                     "workers")
 
 
-def _check_int(key: str, value: int, low: int, high: int, nullable: bool = False) -> None:
+def _check_int(key: str, value: int | None, low: int, high: int, nullable: bool = False
+               ) -> None:
+    if value is None and nullable:
+        return
     if not low <= value <= high:
         allowed = (f"an integer >= {low}" if high >= 2**62 else
                    f"an integer from {low} to {high}") + (" or null" if nullable else "")

@@ -28,6 +28,7 @@ from multiprocessing.connection import Connection
 from typing import Any
 
 from . import interrupts
+from .build import ProblemCache, run_rng
 from .errors import VpidBenchError
 from .job_runs import run_outcomes, warm_up
 from .machine import one_blas_thread
@@ -114,8 +115,6 @@ def _identity(fd: int) -> tuple[int, int] | None:
 def serve(conn: Connection, out: Connection, err: Connection) -> None:
     """The worker's loop (the target of its process): one task at a time until told to stop
     or the pipe closes. ``out`` and ``err`` become its standard output and error."""
-    from .build import ProblemCache
-
     detach()
     drop_tracker()
     redirect(out, err)
@@ -197,8 +196,6 @@ def _run_task(job: Job, payload: tuple[list[int], bool, int], state: dict[str, A
 def probe(job: Job, problem: Any) -> None:
     """Build run 0's optimizer of ``job`` under the run's time limit; raise what its
     constructor raised (a fault there stops the job before any run)."""
-    from .build import run_rng
-
     limit = job.spec.run_timeout_s
     try:
         with time_limit(limit), keep_cwd():

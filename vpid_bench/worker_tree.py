@@ -1,22 +1,15 @@
 """A worker process and every process its plugins start, held so that ending them never
-signals anything else (issue 44: N1, N3, N4).
+signals anything else (issue 44: N1, a reused process number once got SIGKILL; N3, N4; the
+whole story: docs/sweeps.md, crash isolation).
 
-Round five found three ways the tree kill failed: N1, the worker's bare process id was
-signalled after it died and was reaped, so a reused number got SIGKILL; N3, a daemon (double
-fork, ``setsid``) went to init, out of reach, holding the resource tracker's pipe (so
-``vpid-bench ... | tail`` hung; the worker now closes its copy: :mod:`.worker_loop`); N4, a
-process forking and calling ``setsid`` in a loop slipped between listing and kill.
-
-So every signal goes through what this process holds: a pidfd (Linux >= 5.3) opened while
-the worker was its unreaped child, or on a process checked to be the tree's before it is
-signalled (psutil's handles, which check the start time, without pidfds). Each worker is
-started in a cgroup of its own where one can be made (:mod:`vpid_bench.cgroups`: killed
-whole, forks in flight included) and with a mark in its environment (:data:`MARK`) that its
-descendants carry. :meth:`Tree.end` kills the cgroup, stops the worker (the child subreaper
-of its tree, so orphans keep coming to it), then round after round, until two rounds find
-nothing new, holds and stops its descendants and every process carrying its mark, then kills
-them all. What still runs (it cleared its environment *and* left the cgroup) is returned and
-named in one ``warning:`` line (docs/sweeps.md, crash isolation).
+Every signal goes through what this process holds: a pidfd (Linux >= 5.3) opened while the
+worker was its unreaped child, or on a process checked to be the tree's before it is
+signalled (psutil's handles, which check the start time, without pidfds). Each worker has a
+cgroup of its own where one can be made (:mod:`vpid_bench.cgroups`) and a mark in its
+environment (:data:`MARK`) that its descendants carry. :meth:`Tree.end` kills the cgroup,
+stops the worker (the child subreaper of its tree, so orphans keep coming to it), then round
+after round, until two rounds find nothing new, stops its descendants and every process
+carrying its mark, then kills them all; what still runs is returned.
 """
 
 from __future__ import annotations

@@ -4,12 +4,9 @@ With ``isolation=process`` (the command's default) every call into plugin code r
 long-lived worker processes, reused by every job of the sweep, several at once
 (:meth:`Workers.outcomes` for runs, :meth:`Workers.call` and :meth:`Workers.calls` for the
 rest); the sweep's own process never builds a problem, it hands out tasks and writes every
-file. A run that ends its process, or is blocked past ``run_timeout_s`` (its worker killed
-:data:`GRACE_S` s later), fails alone; a plugin's ``os.chdir``, threads, signal handlers and
-processes die with its worker (the whole tree and nothing else:
-:mod:`vpid_bench.worker_tree`); SIGTERM and SIGHUP are left to the supervisor. A lockstep
-group that lost its worker runs again one by one. Records are bit-identical to
-``isolation=none`` (tested).
+file. A run that ends or blocks its worker fails alone, a lockstep group that lost its
+worker runs again one by one (what each fault costs: docs/sweeps.md, crash isolation).
+Records are bit-identical to ``isolation=none`` (tested).
 
 Why :mod:`multiprocessing` and not an executor: on Python 3.11 :mod:`concurrent.futures`
 cannot kill one hung worker, loky is only vendored inside joblib, and neither ends the
@@ -22,6 +19,7 @@ import contextlib
 import dataclasses
 import logging
 import pickle
+import resource
 import signal
 import sys
 import time
@@ -36,6 +34,7 @@ from . import interrupts
 from .cgroups import Cgroup
 from .interrupts import held as _sigint_held  # (tests use the name)
 from .job_runs import RunOutcome, now_utc
+from .machine import available_cores
 from .process_tree import Output
 from .runner import RunTimeoutError
 from .spec import Job
@@ -95,8 +94,6 @@ def is_timeout(exc: BaseException) -> bool:
 def worker_cap() -> tuple[int, str]:
     """The most workers this machine holds at once, and why: one per :data:`WORKER_MB` of
     the memory available, no more than the open-file limit allows; at least one."""
-    import resource
-
     import psutil
 
     available = psutil.virtual_memory().available
@@ -547,8 +544,6 @@ def outcomes_isolated(pool: Workers, job: Job, indices: Sequence[int], lockstep:
                       ) -> Iterator[RunOutcome]:
     """:meth:`Workers.outcomes` with the job's ``workers`` and ``threads`` keys applied (each
     worker's problem gets an equal share of the cores unless ``threads`` is set)."""
-    from .machine import available_cores
-
     requested = job.spec.workers or pool.size
     tasks = (len(_tasks(list(indices), min(requested, pool.cap))) if lockstep
              else len(indices))

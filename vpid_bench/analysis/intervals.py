@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from ..problem import Problem
+from .identifiability import jacobian
 
 #: The two-sided 95 % normal quantile (scipy.stats.norm.ppf(0.975)).
 Z95 = 1.959963984540054
@@ -63,8 +64,6 @@ def jacobian_intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None
     residual at ``x`` is not finite or all are zero: ``lower``, ``upper``, ``se`` (physical
     units; ``None``: undetermined, unbounded), ``sigma`` (``σ̂`` per group, the residuals'
     units), ``dof`` (``m − d``) and the same under ``robust``."""
-    from .identifiability import jacobian
-
     x = np.asarray(x, dtype=float).reshape(-1)
     groups = np.asarray(problem.fisher_groups(), dtype=int).reshape(-1)
     r = np.asarray(problem.fisher_residuals(x[None]), dtype=float)[0]

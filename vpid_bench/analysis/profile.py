@@ -14,12 +14,14 @@ in ``θ`` the interval is the Cramér–Rao one (tested).
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import numpy as np
 
 from ..estimators import SIGMA_FLOOR
 from ..problem import Problem
+from .identifiability import cramer_rao, entry_sigma, informative, jacobian
 
 #: χ²(0.95, 1): the profile threshold of a 95 % interval.
 CHI2_95 = 3.841458820694124
@@ -54,8 +56,6 @@ def structural_symmetry(problem: Problem, x: np.ndarray | None = None,
 
 def _whitened_jacobian(problem: Problem, x: np.ndarray, sigma: np.ndarray | None = None
                        ) -> tuple[np.ndarray, np.ndarray]:
-    from .identifiability import entry_sigma, informative, jacobian
-
     given = problem.residual_sigma() if sigma is None else sigma
     if given is None:
         raise ValueError("the problem states no noise sigma (residual_sigma)")
@@ -73,8 +73,6 @@ class _Likelihood:
 
     def __init__(self, problem: Problem, centre: np.ndarray | None = None,
                  sigma: np.ndarray | None = None) -> None:
-        from .identifiability import entry_sigma, informative
-
         sigma = problem.residual_sigma() if sigma is None else sigma
         centre = problem.x_true if centre is None else np.asarray(centre, dtype=float)
         if sigma is None or centre is None:
@@ -108,8 +106,6 @@ class _Likelihood:
     def fit(self, z0: np.ndarray, fixed: int | None = None, value: float = 0.0
             ) -> tuple[np.ndarray, float]:
         """The least NLL from ``z0``, with coordinate ``fixed`` held at ``value``."""
-        import time
-
         from scipy.optimize import least_squares
 
         if self.deadline is not None and time.perf_counter() > self.deadline:
@@ -147,11 +143,7 @@ def profile_intervals(problem: Problem, crb: dict[str, Any] | None = None,
     ``sigma`` per group estimated from the residuals and ``rel_sd`` (the first steps).
     ``limit_s``: :class:`ProfileTooSlowError` when the first fit says it would take longer
     (``2 d FITS_PER_END`` fits), or once it has run twice that long."""
-    import time
-
     from scipy.optimize import brentq
-
-    from .identifiability import cramer_rao
 
     lik = _Likelihood(problem, start, sigma)
     began = time.perf_counter()

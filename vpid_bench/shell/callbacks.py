@@ -20,6 +20,7 @@ from typing import Any
 from hydra.experimental.callback import Callback
 
 from ..fileio import own_folder
+from ..progress import Stages
 from ..store.records import write_json_atomic
 
 log = logging.getLogger(__name__)
@@ -90,7 +91,6 @@ def write_report(folder: Path, short: bool, archive: bool = True) -> bool:
     """Build the report of ``folder`` into ``folder/report`` (whole, or the previous one
     kept with one ``warning:`` line), print the headline and where it is, and write the
     outcome into ``report/status.json``. Never raises."""
-    from ..progress import Stages
     from ..report.build import NoRecordsError, build_report
     from ..report.safe import clean  # every line may quote records or archives
 

@@ -4,6 +4,7 @@ OmegaConf's errors as one :class:`ConfigError` line."""
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 from ..errors import ConfigError
@@ -106,8 +107,6 @@ class Composer:
     def task(self, structural: list[Any]) -> Any:
         """The task config (no ``hydra`` node) of a point whose structural overrides are
         ``structural`` (parsed); the caller copies it before changing it."""
-        import copy
-
         from omegaconf import open_dict
 
         lines = tuple(o.input_line for o in structural)

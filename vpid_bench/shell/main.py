@@ -5,11 +5,8 @@ loaded, a Hydra node stored per plugin and for the job spec; the pre-flight
 (:mod:`.preflight`: every point composed and parsed as the job will, the output folder
 resolved, locked and proven writable; anything wrong: one line, exit 2, nothing written);
 then Hydra runs the jobs (any launcher), each writing its ``job.json``, the report callback
-``report/status.json``: the exit code is read from those files, whatever process ran them.
-
-Exit status: 0 all runs ok; 1 some run, job or report failed; 2 refused before anything ran;
-130, 143, 129 interrupted by SIGINT, SIGTERM, SIGHUP (every completed run kept, every worker
-ended). ``VPID_BENCH_DEBUG=1`` shows tracebacks.
+``report/status.json``: the exit status (docs/sweeps.md) is read from those files, whatever
+process ran them. ``VPID_BENCH_DEBUG=1`` shows tracebacks.
 """
 
 from __future__ import annotations
@@ -25,8 +22,17 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
+from .. import __version__, interrupts
 from ..errors import VpidBenchError
-from ..fileio import loads_json, open_append, read_text_limited
+from ..fileio import loads_json, open_append, read_text_limited, write_text_atomic
+from ..machine import environ
+from ..plugins import PluginLoadWarning, Registry
+from ..store.job_status import write_job_status
+from .argv import parse_command_line
+from .config_store import register_configs
+from .progress import SweepProgress, first_line
+from .quick_help import help_text
+from .suites import expand_suites
 
 DEBUG_ENV = "VPID_BENCH_DEBUG"
 log = logging.getLogger("vpid_bench")
@@ -82,9 +88,7 @@ class JobTask:
     def __call__(self, cfg: Any) -> float | None:
         from hydra.core.hydra_config import HydraConfig
 
-        from ..interrupts import raise_if_swallowed
-
-        raise_if_swallowed()  # a Ctrl-C a C callback dropped during the previous job
+        interrupts.raise_if_swallowed()  # a Ctrl-C a C callback dropped during the last job
         hydra_cfg = HydraConfig.get()
         job_dir = Path(hydra_cfg.runtime.output_dir)
         multirun = hydra_cfg.mode.name == "MULTIRUN"
@@ -156,8 +160,6 @@ JOB_LOG = "vpid_bench.log"
 
 def _write_status(job_dir: Path, status: str, detail: Any) -> None:
     """``job.json``, or one line when it cannot be written: the sweep goes on."""
-    from ..store.job_status import write_job_status
-
     try:
         write_job_status(job_dir, status, detail)
     except OSError as exc:  # the summary finds the planned folder without a job.json
@@ -191,8 +193,6 @@ def _save_job_config(cfg: Any, job_dir: Path) -> None:
     from hydra.core.hydra_config import HydraConfig
     from omegaconf import OmegaConf
 
-    from ..fileio import write_text_atomic
-
     full = HydraConfig.instance().cfg
     folder = job_dir / ".hydra"
     if folder.is_symlink():  # planted: never written through (issue 24); a folder of our own
@@ -205,8 +205,6 @@ def _save_job_config(cfg: Any, job_dir: Path) -> None:
 
 def _load_registry() -> Any:
     """The plugin registry; a plugin that fails to import or register is reported once."""
-    from ..plugins import PluginLoadWarning, Registry
-
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PluginLoadWarning)
         registry = Registry()
@@ -237,8 +235,6 @@ def _hydra_entry(argv: Sequence[str], task: Any) -> None:
 
 def print_versions(registry: Any) -> None:
     """vpid-bench's version, then every plugin's distribution and version."""
-    from .. import __version__
-
     print(f"vpid-bench {__version__}")
     for plugin, source in sorted(registry.info.sources.items()):
         where = f"{source.get('distribution')} {source.get('version')}" if source else "?"
@@ -290,17 +286,13 @@ def main(argv: Sequence[str] | None = None) -> None:
     """The command ``vpid-bench``: a Ctrl-C at any moment is one line and status 130 (once
     a 35-54-line traceback during the imports and the pre-flight)."""
     if argv is None:  # the console command: a Ctrl-C while it starts is noted, not lost
-        from .. import interrupts
-
         interrupts.defer()
-    from ..interrupts import seen
-
     try:
         _main(argv)
     except KeyboardInterrupt:
         _interrupted()
     except Exception:  # a library's error over the user's Ctrl-C (interrupts.seen) is it
-        if seen():
+        if interrupts.seen():
             _interrupted()
         raise
 
@@ -308,20 +300,15 @@ def main(argv: Sequence[str] | None = None) -> None:
 def _interrupted(what: str = "no job was started or every completed run is recorded; run "
                  "the same command with --resume to continue") -> NoReturn:
     """One ``interrupted:`` line and the status of the signal (SIGINT, SIGTERM, SIGHUP)."""
-    from ..interrupts import exit_status
-
     with contextlib.suppress(OSError):  # SIGHUP: the terminal may be gone
         print(f"interrupted: {what}", file=sys.stderr)
-    sys.exit(exit_status())
+    sys.exit(interrupts.exit_status())
 
 
 def _main(argv: Sequence[str] | None) -> None:
     from . import preflight
-    from .argv import parse_command_line
     from .callbacks import ensure_job_dir_resolver
-    from .config_store import register_configs
     from .resume import new_invocation, resume_command
-    from .suites import expand_suites
 
     threading.excepthook = _thread_exception
     before = set(threading.enumerate())
@@ -334,8 +321,6 @@ def _main(argv: Sequence[str] | None) -> None:
     except VpidBenchError as exc:
         _refuse(exc)
     if console:
-        from .. import interrupts
-
         interrupts.install()  # raises a Ctrl-C noted during the start-up
     if cmd.version:
         print_versions(registry)
@@ -390,7 +375,6 @@ def _nothing_to_run(plan: Any, registry: Any, task: JobTask) -> bool:
     """Whether the sweep has nothing to run; else its first progress line (how long)."""
     from ..experiment import recorded_in_full
     from ..store.archive import evaluation_seconds
-    from .progress import first_line
 
     if plan.multirun and recorded_in_full(plan.jobs, plan.job_dirs, registry, plan.problems):
         return True
@@ -420,8 +404,6 @@ def _report_only(plan: Any, task: JobTask, lock: Any, before: set[Any], watch: b
 
 def _quick_help(cmd: Any, registry: Any) -> bool:
     """Print the help page without Hydra's machinery; False when Hydra must build it."""
-    from .quick_help import help_text
-
     if cmd.info != "--help":
         return False
     try:
@@ -436,8 +418,6 @@ def _quick_help(cmd: Any, registry: Any) -> bool:
 
 def _sweep_progress(plan: Any) -> Any:
     """The progress line of a ``-m`` sweep whose jobs the plan knows (and progress=true)."""
-    from .progress import SweepProgress
-
     if not plan.multirun or not plan.jobs or not all(j.spec.progress for j in plan.jobs):
         return None
     return SweepProgress(len(plan.jobs), sum(j.spec.runs for j in plan.jobs))
@@ -471,32 +451,27 @@ def _leave(code: int, before: set[Any], watch: bool) -> None:
 
 def _thread_exception(args: Any) -> None:
     """One line for an exception in a plugin's own thread (not Python's traceback)."""
-    from ..interrupts import thread_exception_line
-
-    print(thread_exception_line(args), file=sys.stderr)
+    print(interrupts.thread_exception_line(args), file=sys.stderr)
 
 
 def _run_hydra(args: list[str], task: Any) -> None:
     """Hydra's run; its refusals become one line, exit 2. Hydra raises its errors
     (``HYDRA_FULL_ERROR``), so one a Ctrl-C caused is told from a refusal and ends the
     command as the Ctrl-C does."""
-    from ..interrupts import raise_if_swallowed, seen
-    from ..machine import environ
-
     try:
         with environ("HYDRA_FULL_ERROR", "1"):  # read by Hydra when an error reaches it
             _hydra_entry(args, task)
-        raise_if_swallowed()  # a Ctrl-C a C callback dropped during the last job
+        interrupts.raise_if_swallowed()  # a Ctrl-C a C callback dropped during the last job
     except SystemExit as exc:
         if exc.code not in (0, None):
-            if seen():
+            if interrupts.seen():
                 raise KeyboardInterrupt from None
             sys.exit(2)
         raise
     except KeyboardInterrupt:
         raise
     except Exception as exc:  # noqa: BLE001 - a Hydra error outside any job
-        if seen():
+        if interrupts.seen():
             raise KeyboardInterrupt from None
         cause = exc.__cause__  # the omegaconf error under it, in one message as Hydra says
         _refuse(exc if cause is None or str(cause) in str(exc)

@@ -14,6 +14,7 @@ hands it to Hydra.
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import itertools
 import math
 import os
@@ -25,12 +26,15 @@ from typing import Any
 
 from ..errors import ConfigError, VpidBenchError
 from ..fileio import own_folder
+from ..params import to_plain
 from ..plugins import Registry
 from ..problem import FILLED_PARAMS
 from ..spec import TOP_LEVEL_KEYS, Job, parse_job
 from .argv import CommandLine, ConfigSource
+from .callbacks import JOB_DIR_RESOLVER, job_dir_name
 from .compose import GROUPS, SHIPPED, Composer, hydra_error, initialize
-from .resume import check_reuse
+from .presets import yaml_presets
+from .resume import check_reuse, find_previous
 
 #: The most jobs one command may start (a typo in a range() should not plan a million).
 MAX_JOBS = 10_000
@@ -81,8 +85,6 @@ def _raw_value(override: Any) -> str:
 
 def _group_names(group: str, registry: Registry, folders: Sequence[str] = ()) -> list[str]:
     """The choices of ``group``: plugins, presets and ``<folder>/<group>/<name>.yaml``."""
-    from .presets import yaml_presets
-
     table = registry.problems if group == "problem" else registry.optimizers
     own = {f.stem for folder in folders for f in Path(folder, group).glob("*.yaml")}
     return sorted({*table, *yaml_presets(group), *own})
@@ -186,8 +188,6 @@ def _check_choice(group: str, name: str, registry: Registry, folders: Sequence[s
 
 def did_you_mean(given: str, known: Sequence[str]) -> str:
     """`` (did you mean de4?)`` for a near miss (difflib ratio >= 0.6), else ``""``."""
-    import difflib
-
     close = difflib.get_close_matches(given, list(known), n=1, cutoff=0.6)
     return f" (did you mean {close[0]}?)" if close else ""
 
@@ -325,8 +325,6 @@ def check_writable(directory: Path, key: str) -> None:
 def _resume_folder(cmd: CommandLine, full_cfg: Any, key: str) -> Path | None:
     """The folder ``--resume`` continues (None: the one named on the command line)."""
     from omegaconf import OmegaConf
-
-    from .resume import find_previous
 
     if cmd.resume:
         folder = Path(cmd.resume)
@@ -486,7 +484,6 @@ def refuse_test_instances(jobs: Sequence[Job]) -> None:
     """Tuning sees held-out instances only (docs/protocol.md): an optimizing sweeper's job
     whose problem's ``seed`` keys are all at their default (the test set) is refused,
     naming the key to change."""
-    from ..params import to_plain
     from ..report.load import flatten
 
     for job in jobs:
@@ -510,8 +507,6 @@ def planned_job_dirs(points: Sequence[Sequence[str]], full_cfg: Any, sweep_dir: 
     ``hydra.sweep.subdir`` is not the default."""
     from hydra._internal.config_loader_impl import get_overrides_dirname
     from omegaconf import OmegaConf
-
-    from .callbacks import JOB_DIR_RESOLVER, job_dir_name
 
     sweep = OmegaConf.to_container(full_cfg.hydra.sweep, resolve=False)
     if str(sweep.get("subdir")) != f"${{{JOB_DIR_RESOLVER}:${{hydra.job.override_dirname}}}}":

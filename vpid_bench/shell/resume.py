@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shlex
 import uuid
 from collections.abc import Sequence
 from pathlib import Path
@@ -176,8 +177,6 @@ def collect_job_statuses(sweep_dir: Path, invocation: str | None) -> list[dict[s
 def resume_command(argv: Sequence[str], output_dir: Path, key: str) -> str:
     """The command that continues ``argv``, quoted for a POSIX shell: ``--resume`` alone
     when ``key`` (the output folder) is on the command line, else ``--resume=<output_dir>``."""
-    import shlex
-
     args = [a for a in argv if a != "--resume" and not a.startswith("--resume=")]
     named = any(a.lstrip("+").startswith(key + "=") for a in args)
     args.append("--resume" if named else f"--resume={output_dir}")

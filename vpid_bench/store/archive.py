@@ -19,9 +19,12 @@ from __future__ import annotations
 import csv
 import gzip
 import hashlib
+import importlib.util
 import io
+import os
 import zlib
 from collections.abc import Iterable, Iterator, Mapping
+from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
@@ -69,9 +72,6 @@ ARCHIVE_DIR_ENV = "VPID_BENCH_ARCHIVE_DIR"
 
 def default_root() -> Path:
     """The archives shipped with the package, or the folder ``$VPID_BENCH_ARCHIVE_DIR``."""
-    import os
-    from importlib.resources import files
-
     chosen = os.environ.get(ARCHIVE_DIR_ENV)
     return Path(chosen) if chosen else Path(str(files("vpid_bench.archive")))
 
@@ -97,10 +97,6 @@ RUN_FILES = (RECORDS, IOH)
 def runs_root() -> Path | None:
     """Where the shipped archives' runs are: ``$VPID_BENCH_ARCHIVE_RUNS_DIR``, else the
     installed package ``vpid_archive_runs``, else ``None`` (not installed)."""
-    import importlib.util
-    import os
-    from importlib.resources import files
-
     chosen = os.environ.get(RUNS_DIR_ENV)
     if chosen:
         return Path(chosen)
@@ -115,8 +111,6 @@ def located(folder: Path, name: str) -> Path:
     path = folder / name
     if name not in RUN_FILES or path.exists() or path.is_symlink():
         return path
-    from importlib.resources import files
-
     runs = runs_root()
     shipped = Path(str(files("vpid_bench.archive"))).resolve()
     if runs is not None and folder.resolve().parent == shipped:

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..fileio import loads_json, read_text_limited, write_text_atomic
+from .records import CorruptRecordError, read_record
 
 BEST_SIGNALS = "best_signals.csv"
 MAGIC = "# vpid-bench best signals 1"
@@ -47,8 +48,6 @@ class BestSignals:
 
 def best_vector(record_paths: Iterable[Path]) -> tuple[np.ndarray, dict[str, Any]] | None:
     """:func:`best_of` the readable records at ``record_paths``."""
-    from .records import CorruptRecordError, read_record
-
     records = []
     for path in record_paths:
         try:

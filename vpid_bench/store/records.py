@@ -15,6 +15,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import re
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
@@ -135,8 +136,6 @@ def record_path(job_dir: Path, run_index: int, rid: str) -> Path:
 
 def parse_record_name(name: str) -> tuple[int, str] | None:
     """``(run_index, run_id)`` of a record's file name (:func:`record_path`), or ``None``."""
-    import re
-
     match = re.fullmatch(r"run-(\d+)-(\w+)\.json", name)
     return None if match is None else (int(match.group(1)), match.group(2))
 
