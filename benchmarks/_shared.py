@@ -21,8 +21,7 @@ REPORT = [sys.executable, "-c", "from vpid_bench.report.cli import main; main()"
 
 
 def cli_env() -> dict[str, str]:
-    """The environment of a child command: headless matplotlib with its own config folder
-    (unless the caller set them)."""
+    """A child command's environment: headless matplotlib, its own config folder (unless set)."""
     env = dict(os.environ)
     env.setdefault("MPLBACKEND", "Agg")
     env.setdefault("MPLCONFIGDIR", tempfile.mkdtemp(prefix="vpid-mpl-"))

@@ -30,8 +30,7 @@ JOIN_TIMEOUT_S = 10.0
 
 
 class _Stop(BaseException):
-    """Unwinds the library's loop once the run is over (a library's ``except Exception``
-    cannot swallow it)."""
+    """Unwinds the library's loop once the run is over (past any ``except Exception`` of it)."""
 
 
 _STOP = object()

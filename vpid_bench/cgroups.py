@@ -41,8 +41,7 @@ def _own_folder() -> Path | None:
 
 
 class Cgroup:
-    """One worker's cgroup (see module): created empty, the worker added once started,
-    killed whole, removed once empty."""
+    """One worker's cgroup: created empty, the worker added once started, killed whole, removed."""
 
     def __init__(self, path: Path) -> None:
         self.path = path

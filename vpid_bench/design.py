@@ -47,8 +47,7 @@ def designs(fixed: list[tuple[str, str]], vary: list[tuple[str, str]]
 
 
 def build(registry: Any, name: str, settings: list[tuple[str, str]]) -> Any:
-    """The problem ``name`` with ``settings`` (dotted keys, YAML values), checked as the
-    command line checks them."""
+    """The problem ``name`` with ``settings`` (dotted keys, YAML values), checked as the CLI."""
     from omegaconf import OmegaConf
 
     try:

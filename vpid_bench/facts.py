@@ -20,8 +20,7 @@ from .problem import Problem, kept_instance
 
 @dataclasses.dataclass(frozen=True)
 class InstanceFacts:
-    """One instance as a run record holds it: id, box, true parameters (``None``: unknown)
-    and ``describe()``."""
+    """One instance as a run record holds it: id, box, truth (``None``: unknown), ``describe()``."""
 
     id: str | None
     bounds: Bounds

@@ -33,8 +33,7 @@ MAX_READ_BYTES = 64 * 1024 * 1024
 
 
 def file_sha256(path: Path) -> str:
-    """The SHA-256 of a file's bytes, hex: how a plugin checks a data file it ships or is
-    pointed to."""
+    """A file's SHA-256, hex: how a plugin checks a data file it ships or is pointed to."""
     digest = hashlib.sha256()
     with open(path, "rb") as f:
         for block in iter(lambda: f.read(1 << 20), b""):
@@ -108,8 +107,7 @@ def read_text_limited(path: Path, max_bytes: int = MAX_READ_BYTES) -> str:
 
 
 def _remove_planted_link(path: Path) -> None:
-    """Remove a link planted where vpid-bench keeps a file or folder (the link only), with
-    one ``warning:`` line."""
+    """Remove a link planted where vpid-bench keeps a file or folder, with one ``warning:`` line."""
     path.unlink(missing_ok=True)  # another process may have removed it first
     print(f"warning: {path} was a symbolic link; removed (the link only) so that nothing "
           "is written outside the output folder", file=sys.stderr, flush=True)
@@ -303,8 +301,7 @@ def _locked(folder: Path) -> Iterator[None]:
 
 
 def _links_below(folder: Path, shown_as: Path, limit: int = 20) -> list[Path]:
-    """At most ``limit`` symbolic links in ``folder`` (not followed), as paths under
-    ``shown_as``."""
+    """At most ``limit`` links in ``folder`` (not followed), as paths under ``shown_as``."""
     found: list[Path] = []
     for root, dirs, files in os.walk(folder):
         for name in [*dirs, *files]:

@@ -59,8 +59,7 @@ def defer() -> None:
 
 
 def note(signum: int = signal.SIGINT) -> None:
-    """Record an interrupting signal (one that arrived before :func:`defer`, or in a block
-    that holds them)."""
+    """Record an interrupting signal (one before :func:`defer`, or in a block holding them)."""
     if not _Watch.signalled:
         _Watch.signum = signum
     _Watch.signalled = True

@@ -83,8 +83,7 @@ def polish_share(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
 def _instances(problem: Problem, indices: Iterable[int],
                bests: Mapping[int, list[tuple[np.ndarray, float]]]
                ) -> list[tuple[Problem, list[tuple[np.ndarray, float]], list[int]]]:
-    """The instances of runs ``indices``, each once: ``(instance, its runs' bests, its run
-    indices)``."""
+    """The instances of runs ``indices``, each once: ``(instance, its runs' bests, indices)``."""
     by_instance: dict[str | None, tuple[Problem, list, list[int]]] = {}
     for i in indices:
         inst = kept_instance(problem, i)

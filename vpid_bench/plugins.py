@@ -45,8 +45,7 @@ class PluginManagerInfo:
 
 
 class PluginManager(pluggy.PluginManager):
-    """pluggy's manager of the ``vpid_bench`` hooks, with what happened while its plugins
-    loaded (:attr:`info`)."""
+    """pluggy's manager of the ``vpid_bench`` hooks, and how its plugins loaded (:attr:`info`)."""
 
     def __init__(self) -> None:
         super().__init__(hookspecs.PROJECT_NAME)
@@ -174,8 +173,7 @@ class Registry:
                               PluginLoadWarning, stacklevel=2)
 
     def suites(self) -> dict[str, list[str]]:
-        """Each suite name the registered problems declare (``Problem.suites``), with its
-        problems in sorted order."""
+        """The suites the registered problems declare (``Problem.suites``), problems sorted."""
         out: dict[str, list[str]] = {}
         for name, cls in sorted(self.problems.items()):
             for suite in getattr(cls, "suites", ()) or ():

@@ -67,8 +67,7 @@ def strays(process: Any) -> list[Any]:
 
 
 def exited(pid: int) -> bool:
-    """Whether the child process ``pid`` has ended, without reaping it (its number stays its
-    own until then)."""
+    """Whether the child process ``pid`` has ended, not reaping it (its number stays its own)."""
     try:
         return os.waitid(os.P_PID, pid, os.WEXITED | os.WNOHANG | os.WNOWAIT) is not None
     except ChildProcessError:  # already reaped

@@ -108,8 +108,7 @@ def worker_cap() -> tuple[int, str]:
 
 
 def can_send(job: Job) -> str | None:
-    """Why ``job`` cannot be sent to a worker (it does not pickle, e.g. a class defined
-    inside a function), or ``None``."""
+    """Why ``job`` cannot be sent to a worker (it does not pickle: a class made in a function)."""
     try:
         pickle.dumps(job)
     except Exception as exc:  # noqa: BLE001 - any pickling failure means "cannot"
@@ -183,8 +182,7 @@ class Workers:
         return worker
 
     def prestart(self, count: int | None = None) -> None:
-        """Start ``count`` workers now (at most :attr:`size`), so their imports overlap the
-        sweep's own set-up."""
+        """Start ``count`` workers now (at most :attr:`size`): their imports overlap the set-up."""
         while len(self._all) < min(self.size, self.size if count is None else count):
             self._idle.append(self._start())
 
@@ -232,8 +230,7 @@ class Workers:
         return describe_exit(worker.process.exitcode)
 
     def _release(self, worker: _Worker, left: int, who: str) -> None:
-        """A worker whose task is over goes back to the idle ones, or is ended with the
-        processes its task left running."""
+        """Back to the idle workers, or ended with the processes its task left running."""
         if left:
             log.warning("%s left %d process(es) running after its task; ended with its worker "
                         "process", who, left)
@@ -391,8 +388,7 @@ class Workers:
 
     def outcomes(self, job: Job, indices: Sequence[int], lockstep: bool, workers: int,
                  threads: int) -> Iterator[RunOutcome]:
-        """The outcome of each run in ``indices``, in the order they end, from up to
-        ``workers`` processes at once."""
+        """The outcome of each run in ``indices``, as they end, from up to ``workers`` processes."""
         size = max(1, workers)
         pending: deque[list[int]] = deque(_tasks(list(indices), size) if lockstep
                                           else [[i] for i in indices])
@@ -507,8 +503,7 @@ def _tasks(indices: list[int], workers: int) -> list[list[int]]:
 
 
 def _allowance(job: Job, runs: int) -> float | None:
-    """Seconds a worker may take for ``runs`` runs (a warm-up counts as one) before it is
-    killed (``None``: none)."""
+    """Seconds a worker may take for ``runs`` runs (a warm-up counts as one) before it is killed."""
     limit = job.spec.run_timeout_s
     return None if limit is None else limit * max(runs, 1) + GRACE_S
 

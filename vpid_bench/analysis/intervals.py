@@ -100,21 +100,16 @@ def jacobian_intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None
             lags = lags or n_lags  # the prewhitened estimate's, which the report names
         hac_var = np.maximum(*variances)  # the larger of the two (see the module)
         se_hac = np.where(blind, math.inf, np.sqrt(np.maximum(hac_var, 0.0)) * scale)
-    return {
-        "method": "jacobian",
-        "assumes": "white residuals",
-        "level": 0.95,
-        "lower": _finite_or_none(x - Z95 * se),
-        "upper": _finite_or_none(x + Z95 * se),
-        "se": _finite_or_none(se),
-        "sigma": sigma.tolist(),
-        "dof": int(r.size - x.size),
-        "robust": {"method": "hac", "kernel": "bartlett", "prewhitened": "var1 or none",
-                   "lags": int(lags), "level": 0.95,
-                   "lower": _finite_or_none(x - Z95 * se_hac),
-                   "upper": _finite_or_none(x + Z95 * se_hac),
-                   "se": _finite_or_none(se_hac)},
-    }
+    return {"method": "jacobian", "assumes": "white residuals", "level": 0.95, **_ends(x, se),
+            "sigma": sigma.tolist(), "dof": int(r.size - x.size),
+            "robust": {"method": "hac", "kernel": "bartlett", "prewhitened": "var1 or none",
+                       "lags": int(lags), "level": 0.95, **_ends(x, se_hac)}}
+
+
+def _ends(x: np.ndarray, se: np.ndarray) -> dict[str, list[float | None]]:
+    """The 95 % interval of ``x`` with standard errors ``se`` (``None``: unbounded)."""
+    return {"lower": _finite_or_none(x - Z95 * se), "upper": _finite_or_none(x + Z95 * se),
+            "se": _finite_or_none(se)}
 
 
 def time_positions(groups: np.ndarray) -> np.ndarray:

@@ -170,8 +170,7 @@ def verdict(fits: Sequence[StructureFit], alpha: float = 0.05) -> str:
 
 
 def table_rows(fits: Sequence[StructureFit]) -> list[list[Any]]:
-    """One row per structure, best first: label, k, held-out error, fit error, ΔAIC, ΔBIC,
-    whiteness p-value."""
+    """One row per structure, best first, in the columns of :data:`TABLE_HEADERS`."""
     order = ranked(fits)
     a0, b0 = min(f.aic for f in fits), min(f.bic for f in fits)
     return [[f.label, f.k, f.heldout, f.fit_error, f.aic - a0, f.bic - b0, f.white_p]

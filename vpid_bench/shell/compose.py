@@ -141,8 +141,7 @@ class Composer:
         return OmegaConf.masked_copy(full, [k for k in full if k != "hydra"])
 
     def _separable(self, structural: list[Any]) -> bool:
-        """Whether the point's optimizer node can come from another composition (see the
-        class docstring)."""
+        """Whether the point's optimizer node can come from another composition (see the class)."""
         if self.source != SHIPPED:
             return False
         for o in structural:

@@ -73,8 +73,7 @@ def _job_folder(folder: Path, manifest: Mapping[str, Any], problem: str) -> Path
 
 
 def _run_identity(rec: Mapping[str, Any]) -> str:
-    """What makes a run the run it is (its setting, optimizer, seed and index), whatever
-    run id its line claims."""
+    """What makes a run the run it is (setting, optimizer, seed, index), whatever its run id."""
     optimizer = rec.get("optimizer") or {}
     return canonical_json([run_setting(rec), optimizer.get("name"), optimizer.get("params"),
                            (rec.get("seeds") or {}).get("seed"), rec.get("run_index")])

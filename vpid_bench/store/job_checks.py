@@ -6,7 +6,7 @@ value (a report never trusts what a job folder holds)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -38,16 +38,24 @@ def _positive(v: Any) -> bool:
     return finite(v) and v >= 0
 
 
+def _checked(path: Path, checks: Callable[[dict[str, Any]], Iterable[tuple[str, bool, str]]]
+             ) -> tuple[dict[str, Any] | None, str]:
+    """The JSON object of the job file ``path`` if it passes every ``(field, ok, expected)``
+    of ``checks(data)``: ``(data, "")``, or ``(None, why)``."""
+    data, why = read_job_json(path)
+    if why or not isinstance(data, dict):
+        return None, why or "not a JSON object"
+    for key, ok, expected in checks(data):
+        if not ok:
+            return None, f"field {key}: expected {expected}"
+    return data, ""
+
+
 def read_identifiability(path: Path, names: Sequence[str]) -> tuple[dict[str, Any] | None, str]:
     """A job's ``identifiability.json``, checked against the records' parameter ``names``:
     ``(data, "")``, or ``(None, why)``."""
     d = len(names)
-    data, why = read_job_json(path)
-    if why:
-        return None, why
-    if not isinstance(data, dict):
-        return None, "not a JSON object"
-    checks = (
+    return _checked(path, lambda data: (
         ("names", data.get("names") == list(names), f"the records' parameter names {names}"),
         ("crb_percent", _bounds_ok(data.get("crb_percent"), d),
          f"a list of {d} finite numbers >= 0"),
@@ -61,11 +69,7 @@ def read_identifiability(path: Path, names: Sequence[str]) -> tuple[dict[str, An
          "a finite number >= 1 or null (infinite)"),
         ("sigma", isinstance(data.get("sigma"), list) and 1 <= len(data["sigma"]) <= 10_000
          and all(finite(v) and v > 0 for v in data["sigma"]), "a list of numbers > 0"),
-    )
-    for key, ok, expected in (*checks, *_optional_checks(data, d)):
-        if not ok:
-            return None, f"field {key}: expected {expected}"
-    return data, ""
+        *_optional_checks(data, d)))
 
 
 def _bounds_ok(v: Any, d: int) -> bool:
@@ -113,29 +117,21 @@ def _optional_checks(data: Mapping[str, Any], d: int) -> list[tuple[str, bool, s
 
 def read_estimator_floors(path: Path) -> tuple[dict[str, Any] | None, str]:
     """A job's ``estimators.json``, checked: ``(data, "")`` or ``(None, why)``."""
-    data, why = read_job_json(path)
-    if why:
-        return None, why
-    if not isinstance(data, dict):
-        return None, "not a JSON object"
-    n = data.get("instances")
-    floors = data.get("floors")
-    checks = (
-        ("metric", isinstance(data.get("metric"), str) and 0 < len(data["metric"]) <= 64,
-         "a name"),
-        ("instances", isinstance(n, int) and not isinstance(n, bool) and 1 <= n <= 1000,
-         "an integer in [1, 1000]"),
-        ("chosen", data.get("chosen") in OBJECTIVES, "one of " + ", ".join(OBJECTIVES)),
-        ("floors", isinstance(floors, dict) and floors and set(floors) <= set(OBJECTIVES)
-         and all(isinstance(v, dict) and _positive(v.get("median"))
-                 and isinstance(v.get("values"), list) and len(v["values"]) == n
-                 and all(_positive(x) for x in v["values"]) for v in floors.values()),
-         "per objective a median and one value per instance, finite and >= 0"),
-    )
-    for key, ok, expected in checks:
-        if not ok:
-            return None, f"field {key}: expected {expected}"
-    return data, ""
+    def checks(data: dict[str, Any]) -> Iterable[tuple[str, bool, str]]:
+        n, floors = data.get("instances"), data.get("floors")
+        return (
+            ("metric", isinstance(data.get("metric"), str) and 0 < len(data["metric"]) <= 64,
+             "a name"),
+            ("instances", isinstance(n, int) and not isinstance(n, bool) and 1 <= n <= 1000,
+             "an integer in [1, 1000]"),
+            ("chosen", data.get("chosen") in OBJECTIVES, "one of " + ", ".join(OBJECTIVES)),
+            ("floors", isinstance(floors, dict) and floors and set(floors) <= set(OBJECTIVES)
+             and all(isinstance(v, dict) and _positive(v.get("median"))
+                     and isinstance(v.get("values"), list) and len(v["values"]) == n
+                     and all(map(_positive, v["values"])) for v in floors.values()),
+             "per objective a median and one value per instance, finite and >= 0"))
+
+    return _checked(path, checks)
 
 
 def _numbers(v: Any, most: int) -> bool:

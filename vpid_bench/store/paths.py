@@ -31,8 +31,7 @@ class UnsafePathError(ValueError):
 
 
 def inside(root: Path, path: Path) -> Path:
-    """``path`` if it lies inside ``root`` once both are resolved; else
-    :class:`UnsafePathError`."""
+    """``path`` if it lies inside ``root`` (both resolved), else :class:`UnsafePathError`."""
     root_r = Path(root).resolve()
     path_r = Path(path).resolve()
     if path_r != root_r and root_r not in path_r.parents:

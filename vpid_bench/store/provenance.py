@@ -39,8 +39,7 @@ _REQUIREMENT_NAME = re.compile(r"^\s*([A-Za-z0-9][A-Za-z0-9._-]*)")
 
 @functools.lru_cache(maxsize=64)
 def _provenance_of(dist_name: str) -> tuple[str, str, tuple[tuple[str, str], ...]]:
-    """Name, version and its unconditional requirements' installed versions (extras and
-    markers skipped)."""
+    """Name, version and the installed versions of its requirements (those of extras left out)."""
     dist = importlib.metadata.distribution(dist_name)
     requires = []
     for req in dist.requires or []:
