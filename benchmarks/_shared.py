@@ -4,6 +4,7 @@ composed as the command composes it, and the timers. Imported as ``_shared`` (a 
 
 from __future__ import annotations
 
+import contextlib
 import os
 import resource
 import statistics
@@ -122,10 +123,8 @@ def parse_keys(text: str) -> dict[str, Any]:
         if value.lower() in ("true", "false"):
             return value.lower() == "true"
         for kind in (int, float):
-            try:
+            with contextlib.suppress(ValueError):
                 return kind(value)
-            except ValueError:
-                pass
         return value
 
     pairs = (item.split("=", 1) for item in text.split(",") if item)

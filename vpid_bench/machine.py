@@ -55,23 +55,17 @@ def machine_facts() -> dict[str, Any]:
     implementation, version, architecture and threads), as threadpoolctl reports them.
     Computed once per process."""
     cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    blas = []
+    with contextlib.suppress(OSError), open("/proc/cpuinfo", encoding="utf-8") as fh:
+        cpu = next((ln.split(":", 1)[1].strip() for ln in fh if ln.startswith("model name")),
+                   cpu)
     try:
         import scipy.linalg  # noqa: F401 - load scipy's BLAS too, as a run would
         from threadpoolctl import threadpool_info
 
-        for lib in threadpool_info():
-            blas.append({k: lib.get(src) for k, src in (
-                ("api", "internal_api"), ("version", "version"),
-                ("architecture", "architecture"), ("threads", "num_threads"))})
+        blas = [{k: lib.get(src) for k, src in (
+            ("api", "internal_api"), ("version", "version"),
+            ("architecture", "architecture"), ("threads", "num_threads"))}
+            for lib in threadpool_info()]
     except Exception:  # noqa: BLE001 - facts for the record, never a reason to fail a run
         blas = []
     return {"cpu": cpu, "cores": os.cpu_count(), "cores_available": available_cores(),

@@ -9,6 +9,7 @@ plugin's Hydra config node from its dataclass (a third-party plugin needs no YAM
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import types
@@ -66,10 +67,8 @@ def _coerce_union(value: Any, tp: Any, key: str) -> Any:
     for arg in args:
         if arg is type(None):
             continue
-        try:
+        with contextlib.suppress(ConfigError):
             return _coerce(value, arg, key)
-        except ConfigError:
-            continue
     raise ConfigError(key, value, _type_name(tp))
 
 

@@ -133,11 +133,9 @@ def _children(pid: int) -> list[int]:
         tids = []
     found: list[int] = []
     for tid in tids:
-        try:
-            with open(f"/proc/{pid}/task/{tid}/children") as f:
-                found += [int(c) for c in f.read().split()]
-        except (OSError, ValueError):
-            continue
+        children = f"/proc/{pid}/task/{tid}/children"
+        with contextlib.suppress(OSError, ValueError), open(children) as f:
+            found += [int(c) for c in f.read().split()]
     if tids or not os.path.isdir("/proc"):
         return found
     import psutil

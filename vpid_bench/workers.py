@@ -223,10 +223,9 @@ class Workers:
                   f"{worker.process.pid} could not be ended and are left running (they left "
                   f"its cgroup or session and cleared their environment): pid "
                   f"{', pid '.join(left)}", file=sys.stderr, flush=True)
-        if worker in self._all:
-            self._all.remove(worker)
-        if worker in self._idle:
-            self._idle.remove(worker)
+        for group in (self._all, self._idle):
+            if worker in group:
+                group.remove(worker)
         return describe_exit(worker.process.exitcode)
 
     def _release(self, worker: _Worker, left: int, who: str) -> None:
@@ -248,10 +247,12 @@ class Workers:
 
     # --- waiting
 
-    def _events(self, workers: Sequence[_Worker], timeout: float | None) -> list[_Worker]:
-        """The workers among ``workers`` with a message waiting or whose process ended, after
-        at most ``timeout`` s (``None``: for ever), copying what they print meanwhile."""
-        end = None if timeout is None else time.monotonic() + timeout
+    def _events(self, busy: Sequence[_Task]) -> list[_Worker]:
+        """The workers of the ``busy`` tasks with a message waiting or whose process ended,
+        waiting until the first deadline at most (none: for ever), copying what they print."""
+        deadlines = [b.deadline for b in busy if b.deadline is not None]
+        end = min(deadlines) if deadlines else None
+        workers = [b.worker for b in busy]
         unwatched = [w for w in workers if w.tree.fd is None]
         while True:
             handles: dict[Any, Any] = {}
@@ -352,9 +353,7 @@ class Workers:
                      ) -> Iterator[tuple[_Task, tuple[Any, Any]]]:
         """The calls among ``busy`` that ended, each with its ``(value, error)``, after one
         wait (a call that announces its problem is built gets ``limit`` from then)."""
-        deadlines = [b.deadline for b in busy.values() if b.deadline is not None]
-        left = max(0.0, min(deadlines) - time.monotonic()) if deadlines else None
-        for worker in self._events([b.worker for b in busy.values()], left):
+        for worker in self._events(list(busy.values())):
             call = busy[worker.conn]
             msg, ended = self._receive(worker)
             if ended is not None:
@@ -418,9 +417,7 @@ class Workers:
 
     def _collect(self, job: Job, busy: dict[Connection, _Task],
                  pending: deque[list[int]]) -> Iterator[RunOutcome]:
-        deadlines = [b.deadline for b in busy.values() if b.deadline is not None]
-        left = max(0.0, min(deadlines) - time.monotonic()) if deadlines else None
-        for worker in self._events([b.worker for b in busy.values()], left):
+        for worker in self._events(list(busy.values())):
             b = busy[worker.conn]
             msg, ended = self._receive(worker)
             if ended is not None:

@@ -25,7 +25,7 @@ from typing import Any, NoReturn
 from .. import __version__, interrupts
 from ..errors import VpidBenchError
 from ..fileio import loads_json, open_append, read_text_limited, write_text_atomic
-from ..machine import environ
+from ..machine import available_cores, environ
 from ..plugins import PluginLoadWarning, Registry
 from ..store.job_status import write_job_status
 from .argv import parse_command_line
@@ -104,7 +104,6 @@ class JobTask:
         """Run the job; its search score is what an optimizing sweeper (Optuna) minimises."""
         from ..build import ProblemCache
         from ..experiment import run_from_config
-        from ..machine import available_cores
         from ..workers import Workers
 
         try:
@@ -137,8 +136,8 @@ class JobTask:
         except BaseException as exc:  # noqa: BLE001 - crash isolation (SystemExit too): go on
             if debug_enabled():
                 log.exception("job failed")
-            message = f"error: {one_line(exc)}"
-            print(message + (f" [{job_dir}]" if multirun else ""), file=sys.stderr, flush=True)
+            print(f"error: {one_line(exc)}" + (f" [{job_dir}]" if multirun else ""),
+                  file=sys.stderr, flush=True)
             _write_status(job_dir, "error", one_line(exc))
             self.not_ok += 1
             if self.progress is not None:

@@ -11,6 +11,7 @@ and ``# units: {JSON}``, then a CSV table: ``t`` (s), ``<channel>:measured``,
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
@@ -50,10 +51,8 @@ def best_vector(record_paths: Iterable[Path]) -> tuple[np.ndarray, dict[str, Any
     """:func:`best_of` the readable records at ``record_paths``."""
     records = []
     for path in record_paths:
-        try:
+        with contextlib.suppress(CorruptRecordError, OSError):
             records.append(read_record(Path(path)))
-        except (CorruptRecordError, OSError):
-            continue
     return best_of(records)
 
 

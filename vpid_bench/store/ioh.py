@@ -100,10 +100,8 @@ def export_ioh(root: Path, records: Sequence[Mapping[str, Any]],
             d = len(x) or len((rec.get("parameters") or {}).get("names") or []) or 1
             inst = (rec.get("instance") or {}).get("index", r["run_index"])
             inst = inst if isinstance(inst, int) and 0 <= inst <= MAX_INSTANCE else 0
-            dims.setdefault(d, []).append({
-                "instance": inst, "evals": int(used),
-                "best": {"evals": best_at[0], "y": best_at[1],
-                         "x": x}})
+            dims.setdefault(d, []).append({"instance": inst, "evals": int(used), "best": {
+                "evals": best_at[0], "y": best_at[1], "x": x}})
             blocks.setdefault(d, []).extend(lines)
         if not dims:
             continue

@@ -9,6 +9,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import importlib.metadata
@@ -27,10 +28,8 @@ def package_versions(extra: tuple[str, ...] = ()) -> dict[str, str]:
     """Versions of Python and of :data:`CORE_PACKAGES` (plus ``extra``) that are installed."""
     out = {"python": platform.python_version()}
     for dist in (*CORE_PACKAGES, *extra):
-        try:
+        with contextlib.suppress(importlib.metadata.PackageNotFoundError):
             out[dist] = importlib.metadata.version(dist)
-        except importlib.metadata.PackageNotFoundError:
-            continue
     return out
 
 

@@ -86,14 +86,12 @@ def _jsonable(obj: Any) -> Any:
         return _float_text(obj)
     if kind is int or kind is str or kind is bool or obj is None:
         return obj
-    if kind is list or kind is tuple:
+    if isinstance(obj, (list, tuple)):
         if all(type(v) is int or (type(v) is float and math.isfinite(v)) for v in obj):
             return list(obj)  # already strict JSON: no call per element
         return [_jsonable(v) for v in obj]
     if isinstance(obj, Mapping):
         return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
     if isinstance(obj, np.ndarray):
         if obj.dtype.kind in "iub" or (obj.dtype.kind == "f" and np.isfinite(obj).all()):
             return obj.tolist()
