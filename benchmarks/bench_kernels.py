@@ -4,20 +4,13 @@ by side in one run (interleaved rounds; the median, or the least where noted).
     MPLBACKEND=Agg .venv/bin/python benchmarks/bench_kernels.py \\
         {core,magic,structures,measured} [--rounds 7] [--ps 20]
 
-* ``core``, the paper's half car: its specialised kernel (``vpid_vehicle.kernel``, one
-  thread); the suite's shared linear core (``ride.linear.newmark_outputs``, target within 1.3x
-  of it); the same with the model's numpy code that builds M, C, K (what a ride problem runs);
-  the plain numpy scheme (``simulate(newmark(...))``). Rounds of 0.3 s.
-* ``magic``: the Magic Formula kernel with its vectorisable ``atan`` and ``sin``
-  (``ride/vecmath``) against the same source compiled with the C library's
-  (``smoke_lateral_mf``); one call per round.
-* ``structures``: each ride family's ``evaluate`` (3 s at 1 ms) with the linear structure and
-  the richest (cubic spring, bilinear damper: RK4); the least over rounds of 15 calls' mean.
-* ``measured``: the measured problems at their defaults (docs/measured.md), a population of
-  ``--ps`` at once against one candidate at a time.
-
-Prints per way µs per candidate, its ratio to the first way and, where the ways compute the
-same outputs, the largest difference to the first's (of the peak).
+``core``: the paper's half car's specialised kernel against the ride suite's shared linear
+core (target within 1.3x of it), the same with the model's matrices, and plain numpy;
+``magic``: the Magic Formula kernel's vectorisable ``atan`` and ``sin`` against the C
+library's; ``structures``: each ride family's linear and richest structure; ``measured``:
+the measured problems, ``--ps`` at once against one at a time (docs/suite.md and
+docs/measured.md). Prints per way µs per candidate, its ratio to the first way and, where the
+ways compute the same outputs, the largest difference to the first's (of the peak).
 """
 
 from __future__ import annotations

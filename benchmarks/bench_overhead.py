@@ -4,13 +4,10 @@ evaluations, measured side by side in one run (issue: studies at kernel speed).
     MPLBACKEND=Agg .venv/bin/python benchmarks/bench_overhead.py [--budget 4200] [--repeat 5] \\
         [--skip nevergrad] [--only random lsq] [--problem smoke_quarter]
 
-Per optimizer, after a short warm-up run: one run on ``--problem`` (PS 20, at its defaults)
-through the run loop (:func:`vpid_bench.runner.run`), recording the batches it evaluated;
-then the same batches evaluated again the same way with nothing around them (the kernel's
-time). Prints the medians over ``--repeat`` runs (one run of 51 batches moves by 10-20 % on a
-shared machine) of the wall time per evaluation, the kernel's, their ratio (1: the optimizer
-costs nothing beyond its evaluations), its own ``ask`` and ``tell``, the run loop's share,
-and the batches (sequential rounds of ask/tell).
+Per optimizer, one run on ``--problem`` (PS 20) through the run loop against its own batches
+evaluated again alone, the rest split into its ``ask`` and ``tell`` and the run loop's share;
+the medians over ``--repeat`` runs (the method and the measurements: docs/sweeps.md, each
+optimizer's overhead per evaluation).
 """
 
 from __future__ import annotations

@@ -4,16 +4,12 @@ side with the runs they report on; or an archive's report.
     .venv/bin/python benchmarks/bench_report.py [--repeats 3] [--records SWEEP_DIR]
     .venv/bin/python benchmarks/bench_report.py --archive ARCHIVE [--instances 15]
 
-* **Full report**: ``vpid-bench-report SWEEP -o OUT`` in a child process (imports included)
-  on the paper experiment's records (made once into a temporary folder unless ``--records``
-  names a sweep), and the sweep's own wall time for scale.
-* **Short report**: ``vpid-bench runs=30`` (DE4 on the vehicle) with ``report=true`` and
-  ``report=false`` alternately: the difference is what the single job's report adds.
-* **An archive's report** (``--archive``), nothing run, beside the 60 s a report over
-  archive/vpid1 may take on a quiet 2-core machine; with ``--instances N``, also on an archive
-  of the same runs N times as large (each run copied to N instances, its values scaled by a
-  factor in [1, 1.05) drawn per copy so the copies are not tied; the optima copied alike):
-  the size of a full build, from a slice of it (``tools/archive_cost.py``).
+The full report of the paper experiment's records (made once into a temporary folder unless
+``--records`` names a sweep) in a child process, beside the sweep's own time; a single job
+(``runs=30``) with and without its short report; or (``--archive``) an archive's report
+beside its 60 s target, and with ``--instances N`` that of the same runs copied to N
+instances, each copy's values scaled by a factor in [1, 1.05) so the copies are not tied
+(the measurements: docs/report.md and docs/sweeps.md).
 """
 
 from __future__ import annotations

@@ -7,15 +7,9 @@ processes, threads, a launcher, the report or the stop at the target cost or giv
 
 Each way (:data:`WAYS`) runs the same ``vpid-bench -m`` sweep into its own folder. Per way:
 wall and CPU seconds, evaluations per second, the speed-up over the first way, the runs' own
-time (the records' ``timing.run_time_s``), whether its records are the first way's
-(fingerprints without timing) and, with a report, whether its fixed-target table
-(``tables/ert.csv``) is the first reported way's. Yardsticks, in the same invocation:
-``--runs-alone`` the first way's runs in this process with nothing around them (problem built
-and kernel compiled beforehand), in lockstep and one after another; ``--kernel`` the kernel
-alone for the first way's evaluations (:func:`_shared.kernel_us` at each job's settings), on
-one core and over every core; ``--report-alone`` ``vpid-bench-report`` on the first way's
-records; ``--fixed-start`` a sweep of one job, one run, one generation (what every command
-pays). docs/sweeps.md gives the commands of its measurements.
+time, whether its records (fingerprints without timing) and ``tables/ert.csv`` are the first
+way's, each beside the yardsticks the flags ask for, timed in the same invocation (what each
+is, and the measurements: docs/sweeps.md, speed at scale).
 """
 
 from __future__ import annotations

@@ -6,24 +6,12 @@ beside the kernel-only time of the same evaluations, side by side in one run.
     MPLBACKEND=Agg .venv/bin/python tools/archive_cost.py \\
         --built outputs/archive-vpid1 [--wall-s SECONDS]   # a finished build, nothing run
 
-1. **The build** of the slice: :func:`build_archive.build` (every stage, pack included, into
-   ``--out``), its wall and CPU time (the process tree) per stage.
-2. **Kernel only** (the yardstick): per member, its kernel's µs per candidate on one thread
-   (:func:`_shared.kernel_us`), timed before and after the build (their mean: the machine's
-   speed moves during a build), times the evaluations its runs used; over ``C`` cores, that
-   sum over ``C``. Build / kernel only is what the machinery around the evaluations costs
-   (target: at most 2), in wall and in CPU seconds.
-3. **Per member and per optimizer**: runs, evaluations, the runs' own time (the records'
-   ``timing.run_time_s``), the kernel-only time of those evaluations, and the jobs' analysis
-   (each ``job.json``'s wall time less its runs' time over its workers).
-4. **Extrapolation to ``--full-runs`` instances**: a run's cost does not depend on the job's
-   other runs, so the runs' time and the analysis scale by ``full_runs / runs``; the rest of
-   the sweep (Hydra, worker start-up, warm-ups: the runs stage less its jobs' wall) and the
-   certify and pack stages count once more as measured. A job of one run shares no gathered
-   call, so the runs' time is an upper bound.
-
-Timings on a shared machine move by up to 2x between invocations: compare the columns of one
-invocation.
+The slice's build (:func:`build_archive.build`, every stage into ``--out``), its wall and
+CPU time per stage, beside the kernel-only time of the same evaluations (each member's µs
+per candidate, :func:`_shared.kernel_us`, timed before and after the build: their mean),
+per member and per optimizer, and extrapolated to ``--full-runs`` instances (the method
+and the measurements: docs/sweeps.md, what the vpid1 build costs). Timings on a shared
+machine move by up to 2x between invocations: compare the columns of one invocation.
 """
 
 from __future__ import annotations

@@ -169,9 +169,7 @@ class Tree(_Held):
                                  os.WEXITED | os.WNOHANG | os.WNOWAIT) is not None
             except ChildProcessError:  # already reaped
                 return True
-        if not self._unreaped():
-            return True
-        return exited(self.pid)  # not reaped: the number is still the worker's
+        return not self._unreaped() or exited(self.pid)  # unreaped: the number is its own
 
     def _unreaped(self) -> bool:
         """Whether the worker is not reaped yet (its number is still its own)."""

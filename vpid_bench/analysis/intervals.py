@@ -15,14 +15,11 @@ can. For an identified vector ``x̂`` (physical units) of a problem with residua
 For a model linear in ``θ`` with one group this is the ordinary least-squares interval
 (tested against the closed form). It **assumes white residuals**; where model error leaves
 them correlated it is too narrow. Beside it, ``robust`` is the sandwich ``A⁻¹ B A⁻¹``
-(``A = Jᵀ W J``) with a HAC estimate ``B`` of the long-run covariance of the scores ``s_t``
-(the whitened scores ``J_i r_i / σ̂_i²`` of the entries at time position ``t``, summed):
-Andrews and Monahan's (1992) *prewhitened* Newey–West (a VAR(1) ``s_t = Φ s_{t−1} + u_t``,
-its singular values capped at :data:`MAX_AR`; the Bartlett estimate of the innovations with
-Andrews' (1991) bandwidth ``L = 1.1447 (α T)^{1/3}``, ``α = 4ρ² / ((1−ρ)² (1+ρ)²)``;
-recoloured, ``B = (I − Φ)⁻¹ B_u (I − Φ)⁻ᵀ``). Each parameter's robust variance is the larger
-of the prewhitened and the plain Newey–West sandwich (why, and why not a block bootstrap:
-docs/estimators.md). With white residuals both equal the Jacobian interval.
+(``A = Jᵀ W J``) with ``B`` the long-run covariance of the whitened scores summed per time
+position, Andrews and Monahan's (1992) *prewhitened* Newey–West (:func:`hac_covariance`,
+:func:`var1`, :func:`andrews_lags`); each parameter's robust variance is the larger of the
+prewhitened and the plain sandwich (why, and why not a block bootstrap: docs/estimators.md).
+With white residuals both equal the Jacobian interval.
 """
 
 from __future__ import annotations

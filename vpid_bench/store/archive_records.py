@@ -128,10 +128,9 @@ def read_archive(folder: Path, optima_only: bool = False) -> Archive:
     used (a changed file, a limit crossed, a run or an optimum given twice, too many bad
     lines). Bad record or optimum lines are skipped and named (:attr:`Archive.bad`).
 
-    ``optima_only``: its optima without its records (what ``target=`` needs), the records
-    file checked against its SHA-256 but not read line by line: reading and checking the
-    8,265 records of the shipped archives took 6.5 s, once in the pre-flight and once more
-    in every job of a ``target=`` sweep."""
+    ``optima_only``: its optima without its records (what ``target=`` needs, in the
+    pre-flight and in every job), the records file checked against its SHA-256 but not read
+    line by line (which took 6.5 s for the shipped archives)."""
     folder = Path(folder)
     manifest = _manifest(folder)
     _check_job_files(folder, manifest)
