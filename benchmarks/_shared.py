@@ -60,8 +60,7 @@ def run_timed(cmd: list[str], cwd: Any = None, check: bool = True) -> tuple[floa
         return r.ru_utime + r.ru_stime
 
     c0, t0 = children_cpu(), time.perf_counter()
-    done = subprocess.run(cmd, cwd=cwd, env=cli_env(), capture_output=True, text=True,
-                          check=False)
+    done = subprocess.run(cmd, cwd=cwd, env=cli_env(), capture_output=True, text=True, check=False)
     wall = time.perf_counter() - t0
     if check and done.returncode != 0:
         sys.exit(f"failed ({done.returncode}): {' '.join(map(str, cmd))}\n"
@@ -92,8 +91,7 @@ def interleaved(calls: dict[str, Callable[[], object]], rounds: int, number: int
     return {name: pick(t) for name, t in times.items()}
 
 
-def kernel_us(cfg: dict[str, Any], seconds: float = 1.0, batch: int = 20
-              ) -> tuple[float, float]:
+def kernel_us(cfg: dict[str, Any], seconds: float = 1.0, batch: int = 20) -> tuple[float, float]:
     """The problem ``cfg``'s (``name`` and keys) µs per candidate on one thread, batches of
     ``batch`` random candidates in its box, the median of 5 timings of ``seconds / 5``; in
     wall time and in this process's CPU time (which another program does not inflate)."""

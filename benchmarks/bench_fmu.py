@@ -28,14 +28,6 @@ HERE = Path(__file__).parent
 X = np.array([280.0, 33.0, 17000.0, 1300.0])
 
 
-def _c_loop(folder: Path) -> Path:
-    from vpid_fmu import example
-
-    exe = folder / "fmu_c_loop"
-    subprocess.run([example.compiler() or "gcc", "-O2", f"-I{example.fmi_headers()}",
-                    str(HERE / "fmu_c_loop.c"), "-o", str(exe), "-ldl"], check=True)
-    return exe
-
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -62,7 +54,9 @@ def main() -> None:
         problem = FmuProblem(build_dataclass(FmuConfig, {
             "fmu": str(fmu), "reference": {"file": str(record)}}, "problem"))
         problem.evaluate(X[None])  # compile (or load the cache) and instantiate
-        exe = _c_loop(folder)
+        exe = folder / "fmu_c_loop"  # the C loop, compiled here
+        subprocess.run([example.compiler() or "gcc", "-O2", f"-I{example.fmi_headers()}",
+                        str(HERE / "fmu_c_loop.c"), "-o", str(exe), "-ldl"], check=True)
         (folder / "h.bin").write_bytes(h.astype("<f8").tobytes())
         lib = folder / "lib" / "quarter_car.so"
         lib.parent.mkdir()

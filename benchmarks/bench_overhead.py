@@ -120,8 +120,7 @@ def main() -> None:
         if name in args.skip or (args.only is not None and name not in args.only):
             continue
         try:
-            runs = [measure(registry, name, args.budget, args.problem)
-                    for _ in range(args.repeat)]
+            runs = [measure(registry, name, args.budget, args.problem) for _ in range(args.repeat)]
             m = {key: statistics.median(r[key] for r in runs) for key in runs[0]}
         except Exception as exc:  # noqa: BLE001 - a benchmark line per optimizer
             print(f"| {name} | failed: {type(exc).__name__}: {exc} | | | | | | |")

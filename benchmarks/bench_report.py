@@ -86,8 +86,7 @@ def scaled_archive(archive: Path, instances: int, tmp: Path) -> Path:
             res, trace = copy.get("result") or {}, copy.get("trace") or {}
             if isinstance(res.get("f_best"), float):
                 res["f_best"] *= c
-            trace["best"] = [b * c if isinstance(b, float) else b
-                             for b in trace.get("best") or []]
+            trace["best"] = [b * c if isinstance(b, float) else b for b in trace.get("best") or []]
             write_json_atomic(job / "records" / f"run-{index:03d}-{copy['run_id']}.json", copy)
     for line in (archive / OPTIMA).read_text(encoding="utf-8").splitlines():
         opt = json.loads(line)

@@ -35,8 +35,7 @@ from vpid_bench.store.archive_records import read_archive
 RESAMPLES = 10_000
 
 
-def rung_rows(runs: Sequence[RunHits], facts: dict[str, tuple[str, int]]
-              ) -> list[list[Any]]:
+def rung_rows(runs: Sequence[RunHits], facts: dict[str, tuple[str, int]]) -> list[list[Any]]:
     """Per group (all, each family) and optimizer that ran all of it: the aggregated ECDF at
     each rung of :data:`~vpid_bench.report.suite_scores.LADDER` (``nan`` beyond a problem's
     budget)."""
@@ -140,8 +139,7 @@ def markdown(folder: Path, manifest: dict[str, Any], ladder: list[list[Any]],
              black_box: dict[str, tuple[str, list]] | None = None,
              users: frozenset[str] = frozenset()) -> list[str]:
     black_box = black_box or {}
-    rungs = [k for k in ss.LADDER
-             if any(math.isfinite(r[3 + ss.LADDER.index(k)]) for r in ladder)]
+    rungs = [k for k in ss.LADDER if any(math.isfinite(r[3 + ss.LADDER.index(k)]) for r in ladder)]
     lines = [f"Made from `{folder}` (nothing run) by "
              f"`python tools/archive_advice.py {folder}`; the archive was made by "
              f"vpid-bench {manifest.get('vpid_bench_version')}, commit "
@@ -231,8 +229,7 @@ def main() -> None:
     from vpid_bench.plugins import Registry
 
     data = compute([args.archive], True, 0.05, "random")
-    facts = ss.context_facts(data.loaded.records, data.rows,
-                             ss.family_lookup(Registry()))
+    facts = ss.context_facts(data.loaded.records, data.rows, ss.family_lookup(Registry()))
     scores, _ = ss.score_rows(data.hits, facts)
     ladder = rung_rows(data.hits, facts)
     groups = {g.name: g.contexts for g in ss.groups(facts) if g.kind != "dimension"}

@@ -57,15 +57,11 @@ def commit() -> str | None:
     return sha + ("-dirty" if dirty.strip() else "")
 
 
-def quoted(argv: list[str]) -> str:
-    return " ".join(shlex.quote(a) for a in argv)
-
 
 def sweep(argv: list[str], env: dict[str, str] | None = None) -> bool:
     """Run ``vpid-bench <argv>`` (printed first); whether it ended clean (exit 0)."""
-    print("vpid-bench " + quoted(argv), flush=True)
-    return subprocess.run([str(BIN / "vpid-bench"), *argv], cwd=ROOT,
-                          env=env).returncode == 0
+    print("vpid-bench " + shlex.join(argv), flush=True)
+    return subprocess.run([str(BIN / "vpid-bench"), *argv], cwd=ROOT, env=env).returncode == 0
 
 
 def clean(folder: Path, exit_ok: bool) -> bool:
@@ -167,7 +163,7 @@ def build(args: argparse.Namespace) -> Built:
         return Built(ok and args.no_pack, runs_dir, seconds)
     t2 = time.perf_counter()
     made_at = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-    manifest = pack(runs_dir, args.suite, out, command="vpid-bench " + quoted(argv),
+    manifest = pack(runs_dir, args.suite, out, command="vpid-bench " + shlex.join(argv),
                     commit=made_by, made_at=made_at, optima_only=args.optima_only)
     seconds["pack"] = time.perf_counter() - t2
     total = sum(f["bytes"] for f in manifest["files"].values())

@@ -76,11 +76,9 @@ def main(argv: Iterable[str] | None = None) -> None:
     tables = args.report / "tables"
     head = _read(tables / "headline.csv")
     pairs = _read(tables / "pairwise.csv")
-    scores = _read(tables / "suite_scores.csv") if (tables / "suite_scores.csv").exists() \
-        else []
+    scores = _read(tables / "suite_scores.csv") if (tables / "suite_scores.csv").exists() else []
     registry = Registry()
-    wants = {n for n, cls in registry.optimizers.items() if getattr(cls, "wants_residuals",
-                                                                    False)}
+    wants = {n for n, cls in registry.optimizers.items() if getattr(cls, "wants_residuals", False)}
     problem_of: Mapping[str, str] = {r["context"]: r["problem"]
                                      for r in _read(args.report / "runs.csv")}
     print("| problem (family) | by NoRE: the leader, and those the tests do not separate from "

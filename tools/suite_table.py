@@ -22,8 +22,7 @@ from vpid_bench.analysis.identifiability import cramer_rao
 from vpid_bench.plugins import Registry
 
 
-def distinct_optima(problem, starts: int, seed: int) -> tuple[list[tuple[float, int, float]],
-                                                                int]:
+def distinct_optima(problem, starts: int, seed: int) -> tuple[list[tuple[float, int, float]], int]:
     """``(f, starts ending there, NoRE %)`` of each distinct converged end, best first, and
     the number of fits that stalled at the evaluation limit."""
     lo, hi = problem.bounds.lower, problem.bounds.upper

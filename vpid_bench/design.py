@@ -56,8 +56,7 @@ def build(registry: Any, name: str, settings: list[tuple[str, str]]) -> Any:
         raise ConfigError("problem", name,
                           "one of " + ", ".join(sorted(registry.problems))) from None
     try:
-        mapping = OmegaConf.to_container(
-            OmegaConf.from_dotlist([f"{k}={v}" for k, v in settings]))
+        mapping = OmegaConf.to_container(OmegaConf.from_dotlist([f"{k}={v}" for k, v in settings]))
     except Exception as exc:  # noqa: BLE001 - OmegaConf or YAML refuses the text: one line
         raise ConfigError("settings", " ".join(f"{k}={v}" for k, v in settings),
                           f"key=value pairs with YAML values ({type(exc).__name__})") from None
@@ -121,8 +120,7 @@ def main(argv: list[str] | None = None) -> int:
         if not 0 <= args.floor <= 1000:
             raise ConfigError("--floor", args.floor, "an integer in [0, 1000]")
         registry = Registry()
-        candidates = designs(_settings(args.settings, "settings"),
-                             _settings(args.vary, "--vary"))
+        candidates = designs(_settings(args.settings, "settings"), _settings(args.vary, "--vary"))
         if len(candidates) > 200:
             raise ConfigError("--vary", len(candidates), "at most 200 designs")
         results = []

@@ -112,8 +112,7 @@ def value(objective: str, weighted: np.ndarray) -> np.ndarray:
     return residuals_and_value(objective, weighted)[0]
 
 
-def residuals_and_value(objective: str, weighted: np.ndarray
-                        ) -> tuple[np.ndarray, np.ndarray]:
+def residuals_and_value(objective: str, weighted: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The objective ``(n,)`` and the residual vectors an optimizer minimises ``(n, p N)`` of
     weighted residuals ``(n, p, N)``: ``eq3`` the sum of channel norms, ``ols`` the sum of
     squares, ``ml`` half the mean square (residuals as weighted); ``ml_profiled``

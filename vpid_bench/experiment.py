@@ -7,9 +7,9 @@ Resume: a run whose complete ``ok`` record (same run id) exists is skipped; miss
 and failed runs run again. The run id hashes everything that determines a result (plugins'
 versions and code, data files' content), so another plugin release or data file runs again.
 
-Crash isolation: an exception (``SystemExit`` included) inside one run is written into its
-record (status ``failed``) and the job goes on; only ``KeyboardInterrupt`` stops it. With
-worker processes every call into plugin code goes to them (:class:`_Here`: in this process).
+Crash isolation (docs/sweeps.md): an exception inside one run is written into its record
+(status ``failed``) and the job goes on. With worker processes every call into plugin code
+goes to them (:class:`_Here`: in this process).
 """
 
 from __future__ import annotations
@@ -153,6 +153,7 @@ def _set_aside(path: Path, why: str) -> Path:
 
 
 def _job_key(job: Job, registry: Registry | None, facts: ProblemFacts) -> dict[str, Any]:
+    """What determines every run of the job but its index (hashed into each run id)."""
     plugins = {}
     if registry is not None:
         for kind, name in (("problem", job.problem_name), ("optimizer", job.optimizer_name)):
@@ -162,10 +163,10 @@ def _job_key(job: Job, registry: Registry | None, facts: ProblemFacts) -> dict[s
     more: dict[str, Any] = {}
     if job.stop_at:  # only then: the run ids of every job without a target stay as they were
         more["target"] = [job.spec.target, sorted(job.stop_at.items())]
-    return rec.job_key({**job.problem_settings(), "name": job.problem_name},
-                       {**job.optimizer_settings(), "name": job.optimizer_name},
-                       job.spec.seed, job.budget, plugins=plugins, data=facts.content_digest,
-                       **more)
+    return {"problem": {**job.problem_settings(), "name": job.problem_name},
+            "optimizer": {**job.optimizer_settings(), "name": job.optimizer_name},
+            "seed": job.spec.seed, "budget": job.budget, "plugins": plugins,
+            "data": facts.content_digest, **more}
 
 
 def _refuse_swapped(*folders: Path) -> None:
@@ -425,8 +426,7 @@ def _what_changed(paths: list[Path], provenance: Mapping[str, Mapping[str, Any]]
         except rec.CorruptRecordError:
             continue
         for kind, now in provenance.items():
-            was = (old.get(kind) or {}).get("plugin") if isinstance(old.get(kind), dict) \
-                else None
+            was = (old.get(kind) or {}).get("plugin") if isinstance(old.get(kind), dict) else None
             if not isinstance(was, dict) or not now:
                 continue
             name = f"{kind} plugin {now.get('plugin')!s}"

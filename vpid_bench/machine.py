@@ -56,8 +56,7 @@ def machine_facts() -> dict[str, Any]:
     Computed once per process."""
     cpu = platform.processor() or platform.machine()
     with contextlib.suppress(OSError), open("/proc/cpuinfo", encoding="utf-8") as fh:
-        cpu = next((ln.split(":", 1)[1].strip() for ln in fh if ln.startswith("model name")),
-                   cpu)
+        cpu = next((ln.split(":", 1)[1].strip() for ln in fh if ln.startswith("model name")), cpu)
     try:
         import scipy.linalg  # noqa: F401 - load scipy's BLAS too, as a run would
         from threadpoolctl import threadpool_info

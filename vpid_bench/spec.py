@@ -92,12 +92,10 @@ class JobSpec:
 #: The top-level keys, in the order they are documented.
 TOP_LEVEL_KEYS = tuple(f.name for f in dataclasses.fields(JobSpec))
 #: Keys that never change a result (they may differ between a sweep and its resume).
-OPERATIONAL_KEYS = ("resume", "progress", "report", "archive", "threads", "isolation",
-                    "workers")
+OPERATIONAL_KEYS = ("resume", "progress", "report", "archive", "threads", "isolation", "workers")
 
 
-def _check_int(key: str, value: int | None, low: int, high: int, nullable: bool = False
-               ) -> None:
+def _check_int(key: str, value: int | None, low: int, high: int, nullable: bool = False) -> None:
     if value is None and nullable:
         return
     if not low <= value <= high:
@@ -204,8 +202,7 @@ def parse_job(cfg: Any, registry: Registry) -> Job:
         raise ConfigError("problem.iterations", problem_config.iterations,
                           f"a protocol of at most {MAX_BUDGET} evaluations per run")
     filled = {**{k: getattr(problem_config, k) for k in PROTOCOL_KEYS}, "budget": budget}
-    params = build_dataclass(optimizer_cls.Params, {**optimizer_cfg, **filled},
-                             prefix="optimizer")
+    params = build_dataclass(optimizer_cls.Params, {**optimizer_cfg, **filled}, prefix="optimizer")
     check_params_bound(optimizer_cls, optimizer_name)
     optimizer_cls.check(params)
     check_compatible(problem_cls, optimizer_cls, optimizer_name, problem_name)

@@ -346,8 +346,7 @@ class Workers:
         except OSError:
             return WorkerDiedError(f"its worker process ended ({self._end(worker)}) before "
                                    f"{what}")
-        return _Task(worker, None if limit is None else time.monotonic() + START_S,
-                     index=index)
+        return _Task(worker, None if limit is None else time.monotonic() + START_S, index=index)
 
     def _call_events(self, busy: dict[Connection, _Task], what: str, limit: float | None
                      ) -> Iterator[tuple[_Task, tuple[Any, Any]]]:
@@ -537,8 +536,7 @@ def outcomes_isolated(pool: Workers, job: Job, indices: Sequence[int], lockstep:
     """:meth:`Workers.outcomes` with the job's ``workers`` and ``threads`` keys applied (each
     worker's problem gets an equal share of the cores unless ``threads`` is set)."""
     requested = job.spec.workers or pool.size
-    tasks = (len(_tasks(list(indices), min(requested, pool.cap))) if lockstep
-             else len(indices))
+    tasks = (len(_tasks(list(indices), min(requested, pool.cap))) if lockstep else len(indices))
     workers = pool.how_many(requested, tasks)
     threads = job.spec.threads or max(1, available_cores() // workers)
     return pool.outcomes(job, indices, lockstep, workers, threads)

@@ -68,5 +68,4 @@ def estimator_floors(problem: Problem, runs: int) -> dict[str, Any] | None:
         floors[objective] = {"median": statistics.median(values), "values": values}
     if not floors or metric is None:
         return None
-    return {"metric": metric, "instances": n, "chosen": problem.config.objective,
-            "floors": floors}
+    return {"metric": metric, "instances": n, "chosen": problem.config.objective, "floors": floors}

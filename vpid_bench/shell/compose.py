@@ -9,7 +9,7 @@ from typing import Any
 
 from ..errors import ConfigError
 from ..spec import TOP_LEVEL_KEYS
-from .argv import ConfigSource
+from .argv import SHIPPED_CONFIGS, ConfigSource
 
 #: The config groups of a job.
 GROUPS = ("problem", "optimizer")
@@ -80,12 +80,10 @@ def initialize(source: ConfigSource) -> Any:
     """Hydra's compose API set up as ``hydra.main`` sets itself up for this command."""
     from hydra import initialize_config_dir, initialize_config_module
 
-    if source.path is None:
-        return initialize_config_module(version_base="1.3", config_module="vpid_bench.conf")
-    if source.path.startswith("pkg://"):
-        return initialize_config_module(version_base="1.3",
-                                        config_module=source.path[len("pkg://"):])
-    return initialize_config_dir(version_base="1.3", config_dir=source.path)
+    path = source.path or SHIPPED_CONFIGS
+    if path.startswith("pkg://"):
+        return initialize_config_module(version_base="1.3", config_module=path[len("pkg://"):])
+    return initialize_config_dir(version_base="1.3", config_dir=path)
 
 
 class Composer:

@@ -198,8 +198,7 @@ def _save_job_config(cfg: Any, job_dir: Path) -> None:
         folder.unlink()
     write_text_atomic(folder / "config.yaml", OmegaConf.to_yaml(cfg))
     write_text_atomic(folder / "hydra.yaml", OmegaConf.to_yaml(full))
-    write_text_atomic(folder / "overrides.yaml",
-                      OmegaConf.to_yaml(full.hydra.overrides.task))
+    write_text_atomic(folder / "overrides.yaml", OmegaConf.to_yaml(full.hydra.overrides.task))
 
 
 def _load_registry() -> Any:

@@ -146,8 +146,7 @@ def _axis(o: Any, multirun: bool, registry: Registry, custom_sweeper: bool,
                           "range(), choice()); interval() needs an optimizing sweeper such "
                           "as hydra/sweeper=optuna")
     if size > MAX_JOBS:
-        raise ConfigError(o.key_or_group, _raw_value(o),
-                          f"a sweep of at most {MAX_JOBS} values")
+        raise ConfigError(o.key_or_group, _raw_value(o), f"a sweep of at most {MAX_JOBS} values")
     return [f"{key}={s}" for s in o.sweep_string_iterator()]
 
 
@@ -172,8 +171,7 @@ def expand_points(parsed: list[Any], multirun: bool, registry: Registry,
     return [list(p) for p in itertools.product(*axes)]
 
 
-def _check_choice(group: str, name: str, registry: Registry, folders: Sequence[str] = ()
-                  ) -> None:
+def _check_choice(group: str, name: str, registry: Registry, folders: Sequence[str] = ()) -> None:
     """Refuse a name that is no choice, listing the known ones and the failed plugins."""
     names = _group_names(group, registry, folders)
     if name.strip("'\"") in names:
@@ -201,7 +199,7 @@ def _is_structural(o: Any) -> bool:
 
 def _apply(cfg: Any, o: Any) -> None:
     """Set one plain ``key=value`` override on a composed config, as Hydra would."""
-    from omegaconf import OmegaConf, open_dict
+    from omegaconf import DictConfig, OmegaConf, open_dict
 
     key, value = o.key_or_group, o.value()
     head, _, rest = key.partition(".")
@@ -222,18 +220,12 @@ def _apply(cfg: Any, o: Any) -> None:
         with open_dict(cfg):
             OmegaConf.update(cfg, key, value, merge=True, force_add=True)
         return
-    if not exists and not _open_parent(cfg, key):
-        raise _unknown_key(cfg, key, value)
+    if not exists:  # new only in a mapping left open (``open_keys``: the plugin checks it)
+        parent = key.rpartition(".")[0]
+        node = OmegaConf.select(cfg, parent, default=None) if parent else None
+        if not (isinstance(node, DictConfig) and not OmegaConf.is_struct(node)):
+            raise _unknown_key(cfg, key, value)
     OmegaConf.update(cfg, key, value, merge=True)
-
-
-def _open_parent(cfg: Any, key: str) -> bool:
-    """Whether ``key`` is new in a mapping left open (``open_keys``: the plugin checks it)."""
-    from omegaconf import DictConfig, OmegaConf
-
-    parent = key.rpartition(".")[0]
-    node = OmegaConf.select(cfg, parent, default=None) if parent else None
-    return isinstance(node, DictConfig) and not OmegaConf.is_struct(node)
 
 
 def _unknown_key(cfg: Any, key: str, value: Any) -> ConfigError:
@@ -303,8 +295,7 @@ def output_dir(full_cfg: Any, multirun: bool) -> Path:
     try:
         value = OmegaConf.select(full_cfg, key)
     except OmegaConfBaseException as exc:
-        raise ConfigError(key, "${...}", f"a folder ({' '.join(str(exc).split()[:10])})"
-                          ) from None
+        raise ConfigError(key, "${...}", f"a folder ({' '.join(str(exc).split()[:10])})") from None
     if value is None or not str(value).strip():
         raise ConfigError(key, value if value is not None else "", "a folder name (empty "
                           "would write into the current folder)")

@@ -78,8 +78,7 @@ def default_root() -> Path:
 
 def _plain(value: Any, limit: int = 80) -> str:
     """A short printable text from an untrusted value (``""`` for anything else)."""
-    return value if isinstance(value, str) and len(value) <= limit and value.isprintable() \
-        else ""
+    return value if isinstance(value, str) and len(value) <= limit and value.isprintable() else ""
 
 
 def _sha256(data: bytes) -> str:

@@ -41,8 +41,7 @@ def _is_int(v: Any, nullable: bool = True) -> bool:
 
 def _num_list(v: Any) -> bool:
     # a trace holds thousands of numbers: plain floats and ints pass on their type alone
-    return isinstance(v, list) and all(type(x) is float or type(x) is int or _is_num(x)
-                                       for x in v)
+    return isinstance(v, list) and all(type(x) is float or type(x) is int or _is_num(x) for x in v)
 
 
 def _texts(v: Any) -> bool:

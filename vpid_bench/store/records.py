@@ -57,8 +57,7 @@ def _float_text(value: float) -> float | str:
 
 def decode_number(value: Any) -> Any:
     """``"inf"``, ``"-inf"``, ``"nan"`` as floats; anything else unchanged."""
-    return NONFINITE_VALUE[value] if isinstance(value, str) and value in NONFINITE_VALUE \
-        else value
+    return NONFINITE_VALUE[value] if isinstance(value, str) and value in NONFINITE_VALUE else value
 
 
 def decode_numbers(record: dict[str, Any]) -> dict[str, Any]:
@@ -114,12 +113,6 @@ def stable_hash(obj: Any, length: int = 16) -> str:
     """First ``length`` hex digits of the SHA-256 of ``canonical_json(obj)``."""
     return hashlib.sha256(canonical_json(obj).encode()).hexdigest()[:length]
 
-
-def job_key(problem: Mapping, optimizer: Mapping, seed: int, budget: int,
-            **more: Any) -> dict[str, Any]:
-    """What determines every run of a job, apart from the run index (``more``: further
-    determinants, e.g. plugin versions and the content hash of a data file)."""
-    return {"problem": problem, "optimizer": optimizer, "seed": seed, "budget": budget, **more}
 
 
 def run_id(key: Mapping[str, Any], run_index: int) -> str:
