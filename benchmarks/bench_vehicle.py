@@ -63,8 +63,7 @@ def baseline_newmark(problem: VehicleProblem, X: np.ndarray) -> np.ndarray:
 
 
 def timed(fn: Callable[[], object], number: int, clock=time.thread_time) -> tuple[float, float]:
-    """Wall and CPU seconds (``clock``: this thread's, or ``process_time`` for all threads)
-    per call over ``number`` calls."""
+    """Wall and CPU seconds per call over ``number`` calls (``clock``: the CPU clock)."""
     w, c = time.perf_counter(), clock()
     for _ in range(number):
         fn()

@@ -151,8 +151,7 @@ def main() -> None:
     us = {m: w for m, (w, _) in measured.items()}
     cpu_us = {m: c for m, (_, c) in measured.items()}
     workers = available_cores()
-    evals = {m: sum(e for j in jobs if j["problem"] == m for e, _, _ in j["runs"])
-             for m in members}
+    evals = {m: sum(e for j in jobs if j["problem"] == m for e, _, _ in j["runs"]) for m in members}
     kernel_1 = sum(evals[m] * us[m] for m in members) * 1e-6
     print(f"\nbuild of the slice: {wall:.1f} s wall ("
           + ", ".join(f"{k} {v:.1f} s" for k, v in built.seconds.items()) + f"); "

@@ -19,8 +19,7 @@ import numpy as np
 
 def bound_covariance(inst) -> np.ndarray:
     """The Cramér–Rao covariance of the relative errors (%²) of ``inst`` at its truth, from
-    the simulated noise (the entries :func:`~vpid_bench.analysis.identifiability.cramer_rao`
-    keeps)."""
+    the simulated noise (the entries ``cramer_rao`` keeps)."""
     from vpid_bench.analysis.identifiability import entry_sigma, informative, jacobian
 
     x = inst.x_true

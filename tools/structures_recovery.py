@@ -23,8 +23,7 @@ import numpy as np
 
 
 def linear_part(model, x: np.ndarray) -> np.ndarray:
-    """The linear model's parameters of a structured row: no cubic term, the damper the mean
-    of bump and rebound."""
+    """The linear model's parameters of a structured row: no cubic term, the damper mean."""
     col = dict(zip(model.names, x, strict=True))
     out = []
     for name in model.base.names:

@@ -78,8 +78,7 @@ class Cgroup:
         return []
 
     def kill(self, wait: float) -> bool:
-        """SIGKILL every process in the cgroup (the kernel's ``cgroup.kill``); whether it is
-        empty within ``wait`` seconds."""
+        """SIGKILL every process in it (``cgroup.kill``); whether it is empty within ``wait`` s."""
         with contextlib.suppress(OSError):
             (self.path / "cgroup.kill").write_text("1")
         end = time.monotonic() + wait

@@ -4,11 +4,8 @@
     vpid-bench-design ride_quarter sensors=body --vary speed_kmh=30,60 --floor 10 --profile
 
 A design is the problem with one choice of settings (``key=value`` for all, each ``--vary``
-a factor). For each, on instance 0: the Cramér–Rao bound's norm (%), the condition number,
-D-optimality (``det(F)^(1/d)`` in relative parameters, higher is better), A-optimality
-(``trace(F⁻¹)``, lower is better), the parameters left undetermined (bound over 10 %) and a
-structural symmetry flag; ``--floor N`` adds the median metric of instances 0..N-1's optima,
-``--profile`` instance 0's profile-likelihood intervals. Prints Markdown.
+a factor), measured on instance 0 (what each column means: docs/estimators.md, record
+design). Prints Markdown.
 """
 
 from __future__ import annotations

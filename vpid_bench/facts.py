@@ -30,8 +30,7 @@ class InstanceFacts:
 
 @dataclasses.dataclass(frozen=True)
 class ProblemFacts:
-    """A problem's facts: its dimension, ``rows_independent``, ``content_digest()``, and the
-    facts of each run's instance."""
+    """A problem's dimension, ``rows_independent``, ``content_digest()``, runs' instances."""
 
     dim: int
     rows_independent: bool

@@ -147,8 +147,7 @@ _APPEND_FLAGS = (os.O_WRONLY | os.O_APPEND | os.O_CREAT | getattr(os, "O_NOFOLLO
 
 def open_append(path: Path) -> TextIO:
     """``path`` opened to append UTF-8 text (a job's log): a link planted there is removed
-    with one line (one was once appended to on every resume); anything but a regular file
-    is an ``OSError``, at once."""
+    with one line (one was once appended to on every resume); ``OSError`` if not a file."""
     path = Path(path)
     try:
         fd = os.open(path, _APPEND_FLAGS, 0o666)

@@ -118,8 +118,7 @@ def exit_status() -> int:
 
 def seen() -> bool:
     """Whether the command's handler has seen the user's Ctrl-C: an error raised since is
-    treated as the interrupt (it can land in a library's clean-up, e.g. Hydra's, which then
-    raised its own error over it)."""
+    treated as the interrupt (it can land in a library's clean-up, e.g. Hydra's)."""
     return _Watch.installed and _Watch.signalled
 
 

@@ -156,9 +156,8 @@ def _run_bests(records: list[dict[str, Any]]) -> dict[int, list[tuple[np.ndarray
 
 
 def job_score(gaps: Mapping[int, float], records: list[dict[str, Any]]) -> float | None:
-    """The job's search score (what an optimizing sweeper tunes on), lower is better: the
-    median gap to the instance optima where known, else the median best objective (``inf``
-    for a failed run)."""
+    """The job's search score (what an optimizing sweeper tunes), lower is better: the median
+    gap to the instance optima where known, else the median best (``inf``: a failed run)."""
     if gaps:
         values = list(gaps.values())
     else:

@@ -67,5 +67,4 @@ def machine_facts() -> dict[str, Any]:
             for lib in threadpool_info()]
     except Exception:  # noqa: BLE001 - facts for the record, never a reason to fail a run
         blas = []
-    return {"cpu": cpu, "cores": os.cpu_count(), "cores_available": available_cores(),
-            "blas": blas}
+    return {"cpu": cpu, "cores": os.cpu_count(), "cores_available": available_cores(), "blas": blas}

@@ -199,8 +199,7 @@ class Problem(abc.ABC):
         return None
 
     def set_threads(self, n: int) -> None:
-        """How many threads ``evaluate`` may use (the job's ``threads`` key); results must not
-        depend on it. Default: ignored."""
+        """How many threads ``evaluate`` may use (``threads``); no result may depend on it."""
         return None
 
 

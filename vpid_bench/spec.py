@@ -5,10 +5,9 @@ config. :func:`parse_job` is the only place that turns that config into typed ob
 calls it, and the pre-flight calls it for every point of a sweep before the first job starts,
 so a bad value anywhere stops the command before any work, in one line.
 
-The protocol is the problem's (``problem.ps``, ``problem.iterations``; the default budget
-:func:`~vpid_bench.api.default_budget`, ``budget`` overrides it). Optimizers receive ``ps``,
-``iterations`` and the run's ``budget`` in their ``Params``; none can be set on the optimizer
-(``optimizer.ps=7`` would silently decouple the budget from the population).
+The protocol is the problem's (``problem.ps``, ``problem.iterations``, ``budget``): the job
+fills it into each optimizer's ``Params``, never settable there (``optimizer.ps=7`` would
+silently decouple the budget from the population).
 """
 
 from __future__ import annotations

@@ -79,8 +79,7 @@ def _certify(job: Job, run: int, instance: Problem, found: list[Any]) -> Any:
 
 def certified_optima(job: Job, problem: Problem, root: Path | None = None) -> dict[int, Any]:
     """Per run index of ``job``, its instance's optimum in the archives below ``root``,
-    matched as the report matches one and confirmed (:func:`_certify`); runs without one are
-    left out."""
+    matched as the report matches one and confirmed (:func:`_certify`), if any."""
     # an unusable archive certifies nothing; its runs are not needed
     found_optima, _ = archive_optima(root, {job.problem_name})
     optima = [o for o in found_optima if o.problem == job.problem_name]
@@ -99,9 +98,8 @@ def certified_optima(job: Job, problem: Problem, root: Path | None = None) -> di
 
 
 def with_stops(job: Job, problem: Problem, root: Path | None = None) -> Job:
-    """``job`` with the stopping value of each run (``job.stop_at``) when its ``target`` is
-    set. Raises :class:`ConfigError` naming the first run whose instance has no optimum
-    certified in advance."""
+    """``job`` with each run's stopping value (``job.stop_at``) when ``target`` is set;
+    :class:`ConfigError` names the first run whose instance has no optimum certified."""
     target = job.spec.target
     if target is None:
         return job

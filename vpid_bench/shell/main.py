@@ -62,9 +62,8 @@ def _refuse(exc: BaseException) -> NoReturn:
 
 
 class JobTask:
-    """Hydra's task function: runs one job, writes its ``job.json``, never raises. The
-    registry, problem cache and worker processes are rebuilt in a launcher's process (they
-    are not pickled)."""
+    """Hydra's task function: runs one job, writes its ``job.json``, never raises. Registry,
+    problem cache and worker processes are not pickled: a launcher's process rebuilds them."""
 
     __module__ = __name__
 

@@ -366,8 +366,7 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
         if group in GROUPS and o.is_delete():
             raise ConfigError(f"~{group}", "", f"a {group} for every job: choose another one "
                               f"with {group}=<name>")
-    custom_sweeper = any(o.key_or_group == "hydra/sweeper" and o.value() != "basic"
-                         for o in parsed)
+    custom_sweeper = any(o.key_or_group == "hydra/sweeper" and o.value() != "basic" for o in parsed)
     folders = [f.removeprefix("file://") for f in (cmd.config.path, cmd.config.search)
                if f is not None and not f.startswith("pkg://")]
     points = expand_points(parsed, cmd.multirun, registry, custom_sweeper, folders)
@@ -473,8 +472,7 @@ def _globs_listed(hydra_args: Sequence[str], parsed: Sequence[Any], registry: Re
 
 def refuse_test_instances(jobs: Sequence[Job]) -> None:
     """Tuning sees held-out instances only (docs/protocol.md): an optimizing sweeper's job
-    whose problem's ``seed`` keys are all at their default (the test set) is refused,
-    naming the key to change."""
+    whose problem's ``seed`` keys are all at their default (the test set) is refused."""
     from ..report.load import flatten
 
     for job in jobs:
@@ -491,8 +489,7 @@ def refuse_test_instances(jobs: Sequence[Job]) -> None:
                               f"e.g. problem.{key}={value + 1} (docs/protocol.md)")
 
 
-def planned_job_dirs(points: Sequence[Sequence[str]], full_cfg: Any, sweep_dir: Path
-                     ) -> list[Path]:
+def planned_job_dirs(points: Sequence[Sequence[str]], full_cfg: Any, sweep_dir: Path) -> list[Path]:
     """The job folders of a basic-sweeper sweep, named as Hydra will name them (each point
     through ``override_dirname`` and :func:`~.callbacks.job_dir_name`); empty when
     ``hydra.sweep.subdir`` is not the default."""

@@ -1,17 +1,9 @@
 """An archive folder's format: its manifest, the files it lists (each checked against its
-SHA-256, each read through its size cap), its JSON-lines files and its optima.
-
-The layout (``<root>/<suite>/``; written by :mod:`.archive_pack`, its runs read by
-:mod:`.archive_records`)::
-
-    manifest.json       what made it and the SHA-256 and size of each file below
-    records.jsonl.gz    one run record per line
-    optima.jsonl        one instance optimum per line (the optimum file's own format,
-                        :mod:`vpid_bench.store.optimum`)
-    summary.csv, ioh.zip, jobs/<problem>/<file>
-
-Everything in an archive is untrusted. ``target=`` reads its optima through
-:func:`archive_optima`; the report reads the runs too, through the same checks.
+SHA-256, each read through its size cap), its JSON-lines files and its optima (what each file
+of ``<root>/<suite>/`` holds: docs/protocol.md, the archive). Written by :mod:`.archive_pack`,
+its runs read by :mod:`.archive_records`. Everything in an archive is untrusted. ``target=``
+reads its optima through :func:`archive_optima`; the report reads the runs too, through the
+same checks.
 """
 
 from __future__ import annotations

@@ -164,8 +164,7 @@ def instance_id(rec: Mapping[str, Any]) -> str | None:
 def load_all(root: Path | None = None, problems: Iterable[str] | None = None,
              optima_only: bool = False) -> tuple[list[Archive], list[str]]:
     """Every readable archive below ``root`` whose manifest lists one of ``problems`` (all
-    when ``None``), and one line per such archive that cannot be used (``optima_only``: see
-    :func:`read_archive`)."""
+    when ``None``), and one line per such archive that cannot be used."""
     found, bad = [], []
     wanted = None if problems is None else set(problems)
     for folder in find_archives(root):

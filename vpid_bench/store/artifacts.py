@@ -57,10 +57,9 @@ def best_vector(record_paths: Iterable[Path]) -> tuple[np.ndarray, dict[str, Any
 
 
 def best_of(records: Iterable[Mapping[str, Any]]) -> tuple[np.ndarray, dict[str, Any]] | None:
-    """The best vector among the ok ``records`` and where it comes from (``run_index``,
-    ``f_best``, ``ranked_by``, ``value``), or ``None``: the lowest first metric when every ok
-    record has it, else the lowest ``f_best``; a record without a numeric vector is passed
-    over."""
+    """The best vector among the ok ``records`` with a numeric one and where it comes from
+    (``run_index``, ``f_best``, ``ranked_by``, ``value``), or ``None``: the lowest first
+    metric when every ok record has it, else the lowest ``f_best``."""
     runs = []
     for r in records:
         res = r.get("result")

@@ -132,8 +132,7 @@ def _data_settings(settings: Mapping[str, Any] | None) -> str | None:
 
 def matching_optima(record: Mapping[str, Any], index: OptimaIndex) -> list[Optimum]:
     """Every optimum of a record's instance: the same problem, instance id, data settings
-    (protocol keys left out) and dimension; a file without settings matches only by a
-    non-null instance id."""
+    (protocol keys left out) and dimension; one without settings only by a non-null id."""
     problem = record["problem"]["name"]
     inst = (record.get("instance") or {}).get("id") if isinstance(
         record.get("instance"), Mapping) else None

@@ -1,6 +1,5 @@
 """File names made from untrusted text, and paths kept inside a folder: the rules every
-writer of a file named from record content applies (the report's tables, figures and pages,
-the IOHprofiler export)."""
+writer of a file named from record content applies (report, IOHprofiler export)."""
 
 from __future__ import annotations
 
