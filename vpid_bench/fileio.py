@@ -6,9 +6,8 @@ just made through :func:`loads_json`. Every file written goes through
 :func:`write_text_atomic` (a crash leaves the old file or the new one; a link at the target
 is replaced, not followed); the folders kept inside an output folder through
 :func:`own_folder`. A folder that must be one thing whole (a report) is written by
-:class:`WholeFolder`: into a new hidden folder that takes its place in one rename (issue 44,
-N8: two reports at once, or one stopped by SIGTERM, once left pages of one and ``runs.csv``
-of the other); a link planted in the old folder is removed with it, never followed (N6).
+:class:`WholeFolder` (issue 44, N8: two reports at once, or one stopped by SIGTERM, once left
+pages of one and ``runs.csv`` of the other; N6).
 """
 
 from __future__ import annotations

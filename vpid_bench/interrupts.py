@@ -6,9 +6,8 @@ before raising; a ``KeyboardInterrupt`` without that note came from code and fai
 only. Without the handler (a program calling the library, a launcher's worker) every
 ``KeyboardInterrupt`` counts as the user's.
 
-SIGTERM and SIGHUP end the command as SIGINT does (issue 44, N2: once status 143, nothing
-printed, workers left running): the same handler takes all three (:data:`SIGNALS`), every
-completed run is kept, the status is ``128 + the signal`` (:func:`exit_status`).
+SIGTERM and SIGHUP end the command as SIGINT does, the same handler taking all three
+(:data:`SIGNALS`; issue 44, N2; docs/sweeps.md, crash isolation and the exit status).
 """
 
 from __future__ import annotations

@@ -159,8 +159,6 @@ class Workers:
         self._all: list[_Worker] = []
         self._finalizer = weakref.finalize(self, _end_all, self._all)
 
-    # --- workers
-
     def _start(self) -> _Worker:
         """A new worker, started with the signals held back (a Ctrl-C inside ``start()`` once
         cut the child's start-up pickle: a traceback); the child releases them once it
@@ -245,8 +243,6 @@ class Workers:
                 self._end(worker)
             self._idle.clear()
 
-    # --- waiting
-
     def _events(self, busy: Sequence[_Task]) -> list[_Worker]:
         """The workers of the ``busy`` tasks with a message waiting or whose process ended,
         waiting until the first deadline at most (none: for ever), copying what they print."""
@@ -297,8 +293,6 @@ class Workers:
             return None, (f"{self._end(worker)} after a message that could not be read "
                           f"({type(exc).__name__})")
         return None, self._end(worker)
-
-    # --- calls
 
     def call(self, job: Job, fn: Callable[..., Any], *args: Any, what: str,
              limit: float | None) -> Any:
@@ -381,8 +375,6 @@ class Workers:
                     f"{GRACE_S:.0f} s; blocked in C or ignoring SIGALRM): its worker process "
                     "was killed" if call.phase else f"building the problem took more than "
                     f"{START_S:.0f} s: its worker process was killed"))
-
-    # --- runs
 
     def outcomes(self, job: Job, indices: Sequence[int], lockstep: bool, workers: int,
                  threads: int) -> Iterator[RunOutcome]:

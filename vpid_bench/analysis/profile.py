@@ -165,16 +165,13 @@ def profile_intervals(problem: Problem, crb: dict[str, Any] | None = None,
         ratio, direction = structural_symmetry(problem, z_hat * lik.scale, sigma)
         rel_sd = np.full(z_hat.size, 0.01) if rel_sd is None else np.asarray(rel_sd, float)
         rel_sd = np.where(np.isfinite(rel_sd) & (rel_sd > 0), rel_sd, 0.01)
-    names = list(problem.bounds.names)
-    out: dict[str, Any] = {"names": names, "estimate": (z_hat * lik.scale).tolist(),
+    out: dict[str, Any] = {"names": list(problem.bounds.names),
+                           "estimate": (z_hat * lik.scale).tolist(),
                            "lower": [], "upper": [], "classification": [],
                            "symmetry_ratio": ratio}
     for j in range(z_hat.size):
-        ends = []
-        for sign, edge in ((-1, lik.lo[j]), (1, lik.hi[j])):
-            ends.append(_end(lik, z_hat, nll_hat, j, sign, edge, max(rel_sd[j], 1e-6),
-                             max_steps, brentq))
-        lower, upper = ends
+        lower, upper = (_end(lik, z_hat, nll_hat, j, sign, edge, max(rel_sd[j], 1e-6),
+                             max_steps, brentq) for sign, edge in ((-1, lik.lo[j]), (1, lik.hi[j])))
         out["lower"].append(None if lower is None else float(lower * lik.scale[j]))
         out["upper"].append(None if upper is None else float(upper * lik.scale[j]))
         if lower is not None and upper is not None:

@@ -111,10 +111,8 @@ class JobTask:
                                      "or removed while the command ran (its lock file is gone):"
                                      " this job is not run; finish the sweep where it now is "
                                      "with --resume=<its path>")
-            if self._registry is None:
-                self._registry = _load_registry()
-            if self._problems is None:
-                self._problems = ProblemCache()
+            self._registry = self._registry or _load_registry()
+            self._problems = self._problems or ProblemCache()
             # Hydra's basic launcher runs jobs in this process, where the sweep's workers
             # serve every job; others' processes (joblib's loky) cannot start spawn children
             basic = str((hydra_cfg.launcher or {}).get("_target_", "")).endswith("BasicLauncher")
@@ -307,7 +305,8 @@ def _main(argv: Sequence[str] | None) -> None:
     from .callbacks import ensure_job_dir_resolver
     from .resume import new_invocation, resume_command
 
-    threading.excepthook = _thread_exception
+    threading.excepthook = (  # a plugin's own thread's exception: one line, no traceback
+        lambda args: print(interrupts.thread_exception_line(args), file=sys.stderr))
     before = set(threading.enumerate())
     console = argv is None  # the console command, not a call from another program
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -444,11 +443,6 @@ def _leave(code: int, before: set[Any], watch: bool) -> None:
         threading.Thread(target=watchdog, name="vpid-bench-exit-watchdog", daemon=True).start()
     if code:
         sys.exit(code)
-
-
-def _thread_exception(args: Any) -> None:
-    """One line for an exception in a plugin's own thread (not Python's traceback)."""
-    print(interrupts.thread_exception_line(args), file=sys.stderr)
 
 
 def _run_hydra(args: list[str], task: Any) -> None:

@@ -388,8 +388,7 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
     hydra_args = [a for a in _globs_listed(cmd.hydra_args, parsed, registry, folders)
                   if not a.startswith(key + "=")]
     hydra_args.append(f"{key}={_quote(str(folder))}")
-    job_dirs = (planned_job_dirs(points, full, folder)
-                if cmd.multirun and not custom_sweeper else [])
+    job_dirs = planned_job_dirs(points, full, folder) if cmd.multirun and not custom_sweeper else []
     merged = check_reuse(folder, job_dirs if cmd.multirun else [folder], cmd.overrides,
                          cmd.multirun, cmd.merge, key)
     if merged:

@@ -72,9 +72,7 @@ def best_of(records: Iterable[Mapping[str, Any]]) -> tuple[np.ndarray, dict[str,
     if not runs:
         return None
     names = [list((res.get("metrics") or {}).keys()) for _, res in runs]
-    metric = names[0][0] if names[0] else None
-    if metric is None or any(metric not in n for n in names):
-        metric = None
+    metric = names[0][0] if names[0] and all(names[0][0] in n for n in names) else None
 
     def value(res: Mapping[str, Any]) -> float:
         v = (res.get("metrics") or {}).get(metric) if metric else res.get("f_best")

@@ -16,9 +16,7 @@ def slug(text: str, max_len: int = MAX_SLUG) -> str:
     or dash, at most ``max_len`` characters (a long text keeps its start and gets a short
     hash of the whole, so distinct long texts stay distinct). Never empty."""
     s = re.sub(r"[^A-Za-z0-9._=-]+", "_", str(text))
-    s = re.sub(r"_+", "_", re.sub(r"\.{2,}", "_", s)).strip("._-")
-    if not s:
-        s = "x"
+    s = re.sub(r"_+", "_", re.sub(r"\.{2,}", "_", s)).strip("._-") or "x"
     if len(s) > max_len:
         digest = hashlib.sha256(str(text).encode()).hexdigest()[:10]
         s = s[: max_len - 11].rstrip("._-") + "-" + digest
