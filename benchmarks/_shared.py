@@ -15,6 +15,15 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
+from hydra import compose as hydra_compose
+from hydra import initialize_config_module
+from hydra.core.global_hydra import GlobalHydra
+
+from vpid_bench.build import build_problem
+from vpid_bench.plugins import Registry
+from vpid_bench.shell.config_store import register_configs
+
 #: ``vpid-bench`` and ``vpid-bench-report`` in a child process of this interpreter (the
 #: virtual environment's, whatever is first on PATH).
 CLI = [sys.executable, "-c", "from vpid_bench.shell.main import main; main()"]
@@ -32,9 +41,6 @@ def cli_env() -> dict[str, str]:
 def registry_with_configs() -> Any:
     """The installed plugins' registry, their config nodes stored in Hydra's ConfigStore
     (once per process, before :func:`compose`)."""
-    from vpid_bench.plugins import Registry
-    from vpid_bench.shell.config_store import register_configs
-
     registry = Registry()
     register_configs(registry)
     return registry
@@ -43,10 +49,6 @@ def registry_with_configs() -> Any:
 def compose(overrides: list[str]) -> Any:
     """The job config the command would compose for ``overrides`` (Hydra's global state
     cleared before; the config nodes stored by :func:`registry_with_configs`)."""
-    from hydra import compose as hydra_compose
-    from hydra import initialize_config_module
-    from hydra.core.global_hydra import GlobalHydra
-
     GlobalHydra.instance().clear()
     with initialize_config_module(version_base="1.3", config_module="vpid_bench.conf"):
         return hydra_compose(config_name="config", overrides=list(overrides))
@@ -95,11 +97,6 @@ def kernel_us(cfg: dict[str, Any], seconds: float = 1.0, batch: int = 20) -> tup
     """The problem ``cfg``'s (``name`` and keys) µs per candidate on one thread, batches of
     ``batch`` random candidates in its box, the median of 5 timings of ``seconds / 5``; in
     wall time and in this process's CPU time (which another program does not inflate)."""
-    import numpy as np
-
-    from vpid_bench.build import build_problem
-    from vpid_bench.plugins import Registry
-
     problem = build_problem(Registry(), cfg)
     problem.set_threads(1)
     X = problem.bounds.sample(np.random.default_rng(0), batch)

@@ -24,6 +24,13 @@ from collections.abc import Iterator
 import numba
 import numpy as np
 from _shared import interleaved
+from vpid_vehicle.config import VehicleConfig
+from vpid_vehicle.model import matrices, response_rows, tyre_input
+from vpid_vehicle.problem import VehicleProblem
+from vpid_vehicle.ride import kernel, linear
+from vpid_vehicle.ride.full import RideFullProblem
+from vpid_vehicle.ride.half import RideHalfProblem
+from vpid_vehicle.ride.quarter import RideQuarterProblem
 
 from vpid_bench.build import build_problem
 from vpid_bench.plugins import Registry
@@ -31,9 +38,6 @@ from vpid_bench.plugins import Registry
 
 def system_of(problem, X: np.ndarray):
     """The paper's half car of the rows of X as a linear system (outputs z1'', z2'')."""
-    from vpid_vehicle.model import matrices, response_rows, tyre_input
-    from vpid_vehicle.ride import linear
-
     known = problem.known
     M, C, K = matrices(X, known)
     F = np.broadcast_to(tyre_input(known), (X.shape[0], 4, 2))
@@ -42,10 +46,6 @@ def system_of(problem, X: np.ndarray):
 
 
 def core(args) -> Iterator[tuple]:
-    from vpid_vehicle.config import VehicleConfig
-    from vpid_vehicle.problem import VehicleProblem
-    from vpid_vehicle.ride import linear
-
     problem = VehicleProblem(VehicleConfig())
     X = problem.bounds.sample(np.random.default_rng(0), args.ps)
     dt, u = problem.config.dt, np.ascontiguousarray(problem.model.y)
@@ -68,8 +68,6 @@ def _recompiled(fn, options, **globals_):
 
 
 def magic(args) -> Iterator[tuple]:
-    from vpid_vehicle.ride import kernel
-
     libm = types.ModuleType("libm")  # numba types a module's functions, not a namespace's
     libm.atan, libm.sin = math.atan, math.sin
     inline = {"inline": "always", "error_model": "numpy"}
@@ -95,10 +93,6 @@ def magic(args) -> Iterator[tuple]:
 
 
 def structures(args) -> Iterator[tuple]:
-    from vpid_vehicle.ride.full import RideFullProblem
-    from vpid_vehicle.ride.half import RideHalfProblem
-    from vpid_vehicle.ride.quarter import RideQuarterProblem
-
     for P in (RideQuarterProblem, RideHalfProblem, RideFullProblem):
         ways = {}
         for name, keys in (("linear", {}), ("cubic+bilinear", {"spring": "cubic",

@@ -19,6 +19,9 @@ import timeit
 
 import numpy as np
 from _shared import parse_keys
+from scipy.optimize import least_squares
+from vpid_peers.coordinates import Coordinates
+from vpid_peers.solver import Solver, SolverSettings
 
 from vpid_bench.api import LoopOptimizer, OptimizerParams
 from vpid_bench.build import build_problem, optimizer_params, run_rng
@@ -31,9 +34,6 @@ WINDOWS = (("paper window", 0.0, 300, 27), ("record.extra=0.5", 0.5, 150, 28))
 
 def polish_own(problem) -> float:
     """f at the end of a descent from the truth with a fresh Jacobian at every step."""
-    from vpid_peers.coordinates import Coordinates
-    from vpid_peers.solver import Solver, SolverSettings
-
     coords = Coordinates(problem.bounds, "log")
     solver = Solver(problem.evaluate_with_residuals, coords, problem.residual_groups(),
                     SolverSettings(broyden=False, ftol=1e-15, inner=5))
@@ -44,8 +44,6 @@ def polish_own(problem) -> float:
 def polish_scipy(problem, rounds: int = 20) -> float:
     """IRLS between full solves: scipy's least_squares on the group-weighted residuals,
     weights 1/sqrt(||r_g||) refreshed after each solve, from the truth (log coordinates)."""
-    from scipy.optimize import least_squares
-
     groups = problem.residual_groups()
     x = problem.x_true.copy()
     lo, hi = np.log(problem.bounds.lower), np.log(problem.bounds.upper)

@@ -20,13 +20,14 @@ import time
 import numpy as np
 from _shared import compose, registry_with_configs
 
+from vpid_bench.analysis.optimum import INNER_TOL, polish
+from vpid_bench.build import ProblemCache, run_rng
+from vpid_bench.runner import run
+from vpid_bench.spec import parse_job
+from vpid_bench.store.archive_records import load_all
+
 
 def polish_part(runs: int) -> None:
-    from vpid_bench.analysis.optimum import INNER_TOL, polish
-    from vpid_bench.build import ProblemCache, run_rng
-    from vpid_bench.runner import run
-    from vpid_bench.spec import parse_job
-
     registry = registry_with_configs()  # before compose: it stores the config nodes
     job = parse_job(compose(["optimizer=de1", f"runs={runs}"]), registry)
     problem = ProblemCache().get(job)
@@ -52,8 +53,6 @@ def polish_part(runs: int) -> None:
 
 
 def read_part(problem: str, repeat: int) -> None:
-    from vpid_bench.store.archive_records import load_all
-
     rows = {}
     for name, optima_only in (("whole archives", False), ("optima alone", True)):
         seconds = []

@@ -22,7 +22,14 @@ import statistics
 import tempfile
 from pathlib import Path
 
+import numpy as np
 from _shared import CLI, REPORT, run_timed
+
+from vpid_bench.analysis.optimum import optimum_key, record_settings
+from vpid_bench.report.pack import pack
+from vpid_bench.store.archive import JOBS, MANIFEST, OPTIMA, RECORDS
+from vpid_bench.store.archive_records import read_archive
+from vpid_bench.store.records import stable_hash, write_json_atomic
 
 #: What the report over archive/vpid1 may take on a quiet 2-core machine (issue 46), in s.
 TARGET_S = 60.0
@@ -58,13 +65,6 @@ def short_report(repeats: int, tmp: Path) -> None:
 def scaled_archive(archive: Path, instances: int, tmp: Path) -> Path:
     """An archive of the runs of ``archive`` copied to ``instances`` instances each (see the
     module), packed by the real packer from a sweep folder written here."""
-    import numpy as np
-
-    from vpid_bench.analysis.optimum import optimum_key, record_settings
-    from vpid_bench.report.pack import pack
-    from vpid_bench.store.archive import JOBS, MANIFEST, OPTIMA, RECORDS
-    from vpid_bench.store.records import stable_hash, write_json_atomic
-
     sweep = tmp / "scaled-sweep"
     rng = np.random.default_rng(0)
     manifest = json.loads((archive / MANIFEST).read_text(encoding="utf-8"))
@@ -103,8 +103,6 @@ def scaled_archive(archive: Path, instances: int, tmp: Path) -> Path:
 
 def archive_report(archive: Path, instances: int | None, tmp: Path) -> None:
     """The report of ``archive`` (nothing run), and of its scaled copy (see the module)."""
-    from vpid_bench.store.archive_records import read_archive
-
     load = os.getloadavg()[0]
     plain, plain_cpu = run_timed([*REPORT, str(archive), "-o", str(tmp / "report-archive")])
     n = len(read_archive(archive).records)

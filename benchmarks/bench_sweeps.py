@@ -21,7 +21,15 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
 from _shared import CLI, REPORT, compose, kernel_us, registry_with_configs, run_timed
+
+from vpid_bench.build import ProblemCache, run_rng
+from vpid_bench.job_runs import joins_lockstep
+from vpid_bench.machine import available_cores
+from vpid_bench.runner import Lane, run, run_many
+from vpid_bench.spec import parse_job
+from vpid_bench.store import records as rec
 
 #: name: (what it is, its overrides); a way without ``report=`` runs ``report=false``
 WAYS = {
@@ -38,8 +46,6 @@ WAYS = {
 def summary(folder: Path) -> dict:
     """The sweep's record fingerprints, evaluations per problem config, runs' own time and
     fixed-target table (``None`` without a report)."""
-    from vpid_bench.store import records as rec
-
     prints, evaluations, run_s = {}, {}, 0.0
     for path in rec.iter_record_files([folder]):
         record = rec.read_record(path)
@@ -60,14 +66,6 @@ def summary(folder: Path) -> dict:
 def runs_alone(jobs: list[list[str]], lockstep: bool) -> float:
     """Seconds the runs of the given jobs take in this process, nothing around them
     (``lockstep=False``: one run after another)."""
-    import numpy as np
-
-    from vpid_bench.build import ProblemCache, run_rng
-    from vpid_bench.job_runs import joins_lockstep
-    from vpid_bench.machine import available_cores
-    from vpid_bench.runner import Lane, run, run_many
-    from vpid_bench.spec import parse_job
-
     registry, cache, total = registry_with_configs(), ProblemCache(), 0.0
     for overrides in jobs:
         job = parse_job(compose(overrides), registry)
@@ -112,8 +110,6 @@ def parse_args() -> argparse.Namespace:
 
 
 def main() -> None:
-    from vpid_bench.machine import available_cores
-
     args = parse_args()
     ways = args.ways.split(",")
     first_problem, first_optimizer = args.problems.split(",")[0], args.optimizers.split(",")[0]

@@ -28,6 +28,7 @@ from typing import Any
 from build_archive import ROOT, build, parse_args
 
 from vpid_bench.machine import available_cores
+from vpid_bench.plugins import Registry
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 from _shared import kernel_us  # noqa: E402  (the benchmarks' timer, one home)
@@ -42,8 +43,6 @@ def cpu_seconds() -> float:
 
 def yardstick(args: argparse.Namespace, seconds: float) -> dict[str, tuple[float, float]]:
     """:func:`kernel_us` of every member the build will sweep, timed before it starts."""
-    from vpid_bench.plugins import Registry
-
     names = (args.problems.split(",") if args.problems
              else sorted(Registry().suites().get(args.suite, ())))
     return {m: kernel_us({"name": m}, seconds) for m in names}

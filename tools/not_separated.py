@@ -4,10 +4,9 @@
     .venv/bin/python tools/not_separated.py outputs/smoke-archive-report
 
 From a full report's tables (nothing recomputed), per context in Markdown: the leader by NoRE
-and every optimizer the Holm-corrected pairwise tests do not separate from it (p_holm >=
-alpha); the same among the black-box optimizers (not ``wants_residuals``, not a reference),
-and which of them beat both random search and the box centre; the family's best black-box
-score (mean fixed-target AUC) and those whose 95 % bootstrap interval overlaps its own.
+and those the Holm-corrected pairwise tests do not separate from it, the same among the
+black-box optimizers, those that beat both references, and the family's best black-box score
+with the scores whose 95 % interval overlaps it (docs/study.md).
 """
 
 from __future__ import annotations

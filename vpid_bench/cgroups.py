@@ -1,11 +1,8 @@
-"""A Linux cgroup (version 2) per worker process, where this process may make one: every
-process the worker's plugins start is in it, whatever it does, and ``cgroup.kill`` ends them
-all at once, forks in flight included (Linux >= 5.14).
-
-Available where a cgroup v2 hierarchy is mounted, this process's own cgroup folder may be
-written (root, or delegated by systemd) and offers ``cgroup.kill``. Elsewhere
-:meth:`Cgroup.create` returns ``None`` and :mod:`vpid_bench.worker_tree` finds processes by
-their mark. ``VPID_BENCH_CGROUPS=0`` turns cgroups off (a test of that path).
+"""A Linux cgroup (version 2) per worker process, where this process may make one (where, and
+``VPID_BENCH_CGROUPS=0``: docs/sweeps.md, crash isolation): every process the worker's plugins
+start is in it, whatever it does, and ``cgroup.kill`` ends them all at once, forks in flight
+included (Linux >= 5.14). Elsewhere :meth:`Cgroup.create` returns ``None`` and
+:mod:`vpid_bench.worker_tree` finds processes by their mark.
 """
 
 from __future__ import annotations

@@ -17,7 +17,11 @@ import sys
 from typing import Any
 
 import numpy as np
+from omegaconf import OmegaConf
 
+from .analysis.estimator_floors import truth_optima_metric
+from .analysis.identifiability import cramer_rao
+from .analysis.profile import STRUCTURAL_RATIO, profile_intervals
 from .errors import ConfigError, VpidBenchError
 from .params import build_dataclass
 from .plugins import Registry
@@ -45,8 +49,6 @@ def designs(fixed: list[tuple[str, str]], vary: list[tuple[str, str]]
 
 def build(registry: Any, name: str, settings: list[tuple[str, str]]) -> Any:
     """The problem ``name`` with ``settings`` (dotted keys, YAML values), checked as the CLI."""
-    from omegaconf import OmegaConf
-
     try:
         cls = registry.problem(name)
     except KeyError:
@@ -62,10 +64,6 @@ def build(registry: Any, name: str, settings: list[tuple[str, str]]) -> Any:
 
 def measure(problem: Any, floor: int, profile: bool) -> dict[str, Any]:
     """The design's numbers (see the module)."""
-    from .analysis.estimator_floors import truth_optima_metric
-    from .analysis.identifiability import cramer_rao
-    from .analysis.profile import STRUCTURAL_RATIO, profile_intervals
-
     crb = cramer_rao(problem)
     if crb is None:
         raise ConfigError("problem", problem.name, "a problem with residuals, its truth and a "

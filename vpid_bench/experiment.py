@@ -24,6 +24,8 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+from tqdm import tqdm  # the progress bar: runs done of total, elapsed, rate
+
 from .assemble import make_record
 from .build import ProblemCache
 from .errors import PluginError, VpidBenchError
@@ -95,12 +97,9 @@ def recorded_in_full(jobs: list[Job], job_dirs: list[Path], registry: Registry |
     """Whether every job of a sweep ended ``ok`` with the complete record of every run under
     the run ids it would have now: then the command writes nothing but the report. The
     problems' set-up runs as a job's does; any fault there: ``False`` (the jobs say why)."""
-    if not jobs or len(jobs) != len(job_dirs):
+    if not jobs or len(jobs) != len(job_dirs) or any(
+            (read_job_status(d) or {}).get("status") != "ok" for d in job_dirs):
         return False
-    for job_dir in job_dirs:
-        status = read_job_status(job_dir)
-        if status is None or status.get("status") != "ok":
-            return False
     pool = Workers(1) if all(j.spec.isolation != "none" and can_send(j) is None
                              for j in jobs) else None
     try:
@@ -452,8 +451,6 @@ def _run_missing(job: Job, calls: Any, facts: ProblemFacts, job_dir: Path,
                  pool: Workers | None, failure: BaseException | None) -> None:
     """Run the runs without a complete record, here or in ``pool``'s workers, writing each
     record as soon as it is over. ``failure``: every run is recorded as failed with it."""
-    from tqdm import tqdm  # runs done of total, elapsed, rate
-
     spec = job.spec
     bar = tqdm(total=spec.runs, desc=f"{job.optimizer_name} on {job.problem_name}", unit="run",
                file=sys.stderr, dynamic_ncols=True, mininterval=0.5, disable=not spec.progress)

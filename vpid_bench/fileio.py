@@ -13,6 +13,7 @@ pages of one and ``runs.csv`` of the other; N6).
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import errno
 import hashlib
 import json
@@ -255,8 +256,6 @@ def _exchange(a: Path, b: Path) -> bool:
     file system cannot (nothing happened)."""
     if not sys.platform.startswith("linux"):
         return False
-    import ctypes
-
     try:
         renameat2 = ctypes.CDLL(None, use_errno=True).renameat2
     except (OSError, AttributeError):  # a C library without it (glibc < 2.28, musl)

@@ -10,11 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from .analysis.diagnostics import write_diagnostics
-from .analysis.estimates import write_comparisons, write_profile
-from .analysis.estimator_floors import INSTANCES as FLOORS_INSTANCES
-from .analysis.estimator_floors import estimator_floors
-from .analysis.identifiability import cramer_rao, per_instance
+from .analysis import diagnostics, estimates, estimator_floors, identifiability
 from .analysis.optimum import _locked, optimum_key, update_instance_optimum
 from .fileio import own_folder
 from .problem import Problem, kept_instance, offers_residuals
@@ -34,7 +30,7 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
     to ``comparisons.json``. Returns each run's relative gap ``(f_best - f*) / f*`` to its
     instance's optimum (absolute where ``f* <= 0``). ``polished``: the optima already made
     by :func:`polish_share` tasks, by instance id (nothing is polished here then)."""
-    write_comparisons(problem, job_dir)  # first: cheap, and wanted whatever follows
+    estimates.write_comparisons(problem, job_dir)  # first: cheap, and wanted whatever follows
     if not offers_residuals(type(problem)):
         return {}
     truth = problem.x_true is not None
@@ -57,9 +53,9 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
         return gaps  # no record: no identified value, profile or fit diagnostics
     lowest = min(optima, key=lambda o: o[1]["f_opt"])
     if not truth:
-        write_profile(*lowest, job_dir)
+        estimates.write_profile(*lowest, job_dir)
     inst, optimum = optima[0] if truth else lowest  # with a truth: the first instance's
-    write_diagnostics(inst, optimum["x_opt"], job_dir)
+    diagnostics.write_diagnostics(inst, optimum["x_opt"], job_dir)
     return gaps
 
 
@@ -105,17 +101,19 @@ def _instance_optimum(job: Job, inst: Problem, optima_dir: Path,
 def _per_problem_files(job: Job, problem: Problem, job_dir: Path, optima_dir: Path) -> None:
     """The job's ``identifiability.json`` (instance 0's bounds, each instance's under
     ``instances``) and ``estimators.json``, each made once per sweep (:func:`shared_file`)."""
+    runs = job.spec.runs
+
     def bounds() -> dict[str, Any] | None:
-        crb = cramer_rao(problem)
+        crb = identifiability.cramer_rao(problem)
         if crb is not None:
-            crb["instances"] = per_instance(problem, job.spec.runs)
+            crb["instances"] = identifiability.per_instance(problem, runs)
         return crb
 
     settings = job.problem_settings()
-    n_floors = max(1, min(FLOORS_INSTANCES, job.spec.runs))  # what the floors depend on
+    n_floors = max(1, min(estimator_floors.INSTANCES, runs))  # what the floors depend on
     for name, make, more in (
-            (IDENTIFIABILITY, bounds, job.spec.runs),
-            (ESTIMATORS, lambda: estimator_floors(problem, job.spec.runs), n_floors)):
+            (IDENTIFIABILITY, bounds, runs),
+            (ESTIMATORS, lambda: estimator_floors.estimator_floors(problem, runs), n_floors)):
         if not (job_dir / name).is_file():
             data = shared_file(optima_dir, name, problem, settings, more, make)
             if data is not None:

@@ -9,6 +9,8 @@ import platform
 from collections.abc import Iterator
 from typing import Any
 
+from threadpoolctl import threadpool_info, threadpool_limits
+
 
 def available_cores() -> int:
     """The cores this process may run on: its CPU affinity where the OS says (Linux), else
@@ -42,8 +44,6 @@ def one_blas_thread() -> Iterator[None]:
                                        "MKL_NUM_THREADS", "VPID_BENCH_BLAS_THREADS")):
         yield
         return
-    from threadpoolctl import threadpool_limits
-
     with threadpool_limits(limits=1, user_api="blas"):
         yield
 
@@ -59,8 +59,6 @@ def machine_facts() -> dict[str, Any]:
         cpu = next((ln.split(":", 1)[1].strip() for ln in fh if ln.startswith("model name")), cpu)
     try:
         import scipy.linalg  # noqa: F401 - load scipy's BLAS too, as a run would
-        from threadpoolctl import threadpool_info
-
         blas = [{k: lib.get(src) for k, src in (
             ("api", "internal_api"), ("version", "version"),
             ("architecture", "architecture"), ("threads", "num_threads"))}

@@ -9,11 +9,14 @@ from __future__ import annotations
 
 import codecs
 import contextlib
+import ctypes
 import os
 import select
 import sys
 from multiprocessing.connection import Connection
 from typing import Any
+
+import psutil
 
 #: ``prctl`` option that makes a process the reaper of its orphaned descendants (Linux).
 PR_SET_CHILD_SUBREAPER = 36
@@ -28,8 +31,6 @@ def detach() -> None:
         os.setsid()
     if sys.platform.startswith("linux"):
         with contextlib.suppress(Exception):
-            import ctypes
-
             ctypes.CDLL(None, use_errno=True).prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0)
 
 
@@ -51,8 +52,6 @@ def drop_tracker() -> None:
 def strays(process: Any) -> list[Any]:
     """The living descendants (no zombies) of ``process`` (a :class:`psutil.Process` or a
     process id), as :class:`psutil.Process` objects."""
-    import psutil
-
     try:
         root = process if isinstance(process, psutil.Process) else psutil.Process(process)
         found = root.children(recursive=True) if root.is_running() else []

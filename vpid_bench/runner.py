@@ -310,8 +310,7 @@ def _start(lane: Lane, dim: int) -> _Run:
     if r.residuals:
         try:
             check_compatible(lane.problem, opt)
-            groups = lane.problem.residual_groups()
-            opt.residual_groups = np.asarray(groups, dtype=int).reshape(-1)
+            opt.residual_groups = np.asarray(lane.problem.residual_groups(), dtype=int).reshape(-1)
         except Exception as exc:  # noqa: BLE001 - this run only
             r.outcome = exc
     return r

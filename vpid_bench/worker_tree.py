@@ -24,6 +24,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+import psutil
+
 from .cgroups import Cgroup
 from .machine import environ
 from .process_tree import exited, readable
@@ -83,15 +85,11 @@ class _Held:
             with contextlib.suppress(OSError):
                 signal.pidfd_send_signal(self.fd, sig)
         elif self.proc is not None:
-            import psutil
-
             with contextlib.suppress(psutil.Error):
                 self.proc.send_signal(sig)
 
     def alive(self) -> bool:
         """Whether it still runs (a zombie does not)."""
-        import psutil
-
         if self.fd is not None and readable(self.fd, closed=True):  # readable once it exits
             return False
         try:
@@ -110,8 +108,6 @@ def _hold(pid: int, belongs: Callable[[Any], bool]) -> _Held | None:
     """Process ``pid`` held by a pidfd, once checked to be the tree's (``belongs``, asked of
     its :class:`psutil.Process`), so a number handed out again is never held; ``None`` if it
     is gone, a zombie or not the tree's."""
-    import psutil
-
     fd = pidfd(pid)
     try:
         proc = psutil.Process(pid)
@@ -138,8 +134,6 @@ def _children(pid: int) -> list[int]:
             found += [int(c) for c in f.read().split()]
     if tids or not os.path.isdir("/proc"):
         return found
-    import psutil
-
     with contextlib.suppress(psutil.Error):
         return [c.pid for c in psutil.Process(pid).children()]
     return []
@@ -151,8 +145,6 @@ class Tree(_Held):
     ``None`` without pidfds) is readable once it ended. :meth:`close` lets go of it."""
 
     def __init__(self, process: Any, token: str, cgroup: Cgroup | None) -> None:
-        import psutil
-
         self.process, self.pid, self.token, self.name = process, process.pid, token, "worker"
         self.fd = pidfd(self.pid)
         try:
@@ -222,8 +214,6 @@ class Tree(_Held):
     def _marked(self, held: dict[int, _Held], checked: set[int]) -> list[_Held]:
         """The processes carrying the worker's mark not held yet (wherever they went);
         ``checked``: the numbers already read (only new ones are read)."""
-        import psutil
-
         def marked(proc: Any) -> bool:
             return proc.environ().get(MARK) == self.token
 

@@ -30,6 +30,8 @@ from multiprocessing import get_context
 from multiprocessing.connection import Connection, wait
 from typing import Any
 
+import psutil
+
 from . import interrupts
 from .cgroups import Cgroup
 from .interrupts import held as _sigint_held  # (tests use the name)
@@ -94,8 +96,6 @@ def is_timeout(exc: BaseException) -> bool:
 def worker_cap() -> tuple[int, str]:
     """The most workers this machine holds at once, and why: one per :data:`WORKER_MB` of
     the memory available, no more than the open-file limit allows; at least one."""
-    import psutil
-
     available = psutil.virtual_memory().available
     by_memory = max(1, int(available // (WORKER_MB * 2**20)))
     soft = resource.getrlimit(resource.RLIMIT_NOFILE)[0]

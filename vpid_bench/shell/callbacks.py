@@ -1,9 +1,7 @@
-"""Hydra callbacks (listed in ``conf/config.yaml``). They write their outcome to disk, never
-into process-global state, so the command reads it whatever process ran the jobs.
-:class:`SweepStatus` prints the sweep folder and the command that resumes it;
-:class:`ReportCallback` writes the report (full after a sweep, short after a job) and
-``report/status.json``. Both register the ``vpid_bench_job_dir`` resolver (safe job folder
-names) in every process that resolves job folders.
+"""Hydra callbacks (listed in ``conf/config.yaml``): :class:`SweepStatus`, :class:`ReportCallback`.
+They write their outcome to disk, never into process-global state, so the command reads it
+whatever process ran the jobs; both register the ``vpid_bench_job_dir`` resolver (safe job
+folder names) in every process that resolves job folders.
 """
 
 from __future__ import annotations
@@ -18,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from hydra.experimental.callback import Callback
+from omegaconf import OmegaConf
 
 from ..fileio import own_folder
 from ..progress import Stages
@@ -49,8 +48,6 @@ def job_dir_name(override_dirname: str) -> str:
 
 def ensure_job_dir_resolver() -> None:
     """Register the ``${vpid_bench_job_dir:...}`` resolver in this process (idempotent)."""
-    from omegaconf import OmegaConf
-
     if not OmegaConf.has_resolver(JOB_DIR_RESOLVER):
         OmegaConf.register_new_resolver(JOB_DIR_RESOLVER, job_dir_name)
 

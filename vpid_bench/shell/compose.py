@@ -7,6 +7,12 @@ from __future__ import annotations
 import copy
 from typing import Any
 
+import yaml
+from hydra import compose, initialize_config_dir, initialize_config_module
+from hydra.errors import HydraException, MissingConfigException
+from omegaconf import OmegaConf, open_dict
+from omegaconf.errors import OmegaConfBaseException
+
 from ..errors import ConfigError
 from ..spec import TOP_LEVEL_KEYS
 from .argv import SHIPPED_CONFIGS, ConfigSource
@@ -19,8 +25,6 @@ SHIPPED = ConfigSource()
 
 def _yaml_error(exc: BaseException) -> ConfigError | None:
     """A config file that is not YAML, as one line naming the place (or None)."""
-    import yaml
-
     cause: BaseException | None = exc
     while cause is not None and not isinstance(cause, yaml.MarkedYAMLError):
         cause = cause.__cause__ or cause.__context__
@@ -34,8 +38,6 @@ def _yaml_error(exc: BaseException) -> ConfigError | None:
 
 def hydra_error(exc: BaseException) -> ConfigError:
     """A Hydra or OmegaConf error as one line (the innermost cause that names a key)."""
-    from hydra.errors import MissingConfigException
-
     if isinstance(exc, MissingConfigException):
         missing = str(getattr(exc, "missing_cfg_file", "") or "")
         group, _, name = missing.rpartition("/")
@@ -64,10 +66,6 @@ def hydra_error(exc: BaseException) -> ConfigError:
 
 
 def _compose(overrides: list[str], hydra: bool, source: ConfigSource = SHIPPED) -> Any:
-    from hydra import compose
-    from hydra.errors import HydraException
-    from omegaconf.errors import OmegaConfBaseException
-
     overrides = [*overrides, *source.search_override()]  # as on Hydra's command line
     try:
         return compose(config_name=source.name or "config", overrides=overrides,
@@ -78,8 +76,6 @@ def _compose(overrides: list[str], hydra: bool, source: ConfigSource = SHIPPED) 
 
 def initialize(source: ConfigSource) -> Any:
     """Hydra's compose API set up as ``hydra.main`` sets itself up for this command."""
-    from hydra import initialize_config_dir, initialize_config_module
-
     path = source.path or SHIPPED_CONFIGS
     if path.startswith("pkg://"):
         return initialize_config_module(version_base="1.3", config_module=path[len("pkg://"):])
@@ -105,8 +101,6 @@ class Composer:
     def task(self, structural: list[Any]) -> Any:
         """The task config (no ``hydra`` node) of a point whose structural overrides are
         ``structural`` (parsed); the caller copies it before changing it."""
-        from omegaconf import open_dict
-
         lines = tuple(o.input_line for o in structural)
         if lines in self._tasks:
             return self._tasks[lines]
@@ -126,8 +120,6 @@ class Composer:
         return task
 
     def _compose(self, overrides: list[str]) -> Any:
-        from omegaconf import OmegaConf
-
         full = _compose(overrides, hydra=True, source=self.source)
         if self.source != SHIPPED and not all(k in full for k in TOP_LEVEL_KEYS):
             raise ConfigError("--config-name", self.source.name or "config",  # its defaults,

@@ -1,12 +1,7 @@
-"""The ``vpid-bench`` command: read the command line, check everything, hand over to Hydra.
-
-The command line (:mod:`.argv`; ``--version`` prints every plugin's version); the plugins
-loaded, a Hydra node stored per plugin and for the job spec; the pre-flight
-(:mod:`.preflight`: every point composed and parsed as the job will, the output folder
-resolved, locked and proven writable; anything wrong: one line, exit 2, nothing written);
-then Hydra runs the jobs (any launcher), each writing its ``job.json``, the report callback
-``report/status.json``: the exit status (docs/sweeps.md) is read from those files, whatever
-process ran them. ``VPID_BENCH_DEBUG=1`` shows tracebacks.
+"""The ``vpid-bench`` command: read the command line, check everything, hand over to Hydra
+(each step: docs/architecture.md, how a command flows). The jobs write their ``job.json``,
+the report callback ``report/status.json``: the exit status (docs/sweeps.md) is read from
+those files, whatever process ran them. ``VPID_BENCH_DEBUG=1`` shows tracebacks.
 """
 
 from __future__ import annotations
@@ -22,16 +17,24 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
+import hydra
+from hydra.core.hydra_config import HydraConfig
+from omegaconf import OmegaConf
+
 from .. import __version__, interrupts
 from ..errors import VpidBenchError
 from ..fileio import loads_json, open_append, read_text_limited, write_text_atomic
 from ..machine import available_cores, environ
 from ..plugins import PluginLoadWarning, Registry
+from ..store.archive import evaluation_seconds
 from ..store.job_status import write_job_status
+from . import preflight
 from .argv import parse_command_line
+from .callbacks import REPORT_STATUS, REPORT_SUBDIR, ensure_job_dir_resolver, write_report
 from .config_store import register_configs
 from .progress import SweepProgress, first_line
 from .quick_help import help_text
+from .resume import FolderLock, collect_job_statuses, new_invocation, resume_command
 from .suites import expand_suites
 
 DEBUG_ENV = "VPID_BENCH_DEBUG"
@@ -85,8 +88,6 @@ class JobTask:
             self._pool.close()
 
     def __call__(self, cfg: Any) -> float | None:
-        from hydra.core.hydra_config import HydraConfig
-
         interrupts.raise_if_swallowed()  # a Ctrl-C a C callback dropped during the last job
         hydra_cfg = HydraConfig.get()
         job_dir = Path(hydra_cfg.runtime.output_dir)
@@ -186,9 +187,6 @@ def _open_job_log(job_dir: Path) -> logging.Handler | None:
 def _save_job_config(cfg: Any, job_dir: Path) -> None:
     """``.hydra/config.yaml``, ``hydra.yaml`` and ``overrides.yaml`` as Hydra saves them,
     atomically and inside the job's error handling (our ``hydra.output_subdir`` is null)."""
-    from hydra.core.hydra_config import HydraConfig
-    from omegaconf import OmegaConf
-
     full = HydraConfig.instance().cfg
     folder = job_dir / ".hydra"
     if folder.is_symlink():  # planted: never written through (issue 24); a folder of our own
@@ -216,8 +214,6 @@ def _load_registry() -> Any:
 
 
 def _hydra_entry(argv: Sequence[str], task: Any) -> None:
-    import hydra
-
     decorated = hydra.main(version_base="1.3", config_path="pkg://vpid_bench.conf",
                            config_name="config")(task)
     saved = sys.argv
@@ -239,9 +235,6 @@ def print_versions(registry: Any) -> None:
 def _failures(folder: Path | None, multirun: bool,
               planned: Sequence[Path] = (), report_expected: bool = False) -> list[str]:
     """What went wrong, read from the disk; prints the sweep summary."""
-    from .callbacks import REPORT_STATUS, REPORT_SUBDIR
-    from .resume import collect_job_statuses
-
     if folder is None:
         return []
     invocation = os.environ.get("VPID_BENCH_INVOCATION")
@@ -301,10 +294,6 @@ def _interrupted(what: str = "no job was started or every completed run is recor
 
 
 def _main(argv: Sequence[str] | None) -> None:
-    from . import preflight
-    from .callbacks import ensure_job_dir_resolver
-    from .resume import new_invocation, resume_command
-
     threading.excepthook = (  # a plugin's own thread's exception: one line, no traceback
         lambda args: print(interrupts.thread_exception_line(args), file=sys.stderr))
     before = set(threading.enumerate())
@@ -356,9 +345,6 @@ def _main(argv: Sequence[str] | None) -> None:
 
 def _prepare_folder(plan: Any, key: str, task: JobTask) -> Any:
     """The output folder checked, locked (returned) and its job folders made."""
-    from . import preflight
-    from .resume import FolderLock
-
     lock = FolderLock(plan.output_dir, key)
     preflight.check_writable(plan.output_dir, key)
     lock.acquire()
@@ -370,8 +356,6 @@ def _prepare_folder(plan: Any, key: str, task: JobTask) -> Any:
 def _nothing_to_run(plan: Any, registry: Any, task: JobTask) -> bool:
     """Whether the sweep has nothing to run; else its first progress line (how long)."""
     from ..experiment import recorded_in_full
-    from ..store.archive import evaluation_seconds
-
     if plan.multirun and recorded_in_full(plan.jobs, plan.job_dirs, registry, plan.problems):
         return True
     if task.progress is not None:
@@ -382,8 +366,6 @@ def _nothing_to_run(plan: Any, registry: Any, task: JobTask) -> bool:
 def _report_only(plan: Any, task: JobTask, lock: Any, before: set[Any], watch: bool) -> None:
     """A sweep whose every run is recorded: say so and write its report again (archives or
     the report's code may have changed), nothing else; status 1 when the report failed."""
-    from .callbacks import write_report
-
     runs = sum(j.spec.runs for j in plan.jobs)
     print(f"sweep folder: {plan.output_dir}\n  nothing to run: the {len(plan.jobs)} job(s)' "
           f"{runs} run(s) are all recorded under these settings, plugins and data; only the "

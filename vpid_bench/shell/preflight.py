@@ -1,14 +1,13 @@
-"""Pre-flight: every point of the command checked before any job runs.
+"""Pre-flight: every point of the command checked before any job runs (docs/architecture.md,
+how a command flows).
 
 Hydra composes a job's config only when that job starts, so a bad value in the tenth point of
 a sweep once stopped it after nine jobs. The pre-flight expands the sweep exactly as Hydra's
 basic sweeper does (the cartesian product of the sweep overrides, the first outermost),
 composes each point and parses it with :func:`vpid_bench.spec.parse_job`, the function the job
-calls (a plugin's own range checks included): anything bad stops the command with one line,
-exit 2, before any folder is written. Points that differ only in plain ``key=value`` settings
-share one composition (:class:`.compose.Composer`), their values set on a copy as Hydra sets
-them (struct mode: an unknown key is refused). It also resolves the output folder once and
-hands it to Hydra.
+calls: anything bad stops the command with one line, exit 2, before any folder is written.
+Points that differ only in plain ``key=value`` settings share one composition
+(:class:`.compose.Composer`), their values set on a copy as Hydra sets them.
 """
 
 from __future__ import annotations
@@ -23,6 +22,13 @@ import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
+
+from hydra._internal.config_loader_impl import get_overrides_dirname
+from hydra.core.override_parser.overrides_parser import OverridesParser
+from hydra.core.override_parser.types import ChoiceSweep, Glob, RangeSweep, Sweep
+from hydra.errors import OverrideParseException
+from omegaconf import DictConfig, OmegaConf, open_dict
+from omegaconf.errors import OmegaConfBaseException
 
 from ..errors import ConfigError, VpidBenchError
 from ..fileio import own_folder
@@ -57,17 +63,9 @@ class Plan:
     problems: Any = None
 
 
-def _parser() -> Any:
-    from hydra.core.override_parser.overrides_parser import OverridesParser
-
-    return OverridesParser.create()
-
-
 def parse_overrides(overrides: Sequence[str]) -> list[Any]:
     """Hydra's parsed ``Override`` objects; a syntax error is one ConfigError line."""
-    from hydra.errors import OverrideParseException
-
-    parser = _parser()
+    parser = OverridesParser.create()
     parsed = []
     for text in overrides:
         try:
@@ -92,8 +90,6 @@ def _group_names(group: str, registry: Registry, folders: Sequence[str] = ()) ->
 
 def _sweep_size(override: Any) -> int | None:
     """How many values a sweep override stands for (None: not a list, e.g. interval())."""
-    from hydra.core.override_parser.types import ChoiceSweep, RangeSweep
-
     value = override.value()
     if isinstance(value, RangeSweep):
         if not value.step:
@@ -106,8 +102,6 @@ def _sweep_size(override: Any) -> int | None:
 def _refuse_nested_sweep(o: Any, value: Any) -> None:
     """Refuse a sweep function inside a list sweep (``a,choice(b,c)``): Hydra cannot expand
     it (a 20-line ``ValidationError`` once, round five's N19)."""
-    from hydra.core.override_parser.types import Glob, Sweep
-
     for item in getattr(value, "list", None) or ():
         if isinstance(item, (Sweep, Glob)):
             raise ConfigError(o.key_or_group, _raw_value(o),
@@ -118,8 +112,6 @@ def _refuse_nested_sweep(o: Any, value: Any) -> None:
 def _axis(o: Any, multirun: bool, registry: Registry, custom_sweeper: bool,
           folders: Sequence[str] = ()) -> list[str] | None:
     """The override strings one override contributes (``None``: a sweeper's choice)."""
-    from hydra.core.override_parser.types import Glob
-
     if not o.is_sweep_override():
         return [o.input_line]
     key = o.get_key_element()
@@ -199,8 +191,6 @@ def _is_structural(o: Any) -> bool:
 
 def _apply(cfg: Any, o: Any) -> None:
     """Set one plain ``key=value`` override on a composed config, as Hydra would."""
-    from omegaconf import DictConfig, OmegaConf, open_dict
-
     key, value = o.key_or_group, o.value()
     head, _, rest = key.partition(".")
     if head in GROUPS and rest == "name":
@@ -230,8 +220,6 @@ def _apply(cfg: Any, o: Any) -> None:
 
 def _unknown_key(cfg: Any, key: str, value: Any) -> ConfigError:
     """The error for ``key=value`` where ``key`` does not exist: names the keys that do."""
-    from omegaconf import DictConfig, OmegaConf
-
     parts = key.split(".")
     for depth in range(len(parts) - 1, -1, -1):
         parent = ".".join(parts[:depth])
@@ -258,10 +246,7 @@ def _unknown_key(cfg: Any, key: str, value: Any) -> ConfigError:
 def check_points(points: list[list[str]], registry: Registry,
                  source: ConfigSource = SHIPPED) -> tuple[list[Job], Any]:
     """Compose and parse every point: the jobs and the first point's full config."""
-    from omegaconf import OmegaConf, open_dict
-    from omegaconf.errors import OmegaConfBaseException
-
-    parser = _parser()
+    parser = OverridesParser.create()
     composer = Composer(source)
     jobs = []
     with initialize(source):
@@ -288,9 +273,6 @@ def _quote(path: str) -> str:
 
 def output_dir(full_cfg: Any, multirun: bool) -> Path:
     """The job's (``hydra.run.dir``) or sweep's (``hydra.sweep.dir``) folder, resolved once."""
-    from omegaconf import OmegaConf
-    from omegaconf.errors import OmegaConfBaseException
-
     key = "hydra.sweep.dir" if multirun else "hydra.run.dir"
     try:
         value = OmegaConf.select(full_cfg, key)
@@ -315,8 +297,6 @@ def check_writable(directory: Path, key: str) -> None:
 
 def _resume_folder(cmd: CommandLine, full_cfg: Any, key: str) -> Path | None:
     """The folder ``--resume`` continues (None: the one named on the command line)."""
-    from omegaconf import OmegaConf
-
     if cmd.resume:
         folder = Path(cmd.resume)
         if not folder.is_dir():
@@ -458,8 +438,6 @@ def _globs_listed(hydra_args: Sequence[str], parsed: Sequence[Any], registry: Re
     """The command line with each ``glob()`` over names replaced by the names it matched
     (Hydra's sweeper lists choices before it reads ``hydra.searchpath``: it would miss a
     ``-cd`` folder's)."""
-    from hydra.core.override_parser.types import Glob
-
     listed = {}
     for o in parsed:
         if o.key_or_group in GROUPS and isinstance(o.value(), Glob):
@@ -492,14 +470,11 @@ def planned_job_dirs(points: Sequence[Sequence[str]], full_cfg: Any, sweep_dir: 
     """The job folders of a basic-sweeper sweep, named as Hydra will name them (each point
     through ``override_dirname`` and :func:`~.callbacks.job_dir_name`); empty when
     ``hydra.sweep.subdir`` is not the default."""
-    from hydra._internal.config_loader_impl import get_overrides_dirname
-    from omegaconf import OmegaConf
-
     sweep = OmegaConf.to_container(full_cfg.hydra.sweep, resolve=False)
     if str(sweep.get("subdir")) != f"${{{JOB_DIR_RESOLVER}:${{hydra.job.override_dirname}}}}":
         return []
     naming = full_cfg.hydra.job.config.override_dirname
-    parser = _parser()
+    parser = OverridesParser.create()
     dirs = []
     for point in points:
         lines: dict[str, str] = {}  # as Hydra's basic sweeper renders a job: value as a

@@ -1,10 +1,8 @@
-"""Provenance: which versions of what produced a record, each looked up once per process.
-
-* :func:`package_versions`: Python and the numerical stack that can change any result;
-* :func:`distribution_provenance`: a plugin's distribution, version and the installed
-  versions of its requirements (a resumed job tells runs made by another release);
-* :func:`code_digest`: a digest of a plugin's installed source; it enters each run's id, so
-  a plugin changed under the same version (once served its old records) runs again.
+"""Provenance: which versions of what produced a record, each looked up once per process: the
+numerical stack, each plugin's distribution and requirements (a resumed job tells runs made by
+another release) and a digest of its installed source (:func:`code_digest`: it enters each
+run's id, so a plugin changed under the same version, which once served its old records, runs
+again).
 """
 
 from __future__ import annotations

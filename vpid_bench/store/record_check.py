@@ -7,9 +7,8 @@ must neither crash the report nor be trusted by a resumed job. :func:`check_reco
 first bad field; the report skips such a record with that line, a resumed job sets it aside
 and runs that run again.
 
-The rules are a table (:data:`RULES`), one small function per field, checked in order: a
-rule may rely on every rule before it (``problem.name`` is read only once ``problem`` is
-known to be a mapping).
+The rules are a table (:data:`RULES`) checked in order: a rule may rely on every rule before
+it (``problem.name`` is read only once ``problem`` is known to be a mapping).
 """
 
 from __future__ import annotations

@@ -5,9 +5,9 @@ A record says everything needed to repeat a run (config, seeds, versions) and to
 strict JSON; a non-finite float is written as the string ``"inf"``, ``"-inf"`` or ``"nan"``,
 and :func:`read_record` turns those back into floats in the numeric fields.
 
-Two runs of the same config and seed give records identical but for ``timing``
-(:func:`fingerprint` drops it). File name: ``records/run-<index>-<run_id>.json``; the
-``run_id`` hashes what determines the result, so a re-run of the job recognises its records.
+Two runs of the same config and seed give records identical but for ``timing``; the run id
+in each file name (:func:`record_path`) hashes what determines the result, so a re-run of the
+job recognises its records.
 """
 
 from __future__ import annotations
