@@ -3,9 +3,8 @@
 :func:`run_from_config` is a plain function of a composed config (tests call it directly; the
 shell calls it once per job).
 
-Resume: a run whose complete ``ok`` record (same run id) exists is skipped; missing, corrupt
-and failed runs run again. The run id hashes everything that determines a result (plugins'
-versions and code, data files' content), so another plugin release or data file runs again.
+Resume (docs/sweeps.md): a run whose complete ``ok`` record (same run id: plugins' versions
+and code, data files' content, settings) exists is skipped; every other run runs again.
 
 Crash isolation (docs/sweeps.md): an exception inside one run is written into its record
 (status ``failed``) and the job goes on. With worker processes every call into plugin code

@@ -1,11 +1,9 @@
 """Stop at the final target (the job key ``target``), as COCO does.
 
-A run may end once within the final target of its instance's optimum, where that optimum is
-known *in advance*: the suite's archive ships each instance's (``optima.jsonl``). An archive
-is untrusted: the installed problem must find the optimum's value at its vector, and archives
-that disagree are refused. A run then stops after the batch whose best value is at most
-``f_opt + target * |f_opt|`` (``target`` where ``f_opt`` is 0): ``stopped_by: "target"``
-(what stays and what changes in a report: docs/protocol.md).
+A run may end once within the final target of its instance's optimum, known *in advance*
+from the suite's archive (``optima.jsonl``, untrusted: the installed problem must confirm
+it). A run then stops after the batch whose best value is at most :func:`stop_value`:
+``stopped_by: "target"`` (what stays and what changes in a report: docs/protocol.md).
 """
 
 from __future__ import annotations

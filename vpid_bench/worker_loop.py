@@ -8,9 +8,8 @@ ends, or ``("call", job, (fn, args))``: ``fn(job, problem, *args)`` with the job
 worker with them). On the way: ``("phase", name)`` (the supervisor's clock restarts),
 ``("outcome", RunOutcome)``, and a plugin's log records and lines for the terminal.
 
-A plugin that forks: the child's copy of the pipe is closed at the fork, so nothing it sends
-arrives. A plugin that closes the pipe: the worker ends at once with
-:data:`LOST_PIPE_EXIT`, no traceback, and the run fails with that reason.
+A forked child's copy of the pipe is closed at the fork; a plugin that closes the pipe ends
+the worker at once with :data:`LOST_PIPE_EXIT` (docs/sweeps.md, crash isolation).
 """
 
 from __future__ import annotations
