@@ -4,13 +4,25 @@ composed as the command composes it, and the timers. Imported as ``_shared`` (a 
 
 from __future__ import annotations
 
+import contextlib
 import os
+import resource
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
 from collections.abc import Callable
 from typing import Any
+
+import numpy as np
+from hydra import compose as hydra_compose
+from hydra import initialize_config_module
+from hydra.core.global_hydra import GlobalHydra
+
+from vpid_bench.build import build_problem
+from vpid_bench.plugins import Registry
+from vpid_bench.shell.config_store import register_configs
 
 #: ``vpid-bench`` and ``vpid-bench-report`` in a child process of this interpreter (the
 #: virtual environment's, whatever is first on PATH).
@@ -19,8 +31,7 @@ REPORT = [sys.executable, "-c", "from vpid_bench.report.cli import main; main()"
 
 
 def cli_env() -> dict[str, str]:
-    """The environment of a child command: headless matplotlib with its own config folder
-    (unless the caller set them)."""
+    """A child command's environment: headless matplotlib, its own config folder (unless set)."""
     env = dict(os.environ)
     env.setdefault("MPLBACKEND", "Agg")
     env.setdefault("MPLCONFIGDIR", tempfile.mkdtemp(prefix="vpid-mpl-"))
@@ -30,9 +41,6 @@ def cli_env() -> dict[str, str]:
 def registry_with_configs() -> Any:
     """The installed plugins' registry, their config nodes stored in Hydra's ConfigStore
     (once per process, before :func:`compose`)."""
-    from vpid_bench.plugins import Registry
-    from vpid_bench.shell.config_store import register_configs
-
     registry = Registry()
     register_configs(registry)
     return registry
@@ -41,10 +49,6 @@ def registry_with_configs() -> Any:
 def compose(overrides: list[str]) -> Any:
     """The job config the command would compose for ``overrides`` (Hydra's global state
     cleared before; the config nodes stored by :func:`registry_with_configs`)."""
-    from hydra import compose as hydra_compose
-    from hydra import initialize_config_module
-    from hydra.core.global_hydra import GlobalHydra
-
     GlobalHydra.instance().clear()
     with initialize_config_module(version_base="1.3", config_module="vpid_bench.conf"):
         return hydra_compose(config_name="config", overrides=list(overrides))
@@ -53,16 +57,12 @@ def compose(overrides: list[str]) -> Any:
 def run_timed(cmd: list[str], cwd: Any = None, check: bool = True) -> tuple[float, float]:
     """Wall and CPU seconds (user + system of the child: a shared machine moves them less) of
     ``cmd`` run in ``cwd``; with ``check`` it must succeed, else exit with its stderr's end."""
-    import resource
-    import subprocess
-
     def children_cpu() -> float:
         r = resource.getrusage(resource.RUSAGE_CHILDREN)
         return r.ru_utime + r.ru_stime
 
     c0, t0 = children_cpu(), time.perf_counter()
-    done = subprocess.run(cmd, cwd=cwd, env=cli_env(), capture_output=True, text=True,
-                          check=False)
+    done = subprocess.run(cmd, cwd=cwd, env=cli_env(), capture_output=True, text=True, check=False)
     wall = time.perf_counter() - t0
     if check and done.returncode != 0:
         sys.exit(f"failed ({done.returncode}): {' '.join(map(str, cmd))}\n"
@@ -93,16 +93,10 @@ def interleaved(calls: dict[str, Callable[[], object]], rounds: int, number: int
     return {name: pick(t) for name, t in times.items()}
 
 
-def kernel_us(cfg: dict[str, Any], seconds: float = 1.0, batch: int = 20
-              ) -> tuple[float, float]:
+def kernel_us(cfg: dict[str, Any], seconds: float = 1.0, batch: int = 20) -> tuple[float, float]:
     """The problem ``cfg``'s (``name`` and keys) µs per candidate on one thread, batches of
     ``batch`` random candidates in its box, the median of 5 timings of ``seconds / 5``; in
     wall time and in this process's CPU time (which another program does not inflate)."""
-    import numpy as np
-
-    from vpid_bench.build import build_problem
-    from vpid_bench.plugins import Registry
-
     problem = build_problem(Registry(), cfg)
     problem.set_threads(1)
     X = problem.bounds.sample(np.random.default_rng(0), batch)
@@ -124,10 +118,8 @@ def parse_keys(text: str) -> dict[str, Any]:
         if value.lower() in ("true", "false"):
             return value.lower() == "true"
         for kind in (int, float):
-            try:
+            with contextlib.suppress(ValueError):
                 return kind(value)
-            except ValueError:
-                pass
         return value
 
     pairs = (item.split("=", 1) for item in text.split(",") if item)

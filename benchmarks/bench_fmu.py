@@ -19,6 +19,7 @@ import statistics
 import subprocess
 import tempfile
 import time
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -26,14 +27,6 @@ import numpy as np
 HERE = Path(__file__).parent
 X = np.array([280.0, 33.0, 17000.0, 1300.0])
 
-
-def _c_loop(folder: Path) -> Path:
-    from vpid_fmu import example
-
-    exe = folder / "fmu_c_loop"
-    subprocess.run([example.compiler() or "gcc", "-O2", f"-I{example.fmi_headers()}",
-                    str(HERE / "fmu_c_loop.c"), "-o", str(exe), "-ldl"], check=True)
-    return exe
 
 
 def main() -> None:
@@ -61,12 +54,12 @@ def main() -> None:
         problem = FmuProblem(build_dataclass(FmuConfig, {
             "fmu": str(fmu), "reference": {"file": str(record)}}, "problem"))
         problem.evaluate(X[None])  # compile (or load the cache) and instantiate
-        exe = _c_loop(folder)
+        exe = folder / "fmu_c_loop"  # the C loop, compiled here
+        subprocess.run([example.compiler() or "gcc", "-O2", f"-I{example.fmi_headers()}",
+                        str(HERE / "fmu_c_loop.c"), "-o", str(exe), "-ldl"], check=True)
         (folder / "h.bin").write_bytes(h.astype("<f8").tobytes())
         lib = folder / "lib" / "quarter_car.so"
         lib.parent.mkdir()
-        import zipfile
-
         with zipfile.ZipFile(fmu) as z:
             lib.write_bytes(z.read("binaries/linux64/quarter_car.so"))
         unzipped = fmpy.extract(str(fmu), str(folder / "fmpy"))

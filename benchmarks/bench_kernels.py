@@ -4,20 +4,13 @@ by side in one run (interleaved rounds; the median, or the least where noted).
     MPLBACKEND=Agg .venv/bin/python benchmarks/bench_kernels.py \\
         {core,magic,structures,measured} [--rounds 7] [--ps 20]
 
-* ``core``, the paper's half car: its specialised kernel (``vpid_vehicle.kernel``, one
-  thread); the suite's shared linear core (``ride.linear.newmark_outputs``, target within 1.3x
-  of it); the same with the model's numpy code that builds M, C, K (what a ride problem runs);
-  the plain numpy scheme (``simulate(newmark(...))``). Rounds of 0.3 s.
-* ``magic``: the Magic Formula kernel with its vectorisable ``atan`` and ``sin``
-  (``ride/vecmath``) against the same source compiled with the C library's
-  (``smoke_lateral_mf``); one call per round.
-* ``structures``: each ride family's ``evaluate`` (3 s at 1 ms) with the linear structure and
-  the richest (cubic spring, bilinear damper: RK4); the least over rounds of 15 calls' mean.
-* ``measured``: the measured problems at their defaults (docs/measured.md), a population of
-  ``--ps`` at once against one candidate at a time.
-
-Prints per way µs per candidate, its ratio to the first way and, where the ways compute the
-same outputs, the largest difference to the first's (of the peak).
+``core``: the paper's half car's specialised kernel against the ride suite's shared linear
+core (target within 1.3x of it), the same with the model's matrices, and plain numpy;
+``magic``: the Magic Formula kernel's vectorisable ``atan`` and ``sin`` against the C
+library's; ``structures``: each ride family's linear and richest structure; ``measured``:
+the measured problems, ``--ps`` at once against one at a time (docs/suite.md and
+docs/measured.md). Prints per way µs per candidate, its ratio to the first way and, where the
+ways compute the same outputs, the largest difference to the first's (of the peak).
 """
 
 from __future__ import annotations
@@ -31,6 +24,13 @@ from collections.abc import Iterator
 import numba
 import numpy as np
 from _shared import interleaved
+from vpid_vehicle.config import VehicleConfig
+from vpid_vehicle.model import matrices, response_rows, tyre_input
+from vpid_vehicle.problem import VehicleProblem
+from vpid_vehicle.ride import kernel, linear
+from vpid_vehicle.ride.full import RideFullProblem
+from vpid_vehicle.ride.half import RideHalfProblem
+from vpid_vehicle.ride.quarter import RideQuarterProblem
 
 from vpid_bench.build import build_problem
 from vpid_bench.plugins import Registry
@@ -38,9 +38,6 @@ from vpid_bench.plugins import Registry
 
 def system_of(problem, X: np.ndarray):
     """The paper's half car of the rows of X as a linear system (outputs z1'', z2'')."""
-    from vpid_vehicle.model import matrices, response_rows, tyre_input
-    from vpid_vehicle.ride import linear
-
     known = problem.known
     M, C, K = matrices(X, known)
     F = np.broadcast_to(tyre_input(known), (X.shape[0], 4, 2))
@@ -49,10 +46,6 @@ def system_of(problem, X: np.ndarray):
 
 
 def core(args) -> Iterator[tuple]:
-    from vpid_vehicle.config import VehicleConfig
-    from vpid_vehicle.problem import VehicleProblem
-    from vpid_vehicle.ride import linear
-
     problem = VehicleProblem(VehicleConfig())
     X = problem.bounds.sample(np.random.default_rng(0), args.ps)
     dt, u = problem.config.dt, np.ascontiguousarray(problem.model.y)
@@ -75,8 +68,6 @@ def _recompiled(fn, options, **globals_):
 
 
 def magic(args) -> Iterator[tuple]:
-    from vpid_vehicle.ride import kernel
-
     libm = types.ModuleType("libm")  # numba types a module's functions, not a namespace's
     libm.atan, libm.sin = math.atan, math.sin
     inline = {"inline": "always", "error_model": "numpy"}
@@ -102,10 +93,6 @@ def magic(args) -> Iterator[tuple]:
 
 
 def structures(args) -> Iterator[tuple]:
-    from vpid_vehicle.ride.full import RideFullProblem
-    from vpid_vehicle.ride.half import RideHalfProblem
-    from vpid_vehicle.ride.quarter import RideQuarterProblem
-
     for P in (RideQuarterProblem, RideHalfProblem, RideFullProblem):
         ways = {}
         for name, keys in (("linear", {}), ("cubic+bilinear", {"spring": "cubic",

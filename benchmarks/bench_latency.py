@@ -1,10 +1,8 @@
 """How fast ``vpid-bench`` answers: ``--help``, ``--version`` and one-line refusals (issue 46).
 
-Each command is run ``--repeat`` times in a fresh process; the median wall time (s) and the
-median CPU time of the child (user + system, s) are printed beside two references measured
-in the same run: ``python -c pass`` and the ``--help`` of a minimal ``@hydra.main`` app
-(written to a temporary file). The goal: ``--help`` and a refusal within 1.5x the minimal
-Hydra app's ``--help``.
+Each command's median wall and CPU time (s) over ``--repeat`` fresh processes, beside
+``python -c pass`` and a minimal ``@hydra.main`` app's ``--help`` (the goal: ``--help`` and a
+refusal within 1.5x the latter; README.md, a command that answers at once).
 
     .venv/bin/python benchmarks/bench_latency.py [--repeat 5]
 """

@@ -1,16 +1,11 @@
 """How many evaluations lsq needs to reach each record's optimum, and what the bridge costs.
 
-Part ``lsq`` (issue 11's target): on ``problem=vehicle``, run ``i`` fits the record of
-``problem.noise.seed=i`` with the job's stream ``run_rng(0, i)``. The record's optimum is the
-lowest of a polish from the truth (a fresh finite-difference Jacobian at every step, to
-convergence), an independent one (scipy's ``least_squares`` in an outer IRLS loop) and the
-run's best; a run reaches it at the first evaluation count (Jacobian rows included) within a
-relative 1e-6. Target: >= 27 of 30 within 300 on the paper's window, >= 28 of 30 within 150
-with ``problem.record.extra=0.5``.
-
+Part ``lsq`` (issue 11's target: >= 27 of 30 runs within 300 evaluations on the paper's
+window, >= 28 of 30 within 150 with ``problem.record.extra=0.5``): evaluations to each
+record's optimum, how it is found: docs/peers.md, evaluations to each record's optimum.
 Part ``bridge``: wall time per batch of a loop-owning optimizer (``LoopOptimizer``'s worker
-thread) beside ask/tell ones on the 9-D sphere, batches of 20, best of several repeats:
-``scipy_de`` vs ``de1``, and a do-nothing library loop vs random search (the hand-over alone).
+thread) beside ask/tell ones on the 9-D sphere: ``scipy_de`` vs ``de1``, and a do-nothing
+library loop vs random search (the hand-over alone).
 
     .venv/bin/python benchmarks/bench_lsq.py [--part lsq|bridge|all] [--runs 30] [--budget 600]
     .venv/bin/python benchmarks/bench_lsq.py --part lsq --variant broyden=false,inner=3
@@ -24,6 +19,9 @@ import timeit
 
 import numpy as np
 from _shared import parse_keys
+from scipy.optimize import least_squares
+from vpid_peers.coordinates import Coordinates
+from vpid_peers.solver import Solver, SolverSettings
 
 from vpid_bench.api import LoopOptimizer, OptimizerParams
 from vpid_bench.build import build_problem, optimizer_params, run_rng
@@ -36,9 +34,6 @@ WINDOWS = (("paper window", 0.0, 300, 27), ("record.extra=0.5", 0.5, 150, 28))
 
 def polish_own(problem) -> float:
     """f at the end of a descent from the truth with a fresh Jacobian at every step."""
-    from vpid_peers.coordinates import Coordinates
-    from vpid_peers.solver import Solver, SolverSettings
-
     coords = Coordinates(problem.bounds, "log")
     solver = Solver(problem.evaluate_with_residuals, coords, problem.residual_groups(),
                     SolverSettings(broyden=False, ftol=1e-15, inner=5))
@@ -49,8 +44,6 @@ def polish_own(problem) -> float:
 def polish_scipy(problem, rounds: int = 20) -> float:
     """IRLS between full solves: scipy's least_squares on the group-weighted residuals,
     weights 1/sqrt(||r_g||) refreshed after each solve, from the truth (log coordinates)."""
-    from scipy.optimize import least_squares
-
     groups = problem.residual_groups()
     x = problem.x_true.copy()
     lo, hi = np.log(problem.bounds.lower), np.log(problem.bounds.upper)

@@ -5,14 +5,10 @@ certified ones from the shipped archives, each side by side in one run.
     MPLBACKEND=Agg .venv/bin/python benchmarks/bench_optima.py read \\
         [--problem vpid1_q_golden_hump] [--repeat 3]
 
-* ``polish``: the same starting points (the best of a DE1 run on the paper's window and the
-  truth, per instance) polished with scipy tolerances ``1e-15`` (the setting before round two)
-  and :data:`vpid_bench.analysis.optimum.INNER_TOL`: ms per polish, their ratio and the largest
-  relative difference of the polished values.
-* ``read``: what certifying a ``target=`` job's stops reads, the whole archives holding
-  ``--problem`` (records parsed and checked) against their optima alone (the records file
-  checked against its SHA-256, not parsed; what ``target=`` reads, once in the pre-flight and
-  once per job): the median wall time over ``--repeat`` reads, what each read, their ratio.
+``polish``: the best of a DE1 run and the truth of each instance polished with scipy
+tolerances ``1e-15`` (before round two) and :data:`vpid_bench.analysis.optimum.INNER_TOL`.
+``read``: the whole archives holding ``--problem`` (records parsed and checked) against
+their optima alone (what ``target=`` reads, once in the pre-flight and once per job).
 """
 
 from __future__ import annotations
@@ -24,13 +20,14 @@ import time
 import numpy as np
 from _shared import compose, registry_with_configs
 
+from vpid_bench.analysis.optimum import INNER_TOL, polish
+from vpid_bench.build import ProblemCache, run_rng
+from vpid_bench.runner import run
+from vpid_bench.spec import parse_job
+from vpid_bench.store.archive_records import load_all
+
 
 def polish_part(runs: int) -> None:
-    from vpid_bench.analysis.optimum import INNER_TOL, polish
-    from vpid_bench.build import ProblemCache, run_rng
-    from vpid_bench.runner import run
-    from vpid_bench.spec import parse_job
-
     registry = registry_with_configs()  # before compose: it stores the config nodes
     job = parse_job(compose(["optimizer=de1", f"runs={runs}"]), registry)
     problem = ProblemCache().get(job)
@@ -56,8 +53,6 @@ def polish_part(runs: int) -> None:
 
 
 def read_part(problem: str, repeat: int) -> None:
-    from vpid_bench.store.archive_records import load_all
-
     rows = {}
     for name, optima_only in (("whole archives", False), ("optima alone", True)):
         seconds = []

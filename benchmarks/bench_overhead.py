@@ -4,13 +4,10 @@ evaluations, measured side by side in one run (issue: studies at kernel speed).
     MPLBACKEND=Agg .venv/bin/python benchmarks/bench_overhead.py [--budget 4200] [--repeat 5] \\
         [--skip nevergrad] [--only random lsq] [--problem smoke_quarter]
 
-Per optimizer, after a short warm-up run: one run on ``--problem`` (PS 20, at its defaults)
-through the run loop (:func:`vpid_bench.runner.run`), recording the batches it evaluated;
-then the same batches evaluated again the same way with nothing around them (the kernel's
-time). Prints the medians over ``--repeat`` runs (one run of 51 batches moves by 10-20 % on a
-shared machine) of the wall time per evaluation, the kernel's, their ratio (1: the optimizer
-costs nothing beyond its evaluations), its own ``ask`` and ``tell``, the run loop's share,
-and the batches (sequential rounds of ask/tell).
+Per optimizer, one run on ``--problem`` (PS 20) through the run loop against its own batches
+evaluated again alone, the rest split into its ``ask`` and ``tell`` and the run loop's share;
+the medians over ``--repeat`` runs (the method and the measurements: docs/sweeps.md, each
+optimizer's overhead per evaluation).
 """
 
 from __future__ import annotations
@@ -123,8 +120,7 @@ def main() -> None:
         if name in args.skip or (args.only is not None and name not in args.only):
             continue
         try:
-            runs = [measure(registry, name, args.budget, args.problem)
-                    for _ in range(args.repeat)]
+            runs = [measure(registry, name, args.budget, args.problem) for _ in range(args.repeat)]
             m = {key: statistics.median(r[key] for r in runs) for key in runs[0]}
         except Exception as exc:  # noqa: BLE001 - a benchmark line per optimizer
             print(f"| {name} | failed: {type(exc).__name__}: {exc} | | | | | | |")

@@ -4,27 +4,32 @@ side with the runs they report on; or an archive's report.
     .venv/bin/python benchmarks/bench_report.py [--repeats 3] [--records SWEEP_DIR]
     .venv/bin/python benchmarks/bench_report.py --archive ARCHIVE [--instances 15]
 
-* **Full report**: ``vpid-bench-report SWEEP -o OUT`` in a child process (imports included)
-  on the paper experiment's records (made once into a temporary folder unless ``--records``
-  names a sweep), and the sweep's own wall time for scale.
-* **Short report**: ``vpid-bench runs=30`` (DE4 on the vehicle) with ``report=true`` and
-  ``report=false`` alternately: the difference is what the single job's report adds.
-* **An archive's report** (``--archive``), nothing run, beside the 60 s a report over
-  archive/vpid1 may take on a quiet 2-core machine; with ``--instances N``, also on an archive
-  of the same runs N times as large (each run copied to N instances, its values scaled by a
-  factor in [1, 1.05) drawn per copy so the copies are not tied; the optima copied alike):
-  the size of a full build, from a slice of it (``tools/archive_cost.py``).
+The full report of the paper experiment's records (made once into a temporary folder unless
+``--records`` names a sweep) in a child process, beside the sweep's own time; a single job
+(``runs=30``) with and without its short report; or (``--archive``) an archive's report
+beside its 60 s target, and with ``--instances N`` that of the same runs copied to N
+instances, each copy's values scaled by a factor in [1, 1.05) so the copies are not tied
+(the measurements: docs/report.md and docs/sweeps.md).
 """
 
 from __future__ import annotations
 
 import argparse
+import gzip
+import json
 import os
 import statistics
 import tempfile
 from pathlib import Path
 
+import numpy as np
 from _shared import CLI, REPORT, run_timed
+
+from vpid_bench.analysis.optimum import optimum_key, record_settings
+from vpid_bench.report.pack import pack
+from vpid_bench.store.archive import JOBS, MANIFEST, OPTIMA, RECORDS
+from vpid_bench.store.archive_records import read_archive
+from vpid_bench.store.records import stable_hash, write_json_atomic
 
 #: What the report over archive/vpid1 may take on a quiet 2-core machine (issue 46), in s.
 TARGET_S = 60.0
@@ -32,17 +37,12 @@ PAPER_SWEEP = ["-m", "optimizer=de1,de2,de3,de4,de5,de6,de7,de8,ga", "problem.ps
                "runs=30", "progress=false", "report=false"]
 
 
-def timed(cmd: list[str]) -> float:
-    """Wall seconds of ``cmd`` in a child process (it must succeed)."""
-    return run_timed(cmd)[0]
-
-
 def full_report(records: Path | None, repeats: int, tmp: Path) -> None:
     sweep_s = None
     if records is None:
         records = tmp / "sweep"
-        sweep_s = timed([*CLI, *PAPER_SWEEP, f"hydra.sweep.dir={records}"])
-    times = [timed([*REPORT, str(records), "-o", str(tmp / f"report-{i}")])
+        sweep_s = run_timed([*CLI, *PAPER_SWEEP, f"hydra.sweep.dir={records}"])[0]
+    times = [run_timed([*REPORT, str(records), "-o", str(tmp / f"report-{i}")])[0]
              for i in range(repeats)]
     print(f"full report of {records} ({repeats} repeats): median "
           f"{statistics.median(times):.2f} s  (all: {', '.join(f'{t:.2f}' for t in times)})")
@@ -54,9 +54,9 @@ def short_report(repeats: int, tmp: Path) -> None:
     times: dict[bool, list[float]] = {True: [], False: []}
     for i in range(repeats):
         for report in (True, False):
-            times[report].append(timed([*CLI, "runs=30", "progress=false",
-                                        f"report={str(report).lower()}",
-                                        f"hydra.run.dir={tmp / f'job-{report}-{i}'}"]))
+            times[report].append(run_timed([*CLI, "runs=30", "progress=false",
+                                            f"report={str(report).lower()}",
+                                            f"hydra.run.dir={tmp / f'job-{report}-{i}'}"])[0])
     on, off = statistics.median(times[True]), statistics.median(times[False])
     print(f"single job, runs=30 ({repeats} repeats each): report=true median {on:.2f} s, "
           f"report=false median {off:.2f} s; the short report adds {on - off:+.2f} s")
@@ -65,16 +65,6 @@ def short_report(repeats: int, tmp: Path) -> None:
 def scaled_archive(archive: Path, instances: int, tmp: Path) -> Path:
     """An archive of the runs of ``archive`` copied to ``instances`` instances each (see the
     module), packed by the real packer from a sweep folder written here."""
-    import gzip
-    import json
-
-    import numpy as np
-
-    from vpid_bench.analysis.optimum import optimum_key, record_settings
-    from vpid_bench.report.pack import pack
-    from vpid_bench.store.archive import JOBS, MANIFEST, OPTIMA, RECORDS
-    from vpid_bench.store.records import stable_hash, write_json_atomic
-
     sweep = tmp / "scaled-sweep"
     rng = np.random.default_rng(0)
     manifest = json.loads((archive / MANIFEST).read_text(encoding="utf-8"))
@@ -96,8 +86,7 @@ def scaled_archive(archive: Path, instances: int, tmp: Path) -> Path:
             res, trace = copy.get("result") or {}, copy.get("trace") or {}
             if isinstance(res.get("f_best"), float):
                 res["f_best"] *= c
-            trace["best"] = [b * c if isinstance(b, float) else b
-                             for b in trace.get("best") or []]
+            trace["best"] = [b * c if isinstance(b, float) else b for b in trace.get("best") or []]
             write_json_atomic(job / "records" / f"run-{index:03d}-{copy['run_id']}.json", copy)
     for line in (archive / OPTIMA).read_text(encoding="utf-8").splitlines():
         opt = json.loads(line)
@@ -114,8 +103,6 @@ def scaled_archive(archive: Path, instances: int, tmp: Path) -> Path:
 
 def archive_report(archive: Path, instances: int | None, tmp: Path) -> None:
     """The report of ``archive`` (nothing run), and of its scaled copy (see the module)."""
-    from vpid_bench.store.archive_records import read_archive
-
     load = os.getloadavg()[0]
     plain, plain_cpu = run_timed([*REPORT, str(archive), "-o", str(tmp / "report-archive")])
     n = len(read_archive(archive).records)

@@ -7,15 +7,9 @@ processes, threads, a launcher, the report or the stop at the target cost or giv
 
 Each way (:data:`WAYS`) runs the same ``vpid-bench -m`` sweep into its own folder. Per way:
 wall and CPU seconds, evaluations per second, the speed-up over the first way, the runs' own
-time (the records' ``timing.run_time_s``), whether its records are the first way's
-(fingerprints without timing) and, with a report, whether its fixed-target table
-(``tables/ert.csv``) is the first reported way's. Yardsticks, in the same invocation:
-``--runs-alone`` the first way's runs in this process with nothing around them (problem built
-and kernel compiled beforehand), in lockstep and one after another; ``--kernel`` the kernel
-alone for the first way's evaluations (:func:`_shared.kernel_us` at each job's settings), on
-one core and over every core; ``--report-alone`` ``vpid-bench-report`` on the first way's
-records; ``--fixed-start`` a sweep of one job, one run, one generation (what every command
-pays). docs/sweeps.md gives the commands of its measurements.
+time, whether its records (fingerprints without timing) and ``tables/ert.csv`` are the first
+way's, each beside the yardsticks the flags ask for, timed in the same invocation (what each
+is, and the measurements: docs/sweeps.md, speed at scale).
 """
 
 from __future__ import annotations
@@ -27,7 +21,15 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
 from _shared import CLI, REPORT, compose, kernel_us, registry_with_configs, run_timed
+
+from vpid_bench.build import ProblemCache, run_rng
+from vpid_bench.job_runs import joins_lockstep
+from vpid_bench.machine import available_cores
+from vpid_bench.runner import Lane, run, run_many
+from vpid_bench.spec import parse_job
+from vpid_bench.store import records as rec
 
 #: name: (what it is, its overrides); a way without ``report=`` runs ``report=false``
 WAYS = {
@@ -44,8 +46,6 @@ WAYS = {
 def summary(folder: Path) -> dict:
     """The sweep's record fingerprints, evaluations per problem config, runs' own time and
     fixed-target table (``None`` without a report)."""
-    from vpid_bench.store import records as rec
-
     prints, evaluations, run_s = {}, {}, 0.0
     for path in rec.iter_record_files([folder]):
         record = rec.read_record(path)
@@ -66,14 +66,6 @@ def summary(folder: Path) -> dict:
 def runs_alone(jobs: list[list[str]], lockstep: bool) -> float:
     """Seconds the runs of the given jobs take in this process, nothing around them
     (``lockstep=False``: one run after another)."""
-    import numpy as np
-
-    from vpid_bench.build import ProblemCache, run_rng
-    from vpid_bench.job_runs import joins_lockstep
-    from vpid_bench.machine import available_cores
-    from vpid_bench.runner import Lane, run, run_many
-    from vpid_bench.spec import parse_job
-
     registry, cache, total = registry_with_configs(), ProblemCache(), 0.0
     for overrides in jobs:
         job = parse_job(compose(overrides), registry)
@@ -118,8 +110,6 @@ def parse_args() -> argparse.Namespace:
 
 
 def main() -> None:
-    from vpid_bench.machine import available_cores
-
     args = parse_args()
     ways = args.ways.split(",")
     first_problem, first_optimizer = args.problems.split(",")[0], args.optimizers.split(",")[0]

@@ -11,10 +11,8 @@ package changes); ``soa-1``, the package's structure-of-arrays kernel on one thr
 variant once); the tables give the minimum and the median over the rounds, ratios are medians
 of the per-round ratios. Wall time is what a user waits for; for one thread the thread's CPU
 time is given too, much less sensitive to other processes. Also: the kernel on a 1-sample
-window (set-up and call), and a fresh process's build and first evaluation. ``--memory``
-instead measures, with tracemalloc at two record lengths (the difference cancels fixed costs),
-the bytes per sample of the set-up and per sample and candidate of a residual batch: the
-figures behind the memory cap's ``BYTES_PER_STEP`` and ``BYTES_PER_SAMPLE_CANDIDATE``.
+window (set-up and call), and a fresh process's build and first evaluation. ``--memory``:
+the bytes per sample behind the memory cap (tracemalloc at two record lengths; docs/sweeps.md).
 """
 
 from __future__ import annotations
@@ -33,6 +31,8 @@ from vpid_vehicle import kernel
 from vpid_vehicle.config import BYTES_PER_SAMPLE_CANDIDATE, BYTES_PER_STEP, VehicleConfig
 from vpid_vehicle.model import matrices, response_rows, tyre_input
 from vpid_vehicle.problem import VehicleProblem
+
+from vpid_bench.params import build_dataclass
 
 
 def baseline_newmark(problem: VehicleProblem, X: np.ndarray) -> np.ndarray:
@@ -63,8 +63,7 @@ def baseline_newmark(problem: VehicleProblem, X: np.ndarray) -> np.ndarray:
 
 
 def timed(fn: Callable[[], object], number: int, clock=time.thread_time) -> tuple[float, float]:
-    """Wall and CPU seconds (``clock``: this thread's, or ``process_time`` for all threads)
-    per call over ``number`` calls."""
+    """Wall and CPU seconds per call over ``number`` calls (``clock``: the CPU clock)."""
     w, c = time.perf_counter(), clock()
     for _ in range(number):
         fn()
@@ -152,8 +151,6 @@ def threshold(rounds: int) -> None:
 
 def memory(ps: int = 20) -> None:
     """Bytes per sample of the set-up and per sample and candidate of a residual batch."""
-    from vpid_bench.params import build_dataclass
-
     def peak(extra: float) -> tuple[int, int, int]:
         tracemalloc.start()
         problem = VehicleProblem(build_dataclass(VehicleConfig, {"record": {"extra": extra}}))

@@ -5,12 +5,10 @@ docs/study.md, regenerated from the archive alone (nothing is run).
         [-o docs/study/vpid1-advice]
 
 Writes (and prints) ``<out>/advice.md``, with ``ladder.csv``, ``scores.csv`` and the figure
-``ecdf_families.png``: per group (all problems, each family) the report's aggregated ECDF
-(:mod:`vpid_bench.report.suite_scores`) at the rungs 10, 100, 1,000 (10,000)·D, each
-optimizer's score (mean AUC, 95 % bootstrap interval), the optimizers not separated from the
-leader (a 95 % paired bootstrap interval of the per-run AUC difference, paired by problem and
-instance, that contains 0), the same among the black-box optimizers (no ``wants_residuals``),
-and the protocol's caveats with the archive's own facts.
+``ecdf_families.png``: per group (all problems, each family) the report's aggregated ECDF at
+the budget ladder's rungs, each optimizer's score, those not separated from the leader (all,
+and black-box only: :func:`not_separated`) and the caveats with the archive's own facts
+(what each means: docs/study.md).
 """
 
 from __future__ import annotations
@@ -24,9 +22,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.stats import bootstrap
 
+from vpid_bench.errors import VpidBenchError
+from vpid_bench.plugins import Registry
 from vpid_bench.report import suite_scores as ss
-from vpid_bench.report.anytime import RunHits, auc
+from vpid_bench.report.anytime import RunHits, auc, run_hits
 from vpid_bench.report.archive import budgets_per_dim
 from vpid_bench.report.compute import compute
 from vpid_bench.store.archive import ArchiveError
@@ -35,8 +36,7 @@ from vpid_bench.store.archive_records import read_archive
 RESAMPLES = 10_000
 
 
-def rung_rows(runs: Sequence[RunHits], facts: dict[str, tuple[str, int]]
-              ) -> list[list[Any]]:
+def rung_rows(runs: Sequence[RunHits], facts: dict[str, tuple[str, int]]) -> list[list[Any]]:
     """Per group (all, each family) and optimizer that ran all of it: the aggregated ECDF at
     each rung of :data:`~vpid_bench.report.suite_scores.LADDER` (``nan`` beyond a problem's
     budget)."""
@@ -64,8 +64,6 @@ def rung_rows(runs: Sequence[RunHits], facts: dict[str, tuple[str, int]]
 def run_aucs(data: Any, contexts: Sequence[str]) -> dict[str, dict[tuple[str, str], float]]:
     """Per optimizer, the AUC of each of its runs on ``contexts`` by (context, instance id):
     runs of two optimizers on the same instance pair."""
-    from vpid_bench.report.anytime import run_hits
-
     by_id = {r["run_id"]: r for r in data.loaded.records}
     budgets = {c: ss.context_budget(data.hits, c) for c in contexts}
     out: dict[str, dict[tuple[str, str], float]] = {}
@@ -86,8 +84,6 @@ def not_separated(aucs: dict[str, dict[tuple[str, str], float]],
     bootstrap interval of (leader - it) in per-run AUC over the (problem, instance) pairs
     both ran; the leader first. Optimizers in ``leave_out`` take no part (the black-box
     comparison leaves out those that use the residuals)."""
-    from scipy.stats import bootstrap
-
     scored = [r for r in score_rows if r[1] == group and r[2] not in leave_out]
     if not scored:
         return "", []
@@ -121,9 +117,6 @@ def _names(names: Sequence[str]) -> str:
 def residual_users(names: Sequence[str]) -> frozenset[str]:
     """The optimizers among ``names`` whose installed class sets ``wants_residuals`` (they
     need a problem that offers residuals; one not installed here counts as black-box)."""
-    from vpid_bench.errors import VpidBenchError
-    from vpid_bench.plugins import Registry
-
     registry, out = Registry(), set()
     for name in names:
         try:
@@ -140,8 +133,7 @@ def markdown(folder: Path, manifest: dict[str, Any], ladder: list[list[Any]],
              black_box: dict[str, tuple[str, list]] | None = None,
              users: frozenset[str] = frozenset()) -> list[str]:
     black_box = black_box or {}
-    rungs = [k for k in ss.LADDER
-             if any(math.isfinite(r[3 + ss.LADDER.index(k)]) for r in ladder)]
+    rungs = [k for k in ss.LADDER if any(math.isfinite(r[3 + ss.LADDER.index(k)]) for r in ladder)]
     lines = [f"Made from `{folder}` (nothing run) by "
              f"`python tools/archive_advice.py {folder}`; the archive was made by "
              f"vpid-bench {manifest.get('vpid_bench_version')}, commit "
@@ -228,11 +220,8 @@ def main() -> None:
     out = args.out or Path(__file__).resolve().parents[1] / "docs" / "study" / \
         f"{arch.suite}-advice"
     out.mkdir(parents=True, exist_ok=True)
-    from vpid_bench.plugins import Registry
-
     data = compute([args.archive], True, 0.05, "random")
-    facts = ss.context_facts(data.loaded.records, data.rows,
-                             ss.family_lookup(Registry()))
+    facts = ss.context_facts(data.loaded.records, data.rows, ss.family_lookup(Registry()))
     scores, _ = ss.score_rows(data.hits, facts)
     ladder = rung_rows(data.hits, facts)
     groups = {g.name: g.contexts for g in ss.groups(facts) if g.kind != "dimension"}

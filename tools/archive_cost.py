@@ -6,30 +6,19 @@ beside the kernel-only time of the same evaluations, side by side in one run.
     MPLBACKEND=Agg .venv/bin/python tools/archive_cost.py \\
         --built outputs/archive-vpid1 [--wall-s SECONDS]   # a finished build, nothing run
 
-1. **The build** of the slice: :func:`build_archive.build` (every stage, pack included, into
-   ``--out``), its wall and CPU time (the process tree) per stage.
-2. **Kernel only** (the yardstick): per member, its kernel's µs per candidate on one thread
-   (:func:`_shared.kernel_us`), timed before and after the build (their mean: the machine's
-   speed moves during a build), times the evaluations its runs used; over ``C`` cores, that
-   sum over ``C``. Build / kernel only is what the machinery around the evaluations costs
-   (target: at most 2), in wall and in CPU seconds.
-3. **Per member and per optimizer**: runs, evaluations, the runs' own time (the records'
-   ``timing.run_time_s``), the kernel-only time of those evaluations, and the jobs' analysis
-   (each ``job.json``'s wall time less its runs' time over its workers).
-4. **Extrapolation to ``--full-runs`` instances**: a run's cost does not depend on the job's
-   other runs, so the runs' time and the analysis scale by ``full_runs / runs``; the rest of
-   the sweep (Hydra, worker start-up, warm-ups: the runs stage less its jobs' wall) and the
-   certify and pack stages count once more as measured. A job of one run shares no gathered
-   call, so the runs' time is an upper bound.
-
-Timings on a shared machine move by up to 2x between invocations: compare the columns of one
-invocation.
+The slice's build (:func:`build_archive.build`, every stage into ``--out``), its wall and
+CPU time per stage, beside the kernel-only time of the same evaluations (each member's µs
+per candidate, :func:`_shared.kernel_us`, timed before and after the build: their mean),
+per member and per optimizer, and extrapolated to ``--full-runs`` instances (the method
+and the measurements: docs/sweeps.md, what the vpid1 build costs). Timings on a shared
+machine move by up to 2x between invocations: compare the columns of one invocation.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import resource
 import sys
 import time
 from collections import defaultdict
@@ -39,6 +28,7 @@ from typing import Any
 from build_archive import ROOT, build, parse_args
 
 from vpid_bench.machine import available_cores
+from vpid_bench.plugins import Registry
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 from _shared import kernel_us  # noqa: E402  (the benchmarks' timer, one home)
@@ -46,8 +36,6 @@ from _shared import kernel_us  # noqa: E402  (the benchmarks' timer, one home)
 
 def cpu_seconds() -> float:
     """CPU seconds (user + system) of this process and of its children that ended."""
-    import resource
-
     own, kids = resource.getrusage(resource.RUSAGE_SELF), \
         resource.getrusage(resource.RUSAGE_CHILDREN)
     return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
@@ -55,8 +43,6 @@ def cpu_seconds() -> float:
 
 def yardstick(args: argparse.Namespace, seconds: float) -> dict[str, tuple[float, float]]:
     """:func:`kernel_us` of every member the build will sweep, timed before it starts."""
-    from vpid_bench.plugins import Registry
-
     names = (args.problems.split(",") if args.problems
              else sorted(Registry().suites().get(args.suite, ())))
     return {m: kernel_us({"name": m}, seconds) for m in names}
@@ -164,8 +150,7 @@ def main() -> None:
     us = {m: w for m, (w, _) in measured.items()}
     cpu_us = {m: c for m, (_, c) in measured.items()}
     workers = available_cores()
-    evals = {m: sum(e for j in jobs if j["problem"] == m for e, _, _ in j["runs"])
-             for m in members}
+    evals = {m: sum(e for j in jobs if j["problem"] == m for e, _, _ in j["runs"]) for m in members}
     kernel_1 = sum(evals[m] * us[m] for m in members) * 1e-6
     print(f"\nbuild of the slice: {wall:.1f} s wall ("
           + ", ".join(f"{k} {v:.1f} s" for k, v in built.seconds.items()) + f"); "

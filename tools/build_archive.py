@@ -4,12 +4,10 @@
     .venv/bin/python tools/build_archive.py --suite smoke --runs 30
 
 Resumable: each stage is a ``vpid-bench`` sweep into a fixed folder, which skips the runs it
-has recorded, so the same command again runs only what is missing. The stages (docs/sweeps.md,
-"Building an archive"): **certify** (with ``--target``: the instance optima, packed as an
-optima-only archive that ``target=`` reads), **runs** (every built-in, its ``optima/`` seeded
-from certify), **pack** (refused when a job or run failed; a shipped archive's runs then move
-to ``archive-runs/``). Anything after ``--`` goes to both sweeps (e.g. a Hydra launcher).
-Commit the archive with the code that made it: the manifest names the commit and command.
+has recorded, so the same command again runs only what is missing. The stages, certify (with
+``--target``), runs and pack: docs/sweeps.md, building an archive. Anything after ``--``
+goes to both sweeps (e.g. a Hydra launcher). Commit the archive with the code that made it:
+the manifest names the commit and command.
 """
 
 from __future__ import annotations
@@ -57,15 +55,11 @@ def commit() -> str | None:
     return sha + ("-dirty" if dirty.strip() else "")
 
 
-def quoted(argv: list[str]) -> str:
-    return " ".join(shlex.quote(a) for a in argv)
-
 
 def sweep(argv: list[str], env: dict[str, str] | None = None) -> bool:
     """Run ``vpid-bench <argv>`` (printed first); whether it ended clean (exit 0)."""
-    print("vpid-bench " + quoted(argv), flush=True)
-    return subprocess.run([str(BIN / "vpid-bench"), *argv], cwd=ROOT,
-                          env=env).returncode == 0
+    print("vpid-bench " + shlex.join(argv), flush=True)
+    return subprocess.run([str(BIN / "vpid-bench"), *argv], cwd=ROOT, env=env).returncode == 0
 
 
 def clean(folder: Path, exit_ok: bool) -> bool:
@@ -132,7 +126,7 @@ class Built:
 
 
 def build(args: argparse.Namespace) -> Built:
-    """The stages of the module docstring; each prints its command first."""
+    """The stages (docs/sweeps.md, building an archive); each prints its command first."""
     base = (args.sweep or ROOT / "outputs" / f"archive-{args.suite}").resolve()
     out = args.out or ROOT / "archive" / args.suite
     which = f"problem={args.problems}" if args.problems else f"suite={args.suite}"
@@ -167,7 +161,7 @@ def build(args: argparse.Namespace) -> Built:
         return Built(ok and args.no_pack, runs_dir, seconds)
     t2 = time.perf_counter()
     made_at = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-    manifest = pack(runs_dir, args.suite, out, command="vpid-bench " + quoted(argv),
+    manifest = pack(runs_dir, args.suite, out, command="vpid-bench " + shlex.join(argv),
                     commit=made_by, made_at=made_at, optima_only=args.optima_only)
     seconds["pack"] = time.perf_counter() - t2
     total = sum(f["bytes"] for f in manifest["files"].values())

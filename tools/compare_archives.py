@@ -3,8 +3,6 @@ rebuild (another commit, launcher or machine) made the same runs.
 
     .venv/bin/python tools/compare_archives.py archive/vpid1 /tmp/vpid1-archive
 
-Prints the runs both hold, how many have the same evaluations and the same reason to stop,
-how many best values are bit-identical, and the largest relative differences of the others.
 Both archives are read through the archive reader (checksums, limits).
 """
 

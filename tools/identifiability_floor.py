@@ -11,6 +11,12 @@ from __future__ import annotations
 import argparse
 
 import numpy as np
+from vpid_vehicle.config import VehicleConfig
+from vpid_vehicle.problem import VehicleProblem
+
+from vpid_bench.analysis.identifiability import cramer_rao
+from vpid_bench.analysis.optimum import polish
+from vpid_bench.params import build_dataclass
 
 DESIGNS = {"vehicle (0.48 s window)": {},
            "vehicle_long_record (+0.5 s)": {"record": {"extra": 0.5}}}
@@ -21,13 +27,6 @@ OBJECTIVES = ("eq3", "ols", "ml", "ml_profiled")
 
 def measure(overrides: dict, instances: int) -> dict:
     """Floor and bounds of one design over ``instances`` noise records."""
-    from vpid_vehicle.config import VehicleConfig
-    from vpid_vehicle.problem import VehicleProblem
-
-    from vpid_bench.analysis.identifiability import cramer_rao
-    from vpid_bench.analysis.optimum import polish
-    from vpid_bench.params import build_dataclass
-
     problem = VehicleProblem(build_dataclass(VehicleConfig, overrides, prefix="problem"))
     crb = cramer_rao(problem)
     nores, errors = [], []

@@ -2,13 +2,10 @@
 the robust (HAC sandwich) interval beside the white-noise (Jacobian) one (docs/estimators.md,
 "What an interval covers under model error").
 
-Per member and instance: the estimate ``θ̂`` (``objective=ml_profiled``, fitted to the noisy
-record by iteratively reweighted least squares from the truth, inside the box), the
-pseudo-true ``θ*`` (the same on the noise-free record, ``problem.clean``), both intervals at
-``θ̂`` (:func:`vpid_bench.analysis.intervals.jacobian_intervals`); a parameter is covered when
-``θ*_j`` lies inside. Prints per member the coverage of each interval, their median
-half-widths (% of the value) and the median lag-1 autocorrelation of the residuals.
-Deterministic. Command: ``python tools/interval_coverage.py --instances 15``.
+Per member and instance: the estimate ``θ̂`` (:func:`_fit` of the noisy record), the
+pseudo-true ``θ*`` (the same on the noise-free record, ``problem.clean``) and both intervals
+at ``θ̂``; a parameter is covered when ``θ*_j`` lies inside. Deterministic. Command:
+``python tools/interval_coverage.py --instances 15``.
 """
 
 from __future__ import annotations
@@ -18,6 +15,10 @@ import sys
 from typing import Any
 
 import numpy as np
+from scipy.optimize import least_squares
+from vpid_vehicle.ride.suites import MEMBERS as ALL
+
+from vpid_bench.analysis.diagnostics import problem_diagnostics
 
 #: The suite's model-error members (docs/suite.md).
 MEMBERS = ("vpid1_q_golden_bilinear", "vpid1_h_gokdag_seat_iso_c", "vpid1_l_civic_model_error")
@@ -29,8 +30,6 @@ def _fit(problem: Any, measured: np.ndarray, start: np.ndarray) -> np.ndarray:
     """The ``ml_profiled`` estimate on ``measured`` (a record of the problem's channels):
     least squares on ``fisher_residuals`` weighted by ``1/σ̂_c`` per channel, ``σ̂_c`` from
     the residuals of the previous fit, repeated :data:`REWEIGHTS` times."""
-    from scipy.optimize import least_squares
-
     saved = problem.measured
     problem.measured = measured
     try:
@@ -55,10 +54,6 @@ def _fit(problem: Any, measured: np.ndarray, start: np.ndarray) -> np.ndarray:
 
 def member_coverage(name: str, instances: int) -> dict[str, Any]:
     """Coverage of both intervals over ``instances`` instances of suite member ``name``."""
-    from vpid_vehicle.ride.suites import MEMBERS as ALL
-
-    from vpid_bench.analysis.diagnostics import problem_diagnostics
-
     cls = {m.name: m for m in ALL}[name]
     base = cls(cls.Config())
     white, robust, half_w, half_r, lag1 = [], [], [], [], []

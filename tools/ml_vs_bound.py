@@ -1,12 +1,10 @@
 """The likelihood (``objective=ml``) against the Cramér–Rao bound, like with like, at more
 than one noise level (docs/estimators.md, "The likelihood against the bound").
 
-Per level, over instances 0 .. n-1 of ``problem=vehicle`` with the ``ml`` optimum polished
-from the truth: the rms-norm ``sqrt(Σ_j mean_i e_ij²)`` of its relative errors (%) against the
-bound's norm (the rms of an efficient estimator's NoRE), and its median NoRE against the
-median of ``||N(0, cov_CRB)||`` (200,000 seeded draws). Both ratios are 1 for an efficient
-estimator. Deterministic. Command:
-``python tools/ml_vs_bound.py --instances 30 --levels 0.05 0.2`` (about a minute).
+Per level, over instances 0 .. n-1 of ``problem=vehicle`` (the ``ml`` optimum polished from the
+truth): the rms-norm of its relative errors (%) against the bound's norm, and its median NoRE
+against the median of ``||N(0, cov_CRB)||``; both ratios are 1 for an efficient estimator.
+Deterministic. Command: ``python tools/ml_vs_bound.py --instances 30 --levels 0.05 0.2``.
 """
 
 from __future__ import annotations
@@ -15,14 +13,16 @@ import argparse
 import dataclasses
 
 import numpy as np
+from vpid_vehicle.config import VehicleConfig
+from vpid_vehicle.problem import VehicleProblem
+
+from vpid_bench.analysis.identifiability import entry_sigma, informative, jacobian
+from vpid_bench.analysis.optimum import polish
 
 
 def bound_covariance(inst) -> np.ndarray:
     """The Cramér–Rao covariance of the relative errors (%²) of ``inst`` at its truth, from
-    the simulated noise (the entries :func:`~vpid_bench.analysis.identifiability.cramer_rao`
-    keeps)."""
-    from vpid_bench.analysis.identifiability import entry_sigma, informative, jacobian
-
+    the simulated noise (the entries ``cramer_rao`` keeps)."""
     x = inst.x_true
     groups = np.asarray(inst.fisher_groups(), dtype=int)
     per = entry_sigma(np.asarray(inst.residual_sigma(), dtype=float), groups)
@@ -33,11 +33,6 @@ def bound_covariance(inst) -> np.ndarray:
 
 def measure(level: float, instances: int, draws: int = 200_000) -> dict:
     """The ``ml`` optimum's error statistics and the bound's at noise ``level``."""
-    from vpid_vehicle.config import VehicleConfig
-    from vpid_vehicle.problem import VehicleProblem
-
-    from vpid_bench.analysis.optimum import polish
-
     cfg = VehicleConfig(objective="ml")
     cfg = dataclasses.replace(cfg, noise=dataclasses.replace(cfg.noise, level=level))
     problem = VehicleProblem(cfg)

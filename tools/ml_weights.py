@@ -5,10 +5,9 @@ paper's records under their multiplicative noise, side by side (docs/estimators.
 ``own_sample`` (``σ_k = level × |y_k|`` from the noisy sample, the rule before round four);
 ``exact_likelihood`` (``σ_k(θ) = level × |g_k(θ)|`` from the prediction, with the
 ``Σ log σ_k(θ)`` term). For each, over instances 0 .. n-1 of ``problem=vehicle`` (or a record
-made by the exact solution, ``--exact-record``): the optimum polished from the truth, its
-median NoRE, the norm of the rms errors, the mean error in standard errors; with ``--lsq K``,
-``optimizer=lsq`` from random starts on the first K instances, its median gap to that
-optimum. Deterministic. Command: ``python tools/ml_weights.py --instances 30 --lsq 5``.
+made by the exact solution, ``--exact-record``), the errors of the optimum polished from the
+truth and (``--lsq K``) ``lsq``'s gap to it from random starts on the first K instances.
+Deterministic. Command: ``python tools/ml_weights.py --instances 30 --lsq 5``.
 """
 
 from __future__ import annotations
@@ -17,16 +16,20 @@ import argparse
 import dataclasses
 
 import numpy as np
+from vpid_peers.lsq import LeastSquares, LSQParams
+from vpid_vehicle.config import PARAM_NAMES, VehicleConfig
+from vpid_vehicle.problem import VehicleProblem
+
+from vpid_bench import estimators
+from vpid_bench.analysis.optimum import polish
+from vpid_bench.problem import default_budget
+from vpid_bench.runner import run
 
 RULES = ("leave_one_out", "own_sample", "exact_likelihood")
 
 
 def problem_class(rule: str) -> type:
     """The paper's problem under ``objective=ml`` with ``rule``'s weights."""
-    from vpid_vehicle.problem import VehicleProblem
-
-    from vpid_bench import estimators
-
     class Weighed(VehicleProblem):
         def _weighting(self) -> np.ndarray:
             if "_weights" not in self.__dict__:
@@ -51,8 +54,6 @@ def exact_likelihood(problem, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``f`` = the negative log-likelihood per sample of the multiplicative model with σ from
     the prediction, less its value's constant part (``log`` of the record's σ), and residuals
     whose sum of squares is ``2 M f``."""
-    from vpid_bench import estimators
-
     y, level = problem.reference, problem.config.noise.level
     rms = np.sqrt(np.mean(y**2, axis=1, keepdims=True))
     floor = estimators.SIGMA_FLOOR * level * rms
@@ -73,13 +74,6 @@ def exact_likelihood(problem, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def measure(rule: str, instances: int, lsq: int, exact: bool) -> dict:
-    from vpid_peers.lsq import LeastSquares, LSQParams
-    from vpid_vehicle.config import VehicleConfig
-
-    from vpid_bench.analysis.optimum import polish
-    from vpid_bench.problem import default_budget
-    from vpid_bench.runner import run
-
     cfg = VehicleConfig(objective="ml")
     if exact:
         cfg = dataclasses.replace(cfg, reference=dataclasses.replace(cfg.reference,
@@ -105,8 +99,6 @@ def measure(rule: str, instances: int, lsq: int, exact: bool) -> dict:
 
 
 def main() -> None:
-    from vpid_vehicle.config import PARAM_NAMES
-
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--instances", type=int, default=30)
     parser.add_argument("--lsq", type=int, default=5)

@@ -4,10 +4,9 @@
     .venv/bin/python tools/not_separated.py outputs/smoke-archive-report
 
 From a full report's tables (nothing recomputed), per context in Markdown: the leader by NoRE
-and every optimizer the Holm-corrected pairwise tests do not separate from it (p_holm >=
-alpha); the same among the black-box optimizers (not ``wants_residuals``, not a reference),
-and which of them beat both random search and the box centre; the family's best black-box
-score (mean fixed-target AUC) and those whose 95 % bootstrap interval overlaps its own.
+and those the Holm-corrected pairwise tests do not separate from it, the same among the
+black-box optimizers, those that beat both references, and the family's best black-box score
+with the scores whose 95 % interval overlaps it (docs/study.md).
 """
 
 from __future__ import annotations
@@ -76,11 +75,9 @@ def main(argv: Iterable[str] | None = None) -> None:
     tables = args.report / "tables"
     head = _read(tables / "headline.csv")
     pairs = _read(tables / "pairwise.csv")
-    scores = _read(tables / "suite_scores.csv") if (tables / "suite_scores.csv").exists() \
-        else []
+    scores = _read(tables / "suite_scores.csv") if (tables / "suite_scores.csv").exists() else []
     registry = Registry()
-    wants = {n for n, cls in registry.optimizers.items() if getattr(cls, "wants_residuals",
-                                                                    False)}
+    wants = {n for n, cls in registry.optimizers.items() if getattr(cls, "wants_residuals", False)}
     problem_of: Mapping[str, str] = {r["context"]: r["problem"]
                                      for r in _read(args.report / "runs.csv")}
     print("| problem (family) | by NoRE: the leader, and those the tests do not separate from "

@@ -3,27 +3,31 @@ it made, where the linear model fitted to the same record cannot (issue 43; docs
 
     MPLBACKEND=Agg .venv/bin/python tools/structures_recovery.py [--instances 3]
 
-Per member and instance: the NoRE (%) of the richer structure's optimum of its own record (the
-polish from the truth, as the archive certifies optima), and that of the linear model fitted
-to the same record (written as a file; from the truth's linear part) against the truth's
-linear part (no cubic term; the damper the mean of bump and rebound, as ``record_model=
-bilinear_damper`` defines ``cs``).
+Per member and instance: the NoRE (%) of the richer structure's optimum of its own record, and
+that of the linear model fitted to the same record (written as a file) against the truth's
+linear part (:func:`linear_part`).
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
 import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
+from vpid_vehicle.record_file import column_name
+from vpid_vehicle.ride.problem import RecordFileConfig
+from vpid_vehicle.ride.suites import MEMBERS
+
+from vpid_bench import relative_errors_percent
+from vpid_bench.analysis.optimum import polish
 
 
 def linear_part(model, x: np.ndarray) -> np.ndarray:
-    """The linear model's parameters of a structured row: no cubic term, the damper the mean
-    of bump and rebound."""
+    """The linear model's parameters of a structured row: no cubic term, the damper mean."""
     col = dict(zip(model.names, x, strict=True))
     out = []
     for name in model.base.names:
@@ -35,8 +39,6 @@ def linear_part(model, x: np.ndarray) -> np.ndarray:
 
 
 def write_record(path: Path, p) -> None:
-    from vpid_vehicle.record_file import column_name
-
     cols = {"t": p.t}
     for w, name in enumerate(p.model.wheel_names):
         cols[name] = p.u[:, w]
@@ -49,14 +51,6 @@ def write_record(path: Path, p) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    import dataclasses
-
-    from vpid_vehicle.ride.problem import RecordFileConfig
-    from vpid_vehicle.ride.suites import MEMBERS
-
-    from vpid_bench import relative_errors_percent
-    from vpid_bench.analysis.optimum import polish
-
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--instances", type=int, default=3)
     args = ap.parse_args(argv)

@@ -3,11 +3,9 @@
     .venv/bin/python tools/suite_table.py [--suite vpid1] [--starts 100] [--seed 0] [--only a,b]
 
 Per problem: model, parameter set, dimension, input, sensors, noise, record length, the
-Cramér–Rao bound's norm (%, :func:`vpid_bench.analysis.identifiability.cramer_rao`), the
-condition number of the noise-scaled Jacobian in log-parameters, and the distinct optima that
-``--starts`` bounded least-squares fits from uniform random starts end in (at most 300
-evaluations each; the same optimum when the objectives agree to a relative 1e-4; with each,
-the starts that ended there and its NoRE). Fits stopped at the limit count apart ("stalled").
+Cramér–Rao bound's norm and condition number, and the distinct optima that ``--starts``
+bounded least-squares fits from uniform random starts end in (:func:`distinct_optima`; each
+column: docs/suite.md, the members of ``vpid1``).
 """
 
 from __future__ import annotations
@@ -22,8 +20,7 @@ from vpid_bench.analysis.identifiability import cramer_rao
 from vpid_bench.plugins import Registry
 
 
-def distinct_optima(problem, starts: int, seed: int) -> tuple[list[tuple[float, int, float]],
-                                                                int]:
+def distinct_optima(problem, starts: int, seed: int) -> tuple[list[tuple[float, int, float]], int]:
     """``(f, starts ending there, NoRE %)`` of each distinct converged end, best first, and
     the number of fits that stalled at the evaluation limit."""
     lo, hi = problem.bounds.lower, problem.bounds.upper

@@ -3,9 +3,7 @@
 The plugin API is one import line: everything a problem, optimizer or report-section plugin
 uses is importable from here (``from vpid_bench import Problem, Optimizer, hookimpl, ...``).
 Plugins implement :class:`Problem` or :class:`Optimizer` and register them with the
-:data:`hookimpl` marker (see docs/architecture.md). The report-section helpers
-(:class:`ReportContext`, :class:`Section`, ...) and the artifact readers are imported only
-when first used, so importing this package stays light.
+:data:`hookimpl` marker (docs/plugins.md); a few names are served on first use (``_LAZY``).
 """
 
 from __future__ import annotations
@@ -23,14 +21,10 @@ __version__ = "0.1.0"
 #: Names served on first use: ``name -> module`` (the report's section helpers and the
 #: readers of a run's artifacts pull in the report's machinery).
 _LAZY = {
-    "Contribution": ".report.sections",
-    "HeadlineColumn": ".report.sections",
-    "ReportContext": ".report.sections",
-    "Section": ".report.sections",
-    "BestSignals": ".store.artifacts",
-    "read_best_signals": ".store.artifacts",
-    "fit_structure": ".analysis.structures",
-    "structure_summary": ".analysis.structures",
+    **dict.fromkeys(("Contribution", "HeadlineColumn", "ReportContext", "Section"),
+                    ".report.sections"),
+    **dict.fromkeys(("BestSignals", "read_best_signals"), ".store.artifacts"),
+    **dict.fromkeys(("fit_structure", "structure_summary"), ".analysis.structures"),
 }
 
 #: api.py's names (written once, there), the estimators module, the hook marker, the version

@@ -2,11 +2,10 @@
 and :class:`Optimizer`) and everything a plugin uses with them.
 
 A problem maps a population of candidate vectors (rows, in physical units) to objective
-values; an optimizer proposes populations (``ask``) and learns their values (``tell``), with
-its own :class:`numpy.random.Generator`; the run loop between them owns the budget.
-Hyper-parameters are frozen dataclasses (``Optimizer.Params``, ``Problem.Config``), so a bad
-key fails when the object is built. This module only gathers names from the small modules
-(which never import it back); ``from vpid_bench import ...`` offers the same names.
+values; an optimizer proposes populations (``ask``) and learns their values (``tell``); the
+run loop between them owns the budget (docs/plugins.md). This module only gathers names from
+the small modules (which never import it back); ``from vpid_bench import ...`` offers the
+same names.
 """
 
 from __future__ import annotations

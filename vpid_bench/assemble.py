@@ -17,7 +17,6 @@ import numpy as np
 
 from .bounds import relative_errors_percent
 from .machine import machine_facts
-from .runner import RunResult
 from .store.provenance import package_versions
 from .store.records import SCHEMA
 
@@ -26,25 +25,6 @@ if TYPE_CHECKING:  # the job's types; records sit below the job in the layers
     from .job_runs import RunOutcome
     from .spec import Job
 
-
-def result_section(result: RunResult, derived: Mapping[str, Any],
-                   x_true: np.ndarray | None) -> dict[str, Any]:
-    """The ``result`` section: the loop's own best, what the problem said of it (``derived``)
-    and how far it is from a known truth."""
-    section: dict[str, Any] = {
-        "x_best": result.x_best,
-        "f_best": result.f_best,
-        "evaluations": result.evaluations,
-        "batches": result.batches,
-        "stopped_by": result.stopped_by,
-        "metrics": dict(derived.get("metrics") or {}),
-        "rel_error_percent": None,
-    }
-    if x_true is not None and np.all(np.isfinite(result.x_best)):
-        section["rel_error_percent"] = relative_errors_percent(result.x_best, x_true)
-    if "intervals" in derived:  # a problem without a truth (job_runs.with_problem_results)
-        section["intervals"] = derived["intervals"]
-    return section
 
 
 def error_section(error: BaseException) -> dict[str, str]:
@@ -86,8 +66,16 @@ def make_record(job: Job, run: RunOutcome, rid: str, instance: InstanceFacts,
     }
     if run.index in job.stop_at:  # stop at the final target (vpid_bench.targets)
         record["target"] = {"gap": job.spec.target, "f_stop": job.stop_at[run.index]}
-    if result is not None:
-        record["result"] = result_section(result, run.derived, instance.x_true)
+    if result is not None:  # the loop's own best, what the problem said of it, the truth's
+        x_true, derived = instance.x_true, run.derived
+        record["result"] = section = {
+            "x_best": result.x_best, "f_best": result.f_best, "evaluations": result.evaluations,
+            "batches": result.batches, "stopped_by": result.stopped_by,
+            "metrics": dict(derived.get("metrics") or {}), "rel_error_percent": None}
+        if x_true is not None and np.all(np.isfinite(result.x_best)):
+            section["rel_error_percent"] = relative_errors_percent(result.x_best, x_true)
+        if "intervals" in derived:  # no truth (job_runs.with_problem_results)
+            section["intervals"] = derived["intervals"]
         record["trace"] = {"evaluations": result.trace_evaluations, "best": result.trace_best}
         record["timing"]["run_time_s"] = result.wall_time_s
         # the run's own time at each trace point: wall time to a target (not in the trace,

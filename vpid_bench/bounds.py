@@ -37,10 +37,8 @@ class Bounds:
                               "lower bound must be strictly below the upper bound")
         lower.setflags(write=False)
         upper.setflags(write=False)
-        object.__setattr__(self, "lower", lower)
-        object.__setattr__(self, "upper", upper)
-        object.__setattr__(self, "names", names)
-        object.__setattr__(self, "units", units)
+        for key, value in (("lower", lower), ("upper", upper), ("names", names), ("units", units)):
+            object.__setattr__(self, key, value)
 
     @property
     def dim(self) -> int:
@@ -66,6 +64,5 @@ class Bounds:
 
 def relative_errors_percent(x: Sequence[float], x_true: Sequence[float]) -> np.ndarray:
     """Relative error of each parameter, ``100 * (x - x_true) / x_true`` (percent)."""
-    x = np.asarray(x, dtype=float)
     x_true = np.asarray(x_true, dtype=float)
-    return 100.0 * (x - x_true) / x_true
+    return 100.0 * (np.asarray(x, dtype=float) - x_true) / x_true

@@ -2,13 +2,11 @@
 
 Such a library calls ``f`` itself, in its own loop; the run loop asks and tells.
 :class:`LoopOptimizer` runs the library's loop in a worker thread and hands each batch
-across, strictly in turn (one thread works at a time: the run stays deterministic): the
-worker's ``evaluate(X)`` posts ``X`` and waits; ``ask`` returns it; ``tell`` posts the values
-and waits for the worker's next message (a batch, its return value, its exception: raised
-again in the run loop's thread, so the run fails and is recorded). When the run is over, even
-mid-loop, ``close`` makes the waiting ``evaluate`` raise an internal ``BaseException`` that
-unwinds the library's frames, and joins the thread. The pattern is nevergrad's "recast"
-optimizers'; this is an independent implementation with two ``queue.SimpleQueue``.
+across, strictly in turn (one thread works at a time: the run stays deterministic); when the
+run is over, even mid-loop, ``close`` unwinds the library's frames with an internal
+``BaseException`` and joins the thread (docs/peers.md, the bridge). The pattern is
+nevergrad's "recast" optimizers'; this is an independent implementation with two
+``queue.SimpleQueue``.
 """
 
 from __future__ import annotations
@@ -30,8 +28,7 @@ JOIN_TIMEOUT_S = 10.0
 
 
 class _Stop(BaseException):
-    """Unwinds the library's loop once the run is over (a library's ``except Exception``
-    cannot swallow it)."""
+    """Unwinds the library's loop once the run is over (past any ``except Exception`` of it)."""
 
 
 _STOP = object()

@@ -1,11 +1,8 @@
-"""A Linux cgroup (version 2) per worker process, where this process may make one: every
-process the worker's plugins start is in it, whatever it does, and ``cgroup.kill`` ends them
-all at once, forks in flight included (Linux >= 5.14).
-
-Available where a cgroup v2 hierarchy is mounted, this process's own cgroup folder may be
-written (root, or delegated by systemd) and offers ``cgroup.kill``. Elsewhere
-:meth:`Cgroup.create` returns ``None`` and :mod:`vpid_bench.worker_tree` finds processes by
-their mark. ``VPID_BENCH_CGROUPS=0`` turns cgroups off (a test of that path).
+"""A Linux cgroup (version 2) per worker process, where this process may make one (where, and
+``VPID_BENCH_CGROUPS=0``: docs/sweeps.md, crash isolation): every process the worker's plugins
+start is in it, whatever it does, and ``cgroup.kill`` ends them all at once, forks in flight
+included (Linux >= 5.14). Elsewhere :meth:`Cgroup.create` returns ``None`` and
+:mod:`vpid_bench.worker_tree` finds processes by their mark.
 """
 
 from __future__ import annotations
@@ -41,8 +38,7 @@ def _own_folder() -> Path | None:
 
 
 class Cgroup:
-    """One worker's cgroup (see module): created empty, the worker added once started,
-    killed whole, removed once empty."""
+    """One worker's cgroup: created empty, the worker added once started, killed whole, removed."""
 
     def __init__(self, path: Path) -> None:
         self.path = path
@@ -79,8 +75,7 @@ class Cgroup:
         return []
 
     def kill(self, wait: float) -> bool:
-        """SIGKILL every process in the cgroup (the kernel's ``cgroup.kill``); whether it is
-        empty within ``wait`` seconds."""
+        """SIGKILL every process in it (``cgroup.kill``); whether it is empty within ``wait`` s."""
         with contextlib.suppress(OSError):
             (self.path / "cgroup.kill").write_text("1")
         end = time.monotonic() + wait

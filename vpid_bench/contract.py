@@ -1,14 +1,12 @@
 """The problem contract, grouped into capabilities, and the check that refuses half of one.
 
-A :class:`~vpid_bench.api.Problem` is a core (``Config``, ``bounds``, ``evaluate``) plus
-capabilities it may offer (:data:`CAPABILITIES`; the table: docs/architecture.md, the problem
-contract). Each is all or nothing: a problem implementing part of one would get the
-framework's default for the rest, wrong numbers without a word (``instance(i)`` without
-``instance_id()`` once judged every run against instance 0's optimum). A capability is offered
-when its *anchor* is overridden; overriding another of its members without the anchor is
-refused, and so is ``instance`` without ``instance_id``, and a method of
-:class:`~vpid_bench.api.Problem` replaced by a non-callable (``instance_id = "a"``):
-:func:`check_problem_class`, called by the job spec's parse (so the pre-flight), one line.
+A :class:`~vpid_bench.api.Problem` is a core plus capabilities it may offer
+(:data:`CAPABILITIES`; the table and why each is all or nothing: docs/architecture.md, the
+problem contract). A capability is offered when its *anchor* is overridden; overriding another
+of its members without the anchor is refused, and so is ``instance`` without ``instance_id``,
+and a method of :class:`~vpid_bench.api.Problem` replaced by a non-callable
+(``instance_id = "a"``): :func:`check_problem_class`, called by the job spec's parse (so the
+pre-flight), one line.
 """
 
 from __future__ import annotations

@@ -4,11 +4,8 @@
     vpid-bench-design ride_quarter sensors=body --vary speed_kmh=30,60 --floor 10 --profile
 
 A design is the problem with one choice of settings (``key=value`` for all, each ``--vary``
-a factor). For each, on instance 0: the Cramér–Rao bound's norm (%), the condition number,
-D-optimality (``det(F)^(1/d)`` in relative parameters, higher is better), A-optimality
-(``trace(F⁻¹)``, lower is better), the parameters left undetermined (bound over 10 %) and a
-structural symmetry flag; ``--floor N`` adds the median metric of instances 0..N-1's optima,
-``--profile`` instance 0's profile-likelihood intervals. Prints Markdown.
+a factor), measured on instance 0 (what each column means: docs/estimators.md, record
+design). Prints Markdown.
 """
 
 from __future__ import annotations
@@ -20,8 +17,14 @@ import sys
 from typing import Any
 
 import numpy as np
+from omegaconf import OmegaConf
 
+from .analysis.estimator_floors import truth_optima_metric
+from .analysis.identifiability import cramer_rao
+from .analysis.profile import STRUCTURAL_RATIO, profile_intervals
 from .errors import ConfigError, VpidBenchError
+from .params import build_dataclass
+from .plugins import Registry
 
 UNDETERMINED_PERCENT = 10.0
 
@@ -45,20 +48,14 @@ def designs(fixed: list[tuple[str, str]], vary: list[tuple[str, str]]
 
 
 def build(registry: Any, name: str, settings: list[tuple[str, str]]) -> Any:
-    """The problem ``name`` with ``settings`` (dotted keys, YAML values), checked as the
-    command line checks them."""
-    from omegaconf import OmegaConf
-
-    from .params import build_dataclass
-
+    """The problem ``name`` with ``settings`` (dotted keys, YAML values), checked as the CLI."""
     try:
         cls = registry.problem(name)
     except KeyError:
         raise ConfigError("problem", name,
                           "one of " + ", ".join(sorted(registry.problems))) from None
     try:
-        mapping = OmegaConf.to_container(
-            OmegaConf.from_dotlist([f"{k}={v}" for k, v in settings]))
+        mapping = OmegaConf.to_container(OmegaConf.from_dotlist([f"{k}={v}" for k, v in settings]))
     except Exception as exc:  # noqa: BLE001 - OmegaConf or YAML refuses the text: one line
         raise ConfigError("settings", " ".join(f"{k}={v}" for k, v in settings),
                           f"key=value pairs with YAML values ({type(exc).__name__})") from None
@@ -67,10 +64,6 @@ def build(registry: Any, name: str, settings: list[tuple[str, str]]) -> Any:
 
 def measure(problem: Any, floor: int, profile: bool) -> dict[str, Any]:
     """The design's numbers (see the module)."""
-    from .analysis.estimator_floors import truth_optima_metric
-    from .analysis.identifiability import cramer_rao
-    from .analysis.profile import STRUCTURAL_RATIO, profile_intervals
-
     crb = cramer_rao(problem)
     if crb is None:
         raise ConfigError("problem", problem.name, "a problem with residuals, its truth and a "
@@ -118,14 +111,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--profile", action="store_true",
                     help="profile-likelihood 95 %% intervals of instance 0")
     args = ap.parse_args(argv)
-    from .plugins import Registry
-
     try:
         if not 0 <= args.floor <= 1000:
             raise ConfigError("--floor", args.floor, "an integer in [0, 1000]")
         registry = Registry()
-        candidates = designs(_settings(args.settings, "settings"),
-                             _settings(args.vary, "--vary"))
+        candidates = designs(_settings(args.settings, "settings"), _settings(args.vary, "--vary"))
         if len(candidates) > 200:
             raise ConfigError("--vary", len(candidates), "at most 200 designs")
         results = []

@@ -10,8 +10,7 @@ class VpidBenchError(Exception):
 
 
 class ConfigError(VpidBenchError, ValueError):
-    """A configuration value is not allowed. The message names the key, the value and what is
-    allowed."""
+    """A configuration value not allowed: its message names the key, the value and what is."""
 
     def __init__(self, key: str, value: Any, allowed: str) -> None:
         self.key, self.value, self.allowed = key, value, allowed

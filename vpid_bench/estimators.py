@@ -1,41 +1,20 @@
-"""The estimator as a choice: one record's residuals under four objectives.
+"""The estimator as a choice: one record's residuals under four objectives (``eq3``, ``ols``,
+``ml``, ``ml_profiled``).
 
 An identification problem compares a measured record ``y`` (``p`` channels of ``N_c``
 samples) with a model's response ``g(θ)``; *which* distance is minimised is the estimator,
-and it sets the floor a record allows as much as the data do (``problem.objective``):
-
-* ``eq3``: Eq. 3 of the problem's source, a sum of one Euclidean norm per channel, each over
-  a reference norm. Not a likelihood: its floor can sit far above the Cramér–Rao bound.
-* ``ols``: ordinary least squares, ``f = ||y - g||² / ||y||²`` over all channels at once.
-* ``ml``: the Gaussian likelihood of a **stated** noise model, ``f = mean((y - g)² / (2 σ²))``.
-  Additive noise: ``σ_c = level × rms(y_c)``; multiplicative (``σ_k = level × |z_k|``) and
-  uniform (the same over √3): the noise model's ``σ_k`` at a *leave-one-out* estimate of
-  ``|z_k|`` from the neighbouring samples (:func:`leave_one_out`), floored at
-  ``SIGMA_FLOOR × level × rms(y_c)``. Each weight is then independent of its sample's own
-  noise, so the estimator is unbiased (tested; why not the exact likelihood or weights from
-  the sample itself: docs/estimators.md). Refused without a stated noise level.
-* ``ml_profiled``: the Gaussian likelihood with each channel's (additive, constant) σ
-  **unknown** and profiled out, ``-log L = Σ_c N_c/2 · log(RSS_c / N_c) + const``, for
-  measured records; reported as ``f = Π_c (rms(y_c - g_c) / rms(y_c))^(N_c / N)``
-  (dimensionless, ``-log L = N log f + const``), its residuals scaled so that their norm is
-  ``√N · f`` and their Gauss–Newton matrix the likelihood's.
-
-**How a problem uses them**: multiply each raw residual ``y - g`` by :func:`weights` (fixed
-for a record), hand the weighted residuals ``(n, p, N)`` to :func:`residuals_and_value` (the
-objective and the residual vectors an optimizer sees); :func:`groups` gives the residual
-groups. The weighted residuals before any rescaling are the problem's ``fisher_residuals``.
-A problem that offers the choice validates it with :func:`check_objective`.
+and it sets the floor a record allows as much as the data do (``problem.objective``). What
+each objective is, why ``ml`` weighs a sample by its neighbours (:func:`leave_one_out`) and
+how a problem uses them (:func:`weights`, :func:`residuals_and_value`, :func:`groups`,
+:func:`check_objective`, ``fisher_residuals``): docs/estimators.md.
 """
 
 from __future__ import annotations
-
-from typing import Literal
 
 import numpy as np
 
 from .errors import ConfigError
 
-Objective = Literal["eq3", "ols", "ml", "ml_profiled"]
 OBJECTIVES: tuple[str, ...] = ("eq3", "ols", "ml", "ml_profiled")
 #: The smallest plug-in sigma of a multiplicative model, as a fraction of ``level × rms``.
 SIGMA_FLOOR = 1e-3
@@ -133,8 +112,7 @@ def value(objective: str, weighted: np.ndarray) -> np.ndarray:
     return residuals_and_value(objective, weighted)[0]
 
 
-def residuals_and_value(objective: str, weighted: np.ndarray
-                        ) -> tuple[np.ndarray, np.ndarray]:
+def residuals_and_value(objective: str, weighted: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The objective ``(n,)`` and the residual vectors an optimizer minimises ``(n, p N)`` of
     weighted residuals ``(n, p, N)``: ``eq3`` the sum of channel norms, ``ols`` the sum of
     squares, ``ml`` half the mean square (residuals as weighted); ``ml_profiled``

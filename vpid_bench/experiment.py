@@ -1,19 +1,14 @@
 """Run a job: a parsed job spec, the plugin registry and a folder in; run records out.
 
 :func:`run_from_config` is a plain function of a composed config (tests call it directly; the
-shell calls it once per job). The problem and each run's generator: :mod:`vpid_bench.build`;
-what the job reads of the problem: :mod:`vpid_bench.facts`; the runs: :mod:`vpid_bench.job_runs`;
-one record per run: :func:`vpid_bench.assemble.make_record`; what the records allow:
-:mod:`vpid_bench.job_analysis`; the best run's signals: :mod:`vpid_bench.store.artifacts`.
+shell calls it once per job).
 
-Resume: a run whose complete ``ok`` record (same run id) exists is skipped; missing, corrupt
-and failed runs run again. The run id hashes everything that determines a result (plugins'
-versions and code, data files' content), so another plugin release or data file runs again.
+Resume (docs/sweeps.md): a run whose complete ``ok`` record (same run id: plugins' versions
+and code, data files' content, settings) exists is skipped; every other run runs again.
 
-Crash isolation: an exception (``SystemExit`` included) inside one run is written into its
-record (status ``failed``) and the job goes on; only ``KeyboardInterrupt`` stops it. With
-worker processes every call into plugin code goes to them and this process never builds the
-problem (:class:`_Here` makes the same calls in this process when there are none).
+Crash isolation (docs/sweeps.md): an exception inside one run is written into its record
+(status ``failed``) and the job goes on. With worker processes every call into plugin code
+goes to them (:class:`_Here`: in this process).
 """
 
 from __future__ import annotations
@@ -28,6 +23,8 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+from tqdm import tqdm  # the progress bar: runs done of total, elapsed, rate
+
 from .assemble import make_record
 from .build import ProblemCache
 from .errors import PluginError, VpidBenchError
@@ -41,6 +38,7 @@ from .runner import RunTimeoutError, time_limit
 from .spec import Job, parse_job
 from .store import records as rec
 from .store.artifacts import best_of, write_best_signals
+from .store.job_status import read_job_status
 from .store.record_check import check_record
 from .targets import with_stops
 from .worker_loop import probe
@@ -84,8 +82,7 @@ def _valid(path: Path) -> tuple[dict[str, Any] | None, str]:
 
 def _kept(path: Path, rid: str, set_aside: bool = False) -> bool:
     """Whether ``path`` holds this run's complete ``ok`` record, which a resume keeps. With
-    ``set_aside``, a file that is not a valid record (it once failed its job on every
-    resume) is moved aside (:func:`_set_aside`) and its run runs again."""
+    ``set_aside``, an invalid file (it once failed its job on every resume) is moved aside."""
     if not path.is_file():
         return False
     record, why = _valid(path)
@@ -99,14 +96,9 @@ def recorded_in_full(jobs: list[Job], job_dirs: list[Path], registry: Registry |
     """Whether every job of a sweep ended ``ok`` with the complete record of every run under
     the run ids it would have now: then the command writes nothing but the report. The
     problems' set-up runs as a job's does; any fault there: ``False`` (the jobs say why)."""
-    from .store.job_status import read_job_status
-
-    if not jobs or len(jobs) != len(job_dirs):
+    if not jobs or len(jobs) != len(job_dirs) or any(
+            (read_job_status(d) or {}).get("status") != "ok" for d in job_dirs):
         return False
-    for job_dir in job_dirs:
-        status = read_job_status(job_dir)
-        if status is None or status.get("status") != "ok":
-            return False
     pool = Workers(1) if all(j.spec.isolation != "none" and can_send(j) is None
                              for j in jobs) else None
     try:
@@ -159,6 +151,7 @@ def _set_aside(path: Path, why: str) -> Path:
 
 
 def _job_key(job: Job, registry: Registry | None, facts: ProblemFacts) -> dict[str, Any]:
+    """What determines every run of the job but its index (hashed into each run id)."""
     plugins = {}
     if registry is not None:
         for kind, name in (("problem", job.problem_name), ("optimizer", job.optimizer_name)):
@@ -168,10 +161,10 @@ def _job_key(job: Job, registry: Registry | None, facts: ProblemFacts) -> dict[s
     more: dict[str, Any] = {}
     if job.stop_at:  # only then: the run ids of every job without a target stay as they were
         more["target"] = [job.spec.target, sorted(job.stop_at.items())]
-    return rec.job_key({**job.problem_settings(), "name": job.problem_name},
-                       {**job.optimizer_settings(), "name": job.optimizer_name},
-                       job.spec.seed, job.budget, plugins=plugins, data=facts.content_digest,
-                       **more)
+    return {"problem": {**job.problem_settings(), "name": job.problem_name},
+            "optimizer": {**job.optimizer_settings(), "name": job.optimizer_name},
+            "seed": job.spec.seed, "budget": job.budget, "plugins": plugins,
+            "data": facts.content_digest, **more}
 
 
 def _refuse_swapped(*folders: Path) -> None:
@@ -217,8 +210,9 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
         records = [r for r, _ in map(_valid, summary.record_paths) if r is not None]
         optima_dir = Path(optima_dir or job_dir / "optima")
         polished = _polish_at_once(job, pool, facts, job_dir, optima_dir, records)
-        gaps = _after_runs(job, calls, "the optimum / identifiability analysis", _analyse, job_dir,
-                           optima_dir, records, polished, what="its gaps to the optimum are not",
+        gaps = _after_runs(job, calls, "the optimum / identifiability analysis", _analysis,
+                           analyse_job, job_dir, optima_dir, records, polished,
+                           what="its gaps to the optimum are not",
                            limit=_limit(analysis_limit_s(job))) or {}
         summary.score = job_score(gaps, records)
         summary.wall_time_s = time.perf_counter() - start
@@ -306,16 +300,10 @@ def _write_artifacts(job: Job, problem: Any, job_dir: Path) -> list[Any]:
         return list(problem.write_artifacts(job_dir) or [])
 
 
-def _analyse(job: Job, problem: Any, job_dir: Path, optima_dir: Path,
-             records: list[dict[str, Any]], polished: Any) -> dict[int, float]:
+def _analysis(job: Job, problem: Any, fn: Any, *args: Any) -> Any:
+    """``fn(job, problem, *args)`` (the analysis or a share of its polish), time-limited."""
     with time_limit(analysis_limit_s(job)), one_blas_thread():
-        return analyse_job(job, problem, job_dir, optima_dir, records, polished)
-
-
-def _polish_share(job: Job, problem: Any, job_dir: Path, optima_dir: Path,
-                  records: list[dict[str, Any]], indices: list[int] | None) -> Any:
-    with time_limit(analysis_limit_s(job)), one_blas_thread():
-        return polish_share(job, problem, job_dir, optima_dir, records, indices)
+        return fn(job, problem, *args)
 
 
 def _signals(job: Job, problem: Any, job_dir: Path, index: int, x: Any,
@@ -379,9 +367,9 @@ def _polish_at_once(job: Job, pool: Workers | None, facts: ProblemFacts, job_dir
     workers = pool.how_many(job.spec.workers or pool.size, len(groups) + 1)
     if workers < 2:
         return None
-    tasks = [(_polish_share, (job_dir, optima_dir, [], None))]
-    tasks += [(_polish_share, (job_dir, optima_dir,
-                               [r for r in records if r.get("run_index") in indices], indices))
+    tasks = [(_analysis, (polish_share, job_dir, optima_dir, [], None))]
+    tasks += [(_analysis, (polish_share, job_dir, optima_dir,
+                           [r for r in records if r.get("run_index") in indices], indices))
               for indices in groups.values()]
     polished: dict[str | None, dict[str, Any]] = {}
     name = "the optimum / identifiability analysis"
@@ -436,8 +424,7 @@ def _what_changed(paths: list[Path], provenance: Mapping[str, Mapping[str, Any]]
         except rec.CorruptRecordError:
             continue
         for kind, now in provenance.items():
-            was = (old.get(kind) or {}).get("plugin") if isinstance(old.get(kind), dict) \
-                else None
+            was = (old.get(kind) or {}).get("plugin") if isinstance(old.get(kind), dict) else None
             if not isinstance(was, dict) or not now:
                 continue
             name = f"{kind} plugin {now.get('plugin')!s}"
@@ -463,8 +450,6 @@ def _run_missing(job: Job, calls: Any, facts: ProblemFacts, job_dir: Path,
                  pool: Workers | None, failure: BaseException | None) -> None:
     """Run the runs without a complete record, here or in ``pool``'s workers, writing each
     record as soon as it is over. ``failure``: every run is recorded as failed with it."""
-    from tqdm import tqdm  # runs done of total, elapsed, rate
-
     spec = job.spec
     bar = tqdm(total=spec.runs, desc=f"{job.optimizer_name} on {job.problem_name}", unit="run",
                file=sys.stderr, dynamic_ncols=True, mininterval=0.5, disable=not spec.progress)

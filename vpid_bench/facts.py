@@ -20,8 +20,7 @@ from .problem import Problem, kept_instance
 
 @dataclasses.dataclass(frozen=True)
 class InstanceFacts:
-    """One instance as a run record holds it: id, box, true parameters (``None``: unknown)
-    and ``describe()``."""
+    """One instance as a run record holds it: id, box, truth (``None``: unknown), ``describe()``."""
 
     id: str | None
     bounds: Bounds
@@ -31,8 +30,7 @@ class InstanceFacts:
 
 @dataclasses.dataclass(frozen=True)
 class ProblemFacts:
-    """A problem's facts: its dimension, ``rows_independent``, ``content_digest()``, and the
-    facts of each run's instance."""
+    """A problem's dimension, ``rows_independent``, ``content_digest()``, runs' instances."""
 
     dim: int
     rows_independent: bool

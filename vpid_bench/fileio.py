@@ -6,14 +6,14 @@ just made through :func:`loads_json`. Every file written goes through
 :func:`write_text_atomic` (a crash leaves the old file or the new one; a link at the target
 is replaced, not followed); the folders kept inside an output folder through
 :func:`own_folder`. A folder that must be one thing whole (a report) is written by
-:class:`WholeFolder`: into a new hidden folder that takes its place in one rename (issue 44,
-N8: two reports at once, or one stopped by SIGTERM, once left pages of one and ``runs.csv``
-of the other); a link planted in the old folder is removed with it, never followed (N6).
+:class:`WholeFolder` (issue 44, N8: two reports at once, or one stopped by SIGTERM, once left
+pages of one and ``runs.csv`` of the other; N6).
 """
 
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import errno
 import hashlib
 import json
@@ -24,7 +24,6 @@ import sys
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
-from types import TracebackType
 from typing import TextIO
 
 from .interrupts import held
@@ -34,8 +33,7 @@ MAX_READ_BYTES = 64 * 1024 * 1024
 
 
 def file_sha256(path: Path) -> str:
-    """The SHA-256 of a file's bytes, hex: how a plugin checks a data file it ships or is
-    pointed to."""
+    """A file's SHA-256, hex: how a plugin checks a data file it ships or is pointed to."""
     digest = hashlib.sha256()
     with open(path, "rb") as f:
         for block in iter(lambda: f.read(1 << 20), b""):
@@ -109,8 +107,7 @@ def read_text_limited(path: Path, max_bytes: int = MAX_READ_BYTES) -> str:
 
 
 def _remove_planted_link(path: Path) -> None:
-    """Remove a link planted where vpid-bench keeps a file or folder (the link only), with
-    one ``warning:`` line."""
+    """Remove a link planted where vpid-bench keeps a file or folder, with one ``warning:`` line."""
     path.unlink(missing_ok=True)  # another process may have removed it first
     print(f"warning: {path} was a symbolic link; removed (the link only) so that nothing "
           "is written outside the output folder", file=sys.stderr, flush=True)
@@ -150,8 +147,7 @@ _APPEND_FLAGS = (os.O_WRONLY | os.O_APPEND | os.O_CREAT | getattr(os, "O_NOFOLLO
 
 def open_append(path: Path) -> TextIO:
     """``path`` opened to append UTF-8 text (a job's log): a link planted there is removed
-    with one line (one was once appended to on every resume); anything but a regular file
-    is an ``OSError``, at once."""
+    with one line (one was once appended to on every resume); ``OSError`` if not a file."""
     path = Path(path)
     try:
         fd = os.open(path, _APPEND_FLAGS, 0o666)
@@ -214,8 +210,7 @@ class WholeFolder:
         os.chmod(self._new, 0o777 & ~_umask())  # mkdtemp makes 0700; a report is shared
         return self._new
 
-    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
-                 tb: TracebackType | None) -> None:
+    def __exit__(self, exc_type: type[BaseException] | None, *_: object) -> None:
         assert self._new is not None, "WholeFolder used without entering it"
         if exc_type is not None:
             shutil.rmtree(self._new, ignore_errors=True)
@@ -261,8 +256,6 @@ def _exchange(a: Path, b: Path) -> bool:
     file system cannot (nothing happened)."""
     if not sys.platform.startswith("linux"):
         return False
-    import ctypes
-
     try:
         renameat2 = ctypes.CDLL(None, use_errno=True).renameat2
     except (OSError, AttributeError):  # a C library without it (glibc < 2.28, musl)
@@ -305,8 +298,7 @@ def _locked(folder: Path) -> Iterator[None]:
 
 
 def _links_below(folder: Path, shown_as: Path, limit: int = 20) -> list[Path]:
-    """At most ``limit`` symbolic links in ``folder`` (not followed), as paths under
-    ``shown_as``."""
+    """At most ``limit`` links in ``folder`` (not followed), as paths under ``shown_as``."""
     found: list[Path] = []
     for root, dirs, files in os.walk(folder):
         for name in [*dirs, *files]:

@@ -6,9 +6,8 @@ before raising; a ``KeyboardInterrupt`` without that note came from code and fai
 only. Without the handler (a program calling the library, a launcher's worker) every
 ``KeyboardInterrupt`` counts as the user's.
 
-SIGTERM and SIGHUP end the command as SIGINT does (issue 44, N2: once status 143, nothing
-printed, workers left running): the same handler takes all three (:data:`SIGNALS`), every
-completed run is kept, the status is ``128 + the signal`` (:func:`exit_status`).
+SIGTERM and SIGHUP end the command as SIGINT does, the same handler taking all three
+(:data:`SIGNALS`; issue 44, N2; docs/sweeps.md, crash isolation and the exit status).
 """
 
 from __future__ import annotations
@@ -59,8 +58,7 @@ def defer() -> None:
 
 
 def note(signum: int = signal.SIGINT) -> None:
-    """Record an interrupting signal (one that arrived before :func:`defer`, or in a block
-    that holds them)."""
+    """Record an interrupting signal (one before :func:`defer`, or in a block holding them)."""
     if not _Watch.signalled:
         _Watch.signum = signum
     _Watch.signalled = True
@@ -119,8 +117,7 @@ def exit_status() -> int:
 
 def seen() -> bool:
     """Whether the command's handler has seen the user's Ctrl-C: an error raised since is
-    treated as the interrupt (it can land in a library's clean-up, e.g. Hydra's, which then
-    raised its own error over it)."""
+    treated as the interrupt (it can land in a library's clean-up, e.g. Hydra's)."""
     return _Watch.installed and _Watch.signalled
 
 

@@ -10,10 +10,12 @@ from typing import Any
 
 import numpy as np
 
+from .analysis import diagnostics, estimates, estimator_floors, identifiability
+from .analysis.optimum import _locked, optimum_key, update_instance_optimum
 from .fileio import own_folder
 from .problem import Problem, kept_instance, offers_residuals
 from .spec import Job
-from .store.job_files import IDENTIFIABILITY, read_job_json, write_job_json
+from .store.job_files import ESTIMATORS, IDENTIFIABILITY, read_job_json, write_job_json
 
 
 def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
@@ -28,10 +30,7 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
     to ``comparisons.json``. Returns each run's relative gap ``(f_best - f*) / f*`` to its
     instance's optimum (absolute where ``f* <= 0``). ``polished``: the optima already made
     by :func:`polish_share` tasks, by instance id (nothing is polished here then)."""
-    from .analysis.diagnostics import write_diagnostics
-    from .analysis.estimates import write_comparisons, write_profile
-
-    write_comparisons(problem, job_dir)  # first: cheap, and wanted whatever follows
+    estimates.write_comparisons(problem, job_dir)  # first: cheap, and wanted whatever follows
     if not offers_residuals(type(problem)):
         return {}
     truth = problem.x_true is not None
@@ -54,9 +53,9 @@ def analyse_job(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
         return gaps  # no record: no identified value, profile or fit diagnostics
     lowest = min(optima, key=lambda o: o[1]["f_opt"])
     if not truth:
-        write_profile(*lowest, job_dir)
+        estimates.write_profile(*lowest, job_dir)
     inst, optimum = optima[0] if truth else lowest  # with a truth: the first instance's
-    write_diagnostics(inst, optimum["x_opt"], job_dir)
+    diagnostics.write_diagnostics(inst, optimum["x_opt"], job_dir)
     return gaps
 
 
@@ -80,8 +79,7 @@ def polish_share(job: Job, problem: Problem, job_dir: Path, optima_dir: Path,
 def _instances(problem: Problem, indices: Iterable[int],
                bests: Mapping[int, list[tuple[np.ndarray, float]]]
                ) -> list[tuple[Problem, list[tuple[np.ndarray, float]], list[int]]]:
-    """The instances of runs ``indices``, each once: ``(instance, its runs' bests, its run
-    indices)``."""
+    """The instances of runs ``indices``, each once: ``(instance, its runs' bests, indices)``."""
     by_instance: dict[str | None, tuple[Problem, list, list[int]]] = {}
     for i in indices:
         inst = kept_instance(problem, i)
@@ -95,33 +93,27 @@ def _instance_optimum(job: Job, inst: Problem, optima_dir: Path,
                       runs: list[tuple[np.ndarray, float]]) -> dict[str, Any] | None:
     """The instance's optimum, polished as far as ``runs`` ask (:mod:`.optimum`); ``None``
     without a truth and without a run to start from."""
-    from .analysis.optimum import update_instance_optimum
-
     if inst.x_true is None and not runs:
         return None  # nothing to start a polish from
     return update_instance_optimum(inst, job.problem_settings(), optima_dir, runs)
 
 
-
 def _per_problem_files(job: Job, problem: Problem, job_dir: Path, optima_dir: Path) -> None:
     """The job's ``identifiability.json`` (instance 0's bounds, each instance's under
     ``instances``) and ``estimators.json``, each made once per sweep (:func:`shared_file`)."""
-    from .analysis.estimator_floors import FILE as FLOORS_FILE
-    from .analysis.estimator_floors import INSTANCES as FLOORS_INSTANCES
-    from .analysis.estimator_floors import estimator_floors
-    from .analysis.identifiability import cramer_rao, per_instance
+    runs = job.spec.runs
 
     def bounds() -> dict[str, Any] | None:
-        crb = cramer_rao(problem)
+        crb = identifiability.cramer_rao(problem)
         if crb is not None:
-            crb["instances"] = per_instance(problem, job.spec.runs)
+            crb["instances"] = identifiability.per_instance(problem, runs)
         return crb
 
     settings = job.problem_settings()
-    n_floors = max(1, min(FLOORS_INSTANCES, job.spec.runs))  # what the floors depend on
+    n_floors = max(1, min(estimator_floors.INSTANCES, runs))  # what the floors depend on
     for name, make, more in (
-            (IDENTIFIABILITY, bounds, job.spec.runs),
-            (FLOORS_FILE, lambda: estimator_floors(problem, job.spec.runs), n_floors)):
+            (IDENTIFIABILITY, bounds, runs),
+            (ESTIMATORS, lambda: estimator_floors.estimator_floors(problem, runs), n_floors)):
         if not (job_dir / name).is_file():
             data = shared_file(optima_dir, name, problem, settings, more, make)
             if data is not None:
@@ -138,8 +130,6 @@ def shared_file(optima_dir: Path, name: str, problem: Problem, settings: Mapping
     ``optima_dir/per-problem/`` by a hash of the problem's name, settings, data digest and
     ``more``, and copied by every later job (a vpid1 build has 19 jobs per problem). A kept
     file that is not a JSON object is made again."""
-    from .analysis.optimum import _locked, optimum_key
-
     key = optimum_key(problem.name, settings, problem.content_digest(), str(more))
     path = own_folder(own_folder(optima_dir) / SHARED_DIR) / f"{Path(name).stem}-{key}.json"
     with _locked(path):  # launcher workers share the folder
@@ -164,9 +154,8 @@ def _run_bests(records: list[dict[str, Any]]) -> dict[int, list[tuple[np.ndarray
 
 
 def job_score(gaps: Mapping[int, float], records: list[dict[str, Any]]) -> float | None:
-    """The job's search score (what an optimizing sweeper tunes on), lower is better: the
-    median gap to the instance optima where known, else the median best objective (``inf``
-    for a failed run)."""
+    """The job's search score (what an optimizing sweeper tunes), lower is better: the median
+    gap to the instance optima where known, else the median best (``inf``: a failed run)."""
     if gaps:
         values = list(gaps.values())
     else:

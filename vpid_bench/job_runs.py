@@ -5,11 +5,8 @@ depend on the batch (:attr:`~vpid_bench.api.Problem.rows_independent`) and the o
 and tells in the loop's thread (no :class:`~vpid_bench.api.LoopOptimizer`, no residuals), the
 runs go in lockstep: one evaluation call per step for all; else one at a time. Either way a
 record is bit-identical (tested); a run's time is its own (constructor, ask, tell, its rows'
-share of each evaluation). One untimed warm-up run first compiles the kernels (numba).
-
-What the problem says of each run's best vector (:meth:`~vpid_bench.api.Problem.metrics`;
-without a truth, intervals from its residuals) is computed where the run ran, so problem code
-that raises, passes ``run_timeout_s`` or ends its process costs its run only.
+share of each evaluation). One untimed warm-up run first compiles the kernels (numba). What
+the problem says of a run's best vector is computed where the run ran (in its worker).
 """
 
 from __future__ import annotations
@@ -27,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from . import interrupts
+from .analysis.intervals import jacobian_intervals
 from .bridge import LoopOptimizer
 from .build import run_rng
 from .errors import PluginError
@@ -153,8 +151,6 @@ def _say_warnings(job: Job, group: Sequence[int], caught: Sequence[warnings.Warn
 
 def _intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None:
     """The parameters' intervals at ``x``, ``None`` where a simulation near ``x`` fails."""
-    from .analysis.intervals import jacobian_intervals
-
     try:
         return jacobian_intervals(problem, x)
     except (ValueError, FloatingPointError, np.linalg.LinAlgError):

@@ -9,6 +9,8 @@ import platform
 from collections.abc import Iterator
 from typing import Any
 
+from threadpoolctl import threadpool_info, threadpool_limits
+
 
 def available_cores() -> int:
     """The cores this process may run on: its CPU affinity where the OS says (Linux), else
@@ -42,8 +44,6 @@ def one_blas_thread() -> Iterator[None]:
                                        "MKL_NUM_THREADS", "VPID_BENCH_BLAS_THREADS")):
         yield
         return
-    from threadpoolctl import threadpool_limits
-
     with threadpool_limits(limits=1, user_api="blas"):
         yield
 
@@ -55,24 +55,14 @@ def machine_facts() -> dict[str, Any]:
     implementation, version, architecture and threads), as threadpoolctl reports them.
     Computed once per process."""
     cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    blas = []
+    with contextlib.suppress(OSError), open("/proc/cpuinfo", encoding="utf-8") as fh:
+        cpu = next((ln.split(":", 1)[1].strip() for ln in fh if ln.startswith("model name")), cpu)
     try:
         import scipy.linalg  # noqa: F401 - load scipy's BLAS too, as a run would
-        from threadpoolctl import threadpool_info
-
-        for lib in threadpool_info():
-            blas.append({k: lib.get(src) for k, src in (
-                ("api", "internal_api"), ("version", "version"),
-                ("architecture", "architecture"), ("threads", "num_threads"))})
+        blas = [{k: lib.get(src) for k, src in (
+            ("api", "internal_api"), ("version", "version"),
+            ("architecture", "architecture"), ("threads", "num_threads"))}
+            for lib in threadpool_info()]
     except Exception:  # noqa: BLE001 - facts for the record, never a reason to fail a run
         blas = []
-    return {"cpu": cpu, "cores": os.cpu_count(), "cores_available": available_cores(),
-            "blas": blas}
+    return {"cpu": cpu, "cores": os.cpu_count(), "cores_available": available_cores(), "blas": blas}

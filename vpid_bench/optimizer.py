@@ -27,16 +27,9 @@ class OptimizerParams:
 
 
 class Optimizer(abc.ABC):
-    """An ask/tell optimizer over a box.
-
-    The run loop calls ``ask()`` for a population (rows in physical units, inside
-    ``bounds``), evaluates it and calls ``tell(X, f)`` (``inf`` for failed candidates), until
-    the budget is spent or ``done`` is true (``self.done = True`` ends a run early); a
-    population cut by the budget gets no ``tell``. With ``wants_residuals = True`` the loop
-    calls ``tell(X, f, residuals=R)`` (``R`` ``(n, m)``) and sets ``self.residual_groups``
-    before the first ``ask`` (a problem without residuals is refused before the run). When
-    the run ends, however, the loop calls :meth:`close`.
-    """
+    """An ask/tell optimizer over a box: the run loop calls ``ask()`` for a population (rows
+    in physical units, inside ``bounds``) and ``tell(X, f)`` with its values until the budget
+    is spent or ``done`` is true, then :meth:`close` (the whole contract: docs/plugins.md)."""
 
     Params: ClassVar[type[OptimizerParams]] = OptimizerParams
     name: str = "optimizer"

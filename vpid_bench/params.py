@@ -3,14 +3,13 @@
 ``build_dataclass(Params, mapping, prefix="optimizer")`` checks every key against the
 dataclass fields (nested dataclasses included) and every value against the field's type, so
 that ``optimizer.FF=0.8`` or ``problem.noise.level=abc`` fails with one line naming the key,
-the bad value and what is allowed, before any work is done.
-
-``hydra_node(cls, name, interpolations)`` builds the Hydra config node of a plugin from its
-dataclass, so a third-party optimizer needs no YAML to be usable as ``optimizer=<name>``.
+the bad value and what is allowed, before any work is done. :func:`hydra_node` builds a
+plugin's Hydra config node from its dataclass (a third-party plugin needs no YAML).
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import types
@@ -68,10 +67,8 @@ def _coerce_union(value: Any, tp: Any, key: str) -> Any:
     for arg in args:
         if arg is type(None):
             continue
-        try:
+        with contextlib.suppress(ConfigError):
             return _coerce(value, arg, key)
-        except ConfigError:
-            continue
     raise ConfigError(key, value, _type_name(tp))
 
 

@@ -17,6 +17,7 @@ import inspect
 import textwrap
 
 from .errors import ConfigError
+from .optimizer import OptimizerParams
 
 
 @functools.lru_cache(maxsize=256)
@@ -48,8 +49,6 @@ def check_params_bound(cls: type, name: str) -> None:
     :class:`~vpid_bench.optimizer.OptimizerParams` (``Params = MyParams`` not bound) while
     its code reads parameters of its own, naming them. A class that binds a ``Params`` of its
     own is not judged (a subclass may override every method that reads a base's field)."""
-    from .optimizer import OptimizerParams
-
     params = getattr(cls, "Params", None)
     if params is not OptimizerParams:
         return

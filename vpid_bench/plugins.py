@@ -45,8 +45,7 @@ class PluginManagerInfo:
 
 
 class PluginManager(pluggy.PluginManager):
-    """pluggy's manager of the ``vpid_bench`` hooks, with what happened while its plugins
-    loaded (:attr:`info`)."""
+    """pluggy's manager of the ``vpid_bench`` hooks, and how its plugins loaded (:attr:`info`)."""
 
     def __init__(self) -> None:
         super().__init__(hookspecs.PROJECT_NAME)
@@ -54,31 +53,15 @@ class PluginManager(pluggy.PluginManager):
         self.info = PluginManagerInfo()
 
 
-def _blocked_names() -> set[str]:
-    raw = os.environ.get(BLOCK_ENV, "")
-    return {name.strip() for name in raw.split(",") if name.strip()}
-
-
-def _entry_point_owner(ep: importlib.metadata.EntryPoint) -> str:
-    dist = getattr(ep, "dist", None)
-    if dist is None:
-        return ep.value
-    return f"{dist.metadata['Name']} {dist.version}"
-
-
-def get_plugin_manager(
-    entry_points: Iterable[importlib.metadata.EntryPoint] | None = None,
-    extra_plugins: Iterable[tuple[str, Any]] = (),
-) -> PluginManager:
-    """A fresh plugin manager with every ``vpid_bench`` entry point loaded.
-
-    ``entry_points`` replaces the installed entry points (tests use it); ``extra_plugins``
-    registers ``(name, module_or_object)`` pairs on top. The manager's :attr:`~PluginManager.info`
-    lists blocked and failed plugins and where each loaded one came from.
-    """
+def get_plugin_manager(entry_points: Iterable[importlib.metadata.EntryPoint] | None = None,
+                       extra_plugins: Iterable[tuple[str, Any]] = ()) -> PluginManager:
+    """A fresh plugin manager with every ``vpid_bench`` entry point loaded (its
+    :attr:`~PluginManager.info` says what was blocked, failed and where each came from).
+    ``entry_points`` replaces the installed ones (tests use it); ``extra_plugins`` registers
+    ``(name, module_or_object)`` pairs on top."""
     pm = PluginManager()
     info = pm.info
-    blocked = _blocked_names()
+    blocked = {n.strip() for n in os.environ.get(BLOCK_ENV, "").split(",") if n.strip()}
     if entry_points is None:
         entry_points = importlib.metadata.entry_points(group=ENTRY_POINT_GROUP)
     owners: dict[str, str] = {}
@@ -86,36 +69,32 @@ def get_plugin_manager(
         if ep.name in blocked:
             info.blocked.append(ep.name)
             continue
-        owner = _entry_point_owner(ep)
+        dist = getattr(ep, "dist", None)
+        owner = ep.value if dist is None else f"{dist.metadata['Name']} {dist.version}"
         if ep.name in owners:
-            raise PluginError(
-                f"two plugins use the entry-point name {ep.name!r}: {owners[ep.name]} and "
-                f"{owner}; uninstall one or block it with {BLOCK_ENV}={ep.name}"
-            )
+            raise PluginError(f"two plugins use the entry-point name {ep.name!r}: "
+                              f"{owners[ep.name]} and {owner}; uninstall one or block it with "
+                              f"{BLOCK_ENV}={ep.name}")
         owners[ep.name] = owner
         try:
             plugin = ep.load()
         except Exception as exc:  # a broken third-party plugin must not stop the others
             info.failed[ep.name] = f"{type(exc).__name__}: {exc}"
-            warnings.warn(
-                f"vpid-bench plugin {ep.name!r} ({owner}) failed to import and was skipped: "
-                f"{type(exc).__name__}: {exc}",
-                PluginLoadWarning,
-                stacklevel=2,
-            )
+            warnings.warn(f"vpid-bench plugin {ep.name!r} ({owner}) failed to import and was "
+                          f"skipped: {type(exc).__name__}: {exc}", PluginLoadWarning,
+                          stacklevel=2)
             continue
         _register(pm, plugin, ep.name, owner)
-        info.sources[ep.name] = distribution_provenance(getattr(ep, "dist", None))
+        info.sources[ep.name] = distribution_provenance(dist)
     for name, plugin in extra_plugins:
         _register(pm, plugin, name, name)
     try:
         pm.check_pending()
     except pluggy.PluginValidationError as exc:
-        raise PluginError(
-            f"plugin {pm.get_name(exc.plugin)!r} implements a hook vpid-bench does not know: "
-            f"{exc}; the hooks are vpid_bench_register_optimizers, "
-            "vpid_bench_register_problems and vpid_bench_register_report_sections"
-        ) from exc
+        raise PluginError(f"plugin {pm.get_name(exc.plugin)!r} implements a hook vpid-bench "
+                          f"does not know: {exc}; the hooks are vpid_bench_register_optimizers, "
+                          "vpid_bench_register_problems and vpid_bench_register_report_sections"
+                          ) from exc
     return pm
 
 
@@ -160,27 +139,22 @@ class Registry:
 
             def register(name: str, cls: type, _plugin: str = plugin_name) -> None:
                 if not isinstance(name, str) or not name.isidentifier():
-                    raise PluginError(
-                        f"plugin {_plugin!r} registered the {kind} name {name!r}: a name must "
-                        "be a Python identifier (letters, digits, underscores)"
-                    )
+                    raise PluginError(f"plugin {_plugin!r} registered the {kind} name {name!r}: "
+                                      "a name must be a Python identifier (letters, digits, "
+                                      "underscores)")
                 if not (isinstance(cls, type) and issubclass(cls, base)):
-                    raise PluginError(
-                        f"plugin {_plugin!r} registered {kind} {name!r} as {cls!r}, which is "
-                        f"not a subclass of {base.__module__}.{base.__name__}"
-                    )
+                    raise PluginError(f"plugin {_plugin!r} registered {kind} {name!r} as "
+                                      f"{cls!r}, which is not a subclass of "
+                                      f"{base.__module__}.{base.__name__}")
                 params = getattr(cls, params_attr, None)
                 if not (dataclasses.is_dataclass(params) and issubclass(params, params_base)):
-                    raise PluginError(
-                        f"plugin {_plugin!r}: {kind} {name!r} needs a {params_attr} dataclass "
-                        f"deriving from {params_base.__name__}"
-                    )
+                    raise PluginError(f"plugin {_plugin!r}: {kind} {name!r} needs a "
+                                      f"{params_attr} dataclass deriving from "
+                                      f"{params_base.__name__}")
                 if name in table:
-                    raise PluginError(
-                        f"{kind} name {name!r} is registered twice: by plugin "
-                        f"{self._owner[(kind, name)]!r} and by plugin {_plugin!r}; block one "
-                        f"with {BLOCK_ENV}=<plugin name>"
-                    )
+                    raise PluginError(f"{kind} name {name!r} is registered twice: by plugin "
+                                      f"{self._owner[(kind, name)]!r} and by plugin "
+                                      f"{_plugin!r}; block one with {BLOCK_ENV}=<plugin name>")
                 table[name] = cls
                 self._owner[(kind, name)] = _plugin
 
@@ -194,16 +168,12 @@ class Registry:
                     del table[key]
                     self._owner.pop((kind, key), None)
                 self.info.failed[plugin_name] = f"{type(exc).__name__}: {exc}"
-                warnings.warn(
-                    f"vpid-bench plugin {plugin_name!r} failed to register its {kind}s and was "
-                    f"skipped: {type(exc).__name__}: {exc}",
-                    PluginLoadWarning,
-                    stacklevel=2,
-                )
+                warnings.warn(f"vpid-bench plugin {plugin_name!r} failed to register its "
+                              f"{kind}s and was skipped: {type(exc).__name__}: {exc}",
+                              PluginLoadWarning, stacklevel=2)
 
     def suites(self) -> dict[str, list[str]]:
-        """Each suite name the registered problems declare (``Problem.suites``), with its
-        problems in sorted order."""
+        """The suites the registered problems declare (``Problem.suites``), problems sorted."""
         out: dict[str, list[str]] = {}
         for name, cls in sorted(self.problems.items()):
             for suite in getattr(cls, "suites", ()) or ():
@@ -236,9 +206,8 @@ class Registry:
         try:
             return self.optimizers[name]
         except KeyError:
-            raise ConfigError(
-                "optimizer", name, "one of " + ", ".join(sorted(self.optimizers))
-            ) from None
+            known = ", ".join(sorted(self.optimizers))
+            raise ConfigError("optimizer", name, "one of " + known) from None
 
     def problem(self, name: str) -> type[Problem]:
         """The problem class registered as ``name``; a clear error lists the known names."""

@@ -58,9 +58,7 @@ class Problem(abc.ABC):
     @property
     def x_true(self) -> np.ndarray | None:
         """The true parameter vector when known (records then hold relative errors), else
-        ``None``: a problem **without a truth** (a measured record): no error is computed,
-        a problem with residuals gets intervals instead, and the report ranks by
-        :meth:`metrics` (held-out errors) or the objective."""
+        ``None``: a problem **without a truth** (a measured record; docs/architecture.md)."""
         return None
 
     @abc.abstractmethod
@@ -81,9 +79,7 @@ class Problem(abc.ABC):
 
     def metrics(self, x: np.ndarray) -> dict[str, float]:
         """Named accuracy metrics of an identified vector ``x`` (lower is better), e.g. an
-        error norm against the truth; without a truth, errors on held-out data. Stored as
-        ``result.metrics``; the report ranks by the first where every run has it. Default:
-        none."""
+        error norm against the truth; without a truth, errors on held-out data. Default: none."""
         return {}
 
     def comparisons(self) -> dict[str, dict[str, Any]]:
@@ -148,8 +144,7 @@ class Problem(abc.ABC):
 
     #: True when the objective fits a model to a record: without a truth, its best vector
     #: gets intervals, a profile and fit diagnostics. False for no fit (a test function
-    #: offered without a truth: round five's N16); records then say
-    #: ``problem.info.fits_a_record: false``.
+    #: offered without a truth); records then say ``problem.info.fits_a_record: false``.
     fits_a_record: ClassVar[bool] = True
 
     #: The named suites this problem belongs to: ``vpid-bench -m suite=<name>`` sweeps every
@@ -204,8 +199,7 @@ class Problem(abc.ABC):
         return None
 
     def set_threads(self, n: int) -> None:
-        """How many threads ``evaluate`` may use (the job's ``threads`` key); results must not
-        depend on it. Default: ignored."""
+        """How many threads ``evaluate`` may use (``threads``); no result may depend on it."""
         return None
 
 

@@ -1,22 +1,22 @@
-"""A worker process's own session, its output through the supervisor, its copy of the
-resource-tracker pipe closed.
-
-Round four found that a forked child kept the worker's pipe open (the sweep learned of its
-worker's death only when the child ended) and that an orphan kept the command's standard
-output open (``vpid-bench ... | tail`` waited for it). So each worker starts its own session
-and, on Linux, is the child subreaper of its descendants (:func:`detach`); closes its copy of
-the resource-tracker pipe (:func:`drop_tracker`); and writes its output into pipes the
-supervisor copies (:class:`Output`). Ending the tree is :mod:`vpid_bench.worker_tree`'s job.
+"""A worker process's own session and subreaping (:func:`detach`), its copy of the
+resource-tracker pipe closed (:func:`drop_tracker`), its output through pipes the supervisor
+copies (:class:`Output`): an orphan once kept the command's standard output open and
+``vpid-bench ... | tail`` waited for it (docs/sweeps.md, crash isolation). Ending the tree
+is :mod:`vpid_bench.worker_tree`'s job.
 """
 
 from __future__ import annotations
 
 import codecs
 import contextlib
+import ctypes
 import os
+import select
 import sys
 from multiprocessing.connection import Connection
 from typing import Any
+
+import psutil
 
 #: ``prctl`` option that makes a process the reaper of its orphaned descendants (Linux).
 PR_SET_CHILD_SUBREAPER = 36
@@ -31,8 +31,6 @@ def detach() -> None:
         os.setsid()
     if sys.platform.startswith("linux"):
         with contextlib.suppress(Exception):
-            import ctypes
-
             ctypes.CDLL(None, use_errno=True).prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0)
 
 
@@ -54,8 +52,6 @@ def drop_tracker() -> None:
 def strays(process: Any) -> list[Any]:
     """The living descendants (no zombies) of ``process`` (a :class:`psutil.Process` or a
     process id), as :class:`psutil.Process` objects."""
-    import psutil
-
     try:
         root = process if isinstance(process, psutil.Process) else psutil.Process(process)
         found = root.children(recursive=True) if root.is_running() else []
@@ -70,8 +66,7 @@ def strays(process: Any) -> list[Any]:
 
 
 def exited(pid: int) -> bool:
-    """Whether the child process ``pid`` has ended, without reaping it (its number stays its
-    own until then)."""
+    """Whether the child process ``pid`` has ended, not reaping it (its number stays its own)."""
     try:
         return os.waitid(os.P_PID, pid, os.WEXITED | os.WNOHANG | os.WNOWAIT) is not None
     except ChildProcessError:  # already reaped
@@ -143,8 +138,6 @@ class Output:
 
 def readable(fd: int, closed: bool = False) -> bool:
     """Whether ``fd`` (a pipe, a pidfd) is readable now; ``closed`` when it is not open."""
-    import select
-
     with contextlib.suppress(OSError, ValueError):
         return bool(select.select([fd], [], [], 0)[0])
     return closed

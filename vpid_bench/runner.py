@@ -1,13 +1,10 @@
 """The one run loop. It owns the budget, the best-so-far and the trace.
 
-An optimizer only proposes candidates; this loop decides what gets evaluated and recorded. It
-checks every proposal (2-D, ``dim`` columns, at least one row, finite, inside the box);
-evaluates at most ``budget`` candidates in all (a proposal larger than what is left is cut,
-its first rows evaluated, the run ended without a ``tell``); maps NaN values to ``inf``; for
-an optimizer that ``wants_residuals``, refuses a problem without residuals and tells
-``tell(X, f, residuals=R)``; keeps each run's books in one :class:`Ledger` (an optimizer's own
-claim about its best is never used); times each run; and calls ``optimizer.close()`` however
-the run ended.
+An optimizer only proposes candidates; this loop checks every proposal, evaluates at most
+``budget`` candidates in all (a proposal larger than what is left is cut, the run ended
+without a ``tell``), keeps each run's books in one :class:`Ledger`, times each run and calls
+``optimizer.close()`` however the run ended (the contract, as a plugin author reads it:
+docs/plugins.md).
 
 :func:`run_many` is the one loop, for one run or several *in lockstep*: each step it asks
 each unfinished run for its batch, evaluates the batches that need only values in one call
@@ -313,8 +310,7 @@ def _start(lane: Lane, dim: int) -> _Run:
     if r.residuals:
         try:
             check_compatible(lane.problem, opt)
-            groups = lane.problem.residual_groups()
-            opt.residual_groups = np.asarray(groups, dtype=int).reshape(-1)
+            opt.residual_groups = np.asarray(lane.problem.residual_groups(), dtype=int).reshape(-1)
         except Exception as exc:  # noqa: BLE001 - this run only
             r.outcome = exc
     return r

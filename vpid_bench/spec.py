@@ -5,10 +5,9 @@ config. :func:`parse_job` is the only place that turns that config into typed ob
 calls it, and the pre-flight calls it for every point of a sweep before the first job starts,
 so a bad value anywhere stops the command before any work, in one line.
 
-The protocol is the problem's (``problem.ps``, ``problem.iterations``; the default budget
-:func:`~vpid_bench.api.default_budget`, ``budget`` overrides it). Optimizers receive ``ps``,
-``iterations`` and the run's ``budget`` in their ``Params``; none can be set on the optimizer
-(``optimizer.ps=7`` would silently decouple the budget from the population).
+The protocol is the problem's (``problem.ps``, ``problem.iterations``, ``budget``): the job
+fills it into each optimizer's ``Params``, never settable there (``optimizer.ps=7`` would
+silently decouple the budget from the population).
 """
 
 from __future__ import annotations
@@ -71,23 +70,19 @@ class JobSpec:
     def __post_init__(self) -> None:
         _check_int("seed", self.seed, 0, 2**63 - 1)
         _check_int("runs", self.runs, 1, MAX_RUNS)
-        if self.budget is not None:
-            _check_int("budget", self.budget, 1, MAX_BUDGET, nullable=True)
-        if self.budget_per_dim is not None:
-            _check_int("budget_per_dim", self.budget_per_dim, 1, MAX_BUDGET, nullable=True)
-            if self.budget is not None:
-                raise ConfigError("budget_per_dim", self.budget_per_dim,
-                                  "either budget= or budget_per_dim=, not both")
-        if self.threads is not None:
-            _check_int("threads", self.threads, 1, 1024, nullable=True)
+        _check_int("budget", self.budget, 1, MAX_BUDGET, nullable=True)
+        _check_int("budget_per_dim", self.budget_per_dim, 1, MAX_BUDGET, nullable=True)
+        if self.budget_per_dim is not None and self.budget is not None:
+            raise ConfigError("budget_per_dim", self.budget_per_dim,
+                              "either budget= or budget_per_dim=, not both")
+        _check_int("threads", self.threads, 1, 1024, nullable=True)
         if self.run_timeout_s is not None and not 0 < self.run_timeout_s <= MAX_RUN_TIMEOUT_S:
             raise ConfigError("run_timeout_s", self.run_timeout_s,
                               f"a positive number of seconds up to {MAX_RUN_TIMEOUT_S:g} "
                               "(a week) or null")
         if self.isolation not in ISOLATION:
             raise ConfigError("isolation", self.isolation, " | ".join(ISOLATION))
-        if self.workers is not None:
-            _check_int("workers", self.workers, 1, 1024, nullable=True)
+        _check_int("workers", self.workers, 1, 1024, nullable=True)
         if self.target is not None and not 0.0 <= self.target <= 1.0:
             raise ConfigError("target", self.target, "a relative gap from 0 to 1 (e.g. 1e-8) "
                               "or null")
@@ -96,11 +91,12 @@ class JobSpec:
 #: The top-level keys, in the order they are documented.
 TOP_LEVEL_KEYS = tuple(f.name for f in dataclasses.fields(JobSpec))
 #: Keys that never change a result (they may differ between a sweep and its resume).
-OPERATIONAL_KEYS = ("resume", "progress", "report", "archive", "threads", "isolation",
-                    "workers")
+OPERATIONAL_KEYS = ("resume", "progress", "report", "archive", "threads", "isolation", "workers")
 
 
-def _check_int(key: str, value: int, low: int, high: int, nullable: bool = False) -> None:
+def _check_int(key: str, value: int | None, low: int, high: int, nullable: bool = False) -> None:
+    if value is None and nullable:
+        return
     if not low <= value <= high:
         allowed = (f"an integer >= {low}" if high >= 2**62 else
                    f"an integer from {low} to {high}") + (" or null" if nullable else "")
@@ -157,11 +153,9 @@ class Job:
 def plain_config(cfg: Any) -> dict[str, Any]:
     """A composed config (OmegaConf node or mapping) as plain data, interpolations resolved,
     the ``hydra`` node dropped. An interpolation that cannot be resolved is a ConfigError."""
-    try:
-        from omegaconf import DictConfig, OmegaConf
-        from omegaconf.errors import OmegaConfBaseException
-    except ImportError:  # pragma: no cover - hydra is a base dependency
-        return {k: v for k, v in to_plain(cfg).items() if k != "hydra"}
+    from omegaconf import DictConfig, OmegaConf
+    from omegaconf.errors import OmegaConfBaseException
+
     if isinstance(cfg, DictConfig):
         try:
             plain = OmegaConf.to_container(cfg, resolve=True)
@@ -207,8 +201,7 @@ def parse_job(cfg: Any, registry: Registry) -> Job:
         raise ConfigError("problem.iterations", problem_config.iterations,
                           f"a protocol of at most {MAX_BUDGET} evaluations per run")
     filled = {**{k: getattr(problem_config, k) for k in PROTOCOL_KEYS}, "budget": budget}
-    params = build_dataclass(optimizer_cls.Params, {**optimizer_cfg, **filled},
-                             prefix="optimizer")
+    params = build_dataclass(optimizer_cls.Params, {**optimizer_cfg, **filled}, prefix="optimizer")
     check_params_bound(optimizer_cls, optimizer_name)
     optimizer_cls.check(params)
     check_compatible(problem_cls, optimizer_cls, optimizer_name, problem_name)

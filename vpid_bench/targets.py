@@ -1,13 +1,9 @@
 """Stop at the final target (the job key ``target``), as COCO does.
 
-A run may end once within the final target of its instance's optimum, where that optimum is
-known *in advance*: the suite's archive ships each instance's (``optima.jsonl``). An archive
-is untrusted: the installed problem must find the optimum's value at its vector, and archives
-that disagree are refused. A run then stops after the batch whose best value is at most
-``f_opt + target * |f_opt|`` (``target`` where ``f_opt`` is 0): ``stopped_by: "target"``.
-
-Fixed-target results (hits, ECDF, ERT, AUC) are unchanged: the report's targets (1 to 1e-6)
-are hit before a final target of 1e-8. Fixed-budget columns then mean "at the stop".
+A run may end once within the final target of its instance's optimum, known *in advance*
+from the suite's archive (``optima.jsonl``, untrusted: the installed problem must confirm
+it). A run then stops after the batch whose best value is at most :func:`stop_value`:
+``stopped_by: "target"`` (what stays and what changes in a report: docs/protocol.md).
 """
 
 from __future__ import annotations
@@ -22,6 +18,8 @@ import numpy as np
 from .errors import ConfigError
 from .problem import Problem, kept_instance
 from .spec import Job
+from .store.archive import archive_optima
+from .store.optimum import OptimaIndex, matching_optima
 
 
 def stop_value(f_opt: float, target: float) -> float:
@@ -79,11 +77,7 @@ def _certify(job: Job, run: int, instance: Problem, found: list[Any]) -> Any:
 
 def certified_optima(job: Job, problem: Problem, root: Path | None = None) -> dict[int, Any]:
     """Per run index of ``job``, its instance's optimum in the archives below ``root``,
-    matched as the report matches one and confirmed (:func:`_certify`); runs without one are
-    left out."""
-    from .store.archive import archive_optima
-    from .store.optimum import OptimaIndex, matching_optima
-
+    matched as the report matches one and confirmed (:func:`_certify`), if any."""
     # an unusable archive certifies nothing; its runs are not needed
     found_optima, _ = archive_optima(root, {job.problem_name})
     optima = [o for o in found_optima if o.problem == job.problem_name]
@@ -102,9 +96,8 @@ def certified_optima(job: Job, problem: Problem, root: Path | None = None) -> di
 
 
 def with_stops(job: Job, problem: Problem, root: Path | None = None) -> Job:
-    """``job`` with the stopping value of each run (``job.stop_at``) when its ``target`` is
-    set. Raises :class:`ConfigError` naming the first run whose instance has no optimum
-    certified in advance."""
+    """``job`` with each run's stopping value (``job.stop_at``) when ``target`` is set;
+    :class:`ConfigError` names the first run whose instance has no optimum certified."""
     target = job.spec.target
     if target is None:
         return job

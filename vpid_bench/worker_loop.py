@@ -8,9 +8,8 @@ ends, or ``("call", job, (fn, args))``: ``fn(job, problem, *args)`` with the job
 worker with them). On the way: ``("phase", name)`` (the supervisor's clock restarts),
 ``("outcome", RunOutcome)``, and a plugin's log records and lines for the terminal.
 
-A plugin that forks: the child's copy of the pipe is closed at the fork, so nothing it sends
-arrives. A plugin that closes the pipe: the worker ends at once with
-:data:`LOST_PIPE_EXIT`, no traceback, and the run fails with that reason.
+A forked child's copy of the pipe is closed at the fork; a plugin that closes the pipe ends
+the worker at once with :data:`LOST_PIPE_EXIT` (docs/sweeps.md, crash isolation).
 """
 
 from __future__ import annotations
@@ -28,8 +27,9 @@ from multiprocessing.connection import Connection
 from typing import Any
 
 from . import interrupts
+from .build import ProblemCache, run_rng
 from .errors import VpidBenchError
-from .job_runs import RunOutcome, run_outcomes, warm_up
+from .job_runs import run_outcomes, warm_up
 from .machine import one_blas_thread
 from .process_tree import detach, drop_tracker, redirect, strays
 from .runner import RunTimeoutError, keep_cwd, time_limit
@@ -114,8 +114,6 @@ def _identity(fd: int) -> tuple[int, int] | None:
 def serve(conn: Connection, out: Connection, err: Connection) -> None:
     """The worker's loop (the target of its process): one task at a time until told to stop
     or the pipe closes. ``out`` and ``err`` become its standard output and error."""
-    from .build import ProblemCache
-
     detach()
     drop_tracker()
     redirect(out, err)
@@ -189,21 +187,14 @@ def _run_task(job: Job, payload: tuple[list[int], bool, int], state: dict[str, A
             send(("phase", "warmed"))
         for outcome in run_outcomes(job, problem, indices, lockstep,
                                     announce=lambda phase: send(("phase", phase))):
-            send(("outcome", portable_outcome(outcome)))
-
-
-def portable_outcome(outcome: RunOutcome) -> RunOutcome:
-    """``outcome`` with its error as a :class:`RemoteError` (always picklable)."""
-    if outcome.error is None:
-        return outcome
-    return dataclasses.replace(outcome, outcome=portable(outcome.error))
+            if outcome.error is not None:  # as a RemoteError: always picklable
+                outcome = dataclasses.replace(outcome, outcome=portable(outcome.error))
+            send(("outcome", outcome))
 
 
 def probe(job: Job, problem: Any) -> None:
     """Build run 0's optimizer of ``job`` under the run's time limit; raise what its
     constructor raised (a fault there stops the job before any run)."""
-    from .build import run_rng
-
     limit = job.spec.run_timeout_s
     try:
         with time_limit(limit), keep_cwd():

@@ -1,22 +1,15 @@
 """A worker process and every process its plugins start, held so that ending them never
-signals anything else (issue 44: N1, N3, N4).
+signals anything else (issue 44: N1, a reused process number once got SIGKILL; N3, N4; the
+whole story: docs/sweeps.md, crash isolation).
 
-Round five found three ways the tree kill failed: N1, the worker's bare process id was
-signalled after it died and was reaped, so a reused number got SIGKILL; N3, a daemon (double
-fork, ``setsid``) went to init, out of reach, holding the resource tracker's pipe (so
-``vpid-bench ... | tail`` hung; the worker now closes its copy: :mod:`.worker_loop`); N4, a
-process forking and calling ``setsid`` in a loop slipped between listing and kill.
-
-So every signal goes through what this process holds: a pidfd (Linux >= 5.3) opened while
-the worker was its unreaped child, or on a process checked to be the tree's before it is
-signalled (psutil's handles, which check the start time, without pidfds). Each worker is
-started in a cgroup of its own where one can be made (:mod:`vpid_bench.cgroups`: killed
-whole, forks in flight included) and with a mark in its environment (:data:`MARK`) that its
-descendants carry. :meth:`Tree.end` kills the cgroup, stops the worker (the child subreaper
-of its tree, so orphans keep coming to it), then round after round, until two rounds find
-nothing new, holds and stops its descendants and every process carrying its mark, then kills
-them all. What still runs (it cleared its environment *and* left the cgroup) is returned and
-named in one ``warning:`` line (docs/sweeps.md, crash isolation).
+Every signal goes through what this process holds: a pidfd (Linux >= 5.3) opened while the
+worker was its unreaped child, or on a process checked to be the tree's before it is
+signalled (psutil's handles, which check the start time, without pidfds). Each worker has a
+cgroup of its own where one can be made (:mod:`vpid_bench.cgroups`) and a mark in its
+environment (:data:`MARK`) that its descendants carry. :meth:`Tree.end` kills the cgroup,
+stops the worker (the child subreaper of its tree, so orphans keep coming to it), then round
+after round, until two rounds find nothing new, stops its descendants and every process
+carrying its mark, then kills them all; what still runs is returned.
 """
 
 from __future__ import annotations
@@ -30,6 +23,8 @@ import signal
 import time
 from collections.abc import Callable
 from typing import Any
+
+import psutil
 
 from .cgroups import Cgroup
 from .machine import environ
@@ -90,15 +85,11 @@ class _Held:
             with contextlib.suppress(OSError):
                 signal.pidfd_send_signal(self.fd, sig)
         elif self.proc is not None:
-            import psutil
-
             with contextlib.suppress(psutil.Error):
                 self.proc.send_signal(sig)
 
     def alive(self) -> bool:
         """Whether it still runs (a zombie does not)."""
-        import psutil
-
         if self.fd is not None and readable(self.fd, closed=True):  # readable once it exits
             return False
         try:
@@ -117,8 +108,6 @@ def _hold(pid: int, belongs: Callable[[Any], bool]) -> _Held | None:
     """Process ``pid`` held by a pidfd, once checked to be the tree's (``belongs``, asked of
     its :class:`psutil.Process`), so a number handed out again is never held; ``None`` if it
     is gone, a zombie or not the tree's."""
-    import psutil
-
     fd = pidfd(pid)
     try:
         proc = psutil.Process(pid)
@@ -140,15 +129,11 @@ def _children(pid: int) -> list[int]:
         tids = []
     found: list[int] = []
     for tid in tids:
-        try:
-            with open(f"/proc/{pid}/task/{tid}/children") as f:
-                found += [int(c) for c in f.read().split()]
-        except (OSError, ValueError):
-            continue
+        children = f"/proc/{pid}/task/{tid}/children"
+        with contextlib.suppress(OSError, ValueError), open(children) as f:
+            found += [int(c) for c in f.read().split()]
     if tids or not os.path.isdir("/proc"):
         return found
-    import psutil
-
     with contextlib.suppress(psutil.Error):
         return [c.pid for c in psutil.Process(pid).children()]
     return []
@@ -160,8 +145,6 @@ class Tree(_Held):
     ``None`` without pidfds) is readable once it ended. :meth:`close` lets go of it."""
 
     def __init__(self, process: Any, token: str, cgroup: Cgroup | None) -> None:
-        import psutil
-
         self.process, self.pid, self.token, self.name = process, process.pid, token, "worker"
         self.fd = pidfd(self.pid)
         try:
@@ -178,9 +161,7 @@ class Tree(_Held):
                                  os.WEXITED | os.WNOHANG | os.WNOWAIT) is not None
             except ChildProcessError:  # already reaped
                 return True
-        if not self._unreaped():
-            return True
-        return exited(self.pid)  # not reaped: the number is still the worker's
+        return not self._unreaped() or exited(self.pid)  # unreaped: the number is its own
 
     def _unreaped(self) -> bool:
         """Whether the worker is not reaped yet (its number is still its own)."""
@@ -233,8 +214,6 @@ class Tree(_Held):
     def _marked(self, held: dict[int, _Held], checked: set[int]) -> list[_Held]:
         """The processes carrying the worker's mark not held yet (wherever they went);
         ``checked``: the numbers already read (only new ones are read)."""
-        import psutil
-
         def marked(proc: Any) -> bool:
             return proc.environ().get(MARK) == self.token
 

@@ -4,12 +4,9 @@ With ``isolation=process`` (the command's default) every call into plugin code r
 long-lived worker processes, reused by every job of the sweep, several at once
 (:meth:`Workers.outcomes` for runs, :meth:`Workers.call` and :meth:`Workers.calls` for the
 rest); the sweep's own process never builds a problem, it hands out tasks and writes every
-file. A run that ends its process, or is blocked past ``run_timeout_s`` (its worker killed
-:data:`GRACE_S` s later), fails alone; a plugin's ``os.chdir``, threads, signal handlers and
-processes die with its worker (the whole tree and nothing else:
-:mod:`vpid_bench.worker_tree`); SIGTERM and SIGHUP are left to the supervisor. A lockstep
-group that lost its worker runs again one by one. Records are bit-identical to
-``isolation=none`` (tested).
+file. A run that ends or blocks its worker fails alone, a lockstep group that lost its
+worker runs again one by one (what each fault costs: docs/sweeps.md, crash isolation).
+Records are bit-identical to ``isolation=none`` (tested).
 
 Why :mod:`multiprocessing` and not an executor: on Python 3.11 :mod:`concurrent.futures`
 cannot kill one hung worker, loky is only vendored inside joblib, and neither ends the
@@ -22,6 +19,7 @@ import contextlib
 import dataclasses
 import logging
 import pickle
+import resource
 import signal
 import sys
 import time
@@ -32,14 +30,17 @@ from multiprocessing import get_context
 from multiprocessing.connection import Connection, wait
 from typing import Any
 
+import psutil
+
 from . import interrupts
 from .cgroups import Cgroup
 from .interrupts import held as _sigint_held  # (tests use the name)
 from .job_runs import RunOutcome, now_utc
+from .machine import available_cores
 from .process_tree import Output
 from .runner import RunTimeoutError
 from .spec import Job
-from .worker_loop import LOST_PIPE_EXIT, RemoteError, portable, probe, serve
+from .worker_loop import LOST_PIPE_EXIT, RemoteError, portable, serve
 from .worker_tree import Tree, marked, new_token, start_tracker
 
 log = logging.getLogger(__name__)
@@ -95,10 +96,6 @@ def is_timeout(exc: BaseException) -> bool:
 def worker_cap() -> tuple[int, str]:
     """The most workers this machine holds at once, and why: one per :data:`WORKER_MB` of
     the memory available, no more than the open-file limit allows; at least one."""
-    import resource
-
-    import psutil
-
     available = psutil.virtual_memory().available
     by_memory = max(1, int(available // (WORKER_MB * 2**20)))
     soft = resource.getrlimit(resource.RLIMIT_NOFILE)[0]
@@ -111,8 +108,7 @@ def worker_cap() -> tuple[int, str]:
 
 
 def can_send(job: Job) -> str | None:
-    """Why ``job`` cannot be sent to a worker (it does not pickle, e.g. a class defined
-    inside a function), or ``None``."""
+    """Why ``job`` cannot be sent to a worker (it does not pickle: a class made in a function)."""
     try:
         pickle.dumps(job)
     except Exception as exc:  # noqa: BLE001 - any pickling failure means "cannot"
@@ -163,8 +159,6 @@ class Workers:
         self._all: list[_Worker] = []
         self._finalizer = weakref.finalize(self, _end_all, self._all)
 
-    # --- workers
-
     def _start(self) -> _Worker:
         """A new worker, started with the signals held back (a Ctrl-C inside ``start()`` once
         cut the child's start-up pickle: a traceback); the child releases them once it
@@ -186,8 +180,7 @@ class Workers:
         return worker
 
     def prestart(self, count: int | None = None) -> None:
-        """Start ``count`` workers now (at most :attr:`size`), so their imports overlap the
-        sweep's own set-up."""
+        """Start ``count`` workers now (at most :attr:`size`): their imports overlap the set-up."""
         while len(self._all) < min(self.size, self.size if count is None else count):
             self._idle.append(self._start())
 
@@ -228,15 +221,13 @@ class Workers:
                   f"{worker.process.pid} could not be ended and are left running (they left "
                   f"its cgroup or session and cleared their environment): pid "
                   f"{', pid '.join(left)}", file=sys.stderr, flush=True)
-        if worker in self._all:
-            self._all.remove(worker)
-        if worker in self._idle:
-            self._idle.remove(worker)
+        for group in (self._all, self._idle):
+            if worker in group:
+                group.remove(worker)
         return describe_exit(worker.process.exitcode)
 
     def _release(self, worker: _Worker, left: int, who: str) -> None:
-        """A worker whose task is over goes back to the idle ones, or is ended with the
-        processes its task left running."""
+        """Back to the idle workers, or ended with the processes its task left running."""
         if left:
             log.warning("%s left %d process(es) running after its task; ended with its worker "
                         "process", who, left)
@@ -252,12 +243,12 @@ class Workers:
                 self._end(worker)
             self._idle.clear()
 
-    # --- waiting
-
-    def _events(self, workers: Sequence[_Worker], timeout: float | None) -> list[_Worker]:
-        """The workers among ``workers`` with a message waiting or whose process ended, after
-        at most ``timeout`` s (``None``: for ever), copying what they print meanwhile."""
-        end = None if timeout is None else time.monotonic() + timeout
+    def _events(self, busy: Sequence[_Task]) -> list[_Worker]:
+        """The workers of the ``busy`` tasks with a message waiting or whose process ended,
+        waiting until the first deadline at most (none: for ever), copying what they print."""
+        deadlines = [b.deadline for b in busy if b.deadline is not None]
+        end = min(deadlines) if deadlines else None
+        workers = [b.worker for b in busy]
         unwatched = [w for w in workers if w.tree.fd is None]
         while True:
             handles: dict[Any, Any] = {}
@@ -302,8 +293,6 @@ class Workers:
             return None, (f"{self._end(worker)} after a message that could not be read "
                           f"({type(exc).__name__})")
         return None, self._end(worker)
-
-    # --- calls
 
     def call(self, job: Job, fn: Callable[..., Any], *args: Any, what: str,
              limit: float | None) -> Any:
@@ -351,16 +340,13 @@ class Workers:
         except OSError:
             return WorkerDiedError(f"its worker process ended ({self._end(worker)}) before "
                                    f"{what}")
-        return _Task(worker, None if limit is None else time.monotonic() + START_S,
-                     index=index)
+        return _Task(worker, None if limit is None else time.monotonic() + START_S, index=index)
 
     def _call_events(self, busy: dict[Connection, _Task], what: str, limit: float | None
                      ) -> Iterator[tuple[_Task, tuple[Any, Any]]]:
         """The calls among ``busy`` that ended, each with its ``(value, error)``, after one
         wait (a call that announces its problem is built gets ``limit`` from then)."""
-        deadlines = [b.deadline for b in busy.values() if b.deadline is not None]
-        left = max(0.0, min(deadlines) - time.monotonic()) if deadlines else None
-        for worker in self._events([b.worker for b in busy.values()], left):
+        for worker in self._events(list(busy.values())):
             call = busy[worker.conn]
             msg, ended = self._receive(worker)
             if ended is not None:
@@ -390,16 +376,9 @@ class Workers:
                     "was killed" if call.phase else f"building the problem took more than "
                     f"{START_S:.0f} s: its worker process was killed"))
 
-    def probe(self, job: Job) -> None:
-        """Build one optimizer of ``job`` in a worker; raise what its constructor raised."""
-        self.call(job, probe, what="the optimizer's constructor", limit=_allowance(job, 1))
-
-    # --- runs
-
     def outcomes(self, job: Job, indices: Sequence[int], lockstep: bool, workers: int,
                  threads: int) -> Iterator[RunOutcome]:
-        """The outcome of each run in ``indices``, in the order they end, from up to
-        ``workers`` processes at once."""
+        """The outcome of each run in ``indices``, as they end, from up to ``workers`` processes."""
         size = max(1, workers)
         pending: deque[list[int]] = deque(_tasks(list(indices), size) if lockstep
                                           else [[i] for i in indices])
@@ -429,9 +408,7 @@ class Workers:
 
     def _collect(self, job: Job, busy: dict[Connection, _Task],
                  pending: deque[list[int]]) -> Iterator[RunOutcome]:
-        deadlines = [b.deadline for b in busy.values() if b.deadline is not None]
-        left = max(0.0, min(deadlines) - time.monotonic()) if deadlines else None
-        for worker in self._events([b.worker for b in busy.values()], left):
+        for worker in self._events(list(busy.values())):
             b = busy[worker.conn]
             msg, ended = self._receive(worker)
             if ended is not None:
@@ -514,8 +491,7 @@ def _tasks(indices: list[int], workers: int) -> list[list[int]]:
 
 
 def _allowance(job: Job, runs: int) -> float | None:
-    """Seconds a worker may take for ``runs`` runs (a warm-up counts as one) before it is
-    killed (``None``: none)."""
+    """Seconds a worker may take for ``runs`` runs (a warm-up counts as one) before it is killed."""
     limit = job.spec.run_timeout_s
     return None if limit is None else limit * max(runs, 1) + GRACE_S
 
@@ -551,11 +527,8 @@ def outcomes_isolated(pool: Workers, job: Job, indices: Sequence[int], lockstep:
                       ) -> Iterator[RunOutcome]:
     """:meth:`Workers.outcomes` with the job's ``workers`` and ``threads`` keys applied (each
     worker's problem gets an equal share of the cores unless ``threads`` is set)."""
-    from .machine import available_cores
-
     requested = job.spec.workers or pool.size
-    tasks = (len(_tasks(list(indices), min(requested, pool.cap))) if lockstep
-             else len(indices))
+    tasks = (len(_tasks(list(indices), min(requested, pool.cap))) if lockstep else len(indices))
     workers = pool.how_many(requested, tasks)
     threads = job.spec.threads or max(1, available_cores() // workers)
     return pool.outcomes(job, indices, lockstep, workers, threads)

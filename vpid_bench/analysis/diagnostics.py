@@ -23,12 +23,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..store.job_checks import DIAGNOSTICS_SCHEMA as SCHEMA
-from ..store.job_files import DIAGNOSTICS
+from ..store.job_files import DIAGNOSTICS, write_job_json
+from .intervals import jacobian_intervals
 
 #: The two-sided 99 % normal quantile (scipy.stats.norm.ppf(0.995)).
 Z99 = 2.5758293035489004
@@ -190,18 +192,12 @@ def fit_diagnostics(residuals: np.ndarray, groups: np.ndarray,
             "explained": not any(e["correlated"] or e["input_correlated"] for e in out)}
 
 
-#: The file a job writes (:func:`write_diagnostics`).
-FILE = DIAGNOSTICS
-
-
 def problem_diagnostics(problem: Any, x: Any) -> dict[str, Any]:
     """The fit diagnostics of ``problem`` (one with residuals) at ``x``: its
     ``fisher_residuals`` by ``fisher_groups``, its stated ``residual_sigma`` per group and
     its optional ``diagnostic_signals(x)`` (a dict of :func:`fit_diagnostics`' ``measured``,
     ``names``, ``inputs``, ``held_out``); with ``x``, ``f`` and both ``intervals``
     (:func:`.intervals.jacobian_intervals`)."""
-    from .intervals import jacobian_intervals
-
     x = np.asarray(x, dtype=float).reshape(-1)
     groups = np.asarray(problem.fisher_groups(), dtype=int).reshape(-1)
     r = np.asarray(problem.fisher_residuals(x[None]), dtype=float)[0]
@@ -222,13 +218,9 @@ def problem_diagnostics(problem: Any, x: Any) -> dict[str, Any]:
 
 def write_diagnostics(problem: Any, x: Any, job_dir: Any) -> Any:
     """``job_dir/diagnostics.json`` at ``x``, or with ``status`` ``failed`` and why."""
-    from pathlib import Path
-
-    from ..store.job_files import write_job_json
-
     try:
         data = {"status": "ok", **problem_diagnostics(problem, x)}
     except (ValueError, FloatingPointError, np.linalg.LinAlgError, TypeError) as exc:
         data = {"schema": SCHEMA, "status": "failed",
                 "reason": " ".join(f"{type(exc).__name__}: {exc}".split())[:200]}
-    return write_job_json(Path(job_dir) / FILE, data)
+    return write_job_json(Path(job_dir) / DIAGNOSTICS, data)

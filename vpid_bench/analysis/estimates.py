@@ -22,9 +22,9 @@ import numpy as np
 from ..problem import Problem
 from ..store.job_checks import COMPARISONS_SCHEMA, MAX_COMPARISONS, PROFILE_SCHEMA
 from ..store.job_files import COMPARISONS, PROFILE, write_job_json
+from .intervals import group_sigma, jacobian_intervals
+from .profile import ProfileTooSlowError, profile_intervals
 
-PROFILE_FILE = PROFILE
-COMPARISONS_FILE = COMPARISONS
 #: Longest a profile may take (s), judged from its first fit before it starts (a job's
 #: analysis should not outlast its runs by much; docs/report.md).
 PROFILE_LIMIT_S = 120.0
@@ -34,9 +34,6 @@ def write_profile(problem: Problem, optimum: dict[str, Any], job_dir: Path,
                   limit_s: float = PROFILE_LIMIT_S) -> Path:
     """``job_dir/profile.json`` for ``problem`` (an instance without a truth) at
     ``optimum`` (:func:`.optimum.update_instance_optimum`'s result)."""
-    from .intervals import group_sigma, jacobian_intervals
-    from .profile import ProfileTooSlowError, profile_intervals
-
     x = np.asarray(optimum["x_opt"], dtype=float)
     out: dict[str, Any] = {"schema": PROFILE_SCHEMA, "instance": problem.instance_id(),
                            "start": x.tolist(), "f_start": float(optimum["f_opt"]),
@@ -56,7 +53,7 @@ def write_profile(problem: Problem, optimum: dict[str, Any], job_dir: Path,
     except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:
         out.update(status="failed", reason=" ".join(f"{type(exc).__name__}: {exc}".split())[:200])
     out["seconds"] = time.perf_counter() - began
-    return write_job_json(Path(job_dir) / PROFILE_FILE, out)
+    return write_job_json(Path(job_dir) / PROFILE, out)
 
 
 def comparison_rows(problem: Problem) -> list[dict[str, Any]]:
@@ -89,6 +86,5 @@ def write_comparisons(problem: Problem, job_dir: Path) -> Path | None:
     rows = comparison_rows(problem)
     if not rows:
         return None
-    return write_job_json(Path(job_dir) / COMPARISONS_FILE,
-                             {"schema": COMPARISONS_SCHEMA, "problem": problem.name,
-                              "rows": rows})
+    return write_job_json(Path(job_dir) / COMPARISONS, {"schema": COMPARISONS_SCHEMA,
+                                                        "problem": problem.name, "rows": rows})

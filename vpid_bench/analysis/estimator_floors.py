@@ -17,6 +17,7 @@ from ..errors import VpidBenchError
 from ..estimators import OBJECTIVES
 from ..problem import Problem, kept_instance
 from ..store.job_files import ESTIMATORS
+from .optimum import polish
 
 #: The instances each objective's optimum is polished on (0 .. INSTANCES - 1, at most the
 #: job's runs): a few polishes per objective keep the job's analysis short.
@@ -34,8 +35,6 @@ def offers_objectives(problem: Problem) -> bool:
 def truth_optima_metric(problem: Problem, n: int) -> tuple[str, list[float]] | None:
     """The problem's first metric at the optimum of each of instances 0 .. n-1 polished
     from the truth (its objective's floor there); ``None`` without a metric."""
-    from .optimum import polish
-
     metric: str | None = None
     values = []
     for i in range(n):
@@ -69,5 +68,4 @@ def estimator_floors(problem: Problem, runs: int) -> dict[str, Any] | None:
         floors[objective] = {"median": statistics.median(values), "values": values}
     if not floors or metric is None:
         return None
-    return {"metric": metric, "instances": n, "chosen": problem.config.objective,
-            "floors": floors}
+    return {"metric": metric, "instances": n, "chosen": problem.config.objective, "floors": floors}

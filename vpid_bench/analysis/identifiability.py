@@ -78,8 +78,7 @@ def floored(sigma: np.ndarray, groups: np.ndarray, fraction: float) -> np.ndarra
     return np.maximum(sigma, fraction * rms[groups])
 
 
-def _bounds(J: np.ndarray, sigma: np.ndarray, x_true: np.ndarray
-            ) -> tuple[np.ndarray, np.ndarray]:
+def _bounds(J: np.ndarray, sigma: np.ndarray, x_true: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The bounds (percent) and the whitened Jacobian of the rows of ``J`` with ``σ``."""
     Jw = J / sigma[:, None]
     fisher = Jw.T @ Jw

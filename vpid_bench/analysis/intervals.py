@@ -15,14 +15,11 @@ can. For an identified vector ``x̂`` (physical units) of a problem with residua
 For a model linear in ``θ`` with one group this is the ordinary least-squares interval
 (tested against the closed form). It **assumes white residuals**; where model error leaves
 them correlated it is too narrow. Beside it, ``robust`` is the sandwich ``A⁻¹ B A⁻¹``
-(``A = Jᵀ W J``) with a HAC estimate ``B`` of the long-run covariance of the scores ``s_t``
-(the whitened scores ``J_i r_i / σ̂_i²`` of the entries at time position ``t``, summed):
-Andrews and Monahan's (1992) *prewhitened* Newey–West (a VAR(1) ``s_t = Φ s_{t−1} + u_t``,
-its singular values capped at :data:`MAX_AR`; the Bartlett estimate of the innovations with
-Andrews' (1991) bandwidth ``L = 1.1447 (α T)^{1/3}``, ``α = 4ρ² / ((1−ρ)² (1+ρ)²)``;
-recoloured, ``B = (I − Φ)⁻¹ B_u (I − Φ)⁻ᵀ``). Each parameter's robust variance is the larger
-of the prewhitened and the plain Newey–West sandwich (why, and why not a block bootstrap:
-docs/estimators.md). With white residuals both equal the Jacobian interval.
+(``A = Jᵀ W J``) with ``B`` the long-run covariance of the whitened scores summed per time
+position, Andrews and Monahan's (1992) *prewhitened* Newey–West (:func:`hac_covariance`,
+:func:`var1`, :func:`andrews_lags`); each parameter's robust variance is the larger of the
+prewhitened and the plain sandwich (why, and why not a block bootstrap: docs/estimators.md).
+With white residuals both equal the Jacobian interval.
 """
 
 from __future__ import annotations
@@ -33,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from ..problem import Problem
+from .identifiability import jacobian
 
 #: The two-sided 95 % normal quantile (scipy.stats.norm.ppf(0.975)).
 Z95 = 1.959963984540054
@@ -63,8 +61,6 @@ def jacobian_intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None
     residual at ``x`` is not finite or all are zero: ``lower``, ``upper``, ``se`` (physical
     units; ``None``: undetermined, unbounded), ``sigma`` (``σ̂`` per group, the residuals'
     units), ``dof`` (``m − d``) and the same under ``robust``."""
-    from .identifiability import jacobian
-
     x = np.asarray(x, dtype=float).reshape(-1)
     groups = np.asarray(problem.fisher_groups(), dtype=int).reshape(-1)
     r = np.asarray(problem.fisher_residuals(x[None]), dtype=float)[0]
@@ -101,21 +97,16 @@ def jacobian_intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None
             lags = lags or n_lags  # the prewhitened estimate's, which the report names
         hac_var = np.maximum(*variances)  # the larger of the two (see the module)
         se_hac = np.where(blind, math.inf, np.sqrt(np.maximum(hac_var, 0.0)) * scale)
-    return {
-        "method": "jacobian",
-        "assumes": "white residuals",
-        "level": 0.95,
-        "lower": _finite_or_none(x - Z95 * se),
-        "upper": _finite_or_none(x + Z95 * se),
-        "se": _finite_or_none(se),
-        "sigma": sigma.tolist(),
-        "dof": int(r.size - x.size),
-        "robust": {"method": "hac", "kernel": "bartlett", "prewhitened": "var1 or none",
-                   "lags": int(lags), "level": 0.95,
-                   "lower": _finite_or_none(x - Z95 * se_hac),
-                   "upper": _finite_or_none(x + Z95 * se_hac),
-                   "se": _finite_or_none(se_hac)},
-    }
+    return {"method": "jacobian", "assumes": "white residuals", "level": 0.95, **_ends(x, se),
+            "sigma": sigma.tolist(), "dof": int(r.size - x.size),
+            "robust": {"method": "hac", "kernel": "bartlett", "prewhitened": "var1 or none",
+                       "lags": int(lags), "level": 0.95, **_ends(x, se_hac)}}
+
+
+def _ends(x: np.ndarray, se: np.ndarray) -> dict[str, list[float | None]]:
+    """The 95 % interval of ``x`` with standard errors ``se`` (``None``: unbounded)."""
+    return {"lower": _finite_or_none(x - Z95 * se), "upper": _finite_or_none(x + Z95 * se),
+            "se": _finite_or_none(se)}
 
 
 def time_positions(groups: np.ndarray) -> np.ndarray:

@@ -96,8 +96,7 @@ def polish(problem: Problem, x0: np.ndarray, rounds: int = 30, tol: float = 1e-1
     return best_x, best_f
 
 
-def _weighted_rows(problem: Problem, Z: np.ndarray, scale: np.ndarray,
-                   w: np.ndarray) -> np.ndarray:
+def _weighted_rows(problem: Problem, Z: np.ndarray, scale: np.ndarray, w: np.ndarray) -> np.ndarray:
     """Weighted residuals of the rows of ``Z`` (in units of ``scale``), non-finite entries
     replaced by a huge value, ``(n, m)``."""
     res = np.asarray(problem.residuals(Z * scale), dtype=float)

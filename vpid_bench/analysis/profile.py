@@ -14,12 +14,14 @@ in ``θ`` the interval is the Cramér–Rao one (tested).
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import numpy as np
 
 from ..estimators import SIGMA_FLOOR
 from ..problem import Problem
+from .identifiability import cramer_rao, entry_sigma, informative, jacobian
 
 #: χ²(0.95, 1): the profile threshold of a 95 % interval.
 CHI2_95 = 3.841458820694124
@@ -54,8 +56,6 @@ def structural_symmetry(problem: Problem, x: np.ndarray | None = None,
 
 def _whitened_jacobian(problem: Problem, x: np.ndarray, sigma: np.ndarray | None = None
                        ) -> tuple[np.ndarray, np.ndarray]:
-    from .identifiability import entry_sigma, informative, jacobian
-
     given = problem.residual_sigma() if sigma is None else sigma
     if given is None:
         raise ValueError("the problem states no noise sigma (residual_sigma)")
@@ -73,8 +73,6 @@ class _Likelihood:
 
     def __init__(self, problem: Problem, centre: np.ndarray | None = None,
                  sigma: np.ndarray | None = None) -> None:
-        from .identifiability import entry_sigma, informative
-
         sigma = problem.residual_sigma() if sigma is None else sigma
         centre = problem.x_true if centre is None else np.asarray(centre, dtype=float)
         if sigma is None or centre is None:
@@ -108,8 +106,6 @@ class _Likelihood:
     def fit(self, z0: np.ndarray, fixed: int | None = None, value: float = 0.0
             ) -> tuple[np.ndarray, float]:
         """The least NLL from ``z0``, with coordinate ``fixed`` held at ``value``."""
-        import time
-
         from scipy.optimize import least_squares
 
         if self.deadline is not None and time.perf_counter() > self.deadline:
@@ -147,11 +143,7 @@ def profile_intervals(problem: Problem, crb: dict[str, Any] | None = None,
     ``sigma`` per group estimated from the residuals and ``rel_sd`` (the first steps).
     ``limit_s``: :class:`ProfileTooSlowError` when the first fit says it would take longer
     (``2 d FITS_PER_END`` fits), or once it has run twice that long."""
-    import time
-
     from scipy.optimize import brentq
-
-    from .identifiability import cramer_rao
 
     lik = _Likelihood(problem, start, sigma)
     began = time.perf_counter()
@@ -173,16 +165,13 @@ def profile_intervals(problem: Problem, crb: dict[str, Any] | None = None,
         ratio, direction = structural_symmetry(problem, z_hat * lik.scale, sigma)
         rel_sd = np.full(z_hat.size, 0.01) if rel_sd is None else np.asarray(rel_sd, float)
         rel_sd = np.where(np.isfinite(rel_sd) & (rel_sd > 0), rel_sd, 0.01)
-    names = list(problem.bounds.names)
-    out: dict[str, Any] = {"names": names, "estimate": (z_hat * lik.scale).tolist(),
+    out: dict[str, Any] = {"names": list(problem.bounds.names),
+                           "estimate": (z_hat * lik.scale).tolist(),
                            "lower": [], "upper": [], "classification": [],
                            "symmetry_ratio": ratio}
     for j in range(z_hat.size):
-        ends = []
-        for sign, edge in ((-1, lik.lo[j]), (1, lik.hi[j])):
-            ends.append(_end(lik, z_hat, nll_hat, j, sign, edge, max(rel_sd[j], 1e-6),
-                             max_steps, brentq))
-        lower, upper = ends
+        lower, upper = (_end(lik, z_hat, nll_hat, j, sign, edge, max(rel_sd[j], 1e-6),
+                             max_steps, brentq) for sign, edge in ((-1, lik.lo[j]), (1, lik.hi[j])))
         out["lower"].append(None if lower is None else float(lower * lik.scale[j]))
         out["upper"].append(None if upper is None else float(upper * lik.scale[j]))
         if lower is not None and upper is not None:

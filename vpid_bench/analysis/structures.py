@@ -69,11 +69,9 @@ def segments(groups: np.ndarray, fit_fraction: float = FIT_FRACTION
     return fit, val
 
 
-def information_criteria(rss: Sequence[float], n: Sequence[int], k: int
-                         ) -> tuple[float, float]:
+def information_criteria(rss: Sequence[float], n: Sequence[int], k: int) -> tuple[float, float]:
     """``(AIC, BIC)`` with each channel's variance profiled out (see the module)."""
-    m2logl = float(sum(nc * math.log(max(r, 1e-300) / nc) for r, nc in zip(rss, n,
-                                                                          strict=True)))
+    m2logl = float(sum(nc * math.log(max(r, 1e-300) / nc) for r, nc in zip(rss, n, strict=True)))
     total = int(sum(n))
     return m2logl + 2 * k, m2logl + k * math.log(total)
 
@@ -105,8 +103,7 @@ def fit_structure(problem: Any, label: str, x0: np.ndarray | None = None,
     aic, bic = information_criteria(rss, n, x.size)
     p_min = min(ljung_box_p(r_all[i]) for i in fit_idx)
     # intervals: residuals whitened by each channel's fitted sigma
-    sigma = np.concatenate([np.full(nc, math.sqrt(r / nc)) for r, nc in zip(rss, n,
-                                                                             strict=True)])
+    sigma = np.concatenate([np.full(nc, math.sqrt(r / nc)) for r, nc in zip(rss, n, strict=True)])
     half = _half_widths(sol.jac / sigma[:, None] / width[None, :], sol.x, z)
     return StructureFit(
         label=label, names=tuple(b.names), units=tuple(b.units or ("",) * x.size), x=x,
@@ -170,16 +167,14 @@ def verdict(fits: Sequence[StructureFit], alpha: float = 0.05) -> str:
 
 
 def table_rows(fits: Sequence[StructureFit]) -> list[list[Any]]:
-    """One row per structure, best first: label, k, held-out error, fit error, ΔAIC, ΔBIC,
-    whiteness p-value."""
+    """One row per structure, best first, in the columns of :data:`TABLE_HEADERS`."""
     order = ranked(fits)
     a0, b0 = min(f.aic for f in fits), min(f.bic for f in fits)
     return [[f.label, f.k, f.heldout, f.fit_error, f.aic - a0, f.bic - b0, f.white_p]
             for f in order]
 
 
-TABLE_HEADERS = ["structure", "k", "held-out error", "fit error", "ΔAIC", "ΔBIC",
-                 "whiteness p"]
+TABLE_HEADERS = ["structure", "k", "held-out error", "fit error", "ΔAIC", "ΔBIC", "whiteness p"]
 
 
 def value_rows(fits: Sequence[StructureFit]) -> list[list[Any]]:
@@ -214,8 +209,7 @@ class StructureSummary:
     values: tuple[list[str], list[list[Any]]]
 
 
-def structure_summary(fits: Sequence[StructureFit], alpha: float = 0.05
-                      ) -> StructureSummary:
+def structure_summary(fits: Sequence[StructureFit], alpha: float = 0.05) -> StructureSummary:
     """The :class:`StructureSummary` of fitted structures of one record."""
     return StructureSummary(METHOD, verdict(fits, alpha), (TABLE_HEADERS, table_rows(fits)),
                             (VALUE_HEADERS, value_rows(fits)))

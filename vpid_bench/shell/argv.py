@@ -152,14 +152,10 @@ def parse_command_line(argv: Sequence[str]) -> CommandLine:
     """Read ``argv``; :class:`ConfigError` for what Hydra would refuse or cannot honour."""
     hydra_args, resume, merge = _own_flags(argv)
     args = _parser(hydra_args).parse_args(hydra_args)
-    info = None
-    for flag, given in (("--help", args.help), ("--hydra-help", args.hydra_help),
-                        ("--cfg", args.cfg), ("--info", args.info),
-                        ("--shell-completion", args.shell_completion),
-                        ("--experimental-rerun", args.experimental_rerun)):
-        if given:
-            info = flag
-            break
+    info = next((flag for flag, given in (
+        ("--help", args.help), ("--hydra-help", args.hydra_help), ("--cfg", args.cfg),
+        ("--info", args.info), ("--shell-completion", args.shell_completion),
+        ("--experimental-rerun", args.experimental_rerun)) if given), None)
     if args.multirun and info in ("--cfg", "--info", "--experimental-rerun"):
         raise ConfigError(info, args.cfg or args.info or args.experimental_rerun,
                           "a single run's config: drop -m (or use --help)")

@@ -1,9 +1,7 @@
-"""Hydra callbacks (listed in ``conf/config.yaml``). They write their outcome to disk, never
-into process-global state, so the command reads it whatever process ran the jobs.
-:class:`SweepStatus` prints the sweep folder and the command that resumes it;
-:class:`ReportCallback` writes the report (full after a sweep, short after a job) and
-``report/status.json``. Both register the ``vpid_bench_job_dir`` resolver (safe job folder
-names) in every process that resolves job folders.
+"""Hydra callbacks (listed in ``conf/config.yaml``): :class:`SweepStatus`, :class:`ReportCallback`.
+They write their outcome to disk, never into process-global state, so the command reads it
+whatever process ran the jobs; both register the ``vpid_bench_job_dir`` resolver (safe job
+folder names) in every process that resolves job folders.
 """
 
 from __future__ import annotations
@@ -18,8 +16,10 @@ from pathlib import Path
 from typing import Any
 
 from hydra.experimental.callback import Callback
+from omegaconf import OmegaConf
 
 from ..fileio import own_folder
+from ..progress import Stages
 from ..store.records import write_json_atomic
 
 log = logging.getLogger(__name__)
@@ -48,8 +48,6 @@ def job_dir_name(override_dirname: str) -> str:
 
 def ensure_job_dir_resolver() -> None:
     """Register the ``${vpid_bench_job_dir:...}`` resolver in this process (idempotent)."""
-    from omegaconf import OmegaConf
-
     if not OmegaConf.has_resolver(JOB_DIR_RESOLVER):
         OmegaConf.register_new_resolver(JOB_DIR_RESOLVER, job_dir_name)
 
@@ -90,7 +88,6 @@ def write_report(folder: Path, short: bool, archive: bool = True) -> bool:
     """Build the report of ``folder`` into ``folder/report`` (whole, or the previous one
     kept with one ``warning:`` line), print the headline and where it is, and write the
     outcome into ``report/status.json``. Never raises."""
-    from ..progress import Stages
     from ..report.build import NoRecordsError, build_report
     from ..report.safe import clean  # every line may quote records or archives
 

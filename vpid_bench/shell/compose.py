@@ -4,11 +4,18 @@ OmegaConf's errors as one :class:`ConfigError` line."""
 
 from __future__ import annotations
 
+import copy
 from typing import Any
+
+import yaml
+from hydra import compose, initialize_config_dir, initialize_config_module
+from hydra.errors import HydraException, MissingConfigException
+from omegaconf import OmegaConf, open_dict
+from omegaconf.errors import OmegaConfBaseException
 
 from ..errors import ConfigError
 from ..spec import TOP_LEVEL_KEYS
-from .argv import ConfigSource
+from .argv import SHIPPED_CONFIGS, ConfigSource
 
 #: The config groups of a job.
 GROUPS = ("problem", "optimizer")
@@ -18,8 +25,6 @@ SHIPPED = ConfigSource()
 
 def _yaml_error(exc: BaseException) -> ConfigError | None:
     """A config file that is not YAML, as one line naming the place (or None)."""
-    import yaml
-
     cause: BaseException | None = exc
     while cause is not None and not isinstance(cause, yaml.MarkedYAMLError):
         cause = cause.__cause__ or cause.__context__
@@ -33,8 +38,6 @@ def _yaml_error(exc: BaseException) -> ConfigError | None:
 
 def hydra_error(exc: BaseException) -> ConfigError:
     """A Hydra or OmegaConf error as one line (the innermost cause that names a key)."""
-    from hydra.errors import MissingConfigException
-
     if isinstance(exc, MissingConfigException):
         missing = str(getattr(exc, "missing_cfg_file", "") or "")
         group, _, name = missing.rpartition("/")
@@ -63,10 +66,6 @@ def hydra_error(exc: BaseException) -> ConfigError:
 
 
 def _compose(overrides: list[str], hydra: bool, source: ConfigSource = SHIPPED) -> Any:
-    from hydra import compose
-    from hydra.errors import HydraException
-    from omegaconf.errors import OmegaConfBaseException
-
     overrides = [*overrides, *source.search_override()]  # as on Hydra's command line
     try:
         return compose(config_name=source.name or "config", overrides=overrides,
@@ -77,14 +76,10 @@ def _compose(overrides: list[str], hydra: bool, source: ConfigSource = SHIPPED) 
 
 def initialize(source: ConfigSource) -> Any:
     """Hydra's compose API set up as ``hydra.main`` sets itself up for this command."""
-    from hydra import initialize_config_dir, initialize_config_module
-
-    if source.path is None:
-        return initialize_config_module(version_base="1.3", config_module="vpid_bench.conf")
-    if source.path.startswith("pkg://"):
-        return initialize_config_module(version_base="1.3",
-                                        config_module=source.path[len("pkg://"):])
-    return initialize_config_dir(version_base="1.3", config_dir=source.path)
+    path = source.path or SHIPPED_CONFIGS
+    if path.startswith("pkg://"):
+        return initialize_config_module(version_base="1.3", config_module=path[len("pkg://"):])
+    return initialize_config_dir(version_base="1.3", config_dir=path)
 
 
 class Composer:
@@ -106,10 +101,6 @@ class Composer:
     def task(self, structural: list[Any]) -> Any:
         """The task config (no ``hydra`` node) of a point whose structural overrides are
         ``structural`` (parsed); the caller copies it before changing it."""
-        import copy
-
-        from omegaconf import open_dict
-
         lines = tuple(o.input_line for o in structural)
         if lines in self._tasks:
             return self._tasks[lines]
@@ -129,8 +120,6 @@ class Composer:
         return task
 
     def _compose(self, overrides: list[str]) -> Any:
-        from omegaconf import OmegaConf
-
         full = _compose(overrides, hydra=True, source=self.source)
         if self.source != SHIPPED and not all(k in full for k in TOP_LEVEL_KEYS):
             raise ConfigError("--config-name", self.source.name or "config",  # its defaults,
@@ -142,8 +131,7 @@ class Composer:
         return OmegaConf.masked_copy(full, [k for k in full if k != "hydra"])
 
     def _separable(self, structural: list[Any]) -> bool:
-        """Whether the point's optimizer node can come from another composition (see the
-        class docstring)."""
+        """Whether the point's optimizer node can come from another composition (see the class)."""
         if self.source != SHIPPED:
             return False
         for o in structural:

@@ -1,15 +1,7 @@
-"""The ``vpid-bench`` command: read the command line, check everything, hand over to Hydra.
-
-The command line (:mod:`.argv`; ``--version`` prints every plugin's version); the plugins
-loaded, a Hydra node stored per plugin and for the job spec; the pre-flight
-(:mod:`.preflight`: every point composed and parsed as the job will, the output folder
-resolved, locked and proven writable; anything wrong: one line, exit 2, nothing written);
-then Hydra runs the jobs (any launcher), each writing its ``job.json``, the report callback
-``report/status.json``: the exit code is read from those files, whatever process ran them.
-
-Exit status: 0 all runs ok; 1 some run, job or report failed; 2 refused before anything ran;
-130, 143, 129 interrupted by SIGINT, SIGTERM, SIGHUP (every completed run kept, every worker
-ended). ``VPID_BENCH_DEBUG=1`` shows tracebacks.
+"""The ``vpid-bench`` command: read the command line, check everything, hand over to Hydra
+(each step: docs/architecture.md, how a command flows). The jobs write their ``job.json``,
+the report callback ``report/status.json``: the exit status (docs/sweeps.md) is read from
+those files, whatever process ran them. ``VPID_BENCH_DEBUG=1`` shows tracebacks.
 """
 
 from __future__ import annotations
@@ -25,8 +17,25 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
+import hydra
+from hydra.core.hydra_config import HydraConfig
+from omegaconf import OmegaConf
+
+from .. import __version__, interrupts
 from ..errors import VpidBenchError
-from ..fileio import loads_json, open_append, read_text_limited
+from ..fileio import loads_json, open_append, read_text_limited, write_text_atomic
+from ..machine import available_cores, environ
+from ..plugins import PluginLoadWarning, Registry
+from ..store.archive import evaluation_seconds
+from ..store.job_status import write_job_status
+from . import preflight
+from .argv import parse_command_line
+from .callbacks import REPORT_STATUS, REPORT_SUBDIR, ensure_job_dir_resolver, write_report
+from .config_store import register_configs
+from .progress import SweepProgress, first_line
+from .quick_help import help_text
+from .resume import FolderLock, collect_job_statuses, new_invocation, resume_command
+from .suites import expand_suites
 
 DEBUG_ENV = "VPID_BENCH_DEBUG"
 log = logging.getLogger("vpid_bench")
@@ -56,9 +65,8 @@ def _refuse(exc: BaseException) -> NoReturn:
 
 
 class JobTask:
-    """Hydra's task function: runs one job, writes its ``job.json``, never raises. The
-    registry, problem cache and worker processes are rebuilt in a launcher's process (they
-    are not pickled)."""
+    """Hydra's task function: runs one job, writes its ``job.json``, never raises. Registry,
+    problem cache and worker processes are not pickled: a launcher's process rebuilds them."""
 
     __module__ = __name__
 
@@ -80,11 +88,7 @@ class JobTask:
             self._pool.close()
 
     def __call__(self, cfg: Any) -> float | None:
-        from hydra.core.hydra_config import HydraConfig
-
-        from ..interrupts import raise_if_swallowed
-
-        raise_if_swallowed()  # a Ctrl-C a C callback dropped during the previous job
+        interrupts.raise_if_swallowed()  # a Ctrl-C a C callback dropped during the last job
         hydra_cfg = HydraConfig.get()
         job_dir = Path(hydra_cfg.runtime.output_dir)
         multirun = hydra_cfg.mode.name == "MULTIRUN"
@@ -100,7 +104,6 @@ class JobTask:
         """Run the job; its search score is what an optimizing sweeper (Optuna) minimises."""
         from ..build import ProblemCache
         from ..experiment import run_from_config
-        from ..machine import available_cores
         from ..workers import Workers
 
         try:
@@ -109,10 +112,8 @@ class JobTask:
                                      "or removed while the command ran (its lock file is gone):"
                                      " this job is not run; finish the sweep where it now is "
                                      "with --resume=<its path>")
-            if self._registry is None:
-                self._registry = _load_registry()
-            if self._problems is None:
-                self._problems = ProblemCache()
+            self._registry = self._registry or _load_registry()
+            self._problems = self._problems or ProblemCache()
             # Hydra's basic launcher runs jobs in this process, where the sweep's workers
             # serve every job; others' processes (joblib's loky) cannot start spawn children
             basic = str((hydra_cfg.launcher or {}).get("_target_", "")).endswith("BasicLauncher")
@@ -133,8 +134,8 @@ class JobTask:
         except BaseException as exc:  # noqa: BLE001 - crash isolation (SystemExit too): go on
             if debug_enabled():
                 log.exception("job failed")
-            message = f"error: {one_line(exc)}"
-            print(message + (f" [{job_dir}]" if multirun else ""), file=sys.stderr, flush=True)
+            print(f"error: {one_line(exc)}" + (f" [{job_dir}]" if multirun else ""),
+                  file=sys.stderr, flush=True)
             _write_status(job_dir, "error", one_line(exc))
             self.not_ok += 1
             if self.progress is not None:
@@ -156,8 +157,6 @@ JOB_LOG = "vpid_bench.log"
 
 def _write_status(job_dir: Path, status: str, detail: Any) -> None:
     """``job.json``, or one line when it cannot be written: the sweep goes on."""
-    from ..store.job_status import write_job_status
-
     try:
         write_job_status(job_dir, status, detail)
     except OSError as exc:  # the summary finds the planned folder without a job.json
@@ -188,25 +187,17 @@ def _open_job_log(job_dir: Path) -> logging.Handler | None:
 def _save_job_config(cfg: Any, job_dir: Path) -> None:
     """``.hydra/config.yaml``, ``hydra.yaml`` and ``overrides.yaml`` as Hydra saves them,
     atomically and inside the job's error handling (our ``hydra.output_subdir`` is null)."""
-    from hydra.core.hydra_config import HydraConfig
-    from omegaconf import OmegaConf
-
-    from ..fileio import write_text_atomic
-
     full = HydraConfig.instance().cfg
     folder = job_dir / ".hydra"
     if folder.is_symlink():  # planted: never written through (issue 24); a folder of our own
         folder.unlink()
     write_text_atomic(folder / "config.yaml", OmegaConf.to_yaml(cfg))
     write_text_atomic(folder / "hydra.yaml", OmegaConf.to_yaml(full))
-    write_text_atomic(folder / "overrides.yaml",
-                      OmegaConf.to_yaml(full.hydra.overrides.task))
+    write_text_atomic(folder / "overrides.yaml", OmegaConf.to_yaml(full.hydra.overrides.task))
 
 
 def _load_registry() -> Any:
     """The plugin registry; a plugin that fails to import or register is reported once."""
-    from ..plugins import PluginLoadWarning, Registry
-
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PluginLoadWarning)
         registry = Registry()
@@ -223,8 +214,6 @@ def _load_registry() -> Any:
 
 
 def _hydra_entry(argv: Sequence[str], task: Any) -> None:
-    import hydra
-
     decorated = hydra.main(version_base="1.3", config_path="pkg://vpid_bench.conf",
                            config_name="config")(task)
     saved = sys.argv
@@ -237,8 +226,6 @@ def _hydra_entry(argv: Sequence[str], task: Any) -> None:
 
 def print_versions(registry: Any) -> None:
     """vpid-bench's version, then every plugin's distribution and version."""
-    from .. import __version__
-
     print(f"vpid-bench {__version__}")
     for plugin, source in sorted(registry.info.sources.items()):
         where = f"{source.get('distribution')} {source.get('version')}" if source else "?"
@@ -248,9 +235,6 @@ def print_versions(registry: Any) -> None:
 def _failures(folder: Path | None, multirun: bool,
               planned: Sequence[Path] = (), report_expected: bool = False) -> list[str]:
     """What went wrong, read from the disk; prints the sweep summary."""
-    from .callbacks import REPORT_STATUS, REPORT_SUBDIR
-    from .resume import collect_job_statuses
-
     if folder is None:
         return []
     invocation = os.environ.get("VPID_BENCH_INVOCATION")
@@ -290,17 +274,13 @@ def main(argv: Sequence[str] | None = None) -> None:
     """The command ``vpid-bench``: a Ctrl-C at any moment is one line and status 130 (once
     a 35-54-line traceback during the imports and the pre-flight)."""
     if argv is None:  # the console command: a Ctrl-C while it starts is noted, not lost
-        from .. import interrupts
-
         interrupts.defer()
-    from ..interrupts import seen
-
     try:
         _main(argv)
     except KeyboardInterrupt:
         _interrupted()
     except Exception:  # a library's error over the user's Ctrl-C (interrupts.seen) is it
-        if seen():
+        if interrupts.seen():
             _interrupted()
         raise
 
@@ -308,22 +288,14 @@ def main(argv: Sequence[str] | None = None) -> None:
 def _interrupted(what: str = "no job was started or every completed run is recorded; run "
                  "the same command with --resume to continue") -> NoReturn:
     """One ``interrupted:`` line and the status of the signal (SIGINT, SIGTERM, SIGHUP)."""
-    from ..interrupts import exit_status
-
     with contextlib.suppress(OSError):  # SIGHUP: the terminal may be gone
         print(f"interrupted: {what}", file=sys.stderr)
-    sys.exit(exit_status())
+    sys.exit(interrupts.exit_status())
 
 
 def _main(argv: Sequence[str] | None) -> None:
-    from . import preflight
-    from .argv import parse_command_line
-    from .callbacks import ensure_job_dir_resolver
-    from .config_store import register_configs
-    from .resume import new_invocation, resume_command
-    from .suites import expand_suites
-
-    threading.excepthook = _thread_exception
+    threading.excepthook = (  # a plugin's own thread's exception: one line, no traceback
+        lambda args: print(interrupts.thread_exception_line(args), file=sys.stderr))
     before = set(threading.enumerate())
     console = argv is None  # the console command, not a call from another program
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -334,8 +306,6 @@ def _main(argv: Sequence[str] | None) -> None:
     except VpidBenchError as exc:
         _refuse(exc)
     if console:
-        from .. import interrupts
-
         interrupts.install()  # raises a Ctrl-C noted during the start-up
     if cmd.version:
         print_versions(registry)
@@ -375,9 +345,6 @@ def _main(argv: Sequence[str] | None) -> None:
 
 def _prepare_folder(plan: Any, key: str, task: JobTask) -> Any:
     """The output folder checked, locked (returned) and its job folders made."""
-    from . import preflight
-    from .resume import FolderLock
-
     lock = FolderLock(plan.output_dir, key)
     preflight.check_writable(plan.output_dir, key)
     lock.acquire()
@@ -389,9 +356,6 @@ def _prepare_folder(plan: Any, key: str, task: JobTask) -> Any:
 def _nothing_to_run(plan: Any, registry: Any, task: JobTask) -> bool:
     """Whether the sweep has nothing to run; else its first progress line (how long)."""
     from ..experiment import recorded_in_full
-    from ..store.archive import evaluation_seconds
-    from .progress import first_line
-
     if plan.multirun and recorded_in_full(plan.jobs, plan.job_dirs, registry, plan.problems):
         return True
     if task.progress is not None:
@@ -402,8 +366,6 @@ def _nothing_to_run(plan: Any, registry: Any, task: JobTask) -> bool:
 def _report_only(plan: Any, task: JobTask, lock: Any, before: set[Any], watch: bool) -> None:
     """A sweep whose every run is recorded: say so and write its report again (archives or
     the report's code may have changed), nothing else; status 1 when the report failed."""
-    from .callbacks import write_report
-
     runs = sum(j.spec.runs for j in plan.jobs)
     print(f"sweep folder: {plan.output_dir}\n  nothing to run: the {len(plan.jobs)} job(s)' "
           f"{runs} run(s) are all recorded under these settings, plugins and data; only the "
@@ -420,8 +382,6 @@ def _report_only(plan: Any, task: JobTask, lock: Any, before: set[Any], watch: b
 
 def _quick_help(cmd: Any, registry: Any) -> bool:
     """Print the help page without Hydra's machinery; False when Hydra must build it."""
-    from .quick_help import help_text
-
     if cmd.info != "--help":
         return False
     try:
@@ -436,8 +396,6 @@ def _quick_help(cmd: Any, registry: Any) -> bool:
 
 def _sweep_progress(plan: Any) -> Any:
     """The progress line of a ``-m`` sweep whose jobs the plan knows (and progress=true)."""
-    from .progress import SweepProgress
-
     if not plan.multirun or not plan.jobs or not all(j.spec.progress for j in plan.jobs):
         return None
     return SweepProgress(len(plan.jobs), sum(j.spec.runs for j in plan.jobs))
@@ -469,34 +427,24 @@ def _leave(code: int, before: set[Any], watch: bool) -> None:
         sys.exit(code)
 
 
-def _thread_exception(args: Any) -> None:
-    """One line for an exception in a plugin's own thread (not Python's traceback)."""
-    from ..interrupts import thread_exception_line
-
-    print(thread_exception_line(args), file=sys.stderr)
-
-
 def _run_hydra(args: list[str], task: Any) -> None:
     """Hydra's run; its refusals become one line, exit 2. Hydra raises its errors
     (``HYDRA_FULL_ERROR``), so one a Ctrl-C caused is told from a refusal and ends the
     command as the Ctrl-C does."""
-    from ..interrupts import raise_if_swallowed, seen
-    from ..machine import environ
-
     try:
         with environ("HYDRA_FULL_ERROR", "1"):  # read by Hydra when an error reaches it
             _hydra_entry(args, task)
-        raise_if_swallowed()  # a Ctrl-C a C callback dropped during the last job
+        interrupts.raise_if_swallowed()  # a Ctrl-C a C callback dropped during the last job
     except SystemExit as exc:
         if exc.code not in (0, None):
-            if seen():
+            if interrupts.seen():
                 raise KeyboardInterrupt from None
             sys.exit(2)
         raise
     except KeyboardInterrupt:
         raise
     except Exception as exc:  # noqa: BLE001 - a Hydra error outside any job
-        if seen():
+        if interrupts.seen():
             raise KeyboardInterrupt from None
         cause = exc.__cause__  # the omegaconf error under it, in one message as Hydra says
         _refuse(exc if cause is None or str(cause) in str(exc)

@@ -1,19 +1,19 @@
-"""Pre-flight: every point of the command checked before any job runs.
+"""Pre-flight: every point of the command checked before any job runs (docs/architecture.md,
+how a command flows).
 
 Hydra composes a job's config only when that job starts, so a bad value in the tenth point of
 a sweep once stopped it after nine jobs. The pre-flight expands the sweep exactly as Hydra's
 basic sweeper does (the cartesian product of the sweep overrides, the first outermost),
 composes each point and parses it with :func:`vpid_bench.spec.parse_job`, the function the job
-calls (a plugin's own range checks included): anything bad stops the command with one line,
-exit 2, before any folder is written. Points that differ only in plain ``key=value`` settings
-share one composition (:class:`.compose.Composer`), their values set on a copy as Hydra sets
-them (struct mode: an unknown key is refused). It also resolves the output folder once and
-hands it to Hydra.
+calls: anything bad stops the command with one line, exit 2, before any folder is written.
+Points that differ only in plain ``key=value`` settings share one composition
+(:class:`.compose.Composer`), their values set on a copy as Hydra sets them.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import itertools
 import math
 import os
@@ -23,14 +23,24 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from hydra._internal.config_loader_impl import get_overrides_dirname
+from hydra.core.override_parser.overrides_parser import OverridesParser
+from hydra.core.override_parser.types import ChoiceSweep, Glob, RangeSweep, Sweep
+from hydra.errors import OverrideParseException
+from omegaconf import DictConfig, OmegaConf, open_dict
+from omegaconf.errors import OmegaConfBaseException
+
 from ..errors import ConfigError, VpidBenchError
 from ..fileio import own_folder
+from ..params import to_plain
 from ..plugins import Registry
 from ..problem import FILLED_PARAMS
 from ..spec import TOP_LEVEL_KEYS, Job, parse_job
 from .argv import CommandLine, ConfigSource
+from .callbacks import JOB_DIR_RESOLVER, job_dir_name
 from .compose import GROUPS, SHIPPED, Composer, hydra_error, initialize
-from .resume import check_reuse
+from .presets import yaml_presets
+from .resume import check_reuse, find_previous
 
 #: The most jobs one command may start (a typo in a range() should not plan a million).
 MAX_JOBS = 10_000
@@ -53,17 +63,9 @@ class Plan:
     problems: Any = None
 
 
-def _parser() -> Any:
-    from hydra.core.override_parser.overrides_parser import OverridesParser
-
-    return OverridesParser.create()
-
-
 def parse_overrides(overrides: Sequence[str]) -> list[Any]:
     """Hydra's parsed ``Override`` objects; a syntax error is one ConfigError line."""
-    from hydra.errors import OverrideParseException
-
-    parser = _parser()
+    parser = OverridesParser.create()
     parsed = []
     for text in overrides:
         try:
@@ -81,8 +83,6 @@ def _raw_value(override: Any) -> str:
 
 def _group_names(group: str, registry: Registry, folders: Sequence[str] = ()) -> list[str]:
     """The choices of ``group``: plugins, presets and ``<folder>/<group>/<name>.yaml``."""
-    from .presets import yaml_presets
-
     table = registry.problems if group == "problem" else registry.optimizers
     own = {f.stem for folder in folders for f in Path(folder, group).glob("*.yaml")}
     return sorted({*table, *yaml_presets(group), *own})
@@ -90,8 +90,6 @@ def _group_names(group: str, registry: Registry, folders: Sequence[str] = ()) ->
 
 def _sweep_size(override: Any) -> int | None:
     """How many values a sweep override stands for (None: not a list, e.g. interval())."""
-    from hydra.core.override_parser.types import ChoiceSweep, RangeSweep
-
     value = override.value()
     if isinstance(value, RangeSweep):
         if not value.step:
@@ -104,8 +102,6 @@ def _sweep_size(override: Any) -> int | None:
 def _refuse_nested_sweep(o: Any, value: Any) -> None:
     """Refuse a sweep function inside a list sweep (``a,choice(b,c)``): Hydra cannot expand
     it (a 20-line ``ValidationError`` once, round five's N19)."""
-    from hydra.core.override_parser.types import Glob, Sweep
-
     for item in getattr(value, "list", None) or ():
         if isinstance(item, (Sweep, Glob)):
             raise ConfigError(o.key_or_group, _raw_value(o),
@@ -116,8 +112,6 @@ def _refuse_nested_sweep(o: Any, value: Any) -> None:
 def _axis(o: Any, multirun: bool, registry: Registry, custom_sweeper: bool,
           folders: Sequence[str] = ()) -> list[str] | None:
     """The override strings one override contributes (``None``: a sweeper's choice)."""
-    from hydra.core.override_parser.types import Glob
-
     if not o.is_sweep_override():
         return [o.input_line]
     key = o.get_key_element()
@@ -144,8 +138,7 @@ def _axis(o: Any, multirun: bool, registry: Registry, custom_sweeper: bool,
                           "range(), choice()); interval() needs an optimizing sweeper such "
                           "as hydra/sweeper=optuna")
     if size > MAX_JOBS:
-        raise ConfigError(o.key_or_group, _raw_value(o),
-                          f"a sweep of at most {MAX_JOBS} values")
+        raise ConfigError(o.key_or_group, _raw_value(o), f"a sweep of at most {MAX_JOBS} values")
     return [f"{key}={s}" for s in o.sweep_string_iterator()]
 
 
@@ -170,8 +163,7 @@ def expand_points(parsed: list[Any], multirun: bool, registry: Registry,
     return [list(p) for p in itertools.product(*axes)]
 
 
-def _check_choice(group: str, name: str, registry: Registry, folders: Sequence[str] = ()
-                  ) -> None:
+def _check_choice(group: str, name: str, registry: Registry, folders: Sequence[str] = ()) -> None:
     """Refuse a name that is no choice, listing the known ones and the failed plugins."""
     names = _group_names(group, registry, folders)
     if name.strip("'\"") in names:
@@ -186,8 +178,6 @@ def _check_choice(group: str, name: str, registry: Registry, folders: Sequence[s
 
 def did_you_mean(given: str, known: Sequence[str]) -> str:
     """`` (did you mean de4?)`` for a near miss (difflib ratio >= 0.6), else ``""``."""
-    import difflib
-
     close = difflib.get_close_matches(given, list(known), n=1, cutoff=0.6)
     return f" (did you mean {close[0]}?)" if close else ""
 
@@ -201,8 +191,6 @@ def _is_structural(o: Any) -> bool:
 
 def _apply(cfg: Any, o: Any) -> None:
     """Set one plain ``key=value`` override on a composed config, as Hydra would."""
-    from omegaconf import OmegaConf, open_dict
-
     key, value = o.key_or_group, o.value()
     head, _, rest = key.partition(".")
     if head in GROUPS and rest == "name":
@@ -222,24 +210,16 @@ def _apply(cfg: Any, o: Any) -> None:
         with open_dict(cfg):
             OmegaConf.update(cfg, key, value, merge=True, force_add=True)
         return
-    if not exists and not _open_parent(cfg, key):
-        raise _unknown_key(cfg, key, value)
+    if not exists:  # new only in a mapping left open (``open_keys``: the plugin checks it)
+        parent = key.rpartition(".")[0]
+        node = OmegaConf.select(cfg, parent, default=None) if parent else None
+        if not (isinstance(node, DictConfig) and not OmegaConf.is_struct(node)):
+            raise _unknown_key(cfg, key, value)
     OmegaConf.update(cfg, key, value, merge=True)
-
-
-def _open_parent(cfg: Any, key: str) -> bool:
-    """Whether ``key`` is new in a mapping left open (``open_keys``: the plugin checks it)."""
-    from omegaconf import DictConfig, OmegaConf
-
-    parent = key.rpartition(".")[0]
-    node = OmegaConf.select(cfg, parent, default=None) if parent else None
-    return isinstance(node, DictConfig) and not OmegaConf.is_struct(node)
 
 
 def _unknown_key(cfg: Any, key: str, value: Any) -> ConfigError:
     """The error for ``key=value`` where ``key`` does not exist: names the keys that do."""
-    from omegaconf import DictConfig, OmegaConf
-
     parts = key.split(".")
     for depth in range(len(parts) - 1, -1, -1):
         parent = ".".join(parts[:depth])
@@ -266,10 +246,7 @@ def _unknown_key(cfg: Any, key: str, value: Any) -> ConfigError:
 def check_points(points: list[list[str]], registry: Registry,
                  source: ConfigSource = SHIPPED) -> tuple[list[Job], Any]:
     """Compose and parse every point: the jobs and the first point's full config."""
-    from omegaconf import OmegaConf, open_dict
-    from omegaconf.errors import OmegaConfBaseException
-
-    parser = _parser()
+    parser = OverridesParser.create()
     composer = Composer(source)
     jobs = []
     with initialize(source):
@@ -296,15 +273,11 @@ def _quote(path: str) -> str:
 
 def output_dir(full_cfg: Any, multirun: bool) -> Path:
     """The job's (``hydra.run.dir``) or sweep's (``hydra.sweep.dir``) folder, resolved once."""
-    from omegaconf import OmegaConf
-    from omegaconf.errors import OmegaConfBaseException
-
     key = "hydra.sweep.dir" if multirun else "hydra.run.dir"
     try:
         value = OmegaConf.select(full_cfg, key)
     except OmegaConfBaseException as exc:
-        raise ConfigError(key, "${...}", f"a folder ({' '.join(str(exc).split()[:10])})"
-                          ) from None
+        raise ConfigError(key, "${...}", f"a folder ({' '.join(str(exc).split()[:10])})") from None
     if value is None or not str(value).strip():
         raise ConfigError(key, value if value is not None else "", "a folder name (empty "
                           "would write into the current folder)")
@@ -324,10 +297,6 @@ def check_writable(directory: Path, key: str) -> None:
 
 def _resume_folder(cmd: CommandLine, full_cfg: Any, key: str) -> Path | None:
     """The folder ``--resume`` continues (None: the one named on the command line)."""
-    from omegaconf import OmegaConf
-
-    from .resume import find_previous
-
     if cmd.resume:
         folder = Path(cmd.resume)
         if not folder.is_dir():
@@ -377,8 +346,7 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
         if group in GROUPS and o.is_delete():
             raise ConfigError(f"~{group}", "", f"a {group} for every job: choose another one "
                               f"with {group}=<name>")
-    custom_sweeper = any(o.key_or_group == "hydra/sweeper" and o.value() != "basic"
-                         for o in parsed)
+    custom_sweeper = any(o.key_or_group == "hydra/sweeper" and o.value() != "basic" for o in parsed)
     folders = [f.removeprefix("file://") for f in (cmd.config.path, cmd.config.search)
                if f is not None and not f.startswith("pkg://")]
     points = expand_points(parsed, cmd.multirun, registry, custom_sweeper, folders)
@@ -400,8 +368,7 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
     hydra_args = [a for a in _globs_listed(cmd.hydra_args, parsed, registry, folders)
                   if not a.startswith(key + "=")]
     hydra_args.append(f"{key}={_quote(str(folder))}")
-    job_dirs = (planned_job_dirs(points, full, folder)
-                if cmd.multirun and not custom_sweeper else [])
+    job_dirs = planned_job_dirs(points, full, folder) if cmd.multirun and not custom_sweeper else []
     merged = check_reuse(folder, job_dirs if cmd.multirun else [folder], cmd.overrides,
                          cmd.multirun, cmd.merge, key)
     if merged:
@@ -471,8 +438,6 @@ def _globs_listed(hydra_args: Sequence[str], parsed: Sequence[Any], registry: Re
     """The command line with each ``glob()`` over names replaced by the names it matched
     (Hydra's sweeper lists choices before it reads ``hydra.searchpath``: it would miss a
     ``-cd`` folder's)."""
-    from hydra.core.override_parser.types import Glob
-
     listed = {}
     for o in parsed:
         if o.key_or_group in GROUPS and isinstance(o.value(), Glob):
@@ -484,9 +449,7 @@ def _globs_listed(hydra_args: Sequence[str], parsed: Sequence[Any], registry: Re
 
 def refuse_test_instances(jobs: Sequence[Job]) -> None:
     """Tuning sees held-out instances only (docs/protocol.md): an optimizing sweeper's job
-    whose problem's ``seed`` keys are all at their default (the test set) is refused,
-    naming the key to change."""
-    from ..params import to_plain
+    whose problem's ``seed`` keys are all at their default (the test set) is refused."""
     from ..report.load import flatten
 
     for job in jobs:
@@ -503,21 +466,15 @@ def refuse_test_instances(jobs: Sequence[Job]) -> None:
                               f"e.g. problem.{key}={value + 1} (docs/protocol.md)")
 
 
-def planned_job_dirs(points: Sequence[Sequence[str]], full_cfg: Any, sweep_dir: Path
-                     ) -> list[Path]:
+def planned_job_dirs(points: Sequence[Sequence[str]], full_cfg: Any, sweep_dir: Path) -> list[Path]:
     """The job folders of a basic-sweeper sweep, named as Hydra will name them (each point
     through ``override_dirname`` and :func:`~.callbacks.job_dir_name`); empty when
     ``hydra.sweep.subdir`` is not the default."""
-    from hydra._internal.config_loader_impl import get_overrides_dirname
-    from omegaconf import OmegaConf
-
-    from .callbacks import JOB_DIR_RESOLVER, job_dir_name
-
     sweep = OmegaConf.to_container(full_cfg.hydra.sweep, resolve=False)
     if str(sweep.get("subdir")) != f"${{{JOB_DIR_RESOLVER}:${{hydra.job.override_dirname}}}}":
         return []
     naming = full_cfg.hydra.job.config.override_dirname
-    parser = _parser()
+    parser = OverridesParser.create()
     dirs = []
     for point in points:
         lines: dict[str, str] = {}  # as Hydra's basic sweeper renders a job: value as a

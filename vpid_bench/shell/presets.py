@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import importlib.resources
 
+from omegaconf import OmegaConf
+
 
 def yaml_presets(group: str) -> dict[str, str]:
     """Presets shipped as ``conf/<group>/<name>.yaml``, each mapped to the registered plugin
     name it extends (the first entry of its defaults list, followed through other presets)."""
-    from omegaconf import OmegaConf
-
     folder = importlib.resources.files("vpid_bench.conf").joinpath(group)
     if not folder.is_dir():
         return {}

@@ -1,6 +1,5 @@
 """The progress of a whole ``-m`` sweep: after each job, one line with the jobs and runs done,
-the time spent and an estimate of the time left (where the jobs run in the command's process,
-Hydra's basic launcher)."""
+the time spent and an estimate of the time left (jobs in the command's process)."""
 
 from __future__ import annotations
 
@@ -28,8 +27,7 @@ class SweepProgress:
         self.runs_run = 0  # runs this command ran (what the estimate is made from)
 
     def job_done(self, ran: int, skipped: int, not_run: int = 0) -> str:
-        """Count one job (runs run now, found recorded, never run as the job failed); print
-        and return the line."""
+        """Count one job (runs run, found recorded, not run: it failed); print, return its line."""
         self.jobs_done += 1
         self.runs_done += ran + skipped + not_run
         self.runs_run += ran

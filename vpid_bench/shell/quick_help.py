@@ -8,14 +8,16 @@ from __future__ import annotations
 
 from typing import Any
 
+from omegaconf import OmegaConf
+
 from .argv import CommandLine
+from .compose import SHIPPED, _compose, initialize
 from .config_store import hydra_settings
+from .preflight import _group_names
 
 
 def choices(registry: Any) -> list[str]:
     """One ``group: name, name, ...`` line per group (plugins and presets)."""
-    from .preflight import _group_names
-
     return [f"{group}: " + ", ".join(_group_names(group, registry))
             for group in ("optimizer", "problem")]
 
@@ -24,10 +26,6 @@ def help_text(cmd: CommandLine, registry: Any) -> str | None:
     """The help page for ``cmd``, or ``None`` when only Hydra can build it."""
     if cmd.custom_config or any("," in o for o in cmd.overrides):
         return None
-    from omegaconf import OmegaConf
-
-    from .compose import SHIPPED, _compose, initialize
-
     with initialize(SHIPPED):
         cfg = _compose(list(cmd.overrides), hydra=False)
     text = hydra_settings()["help"]

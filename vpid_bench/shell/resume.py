@@ -1,22 +1,20 @@
-"""Sweeps that survive: finding an earlier sweep, one command per folder, the jobs' statuses.
-
-* :func:`find_previous` (``--resume``): the newest earlier sweep or run whose overrides match
-  these, ``hydra.*`` and the keys that change no result left out;
-* :func:`check_reuse`: an earlier command's jobs in the output folder are refused, unless
-  ``--merge``;
-* :class:`FolderLock`: a second command in one output folder is refused in one line;
-* :func:`collect_job_statuses`: the ``job.json`` of this invocation's jobs (its id in
-  ``VPID_BENCH_INVOCATION``, inherited by launcher workers).
+"""Sweeps that survive: finding an earlier sweep (``--resume``: :func:`find_previous`), one
+command per output folder (:func:`check_reuse`, :class:`FolderLock`), the ``job.json`` of
+this invocation's jobs (:func:`collect_job_statuses`; its id in ``VPID_BENCH_INVOCATION``,
+inherited by launcher workers).
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import shlex
 import uuid
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
+
+from omegaconf import OmegaConf
 
 from ..errors import ConfigError
 from ..spec import OPERATIONAL_KEYS
@@ -46,8 +44,6 @@ def normalise_overrides(overrides: Sequence[str]) -> list[str]:
 
 def _saved_task_overrides(folder: Path, multirun: bool) -> list[str] | None:
     """The task overrides Hydra saved for an earlier sweep / run in ``folder``."""
-    from omegaconf import OmegaConf
-
     try:
         if multirun:
             cfg = OmegaConf.load(folder / "multirun.yaml")
@@ -176,8 +172,6 @@ def collect_job_statuses(sweep_dir: Path, invocation: str | None) -> list[dict[s
 def resume_command(argv: Sequence[str], output_dir: Path, key: str) -> str:
     """The command that continues ``argv``, quoted for a POSIX shell: ``--resume`` alone
     when ``key`` (the output folder) is on the command line, else ``--resume=<output_dir>``."""
-    import shlex
-
     args = [a for a in argv if a != "--resume" and not a.startswith("--resume=")]
     named = any(a.lstrip("+").startswith(key + "=") for a in args)
     args.append("--resume" if named else f"--resume={output_dir}")

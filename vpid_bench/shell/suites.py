@@ -35,5 +35,4 @@ def expand_suites(cmd: CommandLine, registry: Registry) -> CommandLine:
         return [override if a.startswith("suite=") else a for a in args
                 if not (a.startswith("suite=") and a != given[-1])]
 
-    return dataclasses.replace(cmd, overrides=swap(cmd.overrides),
-                               hydra_args=swap(cmd.hydra_args))
+    return dataclasses.replace(cmd, overrides=swap(cmd.overrides), hydra_args=swap(cmd.hydra_args))

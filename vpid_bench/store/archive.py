@@ -1,17 +1,9 @@
 """An archive folder's format: its manifest, the files it lists (each checked against its
-SHA-256, each read through its size cap), its JSON-lines files and its optima.
-
-The layout (``<root>/<suite>/``; written by :mod:`.archive_pack`, its runs read by
-:mod:`.archive_records`)::
-
-    manifest.json       what made it and the SHA-256 and size of each file below
-    records.jsonl.gz    one run record per line
-    optima.jsonl        one instance optimum per line (the optimum file's own format,
-                        :mod:`vpid_bench.store.optimum`)
-    summary.csv, ioh.zip, jobs/<problem>/<file>
-
-Everything in an archive is untrusted. ``target=`` reads its optima through
-:func:`archive_optima`; the report reads the runs too, through the same checks.
+SHA-256, each read through its size cap), its JSON-lines files and its optima (what each file
+of ``<root>/<suite>/`` holds: docs/protocol.md, the archive). Written by :mod:`.archive_pack`,
+its runs read by :mod:`.archive_records`. Everything in an archive is untrusted. ``target=``
+reads its optima through :func:`archive_optima`; the report reads the runs too, through the
+same checks.
 """
 
 from __future__ import annotations
@@ -19,9 +11,12 @@ from __future__ import annotations
 import csv
 import gzip
 import hashlib
+import importlib.util
 import io
+import os
 import zlib
 from collections.abc import Iterable, Iterator, Mapping
+from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
@@ -69,17 +64,13 @@ ARCHIVE_DIR_ENV = "VPID_BENCH_ARCHIVE_DIR"
 
 def default_root() -> Path:
     """The archives shipped with the package, or the folder ``$VPID_BENCH_ARCHIVE_DIR``."""
-    import os
-    from importlib.resources import files
-
     chosen = os.environ.get(ARCHIVE_DIR_ENV)
     return Path(chosen) if chosen else Path(str(files("vpid_bench.archive")))
 
 
 def _plain(value: Any, limit: int = 80) -> str:
     """A short printable text from an untrusted value (``""`` for anything else)."""
-    return value if isinstance(value, str) and len(value) <= limit and value.isprintable() \
-        else ""
+    return value if isinstance(value, str) and len(value) <= limit and value.isprintable() else ""
 
 
 def _sha256(data: bytes) -> str:
@@ -97,10 +88,6 @@ RUN_FILES = (RECORDS, IOH)
 def runs_root() -> Path | None:
     """Where the shipped archives' runs are: ``$VPID_BENCH_ARCHIVE_RUNS_DIR``, else the
     installed package ``vpid_archive_runs``, else ``None`` (not installed)."""
-    import importlib.util
-    import os
-    from importlib.resources import files
-
     chosen = os.environ.get(RUNS_DIR_ENV)
     if chosen:
         return Path(chosen)
@@ -115,8 +102,6 @@ def located(folder: Path, name: str) -> Path:
     path = folder / name
     if name not in RUN_FILES or path.exists() or path.is_symlink():
         return path
-    from importlib.resources import files
-
     runs = runs_root()
     shipped = Path(str(files("vpid_bench.archive"))).resolve()
     if runs is not None and folder.resolve().parent == shipped:

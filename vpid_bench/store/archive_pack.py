@@ -13,18 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import VpidBenchError
-from .archive import (
-    IOH,
-    JOB_FILES,
-    JOBS,
-    MANIFEST,
-    OPTIMA,
-    RECORDS,
-    SCHEMA,
-    SUMMARY,
-    _sha256,
-    optimum_instance,
-)
+from . import archive as arc
 from .csv_table import write_csv
 from .ioh import write_zip
 from .optimum import Optimum, read_optimum_data
@@ -98,17 +87,17 @@ def write_archive(out: Path, suite: str, records: Sequence[Mapping[str, Any]],
     runs = [] if optima_only else found
     lines = "".join(json.dumps(_jsonable(compact_trace(_strip(r))), sort_keys=True,
                                allow_nan=False) + "\n" for r in runs)
-    with gzip.GzipFile(out / RECORDS, "wb", mtime=0) as fh:
+    with gzip.GzipFile(out / arc.RECORDS, "wb", mtime=0) as fh:
         fh.write(lines.encode())
     lowest: dict[str, Optimum] = {}  # one per instance (jobs with folders of their own: several)
     for o in sorted(optima, key=lambda o: (o.problem, str(o.instance), o.f_opt)):
-        lowest.setdefault(optimum_instance(o), o)
-    (out / OPTIMA).write_text("".join(
+        lowest.setdefault(arc.optimum_instance(o), o)
+    (out / arc.OPTIMA).write_text("".join(
         json.dumps(_optimum_data(o.path), sort_keys=True) + "\n"
         for o in lowest.values()), encoding="utf-8")
     job_files = [] if optima_only else _copy_job_files(found, out)
-    write_csv(out / SUMMARY, SUMMARY_HEADERS, [] if optima_only else summary)
-    write_zip(out / IOH, runs, [] if optima_only else rows)
+    write_csv(out / arc.SUMMARY, SUMMARY_HEADERS, [] if optima_only else summary)
+    write_zip(out / arc.IOH, runs, [] if optima_only else rows)
     problems = {}
     for r in found:
         p = r["problem"]
@@ -116,15 +105,15 @@ def write_archive(out: Path, suite: str, records: Sequence[Mapping[str, Any]],
                                         "plugin": {k: (p.get("plugin") or {}).get(k)
                                                    for k in ("distribution", "version")}})
     manifest = {
-        "schema": SCHEMA, "suite": suite, "made_at": made_at, "command": command,
+        "schema": arc.SCHEMA, "suite": suite, "made_at": made_at, "command": command,
         "vpid_bench_version": version, "commit": commit,
         "optimizers": sorted({r["optimizer"]["name"] for r in runs}),
         "runs": len(runs), "problems": problems, "optima_only": optima_only,
-        "files": {name: {"sha256": _sha256((out / name).read_bytes()),
+        "files": {name: {"sha256": arc._sha256((out / name).read_bytes()),
                          "bytes": (out / name).stat().st_size}
-                  for name in (RECORDS, OPTIMA, SUMMARY, IOH, *job_files)},
+                  for name in (arc.RECORDS, arc.OPTIMA, arc.SUMMARY, arc.IOH, *job_files)},
     }
-    (out / MANIFEST).write_text(json.dumps(manifest, indent=1, sort_keys=True) + "\n",
+    (out / arc.MANIFEST).write_text(json.dumps(manifest, indent=1, sort_keys=True) + "\n",
                                 encoding="utf-8")
     return manifest
 
@@ -139,14 +128,14 @@ def _copy_job_files(records: Sequence[Mapping[str, Any]], out: Path) -> list[str
         job = Path(str(r.get("_job_dir", "")))
         if problem in done or not problem.isidentifier():
             continue
-        present = [f for f in JOB_FILES if (job / f).is_file() and not (job / f).is_symlink()]
+        present = [f for f in arc.JOB_FILES if (job / f).is_file() and not (job / f).is_symlink()]
         if not present:
             continue
         done.add(problem)
-        (out / JOBS / problem).mkdir(parents=True, exist_ok=True)
+        (out / arc.JOBS / problem).mkdir(parents=True, exist_ok=True)
         for f in present:
-            shutil.copyfile(job / f, out / JOBS / problem / f)
-            names.append(f"{JOBS}/{problem}/{f}")
+            shutil.copyfile(job / f, out / arc.JOBS / problem / f)
+            names.append(f"{arc.JOBS}/{problem}/{f}")
     return names
 
 

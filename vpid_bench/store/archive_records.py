@@ -10,22 +10,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from .archive import (
-    JOBS,
-    MAX_GZ_BYTES,
-    RECORDS,
-    ArchiveError,
-    _Bad,
-    _check_job_files,
-    _checked_file,
-    _gz_lines,
-    _lines,
-    _manifest,
-    _plain,
-    _read_optima,
-    find_archives,
-    runs_installed,
-)
+from . import archive as arc
 from .optimum import Optimum, _data_settings
 from .plausible import implausible
 from .record_check import check_record
@@ -57,8 +42,8 @@ class Archive:
     def made_by(self) -> str:
         """``vpid-bench <version>, commit <sha>`` as the manifest states it (plain text)."""
         m = self.manifest
-        version = _plain(m.get("vpid_bench_version"))
-        commit = _plain(m.get("commit"))
+        version = arc._plain(m.get("vpid_bench_version"))
+        commit = arc._plain(m.get("commit"))
         return f"vpid-bench {version}" + (f", commit {commit[:12]}" if commit else "")
 
 
@@ -67,14 +52,13 @@ def _job_folder(folder: Path, manifest: Mapping[str, Any], problem: str) -> Path
     lists files there (each checked against its SHA-256 by :func:`read_archive`), else the
     archive folder (no such files). A name that is not an identifier never becomes a path."""
     if problem.isidentifier() and any(
-            str(name).startswith(f"{JOBS}/{problem}/") for name in manifest["files"]):
-        return folder / JOBS / problem
+            str(name).startswith(f"{arc.JOBS}/{problem}/") for name in manifest["files"]):
+        return folder / arc.JOBS / problem
     return folder
 
 
 def _run_identity(rec: Mapping[str, Any]) -> str:
-    """What makes a run the run it is (its setting, optimizer, seed and index), whatever
-    run id its line claims."""
+    """What makes a run the run it is (setting, optimizer, seed, index), whatever its run id."""
     optimizer = rec.get("optimizer") or {}
     return canonical_json([run_setting(rec), optimizer.get("name"), optimizer.get("params"),
                            (rec.get("seeds") or {}).get("seed"), rec.get("run_index")])
@@ -86,7 +70,7 @@ def _optimum_key(problem: str, instance: Any, settings: Any, dim: int) -> str:
 
 
 def _read_records(folder: Path, manifest: Mapping[str, Any], optima: Sequence[Optimum],
-                  bad: _Bad, problems: set[str] | None = None) -> list[dict[str, Any]]:
+                  bad: arc._Bad, problems: set[str] | None = None) -> list[dict[str, Any]]:
     """The record lines that pass every check a record file passes and hold values a run
     gives (:func:`.plausible.implausible`); a run given twice refuses the archive.
     ``problems``: only the lines of these problems are checked and kept (the others are not
@@ -96,10 +80,10 @@ def _read_records(folder: Path, manifest: Mapping[str, Any], optima: Sequence[Op
              for o in optima if o.settings is not None}
     records: list[dict[str, Any]] = []
     seen: dict[str, int] = {}
-    data = _checked_file(folder, manifest, RECORDS, MAX_GZ_BYTES)
-    for n, obj, unreadable in _lines(_gz_lines(data, folder), folder / RECORDS):
+    data = arc._checked_file(folder, manifest, arc.RECORDS, arc.MAX_GZ_BYTES)
+    for n, obj, unreadable in arc._lines(arc._gz_lines(data, folder), folder / arc.RECORDS):
         if unreadable:
-            bad.add(RECORDS, n, unreadable)
+            bad.add(arc.RECORDS, n, unreadable)
             continue
         if problems is not None and isinstance(obj, dict) and isinstance(
                 obj.get("problem"), dict) and obj["problem"].get("name") not in problems:
@@ -107,23 +91,23 @@ def _read_records(folder: Path, manifest: Mapping[str, Any], optima: Sequence[Op
         try:
             rec = parse_record(obj, "")
         except CorruptRecordError as exc:
-            bad.add(RECORDS, n, str(exc).removeprefix(": "))
+            bad.add(arc.RECORDS, n, str(exc).removeprefix(": "))
             continue
         why = check_record(rec)
         why = f"field {why}" if why else implausible(rec, f_opt.get(_optimum_key(
             rec["problem"]["name"], instance_id(rec), rec["problem"].get("config") or {},
             len(rec["parameters"].get("names") or []))))
         if why:
-            bad.add(RECORDS, n, why)
+            bad.add(arc.RECORDS, n, why)
             continue
         for key in (f"run id {rec['run_id']}", _run_identity(rec)):
             if key in seen:
-                raise ArchiveError(
-                    f"archive {folder}: {RECORDS} line {n} repeats the run of line "
+                raise arc.ArchiveError(
+                    f"archive {folder}: {arc.RECORDS} line {n} repeats the run of line "
                     f"{seen[key]} (an archive holds each run once: a repeated run would count "
                     "as more runs than were made)")
             seen[key] = n
-        rec["_file"] = f"{folder / RECORDS}:{n}"
+        rec["_file"] = f"{folder / arc.RECORDS}:{n}"
         rec["_job_dir"] = str(_job_folder(folder, manifest, rec["problem"]["name"]))
         rec["_archive"] = manifest["suite"]
         records.append(rec)
@@ -136,18 +120,18 @@ def read_archive(folder: Path, optima_only: bool = False,
     used (a changed file, a limit crossed, a run or an optimum given twice, too many bad
     lines). Bad record or optimum lines are skipped and named (:attr:`Archive.bad`).
 
-    ``optima_only``: its optima without its records (what ``target=`` needs), the records
-    file checked against its SHA-256 but not read line by line: reading and checking the
-    8,265 records of the shipped archives took 6.5 s, once in the pre-flight and once more
-    in every job of a ``target=`` sweep. ``problems``: the records of these problems only."""
+    ``optima_only``: its optima without its records (what ``target=`` needs, in the
+    pre-flight and in every job), the records file checked against its SHA-256 but not read
+    line by line (which took 6.5 s for the shipped archives). ``problems``: the records of
+    these problems only."""
     folder = Path(folder)
-    manifest = _manifest(folder)
-    _check_job_files(folder, manifest)
-    bad = _Bad(folder)
-    optima = _read_optima(folder, manifest, bad)
+    manifest = arc._manifest(folder)
+    arc._check_job_files(folder, manifest)
+    bad = arc._Bad(folder)
+    optima = arc._read_optima(folder, manifest, bad)
     if optima_only:
-        if runs_installed(folder):
-            _checked_file(folder, manifest, RECORDS, MAX_GZ_BYTES)
+        if arc.runs_installed(folder):
+            arc._checked_file(folder, manifest, arc.RECORDS, arc.MAX_GZ_BYTES)
         records: list[dict[str, Any]] = []
     else:
         records = _read_records(folder, manifest, optima, bad, problems)
@@ -173,15 +157,14 @@ def instance_id(rec: Mapping[str, Any]) -> str | None:
 def load_all(root: Path | None = None, problems: Iterable[str] | None = None,
              optima_only: bool = False) -> tuple[list[Archive], list[str]]:
     """Every readable archive below ``root`` whose manifest lists one of ``problems`` (all
-    when ``None``), and one line per such archive that cannot be used (``optima_only``: see
-    :func:`read_archive`)."""
+    when ``None``), and one line per such archive that cannot be used."""
     found, bad = [], []
     wanted = None if problems is None else set(problems)
-    for folder in find_archives(root):
+    for folder in arc.find_archives(root):
         try:
-            if wanted is not None and not wanted & set(_manifest(folder).get("problems") or ()):
+            if wanted is not None and not wanted & set(arc._manifest(folder).get("problems") or ()):
                 continue
             found.append(read_archive(folder, optima_only, wanted))
-        except ArchiveError as exc:
+        except arc.ArchiveError as exc:
             bad.append(str(exc))
     return found, bad

@@ -11,6 +11,7 @@ and ``# units: {JSON}``, then a CSV table: ``t`` (s), ``<channel>:measured``,
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
@@ -23,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..fileio import loads_json, read_text_limited, write_text_atomic
+from .records import CorruptRecordError, read_record
 
 BEST_SIGNALS = "best_signals.csv"
 MAGIC = "# vpid-bench best signals 1"
@@ -47,22 +49,17 @@ class BestSignals:
 
 def best_vector(record_paths: Iterable[Path]) -> tuple[np.ndarray, dict[str, Any]] | None:
     """:func:`best_of` the readable records at ``record_paths``."""
-    from .records import CorruptRecordError, read_record
-
     records = []
     for path in record_paths:
-        try:
+        with contextlib.suppress(CorruptRecordError, OSError):
             records.append(read_record(Path(path)))
-        except (CorruptRecordError, OSError):
-            continue
     return best_of(records)
 
 
 def best_of(records: Iterable[Mapping[str, Any]]) -> tuple[np.ndarray, dict[str, Any]] | None:
-    """The best vector among the ok ``records`` and where it comes from (``run_index``,
-    ``f_best``, ``ranked_by``, ``value``), or ``None``: the lowest first metric when every ok
-    record has it, else the lowest ``f_best``; a record without a numeric vector is passed
-    over."""
+    """The best vector among the ok ``records`` with a numeric one and where it comes from
+    (``run_index``, ``f_best``, ``ranked_by``, ``value``), or ``None``: the lowest first
+    metric when every ok record has it, else the lowest ``f_best``."""
     runs = []
     for r in records:
         res = r.get("result")
@@ -75,9 +72,7 @@ def best_of(records: Iterable[Mapping[str, Any]]) -> tuple[np.ndarray, dict[str,
     if not runs:
         return None
     names = [list((res.get("metrics") or {}).keys()) for _, res in runs]
-    metric = names[0][0] if names[0] else None
-    if metric is None or any(metric not in n for n in names):
-        metric = None
+    metric = names[0][0] if names[0] and all(names[0][0] in n for n in names) else None
 
     def value(res: Mapping[str, Any]) -> float:
         v = (res.get("metrics") or {}).get(metric) if metric else res.get("f_best")

@@ -31,7 +31,6 @@ def _cell(v: Any) -> Any:
         return v
     if math.isnan(x):
         return ""
-    if x.is_integer() and not isinstance(v, float) and type(v).__name__.startswith(
-            ("int", "uint")):
+    if x.is_integer() and not isinstance(v, float) and type(v).__name__.startswith(("int", "uint")):
         return int(x)
     return repr(x)

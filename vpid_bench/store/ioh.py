@@ -1,4 +1,5 @@
-"""The runs' best-so-far traces in IOHprofiler's data format, for IOHanalyzer and iohinspector.
+"""The runs' best-so-far traces in IOHprofiler's data format, for IOHanalyzer and iohinspector
+(what each file holds: docs/report.md, the IOHprofiler export).
 
 Layout (one folder per context and optimizer, below the report's ``ioh/``; an archive's
 ``ioh.zip`` holds the same, :func:`write_zip`)::
@@ -6,20 +7,12 @@ Layout (one folder per context and optimizer, below the report's ``ioh/``; an ar
     ioh/<context>/<optimizer>/IOHprofiler_f<id>_<problem>.json       meta-data
     ioh/<context>/<optimizer>/data_f<id>_<problem>/IOHprofiler_f<id>_DIM<d>.dat
 
-The meta-data file is IOHprofiler's JSON format (what the ``ioh`` package's Analyzer logger
-writes since 0.3.3; IOHanalyzer and ``iohinspector`` read it): version, suite, function id
-and name, ``maximization: false``, the algorithm, the data attributes and per dimension the
-runs (instance, evaluations used, best evaluation and value, best vector). The ``.dat`` file
-holds, per run, a header line ``evaluations raw_y`` and then one line per improvement of the
-best-so-far value, ending with the run's last evaluation.
-
-``raw_y`` is the gap ``f - f_opt`` to the run's instance optimum when every run of the
-context knows it (so runs on different instances compare), else the objective ``f``. The
+The meta-data is the JSON the ``ioh`` package's Analyzer logger writes since 0.3.3. The
 records keep the best after each evaluated batch: an improvement is written at the end of
-the batch that found it, except the first batch's best, which IOHprofiler's format needs at
-evaluation 1 (so the export is optimistic by at most one batch at its start). The function
-id is the context's position among the report's contexts (1, 2, ...); the instance number
-is the run's instance index. No record text is put where a reader evaluates it.
+the batch that found it, except the first batch's best, which the format needs at
+evaluation 1. The function id is the context's position among the report's contexts (1,
+2, ...); the instance number is the run's instance index. No record text is put where a
+reader evaluates it.
 """
 
 from __future__ import annotations
@@ -107,10 +100,8 @@ def export_ioh(root: Path, records: Sequence[Mapping[str, Any]],
             d = len(x) or len((rec.get("parameters") or {}).get("names") or []) or 1
             inst = (rec.get("instance") or {}).get("index", r["run_index"])
             inst = inst if isinstance(inst, int) and 0 <= inst <= MAX_INSTANCE else 0
-            dims.setdefault(d, []).append({
-                "instance": inst, "evals": int(used),
-                "best": {"evals": best_at[0], "y": best_at[1],
-                         "x": x}})
+            dims.setdefault(d, []).append({"instance": inst, "evals": int(used), "best": {
+                "evals": best_at[0], "y": best_at[1], "x": x}})
             blocks.setdefault(d, []).extend(lines)
         if not dims:
             continue

@@ -6,7 +6,7 @@ value (a report never trusts what a job folder holds)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -34,47 +34,51 @@ def finite(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
+def _positive(v: Any) -> bool:
+    return finite(v) and v >= 0
+
+
+def _checked(path: Path, checks: Callable[[dict[str, Any]], Iterable[tuple[str, bool, str]]]
+             ) -> tuple[dict[str, Any] | None, str]:
+    """The JSON object of the job file ``path`` if it passes every ``(field, ok, expected)``
+    of ``checks(data)``: ``(data, "")``, or ``(None, why)``."""
+    data, why = read_job_json(path)
+    if why or not isinstance(data, dict):
+        return None, why or "not a JSON object"
+    for key, ok, expected in checks(data):
+        if not ok:
+            return None, f"field {key}: expected {expected}"
+    return data, ""
+
+
 def read_identifiability(path: Path, names: Sequence[str]) -> tuple[dict[str, Any] | None, str]:
     """A job's ``identifiability.json``, checked against the records' parameter ``names``:
     ``(data, "")``, or ``(None, why)``."""
     d = len(names)
-    data, why = read_job_json(path)
-    if why:
-        return None, why
-    if not isinstance(data, dict):
-        return None, "not a JSON object"
-    checks = (
+    return _checked(path, lambda data: (
         ("names", data.get("names") == list(names), f"the records' parameter names {names}"),
-        ("crb_percent", isinstance(data.get("crb_percent"), list)
-         and len(data["crb_percent"]) == d
-         and all(finite(v) and v >= 0 for v in data["crb_percent"]),
+        ("crb_percent", _bounds_ok(data.get("crb_percent"), d),
          f"a list of {d} finite numbers >= 0"),
-        ("crb_norm_percent", finite(data.get("crb_norm_percent"))
-         and data["crb_norm_percent"] >= 0, "a finite number >= 0"),
+        ("crb_norm_percent", _positive(data.get("crb_norm_percent")), "a finite number >= 0"),
         ("singular_values", isinstance(data.get("singular_values"), list)
          and 1 <= len(data["singular_values"]) <= d
-         and all(finite(v) and v >= 0 for v in data["singular_values"]),
+         and all(map(_positive, data["singular_values"])),
          f"a list of 1 to {d} finite numbers >= 0"),
         ("condition_number", data.get("condition_number") is None
          or (finite(data["condition_number"]) and data["condition_number"] >= 1),
          "a finite number >= 1 or null (infinite)"),
         ("sigma", isinstance(data.get("sigma"), list) and 1 <= len(data["sigma"]) <= 10_000
          and all(finite(v) and v > 0 for v in data["sigma"]), "a list of numbers > 0"),
-    )
-    for key, ok, expected in (*checks, *_optional_checks(data, d)):
-        if not ok:
-            return None, f"field {key}: expected {expected}"
-    return data, ""
+        *_optional_checks(data, d)))
 
 
 def _bounds_ok(v: Any, d: int) -> bool:
-    return (isinstance(v, list) and len(v) == d and all(finite(b) and b >= 0 for b in v))
+    return isinstance(v, list) and len(v) == d and all(map(_positive, v))
 
 
 def _floor_entry_ok(e: Any, d: int) -> bool:
-    return (isinstance(e, dict) and finite(e.get("fraction")) and e["fraction"] >= 0
-            and finite(e.get("crb_norm_percent")) and e["crb_norm_percent"] >= 0
-            and _bounds_ok(e.get("crb_percent"), d))
+    return (isinstance(e, dict) and _positive(e.get("fraction"))
+            and _positive(e.get("crb_norm_percent")) and _bounds_ok(e.get("crb_percent"), d))
 
 
 def _instance_entry_ok(e: Any, d: int) -> bool:
@@ -84,10 +88,9 @@ def _instance_entry_ok(e: Any, d: int) -> bool:
             and isinstance(e.get("runs"), list) and 1 <= len(e["runs"]) <= MAX_INSTANCES
             and all(isinstance(i, int) and not isinstance(i, bool) and i >= 0
                     for i in e["runs"])
-            and _bounds_ok(e.get("crb_percent"), d)
-            and finite(e.get("crb_norm_percent")) and e["crb_norm_percent"] >= 0
+            and _bounds_ok(e.get("crb_percent"), d) and _positive(e.get("crb_norm_percent"))
             and (norms is None or (isinstance(norms, list) and len(norms) <= 10
-                                   and all(finite(v) and v >= 0 for v in norms))))
+                                   and all(map(_positive, norms)))))
 
 
 def _optional_checks(data: Mapping[str, Any], d: int) -> list[tuple[str, bool, str]]:
@@ -112,35 +115,23 @@ def _optional_checks(data: Mapping[str, Any], d: int) -> list[tuple[str, bool, s
     return checks
 
 
-def _positive(v: Any) -> bool:
-    return finite(v) and v >= 0
-
-
 def read_estimator_floors(path: Path) -> tuple[dict[str, Any] | None, str]:
     """A job's ``estimators.json``, checked: ``(data, "")`` or ``(None, why)``."""
-    data, why = read_job_json(path)
-    if why:
-        return None, why
-    if not isinstance(data, dict):
-        return None, "not a JSON object"
-    n = data.get("instances")
-    floors = data.get("floors")
-    checks = (
-        ("metric", isinstance(data.get("metric"), str) and 0 < len(data["metric"]) <= 64,
-         "a name"),
-        ("instances", isinstance(n, int) and not isinstance(n, bool) and 1 <= n <= 1000,
-         "an integer in [1, 1000]"),
-        ("chosen", data.get("chosen") in OBJECTIVES, "one of " + ", ".join(OBJECTIVES)),
-        ("floors", isinstance(floors, dict) and floors and set(floors) <= set(OBJECTIVES)
-         and all(isinstance(v, dict) and _positive(v.get("median"))
-                 and isinstance(v.get("values"), list) and len(v["values"]) == n
-                 and all(_positive(x) for x in v["values"]) for v in floors.values()),
-         "per objective a median and one value per instance, finite and >= 0"),
-    )
-    for key, ok, expected in checks:
-        if not ok:
-            return None, f"field {key}: expected {expected}"
-    return data, ""
+    def checks(data: dict[str, Any]) -> Iterable[tuple[str, bool, str]]:
+        n, floors = data.get("instances"), data.get("floors")
+        return (
+            ("metric", isinstance(data.get("metric"), str) and 0 < len(data["metric"]) <= 64,
+             "a name"),
+            ("instances", isinstance(n, int) and not isinstance(n, bool) and 1 <= n <= 1000,
+             "an integer in [1, 1000]"),
+            ("chosen", data.get("chosen") in OBJECTIVES, "one of " + ", ".join(OBJECTIVES)),
+            ("floors", isinstance(floors, dict) and floors and set(floors) <= set(OBJECTIVES)
+             and all(isinstance(v, dict) and _positive(v.get("median"))
+                     and isinstance(v.get("values"), list) and len(v["values"]) == n
+                     and all(map(_positive, v["values"])) for v in floors.values()),
+             "per objective a median and one value per instance, finite and >= 0"))
+
+    return _checked(path, checks)
 
 
 def _numbers(v: Any, most: int) -> bool:
@@ -175,13 +166,10 @@ def _group(g: Any) -> dict[str, Any] | None:
 
 def _intervals(iv: Any, d: int) -> dict[str, Any] | None:
     """The white and robust standard errors, checked (``None`` where unusable)."""
-    def se(v: Any) -> bool:
-        return isinstance(v, list) and len(v) == d and all(x is None or finite(x) for x in v)
-
-    if not isinstance(iv, Mapping) or not se(iv.get("se")):
+    if not isinstance(iv, Mapping) or not interval_ends(iv.get("se"), d):
         return None
     rob = iv.get("robust")
-    if not isinstance(rob, Mapping) or not se(rob.get("se")):
+    if not isinstance(rob, Mapping) or not interval_ends(rob.get("se"), d):
         return None
     return {"se": iv["se"], "robust_se": rob["se"],
             "lags": int(rob["lags"]) if finite(rob.get("lags")) else None}

@@ -40,6 +40,5 @@ def read_job_json(path: Path) -> tuple[Any, str]:
         return None, f"unreadable ({type(exc).__name__})"
 
 
-def write_job_json(path: Path, data: Any) -> Path:
-    """Write ``data`` to the job file ``path`` atomically (never through a planted link)."""
-    return write_json_atomic(path, data)
+#: Write the job file ``path`` atomically (never through a planted link).
+write_job_json = write_json_atomic

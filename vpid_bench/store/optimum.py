@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 from ..fileio import json_fault, loads_json
 from ..problem import PROTOCOL_KEYS
+from .job_checks import finite as _finite  # (the report imports the name)
 from .records import write_json_atomic
 
 #: The schema string of an optimum file (written by vpid_bench.analysis.optimum).
@@ -35,11 +35,6 @@ class Optimum:
     f_true: float | None
     metrics: Mapping[str, float]
     starts: int
-
-
-def _finite(v: Any) -> bool:
-    return (isinstance(v, (int, float)) and not isinstance(v, bool)
-            and math.isfinite(float(v)))
 
 
 def check_optimum(data: Any) -> str | None:
@@ -137,8 +132,7 @@ def _data_settings(settings: Mapping[str, Any] | None) -> str | None:
 
 def matching_optima(record: Mapping[str, Any], index: OptimaIndex) -> list[Optimum]:
     """Every optimum of a record's instance: the same problem, instance id, data settings
-    (protocol keys left out) and dimension; a file without settings matches only by a
-    non-null instance id."""
+    (protocol keys left out) and dimension; one without settings only by a non-null id."""
     problem = record["problem"]["name"]
     inst = (record.get("instance") or {}).get("id") if isinstance(
         record.get("instance"), Mapping) else None

@@ -1,6 +1,5 @@
 """File names made from untrusted text, and paths kept inside a folder: the rules every
-writer of a file named from record content applies (the report's tables, figures and pages,
-the IOHprofiler export)."""
+writer of a file named from record content applies (report, IOHprofiler export)."""
 
 from __future__ import annotations
 
@@ -17,9 +16,7 @@ def slug(text: str, max_len: int = MAX_SLUG) -> str:
     or dash, at most ``max_len`` characters (a long text keeps its start and gets a short
     hash of the whole, so distinct long texts stay distinct). Never empty."""
     s = re.sub(r"[^A-Za-z0-9._=-]+", "_", str(text))
-    s = re.sub(r"_+", "_", re.sub(r"\.{2,}", "_", s)).strip("._-")
-    if not s:
-        s = "x"
+    s = re.sub(r"_+", "_", re.sub(r"\.{2,}", "_", s)).strip("._-") or "x"
     if len(s) > max_len:
         digest = hashlib.sha256(str(text).encode()).hexdigest()[:10]
         s = s[: max_len - 11].rstrip("._-") + "-" + digest
@@ -31,8 +28,7 @@ class UnsafePathError(ValueError):
 
 
 def inside(root: Path, path: Path) -> Path:
-    """``path`` if it lies inside ``root`` once both are resolved; else
-    :class:`UnsafePathError`."""
+    """``path`` if it lies inside ``root`` (both resolved), else :class:`UnsafePathError`."""
     root_r = Path(root).resolve()
     path_r = Path(path).resolve()
     if path_r != root_r and root_r not in path_r.parents:

@@ -5,21 +5,12 @@ archive's records stand beside a user's runs without being run again, so each mu
 values that a run of vpid-bench can give. A forged or damaged archive whose checksums match
 once ranked runs with a NaN metric, an infinite objective or a negative error as
 significantly better than the user's own. :func:`implausible` names the first such value of
-a record; the archive loader skips the line and names it.
-
-What a run gives (an ok run; a failed run has no result to check):
-
-* every number is finite and below :data:`ABSURD` in magnitude (the run loop maps NaN to
-  ``inf`` and fails a run on ``-inf``; an objective that never became finite is no result to
-  rank);
-* the problem's metrics are accuracy figures, errors, so never negative (README, the
-  ``metrics`` member of a problem);
-* ``x_best`` has one value per parameter, inside the box ``[lower, upper]``;
-* ``1 <= evaluations <= budget``; the trace's evaluations never decrease and stay within
-  the budget, its best values never increase and end at ``f_best``;
-* ``f_best`` is not below its instance's optimum (the archive's own ``optima.jsonl``: the
-  job polishes from every run's best, so no run ends below it);
-* wall and run times are ``null`` or finite and not negative.
+a record; the archive loader skips the line and names it. What an ok run gives (the list:
+docs/protocol.md, the archive): finite numbers below :data:`ABSURD` (the run loop maps NaN
+to ``inf`` and fails a run on ``-inf``), metrics that are errors (never negative),
+``x_best`` inside the box, evaluations within the budget, a trace that never rises and ends
+at ``f_best``, ``f_best`` not below its instance's optimum (the job polishes from every
+run's best), times ``null`` or finite and not negative.
 """
 
 from __future__ import annotations

@@ -1,14 +1,13 @@
-"""Provenance: which versions of what produced a record, each looked up once per process.
-
-* :func:`package_versions`: Python and the numerical stack that can change any result;
-* :func:`distribution_provenance`: a plugin's distribution, version and the installed
-  versions of its requirements (a resumed job tells runs made by another release);
-* :func:`code_digest`: a digest of a plugin's installed source; it enters each run's id, so
-  a plugin changed under the same version (once served its old records) runs again.
+"""Provenance: which versions of what produced a record, each looked up once per process: the
+numerical stack, each plugin's distribution and requirements (a resumed job tells runs made by
+another release) and a digest of its installed source (:func:`code_digest`: it enters each
+run's id, so a plugin changed under the same version, which once served its old records, runs
+again).
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import importlib.metadata
@@ -27,10 +26,8 @@ def package_versions(extra: tuple[str, ...] = ()) -> dict[str, str]:
     """Versions of Python and of :data:`CORE_PACKAGES` (plus ``extra``) that are installed."""
     out = {"python": platform.python_version()}
     for dist in (*CORE_PACKAGES, *extra):
-        try:
+        with contextlib.suppress(importlib.metadata.PackageNotFoundError):
             out[dist] = importlib.metadata.version(dist)
-        except importlib.metadata.PackageNotFoundError:
-            continue
     return out
 
 
@@ -39,8 +36,7 @@ _REQUIREMENT_NAME = re.compile(r"^\s*([A-Za-z0-9][A-Za-z0-9._-]*)")
 
 @functools.lru_cache(maxsize=64)
 def _provenance_of(dist_name: str) -> tuple[str, str, tuple[tuple[str, str], ...]]:
-    """Name, version and its unconditional requirements' installed versions (extras and
-    markers skipped)."""
+    """Name, version and the installed versions of its requirements (those of extras left out)."""
     dist = importlib.metadata.distribution(dist_name)
     requires = []
     for req in dist.requires or []:

@@ -7,9 +7,8 @@ must neither crash the report nor be trusted by a resumed job. :func:`check_reco
 first bad field; the report skips such a record with that line, a resumed job sets it aside
 and runs that run again.
 
-The rules are a table (:data:`RULES`), one small function per field, checked in order: a
-rule may rely on every rule before it (``problem.name`` is read only once ``problem`` is
-known to be a mapping).
+The rules are a table (:data:`RULES`) checked in order: a rule may rely on every rule before
+it (``problem.name`` is read only once ``problem`` is known to be a mapping).
 """
 
 from __future__ import annotations
@@ -41,8 +40,7 @@ def _is_int(v: Any, nullable: bool = True) -> bool:
 
 def _num_list(v: Any) -> bool:
     # a trace holds thousands of numbers: plain floats and ints pass on their type alone
-    return isinstance(v, list) and all(type(x) is float or type(x) is int or _is_num(x)
-                                       for x in v)
+    return isinstance(v, list) and all(type(x) is float or type(x) is int or _is_num(x) for x in v)
 
 
 def _texts(v: Any) -> bool:

@@ -5,9 +5,9 @@ A record says everything needed to repeat a run (config, seeds, versions) and to
 strict JSON; a non-finite float is written as the string ``"inf"``, ``"-inf"`` or ``"nan"``,
 and :func:`read_record` turns those back into floats in the numeric fields.
 
-Two runs of the same config and seed give records identical but for ``timing``
-(:func:`fingerprint` drops it). File name: ``records/run-<index>-<run_id>.json``; the
-``run_id`` hashes what determines the result, so a re-run of the job recognises its records.
+Two runs of the same config and seed give records identical but for ``timing``; the run id
+in each file name (:func:`record_path`) hashes what determines the result, so a re-run of the
+job recognises its records.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import re
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
@@ -56,8 +57,7 @@ def _float_text(value: float) -> float | str:
 
 def decode_number(value: Any) -> Any:
     """``"inf"``, ``"-inf"``, ``"nan"`` as floats; anything else unchanged."""
-    return NONFINITE_VALUE[value] if isinstance(value, str) and value in NONFINITE_VALUE \
-        else value
+    return NONFINITE_VALUE[value] if isinstance(value, str) and value in NONFINITE_VALUE else value
 
 
 def decode_numbers(record: dict[str, Any]) -> dict[str, Any]:
@@ -85,14 +85,12 @@ def _jsonable(obj: Any) -> Any:
         return _float_text(obj)
     if kind is int or kind is str or kind is bool or obj is None:
         return obj
-    if kind is list or kind is tuple:
+    if isinstance(obj, (list, tuple)):
         if all(type(v) is int or (type(v) is float and math.isfinite(v)) for v in obj):
             return list(obj)  # already strict JSON: no call per element
         return [_jsonable(v) for v in obj]
     if isinstance(obj, Mapping):
         return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
     if isinstance(obj, np.ndarray):
         if obj.dtype.kind in "iub" or (obj.dtype.kind == "f" and np.isfinite(obj).all()):
             return obj.tolist()
@@ -116,12 +114,6 @@ def stable_hash(obj: Any, length: int = 16) -> str:
     return hashlib.sha256(canonical_json(obj).encode()).hexdigest()[:length]
 
 
-def job_key(problem: Mapping, optimizer: Mapping, seed: int, budget: int,
-            **more: Any) -> dict[str, Any]:
-    """What determines every run of a job, apart from the run index (``more``: further
-    determinants, e.g. plugin versions and the content hash of a data file)."""
-    return {"problem": problem, "optimizer": optimizer, "seed": seed, "budget": budget, **more}
-
 
 def run_id(key: Mapping[str, Any], run_index: int) -> str:
     """Deterministic id of run ``run_index`` of the job described by ``key``."""
@@ -135,8 +127,6 @@ def record_path(job_dir: Path, run_index: int, rid: str) -> Path:
 
 def parse_record_name(name: str) -> tuple[int, str] | None:
     """``(run_index, run_id)`` of a record's file name (:func:`record_path`), or ``None``."""
-    import re
-
     match = re.fullmatch(r"run-(\d+)-(\w+)\.json", name)
     return None if match is None else (int(match.group(1)), match.group(2))
 
