@@ -42,7 +42,7 @@ from .store.job_status import read_job_status
 from .store.record_check import check_record
 from .targets import with_stops
 from .worker_loop import probe
-from .workers import GRACE_S, Workers, can_send, is_timeout, outcomes_isolated
+from .workers import Workers, can_send, is_timeout, outcomes_isolated
 
 log = logging.getLogger(__name__)
 
@@ -124,7 +124,7 @@ def _recorded(job: Job, job_dir: Path, registry: Registry | None, calls: Any) ->
 
 def _set_up(job: Job, calls: Any) -> tuple[Job, ProblemFacts]:
     """The job sized by its problem's facts, with its stopping values (``target=``)."""
-    limit = _limit(setup_limit_s(job))
+    limit = _limit(job, setup_limit_s(job))
     facts = calls.call(job, _facts, what="the problem's set-up (its instances, bounds, "
                        "x_true, instance_id(), describe(), content_digest())", limit=limit)
     job = job.sized(facts.dim)
@@ -193,7 +193,7 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
                                          ("optimizer", job.optimizer_name))}
         job_dir.mkdir(parents=True, exist_ok=True)
         written = calls.call(job, _write_artifacts, job_dir, what="the problem's write_artifacts()",
-                             limit=_limit(setup_limit_s(job)))
+                             limit=_limit(job, setup_limit_s(job)))
         root = job_dir.resolve()  # a problem writing ../../x once went unnoticed
         for path in written:
             if (target := (job_dir / Path(path)).resolve()) != root and root not in target.parents:
@@ -213,7 +213,7 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
         gaps = _after_runs(job, calls, "the optimum / identifiability analysis", _analysis,
                            analyse_job, job_dir, optima_dir, records, polished,
                            what="its gaps to the optimum are not",
-                           limit=_limit(analysis_limit_s(job))) or {}
+                           limit=_limit(job, analysis_limit_s(job))) or {}
         summary.score = job_score(gaps, records)
         summary.wall_time_s = time.perf_counter() - start
         best = best_of(records)
@@ -221,7 +221,7 @@ def run_job(job: Job, job_dir: str | Path, registry: Registry | None = None,
             _after_runs(job, calls, "the best run's signals", _signals, job_dir,
                         int(best[1]["run_index"]), *best,
                         what="best_signals.csv may be missing or out of date",
-                        limit=_limit(analysis_limit_s(job)))
+                        limit=_limit(job, analysis_limit_s(job)))
         return summary
     finally:
         if own_pool:
@@ -268,10 +268,10 @@ def _choose_workers(job: Job, pool: Workers | None) -> tuple[Workers | None, boo
 
 def setup_limit_s(job: Job) -> float | None:
     """Wall-time limit (s) of each set-up call into the problem: ``run_timeout_s x runs``,
-    at least :data:`~vpid_bench.workers.GRACE_S` (so every run is still tried and recorded);
-    ``None`` without ``run_timeout_s``."""
+    at least ``grace_s`` (so every run is still tried and recorded); ``None`` without
+    ``run_timeout_s``."""
     limit = analysis_limit_s(job)
-    return None if limit is None else max(GRACE_S, limit)
+    return None if limit is None else max(job.spec.grace_s, limit)
 
 
 @contextlib.contextmanager
@@ -312,9 +312,9 @@ def _signals(job: Job, problem: Any, job_dir: Path, index: int, x: Any,
         write_best_signals(job_dir, kept_instance(problem, index), x, source)
 
 
-def _limit(limit: float | None) -> float | None:
+def _limit(job: Job, limit: float | None) -> float | None:
     """A worker's allowance for a call limited to ``limit`` s in the worker itself."""
-    return None if limit is None else limit + GRACE_S
+    return None if limit is None else limit + job.spec.grace_s
 
 
 def _build_one_optimizer(job: Job, calls: Any) -> BaseException | None:
@@ -322,7 +322,7 @@ def _build_one_optimizer(job: Job, calls: Any) -> BaseException | None:
     run's time limit is returned, and every run recorded as failed with it."""
     try:
         calls.call(job, probe, what="the optimizer's constructor",
-                   limit=_limit(job.spec.run_timeout_s))
+                   limit=_limit(job, job.spec.run_timeout_s))
     except Exception as exc:
         if not is_timeout(exc):
             raise
@@ -374,7 +374,7 @@ def _polish_at_once(job: Job, pool: Workers | None, facts: ProblemFacts, job_dir
     polished: dict[str | None, dict[str, Any]] = {}
     name = "the optimum / identifiability analysis"
     results = pool.calls(job, tasks, what=name, workers=workers,
-                         limit=_limit(analysis_limit_s(job)))
+                         limit=_limit(job, analysis_limit_s(job)))
     for value, error in results:
         if error is None and isinstance(value, dict):
             polished.update(value)

@@ -32,6 +32,8 @@ MAX_BUDGET = 10**9
 #: Longest run time limit (s), a week: larger ones overflow the OS timers (1e10 once failed
 #: every run with "timestamp too large").
 MAX_RUN_TIMEOUT_S = 7 * 24 * 3600.0
+#: Longest ``grace_s`` (s): an hour.
+MAX_GRACE_S = 3600.0
 #: Values of the ``isolation`` key (see :class:`JobSpec`).
 ISOLATION = ("auto", "process", "none")
 
@@ -49,8 +51,10 @@ class JobSpec:
     (s; null: none). ``isolation``: ``process`` (supervised worker processes), ``none`` (this
     process) or ``auto`` (``process`` under the command). ``target``: stop a run within this
     relative gap of its instance's optimum certified in advance (null: use the budget).
-    ``workers``: worker processes per job (null: every core). :data:`OPERATIONAL_KEYS` never
-    change a result.
+    ``workers``: worker processes per job (null: every core). ``grace_s``: seconds past a
+    limit (``run_timeout_s``, a set-up's or the analysis's) before a worker that has not
+    answered (blocked in C, deaf to SIGALRM) is killed. :data:`OPERATIONAL_KEYS` never change
+    a result.
     """
 
     seed: int = 0
@@ -66,6 +70,7 @@ class JobSpec:
     isolation: str = "auto"
     workers: int | None = None
     target: float | None = None
+    grace_s: float = 10.0
 
     def __post_init__(self) -> None:
         _check_int("seed", self.seed, 0, 2**63 - 1)
@@ -83,6 +88,9 @@ class JobSpec:
         if self.isolation not in ISOLATION:
             raise ConfigError("isolation", self.isolation, " | ".join(ISOLATION))
         _check_int("workers", self.workers, 1, 1024, nullable=True)
+        if not 0 < self.grace_s <= MAX_GRACE_S:
+            raise ConfigError("grace_s", self.grace_s,
+                              f"a positive number of seconds up to {MAX_GRACE_S:g}")
         if self.target is not None and not 0.0 <= self.target <= 1.0:
             raise ConfigError("target", self.target, "a relative gap from 0 to 1 (e.g. 1e-8) "
                               "or null")
@@ -91,7 +99,8 @@ class JobSpec:
 #: The top-level keys, in the order they are documented.
 TOP_LEVEL_KEYS = tuple(f.name for f in dataclasses.fields(JobSpec))
 #: Keys that never change a result (they may differ between a sweep and its resume).
-OPERATIONAL_KEYS = ("resume", "progress", "report", "archive", "threads", "isolation", "workers")
+OPERATIONAL_KEYS = ("resume", "progress", "report", "archive", "threads", "isolation", "workers",
+                    "grace_s")
 
 
 def _check_int(key: str, value: int | None, low: int, high: int, nullable: bool = False) -> None:

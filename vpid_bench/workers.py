@@ -47,8 +47,6 @@ log = logging.getLogger(__name__)
 
 #: Seconds for a worker new to a job to start, import and build the problem.
 START_S = 120.0
-#: Seconds past ``run_timeout_s`` before the supervisor kills a worker that has not answered.
-GRACE_S = 10.0
 #: Runs per task of a lockstep job, at most (a lost task costs at most this many re-runs).
 LOCKSTEP_CHUNK = 10
 #: Memory one worker takes (MB, resident): 227 MB measured after a job of the default
@@ -322,7 +320,7 @@ class Workers:
                         results[index] = (None, call)
                     else:
                         busy[call.worker.conn] = call
-                for call, outcome in self._call_events(busy, what, limit):
+                for call, outcome in self._call_events(busy, what, limit, job.spec.grace_s):
                     del busy[call.worker.conn]
                     results[call.index] = outcome
         except BaseException:
@@ -342,8 +340,8 @@ class Workers:
                                    f"{what}")
         return _Task(worker, None if limit is None else time.monotonic() + START_S, index=index)
 
-    def _call_events(self, busy: dict[Connection, _Task], what: str, limit: float | None
-                     ) -> Iterator[tuple[_Task, tuple[Any, Any]]]:
+    def _call_events(self, busy: dict[Connection, _Task], what: str, limit: float | None,
+                     grace: float) -> Iterator[tuple[_Task, tuple[Any, Any]]]:
         """The calls among ``busy`` that ended, each with its ``(value, error)``, after one
         wait (a call that announces its problem is built gets ``limit`` from then)."""
         for worker in self._events(list(busy.values())):
@@ -372,7 +370,7 @@ class Workers:
                 self._end(call.worker)
                 yield call, (None, WorkerKilledError(
                     f"{what} did not return within {limit:.0f} s (run_timeout_s + "
-                    f"{GRACE_S:.0f} s; blocked in C or ignoring SIGALRM): its worker process "
+                    f"grace_s={grace:g} s; blocked in C or ignoring SIGALRM): its worker process "
                     "was killed" if call.phase else f"building the problem took more than "
                     f"{START_S:.0f} s: its worker process was killed"))
 
@@ -425,8 +423,8 @@ class Workers:
                 self._end(b.worker)
                 cause = WorkerKilledError(
                     f"the run passed run_timeout_s={job.spec.run_timeout_s} s and did not return "
-                    f"within {GRACE_S:.0f} s more (blocked in C code or ignoring SIGALRM): its "
-                    "worker process was killed")
+                    f"within grace_s={job.spec.grace_s:g} s more (blocked in C code or ignoring "
+                    "SIGALRM): its worker process was killed")
                 yield from _lost(job, b, cause, pending)
 
     def _handle(self, job: Job, conn: Connection, msg: Any, busy: dict[Connection, _Task],
@@ -493,7 +491,7 @@ def _tasks(indices: list[int], workers: int) -> list[list[int]]:
 def _allowance(job: Job, runs: int) -> float | None:
     """Seconds a worker may take for ``runs`` runs (a warm-up counts as one) before it is killed."""
     limit = job.spec.run_timeout_s
-    return None if limit is None else limit * max(runs, 1) + GRACE_S
+    return None if limit is None else limit * max(runs, 1) + job.spec.grace_s
 
 
 def _job_key(job: Job) -> str:
@@ -534,6 +532,6 @@ def outcomes_isolated(pool: Workers, job: Job, indices: Sequence[int], lockstep:
     return pool.outcomes(job, indices, lockstep, workers, threads)
 
 
-__all__ = ["GRACE_S", "RemoteError", "WorkerDiedError", "WorkerKilledError",
+__all__ = ["RemoteError", "WorkerDiedError", "WorkerKilledError",
            "Workers", "can_send", "describe_exit", "is_timeout", "outcomes_isolated",
            "portable", "worker_cap"]

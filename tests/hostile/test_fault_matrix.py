@@ -28,7 +28,7 @@ from process_plugins import PIDS_ENV, left_running
 
 from vpid_bench.experiment import run_job
 from vpid_bench.spec import Job, JobSpec
-from vpid_bench.workers import GRACE_S, Workers
+from vpid_bench.workers import Workers
 
 PS, ITERATIONS = 4, 2
 #: What each fatal fault leaves in the failed record's error (type or message).
@@ -42,6 +42,9 @@ AFTER_RUNS = ("polish", "signals")
 #: A problem's constructor has START_S (120 s) before any limit applies: a 30 s sleep there is
 #: no fault, and a cell that waits for it would take 30 s.
 NOT_A_FAULT = {("sleep", "build")}
+#: Each cell's grace_s: a worker deaf past its limit is killed 1 s later, not the default 10 s
+#: (the default's own path: tests/hostile/test_misbehaving_plugins.py).
+GRACE_S = 1.0
 
 
 @pytest.fixture(scope="module")
@@ -75,7 +78,8 @@ def _job(fault: str = "none", place: str = "none") -> Job:
     params = cls.Params(ps=PS, iterations=ITERATIONS, budget=PS * (ITERATIONS + 1),
                         fault="none" if on_problem else fault,
                         place="none" if on_problem else place)
-    spec = JobSpec(runs=1, progress=False, report=False, run_timeout_s=1.0, isolation="process")
+    spec = JobSpec(runs=1, progress=False, report=False, run_timeout_s=1.0, isolation="process",
+                   grace_s=GRACE_S)
     return Job(spec, "faulty", FaultyProblem, config, f"faulty-{fault}-{place}", cls, params,
                PS * (ITERATIONS + 1))
 
@@ -122,7 +126,7 @@ def test_a_fault_costs_its_run_or_job_only(pool, cells, pids, fault, place):
         if place == "signals":  # closing the pipe ends the worker after the file is written
             written = fault not in FATAL or fault == "closepipe"
             assert (folder / "best_signals.csv").is_file() == written
-    # warm-up + run, each bounded by run_timeout_s=1 (or killed GRACE_S after), plus start-up
+    # warm-up + run, each bounded by run_timeout_s=1 (or killed grace_s after), plus start-up
     assert time.monotonic() - t0 < 2 * (1 + GRACE_S) + 20
     assert os.getcwd() == here
     assert left_running(pids) == []  # no process the fault started outlives its task

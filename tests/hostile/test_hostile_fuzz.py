@@ -27,7 +27,7 @@ KEYS = ["runs", "seed", "budget", "resume", "progress", "report", "threads", "ru
         "optimizer.bounds", "optimizer.R_max", "hydra.sweep.dir", "hydra.run.dir",
         "hydra/launcher", "hydra/sweeper", "hydra.launcher.n_jobs", "hydra.sweep.subdir",
         "foo", "problem.name", "problem.nosuch.x", "optimizer.ps", "hydra.job.chdir",
-        "isolation", "workers", "archive", "target", "budget_per_dim", "suite"]
+        "isolation", "workers", "grace_s", "archive", "target", "budget_per_dim", "suite"]
 VALUES = ["", "0", "1", "-1", "2.0", "2.5", "1e3", "1e308", "-1e308", "inf", "-inf", "nan",
           "abc", "'x y'", '"q"', "a,b", "1,2", "0,1,-3", "range(0,3)", "range(0,1,0)",
           "range(5,1)", "range(0,1000000)", "interval(0,1)", "choice(1,2)", "glob(*)",

@@ -178,6 +178,22 @@ def test_run_timeout_s_is_off_by_default_and_checked():
             JobSpec(run_timeout_s=bad)
 
 
+def test_grace_s_is_ten_seconds_by_default_and_checked(tmp_path):
+    """grace_s: how long past a limit a worker that has not answered is given before it is
+    killed; 0, a negative, NaN or more than an hour is one error line naming the key."""
+    from vpid_bench.api import ConfigError
+    from vpid_bench.spec import JobSpec
+
+    assert JobSpec().grace_s == 10.0
+    for bad in (0.0, -1.0, float("nan"), 3601.0):
+        with pytest.raises(ConfigError, match="grace_s"):
+            JobSpec(grace_s=bad)
+    done = run_cli([*TINY, "grace_s=0"], tmp_path)
+    assert done.returncode == 2
+    assert done.stderr.splitlines() == [
+        "error: grace_s=0.0 is not allowed: a positive number of seconds up to 3600"]
+
+
 def test_system_exit_while_a_job_sets_up_fails_that_job_only(tmp_path, monkeypatch, capsys):
     """Case 7: SystemExit raised while a job builds its problem (a plugin's constructor):
     that job fails with one line, the next job runs, the command exits 1. In this process
