@@ -42,9 +42,9 @@ AFTER_RUNS = ("polish", "signals")
 #: A problem's constructor has START_S (120 s) before any limit applies: a 30 s sleep there is
 #: no fault, and a cell that waits for it would take 30 s.
 NOT_A_FAULT = {("sleep", "build")}
-#: Each cell's grace_s: a worker deaf past its limit is killed 1 s later, not the default 10 s
+#: Each cell's grace_s: a worker deaf past its limit is killed 2 s later, not the default 10 s
 #: (the default's own path: tests/hostile/test_misbehaving_plugins.py).
-GRACE_S = 1.0
+GRACE_S = 2.0
 
 
 @pytest.fixture(scope="module")
