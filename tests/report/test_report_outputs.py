@@ -237,6 +237,7 @@ def test_cli_exit_codes(tmp_path, capsys):
     assert "(2 run records)" in captured.out and (out / "report.md").is_file()
 
 
+@pytest.mark.slow  # the default run's twin: test_html_browser's README sweep (same callback)
 def test_real_sweep_ends_with_a_report(tmp_path):
     """`vpid-bench -m ...` end to end: the callback writes the report into the sweep dir."""
     exe = Path(sys.executable).with_name("vpid-bench")
