@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from . import verdicts
-from .render import fmt
+from .render import fmt, joined
 from .safe import escape
 from .ties import SHARE_TIE, share_leaders
 
@@ -94,7 +94,7 @@ def _names(items: Sequence[str]) -> str:
     shown = [f"`{escape(i)}`" for i in items]
     if len(shown) > MAX_NAMED:
         shown = [*shown[:MAX_NAMED - 1], f"{len(shown) - MAX_NAMED + 1} more"]
-    return shown[0] if len(shown) == 1 else ", ".join(shown[:-1]) + " and " + shown[-1]
+    return joined(shown)
 
 
 def _rung(per_dim: int) -> str:
@@ -178,8 +178,7 @@ def _count(items: Mapping[str, int], total: int, noun: str) -> str:
     if len(ordered) == 1 and ordered[0][1] == total:
         every = {1: "the one", 2: "both"}.get(total, f"all {total}")
         return f"`{escape(ordered[0][0])}` on {every} {noun[:-1] if total == 1 else noun}"
-    parts = [f"`{escape(k)}` on {v}" for k, v in ordered]
-    body = parts[0] if len(parts) == 1 else ", ".join(parts[:-1]) + " and " + parts[-1]
+    body = joined([f"`{escape(k)}` on {v}" for k, v in ordered])
     return f"{body} of {total} {noun[:-1] if total == 1 else noun}"
 
 

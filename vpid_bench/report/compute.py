@@ -83,14 +83,17 @@ class ReportData:
         units = {r.get("metric_unit", "") for r in self.rows if r["context"] == context}
         return units.pop() if len(units) == 1 else ""
 
+    def records_of(self, context: str) -> list[dict[str, Any]]:
+        """The records of the context's runs."""
+        ids = {r["run_id"] for r in self.rows if r["context"] == context}
+        return [rec for rec in self.loaded.records if rec["run_id"] in ids]
+
     def estimator(self, context: str) -> str | None:
         """The objective (``problem.objective``) the context's runs share, else ``None``."""
-        ids = {r["run_id"] for r in self.rows if r["context"] == context}
         found = set()
-        for rec in self.loaded.records:
-            if rec["run_id"] in ids:
-                config = (rec.get("problem") or {}).get("config")
-                found.add(config.get("objective") if isinstance(config, dict) else None)
+        for rec in self.records_of(context):
+            config = (rec.get("problem") or {}).get("config")
+            found.add(config.get("objective") if isinstance(config, dict) else None)
         value = found.pop() if len(found) == 1 else None
         return value if isinstance(value, str) and value.isidentifier() and len(value) <= 32 \
             else None

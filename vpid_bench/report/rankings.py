@@ -14,7 +14,7 @@ import numpy as np
 
 from .load import by_context
 from .optima import REACHED, opt_column_names
-from .render import fmt, markdown, para
+from .render import fmt, joined, markdown, para
 from .safe import escape
 from .ties import WORDS_RTOL, same
 
@@ -97,11 +97,6 @@ def box_centred(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str
     return out
 
 
-def _names(items: Sequence[str]) -> str:
-    items = [escape(i) for i in items]
-    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
-
-
 def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[str, Any]],
                  search: Sequence[Mapping[str, Any]], centred: bool,
                  metric_groups: Mapping[str, str] | None = None,
@@ -141,7 +136,7 @@ def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[s
                        if set(metric_groups.get(a, "")) & set(metric_groups.get(b, ""))]
         if unseparated:
             text += (f"By {escape(metric_name)} the tests do not separate it from "
-                     f"{_names(unseparated)}, which it passes there. ")
+                     f"{joined([escape(b) for b in unseparated])}, which it passes there. ")
     stops_short = s["rel_gap_median"] > REACHED and all(
         s["reached"] < srank[b]["reached"] or s["rel_gap_median"] > srank[b]["rel_gap_median"]
         for b in passed)

@@ -52,6 +52,11 @@ def fmt(value: Any, digits: int = 4) -> str:
     return f"{x:.{digits}g}"
 
 
+def joined(items: Sequence[str]) -> str:
+    """``a``, ``a and b``, ``a, b and c`` (``""`` for none)."""
+    return ", ".join(items[:-1]) + " and " + items[-1] if len(items) > 1 else "".join(items)
+
+
 def p_text(p: float, bound: bool, name: str = "p") -> str:
     """A p-value as text: ``p=0.012``, or ``p≤0.0002`` where it is a bound."""
     return f"{name}{'≤' if bound else '='}{float(p):.2g}"
