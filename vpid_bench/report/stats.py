@@ -26,30 +26,19 @@ ALPHA = 0.05
 def a12_magnitude(a12: float) -> str:
     """Vargha and Delaney's (2000) labels for |A12 - 0.5|: 0.06, 0.14, 0.21 thresholds."""
     d = abs(a12 - 0.5)
-    if d < 0.06:
-        return "negligible"
-    if d < 0.14:
-        return "small"
-    if d < 0.21:
-        return "medium"
-    return "large"
+    return next(label for limit, label in ((0.06, "negligible"), (0.14, "small"),
+                                           (0.21, "medium"), (math.inf, "large")) if d < limit)
 
 
 def holm(pvalues: list[float]) -> list[float]:
     """Holm–Bonferroni adjusted p-values: the i-th smallest of m finite p-values times
     ``m - i``, made non-decreasing in that order and capped at 1; NaN stays NaN."""
-    if not pvalues:
-        return []
     p = np.asarray(pvalues, dtype=float)
     adjusted = np.full(p.shape, np.nan)
     ok = np.flatnonzero(np.isfinite(p))
-    if ok.size:
-        q = p[ok]
-        order = np.argsort(q, kind="stable")
-        scaled = q[order] * np.arange(q.size, 0, -1)
-        adj = np.empty(q.size)
-        adj[order] = np.minimum(np.maximum.accumulate(scaled), 1.0)
-        adjusted[ok] = adj
+    order = ok[np.argsort(p[ok], kind="stable")]
+    adjusted[order] = np.minimum(np.maximum.accumulate(p[order] * np.arange(ok.size, 0, -1)),
+                                 1.0)
     return adjusted.tolist()
 
 
@@ -70,10 +59,14 @@ def nemenyi_friedman(values: np.ndarray) -> np.ndarray:
     return out
 
 
+def _ok(df: Any, value: str = "metric") -> Any:
+    """The successful runs (failed runs carry no value) with a ``value``."""
+    return df[(df["status"] == "ok") & df[value].notna()]
+
+
 def _samples(df: Any, value: str = "metric") -> dict[str, np.ndarray]:
-    """Per algorithm, ``value`` of the successful runs (failed runs carry no value)."""
-    ok = df[(df["status"] == "ok") & df[value].notna()]
-    return {a: g[value].to_numpy(float) for a, g in ok.groupby("algorithm", sort=True)}
+    """Per algorithm, ``value`` of the successful runs."""
+    return {a: g[value].to_numpy(float) for a, g in _ok(df, value).groupby("algorithm")}
 
 
 def kruskal_by_context(df: Any) -> Any:
@@ -111,16 +104,8 @@ def paired_by_instance(g: Any) -> bool:
     if "instance" not in g.columns:
         return False
     ok = g[g["status"] == "ok"]
-    if ok.empty or not all(isinstance(v, str) for v in ok["instance"]):
-        return False
-    return not ok.duplicated(["algorithm", "instance"]).any()
-
-
-def _by_instance(g: Any, value: str) -> dict[str, Any]:
-    """Per algorithm, ``value`` indexed by instance (successful runs with a value)."""
-    ok = g[(g["status"] == "ok") & g[value].notna()]
-    return {a: s.set_index("instance")[value].astype(float)
-            for a, s in ok.groupby("algorithm", sort=True)}
+    return (not ok.empty and all(isinstance(v, str) for v in ok["instance"])
+            and not ok.duplicated(["algorithm", "instance"]).any())
 
 
 #: Resamples of a permutation test (Monte Carlo when the exact enumeration is larger).
@@ -180,9 +165,8 @@ def _wilcoxon_permutation(d: np.ndarray) -> tuple[float, float]:
     def r_plus(flipped: np.ndarray, axis: int = -1) -> np.ndarray:
         return np.sum((flipped > 0) * ranks, axis=axis)
 
-    method = _permutation()
     res = stats.permutation_test((d,), r_plus, permutation_type="samples", vectorized=True,
-                                 n_resamples=method.n_resamples, rng=method.rng,
+                                 n_resamples=N_RESAMPLES, rng=np.random.default_rng(0),
                                  alternative="two-sided")
     statistic = min(np.sum((d > 0) * ranks), np.sum((d < 0) * ranks))
     return float(statistic), float(res.pvalue)
@@ -249,9 +233,8 @@ def _draw_counts(idx: np.ndarray, n: int) -> np.ndarray:
 def p_floor(method: str, two_sided: bool = True) -> float:
     """The smallest p a permutation test gives (``1 / (N_RESAMPLES + 1)``, doubled when
     two-sided), else 0."""
-    if not method.startswith("permutation"):
-        return 0.0
-    return (2.0 if two_sided else 1.0) / (N_RESAMPLES + 1)
+    return ((2.0 if two_sided else 1.0) / (N_RESAMPLES + 1)
+            if method.startswith("permutation") else 0.0)
 
 
 def at_floor(p: float, method: str, two_sided: bool = True) -> bool:
@@ -277,7 +260,8 @@ def pairwise_by_context(df: Any, alpha: float = ALPHA, value: str = "metric") ->
     for context, g in df.groupby("context", sort=True):
         samples = _samples(g, value)
         paired = paired_by_instance(g)
-        inst = _by_instance(g, value) if paired else {}
+        inst = {a: s.set_index("instance")[value].astype(float)  # per algorithm, by instance
+                for a, s in _ok(g, value).groupby("algorithm")} if paired else {}
         block = []
         for a, b in itertools.combinations(sorted(samples), 2):
             x, y = samples[a], samples[b]
@@ -311,8 +295,8 @@ def pairwise_by_context(df: Any, alpha: float = ALPHA, value: str = "metric") ->
             row["p_holm"] = p_adj
             row["p_at_floor"] = at_floor(float(row["p"]), row["p_method"])
             row["significant"] = bool(np.isfinite(p_adj) and p_adj < alpha)
-            row["better"] = row.pop("_lower") if row["significant"] else ""
-            row.pop("_lower", None)
+            lower = row.pop("_lower")
+            row["better"] = lower if row["significant"] else ""
         rows.extend(block)
     cols = ["context", "a", "b", "test", "p_method", "n_a", "n_b", "n_pairs", "median_a",
             "median_b", "U", "W", "p", "p_holm", "p_at_floor", "A12", "A12_lo", "A12_hi",
@@ -371,7 +355,7 @@ def mean_ranks_in_context(df: Any, context: str) -> Any:
     """Mean rank (1 = lowest metric) of each algorithm's runs among all runs of ``context``."""
     from scipy import stats
 
-    g = df[(df["context"] == context) & (df["status"] == "ok") & df["metric"].notna()]
+    g = _ok(df[df["context"] == context])
     ranks = stats.rankdata(g["metric"].to_numpy(float))
     return g.assign(_rank=ranks).groupby("algorithm")["_rank"].mean().sort_values()
 
@@ -468,16 +452,15 @@ def friedman_across_blocks(df: Any, alpha: float = ALPHA, value: str = "metric"
                            ) -> FriedmanResult:
     """Friedman over contexts as blocks, on each algorithm's median ``value`` per context;
     not run where the contexts fit the same instances (not independent blocks)."""
-    ok = df[(df["status"] == "ok") & df[value].notna()]
+    ok = _ok(df, value)
     medians = ok.groupby(["context", "algorithm"])[value].median().unstack("algorithm")
     if "instance" in ok.columns and len(medians) >= 2:
         sets = [frozenset(map(str, g["instance"])) for _, g in ok.groupby("context")]
         if all(s == sets[0] for s in sets) and all(isinstance(v, str) for v in ok["instance"]):
-            res = FriedmanResult([str(b) for b in medians.index], list(medians.columns),
-                                 medians)
-            res.note = ("not run: the contexts fit the same instances, so they are not "
-                        "independent blocks (the instances of each context are)")
-            return res
+            return FriedmanResult([str(b) for b in medians.index], list(medians.columns),
+                                  medians, note="not run: the contexts fit the same instances, "
+                                  "so they are not independent blocks (the instances of each "
+                                  "context are)")
     return friedman_on_table(medians, alpha, "contexts")
 
 
@@ -488,8 +471,6 @@ def friedman_by_instances(df: Any, alpha: float = ALPHA, value: str = "metric"
     for context, g in df.groupby("context", sort=True):
         if not paired_by_instance(g) or value not in g.columns:
             continue
-        ok = g[(g["status"] == "ok") & g[value].notna()]
-        table = ok.pivot(index="instance", columns="algorithm", values=value).dropna(
-            axis=0, how="any")
-        out[str(context)] = friedman_on_table(table.astype(float), alpha, "instances")
+        table = _ok(g, value).pivot(index="instance", columns="algorithm", values=value)
+        out[str(context)] = friedman_on_table(table.dropna().astype(float), alpha, "instances")
     return out

@@ -220,12 +220,6 @@ def _lead(items: Sequence[Method], group: Any) -> list[Method]:
     return [m for m in items if letters[0] in group(m)]
 
 
-def _by_cost(items: Sequence[Method]) -> tuple[Method, str]:
-    """The cheapest of ``items`` to reach the optimum (:func:`.ties.cheapest`)."""
-    return cheapest(items, lambda m: (m.search.evaluations, m.search.seconds) if m.search
-                    else (math.nan, math.nan))
-
-
 def _choose(ev: Evidence, eligible: list[Method]) -> tuple[Method, str, list[Method],
                                                              list[Method], list[Method]]:
     """Rule 3: (pick, basis, its metric group, those tied with it by search too, the
@@ -240,7 +234,8 @@ def _choose(ev: Evidence, eligible: list[Method]) -> tuple[Method, str, list[Met
     names = {m.name for m in slead}
     both = [m for m in sorted(mlead, key=by_search.index) if m.name in names]
     pool = both or sorted(slead, key=by_search.index)
-    pick, decided = _by_cost(pool) if len(pool) > 1 else (pool[0], "")
+    pick, decided = (cheapest(pool, lambda m: (m.search.evaluations, m.search.seconds))
+                     if len(pool) > 1 else (pool[0], ""))
     if not both:
         return pick, SEARCH_ONLY, mlead, pool, mlead
     basis = (ALONE if len(mlead) == 1 else SEARCH if len(both) == 1
@@ -281,8 +276,8 @@ def estimator_advice(chosen: str | None, ratio: float,
     others = [(o, float(v["median"])) for o, v in per.items() if o != chosen]
     best = min(others, key=lambda item: item[1], default=None)
     if best is None or not (best[1] < mine or not math.isfinite(mine)):
-        return EstimatorAdvice(chosen, ratio, None, math.nan, mine, int(floors["instances"]))
-    return EstimatorAdvice(chosen, ratio, best[0], best[1], mine, int(floors["instances"]))
+        best = (None, math.nan)
+    return EstimatorAdvice(chosen, ratio, *best, mine, int(floors["instances"]))
 
 
 def cannot_identify(ev: Evidence, floor: float) -> tuple[tuple[str, float], ...]:
@@ -299,13 +294,16 @@ def decide(ev: Evidence) -> Verdict:
     if not ev.methods:
         return Verdict(kind=EMPTY, **base)
     candidates = [m for m in ev.methods if m.name not in ev.references]
-    if not ev.tested or len(ev.methods) < 2 or not candidates:
-        return _describe(ev, candidates, base)
+    if not ev.tested or len(ev.methods) < 2 or not candidates:  # rule 1: a description
+        return _verdict(DESCRIBE, (candidates or list(ev.methods))[0], ev, base,
+                        single=len(ev.methods) < 2)
     eligible = [m for m in candidates
                 if all(beats(ev.pairs, m.name, r) for r in ev.references)]
     over = math.isfinite(base["bound"]) and base["bound"] > BOUND_LIMIT
-    if over or not eligible or base["cannot_identify"]:  # rule 5: no one is recommended
-        return _no_method(ev, candidates, over, base)
+    if over or not eligible or base["cannot_identify"]:  # rules 2 and 5: none recommended
+        not_beaten = tuple(r for r in ev.references
+                           if not any(beats(ev.pairs, m.name, r) for m in candidates))
+        return _verdict(NONE, candidates[0], ev, base, over_bound=over, not_beaten=not_beaten)
     return _use(ev, eligible, base)
 
 
@@ -331,25 +329,12 @@ def _base(ev: Evidence) -> dict[str, Any]:
         "cannot_identify": cannot_identify(ev, _median(list(ev.floors.values())))}
 
 
-def _describe(ev: Evidence, candidates: list[Method], base: dict[str, Any]) -> Verdict:
-    """Rule 1: a description of the leader, not a recommendation."""
-    lead = (candidates or list(ev.methods))[0]
+def _verdict(kind: str, lead: Method, ev: Evidence, base: dict[str, Any], **kw: Any
+             ) -> Verdict:
+    """A verdict naming ``lead``, with what limits it (rule 4)."""
     limit, gain = _limit(lead, base["floor"], base["ratio"], ev.model_error)
-    return Verdict(kind=DESCRIBE, pick=lead.name, runs=lead.runs, median=lead.median,
-                   single=len(ev.methods) < 2, limit=limit, gain=gain,
-                   search=lead.search, **base)
-
-
-def _no_method(ev: Evidence, candidates: list[Method], over: bool,
-               base: dict[str, Any]) -> Verdict:
-    """Rule 2: no method identifies the model, or none is shown to beat the references."""
-    not_beaten = tuple(r for r in ev.references
-                       if not any(beats(ev.pairs, m.name, r) for m in candidates))
-    lead = candidates[0]
-    limit, gain = _limit(lead, base["floor"], base["ratio"], ev.model_error)
-    return Verdict(kind=NONE, pick=lead.name, runs=lead.runs, median=lead.median,
-                   over_bound=over, not_beaten=not_beaten, limit=limit, gain=gain,
-                   search=lead.search, **base)
+    return Verdict(kind=kind, pick=lead.name, runs=lead.runs, median=lead.median, limit=limit,
+                   gain=gain, search=lead.search, **kw, **base)
 
 
 def _use(ev: Evidence, eligible: list[Method], base: dict[str, Any]) -> Verdict:
@@ -367,10 +352,7 @@ def _use(ev: Evidence, eligible: list[Method], base: dict[str, Any]) -> Verdict:
     costs = tuple(Cost(m.name, m.search.evaluations, m.search.seconds)
                   for m in [pick] + [m for m in pool if m.name != pick.name] if m.search)
     nxt = next((m.name for m in ev.methods if m.name != pick.name), None)
-    limit, gain = _limit(pick, base["floor"], base["ratio"], ev.model_error)
-    return Verdict(kind=USE, pick=pick.name, runs=pick.runs, median=pick.median, basis=basis,
-                   tied=tuple(m.name for m in tied_with), spread=spread,
-                   leaders=tuple(m.name for m in leaders),
-                   costs=costs,
-                   next_pair=None if nxt is None else _pair(ev.pairs, pick.name, nxt),
-                   next_name=nxt, limit=limit, gain=gain, search=pick.search, **base)
+    return _verdict(USE, pick, ev, base, basis=basis, tied=tuple(m.name for m in tied_with),
+                    spread=spread, leaders=tuple(m.name for m in leaders), costs=costs,
+                    next_pair=None if nxt is None else _pair(ev.pairs, pick.name, nxt),
+                    next_name=nxt)
