@@ -46,11 +46,6 @@ def by_context(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str,
     return found
 
 
-def _worst(diag: Mapping[str, Any]) -> dict[str, Any]:
-    """The channel with the largest lag-1 autocorrelation."""
-    return max(diag["groups"], key=lambda g: abs(g["lag1"]))
-
-
 def plain_line(diag: Mapping[str, Any]) -> str:
     """ONE plain line when the model does not explain the record, else ``""``."""
     if diag["explained"]:
@@ -143,10 +138,10 @@ def blocks(diag: Mapping[str, Any] | None, model_error: str = ""
     rows)``: the channel table, then the intervals and which is trusted."""
     if diag is None:
         return []
-    line = plain_line(diag)
-    g = _worst(diag)
-    head = line or (f"The residuals look like noise (lag-1 {fmt(g['lag1'], 3)}, every channel "
-                    "passes the whiteness test): the model explains the record.")
+    worst = max(diag["groups"], key=lambda g: abs(g["lag1"]))
+    head = plain_line(diag) or (f"The residuals look like noise (lag-1 {fmt(worst['lag1'], 3)}, "
+                                "every channel passes the whiteness test): the model explains "
+                                "the record.")
     misfit = [x["name"] for x in diag["groups"] if x["misfit"]]
     if misfit:
         head += (f" The residual exceeds {MISFIT:g} noise σ on {', '.join(map(escape, misfit))}"
@@ -171,10 +166,8 @@ def draw(diag: Mapping[str, Any], title: str) -> Any:
 
     from .figures import _plt
 
-    plt = _plt()
-
     groups = diag["groups"]
-    fig, axes = plt.subplots(len(groups), 2, figsize=(9, 2.4 * len(groups) + 0.8),
+    fig, axes = _plt().subplots(len(groups), 2, figsize=(9, 2.4 * len(groups) + 0.8),
                              squeeze=False)
     for (ax, axc), g in zip(axes, groups, strict=True):
         rho = np.asarray(g["acf"])

@@ -464,9 +464,7 @@ def _no_truth_lines(r: ContextResult) -> list[tuple[str, list[str], list[list[An
         headers, rows = ident.rows()
         out.append((text, headers, rows))
     if r.comparisons:
-        names: list[str] = []
-        for c in r.comparisons:
-            names += [k for k in c["metrics"] if k not in names]
+        names = list(dict.fromkeys(k for c in r.comparisons for k in c["metrics"]))
         headers = ["comparison (not a run, not a truth)", "objective", *names, "note"]
         rows = [[escape(c["name"]), c["f"], *[c["metrics"].get(k) for k in names],
                  escape(c["note"])] for c in r.comparisons]

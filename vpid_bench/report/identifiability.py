@@ -52,14 +52,8 @@ def optima_by_run(records: Sequence[Mapping[str, Any]]) -> dict[str, Mapping[str
     jobs = dict.fromkeys(Path(str(rec.get("_job_dir", "."))) for rec in records)
     optima = load_optima(dict.fromkeys(f for job in jobs
                                        for f in (job / "optima", job.parent / "optima")))
-    if not optima:
-        return {}
-    out = {}
-    for rec in records:
-        found = find_optimum(rec, optima)
-        if found is not None:
-            out[rec["run_id"]] = found
-    return out
+    found = {rec["run_id"]: find_optimum(rec, optima) for rec in records} if optima else {}
+    return {k: v for k, v in found.items() if v is not None}
 
 
 def _instance(rec: Mapping[str, Any]) -> Any:
@@ -93,15 +87,17 @@ def reference_levels(records: Sequence[Mapping[str, Any]], rows: Sequence[Mappin
     return medians(f_true), medians(f_opt)
 
 
+def _read_bounds(path: Path, rec: Mapping[str, Any]) -> dict[str, Any] | None:
+    """A job's ``identifiability.json`` for the record's parameters (``None``: unreadable)."""
+    names = list((rec.get("parameters") or {}).get("names") or [])
+    return read_identifiability(path, names)[0] if path.exists() else None
+
+
 def crb_norm_by_context(records: Sequence[Mapping[str, Any]],
                         rows: Sequence[Mapping[str, Any]]) -> dict[str, float]:
     """Per context, the norm of the Cramér–Rao bounds (%) of the first readable
     ``identifiability.json`` of its jobs: what an efficient estimator could reach."""
-    def read(path: Path, rec: Mapping[str, Any]) -> Any:
-        names = list((rec.get("parameters") or {}).get("names") or [])
-        return read_identifiability(path, names)[0] if path.exists() else None
-
-    found = first_file_by_context(records, rows, FILE, read)
+    found = first_file_by_context(records, rows, FILE, _read_bounds)
     return {c: float(d["crb_norm_percent"]) for c, d in found.items()}
 
 
@@ -110,13 +106,9 @@ def crb_norms_by_instance(records: Sequence[Mapping[str, Any]],
     """Per context, each instance's own bound norm (%), keyed as the rows' ``instance``
     column (its id, or the run index where every run fits the same data): what the verdicts
     compare each instance's floor with (:func:`.verdicts.floor_over_bound`)."""
-    def read(path: Path, rec: Mapping[str, Any]) -> Any:
-        names = list((rec.get("parameters") or {}).get("names") or [])
-        data = read_identifiability(path, names)[0] if path.exists() else None
-        return (data or {}).get("instances") or None
-
     out: dict[str, dict[Any, float]] = {}
-    for context, entries in first_file_by_context(records, rows, FILE, read).items():
+    for context, entries in first_file_by_context(records, rows, FILE, lambda path, rec: (
+            _read_bounds(path, rec) or {}).get("instances") or None).items():
         norms: dict[Any, float] = {}
         for e in entries:
             keys = [e["instance"]] if isinstance(e["instance"], str) else e["runs"]
@@ -238,11 +230,9 @@ def draw_design(design: Mapping[str, Any]) -> Any:
 
     from .figures import _plt
 
-    plt = _plt()
-
     names = design["names"]
     crb = design["crb"]["crb_percent"]
-    fig, ax = plt.subplots(figsize=(max(5.0, 0.7 * len(names) + 2.0), 3.8))
+    fig, ax = _plt().subplots(figsize=(max(5.0, 0.7 * len(names) + 2.0), 3.8))
     xs = range(len(names))
     ax.bar(xs, [max(v, 1e-6) for v in crb], color="#4c72b0",
            label="Cramér–Rao bound (relative sd, %)")
@@ -335,18 +325,13 @@ def section(ctx: ReportContext) -> Contribution | None:
             return None
         return Contribution(sections=(Section(
             "Identifiability", ctx.para("Not built: " + "; ".join(notes) + ".")),))
-    files: list[Path] = []
-    rows = []
-    for d in designs:
-        for j, name in enumerate(d["names"]):
-            for context in d["contexts"]:
-                rows.append([context, d["label"], name, d["crb"]["crb_percent"][j],
-                             d["floor_errors"][j] if d["floor_errors"] is not None else None,
-                             d["instances"]])
-    files += ctx.write_table(
+    files = ctx.write_table(
         "identifiability",
         ["context", "design", "parameter", "crb_percent", "floor_median_abs_error_percent",
-         "instances"], rows)
+         "instances"],
+        [[context, d["label"], name, d["crb"]["crb_percent"][j],
+          d["floor_errors"][j] if d["floor_errors"] is not None else None, d["instances"]]
+         for d in designs for j, name in enumerate(d["names"]) for context in d["contexts"]])
     files += ctx.write_table(
         "identifiability_designs",
         ["design", "contexts", "crb_norm_percent", "floor_metric", "floor_median", "instances",

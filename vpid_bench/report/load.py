@@ -123,15 +123,10 @@ def load_records(paths: Iterable[str | Path]) -> LoadedRecords:
 
 def flatten(obj: Any, prefix: str = "") -> dict[str, Any]:
     """Nested mappings as one level, keys joined with dots; lists become tuples."""
-    out: dict[str, Any] = {}
     if isinstance(obj, Mapping):
-        for k, v in obj.items():
-            out.update(flatten(v, f"{prefix}{k}."))
-        return out
-    if isinstance(obj, list):
-        obj = tuple(obj)
-    out[prefix[:-1]] = obj
-    return out
+        return {key: v for k, value in obj.items()
+                for key, v in flatten(value, f"{prefix}{k}.").items()}
+    return {prefix[:-1]: tuple(obj) if isinstance(obj, list) else obj}
 
 
 def _varying(rows: list[dict[str, Any]]) -> list[str]:
@@ -156,14 +151,11 @@ def grouping(records: list[dict[str, Any]]) -> tuple[dict[str, list[str]], dict[
     by_problem: dict[str, list[dict[str, Any]]] = {}
     by_opt: dict[str, list[dict[str, Any]]] = {}
     for r in records:
-        pflat = _settings(r)
-        for k in PROBLEM_KEYS_IGNORED:
-            pflat.pop(k, None)
-        by_problem.setdefault(r["problem"]["name"], []).append(pflat)
-        oflat = flatten(r["optimizer"].get("params") or {})
-        for k in OPTIMIZER_KEYS_IGNORED:
-            oflat.pop(k, None)
-        by_opt.setdefault(r["optimizer"]["name"], []).append(oflat)
+        by_problem.setdefault(r["problem"]["name"], []).append(
+            {k: v for k, v in _settings(r).items() if k not in PROBLEM_KEYS_IGNORED})
+        by_opt.setdefault(r["optimizer"]["name"], []).append(
+            {k: v for k, v in flatten(r["optimizer"].get("params") or {}).items()
+             if k not in OPTIMIZER_KEYS_IGNORED})
     return ({p: _varying(rows) for p, rows in by_problem.items()},
             {o: _varying(rows) for o, rows in by_opt.items()})
 
@@ -283,11 +275,7 @@ def run_rows(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
     Failed runs have NaN results; a ``null`` objective or metric is ``inf``."""
     labels = run_labels(records)
     chosen = choose_metrics(records, labels)
-    metric_names: list[str] = []
-    for r in records:
-        for k in _metrics(r):
-            if k not in metric_names:
-                metric_names.append(k)
+    metric_names = list(dict.fromkeys(k for r in records for k in _metrics(r)))
     rows = []
     for r, lab in zip(records, labels, strict=True):
         res = r.get("result") or {}
@@ -336,10 +324,8 @@ def run_rows(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
         row["run_id"] = r["run_id"]
         row["file"] = r.get("_file")
         rows.append(row)
-    order = sorted(range(len(rows)), key=lambda i: (
-        rows[i]["context"], rows[i]["algorithm"], _sort_key(rows[i]["seed"]),
-        _sort_key(rows[i]["run_index"])))
-    return [rows[i] for i in order]
+    return sorted(rows, key=lambda row: (row["context"], row["algorithm"],
+                                         _sort_key(row["seed"]), _sort_key(row["run_index"])))
 
 
 def _sort_key(value: Any) -> tuple[int, Any]:

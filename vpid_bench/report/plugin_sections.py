@@ -25,10 +25,6 @@ def plugin_sections(registry: Any, data: Any, out_dir: Path, claim: Callable[[Pa
     add and one line per failure."""
     from . import diagnostics, identifiability, signals
 
-    if registry is None:
-        from ..plugins import Registry
-
-        registry = Registry()
     by_id = {r["run_id"]: r for r in data.loaded.records}
     sections: list[PlacedSection] = []
     columns: list[HeadlineColumn] = []

@@ -22,11 +22,9 @@ def draw_signals(t: Any, channels: Mapping[str, tuple[Any, Any]], units: Mapping
 
     from .figures import _plt
 
-    plt = _plt()
-
     names = sorted(channels)
     ratios = [r for _ in names for r in (3, 1.2)]
-    fig, axes = plt.subplots(2 * len(names), 1, figsize=(7.5, 3.6 * len(names) + 0.8),
+    fig, axes = _plt().subplots(2 * len(names), 1, figsize=(7.5, 3.6 * len(names) + 0.8),
                              sharex=True, gridspec_kw={"height_ratios": ratios})
     t = np.asarray(t, dtype=float)
     for i, ch in enumerate(names):
@@ -58,21 +56,14 @@ def draw_signals(t: Any, channels: Mapping[str, tuple[Any, Any]], units: Mapping
     return fig
 
 
-def _best_run(ctx: ReportContext) -> tuple[Mapping[str, Any], Mapping[str, Any]] | None:
-    ok = [(row, rec) for row, rec in zip(ctx.rows, ctx.records, strict=True)
-          if row["status"] == "ok" and math.isfinite(row["metric"])]
-    return min(ok, key=lambda item: item[0]["metric"]) if ok else None
-
-
 def section(ctx: ReportContext) -> Contribution | None:
     """The figure of the best run of ``ctx``'s problem (full report only; ``None``: no
     signals)."""
-    if ctx.short:
+    ok = [(row, rec) for row, rec in zip(ctx.rows, ctx.records, strict=True)
+          if row["status"] == "ok" and math.isfinite(row["metric"])]
+    if ctx.short or not ok:
         return None
-    best = _best_run(ctx)
-    if best is None:
-        return None
-    row, rec = best
+    row, rec = min(ok, key=lambda item: item[0]["metric"])
     path = Path(ctx.job_dir(rec)) / BEST_SIGNALS
     if not path.exists() and not path.is_symlink():
         return None

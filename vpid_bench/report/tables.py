@@ -20,12 +20,7 @@ BASELINE = "random"
 
 def metric_names(rows: Sequence[Mapping[str, Any]]) -> list[str]:
     """The problem metrics present in the rows (keys ``metric.<name>``), first-seen order."""
-    out: list[str] = []
-    for r in rows:
-        for k in r:
-            if k.startswith("metric.") and k[7:] not in out:
-                out.append(k[7:])
-    return out
+    return list(dict.fromkeys(k[7:] for r in rows for k in r if k.startswith("metric.")))
 
 
 def metric_stats(m: Sequence[float], f: Sequence[float]) -> dict[str, float]:
