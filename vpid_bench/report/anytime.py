@@ -43,13 +43,9 @@ def hit_times(evaluations: Sequence[float], gaps: Sequence[float],
               targets: Sequence[float] = TARGETS) -> tuple[float, ...]:
     """The first evaluation count (or any cost aligned with the trace) at which ``gaps`` is
     at most each target; ``nan`` where never."""
-    ev = np.asarray(evaluations, float)
-    g = np.asarray(gaps, float)
-    out = []
-    for t in targets:
-        idx = np.flatnonzero(np.isfinite(g) & (g <= t))
-        out.append(float(ev[idx[0]]) if idx.size else math.nan)
-    return tuple(out)
+    ev, g = np.asarray(evaluations, float), np.asarray(gaps, float)
+    hit = [np.flatnonzero(np.isfinite(g) & (g <= t)) for t in targets]
+    return tuple(float(ev[i[0]]) if i.size else math.nan for i in hit)
 
 
 def batch_numbers(trace: Mapping[str, Any], n: int) -> list[float]:
@@ -173,10 +169,9 @@ def ecdf_figure(runs: Sequence[RunHits], context: str, path: Path,
     from .figures import _plt, save
     from .styles import legend, lookup
 
-    plt = _plt()
     b = context_budget(runs, context)
     grid = np.unique(np.round(np.geomspace(1.0, max(b, 2.0), 300)))
-    fig, ax = plt.subplots(figsize=(7.0, 4.4))
+    fig, ax = _plt().subplots(figsize=(7.0, 4.4))
     groups = sorted(_groups(sel).items())
     look = lookup(style_of, [a for (_, a), _ in groups])
     for (_, algorithm), g in groups:

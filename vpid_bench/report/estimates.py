@@ -14,6 +14,7 @@ from typing import Any
 from ..store.job_checks import finite, interval_ends, read_comparisons, read_profile
 from ..store.job_files import COMPARISONS, PROFILE
 from .load import first_file_by_context
+from .render import fmt
 
 #: The words every no-truth context starts with (the first screen and the body).
 NO_TRUTH = ("No truth: the parameters that made this record are not known (a measured "
@@ -67,8 +68,6 @@ class Identified:
 
 
 def _interval(lo: float | None, hi: float | None) -> str:
-    from .render import fmt
-
     return f"[{'open' if lo is None else fmt(lo)}, {'open' if hi is None else fmt(hi)}]"
 
 
@@ -87,14 +86,12 @@ def no_truth(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, A
 
 def check_intervals(value: Any, d: int) -> dict[str, Any] | None:
     """A record's ``result.intervals``, or ``None`` when missing or malformed."""
-    if not isinstance(value, Mapping):
-        return None
-    if not (interval_ends(value.get("lower"), d) and interval_ends(value.get("upper"), d)):
+    if not (isinstance(value, Mapping) and interval_ends(value.get("lower"), d)
+            and interval_ends(value.get("upper"), d)):
         return None
     sigma = value.get("sigma")
-    if not (isinstance(sigma, list) and 0 < len(sigma) <= 1000 and all(finite(s) for s in sigma)):
-        return None
-    return dict(value)
+    ok = isinstance(sigma, list) and 0 < len(sigma) <= 1000 and all(finite(s) for s in sigma)
+    return dict(value) if ok else None
 
 
 def comparisons_by_context(records: Sequence[Mapping[str, Any]],
@@ -163,16 +160,8 @@ def _best_profile(records: Sequence[Mapping[str, Any]], d: int
                   ) -> tuple[dict[str, Any] | None, str]:
     """The readable ``profile.json`` (status ok) with the lowest start among the records'
     jobs, or ``None`` and why not."""
-    seen: set[str] = set()
-    found: list[dict[str, Any]] = []
-    for rec in records:
-        folder = str(rec.get("_job_dir", "."))
-        if folder in seen:
-            continue
-        seen.add(folder)
-        data = read_profile(Path(folder) / PROFILE, d)
-        if data is not None:
-            found.append(data)
+    folders = dict.fromkeys(str(rec.get("_job_dir", ".")) for rec in records)
+    found = [p for p in (read_profile(Path(f) / PROFILE, d) for f in folders) if p is not None]
     ok = [p for p in found if p["status"] == "ok"]
     if ok:
         return min(ok, key=lambda p: p["f_start"]), ""

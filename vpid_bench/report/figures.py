@@ -46,8 +46,7 @@ def save(fig: Any, path: Path) -> Path:
 def colours(n: int) -> list[Any]:
     """``n`` distinct colours: matplotlib's colour cycle when it has enough, else ``n`` evenly
     spaced hues (seaborn's ``husl``): a repeated colour would make two curves one."""
-    plt = _plt()
-    cycle = plt.rcParams["axes.prop_cycle"].by_key().get("color") or ["C0"]
+    cycle = _plt().rcParams["axes.prop_cycle"].by_key().get("color") or ["C0"]
     if n <= len(cycle):
         return list(cycle[:n])
     import seaborn as sns
@@ -191,10 +190,9 @@ def draw_convergence(panels: Sequence[Mapping[str, Any]], path: Path,
     from .styles import legend, lookup
 
     look = lookup(style_of, [c["algorithm"] for p in panels for c in p["curves"]])
-    plt = _plt()
     ncol = min(len(panels), 2)
     nrow = -(-len(panels) // ncol)
-    fig, axes = plt.subplots(nrow, ncol, figsize=(6.5 * ncol, 4.2 * nrow), squeeze=False)
+    fig, axes = _plt().subplots(nrow, ncol, figsize=(6.5 * ncol, 4.2 * nrow), squeeze=False)
     for ax, p in zip(axes.flat, panels, strict=False):
         for c in p["curves"]:
             st = look[c["algorithm"]]
@@ -244,14 +242,13 @@ def runs_metric_data(df: Any, problem: str) -> dict[str, Any] | str:
 def draw_runs_metric(data: Mapping[str, Any], path: Path) -> Path | str:
     """Per-run metric per optimizer, grouped by context: a box (whiskers to 1.5 IQR) and every
     run as a dot (jittered by a fixed generator), one colour per context."""
-    plt = _plt()
     order, hue_order = data["order"], data["hue_order"]
     m = max(1, len(hue_order))
-    fig, ax = plt.subplots(figsize=(max(6.0, 0.9 * len(order) * m + 2), 4.6))
+    fig, ax = _plt().subplots(figsize=(max(6.0, 0.9 * len(order) * m + 2), 4.6))
     slot = 0.8 / m
     rng = np.random.default_rng(0)
-    for j, (colour, context) in enumerate(zip(colours(len(hue_order)), hue_order,
-                                              strict=True)):
+    palette = colours(len(hue_order))
+    for j, (colour, context) in enumerate(zip(palette, hue_order, strict=True)):
         pos, vals = [], []
         for i, algorithm in enumerate(order):
             v = data["values"].get((algorithm, context))
@@ -281,7 +278,7 @@ def draw_runs_metric(data: Mapping[str, Any], path: Path) -> Path | str:
     from matplotlib.patches import Patch
 
     ax.legend(handles=[Patch(facecolor="none", edgecolor=c, label=h, linewidth=1.2)
-                       for c, h in zip(colours(len(hue_order)), hue_order, strict=True)],
+                       for c, h in zip(palette, hue_order, strict=True)],
               title="context", fontsize=8, title_fontsize=8)
     return save(fig, path)
 
@@ -388,7 +385,6 @@ def draw_cd(data: Mapping[str, Any], title: str, axis_label: str, path: Path,
     """Critical-difference diagram in Demšar's (2006) layout: mean ranks on a top axis, a bar
     per group of :func:`cd_bars`, each optimizer's elbow line to its label (better half
     left, the rest right), no two lines crossing."""
-    plt = _plt()
     names = [name for name, _ in data["ranks"]]
     from .styles import lookup
 
@@ -407,7 +403,7 @@ def draw_cd(data: Mapping[str, Any], title: str, axis_label: str, path: Path,
     margin = 0.25 * (hi_r - lo_r) + 0.5
     left_x, right_x = lo_r - margin, hi_r + margin
     rows = -step * (len(levels) + 1 + np.arange(half))
-    fig, ax = plt.subplots(figsize=(8, 1.3 + 0.3 * (half + len(levels))))
+    fig, ax = _plt().subplots(figsize=(8, 1.3 + 0.3 * (half + len(levels))))
     for lo, hi, level in placed:
         ax.plot([lo - 0.03, hi + 0.03], [-step * (level + 1)] * 2, color="k", linewidth=3,
                 solid_capstyle="butt", zorder=3)

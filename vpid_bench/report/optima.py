@@ -48,12 +48,6 @@ def load_optima(paths: Iterable[Path], records: Sequence[Mapping[str, Any]]) -> 
     return OptimaIndex(optima, skipped)
 
 
-def column_stem(metrics: Mapping[str, float], record_metrics: Sequence[str]) -> str:
-    """``<metric>`` of the column names."""
-    names = list(record_metrics) or list(metrics)
-    return names[0].lower() if names else "rel_error"
-
-
 def rel_gap(gap: float, f_opt: float) -> float:
     """``gap / |f_opt|``; the gap itself where ``f_opt`` is 0 (no relative scale)."""
     if not math.isfinite(gap):
@@ -95,7 +89,7 @@ def add_optimum_columns(rows: list[dict[str, Any]], records: Sequence[Mapping[st
         if opt is not None:
             mnames = list(((rec.get("result") or {}).get("metrics") or {}).keys())
             mname = mnames[0] if mnames else next(iter(opt.metrics), None)
-            stem = column_stem(opt.metrics, [mname] if mname else [])
+            stem = (mname or next(iter(opt.metrics), "rel_error")).lower()  # of the columns
             if stem not in stems:
                 stems.append(stem)
             extra["f_opt"] = opt.f_opt

@@ -23,7 +23,7 @@ MAX_DECIMALS = 4
 PROSE_WIDTH = 100
 
 
-def _number(value: Any) -> float | None:
+def number(value: Any) -> float | None:
     """``value`` as a float when it is a number (not bool), else ``None``."""
     if isinstance(value, bool) or value is None or isinstance(value, str):
         return None
@@ -40,7 +40,7 @@ def fmt(value: Any, digits: int = 4) -> str:
         return ""
     if isinstance(value, bool):
         return "yes" if value else "no"
-    x = _number(value)
+    x = number(value)
     if x is None:
         return str(value)
     if math.isnan(x):
@@ -64,7 +64,7 @@ def p_text(p: float, bound: bool, name: str = "p") -> str:
 
 def format_column(values: Sequence[Any], digits: int = 4) -> list[str]:
     """Every value of one column in the same number format (see the module docstring)."""
-    nums = [_number(v) for v in values]
+    nums = [number(v) for v in values]
     finite = [x for x in nums if x is not None and math.isfinite(x)]
     if not finite:
         return [fmt(v, digits) for v in values]
@@ -104,7 +104,7 @@ def cells(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4
 
 
 def _numeric_columns(rows: Sequence[Sequence[Any]], n: int) -> list[bool]:
-    return [bool(rows) and all(_number(r[j]) is not None or r[j] is None for r in rows)
+    return [bool(rows) and all(number(r[j]) is not None or r[j] is None for r in rows)
             for j in range(n)]
 
 

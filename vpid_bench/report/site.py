@@ -63,19 +63,13 @@ class Pages:
     def optimizer(self, name: str) -> str | None:
         return self._names.get(("optimizer", name))
 
-    def all(self) -> dict[tuple[str, str], str]:
-        return dict(self._names)
-
 
 def _sort_value(v: Any) -> str | None:
     """The raw value a numeric cell sorts by (``""`` for a missing number), or ``None``."""
-    if isinstance(v, bool) or v is None or isinstance(v, str):
+    x = render.number(v)
+    if x is None:
         return "" if v is None else None
-    try:
-        x = float(v)
-    except (TypeError, ValueError):
-        return None
-    return repr(x) if math.isfinite(x) or math.isinf(x) else ""
+    return "" if math.isnan(x) else repr(x)
 
 
 def table(headers: Sequence[str], rows: Sequence[Sequence[Any]],

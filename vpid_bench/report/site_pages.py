@@ -123,10 +123,8 @@ def _suite(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, A
     if s is None or not s.rows:
         return None
     fig = s.figure if isinstance(s.figure, Path) else None
-    interactive = None
-    if s.interactive is not None:
-        interactive = {"figure": s.interactive, "id": "fig-suite",
-                       "layout": svg.layout(s.interactive, style_of)}
+    interactive = None if s.interactive is None else {
+        "figure": s.interactive, "id": "fig-suite", "layout": svg.layout(s.interactive, style_of)}
     groups = [row for kind in ("family", "dimension")
               for row in score_table(s.rows, kind)[1]]
     return {"table": table(*score_table(s.rows), _links(pages)), "notes": s.notes,
@@ -243,10 +241,8 @@ def interactive_figures(data: Any) -> dict[str, dict[str, Any]]:
     from .interactive import convergence_figures, ecdf_figure
 
     conv = convergence_figures(data.loaded.records, data.rows)
-    out: dict[str, dict[str, Any]] = {}
-    for c in data.contexts:
-        out[c] = {"ecdf": ecdf_figure(data.hits, c), "convergence": conv.get(c)}
-    return out
+    return {c: {"ecdf": ecdf_figure(data.hits, c), "convergence": conv.get(c)}
+            for c in data.contexts}
 
 
 def write_site(model: Any, claim: Callable[[Path], Path]) -> list[Path]:

@@ -135,13 +135,12 @@ def figure(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]], path: 
         return "needs runs with known optima on two or more problems"
     from .figures import _plt, save
 
-    plt = _plt()
     dims = {c: facts[c][1] for c in budgets}
     top = max(budgets[c] / max(dims[c], 1) for c in budgets)
     grid = np.geomspace(min(1.0 / max(dims.values()), 0.1), max(top, 1.0), 300)
     cols = min(len(gs), 3)
     nrows = math.ceil(len(gs) / cols)
-    fig, axes = plt.subplots(nrows, cols, figsize=(5.2 * cols, 3.8 * nrows), squeeze=False)
+    fig, axes = _plt().subplots(nrows, cols, figsize=(5.2 * cols, 3.8 * nrows), squeeze=False)
     by_alg = _by(runs)
     from .styles import lookup
 

@@ -112,8 +112,7 @@ def rank_with_ties(summary: list[dict[str, Any]],
             head = ranked[0]
             tie = [s for s in ranked if same(float(s.get("median", math.nan)),
                                              float(head.get("median", math.nan)))]
-            for s in tie:
-                ranked.remove(s)
+            ranked = [s for s in ranked if s not in tie]
             ordered = by_cost(tie, lambda s, c=context: costs.get((c, s["algorithm"]),
                                                                    (math.inf, math.nan)))
             for i, s in enumerate(ordered):
