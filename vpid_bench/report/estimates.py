@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 from ..store.job_checks import finite, interval_ends, read_comparisons, read_profile
 from ..store.job_files import COMPARISONS, PROFILE
-from .load import first_file_by_context
+from .load import Rows, first_file_by_context
 from .render import fmt
 
 #: The words every no-truth context starts with (the first screen and the body).
@@ -71,8 +71,7 @@ def _interval(lo: float | None, hi: float | None) -> str:
     return f"[{'open' if lo is None else fmt(lo)}, {'open' if hi is None else fmt(hi)}]"
 
 
-def no_truth(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
-             ) -> dict[str, bool]:
+def no_truth(records: Rows, rows: Rows) -> dict[str, bool]:
     """Per context, whether its problem has no truth: every record of it has
     ``parameters.true`` null."""
     by_id = {r["run_id"]: r for r in records}
@@ -94,14 +93,13 @@ def check_intervals(value: Any, d: int) -> dict[str, Any] | None:
     return dict(value) if ok else None
 
 
-def comparisons_by_context(records: Sequence[Mapping[str, Any]],
-                           rows: Sequence[Mapping[str, Any]]) -> dict[str, list[dict[str, Any]]]:
+def comparisons_by_context(records: Rows, rows: Rows) -> dict[str, list[dict[str, Any]]]:
     """Per context, the comparison rows of its first job that wrote readable ones."""
     return first_file_by_context(records, rows, COMPARISONS, read_comparisons)
 
 
-def identified_by_context(records: Sequence[Mapping[str, Any]],
-                          rows: Sequence[Mapping[str, Any]],
+def identified_by_context(records: Rows,
+                          rows: Rows,
                           contexts: Mapping[str, bool]) -> dict[str, Identified]:
     """Per context without a truth: the best ok run with readable intervals, and the
     profile started at the lowest objective."""
@@ -156,8 +154,7 @@ def _text(v: Any, most: int) -> str:
     return " ".join(v.split())[:most] if isinstance(v, str) else ""
 
 
-def _best_profile(records: Sequence[Mapping[str, Any]], d: int
-                  ) -> tuple[dict[str, Any] | None, str]:
+def _best_profile(records: Rows, d: int) -> tuple[dict[str, Any] | None, str]:
     """The readable ``profile.json`` (status ok) with the lowest start among the records'
     jobs, or ``None`` and why not."""
     folders = dict.fromkeys(str(rec.get("_job_dir", ".")) for rec in records)

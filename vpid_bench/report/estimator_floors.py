@@ -3,18 +3,17 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import Any
 
 from ..estimators import DESCRIPTION, OBJECTIVES
 from ..store.job_checks import read_estimator_floors
 from ..store.job_files import ESTIMATORS
-from .load import first_file_by_context
+from .load import Rows, first_file_by_context
 from .safe import escape
 
 
-def by_context(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
-               ) -> dict[str, dict[str, Any]]:
+def by_context(records: Rows, rows: Rows) -> dict[str, dict[str, Any]]:
     """Per context, the first readable ``estimators.json`` of its jobs."""
     return first_file_by_context(records, rows, ESTIMATORS,
                                  lambda path, _rec: read_estimator_floors(path)[0])

@@ -21,7 +21,7 @@ from ..store.job_checks import finite, read_estimator_floors, read_identifiabili
 from ..store.job_files import ESTIMATORS, IDENTIFIABILITY
 from ..store.records import stable_hash
 from .estimator_floors import sentence as estimator_sentence
-from .load import first_file_by_context
+from .load import Rows, first_file_by_context
 from .optima import opt_column_names
 from .safe import escape
 from .sections import Contribution, ReportContext, Section
@@ -46,7 +46,7 @@ CONVENTION = (
     "arithmetic, computed to rounding) carry no information and are left out.")
 
 
-def optima_by_run(records: Sequence[Mapping[str, Any]]) -> dict[str, Mapping[str, Any]]:
+def optima_by_run(records: Rows) -> dict[str, Mapping[str, Any]]:
     """The optimum of the instance each run fitted (checked files of ``<job>/optima`` and
     ``<sweep>/optima``), by ``run_id``."""
     jobs = dict.fromkeys(Path(str(rec.get("_job_dir", "."))) for rec in records)
@@ -61,8 +61,7 @@ def _instance(rec: Mapping[str, Any]) -> Any:
     return inst.get("id") if isinstance(inst, Mapping) else None
 
 
-def reference_levels(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
-                     ) -> tuple[dict[str, float], dict[str, float]]:
+def reference_levels(records: Rows, rows: Rows) -> tuple[dict[str, float], dict[str, float]]:
     """Per context, the median over its instances of the objective at the truth
     (``problem.info.f_at_true``) and of the record optimum ``f*``; a context is left out
     where an instance lacks a finite value."""
@@ -93,16 +92,14 @@ def _read_bounds(path: Path, rec: Mapping[str, Any]) -> dict[str, Any] | None:
     return read_identifiability(path, names)[0] if path.exists() else None
 
 
-def crb_norm_by_context(records: Sequence[Mapping[str, Any]],
-                        rows: Sequence[Mapping[str, Any]]) -> dict[str, float]:
+def crb_norm_by_context(records: Rows, rows: Rows) -> dict[str, float]:
     """Per context, the norm of the Cramér–Rao bounds (%) of the first readable
     ``identifiability.json`` of its jobs: what an efficient estimator could reach."""
     found = first_file_by_context(records, rows, FILE, _read_bounds)
     return {c: float(d["crb_norm_percent"]) for c, d in found.items()}
 
 
-def crb_norms_by_instance(records: Sequence[Mapping[str, Any]],
-                          rows: Sequence[Mapping[str, Any]]) -> dict[str, dict[Any, float]]:
+def crb_norms_by_instance(records: Rows, rows: Rows) -> dict[str, dict[Any, float]]:
     """Per context, each instance's own bound norm (%), keyed as the rows' ``instance``
     column (its id, or the run index where every run fits the same data): what the verdicts
     compare each instance's floor with (:func:`.verdicts.floor_over_bound`)."""
@@ -117,7 +114,7 @@ def crb_norms_by_instance(records: Sequence[Mapping[str, Any]],
     return out
 
 
-def _design_label(rows: Sequence[Mapping[str, Any]]) -> str:
+def _design_label(rows: Rows) -> str:
     """The labels of a design's contexts without the protocol: the problem and its varying
     settings (the rows' ``problem.<key>`` columns) but ``ps``, ``iterations`` and the
     budget."""

@@ -21,6 +21,8 @@ from ..store.record_check import check_record
 from ..store.records import CorruptRecordError, decode_number, iter_record_files, read_record
 from .safe import clean
 
+#: Records, or rows of the run table: read-only mappings.
+Rows = Sequence[Mapping[str, Any]]
 #: Problem-config keys that never define a context of their own (ps, the problem's protocol
 #: as its record states it under ``problem.config``, is the context's first token).
 PROBLEM_KEYS_IGNORED = ("ps",)
@@ -359,7 +361,7 @@ def trace_sets(records: list[dict[str, Any]], rows: list[dict[str, Any]]
     return out
 
 
-def first_file_by_context(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]],
+def first_file_by_context(records: Rows, rows: Rows,
                           name: str, read: Callable[[Path, Mapping[str, Any]], Any]
                           ) -> dict[str, Any]:
     """Per context, the first file ``name`` of its jobs (each tried once) that

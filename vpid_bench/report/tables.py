@@ -11,14 +11,14 @@ from typing import Any
 
 import numpy as np
 
-from .load import by_context
+from .load import Rows, by_context
 from .render import p_text
 
 #: The optimizer every report compares against by default (random search).
 BASELINE = "random"
 
 
-def metric_names(rows: Sequence[Mapping[str, Any]]) -> list[str]:
+def metric_names(rows: Rows) -> list[str]:
     """The problem metrics present in the rows (keys ``metric.<name>``), first-seen order."""
     return list(dict.fromkeys(k[7:] for r in rows for k in r if k.startswith("metric.")))
 
@@ -43,7 +43,7 @@ def metric_stats(m: Sequence[float], f: Sequence[float]) -> dict[str, float]:
         }
 
 
-def summarize(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+def summarize(rows: Rows) -> list[dict[str, Any]]:
     """One row per context and algorithm, sorted by context then rank (1 = lowest median
     metric, then mean; NaN without a successful run), with the :func:`metric_stats` keys."""
     groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
@@ -75,27 +75,16 @@ def summarize(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
                        if np.isfinite(wall_ok).any() else math.nan,
                        wall_time_total_s=float(np.sum(wall[np.isfinite(wall)])))
         out.append(row)
-    grouped = by_context(out)
-    ranked = []
-    for context in sorted(grouped):
-        g = grouped[context]
-        with_runs = sorted((r for r in g if r["n_runs"]),
-                           key=lambda r: (r["median"], _nan_last(r["mean"]), r["algorithm"]))
-        for i, r in enumerate(with_runs, start=1):
-            r["rank"] = i
-        rest = [r for r in g if not r["n_runs"]]
-        for r in rest:
-            r["rank"] = math.nan
-        ranked += with_runs + rest
-    return ranked
+    # per context, those with runs by median, then mean (NaN last), then the rest
+    out.sort(key=lambda r: (r["context"], 0, r["median"], math.inf if math.isnan(r["mean"])
+                            else r["mean"], r["algorithm"]) if r["n_runs"] else (r["context"], 1))
+    for g in by_context(out).values():
+        for i, r in enumerate(g, start=1):
+            r["rank"] = i if r["n_runs"] else math.nan
+    return out
 
 
-def _nan_last(x: float) -> float:
-    return math.inf if math.isnan(x) else x
-
-
-def baseline_verdicts(summary: Sequence[Mapping[str, Any]], pairs: Any,
-                      baseline: str = BASELINE) -> list[str]:
+def baseline_verdicts(summary: Rows, pairs: Any, baseline: str = BASELINE) -> list[str]:
     """Per summary row, against its context's baseline: ``baseline``, ``beats it (...)``,
     ``does not clear it (...)``, ``WORSE than it (...)``, ``not tested`` or ``""`` (not
     run). ``pairs``: the pairwise tests, or ``None``."""
