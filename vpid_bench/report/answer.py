@@ -16,6 +16,7 @@ from typing import Any
 from . import verdicts
 from .render import fmt, joined
 from .safe import escape
+from .suite_scores import LADDER
 from .ties import SHARE_TIE, share_leaders
 
 #: What limits the leader (:data:`.verdicts.LIMIT_SEARCH` ...), in a few words.
@@ -105,13 +106,9 @@ def leaders(ladder: Sequence[Sequence[Any]], scores: Mapping[str, float],
             pool: set[str], references: Sequence[str]) -> tuple[Rung, ...]:
     """Per rung of the ladder that some run reached: the leaders among ``pool`` (ladder rows
     ``[group, algorithm, share at 10·D, ...]``, :func:`.suite_scores.ladder_rows`)."""
-    from .suite_scores import LADDER
-
     out = []
     for k, per_dim in enumerate(LADDER):
         shares = {r[1]: float(r[2 + k]) for r in ladder}
-        if not any(math.isfinite(v) for v in shares.values()):
-            continue
         lead = share_leaders({a: v for a, v in shares.items() if a in pool}, scores)
         if not lead:
             continue
@@ -151,8 +148,7 @@ def _pool_text(pool: Pool) -> str:
             spans.append([r])
     parts = []
     for span in spans:
-        every = len(spans) == 1 and len(span) > 1
-        if every:
+        if len(spans) == 1 and len(span) > 1:
             head = "at every budget"
             shares = ", ".join(f"{_rung(r.per_dim)}: {_share(r.share)}" for r in span)
         else:
@@ -248,8 +244,7 @@ def _limit(v: Any) -> str:
     if v is None or v.kind == verdicts.EMPTY:
         return ""
     if not v.truth:
-        return LIMITS_NO_TRUTH[bool(v.search is not None and v.search.at_optimum)] \
-            if v.search is not None else ""
+        return "" if v.search is None else LIMITS_NO_TRUTH[v.search.at_optimum]
     return LIMITED_BY.get(v.limit, "")
 
 

@@ -1,15 +1,12 @@
 """Build a report from the run records below any folders into ``out_dir``: ``report.md``,
 ``runs.csv``, ``tables/`` (CSV and LaTeX), ``figures/``, ``ioh/`` (IOHprofiler's format) and
-the HTML pages.
-
-``out_dir`` is one report, whole (issue 44, N6, N8, N9): it is built in a hidden folder that
-takes its place in one rename (:class:`~vpid_bench.fileio.WholeFolder`), so a failed,
-interrupted or concurrent build leaves the old report or a new one, and a link planted in the
-old folder is removed, never followed. Stages pass data, never text: :func:`.compute.compute`,
-then :func:`_assemble` fills one :class:`~.model.ReportModel`, which the renderers only
-format. ``short=True`` (a single job's report) has no tests or figures and imports neither
-pandas, matplotlib nor scipy.stats.
-"""
+the HTML pages. ``out_dir`` is one report, whole (issue 44, N6, N8, N9): built in a hidden
+folder that takes its place in one rename (:class:`~vpid_bench.fileio.WholeFolder`), so a
+failed, interrupted or concurrent build leaves the old report or a new one, and a link
+planted in the old folder is removed, never followed. Stages pass data, never text:
+:func:`.compute.compute`, then :func:`_assemble` fills one :class:`~.model.ReportModel`,
+which the renderers only format. ``short=True`` (a single job's report) has no tests or
+figures and imports neither pandas, matplotlib nor scipy.stats."""
 
 from __future__ import annotations
 

@@ -439,11 +439,10 @@ def _limits_without_truth(v: Verdict) -> str:
 
 def _no_truth_lines(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
     """The paragraphs and tables a context without a truth adds below its ranking."""
-    out: list[tuple[str, list[str], list[list[Any]]]] = []
     ranked = ("the objective" if r.metric == "f_best" else
               f"{escape(r.metric)} (held out) and, in the search columns, by the objective")
-    out.append((f"{NO_TRUTH if r.fits_a_record else NO_TRUTH_NO_RECORD}; ranked by {ranked}.",
-                [], []))
+    out: list[tuple[str, list[str], list[list[Any]]]] = [
+        (f"{NO_TRUTH if r.fits_a_record else NO_TRUTH_NO_RECORD}; ranked by {ranked}.", [], [])]
     ident = r.identified
     if ident is not None:
         sigma = ", ".join(fmt(s, 3) for s in ident.sigma)

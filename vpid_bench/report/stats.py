@@ -1,13 +1,11 @@
-"""Significance tests on the per-run metric (lower is better), from scipy.stats.
-
-Within a context: Kruskal–Wallis, and every pair compared two-sided (Wilcoxon signed-rank
-where the runs pair by instance, else Mann–Whitney U), Holm-corrected over the context's
-pairs; the effect size is Vargha–Delaney's A12. Across blocks (contexts, or the instances of
-one): Friedman, Nemenyi's post-hoc test (the critical-difference diagram) and pairwise
-Wilcoxon with Holm. Too few groups, runs or blocks give a note, not an error. Holm and
-Nemenyi are a few lines of numpy (the numbers of statsmodels and scikit-posthocs, which the
-tests check): importing those libraries costs more than the statistics themselves.
-"""
+"""Significance tests on the per-run metric (lower is better), from scipy.stats. Within a
+context: Kruskal–Wallis, and every pair compared two-sided (Wilcoxon signed-rank where the
+runs pair by instance, else Mann–Whitney U), Holm-corrected over the context's pairs; the
+effect size is Vargha–Delaney's A12. Across blocks (contexts, or the instances of one):
+Friedman, Nemenyi's post-hoc test and pairwise Wilcoxon with Holm. Too few groups, runs or
+blocks give a note, not an error. Holm and Nemenyi are a few lines of numpy (the numbers of
+statsmodels and scikit-posthocs, which the tests check): importing those libraries costs
+more than the statistics themselves."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """Ties are ties: the ONE rule by which the report calls runs and optimizers equal, and how
-it breaks the tie.
+it breaks the tie:
 
 * Runs of one instance whose objectives lie within :data:`OBJECTIVE_RTOL` ended at the same
   optimum: :func:`snap_ties` gives them the lowest one's metrics before any test, ranking or
@@ -8,8 +8,7 @@ it breaks the tie.
   ordered by cost to the optimum (:func:`cheapest`: ERT, then seconds, within
   :data:`COST_TIE`); the verdict breaks its ties the same way.
 * At a rung of the budget ladder, shares within :data:`SHARE_TIE` of the highest solve as
-  many (:func:`share_leaders`), the higher suite score first.
-"""
+  many (:func:`share_leaders`), the higher suite score first."""
 
 from __future__ import annotations
 
