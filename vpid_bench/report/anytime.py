@@ -16,7 +16,9 @@ from typing import Any
 
 import numpy as np
 
+from . import figures
 from .optima import rel_gap
+from .styles import legend, lookup
 
 #: The fixed targets on the relative gap to the instance's optimum.
 TARGETS: tuple[float, ...] = tuple(10.0 ** -k for k in range(7))
@@ -166,12 +168,9 @@ def ecdf_figure(runs: Sequence[RunHits], context: str, path: Path,
     sel = [r for r in runs if r.context == context]
     if not sel:
         return f"no run of {context} knows its instance's optimum"
-    from .figures import _plt, save
-    from .styles import legend, lookup
-
     b = context_budget(runs, context)
     grid = np.unique(np.round(np.geomspace(1.0, max(b, 2.0), 300)))
-    fig, ax = _plt().subplots(figsize=(7.0, 4.4))
+    fig, ax = figures._plt().subplots(figsize=(7.0, 4.4))
     groups = sorted(_groups(sel).items())
     look = lookup(style_of, [a for (_, a), _ in groups])
     for (_, algorithm), g in groups:
@@ -187,7 +186,7 @@ def ecdf_figure(runs: Sequence[RunHits], context: str, path: Path,
                  fontsize=9)
     legend(ax, len(groups))
     ax.grid(True, which="major", alpha=0.3)
-    return save(fig, path)
+    return figures.save(fig, path)
 
 
 def costs_to_optimum(hits: Sequence[Any]) -> dict[tuple[str, str], tuple[float, float]]:

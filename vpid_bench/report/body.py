@@ -18,6 +18,7 @@ from .load import by_context, reason
 from .render import para
 from .safe import escape, inert_markdown
 from .sections import HeadlineColumn, Section
+from .suite_scores import ladder_table, score_table
 
 
 def sources_md(model: Any, _: str | None) -> list[str]:
@@ -311,8 +312,6 @@ def suite_md(model: Any, _: str | None) -> list[str]:
     """"Across the suite": the score of every optimizer over all problems, the best per
     family and per dimension, the aggregated ECDF figure and the budget ladder (see
     :mod:`.suite_scores`)."""
-    from .suite_scores import score_table
-
     if model.suite is None:
         return []
     rows, fig = model.suite.rows, model.suite.figure
@@ -352,8 +351,6 @@ def ladder_md(rows: Sequence[Sequence[Any]], scores: Sequence[Sequence[Any]] = (
     pairs solved at 10, 100, 1,000 and 10,000 evaluations per dimension, read off the same
     runs, in the order of the scores (:func:`.suite_scores.ladder_table`); rungs no run
     reached are left out."""
-    from .suite_scores import ladder_table
-
     headers, shown = ladder_table(rows, scores)
     if not rows or len(headers) < 2:
         return []

@@ -23,12 +23,18 @@ from ..progress import Stages
 from ..store import csv_table, ioh
 from ..store.paths import inside, slug
 from . import answer, anytime, body, first_screen, outline, render, tables
+from . import suite_scores as ss
 from .compute import ReportData, compute
+from .core_figures import draw_all
 from .forked import run_forked
+from .interactive import suite_ecdf_figure
 from .load import LoadedRecords, NoRecordsError
 from .model import ReportModel, SuiteScores
 from .outline import full_report_command
 from .plugin_sections import plugin_sections
+from .site import check_links
+from .site_pages import interactive_figures, write_site
+from .styles import of_report
 
 __all__ = ["NoRecordsError", "Report", "build_report", "full_report_command"]
 
@@ -171,8 +177,6 @@ def _assemble(data: ReportData, names: _Names, registry: Any,
     written = _write_tables(data, names)
     model = ReportModel(data, first_screen.results(data), out_dir)
     if not data.short:
-        from .core_figures import draw_all
-
         model.figs = draw_all(data, names.file, progress)
         written += ioh.export_ioh(out_dir / ioh.FOLDER, data.loaded.records, data.rows, out_dir)
         model.suite, more = _suite_scores(data, registry, names)
@@ -197,8 +201,6 @@ def _assemble(data: ReportData, names: _Names, registry: Any,
 
 def _add_interactive(model: ReportModel) -> None:
     """The interactive figures of each context; a failure costs them only, and is said."""
-    from .site_pages import interactive_figures
-
     try:
         model.interactive = interactive_figures(model.data)
     except Exception as exc:  # noqa: BLE001 - a figure's fault costs the figures only
@@ -210,9 +212,6 @@ def _add_interactive(model: ReportModel) -> None:
 
 def _render(model: ReportModel, names: _Names) -> tuple[Path, list[Path]]:
     """``report.md`` (:mod:`.outline`) and the HTML site, ``index.html`` first."""
-    from .site import check_links
-    from .site_pages import write_site
-
     md = names.claim(names.root / "report.md")
     md.write_text("\n".join(outline.markdown(model)), encoding="utf-8")
     site = write_site(model, names.claim)
@@ -278,10 +277,6 @@ def _suite_scores(data: ReportData, registry: Any, names: _Names
     """The scores across the suite (none for fewer than two distinct problems with known
     optima: two population sizes of one problem are one problem), their tables and figure
     (:mod:`.suite_scores`)."""
-    from . import suite_scores as ss
-    from .interactive import suite_ecdf_figure
-    from .styles import of_report
-
     facts = ss.context_facts(data.loaded.records, data.rows, ss.family_lookup(registry))
     if len(ss.problems_scored(data.rows, data.hits)) < 2:
         return None, []

@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from ..progress import Stages
-from . import anytime, diagnostics, estimates, estimator_floors, rankings, tables, ties
+from . import anytime, diagnostics, estimates, estimator_floors, load, rankings, stats, tables, ties
 from .forked import run_forked
 from .identifiability import crb_norm_by_context, crb_norms_by_instance
 from .load import LoadedRecords, NoRecordsError, by_context, load_records, reason, run_rows
@@ -223,10 +223,7 @@ def _add_archive(loaded: LoadedRecords, archive: bool | Path) -> tuple[list[Any]
 
 
 def _tests(rows: list[dict[str, Any]], search: list[dict[str, Any]], alpha: float) -> Tests:
-    from . import stats
-    from .load import runs_frame
-
-    df = runs_frame(rows)
+    df = load.runs_frame(rows)
     sdf = rankings.search_test_frame(df)
     sdf = sdf[sdf["context"].isin({s["context"] for s in search})]
     # two families of tests, each a few seconds over an archive: side by side (.forked)
@@ -241,13 +238,11 @@ def _tests(rows: list[dict[str, Any]], search: list[dict[str, Any]], alpha: floa
 
 def _set_groups(items: list[dict[str, Any]], pairs: Any) -> None:
     """Each row's rank group (compact letters from the Holm-corrected pairwise tests)."""
-    from .stats import rank_groups
-
     for context, g in by_context(items).items():
         n = "n_runs" if "n_runs" in g[0] else "n"
         order = [s["algorithm"] for s in sorted((s for s in g if s.get(n)),
                                                 key=lambda s: s["rank"])]
-        letters = rank_groups(pairs, context, order) if order else {}
+        letters = stats.rank_groups(pairs, context, order) if order else {}
         for s in g:
             s["group"] = letters.get(s["algorithm"], "—")
 

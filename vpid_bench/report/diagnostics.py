@@ -12,12 +12,16 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ..analysis.diagnostics import MISFIT
 from ..analysis.intervals import Z95
 from ..store.job_checks import read_diagnostics
 from ..store.job_files import DIAGNOSTICS
+from .figures import _plt
 from .render import fmt
 from .safe import escape
+from .sections import Contribution, Section
 
 TITLE = "Fit diagnostics: residual autocorrelation and cross-correlation"
 
@@ -162,10 +166,6 @@ def blocks(diag: Mapping[str, Any] | None, model_error: str = ""
 def draw(diag: Mapping[str, Any], title: str) -> Any:
     """Per channel: the residual's autocorrelation and its cross-correlation with each input,
     each with its 99 % band."""
-    import numpy as np
-
-    from .figures import _plt
-
     groups = diag["groups"]
     fig, axes = _plt().subplots(len(groups), 2, figsize=(9, 2.4 * len(groups) + 0.8),
                              squeeze=False)
@@ -198,8 +198,6 @@ def draw(diag: Mapping[str, Any], title: str) -> Any:
 
 def section(ctx: Any) -> Any:
     """The residual figure of the problem's best context (full report only)."""
-    from .sections import Contribution, Section
-
     if ctx.short:
         return None
     found = by_context(ctx.records, ctx.rows)

@@ -20,7 +20,7 @@ def by_context(records: Rows, rows: Rows) -> dict[str, dict[str, Any]]:
 
 
 def sentence(data: Mapping[str, Any], unit: str, fmt: Any) -> str:
-    """``"median NoRE of each estimator's optimum on the first 5 instance(s): ordinary least
+    """``"median rel_error of each estimator's optimum on the first 5 instance(s): ordinary least
     squares (objective=ols) 27.1 %; ..."`` (the objectives of :data:`OBJECTIVES` it has)."""
     floors = data["floors"]
     parts = [f"{DESCRIPTION[o]} (objective={o}) {fmt(floors[o]['median'], 3)} {escape(unit)}"

@@ -14,6 +14,9 @@ from typing import Any
 
 import numpy as np
 
+from .stats import compact_letters
+from .styles import legend, lookup
+
 #: Resolution of every PNG (dots per inch).
 DPI = 110
 #: zlib level of the PNG files: 1 (not 6) saves 5 % of the drawing time, files 5-7 % larger.
@@ -187,8 +190,6 @@ def draw_convergence(panels: Sequence[Mapping[str, Any]], path: Path,
     context, log y axis; dashed: the objective at the truth, dotted: the record optimum."""
     if not panels:
         return "no finite objective values in the traces"
-    from .styles import legend, lookup
-
     look = lookup(style_of, [c["algorithm"] for p in panels for c in p["curves"]])
     ncol = min(len(panels), 2)
     nrow = -(-len(panels) // ncol)
@@ -370,8 +371,6 @@ def cd_data(ranks: Any, pvalues: Any) -> dict[str, Any] | str:
 def cd_bars(names: list[str], p: np.ndarray, alpha: float) -> list[list[str]]:
     """The bars of a critical-difference diagram: each group (two or more) no pair of which
     differs significantly, the columns of the compact letter display, best first."""
-    from .stats import compact_letters
-
     different = {frozenset((names[i], names[j])) for i in range(len(names))
                  for j in range(i + 1, len(names)) if p[i, j] < alpha}
     letters = compact_letters(list(names), different)
@@ -386,8 +385,6 @@ def draw_cd(data: Mapping[str, Any], title: str, axis_label: str, path: Path,
     per group of :func:`cd_bars`, each optimizer's elbow line to its label (better half
     left, the rest right), no two lines crossing."""
     names = [name for name, _ in data["ranks"]]
-    from .styles import lookup
-
     look = lookup(style_of, names)
     rank = {name: r for name, r in data["ranks"]}
     levels: list[float] = []  # the right end of the last bar placed on each level

@@ -21,6 +21,7 @@ from ..store.job_checks import finite, read_estimator_floors, read_identifiabili
 from ..store.job_files import ESTIMATORS, IDENTIFIABILITY
 from ..store.records import stable_hash
 from .estimator_floors import sentence as estimator_sentence
+from .figures import _plt
 from .load import Rows, first_file_by_context
 from .optima import opt_column_names
 from .safe import escape
@@ -224,8 +225,6 @@ def draw_design(design: Mapping[str, Any]) -> Any:
     """Bars: each parameter's bound (%, log axis); dots: the median |error| of the instances'
     optima; a dashed line at :data:`UNDETERMINED_PERCENT`."""
     from matplotlib.ticker import FuncFormatter
-
-    from .figures import _plt
 
     names = design["names"]
     crb = design["crb"]["crb_percent"]

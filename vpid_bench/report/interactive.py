@@ -12,6 +12,10 @@ from typing import Any
 import numpy as np
 
 from .anytime import RunHits, auc, context_budget, ecdf
+from .figures import convergence_panels, thin_steps
+from .identifiability import reference_levels
+from .load import trace_sets
+from .suite_scores import _budgets, _by, aggregated_ecdf
 
 #: At most this many points per curve (steps thinned as :func:`.figures.thin_steps` does).
 MAX_POINTS = 160
@@ -53,8 +57,6 @@ def _tuple(a: Any) -> tuple[float, ...]:
 
 def ecdf_figure(hits: Sequence[RunHits], context: str) -> Figure | None:
     """The fixed-target ECDF of ``context`` (``None``: no run knows its optimum)."""
-    from .figures import thin_steps
-
     sel = [h for h in hits if h.context == context]
     if not sel:
         return None
@@ -79,8 +81,6 @@ def ecdf_figure(hits: Sequence[RunHits], context: str) -> Figure | None:
 
 def convergence_figure(panel: Mapping[str, Any]) -> Figure:
     """One context's convergence (a panel of :func:`.figures.convergence_panels`)."""
-    from .figures import thin_steps
-
     context = str(panel["context"])
     series = []
     values = [np.asarray(panel["values"], float)]
@@ -112,10 +112,6 @@ def convergence_figure(panel: Mapping[str, Any]) -> Figure:
 def convergence_figures(records: Sequence[Mapping[str, Any]],
                         rows: Sequence[Mapping[str, Any]]) -> dict[str, Figure]:
     """Per context, its convergence figure (contexts without a finite trace left out)."""
-    from .figures import convergence_panels
-    from .identifiability import reference_levels
-    from .load import trace_sets
-
     traces = trace_sets(list(records), list(rows))
     if not traces:
         return {}
@@ -127,9 +123,6 @@ def suite_ecdf_figure(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, in
                       ) -> Figure | None:
     """The runtime ECDF aggregated over the suite (:func:`.suite_scores.aggregated_ecdf`),
     one series per optimizer that ran every problem; ``None`` below two problems."""
-    from .figures import thin_steps
-    from .suite_scores import _budgets, _by, aggregated_ecdf
-
     budgets, by_alg = _budgets(runs), _by(runs)
     contexts = sorted(c for c in budgets if c in facts)
     if len(contexts) < 2:

@@ -13,6 +13,7 @@ from typing import Any
 
 from ..fileio import write_refused
 from ..store.paths import UnsafePathError, inside
+from . import diagnostics, identifiability, signals
 from .model import PlacedSection
 from .sections import Contribution, HeadlineColumn, ReportContext, Section
 
@@ -23,8 +24,6 @@ def plugin_sections(registry: Any, data: Any, out_dir: Path, claim: Callable[[Pa
                     ) -> tuple[list[PlacedSection], list[HeadlineColumn], list[str]]:
     """Per problem: the core's sections, then the plugins'; with the headline columns they
     add and one line per failure."""
-    from . import diagnostics, identifiability, signals
-
     by_id = {r["run_id"]: r for r in data.loaded.records}
     sections: list[PlacedSection] = []
     columns: list[HeadlineColumn] = []

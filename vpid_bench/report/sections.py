@@ -17,6 +17,7 @@ from typing import Any
 
 from ..store.paths import inside, slug
 from . import render
+from .figures import save
 from .safe import escape
 
 
@@ -89,8 +90,6 @@ class ReportContext:
     def save_figure(self, fig: Any, name: str) -> Path:
         """Save a matplotlib figure as ``figures/<name>.png``, close it, return the path (the
         one way a section adds a figure)."""
-        from .figures import save
-
         return save(fig, self.path("figures", name, ".png"))
 
     @staticmethod

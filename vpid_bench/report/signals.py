@@ -9,7 +9,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ..store.artifacts import BEST_SIGNALS, BadArtifactError, read_best_signals
+from .figures import _plt
 from .sections import Contribution, ReportContext, Section
 
 TITLE = "Measured vs fitted signals of the best run"
@@ -18,10 +21,6 @@ TITLE = "Measured vs fitted signals of the best run"
 def draw_signals(t: Any, channels: Mapping[str, tuple[Any, Any]], units: Mapping[str, str],
                  title: str) -> Any:
     """Per channel a signal panel and a residual panel under it; one legend above all."""
-    import numpy as np
-
-    from .figures import _plt
-
     names = sorted(channels)
     ratios = [r for _ in names for r in (3, 1.2)]
     fig, axes = _plt().subplots(2 * len(names), 1, figsize=(7.5, 3.6 * len(names) + 0.8),

@@ -13,6 +13,8 @@ from ..store.ioh import FOLDER as IOH_FOLDER
 from ..store.paths import slug
 from . import answer as answers
 from . import body, outline, styles, svg
+from .diagnostics import plain_line
+from .first_screen import extra_blocks
 from .site import (
     ASSET_DIR,
     ASSETS,
@@ -24,6 +26,7 @@ from .site import (
     table,
     written_tables,
 )
+from .suite_scores import GROUP_SHOWN, ladder_table, score_table
 
 #: The search-quality columns of a problem page: (header, key of a search row).
 SEARCH_COLUMNS = (("rank", "rank"), ("group", "group"), ("optimizer", "algorithm"),
@@ -67,8 +70,6 @@ def _links(pages: Pages) -> dict[str, Any]:
 
 
 def _index(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, Any]:
-    from .diagnostics import plain_line
-
     data = model.data
     of = model.problem_of()
     verdicts = []
@@ -117,8 +118,6 @@ def decision(v: Any, pages: Pages) -> dict[str, Any] | None:
 
 
 def _suite(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, Any] | None:
-    from .suite_scores import GROUP_SHOWN, ladder_table, score_table
-
     s = model.suite
     if s is None or not s.rows:
         return None
@@ -148,7 +147,7 @@ def _context_block(model: Any, pages: Pages, r: Any, style_of: Mapping[str, Any]
     search = table([h + (unit if k == "floor_median" else "") for h, k in SEARCH_COLUMNS],
                    [[s.get(k) for _, k in SEARCH_COLUMNS] for s in srows],
                    _links(pages)) if srows else None
-    stats_rows = [s for s in data.summary if s["context"] == r.context]
+    stats_rows = data.metric_rows(r.context)
     stats = table([h + (unit if h in ("median", "q1", "q3", "mean", "sd", "best", "worst")
                         else "") for h, _ in body.STATS_MD],
                   [[s.get(k) for _, k in body.STATS_MD] for s in stats_rows], _links(pages),
@@ -161,8 +160,6 @@ def _context_block(model: Any, pages: Pages, r: Any, style_of: Mapping[str, Any]
             counter[0] += 1
             figures.append((key, {"figure": fig, "layout": svg.layout(fig, style_of),
                                   "id": f"fig{counter[0]}"}))
-    from .first_screen import extra_blocks
-
     extra = [{"text": text, "table": table(h, rows, _links(pages)) if h else None}
              for text, h, rows in extra_blocks(r)]
     return {"context": r.context, "anchor": _anchor(r.context), "verdict": r.verdict,
@@ -210,8 +207,6 @@ def _optimizer(model: Any, pages: Pages, name: str) -> dict[str, Any]:
                      q.get("rel_gap_median"), q.get("auc")])
     suite = None
     if model.suite is not None and model.suite.rows:
-        from .suite_scores import GROUP_SHOWN, score_table
-
         mine = [row for kind in ("all", "family", "dimension")
                 for row in ([["all problems", *r] for r in score_table(model.suite.rows)[1]]
                             if kind == "all" else score_table(model.suite.rows, kind)[1])

@@ -15,6 +15,8 @@ from typing import Any
 import numpy as np
 
 from .anytime import RunHits, auc, context_budget, ecdf
+from .figures import _plt, save
+from .styles import lookup
 
 #: Bootstrap draws of the score interval, and the interval's level.
 N_BOOT = 2000
@@ -133,8 +135,6 @@ def figure(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]], path: 
           if g.kind in ("all", "family")][:6]
     if len(gs[0].contexts) < 2:
         return "needs runs with known optima on two or more problems"
-    from .figures import _plt, save
-
     dims = {c: facts[c][1] for c in budgets}
     top = max(budgets[c] / max(dims[c], 1) for c in budgets)
     grid = np.geomspace(min(1.0 / max(dims.values()), 0.1), max(top, 1.0), 300)
@@ -142,8 +142,6 @@ def figure(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]], path: 
     nrows = math.ceil(len(gs) / cols)
     fig, axes = _plt().subplots(nrows, cols, figsize=(5.2 * cols, 3.8 * nrows), squeeze=False)
     by_alg = _by(runs)
-    from .styles import lookup
-
     look = lookup(style_of, by_alg)
     for ax, g in zip(axes.ravel(), gs):
         for alg, per in sorted(by_alg.items()):
