@@ -50,15 +50,6 @@ def hit_times(evaluations: Sequence[float], gaps: Sequence[float],
     return tuple(float(ev[i[0]]) if i.size else math.nan for i in hit)
 
 
-def batch_numbers(trace: Mapping[str, Any], n: int) -> list[float]:
-    """The batch number of each of the ``n`` trace entries (an archive's cut trace holds its
-    own, :func:`vpid_bench.store.archive_pack.compact_trace`)."""
-    batch = trace.get("batch")
-    if isinstance(batch, list) and len(batch) == n:
-        return [float(b) for b in batch]
-    return [float(i) for i in range(1, n + 1)]
-
-
 def run_hits(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]],
              targets: Sequence[float] = TARGETS) -> list[RunHits]:
     """:class:`RunHits` of every successful run whose instance's optimum is known."""
@@ -79,7 +70,9 @@ def run_hits(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, A
         secs = (by_id[row["run_id"]].get("timing") or {}).get("trace_s") or []
         secs = secs if isinstance(secs, list) and len(secs) == len(ev) else [math.nan] * len(ev)
         secs = [float(v) if isinstance(v, (int, float)) else math.nan for v in secs]
-        index = batch_numbers(trace, len(ev))
+        index = trace.get("batch")  # each entry's batch (an archive's cut trace holds its own)
+        index = ([float(b) for b in index] if isinstance(index, list) and len(index) == len(ev)
+                 else [float(i) for i in range(1, len(ev) + 1)])
         out.append(RunHits(row["context"], row["algorithm"], max(budget, used), used,
                            hit_times(ev, gaps, targets), hit_times(index, gaps, targets),
                            hit_times(secs, gaps, targets), float(index[-1]),

@@ -11,9 +11,9 @@ from pathlib import Path
 from typing import Any
 
 from ..progress import Stages
-from . import anytime, diagnostics, estimates, estimator_floors, load, rankings, stats, tables, ties
+from . import anytime, diagnostics, estimates, load, rankings, stats, tables, ties
 from .forked import run_forked
-from .identifiability import crb_norm_by_context, crb_norms_by_instance
+from .identifiability import crb_norm_by_context, crb_norms_by_instance, estimator_floors_by_context
 from .load import LoadedRecords, NoRecordsError, by_context, load_records, reason, run_rows
 from .optima import add_optimum_columns, load_optima, opt_column_names
 
@@ -170,7 +170,7 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
     return ReportData(paths, short, alpha, baseline, loaded, rows, summary, search, hits,
                       optima_errors, crb_norm_by_context(loaded.records, rows),
                       rankings.box_centred(loaded.records, rows), verdicts, tests,
-                      estimator_floors.by_context(loaded.records, rows), notes, truthless,
+                      estimator_floors_by_context(loaded.records, rows), notes, truthless,
                       estimates.identified_by_context(loaded.records, rows, truthless),
                       estimates.comparisons_by_context(loaded.records, rows),
                       crb_norms_by_instance(loaded.records, rows),

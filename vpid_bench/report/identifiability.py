@@ -16,11 +16,11 @@ from typing import Any
 from ..analysis.identifiability import ROUNDING
 from ..analysis.optimum import find_optimum, load_optima, record_settings
 from ..analysis.profile import STRUCTURAL_RATIO
+from ..estimators import DESCRIPTION, OBJECTIVES
 from ..problem import FILLED_PARAMS
 from ..store.job_checks import finite, read_estimator_floors, read_identifiability
 from ..store.job_files import ESTIMATORS, IDENTIFIABILITY
 from ..store.records import stable_hash
-from .estimator_floors import sentence as estimator_sentence
 from .figures import _plt
 from .load import Rows, first_file_by_context
 from .optima import opt_column_names
@@ -91,6 +91,13 @@ def _read_bounds(path: Path, rec: Mapping[str, Any]) -> dict[str, Any] | None:
     """A job's ``identifiability.json`` for the record's parameters (``None``: unreadable)."""
     names = list((rec.get("parameters") or {}).get("names") or [])
     return read_identifiability(path, names)[0] if path.exists() else None
+
+
+def estimator_floors_by_context(records: Rows, rows: Rows) -> dict[str, dict[str, Any]]:
+    """Per context, the first readable ``estimators.json`` of its jobs: each estimator's floor
+    (:func:`vpid_bench.store.job_checks.read_estimator_floors`)."""
+    return first_file_by_context(records, rows, ESTIMATORS,
+                                 lambda path, _: read_estimator_floors(path)[0])
 
 
 def crb_norm_by_context(records: Rows, rows: Rows) -> dict[str, float]:
@@ -268,9 +275,13 @@ def _design_text(ctx: ReportContext, design: Mapping[str, Any]) -> str:
                if floor is not None else "; no instance optimum was found for a measured floor")
             + f". Condition number {ctx.fmt(cond, 3) if cond is not None else 'infinite'}; "
             f"singular values {', '.join(ctx.fmt(v, 3) for v in s)}. ")
-    if design.get("estimators"):
-        text += "Floors per estimator: " + estimator_sentence(
-            design["estimators"], design["unit"], ctx.fmt) + ". "
+    est = design.get("estimators")
+    if est:  # "...: ordinary least squares (objective=ols) 27.1 %; ..."
+        floors, unit = est["floors"], escape(design["unit"])
+        text += (f"Floors per estimator: median {escape(est['metric'])} of each estimator's "
+                 f"optimum on the first {est['instances']} instance(s): " + "; ".join(
+                     f"{DESCRIPTION[o]} (objective={o}) {ctx.fmt(floors[o]['median'], 3)} "
+                     f"{unit}".rstrip() for o in OBJECTIVES if floors.get(o) is not None) + ". ")
     if cond is None or cond >= 1.0 / STRUCTURAL_RATIO:
         text += ("The record is blind to a combination of the parameters (a structural "
                  "symmetry: the smallest singular value is at most "

@@ -154,11 +154,6 @@ def figure_scope(title: str, names: Iterable[str]) -> bool:
     return any(title.endswith(f", {n}") for n in names)
 
 
-def written_tables(out_dir: Path) -> list[str]:
-    folder = out_dir / "tables"
-    return sorted(p.name for p in folder.glob("*.csv")) if folder.is_dir() else []
-
-
 def check_links(out_dir: Path, pages: Iterable[Path]) -> list[str]:
     """What the pages name that is no file of the report (empty: every ``href`` and ``src``
     resolves): the report's own links are the only links."""

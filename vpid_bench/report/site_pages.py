@@ -24,7 +24,6 @@ from .site import (
     relative,
     render_page,
     table,
-    written_tables,
 )
 from .suite_scores import GROUP_SHOWN, ladder_table, score_table
 
@@ -227,7 +226,7 @@ def _protocol(model: Any) -> dict[str, Any]:
     return {"parts": outline.shown_as_markdown(model, "protocol"),
             "archive_notes": data.archive_notes,
             "failures": [*model.section_errors, *data.optima_errors],
-            "tables": written_tables(model.out_dir),
+            "tables": sorted(p.name for p in (model.out_dir / "tables").glob("*.csv")),
             "ioh": (model.out_dir / IOH_FOLDER).is_dir()}
 
 

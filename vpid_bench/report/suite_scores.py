@@ -48,12 +48,6 @@ def context_facts(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[s
     return out
 
 
-def problems_scored(rows: Sequence[Mapping[str, Any]], runs: Sequence[RunHits]) -> set[str]:
-    """The distinct problems among the contexts whose runs know their optima."""
-    contexts = {h.context for h in runs}
-    return {r["problem"] for r in rows if r["context"] in contexts}
-
-
 def groups(facts: Mapping[str, tuple[str, int]]) -> list[Group]:
     """All contexts, then one group per family and per dimension that holds two or more
     contexts or differs from the whole."""

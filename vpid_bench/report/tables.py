@@ -18,11 +18,6 @@ from .render import p_text
 BASELINE = "random"
 
 
-def metric_names(rows: Rows) -> list[str]:
-    """The problem metrics present in the rows (keys ``metric.<name>``), first-seen order."""
-    return list(dict.fromkeys(k[7:] for r in rows for k in r if k.startswith("metric.")))
-
-
 def metric_stats(m: Sequence[float], f: Sequence[float]) -> dict[str, float]:
     """Statistics of the per-run metric ``m`` and objective ``f`` of the successful runs
     (empty for none); infinite values count (a run that found nothing finite is the worst)."""
@@ -49,7 +44,7 @@ def summarize(rows: Rows) -> list[dict[str, Any]]:
     groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
     for r in rows:
         groups.setdefault((r["context"], r["algorithm"]), []).append(r)
-    names = metric_names(rows)
+    names = list(dict.fromkeys(k[7:] for r in rows for k in r if k.startswith("metric.")))
     out = []
     for (context, algorithm), g in sorted(groups.items()):
         ok = [r for r in g if r["status"] == "ok"]
