@@ -92,9 +92,8 @@ def verdict_short(v: str) -> str:
     return v
 
 
-def headline(summary: list[dict[str, Any]], verdicts: list[str],
-              extra: list[HeadlineColumn], baseline: str
-              ) -> tuple[list[str], list[list[Any]], list[str], list[list[Any]]]:
+def headline(summary: list[dict[str, Any]], verdicts: list[str], extra: list[HeadlineColumn],
+             baseline: str) -> tuple[list[str], list[list[Any]], list[str], list[list[Any]]]:
     """(headers, rows) of the headline for Markdown/terminal (compact, in priority order,
     context first) and for the CSV (every column)."""
     any_failed = any(s["n_failed"] for s in summary)
@@ -345,8 +344,7 @@ def suite_md(model: Any, _: str | None) -> list[str]:
     return lines + ladder_md(model.suite.ladder, rows)
 
 
-def ladder_md(rows: Sequence[Sequence[Any]], scores: Sequence[Sequence[Any]] = ()
-              ) -> list[str]:
+def ladder_md(rows: Sequence[Sequence[Any]], scores: Sequence[Sequence[Any]] = ()) -> list[str]:
     """The budget ladder (:func:`.suite_scores.ladder_rows`): the share of (run, target)
     pairs solved at 10, 100, 1,000 and 10,000 evaluations per dimension, read off the same
     runs, in the order of the scores (:func:`.suite_scores.ladder_table`); rungs no run

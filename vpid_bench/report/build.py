@@ -232,8 +232,7 @@ class _Tables:
     def __init__(self, names: _Names) -> None:
         self.names, self.planned = names, []
 
-    def __call__(self, stem: str, headers: Sequence[str], rows: Sequence[Sequence[Any]]
-                 ) -> None:
+    def __call__(self, stem: str, headers: Sequence[str], rows: Sequence[Sequence[Any]]) -> None:
         self.planned.append((self.names.file("tables", stem, ".csv"), headers, rows))
 
     def write(self) -> list[Path]:

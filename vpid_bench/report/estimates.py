@@ -98,9 +98,8 @@ def comparisons_by_context(records: Rows, rows: Rows) -> dict[str, list[dict[str
     return first_file_by_context(records, rows, COMPARISONS, read_comparisons)
 
 
-def identified_by_context(records: Rows,
-                          rows: Rows,
-                          contexts: Mapping[str, bool]) -> dict[str, Identified]:
+def identified_by_context(records: Rows, rows: Rows, contexts: Mapping[str, bool]
+                          ) -> dict[str, Identified]:
     """Per context without a truth: the best ok run with readable intervals, and the
     profile started at the lowest objective."""
     by_id = {r["run_id"]: r for r in records}

@@ -57,11 +57,6 @@ def colours(n: int) -> list[Any]:
     return list(sns.color_palette("husl", n))
 
 
-def _use_log(values: np.ndarray) -> bool:
-    v = values[np.isfinite(values)]
-    return bool(v.size and np.all(v > 0) and v.max() / v.min() > 50)
-
-
 def extremes(values: np.ndarray) -> np.ndarray:
     """The few finite numbers of ``values`` that :func:`set_log_y` decides on (least,
     largest, least non-zero magnitude)."""
@@ -232,12 +227,13 @@ def runs_metric_data(df: Any, problem: str) -> dict[str, Any] | str:
     if d.empty:
         return f"no successful runs with a finite metric for {problem}"
     names = sorted(d["metric_name"].unique())
+    v = d["metric"].to_numpy(float)  # log axis: all positive, spanning more than 50 times
     values = {(str(a), str(c)): g["metric"].to_numpy(float)
               for (a, c), g in d.groupby(["algorithm", "context"], sort=True)}
     return {"problem": problem, "name": names[0] if len(names) == 1 else "metric",
             "order": sorted(map(str, d["algorithm"].unique())),
             "hue_order": sorted(map(str, d["context"].unique())), "values": values,
-            "log": _use_log(d["metric"].to_numpy(float))}
+            "log": bool(np.all(v > 0) and v.max() / v.min() > 50)}
 
 
 def draw_runs_metric(data: Mapping[str, Any], path: Path) -> Path | str:

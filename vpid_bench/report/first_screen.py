@@ -524,11 +524,6 @@ def _row_one_note(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]
     return [(f"Row 1 of the ranking is not the verdict's choice: {why}.", [], [])]
 
 
-def terminal_width() -> int:
-    """The terminal's width in columns (80 when it cannot be told, at least 40)."""
-    return max(40, shutil.get_terminal_size((80, 24)).columns)
-
-
 #: Joins the words of a name while the terminal's verdict is wrapped (never in the output).
 _GLUE = "\u00a0"
 
@@ -587,7 +582,7 @@ def terminal_text(items: Sequence[ContextResult], width: int | None = None,
                   answer: Any = None) -> str:
     """The same first screen for the terminal: the answer (:mod:`.answer`) first, then a
     table and a verdict per context, the prose wrapped to the terminal's width."""
-    width = width or terminal_width()
+    width = width or max(40, shutil.get_terminal_size((80, 24)).columns)  # 80 if unknown
     blocks = [answer_terminal(answer, width)] if answer is not None else []
     for r in items:
         extra = ""

@@ -81,8 +81,7 @@ def by_context(items: Iterable[Any]) -> dict[str, list[Any]]:
 def reason(path: Path, why: str) -> str:
     """``why`` without a leading ``path: `` (a :class:`CorruptRecordError` names its file,
     and the lines that quote it name the file already)."""
-    prefix = f"{path}: "
-    return why[len(prefix):] if why.startswith(prefix) else why
+    return why.removeprefix(f"{path}: ")
 
 
 def load_records(paths: Iterable[str | Path]) -> LoadedRecords:
@@ -115,10 +114,7 @@ def load_records(paths: Iterable[str | Path]) -> LoadedRecords:
             duplicates += 1
             continue
         seen.add(record["run_id"])
-        record = dict(record)
-        record["_file"] = str(path)
-        record["_job_dir"] = str(path.parent.parent)
-        records.append(record)
+        records.append({**record, "_file": str(path), "_job_dir": str(path.parent.parent)})
     statuses = {d: read_job_status(d) for d in sorted(job_dirs)}
     return LoadedRecords(records, skipped, duplicates, statuses)
 
@@ -167,9 +163,8 @@ def grouping(records: list[dict[str, Any]]) -> tuple[dict[str, list[str]], dict[
 IMPLIED_KEYS = ("budget", "iterations")
 
 
-def _drop_implied(
-    records: list[dict[str, Any]], keys: dict[str, list[str]]
-) -> dict[str, list[str]]:
+def _drop_implied(records: list[dict[str, Any]], keys: dict[str, list[str]]
+                  ) -> dict[str, list[str]]:
     """``keys`` without the implied keys that ps and the other varying keys determine."""
     out = {}
     for pname, varying in keys.items():
@@ -216,12 +211,10 @@ def run_labels(records: list[dict[str, Any]]) -> list[RunLabel]:
         pvary = {k: pflat.get(k) for k in problem_keys[pname]}
         ovary = {k: oflat.get(k) for k in optimizer_keys[oname]}
         # labels every renderer shows (tables, figures, the terminal): one printable line
-        context = clean(f"{pname} ps={_fmt(ps)}" + "".join(
-            f" {k}={_fmt(v)}" for k, v in pvary.items()
-        ))
-        algorithm = clean(oname + (
-            "[" + ",".join(f"{k}={_fmt(v)}" for k, v in ovary.items()) + "]" if ovary else ""
-        ))
+        context = clean(f"{pname} ps={_fmt(ps)}"
+                        + "".join(f" {k}={_fmt(v)}" for k, v in pvary.items()))
+        params = ",".join(f"{k}={_fmt(v)}" for k, v in ovary.items())
+        algorithm = clean(oname + (f"[{params}]" if ovary else ""))
         out.append(RunLabel(context, algorithm, ps, pvary, ovary))
     return out
 
@@ -361,9 +354,8 @@ def trace_sets(records: list[dict[str, Any]], rows: list[dict[str, Any]]
     return out
 
 
-def first_file_by_context(records: Rows, rows: Rows,
-                          name: str, read: Callable[[Path, Mapping[str, Any]], Any]
-                          ) -> dict[str, Any]:
+def first_file_by_context(records: Rows, rows: Rows, name: str,
+                          read: Callable[[Path, Mapping[str, Any]], Any]) -> dict[str, Any]:
     """Per context, the first file ``name`` of its jobs (each tried once) that
     ``read(path, record)`` accepts (returns other than ``None``)."""
     out: dict[str, Any] = {}

@@ -55,8 +55,7 @@ def rel_gap(gap: float, f_opt: float) -> float:
     return gap / abs(f_opt) if f_opt != 0 else gap
 
 
-def distance_percent(x: Sequence[float], x_opt: Sequence[float], x_true: Sequence[float]
-                     ) -> float:
+def distance_percent(x: Sequence[float], x_opt: Sequence[float], x_true: Sequence[float]) -> float:
     """``100 ||(x - x_opt) / x_true||`` (%); NaN when a value is missing or a truth zero."""
     try:
         terms = [100.0 * (float(a) - float(b)) / float(t)

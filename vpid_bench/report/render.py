@@ -197,8 +197,7 @@ def latex(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4
                     tablefmt="latex_booktabs", disable_numparse=True)
 
 
-def write_table(path: Path, headers: Sequence[str], rows: Sequence[Sequence[Any]]
-                ) -> list[Path]:
+def write_table(path: Path, headers: Sequence[str], rows: Sequence[Sequence[Any]]) -> list[Path]:
     """``path`` (CSV, full precision) and its ``.tex`` (booktabs)."""
     csv_table.write_csv(path, headers, rows)
     tex = path.with_suffix(".tex")

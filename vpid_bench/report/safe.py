@@ -17,12 +17,6 @@ from __future__ import annotations
 import re
 
 
-def _visible(char: str) -> str:
-    """A character that is not printable as its Python escape (``\\x1b``, ``\\n``,
-    ``\\u202e``): visible, and inert on any terminal."""
-    return repr(char)[1:-1]
-
-
 def clean(text: object, keep_newlines: bool = False) -> str:
     """``text`` as printable characters only: every control, format or separator character
     but the space written as its escape (ESC as ``\\x1b``), so it cannot act on a terminal
@@ -32,7 +26,7 @@ def clean(text: object, keep_newlines: bool = False) -> str:
         return "\n".join(clean(line) for line in s.split("\n"))
     if s.isprintable():  # the usual case, in one pass
         return s
-    return "".join(c if c.isprintable() else _visible(c) for c in s)
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in s)  # its Python escape
 
 
 _MD_ESCAPES = {"|": "\\|", "&": "&amp;", "<": "&lt;", ">": "&gt;", "`": "'",

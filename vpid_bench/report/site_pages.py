@@ -170,8 +170,7 @@ def _context_block(model: Any, pages: Pages, r: Any, style_of: Mapping[str, Any]
             "stats": stats, "figures": figures}
 
 
-def _problem(model: Any, pages: Pages, problem: str, style_of: Mapping[str, Any]
-             ) -> dict[str, Any]:
+def _problem(model: Any, pages: Pages, problem: str, style_of: Mapping[str, Any]) -> dict[str, Any]:
     contexts = model.contexts_of(problem)
     counter = [0]
     blocks = [_context_block(model, pages, r, style_of, counter)

@@ -405,8 +405,7 @@ def friedman_test(table: np.ndarray, seed: int = 0) -> tuple[float, float, str]:
     return chi2, float(res.pvalue), how
 
 
-def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts"
-                      ) -> FriedmanResult:
+def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts") -> FriedmanResult:
     """Friedman, Nemenyi and pairwise Wilcoxon (Holm) on a blocks x algorithms DataFrame,
     with at least :data:`MIN_BLOCKS` blocks and 3 algorithms (else a note says why not)."""
     import pandas as pd
@@ -446,8 +445,7 @@ def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts"
     return res
 
 
-def friedman_across_blocks(df: Any, alpha: float = ALPHA, value: str = "metric"
-                           ) -> FriedmanResult:
+def friedman_across_blocks(df: Any, alpha: float = ALPHA, value: str = "metric") -> FriedmanResult:
     """Friedman over contexts as blocks, on each algorithm's median ``value`` per context;
     not run where the contexts fit the same instances (not independent blocks)."""
     ok = _ok(df, value)

@@ -176,8 +176,7 @@ LADDER: tuple[int, ...] = (10, 100, 1000, 10000)
 LADDER_HEADERS = ["group", "algorithm", *[f"solved_at_{k}D" for k in LADDER]]
 
 
-def ladder_rows(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]]
-                ) -> list[list[Any]]:
+def ladder_rows(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]]) -> list[list[Any]]:
     """Per optimizer that ran every context, the aggregated ECDF at each rung of
     :data:`LADDER` (``nan`` beyond some context's budget)."""
     budgets = _budgets(runs)
@@ -200,12 +199,6 @@ SCORE_SHOWN = ["rank", "optimizer", "score (mean AUC, 0 to 1)", "95 % interval",
 GROUP_SHOWN = ["group", *SCORE_SHOWN]
 
 
-def _score_row(r: Sequence[Any]) -> list[Any]:
-    """A score row as shown: three decimals (as text), the share solved in whole percent."""
-    return [r[2], f"{float(r[5]):.3f}", f"[{r[6]:.3f}, {r[7]:.3f}]",
-            round(100 * float(r[8])), r[4]]
-
-
 def score_table(rows: Sequence[Sequence[Any]], kind: str = "all"
                 ) -> tuple[list[str], list[list[Any]]]:
     """The scores of one kind of group as a reader sees them, best first within each group."""
@@ -213,10 +206,11 @@ def score_table(rows: Sequence[Sequence[Any]], kind: str = "all"
     for name in dict.fromkeys(r[1] for r in rows if r[0] == kind):
         ranked = sorted((r for r in rows if r[0] == kind and r[1] == name),
                         key=lambda r: (-float(r[5]), r[2]))
-        for k, r in enumerate(ranked, 1):
+        for k, r in enumerate(ranked, 1):  # three decimals (as text), solved in whole percent
             group = f"{r[1]} ({r[3]} problem{'s' if r[3] != 1 else ''})"
-            out.append(([] if kind == "all" else [group])
-                       + [k, *_score_row(r)])
+            out.append(([] if kind == "all" else [group]) + [
+                k, r[2], f"{float(r[5]):.3f}", f"[{r[6]:.3f}, {r[7]:.3f}]",
+                round(100 * float(r[8])), r[4]])
     return (SCORE_SHOWN if kind == "all" else GROUP_SHOWN), out
 
 

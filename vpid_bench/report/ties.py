@@ -66,8 +66,7 @@ def snap_ties(rows: list[dict[str, Any]], records: Sequence[Mapping[str, Any]]) 
     return changed
 
 
-def cheapest(items: Sequence[T], cost: Callable[[T], tuple[float, float]]
-             ) -> tuple[T, str]:
+def cheapest(items: Sequence[T], cost: Callable[[T], tuple[float, float]]) -> tuple[T, str]:
     """The cheapest of ``items`` to reach the optimum (``cost(item) = (evaluations,
     seconds)``, within :data:`COST_TIE` a tie): ``(item, "evaluations" | "seconds")``, or
     ``(items[0], "")`` when cost does not decide."""
@@ -123,8 +122,7 @@ def rank_with_ties(summary: list[dict[str, Any]],
     summary[:] = out
 
 
-def share_leaders(shares: Mapping[str, float], scores: Mapping[str, float]
-                  ) -> tuple[str, ...]:
+def share_leaders(shares: Mapping[str, float], scores: Mapping[str, float]) -> tuple[str, ...]:
     """The optimizers whose share lies within :data:`SHARE_TIE` of the highest, highest
     ``scores`` first (then by name); empty when no share is finite."""
     finite = {k: v for k, v in shares.items() if math.isfinite(v)}

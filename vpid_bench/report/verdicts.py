@@ -245,8 +245,7 @@ def _choose(ev: Evidence, eligible: list[Method]) -> tuple[Method, str, list[Met
     return pick, basis, mlead, pool, []
 
 
-def _limit(pick: Method, floor: float, ratio: float, model_error: str = ""
-           ) -> tuple[str, float]:
+def _limit(pick: Method, floor: float, ratio: float, model_error: str = "") -> tuple[str, float]:
     """What limits the leader, and its median over the floor."""
     if not math.isfinite(floor) or floor < 0:
         return "", math.nan
@@ -329,8 +328,7 @@ def _base(ev: Evidence) -> dict[str, Any]:
         "cannot_identify": cannot_identify(ev, _median(list(ev.floors.values())))}
 
 
-def _verdict(kind: str, lead: Method, ev: Evidence, base: dict[str, Any], **kw: Any
-             ) -> Verdict:
+def _verdict(kind: str, lead: Method, ev: Evidence, base: dict[str, Any], **kw: Any) -> Verdict:
     """A verdict naming ``lead``, with what limits it (rule 4)."""
     limit, gain = _limit(lead, base["floor"], base["ratio"], ev.model_error)
     return Verdict(kind=kind, pick=lead.name, runs=lead.runs, median=lead.median, limit=limit,
