@@ -99,8 +99,7 @@ class ReportData:
             else None
 
     def floors(self, context: str) -> dict[Any, float]:
-        """Per instance of ``context`` with a known optimum: its floor (the optimum's
-        headline metric)."""
+        """Per instance with a known optimum: its floor (the optimum's headline metric)."""
         rows = [r for r in self.rows if r["context"] == context]
         column, _ = opt_column_names(rows)
         out: dict[Any, float] = {}
@@ -111,8 +110,7 @@ class ReportData:
         return out
 
     def groups(self, which: str, context: str) -> dict[str, str] | None:
-        """Rank-group letters of a context's ranking (``"metric"`` or ``"search"``), or
-        ``None`` untested."""
+        """Rank-group letters of the ``"metric"`` or ``"search"`` ranking (``None``: untested)."""
         if self.tests is None:
             return None
         items = self.metric_rows(context) if which == "metric" else self.search_rows(context)

@@ -72,8 +72,7 @@ def _interval(lo: float | None, hi: float | None) -> str:
 
 
 def no_truth(records: Rows, rows: Rows) -> dict[str, bool]:
-    """Per context, whether its problem has no truth: every record of it has
-    ``parameters.true`` null."""
+    """Per context, whether its problem has no truth (every record's ``parameters.true`` null)."""
     by_id = {r["run_id"]: r for r in records}
     out: dict[str, bool] = {}
     for row in rows:

@@ -89,8 +89,7 @@ def set_log_y(ax: Any, values: np.ndarray) -> str:
 # --- convergence -----------------------------------------------------------------------------
 
 def step_values(ev: np.ndarray, best: np.ndarray, grid: np.ndarray) -> np.ndarray:
-    """A best-so-far trace read at ``grid`` evaluation counts as a step function (NaN before
-    the first batch)."""
+    """A best-so-far trace as a step function read at ``grid`` (NaN before the first batch)."""
     idx = np.searchsorted(ev, grid, side="right") - 1
     return np.where(idx >= 0, best[np.clip(idx, 0, None)], np.nan)
 

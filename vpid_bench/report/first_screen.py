@@ -323,8 +323,7 @@ def _estimator(v: Verdict) -> str:
 
 
 def _limits(v: Verdict) -> str:
-    """What the records allow, and what limits the leader: search, the estimator or the
-    data."""
+    """What the records allow, and what limits the leader: search, the estimator or the data."""
     if not v.truth:
         return _limits_without_truth(v)
     parts = [_allowed(v)]
@@ -542,8 +541,7 @@ def _wrap_glued(marked: str, width: int) -> str:
 
 
 def _item(text: str, width: int) -> str:
-    """A list item wrapped at ``width``, its lines after the first indented ("8 %" kept on
-    one line)."""
+    """A list item wrapped at ``width``, later lines indented ("8 %" kept on one line)."""
     return textwrap.fill(" ".join(text.split()).replace(" %", _GLUE + "%"), width=width,
                          subsequent_indent="  ", break_long_words=False,
                          break_on_hyphens=False).replace(_GLUE, " ")

@@ -94,8 +94,7 @@ def _read_bounds(path: Path, rec: Mapping[str, Any]) -> dict[str, Any] | None:
 
 
 def estimator_floors_by_context(records: Rows, rows: Rows) -> dict[str, dict[str, Any]]:
-    """Per context, the first readable ``estimators.json`` of its jobs: each estimator's floor
-    (:func:`vpid_bench.store.job_checks.read_estimator_floors`)."""
+    """Per context, the first readable ``estimators.json`` of its jobs (each estimator's floor)."""
     return first_file_by_context(records, rows, ESTIMATORS,
                                  lambda path, _: read_estimator_floors(path)[0])
 
@@ -145,14 +144,10 @@ def _by_design(ctx: ReportContext) -> list[dict[str, Any]]:
                                "settings": record_settings(rec["problem"].get("config") or {})})
         except (TypeError, ValueError, AttributeError):
             continue
-        d = by_key.setdefault(key, {"contexts": [], "records": [], "rows": [], "jobs": []})
-        if row["context"] not in d["contexts"]:
-            d["contexts"].append(row["context"])
+        d = by_key.setdefault(key, {"contexts": {}, "records": [], "rows": [], "jobs": {}})
+        d["contexts"][row["context"]] = d["jobs"][ctx.job_dir(rec)] = None  # once each
         d["records"].append(rec)
         d["rows"].append(row)
-        job = ctx.job_dir(rec)
-        if job not in d["jobs"]:
-            d["jobs"].append(job)
     return list(by_key.values())
 
 
@@ -202,8 +197,7 @@ def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
     optima = optima_by_run(ctx.records)
     out = []
     for d in _by_design(ctx):
-        params = d["records"][0].get("parameters") or {}
-        names = list(params.get("names") or [])
+        names = list((d["records"][0].get("parameters") or {}).get("names") or [])
         crb = _first_bounds(d["jobs"], names, notes)
         if crb is None:
             continue
@@ -213,7 +207,7 @@ def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
                               [read_estimator_floors(job / ESTIMATORS)[0]] if data), None)
         out.append({
             "label": _design_label(d["rows"]), "contexts": sorted(d["contexts"]),
-            "names": names, "true": params.get("true"), "crb": crb, "metric": metric,
+            "names": names, "crb": crb, "metric": metric,
             "floor": statistics.median(floors.values()) if floors else None,
             "floor_errors": ([statistics.median(e[j] for e in errors.values())
                               for j in range(len(names))] if errors else None),
@@ -324,8 +318,7 @@ def _instances_text(ctx: ReportContext, crb: Mapping[str, Any]) -> str:
 
 
 def section(ctx: ReportContext) -> Contribution | None:
-    """The identifiability section of one problem's runs (``None``: no job wrote an
-    ``identifiability.json``)."""
+    """The identifiability section of one problem's runs (``None``: no identifiability.json)."""
     designs, notes = _designs(ctx)
     if not designs:
         if not notes:

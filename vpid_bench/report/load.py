@@ -252,8 +252,7 @@ def choose_metrics(records: list[dict[str, Any]], labels: list[RunLabel]) -> dic
 
 
 def metric_unit(record: Mapping[str, Any], name: str) -> str:
-    """The unit of metric ``name`` the problem states (``problem.info.metric_units``): a short
-    plain string, else ``""``."""
+    """The unit of metric ``name`` the problem states (``problem.info.metric_units``), or ``""``."""
     info = (record.get("problem") or {}).get("info")
     units = info.get("metric_units") if isinstance(info, Mapping) else None
     unit = units.get(name) if isinstance(units, Mapping) else None

@@ -73,7 +73,6 @@ def add_optimum_columns(rows: list[dict[str, Any]], records: Sequence[Mapping[st
     return one line per run below its instance's optimum."""
     by_id = {r["run_id"]: r for r in records}
     notes: list[str] = []
-    stems: list[str] = []
     computed: list[dict[str, Any]] = []
     for row in rows:
         rec = by_id[row["run_id"]]
@@ -89,8 +88,6 @@ def add_optimum_columns(rows: list[dict[str, Any]], records: Sequence[Mapping[st
             mnames = list(((rec.get("result") or {}).get("metrics") or {}).keys())
             mname = mnames[0] if mnames else next(iter(opt.metrics), None)
             stem = (mname or next(iter(opt.metrics), "rel_error")).lower()  # of the columns
-            if stem not in stems:
-                stems.append(stem)
             extra["f_opt"] = opt.f_opt
             extra["opt_on_edge"] = on_edge(opt.x_opt, rec.get("parameters") or {})
             if row["status"] == "ok":
@@ -112,10 +109,8 @@ def add_optimum_columns(rows: list[dict[str, Any]], records: Sequence[Mapping[st
             extra[f"{stem}_to_opt"] = (distance_percent(x, opt.x_opt, true)
                                        if x and true else math.nan)
         computed.append(extra)
-    cols = ["instance", "f_opt", "gap", "rel_gap"]
-    for s in stems:
-        cols += [f"{s}_floor", f"{s}_to_opt"]
-    cols.append("opt_on_edge")
+    stems = dict.fromkeys(k for e in computed for k in e if k.endswith(("_floor", "_to_opt")))
+    cols = ["instance", "f_opt", "gap", "rel_gap", *stems, "opt_on_edge"]
     for row, extra in zip(rows, computed, strict=True):
         new = {}
         for k, v in row.items():

@@ -60,8 +60,7 @@ def search_summary(rows: Rows) -> list[dict[str, Any]]:
 
 
 def search_test_frame(df: Any) -> Any:
-    """The runs with ``rel_gap_test = max(rel_gap, REACHED)``, what the search tests
-    compare."""
+    """The runs with ``rel_gap_test = max(rel_gap, REACHED)``, what the search tests compare."""
     df = df.copy()
     df["rel_gap_test"] = np.maximum(df["rel_gap"].to_numpy(float), REACHED)
     df.loc[~np.isfinite(df["rel_gap"].to_numpy(float)), "rel_gap_test"] = np.nan
@@ -69,8 +68,7 @@ def search_test_frame(df: Any) -> Any:
 
 
 def box_centred(records: Rows, rows: Rows) -> dict[str, bool]:
-    """Per context: whether every record's box is centred on its true values (within
-    :data:`CENTRED`, relative)."""
+    """Per context: is every record's box centred on its true values (within :data:`CENTRED`)?"""
     context = {r["run_id"]: r["context"] for r in rows}
     out: dict[str, bool] = {}
     for rec in records:

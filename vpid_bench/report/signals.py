@@ -56,8 +56,7 @@ def draw_signals(t: Any, channels: Mapping[str, tuple[Any, Any]], units: Mapping
 
 
 def section(ctx: ReportContext) -> Contribution | None:
-    """The figure of the best run of ``ctx``'s problem (full report only; ``None``: no
-    signals)."""
+    """The figure of the best run of ``ctx``'s problem (full report only; ``None``: no signals)."""
     ok = [(row, rec) for row, rec in zip(ctx.rows, ctx.records, strict=True)
           if row["status"] == "ok" and math.isfinite(row["metric"])]
     if ctx.short or not ok:

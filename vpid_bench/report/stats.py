@@ -229,8 +229,7 @@ def _draw_counts(idx: np.ndarray, n: int) -> np.ndarray:
 
 
 def p_floor(method: str, two_sided: bool = True) -> float:
-    """The smallest p a permutation test gives (``1 / (N_RESAMPLES + 1)``, doubled when
-    two-sided), else 0."""
+    """A permutation test's smallest p, ``1 / (N_RESAMPLES + 1)`` (doubled two-sided), else 0."""
     return ((2.0 if two_sided else 1.0) / (N_RESAMPLES + 1)
             if method.startswith("permutation") else 0.0)
 
@@ -329,8 +328,7 @@ def compact_letters(order: list[str], different: set[frozenset[str]]) -> dict[st
 
 
 def rank_groups(pairs: Any, context: str, order: list[str]) -> dict[str, str]:
-    """Letters of :func:`compact_letters` for one context (an untested pair: not
-    separated)."""
+    """Letters of :func:`compact_letters` for one context (an untested pair is not separated)."""
     sub = pairs[(pairs["context"] == context) & pairs["significant"]]
     diff = {frozenset((r.a, r.b)) for r in sub.itertuples() if r.a in order and r.b in order}
     return compact_letters(order, diff)

@@ -36,8 +36,7 @@ T = TypeVar("T")
 
 
 def same(a: float, b: float, rtol: float = OBJECTIVE_RTOL) -> bool:
-    """Whether ``a`` and ``b`` are equal within ``rtol`` relative (non-finite: only equal
-    values)."""
+    """Whether ``a`` and ``b`` are equal within ``rtol`` relative (non-finite: only if equal)."""
     if not (math.isfinite(a) and math.isfinite(b)):
         return a == b
     return abs(a - b) <= rtol * max(abs(a), abs(b), 1e-300)
@@ -85,8 +84,7 @@ def cheapest(items: Sequence[T], cost: Callable[[T], tuple[float, float]]) -> tu
 
 
 def by_cost(items: Sequence[T], cost: Callable[[T], tuple[float, float]]) -> list[T]:
-    """``items`` cheapest first by :func:`cheapest` (the order of ``items`` where cost does
-    not decide)."""
+    """``items`` cheapest first by :func:`cheapest` (in their order where cost does not decide)."""
     rest, out = list(items), []
     while rest:
         pick, _ = cheapest(rest, cost)
