@@ -14,6 +14,7 @@ from typing import Any
 from ..store.archive import _plain
 from ..store.archive_records import Archive, instance_id, run_setting
 from ..store.optimum import Optimum
+from .ties import same
 
 #: Relative tolerance of the per-instance check (true parameters, objective at the truth).
 SAME_RTOL = 1e-9
@@ -34,9 +35,7 @@ def _close(a: Any, b: Any) -> bool:
     if isinstance(a, list) and isinstance(b, list):
         return len(a) == len(b) and all(_close(x, y) for x, y in zip(a, b, strict=True))
     if isinstance(a, (int, float)) and isinstance(b, (int, float)):
-        a, b = float(a), float(b)
-        return a == b or (math.isfinite(a) and math.isfinite(b)
-                          and abs(a - b) <= SAME_RTOL * max(abs(a), abs(b)))
+        return same(float(a), float(b), SAME_RTOL)
     return a is None and b is None
 
 

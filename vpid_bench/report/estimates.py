@@ -48,8 +48,7 @@ class Identified:
     def rows(self) -> tuple[list[str], list[list[Any]]]:
         """A table: parameter, unit, value, its Jacobian interval and half-width (%), and the
         profile interval where one was computed."""
-        headers = ["parameter", "unit", "value", "95 % interval (Jacobian)",
-                   "± %"]
+        headers = ["parameter", "unit", "value", "95 % interval (Jacobian)", "± %"]
         prof = self.profile
         if prof is not None:
             headers += ["likelihood's estimate", "95 % interval (profile)"]
@@ -106,14 +105,11 @@ def identified_by_context(records: Rows, rows: Rows, contexts: Mapping[str, bool
     for context in (c for c, none in contexts.items() if none):
         mine = [r for r in rows if r["context"] == context and r["status"] == "ok"]
         mine.sort(key=lambda r: (_key(r.get("metric")), _key(r.get("f_best"))))
-        for row in mine:
-            rec = by_id[row["run_id"]]
-            found = _identified(row, rec)
-            if found is not None:
-                found.profile, found.profile_note = _best_profile(
-                    [by_id[r["run_id"]] for r in mine], len(found.names))
-                out[context] = found
-                break
+        found = next(filter(None, (_identified(r, by_id[r["run_id"]]) for r in mine)), None)
+        if found is not None:
+            found.profile, found.profile_note = _best_profile(
+                [by_id[r["run_id"]] for r in mine], len(found.names))
+            out[context] = found
     return out
 
 

@@ -69,7 +69,7 @@ def format_column(values: Sequence[Any], digits: int = 4) -> list[str]:
     if not finite:
         return [fmt(v, digits) for v in values]
     if all(x.is_integer() and abs(x) < 1e9 for x in finite):
-        style, decimals = "int", 0
+        spec = "int"
     else:
         amax = max(abs(x) for x in finite)
         nonzero = [abs(x) for x in finite if x != 0.0]
@@ -79,21 +79,11 @@ def format_column(values: Sequence[Any], digits: int = 4) -> list[str]:
         decimals = min(MAX_DECIMALS, max(0, digits - 1 - lead_min))
         # Fixed point when the smallest value keeps `digits` figures and the largest needs
         # at most 8 characters of digits; otherwise scientific for the whole column.
-        if amin >= 1e-3 and amax < 1e6 and (lead_max + 1) + decimals <= 8:
-            style = "fixed"
-        else:
-            style, decimals = "sci", digits - 1
-    out = []
-    for v, x in zip(values, nums, strict=True):
-        if x is None or not math.isfinite(x):
-            out.append(fmt(v, digits))
-        elif style == "int":
-            out.append(str(int(x)))
-        elif style == "fixed":
-            out.append(f"{x:.{decimals}f}")
-        else:
-            out.append(f"{x:.{decimals}e}")
-    return out
+        fixed = amin >= 1e-3 and amax < 1e6 and (lead_max + 1) + decimals <= 8
+        spec = f".{decimals}f" if fixed else f".{digits - 1}e"
+    return [fmt(v, digits) if x is None or not math.isfinite(x)
+            else str(int(x)) if spec == "int" else format(x, spec)
+            for v, x in zip(values, nums, strict=True)]
 
 
 def cells(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4
