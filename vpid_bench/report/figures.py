@@ -57,17 +57,6 @@ def colours(n: int) -> list[Any]:
     return list(sns.color_palette("husl", n))
 
 
-def extremes(values: np.ndarray) -> np.ndarray:
-    """The few finite numbers of ``values`` that :func:`set_log_y` decides on (least,
-    largest, least non-zero magnitude)."""
-    v = np.asarray(values, float)
-    v = v[np.isfinite(v)]
-    if not v.size:
-        return v
-    nz = np.abs(v[v != 0])
-    return np.array([v.min(), v.max()] + ([nz.min()] if nz.size else []))
-
-
 def set_log_y(ax: Any, values: np.ndarray) -> str:
     """A logarithmic y axis when every finite value is positive, else a symmetric-log one
     (linear within the smallest non-zero magnitude); returns the scale name."""
@@ -143,8 +132,6 @@ def convergence_panels(traces: TraceSets, f_true: Mapping[str, float] | None = N
     """The convergence figure's data, one panel per context with a finite value: each
     optimizer's quartiles over its runs of the best-so-far on the context's evaluation grid,
     thinned. ``traces[context][algorithm]``: each run's (evaluations, best) arrays."""
-    f_true = dict(f_true or {})
-    f_opt = dict(f_opt or {})
     panels = []
     for context in sorted(traces):
         by_alg = traces[context]
@@ -162,19 +149,20 @@ def convergence_panels(traces: TraceSets, f_true: Mapping[str, float] | None = N
             if not with_value.any():
                 continue
             n_runs.add(int(with_value.sum()))
-            found.append(extremes(m))
+            v = m[np.isfinite(m)]  # what set_log_y decides on: least, largest, least non-zero
+            nonzero = np.abs(v[v != 0])
+            found.append(np.array([v.min(), v.max()] + ([nonzero.min()] if nonzero.size else [])))
             cols = ~np.all(np.isnan(m), axis=0)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
                 q = nan_column_quantiles(m[:, cols], [0.25, 0.5, 0.75])
-            x, q25, q50, q75 = thin_steps(grid[cols], q[0], q[1], q[2])
-            curves.append({"algorithm": algorithm, "x": x, "q25": q25, "median": q50,
-                           "q75": q75})
+            x, q25, q50, q75 = thin_steps(grid[cols], *q)
+            curves.append({"algorithm": algorithm, "x": x, "q25": q25, "median": q50, "q75": q75})
         if not curves:
             continue
         panels.append({"context": context, "curves": curves, "runs": sorted(n_runs),
-                       "values": np.concatenate(found), "f_true": f_true.get(context),
-                       "f_opt": f_opt.get(context)})
+                       "values": np.concatenate(found), "f_true": (f_true or {}).get(context),
+                       "f_opt": (f_opt or {}).get(context)})
     return panels
 
 
@@ -196,15 +184,12 @@ def draw_convergence(panels: Sequence[Mapping[str, Any]], path: Path,
             ax.fill_between(c["x"], c["q25"], c["q75"], color=st.colour, alpha=0.12,
                             step="post", linewidth=0)
         values = np.asarray(p["values"], float)
-        ft, fo = p.get("f_true"), p.get("f_opt")
-        if ft is not None and math.isfinite(ft):
-            ax.axhline(ft, color="black", ls="--", lw=1.0,
-                       label=f"f at the true parameters, median over instances ({ft:.4g})")
-            values = np.append(values, ft)
-        if fo is not None and math.isfinite(fo):
-            ax.axhline(fo, color="black", ls=":", lw=1.2,
-                       label=f"record optimum f*, median over instances ({fo:.4g})")
-            values = np.append(values, fo)
+        for level, ls, lw, what in ((p.get("f_true"), "--", 1.0, "f at the true parameters"),
+                                    (p.get("f_opt"), ":", 1.2, "record optimum f*")):
+            if level is not None and math.isfinite(level):
+                ax.axhline(level, color="black", ls=ls, lw=lw,
+                           label=f"{what}, median over instances ({level:.4g})")
+                values = np.append(values, level)
         scale = set_log_y(ax, values)
         ax.set_title(f"{p['context']}\n(runs per optimizer: {', '.join(map(str, p['runs']))})")
         ax.set_xlabel("objective evaluations used")

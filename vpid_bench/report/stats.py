@@ -261,17 +261,14 @@ def pairwise_by_context(df: Any, alpha: float = ALPHA, value: str = "metric") ->
                 for a, s in _ok(g, value).groupby("algorithm")} if paired else {}
         block = []
         for a, b in itertools.combinations(sorted(samples), 2):
-            x, y = samples[a], samples[b]
+            x, y = samples[a], samples[b]  # each of one run at least
+            effect = a12(x, y)
             row = {"context": context, "a": a, "b": b,
                    "test": TEST_PAIRED if paired else TEST_UNPAIRED, "p_method": "",
                    "n_a": len(x), "n_b": len(y), "n_pairs": np.nan,
-                   "median_a": float(np.median(x)) if len(x) else np.nan,
-                   "median_b": float(np.median(y)) if len(y) else np.nan,
-                   "U": np.nan, "W": np.nan, "p": np.nan, "A12": np.nan, "A12_lo": np.nan,
-                   "A12_hi": np.nan, "effect": "", "_lower": ""}
-            if len(x) and len(y):
-                row["A12"] = a12(x, y)
-                row["effect"] = a12_magnitude(row["A12"])
+                   "median_a": float(np.median(x)), "median_b": float(np.median(y)),
+                   "U": np.nan, "W": np.nan, "p": np.nan, "A12": effect, "A12_lo": np.nan,
+                   "A12_hi": np.nan, "effect": a12_magnitude(effect), "_lower": ""}
             if paired:
                 common = inst[a].index.intersection(inst[b].index)
                 row["n_pairs"] = len(common)
@@ -283,7 +280,7 @@ def pairwise_by_context(df: Any, alpha: float = ALPHA, value: str = "metric") ->
                     r = rankdata(np.abs(d[d != 0])) if (d != 0).any() else np.zeros(0)
                     plus, minus = r[d[d != 0] > 0].sum(), r[d[d != 0] < 0].sum()
                     row["_lower"] = a if plus < minus else b if minus < plus else ""
-            elif len(x) and len(y):
+            else:
                 row["A12_lo"], row["A12_hi"] = a12_interval(x, y, paired=False)
                 row["U"], row["p"], row["p_method"] = mann_whitney(x, y)
                 row["_lower"] = a if row["A12"] < 0.5 else b if row["A12"] > 0.5 else ""

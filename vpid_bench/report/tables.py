@@ -83,34 +83,27 @@ def baseline_verdicts(summary: Rows, pairs: Any, baseline: str = BASELINE) -> li
     """Per summary row, against its context's baseline: ``baseline``, ``beats it (...)``,
     ``does not clear it (...)``, ``WORSE than it (...)``, ``not tested`` or ``""`` (not
     run). ``pairs``: the pairwise tests, or ``None``."""
-    out = []
-    for r in summary:
+    def verdict(r: Mapping[str, Any]) -> str:
         bases = [b for b in summary if b["context"] == r["context"]
                  and b["optimizer"] == baseline]
-        if not bases:
-            out.append("")
-            continue
-        if r["optimizer"] == baseline:
-            out.append("baseline")
-            continue
+        if not bases or r["optimizer"] == baseline:
+            return "baseline" if bases else ""
         base = bases[0]["algorithm"]
         if pairs is None or pairs.empty:
-            out.append("not tested")
-            continue
+            return "not tested"
         sel = pairs[(pairs["context"] == r["context"])
                     & (((pairs["a"] == r["algorithm"]) & (pairs["b"] == base))
                        | ((pairs["a"] == base) & (pairs["b"] == r["algorithm"])))]
         if sel.empty or not np.isfinite(sel["p_holm"].iloc[0]):
-            out.append("not tested")
-            continue
+            return "not tested"
         detail = pair_detail(sel.iloc[0], r["algorithm"])
         if sel["better"].iloc[0] == r["algorithm"]:
-            out.append(f"beats it ({detail})")
-        elif sel["better"].iloc[0] == base:
-            out.append(f"WORSE than it ({detail})")
-        else:
-            out.append(f"does not clear it ({detail})")
-    return out
+            return f"beats it ({detail})"
+        if sel["better"].iloc[0] == base:
+            return f"WORSE than it ({detail})"
+        return f"does not clear it ({detail})"
+
+    return [verdict(r) for r in summary]
 
 
 def pair_detail(pair: Mapping[str, Any], first: str) -> str:
