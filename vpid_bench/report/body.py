@@ -30,18 +30,14 @@ def sources_md(model: Any, _: str | None) -> list[str]:
              para(f"Built {_dt.datetime.now(_dt.timezone.utc):%Y-%m-%d %H:%M UTC} from {n} run "
                   f"record(s) ({n_ok} ok, {n - n_ok} failed) found in:"), ""]
     lines += [f"- `{escape(p)}`" for p in model.data.paths]
-    notes = []
-    if loaded.duplicates:
-        notes.append(f"{loaded.duplicates} duplicate record(s) (same run id) were counted once.")
-    for p, why in loaded.skipped:
-        notes.append(f"**Skipped unreadable record** `{escape(p)}`: {escape(reason(p, why))}")
-    for d, why in loaded.failed_jobs:
-        notes.append(f"**Job not ok** `{escape(d)}`: {escape(why)}")
-    for r in model.data.rows:
-        if r["status"] != "ok":
-            notes.append(f"**Failed run** {escape(r['algorithm'])} on {escape(r['context'])}, "
-                         f"run {escape(r['run_index'])} (seed {escape(r['seed'])}): "
-                         f"{escape(r['error'])}")
+    notes = ([f"{loaded.duplicates} duplicate record(s) (same run id) were counted once."]
+             if loaded.duplicates else [])
+    notes += [f"**Skipped unreadable record** `{escape(p)}`: {escape(reason(p, why))}"
+              for p, why in loaded.skipped]
+    notes += [f"**Job not ok** `{escape(d)}`: {escape(why)}" for d, why in loaded.failed_jobs]
+    notes += [f"**Failed run** {escape(r['algorithm'])} on {escape(r['context'])}, run "
+              f"{escape(r['run_index'])} (seed {escape(r['seed'])}): {escape(r['error'])}"
+              for r in model.data.rows if r["status"] != "ok"]
     if notes:
         lines += ["", "Problems found:", ""]
         lines += [textwrap.fill(f"- {t}", width=render.PROSE_WIDTH,

@@ -22,7 +22,7 @@ from ..interrupts import raise_if_swallowed
 from ..progress import Stages
 from ..store import csv_table, ioh
 from ..store.paths import inside, slug
-from . import answer, anytime, body, first_screen, outline, render, tables
+from . import answer, anytime, body, first_screen, outline, rankings, render, tables
 from . import suite_scores as ss
 from .compute import ReportData, compute
 from .core_figures import draw_all
@@ -265,8 +265,7 @@ def _write_tables(data: ReportData, names: _Names) -> list[Path]:
     if data.hits:
         tables("ert", anytime.ERT_HEADERS, anytime.ert_rows(data.hits))
     if data.search:
-        keys = ["context", "rank", "group", "algorithm", "n", "reached", "share",
-                "rel_gap_median", "floor_median", "to_opt_median", "auc"]
+        keys = ["context", *(k for _, k in rankings.SEARCH_COLUMNS)]
         tables("search_quality", keys, [[s.get(k) for k in keys] for s in data.search])
     return written + tables.write()
 

@@ -22,6 +22,11 @@ from .ties import WORDS_RTOL, same
 CENTRED = 0.05
 #: Two medians within this relative distance are tied in words (:data:`.ties.WORDS_RTOL`).
 TIE_RTOL = WORDS_RTOL
+#: The search-quality columns of the HTML pages and the CSV: (header, key of a search row).
+SEARCH_COLUMNS = (("rank", "rank"), ("group", "group"), ("optimizer", "algorithm"),
+                  ("n", "n"), ("reached x*", "reached"), ("share reached", "share"),
+                  ("median rel_gap", "rel_gap_median"), ("floor", "floor_median"),
+                  ("median distance to x* (%)", "to_opt_median"), ("AUC", "auc"))
 
 
 def search_summary(rows: Rows) -> list[dict[str, Any]]:

@@ -15,6 +15,8 @@ from . import answer as answers
 from . import body, outline, styles, svg
 from .diagnostics import plain_line
 from .first_screen import extra_blocks
+from .interactive import convergence_figures, ecdf_figure
+from .rankings import SEARCH_COLUMNS
 from .site import (
     ASSET_DIR,
     ASSETS,
@@ -27,11 +29,6 @@ from .site import (
 )
 from .suite_scores import GROUP_SHOWN, ladder_table, score_table
 
-#: The search-quality columns of a problem page: (header, key of a search row).
-SEARCH_COLUMNS = (("rank", "rank"), ("group", "group"), ("optimizer", "algorithm"),
-                  ("n", "n"), ("reached x*", "reached"), ("share reached", "share"),
-                  ("median rel_gap", "rel_gap_median"), ("floor", "floor_median"),
-                  ("median distance to x* (%)", "to_opt_median"), ("AUC", "auc"))
 #: Core figures shown on the index (across problems) rather than on a problem's page.
 INDEX_FIGURES = ("Convergence", "Critical-difference diagram across blocks")
 
@@ -110,10 +107,10 @@ def decision(v: Any, pages: Pages) -> dict[str, Any] | None:
     """The headline of a :class:`.verdicts.Verdict`, names linked to their pages."""
     if v is None or v.kind == "empty":
         return None
-    names = [(n, pages.optimizer(n)) for n in v.tied]
     return {"kind": v.kind, "pick": (v.pick, pages.optimizer(v.pick)) if v.pick else None,
-            "tied": names, "limit": answers.LIMITS.get(v.limit, ""),
-            "not_beaten": list(v.not_beaten), "over_bound": v.over_bound}
+            "tied": [(n, pages.optimizer(n)) for n in v.tied],
+            "limit": answers.LIMITS.get(v.limit, ""), "not_beaten": list(v.not_beaten),
+            "over_bound": v.over_bound}
 
 
 def _suite(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, Any] | None:
@@ -231,8 +228,6 @@ def _protocol(model: Any) -> dict[str, Any]:
 
 def interactive_figures(data: Any) -> dict[str, dict[str, Any]]:
     """Per context, its ECDF and convergence figures (:mod:`.interactive`)."""
-    from .interactive import convergence_figures, ecdf_figure
-
     conv = convergence_figures(data.loaded.records, data.rows)
     return {c: {"ecdf": ecdf_figure(data.hits, c), "convergence": conv.get(c)}
             for c in data.contexts}

@@ -364,7 +364,6 @@ class FriedmanResult:
 
     blocks: list[str]
     algorithms: list[str]
-    medians: Any = None  # DataFrame blocks x algorithms
     statistic: float = float("nan")
     p: float = float("nan")
     p_method: str = ""
@@ -407,7 +406,7 @@ def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts") 
 
     table = table.dropna(axis=1, how="any")
     blocks, algos = [str(b) for b in table.index], list(table.columns)
-    res = FriedmanResult(blocks, algos, table, kind=kind)
+    res = FriedmanResult(blocks, algos, kind=kind)
     what = ("independent instances of the context" if kind == "instances" else
             "contexts such as problems or independent records")
     if len(blocks) < MIN_BLOCKS:
@@ -449,7 +448,7 @@ def friedman_across_blocks(df: Any, alpha: float = ALPHA, value: str = "metric")
         sets = [frozenset(map(str, g["instance"])) for _, g in ok.groupby("context")]
         if all(s == sets[0] for s in sets) and all(isinstance(v, str) for v in ok["instance"]):
             return FriedmanResult([str(b) for b in medians.index], list(medians.columns),
-                                  medians, note="not run: the contexts fit the same instances, "
+                                  note="not run: the contexts fit the same instances, "
                                   "so they are not independent blocks (the instances of each "
                                   "context are)")
     return friedman_on_table(medians, alpha, "contexts")

@@ -157,7 +157,6 @@ class Verdict:
     costs: tuple[Cost, ...] = ()
     next_pair: Mapping[str, Any] | None = None
     next_name: str | None = None
-    tested: bool = True
     single: bool = False
     over_bound: bool = False
     not_beaten: tuple[str, ...] = ()
@@ -309,9 +308,8 @@ def decide(ev: Evidence) -> Verdict:
 def _base(ev: Evidence) -> dict[str, Any]:
     """What every verdict of ``ev`` carries: its names and rule 4's levels."""
     base: dict[str, Any] = {
-        "context": ev.context, "metric": ev.metric, "unit": ev.unit, "tested": ev.tested,
-        "references": ev.references, "missing": ev.missing, "centred": ev.centred,
-        "estimator": ev.estimator, "truth": ev.truth}
+        "context": ev.context, "metric": ev.metric, "unit": ev.unit, "references": ev.references,
+        "missing": ev.missing, "centred": ev.centred, "estimator": ev.estimator, "truth": ev.truth}
     if not ev.methods:
         return base
     ratio = floor_over_bound(ev.floors, ev.bounds)
