@@ -110,17 +110,9 @@ class _Names:
         return self.claim(self.root / kind / (slug(name) + suffix))
 
 
-def build_report(
-    paths: Iterable[str | Path],
-    out_dir: str | Path,
-    *,
-    short: bool = False,
-    alpha: float = ALPHA,
-    baseline: str = tables.BASELINE,
-    registry: Any = None,
-    archive: bool | Path = False,
-    progress: Stages | None = None,
-) -> Report:
+def build_report(paths: Iterable[str | Path], out_dir: str | Path, *, short: bool = False,
+                 alpha: float = ALPHA, baseline: str = tables.BASELINE, registry: Any = None,
+                 archive: bool | Path = False, progress: Stages | None = None) -> Report:
     """Read the records below ``paths`` and write the report into ``out_dir``.
 
     ``registry`` (default: the installed plugins) gives the report sections; ``archive``:

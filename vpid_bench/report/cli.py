@@ -17,11 +17,9 @@ from .safe import clean
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
-        prog="vpid-bench-report",
-        description="Build a vpid-bench report (Markdown, HTML pages, CSV, LaTeX, PNG figures) "
-        "from the run records below one or more sweep or job folders, merged.",
-    )
+    p = argparse.ArgumentParser(prog="vpid-bench-report", description=(
+        "Build a vpid-bench report (Markdown, HTML pages, CSV, LaTeX, PNG figures) from the run "
+        "records below one or more sweep or job folders, merged."))
     p.add_argument("paths", nargs="+", type=Path, metavar="DIR",
                    help="sweep folders, job folders or record files (any number)")
     p.add_argument("-o", "--out", type=Path, default=Path("report"),

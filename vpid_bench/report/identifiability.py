@@ -325,17 +325,15 @@ def section(ctx: ReportContext) -> Contribution | None:
             return None
         return Contribution(sections=(Section(
             "Identifiability", ctx.para("Not built: " + "; ".join(notes) + ".")),))
-    files = ctx.write_table(
-        "identifiability",
-        ["context", "design", "parameter", "crb_percent", "floor_median_abs_error_percent",
-         "instances"],
+    files = ctx.write_table("identifiability", [
+        "context", "design", "parameter", "crb_percent", "floor_median_abs_error_percent",
+        "instances"],
         [[context, d["label"], name, d["crb"]["crb_percent"][j],
           d["floor_errors"][j] if d["floor_errors"] is not None else None, d["instances"]]
          for d in designs for j, name in enumerate(d["names"]) for context in d["contexts"]])
-    files += ctx.write_table(
-        "identifiability_designs",
-        ["design", "contexts", "crb_norm_percent", "floor_metric", "floor_median", "instances",
-         "condition_number", "singular_values", "sigma"],
+    files += ctx.write_table("identifiability_designs", [
+        "design", "contexts", "crb_norm_percent", "floor_metric", "floor_median", "instances",
+        "condition_number", "singular_values", "sigma"],
         [[d["label"], "; ".join(d["contexts"]), d["crb"]["crb_norm_percent"], d["metric"],
           d["floor"], d["instances"], d["crb"].get("condition_number"),
           " ".join(repr(float(v)) for v in d["crb"]["singular_values"]),

@@ -280,29 +280,22 @@ def run_rows(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
         f = _num(res.get("f_best")) if ok else math.nan
         name = chosen[lab.context]
         row: dict[str, Any] = {
-            "context": lab.context,
-            "problem": clean(r["problem"]["name"]),
-            "ps": lab.ps,
-            "algorithm": lab.algorithm,
-            "optimizer": clean(r["optimizer"]["name"]),
+            "context": lab.context, "problem": clean(r["problem"]["name"]), "ps": lab.ps,
+            "algorithm": lab.algorithm, "optimizer": clean(r["optimizer"]["name"]),
             **{clean(f"problem.{k}"): clean(_fmt(v)) for k, v in lab.problem_vary.items()
                if k != "budget"},
             **{clean(f"optimizer.{k}"): clean(_fmt(v)) for k, v in lab.optimizer_vary.items()},
-            "seed": (r.get("seeds") or {}).get("seed"),
-            "run_index": r.get("run_index"),
-            "status": r["status"],
-            "f_best": f,
+            "seed": (r.get("seeds") or {}).get("seed"), "run_index": r.get("run_index"),
+            "status": r["status"], "f_best": f,
             **{f"metric.{k}": mets.get(k, math.nan) for k in metric_names},
             "metric": (f if name == "f_best" else mets.get(name, math.inf)) if ok else math.nan,
-            "metric_name": name,
-            "metric_unit": metric_unit(r, name),
+            "metric_name": name, "metric_unit": metric_unit(r, name),
             "evaluations": res.get("evaluations", math.nan) if ok else math.nan,
             "budget": r.get("budget"),
             "wall_time_s": _num(timing.get("wall_time_s"), math.nan),
             "run_time_s": _num(timing.get("run_time_s"), math.nan),
             "stopped_by": res.get("stopped_by") if ok else None,
-            "error": (f"{error.get('type')}: {error.get('message')}" if error else None),
-        }
+            "error": (f"{error.get('type')}: {error.get('message')}" if error else None)}
         params = r.get("parameters") or {}
         names = params.get("names") or []
         n = len(names)

@@ -17,16 +17,7 @@ from .diagnostics import plain_line
 from .first_screen import extra_blocks
 from .interactive import convergence_figures, ecdf_figure
 from .rankings import SEARCH_COLUMNS
-from .site import (
-    ASSET_DIR,
-    ASSETS,
-    Pages,
-    figure_scope,
-    provenance,
-    relative,
-    render_page,
-    table,
-)
+from .site import ASSET_DIR, ASSETS, Pages, figure_scope, provenance, relative, render_page, table
 from .suite_scores import GROUP_SHOWN, ladder_table, score_table
 
 #: Core figures shown on the index (across problems) rather than on a problem's page.

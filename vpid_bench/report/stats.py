@@ -21,6 +21,14 @@ import numpy as np
 ALPHA = 0.05
 
 
+def _quiet(f: Any, *args: Any, **kwargs: Any) -> Any:
+    """``f(*args, **kwargs)`` with its warnings silenced (scipy's, on ties and tiny samples:
+    the tables say how each p was got)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return f(*args, **kwargs)
+
+
 def a12_magnitude(a12: float) -> str:
     """Vargha and Delaney's (2000) labels for |A12 - 0.5|: 0.06, 0.14, 0.21 thresholds."""
     d = abs(a12 - 0.5)
@@ -83,9 +91,7 @@ def kruskal_by_context(df: Any) -> Any:
             row["note"] = "not run: needs at least 2 optimizers with at least 2 runs each"
         else:
             try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    res = stats.kruskal(*usable.values())
+                res = _quiet(stats.kruskal, *usable.values())
                 row["H"], row["p"] = float(res.statistic), float(res.pvalue)
                 if not np.isfinite(row["p"]):
                     row["note"] = "undefined: all values are identical"
@@ -144,9 +150,7 @@ def _wilcoxon_cached(xb: bytes, yb: bytes) -> tuple[float, float, str]:
         return (*_wilcoxon_permutation(d), f"permutation ({N_RESAMPLES} resamples)")
     else:
         method, how = "asymptotic", "normal approximation"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res = stats.wilcoxon(x, y, method=method)
+    res = _quiet(stats.wilcoxon, x, y, method=method)
     return float(res.statistic), float(res.pvalue), how
 
 
@@ -183,9 +187,7 @@ def mann_whitney(x: np.ndarray, y: np.ndarray) -> tuple[float, float, str]:
         method, how = _permutation(), f"permutation ({N_RESAMPLES} resamples)"
     else:
         method, how = "asymptotic", "normal approximation"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res = stats.mannwhitneyu(x, y, alternative="two-sided", method=method)
+    res = _quiet(stats.mannwhitneyu, x, y, alternative="two-sided", method=method)
     p = float(res.pvalue)
     # every value tied: no variance, no evidence of a difference
     return float(res.statistic), (1.0 if math.isnan(p) else p), how
@@ -393,10 +395,7 @@ def friedman_test(table: np.ndarray, seed: int = 0) -> tuple[float, float, str]:
                                  vectorized=True, rng=np.random.default_rng(seed))
     exact = math.factorial(k) ** n <= N_RESAMPLES
     how = "exact (all permutations)" if exact else f"permutation ({N_RESAMPLES} resamples)"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        chi2 = float(stats.friedmanchisquare(*t.T).statistic)
-    return chi2, float(res.pvalue), how
+    return float(_quiet(stats.friedmanchisquare, *t.T).statistic), float(res.pvalue), how
 
 
 def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts") -> FriedmanResult:
@@ -421,9 +420,7 @@ def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts") 
     res.mean_ranks = table.rank(axis=1, method="average").mean().sort_values()
     res.statistic, res.p, res.p_method = friedman_test(values)
     res.p_at_floor = at_floor(res.p, res.p_method, two_sided=False)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res.nemenyi = pd.DataFrame(nemenyi_friedman(values), index=algos, columns=algos)
+    res.nemenyi = pd.DataFrame(_quiet(nemenyi_friedman, values), index=algos, columns=algos)
     rows = []
     for a, b in itertools.combinations(algos, 2):
         x, y = table[a].to_numpy(float), table[b].to_numpy(float)

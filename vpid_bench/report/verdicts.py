@@ -219,14 +219,12 @@ def _lead(items: Sequence[Method], group: Any) -> list[Method]:
     return [m for m in items if letters[0] in group(m)]
 
 
-def _choose(ev: Evidence, eligible: list[Method]) -> tuple[Method, str, list[Method],
-                                                             list[Method], list[Method]]:
-    """Rule 3: (pick, basis, its metric group, those tied with it by search too, the
-    metric's leaders when the pick is not among them)."""
+def _choose(eligible: list[Method]) -> tuple[Method, str, list[Method], list[Method]]:
+    """Rule 3: (pick, basis, the metric's best group, those tied with the pick by search
+    too)."""
     mlead = _lead(eligible, lambda m: m.group)
     if not all(m.search for m in eligible):
-        pick = mlead[0]
-        return pick, ALONE if len(mlead) == 1 else ORDER, mlead, [], []
+        return mlead[0], ALONE if len(mlead) == 1 else ORDER, mlead, []
     by_search = sorted(eligible, key=lambda m: (-m.search.reached / max(m.search.runs, 1),
                                                 m.search.rel_gap_median))
     slead = _lead(by_search, lambda m: m.search.group)
@@ -236,12 +234,12 @@ def _choose(ev: Evidence, eligible: list[Method]) -> tuple[Method, str, list[Met
     pick, decided = (cheapest(pool, lambda m: (m.search.evaluations, m.search.seconds))
                      if len(pool) > 1 else (pool[0], ""))
     if not both:
-        return pick, SEARCH_ONLY, mlead, pool, mlead
+        return pick, SEARCH_ONLY, mlead, pool
     basis = (ALONE if len(mlead) == 1 else SEARCH if len(both) == 1
              else COST if decided else ORDER)
     if basis == ORDER:  # tied on everything: the first by the metric's median
         pick = next(m for m in mlead if m in both)
-    return pick, basis, mlead, pool, []
+    return pick, basis, mlead, pool
 
 
 def _limit(pick: Method, floor: float, ratio: float, model_error: str = "") -> tuple[str, float]:
@@ -287,7 +285,7 @@ def cannot_identify(ev: Evidence, floor: float) -> tuple[tuple[str, float], ...]
 
 
 def decide(ev: Evidence) -> Verdict:
-    """The verdict of one context (the rules of the module, one function each)."""
+    """The verdict of one context (the rules of the module)."""
     base = _base(ev)
     if not ev.methods:
         return Verdict(kind=EMPTY, **base)
@@ -335,7 +333,7 @@ def _verdict(kind: str, lead: Method, ev: Evidence, base: dict[str, Any], **kw: 
 
 def _use(ev: Evidence, eligible: list[Method], base: dict[str, Any]) -> Verdict:
     """Rule 3: whom to use among the eligible (:func:`_choose`)."""
-    pick, basis, mlead, pool, leaders = _choose(ev, eligible)
+    pick, basis, mlead, pool = _choose(eligible)
     # those the metric's tests do not separate from the pick: its rank group, or, where the
     # pick is not in the metric's best group, each eligible method without a significant pair
     tied_with = ([m for m in mlead if m.name != pick.name] if basis != SEARCH_ONLY else
@@ -349,6 +347,7 @@ def _use(ev: Evidence, eligible: list[Method], base: dict[str, Any]) -> Verdict:
                   for m in [pick] + [m for m in pool if m.name != pick.name] if m.search)
     nxt = next((m.name for m in ev.methods if m.name != pick.name), None)
     return _verdict(USE, pick, ev, base, basis=basis, tied=tuple(m.name for m in tied_with),
-                    spread=spread, leaders=tuple(m.name for m in leaders), costs=costs,
+                    spread=spread, costs=costs,
+                    leaders=tuple(m.name for m in mlead) if basis == SEARCH_ONLY else (),
                     next_pair=None if nxt is None else _pair(ev.pairs, pick.name, nxt),
                     next_name=nxt)
