@@ -27,11 +27,8 @@ LIMITS = {"search": "more search would still gain",
           "records": "the records set the floor: more search will not help",
           "truth": "the records allow the truth itself: only search limits it"}
 #: The same in the answer's table, in fewer words.
-LIMITED_BY = {"search": "search (more would gain)",
-              "below_floor": "search (runs stop short)",
-              "estimator": "the estimator",
-              "model": "model error",
-              "records": "the records",
+LIMITED_BY = {"search": "search (more would gain)", "below_floor": "search (runs stop short)",
+              "estimator": "the estimator", "model": "model error", "records": "the records",
               "truth": "search (to the truth)"}
 #: Without a truth: whether the leader reaches the record's optimum.
 LIMITS_NO_TRUTH = {True: "the record (optimum reached)",

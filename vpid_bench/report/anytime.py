@@ -93,16 +93,15 @@ def ecdf(runs: Sequence[RunHits], grid: Sequence[float]) -> np.ndarray:
 def ert(runs: Sequence[RunHits], target_index: int, cost: str = "evaluations") -> float:
     """Expected running time of one target in ``evaluations``, ``batches`` (what parallel
     hardware cannot shorten) or ``seconds`` (``nan`` without per-batch times)."""
-    pick = {"evaluations": (lambda r: r.hits, lambda r: r.used),
-            "batches": (lambda r: r.hit_batches, lambda r: r.used_batches),
-            "seconds": (lambda r: r.hit_seconds, lambda r: r.used_seconds)}[cost]
-    hits = np.asarray([pick[0](r)[target_index] if pick[0](r) else math.nan for r in runs],
-                      float)
+    hit_of, used_of = {"evaluations": ("hits", "used"), "batches": ("hit_batches", "used_batches"),
+                       "seconds": ("hit_seconds", "used_seconds")}[cost]
+    hits = np.asarray([getattr(r, hit_of)[target_index] if getattr(r, hit_of) else math.nan
+                       for r in runs], float)
     if cost != "evaluations":
         ok = np.isfinite(np.asarray([r.hits[target_index] for r in runs], float))
         if np.any(ok & ~np.isfinite(hits)):
             return math.nan  # hit, but the record does not say when in this cost
-    used = np.asarray([pick[1](r) for r in runs], float)
+    used = np.asarray([getattr(r, used_of) for r in runs], float)
     n_hit = int(np.isfinite(hits).sum())
     if n_hit == 0:
         return math.inf

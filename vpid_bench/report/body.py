@@ -250,8 +250,7 @@ def headline_md(model: Any, _: str | None) -> list[str]:
     """Both rankings of every context in full (every column; the first screen is a digest),
     with the plugins' headline columns."""
     data = model.data
-    md_h, md_rows, _, _ = headline(data.summary, data.baseline_verdicts, model.extra,
-                                   data.baseline)
+    md_h, md_rows, _, _ = headline(data.summary, data.baseline_verdicts, model.extra, data.baseline)
     lines = ["## Rankings in detail", "",
              para("Per context, two rankings. First by the problem's metric: the median "
                   "per-run metric (`n`: successful runs; IQR: its quartiles) and the columns "

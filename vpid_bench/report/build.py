@@ -275,8 +275,7 @@ def _suite_scores(data: ReportData, registry: Any, names: _Names
     ladder = ss.ladder_rows(data.hits, facts)
     written = (_table(names, "suite_scores", ss.HEADERS, rows)
                + _table(names, "budget_ladder", ss.LADDER_HEADERS, ladder))
-    fig = ss.figure(data.hits, facts, names.file("figures", "suite_ecdf", ".png"),
-                    of_report(data))
+    fig = ss.figure(data.hits, facts, names.file("figures", "suite_ecdf", ".png"), of_report(data))
     if isinstance(fig, Path):
         written.append(fig)
     return SuiteScores(rows, notes, ladder, fig, suite_ecdf_figure(data.hits, facts)), written

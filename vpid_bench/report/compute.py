@@ -160,8 +160,7 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
     if tests is not None:
         _set_groups(summary, tests.pairs)
         _set_groups(search, tests.spairs)
-    verdicts = tables.baseline_verdicts(summary, None if tests is None else tests.pairs,
-                                        baseline)
+    verdicts = tables.baseline_verdicts(summary, None if tests is None else tests.pairs, baseline)
     for s, v in zip(summary, verdicts, strict=True):
         s[f"vs_{baseline}"] = v
     truthless = estimates.no_truth(loaded.records, rows)

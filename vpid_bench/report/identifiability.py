@@ -212,8 +212,7 @@ def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
             "floor_errors": ([statistics.median(e[j] for e in errors.values())
                               for j in range(len(names))] if errors else None),
             "instances": len(floors) if floors else len(errors),
-            "estimators": per_estimator, "unit": str(d["rows"][0].get("metric_unit") or ""),
-        })
+            "estimators": per_estimator, "unit": str(d["rows"][0].get("metric_unit") or "")})
     out.sort(key=lambda x: x["label"])
     labels = [x["label"] for x in out]
     for x in out:

@@ -52,8 +52,7 @@ def build_pages(model: Any) -> dict[str, str]:
 
 
 def _links(pages: Pages) -> dict[str, Any]:
-    return {"optimizer": pages.optimizer, "algorithm": pages.optimizer,
-            "problem": pages.problem}
+    return {"optimizer": pages.optimizer, "algorithm": pages.optimizer, "problem": pages.problem}
 
 
 def _index(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, Any]:
@@ -173,8 +172,7 @@ def _problem(model: Any, pages: Pages, problem: str, style_of: Mapping[str, Any]
 
 
 OPTIMIZER_HEADERS = ["problem", "context", "rank", "group", "n", "failed", "metric", "unit",
-                     "median", "q1", "q3", "search rank", "reached x*", "median rel_gap",
-                     "AUC"]
+                     "median", "q1", "q3", "search rank", "reached x*", "median rel_gap", "AUC"]
 
 
 def _optimizer(model: Any, pages: Pages, name: str) -> dict[str, Any]:

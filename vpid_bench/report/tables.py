@@ -34,8 +34,7 @@ def metric_stats(m: Sequence[float], f: Sequence[float]) -> dict[str, float]:
             "best": float(np.min(m)), "worst": float(np.max(m)),
             "f_median": float(np.median(f)), "f_mean": float(np.mean(f)),
             "f_sd": float(np.std(f, ddof=1)) if len(f) > 1 else math.nan,
-            "f_best": float(np.min(f)), "f_worst": float(np.max(f)),
-        }
+            "f_best": float(np.min(f)), "f_worst": float(np.max(f))}
 
 
 def summarize(rows: Rows) -> list[dict[str, Any]]:
@@ -52,9 +51,7 @@ def summarize(rows: Rows) -> list[dict[str, Any]]:
         row: dict[str, Any] = {
             "context": context, "problem": first["problem"], "ps": first["ps"],
             "algorithm": algorithm, "optimizer": first["optimizer"],
-            "metric_name": first["metric_name"], "n_runs": len(ok),
-            "n_failed": len(g) - len(ok),
-        }
+            "metric_name": first["metric_name"], "n_runs": len(ok), "n_failed": len(g) - len(ok)}
         row.update(metric_stats([r["metric"] for r in ok], [r["f_best"] for r in ok]))
         for name in names:
             vals = [r.get(f"metric.{name}", math.nan) for r in ok]
