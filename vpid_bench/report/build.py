@@ -113,14 +113,12 @@ class _Names:
 def build_report(paths: Iterable[str | Path], out_dir: str | Path, *, short: bool = False,
                  alpha: float = ALPHA, baseline: str = tables.BASELINE, registry: Any = None,
                  archive: bool | Path = False, progress: Stages | None = None) -> Report:
-    """Read the records below ``paths`` and write the report into ``out_dir``.
-
-    ``registry`` (default: the installed plugins) gives the report sections; ``archive``:
-    rank the archived built-ins beside these runs (``True``: the shipped archives, or a
-    folder of archives); ``progress``: where each stage is said as it starts. Raises
-    :class:`NoRecordsError` when no readable record exists, ``OSError`` when the report could
-    not be written (``out_dir`` then left as it was).
-    """
+    """Read the records below ``paths`` and write the report into ``out_dir``. ``registry``
+    (default: the installed plugins) gives the report sections; ``archive``: rank the archived
+    built-ins beside these runs (``True``: the shipped archives, or a folder of archives);
+    ``progress``: where each stage is said as it starts. Raises :class:`NoRecordsError` when
+    no readable record exists, ``OSError`` when the report could not be written (``out_dir``
+    then left as it was)."""
     data = compute(paths, short, alpha, baseline, archive, progress)
     out_dir = Path(out_dir)
     whole = WholeFolder(out_dir)

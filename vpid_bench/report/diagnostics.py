@@ -34,18 +34,12 @@ def by_context(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str,
     tried: set[Path] = set()
     for row in rows:
         rec = by_id.get(row["run_id"])
-        if rec is None:
-            continue
-        path = Path(str(rec.get("_job_dir", "."))) / DIAGNOSTICS
-        if path in tried:
+        path = None if rec is None else Path(str(rec.get("_job_dir", "."))) / DIAGNOSTICS
+        if path is None or path in tried:
             continue
         tried.add(path)
-        data = read_diagnostics(path)
-        if data is None:
-            continue
-        data["job_dir"] = str(path.parent)
-        old = found.get(row["context"])
-        if old is None or data["f"] < old["f"]:
+        data, old = read_diagnostics(path), found.get(row["context"])
+        if data is not None and (old is None or data["f"] < old["f"]):
             found[row["context"]] = data
     return found
 

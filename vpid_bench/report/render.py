@@ -132,16 +132,12 @@ def _shorten(s: str, n: int) -> str:
 def markdown(headers: Sequence[str], rows: Sequence[Sequence[Any]], *, keep: int | None = None,
              max_width: int = MAX_WIDTH, digits: int = 4) -> str:
     """A GitHub pipe table no wider than ``max_width`` as a reader sees it (its source may be
-    a few escapes wider).
-
-    The first ``keep`` columns (default all) are always shown; the others are dropped from
-    the right until the table fits. If it still does not fit, the longest text cells are
-    shortened (with ``…``). Text cells and headers are escaped; numbers are aligned right.
-    """
+    a few escapes wider): the first ``keep`` columns (default all) always shown, the others
+    dropped from the right until it fits, then the longest text cells shortened (with
+    ``…``). Text cells and headers are escaped; numbers are aligned right."""
     headers = [escape(h) for h in headers]
     if not rows:
         return "_(empty)_"
-    rows = [list(r) for r in rows]
     numeric = _numeric_columns(rows, len(headers))
     text = [[escape(c) for c in r] for r in cells(headers, rows, digits)]
     keep = len(headers) if keep is None else max(1, keep)

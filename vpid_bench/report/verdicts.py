@@ -11,8 +11,7 @@ docs/report.md ("Verdicts") with a test in tests/report/test_verdicts.py:
    estimator (or model error, where a richer model made the record) limits the accuracy;
    below :data:`BELOW_BOUND` the record's optimum is biased;
 5. under model error, a record's optimum farther from the truth than a reference ends means
-   the fitted model cannot identify the system (:func:`cannot_identify`).
-"""
+   the fitted model cannot identify the system (:func:`cannot_identify`)."""
 
 from __future__ import annotations
 
