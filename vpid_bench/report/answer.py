@@ -14,8 +14,9 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from . import verdicts
-from .render import fmt
+from .render import fmt, joined
 from .safe import escape
+from .suite_scores import LADDER
 from .ties import SHARE_TIE, share_leaders
 
 #: What limits the leader (:data:`.verdicts.LIMIT_SEARCH` ...), in a few words.
@@ -26,11 +27,8 @@ LIMITS = {"search": "more search would still gain",
           "records": "the records set the floor: more search will not help",
           "truth": "the records allow the truth itself: only search limits it"}
 #: The same in the answer's table, in fewer words.
-LIMITED_BY = {"search": "search (more would gain)",
-              "below_floor": "search (runs stop short)",
-              "estimator": "the estimator",
-              "model": "model error",
-              "records": "the records",
+LIMITED_BY = {"search": "search (more would gain)", "below_floor": "search (runs stop short)",
+              "estimator": "the estimator", "model": "model error", "records": "the records",
               "truth": "search (to the truth)"}
 #: Without a truth: whether the leader reaches the record's optimum.
 LIMITS_NO_TRUTH = {True: "the record (optimum reached)",
@@ -94,7 +92,7 @@ def _names(items: Sequence[str]) -> str:
     shown = [f"`{escape(i)}`" for i in items]
     if len(shown) > MAX_NAMED:
         shown = [*shown[:MAX_NAMED - 1], f"{len(shown) - MAX_NAMED + 1} more"]
-    return shown[0] if len(shown) == 1 else ", ".join(shown[:-1]) + " and " + shown[-1]
+    return joined(shown)
 
 
 def _rung(per_dim: int) -> str:
@@ -105,13 +103,9 @@ def leaders(ladder: Sequence[Sequence[Any]], scores: Mapping[str, float],
             pool: set[str], references: Sequence[str]) -> tuple[Rung, ...]:
     """Per rung of the ladder that some run reached: the leaders among ``pool`` (ladder rows
     ``[group, algorithm, share at 10·D, ...]``, :func:`.suite_scores.ladder_rows`)."""
-    from .suite_scores import LADDER
-
     out = []
     for k, per_dim in enumerate(LADDER):
         shares = {r[1]: float(r[2 + k]) for r in ladder}
-        if not any(math.isfinite(v) for v in shares.values()):
-            continue
         lead = share_leaders({a: v for a, v in shares.items() if a in pool}, scores)
         if not lead:
             continue
@@ -151,8 +145,7 @@ def _pool_text(pool: Pool) -> str:
             spans.append([r])
     parts = []
     for span in spans:
-        every = len(spans) == 1 and len(span) > 1
-        if every:
+        if len(spans) == 1 and len(span) > 1:
             head = "at every budget"
             shares = ", ".join(f"{_rung(r.per_dim)}: {_share(r.share)}" for r in span)
         else:
@@ -178,8 +171,7 @@ def _count(items: Mapping[str, int], total: int, noun: str) -> str:
     if len(ordered) == 1 and ordered[0][1] == total:
         every = {1: "the one", 2: "both"}.get(total, f"all {total}")
         return f"`{escape(ordered[0][0])}` on {every} {noun[:-1] if total == 1 else noun}"
-    parts = [f"`{escape(k)}` on {v}" for k, v in ordered]
-    body = parts[0] if len(parts) == 1 else ", ".join(parts[:-1]) + " and " + parts[-1]
+    body = joined([f"`{escape(k)}` on {v}" for k, v in ordered])
     return f"{body} of {total} {noun[:-1] if total == 1 else noun}"
 
 
@@ -249,8 +241,7 @@ def _limit(v: Any) -> str:
     if v is None or v.kind == verdicts.EMPTY:
         return ""
     if not v.truth:
-        return LIMITS_NO_TRUTH[bool(v.search is not None and v.search.at_optimum)] \
-            if v.search is not None else ""
+        return "" if v.search is None else LIMITS_NO_TRUTH[v.search.at_optimum]
     return LIMITED_BY.get(v.limit, "")
 
 

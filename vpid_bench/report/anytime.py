@@ -16,7 +16,9 @@ from typing import Any
 
 import numpy as np
 
+from . import figures
 from .optima import rel_gap
+from .styles import legend, lookup
 
 #: The fixed targets on the relative gap to the instance's optimum.
 TARGETS: tuple[float, ...] = tuple(10.0 ** -k for k in range(7))
@@ -43,22 +45,9 @@ def hit_times(evaluations: Sequence[float], gaps: Sequence[float],
               targets: Sequence[float] = TARGETS) -> tuple[float, ...]:
     """The first evaluation count (or any cost aligned with the trace) at which ``gaps`` is
     at most each target; ``nan`` where never."""
-    ev = np.asarray(evaluations, float)
-    g = np.asarray(gaps, float)
-    out = []
-    for t in targets:
-        idx = np.flatnonzero(np.isfinite(g) & (g <= t))
-        out.append(float(ev[idx[0]]) if idx.size else math.nan)
-    return tuple(out)
-
-
-def batch_numbers(trace: Mapping[str, Any], n: int) -> list[float]:
-    """The batch number of each of the ``n`` trace entries (an archive's cut trace holds its
-    own, :func:`vpid_bench.store.archive_pack.compact_trace`)."""
-    batch = trace.get("batch")
-    if isinstance(batch, list) and len(batch) == n:
-        return [float(b) for b in batch]
-    return [float(i) for i in range(1, n + 1)]
+    ev, g = np.asarray(evaluations, float), np.asarray(gaps, float)
+    hit = [np.flatnonzero(np.isfinite(g) & (g <= t)) for t in targets]
+    return tuple(float(ev[i[0]]) if i.size else math.nan for i in hit)
 
 
 def run_hits(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]],
@@ -81,7 +70,9 @@ def run_hits(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, A
         secs = (by_id[row["run_id"]].get("timing") or {}).get("trace_s") or []
         secs = secs if isinstance(secs, list) and len(secs) == len(ev) else [math.nan] * len(ev)
         secs = [float(v) if isinstance(v, (int, float)) else math.nan for v in secs]
-        index = batch_numbers(trace, len(ev))
+        index = trace.get("batch")  # each entry's batch (an archive's cut trace holds its own)
+        index = ([float(b) for b in index] if isinstance(index, list) and len(index) == len(ev)
+                 else [float(i) for i in range(1, len(ev) + 1)])
         out.append(RunHits(row["context"], row["algorithm"], max(budget, used), used,
                            hit_times(ev, gaps, targets), hit_times(index, gaps, targets),
                            hit_times(secs, gaps, targets), float(index[-1]),
@@ -102,16 +93,15 @@ def ecdf(runs: Sequence[RunHits], grid: Sequence[float]) -> np.ndarray:
 def ert(runs: Sequence[RunHits], target_index: int, cost: str = "evaluations") -> float:
     """Expected running time of one target in ``evaluations``, ``batches`` (what parallel
     hardware cannot shorten) or ``seconds`` (``nan`` without per-batch times)."""
-    pick = {"evaluations": (lambda r: r.hits, lambda r: r.used),
-            "batches": (lambda r: r.hit_batches, lambda r: r.used_batches),
-            "seconds": (lambda r: r.hit_seconds, lambda r: r.used_seconds)}[cost]
-    hits = np.asarray([pick[0](r)[target_index] if pick[0](r) else math.nan for r in runs],
-                      float)
+    hit_of, used_of = {"evaluations": ("hits", "used"), "batches": ("hit_batches", "used_batches"),
+                       "seconds": ("hit_seconds", "used_seconds")}[cost]
+    hits = np.asarray([getattr(r, hit_of)[target_index] if getattr(r, hit_of) else math.nan
+                       for r in runs], float)
     if cost != "evaluations":
         ok = np.isfinite(np.asarray([r.hits[target_index] for r in runs], float))
         if np.any(ok & ~np.isfinite(hits)):
             return math.nan  # hit, but the record does not say when in this cost
-    used = np.asarray([pick[1](r) for r in runs], float)
+    used = np.asarray([getattr(r, used_of) for r in runs], float)
     n_hit = int(np.isfinite(hits).sum())
     if n_hit == 0:
         return math.inf
@@ -170,13 +160,9 @@ def ecdf_figure(runs: Sequence[RunHits], context: str, path: Path,
     sel = [r for r in runs if r.context == context]
     if not sel:
         return f"no run of {context} knows its instance's optimum"
-    from .figures import _plt, save
-    from .styles import legend, lookup
-
-    plt = _plt()
     b = context_budget(runs, context)
     grid = np.unique(np.round(np.geomspace(1.0, max(b, 2.0), 300)))
-    fig, ax = plt.subplots(figsize=(7.0, 4.4))
+    fig, ax = figures._plt().subplots(figsize=(7.0, 4.4))
     groups = sorted(_groups(sel).items())
     look = lookup(style_of, [a for (_, a), _ in groups])
     for (_, algorithm), g in groups:
@@ -192,7 +178,7 @@ def ecdf_figure(runs: Sequence[RunHits], context: str, path: Path,
                  fontsize=9)
     legend(ax, len(groups))
     ax.grid(True, which="major", alpha=0.3)
-    return save(fig, path)
+    return figures.save(fig, path)
 
 
 def costs_to_optimum(hits: Sequence[Any]) -> dict[tuple[str, str], tuple[float, float]]:

@@ -14,6 +14,7 @@ from typing import Any
 from ..store.archive import _plain
 from ..store.archive_records import Archive, instance_id, run_setting
 from ..store.optimum import Optimum
+from .ties import same
 
 #: Relative tolerance of the per-instance check (true parameters, objective at the truth).
 SAME_RTOL = 1e-9
@@ -34,9 +35,7 @@ def _close(a: Any, b: Any) -> bool:
     if isinstance(a, list) and isinstance(b, list):
         return len(a) == len(b) and all(_close(x, y) for x, y in zip(a, b, strict=True))
     if isinstance(a, (int, float)) and isinstance(b, (int, float)):
-        a, b = float(a), float(b)
-        return a == b or (math.isfinite(a) and math.isfinite(b)
-                          and abs(a - b) <= SAME_RTOL * max(abs(a), abs(b)))
+        return same(float(a), float(b), SAME_RTOL)
     return a is None and b is None
 
 
@@ -70,11 +69,6 @@ def budgets_per_dim(records: Iterable[Mapping[str, Any]]) -> list[int]:
     return sorted(per_dim)
 
 
-def _budgets_text(records: Sequence[Mapping[str, Any]]) -> str:
-    """The budgets per parameter of ``records`` (``1,000·D``), for a note."""
-    return ", ".join(f"{b:,}·D" for b in budgets_per_dim(records)) or "no stated budget"
-
-
 def _check_problem(arch: Archive, problem: str, mine: Sequence[Mapping[str, Any]]
                    ) -> tuple[list[dict[str, Any]], str | None, str | None]:
     """The archived records that may stand beside ``mine`` (the report's records of
@@ -87,12 +81,13 @@ def _check_problem(arch: Archive, problem: str, mine: Sequence[Mapping[str, Any]
     if not match:
         mine_plugin = ((mine[0].get("problem") or {}).get("plugin") or {})
         their_plugin = ((theirs[0].get("problem") or {}).get("plugin") or {})
+        held = ", ".join(f"{b:,}·D" for b in budgets_per_dim(theirs)) or "no stated budget"
         if [mine_plugin.get(k) for k in ("distribution", "version")] != \
                 [their_plugin.get(k) for k in ("distribution", "version")]:
             return [], _refusal(arch, problem, "its plugin version differs"), None
         return [], None, (f"archive {arch.suite}: no archived runs of {problem} with these "
                           f"settings (it holds the problem's defaults at "
-                          f"{_budgets_text(theirs)})")
+                          f"{held})")
     by_instance = {(run_setting(r), instance_id(r)): r for r in mine if instance_id(r)}
     for r in match:
         other = by_instance.get((run_setting(r), instance_id(r)))

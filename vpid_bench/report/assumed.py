@@ -9,6 +9,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from ..store.job_checks import finite
 from .render import fmt
 from .safe import escape
 
@@ -25,9 +26,7 @@ def _text(value: Any, limit: int = MAX_TEXT) -> str | None:
 
 
 def _num(value: Any) -> float | None:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return None
-    return float(value) if math.isfinite(value) else None
+    return float(value) if finite(value) else None
 
 
 #: A group of more boxes than this from one source not the user's is named, not listed.

@@ -1,52 +1,49 @@
 """The report's Markdown after its first screen: the rankings in detail, the plugin sections,
 the statistics and tests, the figures, how to read the report, where the records came from.
-
-Each function returns Markdown lines from computed data (:mod:`.compute`); none reads text
-written by another.
-"""
+Each function returns Markdown lines from computed data (the parts of :mod:`.outline` take
+the :class:`~.model.ReportModel` and the problem whose page shows them, or ``None``); none
+reads text written by another."""
 
 from __future__ import annotations
 
 import datetime as _dt
 import math
 import textwrap
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from . import rankings, render
-from .load import LoadedRecords, by_context, reason
+from .load import by_context, reason
 from .render import para
 from .safe import escape, inert_markdown
 from .sections import HeadlineColumn, Section
+from .suite_scores import ladder_table, score_table
 
 
-def sources_lines(paths: Iterable[Path], loaded: LoadedRecords,
-                  rows: Sequence[Mapping[str, Any]]) -> list[str]:
+def sources_md(model: Any, _: str | None) -> list[str]:
     """Where the records came from, what was skipped, which jobs and runs failed."""
+    loaded = model.data.loaded
     n = len(loaded.records)
     n_ok = sum(r["status"] == "ok" for r in loaded.records)
-    lines = [para(f"Built {_dt.datetime.now(_dt.timezone.utc):%Y-%m-%d %H:%M UTC} from {n} run "
+    lines = ["## Sources", "",
+             para(f"Built {_dt.datetime.now(_dt.timezone.utc):%Y-%m-%d %H:%M UTC} from {n} run "
                   f"record(s) ({n_ok} ok, {n - n_ok} failed) found in:"), ""]
-    lines += [f"- `{escape(p)}`" for p in paths]
-    notes = []
-    if loaded.duplicates:
-        notes.append(f"{loaded.duplicates} duplicate record(s) (same run id) were counted once.")
-    for p, why in loaded.skipped:
-        notes.append(f"**Skipped unreadable record** `{escape(p)}`: {escape(reason(p, why))}")
-    for d, why in loaded.failed_jobs:
-        notes.append(f"**Job not ok** `{escape(d)}`: {escape(why)}")
-    for r in rows:
-        if r["status"] != "ok":
-            notes.append(f"**Failed run** {escape(r['algorithm'])} on {escape(r['context'])}, "
-                         f"run {escape(r['run_index'])} (seed {escape(r['seed'])}): "
-                         f"{escape(r['error'])}")
+    lines += [f"- `{escape(p)}`" for p in model.data.paths]
+    notes = ([f"{loaded.duplicates} duplicate record(s) (same run id) were counted once."]
+             if loaded.duplicates else [])
+    notes += [f"**Skipped unreadable record** `{escape(p)}`: {escape(reason(p, why))}"
+              for p, why in loaded.skipped]
+    notes += [f"**Job not ok** `{escape(d)}`: {escape(why)}" for d, why in loaded.failed_jobs]
+    notes += [f"**Failed run** {escape(r['algorithm'])} on {escape(r['context'])}, run "
+              f"{escape(r['run_index'])} (seed {escape(r['seed'])}): {escape(r['error'])}"
+              for r in model.data.rows if r["status"] != "ok"]
     if notes:
         lines += ["", "Problems found:", ""]
         lines += [textwrap.fill(f"- {t}", width=render.PROSE_WIDTH,
                                        subsequent_indent="  ", break_long_words=False)
                   for t in notes]
-    return lines
+    return lines + [""]
 
 
 HOW_TO_READ = """\
@@ -77,6 +74,11 @@ judged against the lowest objective its own record allows: `rel_gap = (f_best - 
 (a significantly lower per-run metric at the same budget)."""
 
 
+def how_to_read_md(model: Any, _: str | None) -> list[str]:
+    return ["## How to read this report", "", HOW_TO_READ.format(
+        alpha=model.data.alpha, baseline=escape(model.data.baseline)), ""]
+
+
 def verdict_short(v: str) -> str:
     """The headline's compact form of a baseline verdict."""
     for long, short in (("beats it (", "yes, "), ("does not clear it (", "no, "),
@@ -86,9 +88,8 @@ def verdict_short(v: str) -> str:
     return v
 
 
-def headline(summary: list[dict[str, Any]], verdicts: list[str],
-              extra: list[HeadlineColumn], baseline: str
-              ) -> tuple[list[str], list[list[Any]], list[str], list[list[Any]]]:
+def headline(summary: list[dict[str, Any]], verdicts: list[str], extra: list[HeadlineColumn],
+             baseline: str) -> tuple[list[str], list[list[Any]], list[str], list[list[Any]]]:
     """(headers, rows) of the headline for Markdown/terminal (compact, in priority order,
     context first) and for the CSV (every column)."""
     any_failed = any(s["n_failed"] for s in summary)
@@ -126,7 +127,14 @@ STATS_MD = [("optimizer", "algorithm"), ("n", "n_runs"), ("median", "median"), (
             ("s/run", "wall_time_mean_s")]
 
 
-def stats_md(summary: list[dict[str, Any]]) -> list[str]:
+def stats_md(model: Any, problem: str | None) -> list[str]:
+    """Per context, the statistics of its runs (of ``problem``'s contexts only, if given)."""
+    summary = model.data.summary
+    if problem is not None:
+        contexts = set(model.contexts_of(problem))
+        summary = [s for s in summary if s["context"] in contexts]
+    if not summary:
+        return []
     lines = ["## Per-run statistics", "",
              para("Per context: the per-run metric (median, quartiles, mean, sample sd, best, "
                   "worst), the objective `f` (median, best), the evaluations used and the mean "
@@ -207,6 +215,18 @@ def tests_md(kw: Any, pairs: Any, fr: Any, alpha: float,
     return lines
 
 
+def sections_md(model: Any, problem: str | None) -> list[str]:
+    """Every problem's report sections (the core's and the plugins'), then what failed."""
+    lines: list[str] = []
+    for placed in model.sections:
+        if problem is None or placed.problem == problem:
+            lines += section_md(placed.section, model.out_dir)
+    if model.section_errors and problem is None:
+        lines += [para("Not built: " + "; ".join(escape(e) for e in model.section_errors)
+                       + "."), ""]
+    return lines
+
+
 def section_md(section: Section, out_dir: Path) -> list[str]:
     """A section of a plugin (or of the core) as Markdown: its title and text made inert (a
     link or image in them is text, :func:`.safe.inert_markdown`), then the report's own
@@ -226,12 +246,11 @@ def section_md(section: Section, out_dir: Path) -> list[str]:
     return lines
 
 
-
-
-def headline_md(data: Any, extra: list[HeadlineColumn]) -> list[str]:
+def headline_md(model: Any, _: str | None) -> list[str]:
     """Both rankings of every context in full (every column; the first screen is a digest),
     with the plugins' headline columns."""
-    md_h, md_rows, _, _ = headline(data.summary, data.baseline_verdicts, extra, data.baseline)
+    data = model.data
+    md_h, md_rows, _, _ = headline(data.summary, data.baseline_verdicts, model.extra, data.baseline)
     lines = ["## Rankings in detail", "",
              para("Per context, two rankings. First by the problem's metric: the median "
                   "per-run metric (`n`: successful runs; IQR: its quartiles) and the columns "
@@ -259,12 +278,15 @@ def headline_md(data: Any, extra: list[HeadlineColumn]) -> list[str]:
     return lines
 
 
-def figures_md(figs: Mapping[str, Path | str], out_dir: Path) -> list[str]:
-    """The core figures, and one line naming those not drawn and why."""
+def figures_md(model: Any, _: str | None) -> list[str]:
+    """The core figures (a full report's), and one line naming those not drawn and why."""
+    if model.data.tests is None:
+        return []
+    figs = model.figs
     lines = ["## Figures", ""]
     for title, v in figs.items():
         if isinstance(v, Path):
-            rel = v.relative_to(out_dir).as_posix()
+            rel = v.relative_to(model.out_dir).as_posix()
             lines += [f"### {escape(title)}", "", f"![{escape(title)}]({rel})", ""]
     skipped = {k: v for k, v in figs.items() if isinstance(v, str)}
     if skipped:
@@ -273,20 +295,20 @@ def figures_md(figs: Mapping[str, Path | str], out_dir: Path) -> list[str]:
     return lines
 
 
-def files_md(short: bool) -> list[str]:
+def files_md(model: Any, _: str | None) -> list[str]:
     return ["## Files", "",
             para("`runs.csv`: every run, one row each (`pandas.read_csv('runs.csv')`). "
                  "`tables/`: each table as CSV (full precision) and LaTeX (booktabs)."
-                 + ("" if short else " `figures/`: the PNG figures above.")), ""]
+                 + ("" if model.data.short else " `figures/`: the PNG figures above.")), ""]
 
 
-def suite_md(rows: Sequence[Sequence[Any]], notes: Sequence[str], fig: Path | str,
-             out_dir: Path) -> list[str]:
+def suite_md(model: Any, _: str | None) -> list[str]:
     """"Across the suite": the score of every optimizer over all problems, the best per
-    family and per dimension, and the aggregated ECDF figure (see
+    family and per dimension, the aggregated ECDF figure and the budget ladder (see
     :mod:`.suite_scores`)."""
-    from .suite_scores import score_table
-
+    if model.suite is None:
+        return []
+    rows, fig = model.suite.rows, model.suite.figure
     everything = [r for r in rows if r[0] == "all"]
     if not everything:
         return []
@@ -306,24 +328,22 @@ def suite_md(rows: Sequence[Sequence[Any]], notes: Sequence[str], fig: Path | st
                         f"[{top[6]:.3f}, {top[7]:.3f}])")
     if best:
         lines += [para("Best score per group: " + "; ".join(best) + "."), ""]
-    if notes:
-        lines += [para("Not scored: " + "; ".join(escape(n) for n in notes) + "."), ""]
+    if model.suite.notes:
+        lines += [para("Not scored: " + "; ".join(escape(n) for n in model.suite.notes)
+                       + "."), ""]
     if isinstance(fig, Path):
-        rel = fig.relative_to(out_dir).as_posix()
+        rel = fig.relative_to(model.out_dir).as_posix()
         lines += [f"![Runtime ECDFs aggregated over the suite]({rel})", ""]
     else:
         lines += [para(f"The aggregated ECDF figure was not drawn ({escape(fig)})."), ""]
-    return lines
+    return lines + ladder_md(model.suite.ladder, rows)
 
 
-def ladder_md(rows: Sequence[Sequence[Any]], scores: Sequence[Sequence[Any]] = ()
-              ) -> list[str]:
+def ladder_md(rows: Sequence[Sequence[Any]], scores: Sequence[Sequence[Any]] = ()) -> list[str]:
     """The budget ladder (:func:`.suite_scores.ladder_rows`): the share of (run, target)
     pairs solved at 10, 100, 1,000 and 10,000 evaluations per dimension, read off the same
     runs, in the order of the scores (:func:`.suite_scores.ladder_table`); rungs no run
     reached are left out."""
-    from .suite_scores import ladder_table
-
     headers, shown = ladder_table(rows, scores)
     if not rows or len(headers) < 2:
         return []

@@ -1,15 +1,12 @@
 """Build a report from the run records below any folders into ``out_dir``: ``report.md``,
 ``runs.csv``, ``tables/`` (CSV and LaTeX), ``figures/``, ``ioh/`` (IOHprofiler's format) and
-the HTML pages.
-
-``out_dir`` is one report, whole (issue 44, N6, N8, N9): it is built in a hidden folder that
-takes its place in one rename (:class:`~vpid_bench.fileio.WholeFolder`), so a failed,
-interrupted or concurrent build leaves the old report or a new one, and a link planted in the
-old folder is removed, never followed. Stages pass data, never text: :func:`.compute.compute`,
-then :func:`_assemble` fills one :class:`~.model.ReportModel`, which the renderers only
-format. ``short=True`` (a single job's report) has no tests or figures and imports neither
-pandas, matplotlib nor scipy.stats.
-"""
+the HTML pages. ``out_dir`` is one report, whole (issue 44, N6, N8, N9): built in a hidden
+folder that takes its place in one rename (:class:`~vpid_bench.fileio.WholeFolder`), so a
+failed, interrupted or concurrent build leaves the old report or a new one, and a link
+planted in the old folder is removed, never followed. Stages pass data, never text:
+:func:`.compute.compute`, then :func:`_assemble` fills one :class:`~.model.ReportModel`,
+which the renderers only format. ``short=True`` (a single job's report) has no tests or
+figures and imports neither pandas, matplotlib nor scipy.stats."""
 
 from __future__ import annotations
 
@@ -25,14 +22,19 @@ from ..interrupts import raise_if_swallowed
 from ..progress import Stages
 from ..store import csv_table, ioh
 from ..store.paths import inside, slug
-from . import answer, anytime, body, first_screen, outline, render, tables
+from . import answer, anytime, body, first_screen, outline, rankings, render, tables
+from . import suite_scores as ss
 from .compute import ReportData, compute
+from .core_figures import draw_all
 from .forked import run_forked
+from .interactive import suite_ecdf_figure
 from .load import LoadedRecords, NoRecordsError
 from .model import ReportModel, SuiteScores
 from .outline import full_report_command
 from .plugin_sections import plugin_sections
-from .sections import HeadlineColumn
+from .site import check_links
+from .site_pages import interactive_figures, write_site
+from .styles import of_report
 
 __all__ = ["NoRecordsError", "Report", "build_report", "full_report_command"]
 
@@ -108,25 +110,15 @@ class _Names:
         return self.claim(self.root / kind / (slug(name) + suffix))
 
 
-def build_report(
-    paths: Iterable[str | Path],
-    out_dir: str | Path,
-    *,
-    short: bool = False,
-    alpha: float = ALPHA,
-    baseline: str = tables.BASELINE,
-    registry: Any = None,
-    archive: bool | Path = False,
-    progress: Stages | None = None,
-) -> Report:
-    """Read the records below ``paths`` and write the report into ``out_dir``.
-
-    ``registry`` (default: the installed plugins) gives the report sections; ``archive``:
-    rank the archived built-ins beside these runs (``True``: the shipped archives, or a
-    folder of archives); ``progress``: where each stage is said as it starts. Raises
-    :class:`NoRecordsError` when no readable record exists, ``OSError`` when the report could
-    not be written (``out_dir`` then left as it was).
-    """
+def build_report(paths: Iterable[str | Path], out_dir: str | Path, *, short: bool = False,
+                 alpha: float = ALPHA, baseline: str = tables.BASELINE, registry: Any = None,
+                 archive: bool | Path = False, progress: Stages | None = None) -> Report:
+    """Read the records below ``paths`` and write the report into ``out_dir``. ``registry``
+    (default: the installed plugins) gives the report sections; ``archive``: rank the archived
+    built-ins beside these runs (``True``: the shipped archives, or a folder of archives);
+    ``progress``: where each stage is said as it starts. Raises :class:`NoRecordsError` when
+    no readable record exists, ``OSError`` when the report could not be written (``out_dir``
+    then left as it was)."""
     data = compute(paths, short, alpha, baseline, archive, progress)
     out_dir = Path(out_dir)
     whole = WholeFolder(out_dir)
@@ -167,23 +159,27 @@ def _assemble(data: ReportData, names: _Names, registry: Any,
               progress: Stages | None = None) -> tuple[ReportModel, list[Path]]:
     """Everything the report says, as one :class:`~.model.ReportModel`, with the files
     written on the way (tables, figures, the IOHprofiler export)."""
+    if registry is None:
+        from ..plugins import Registry
+
+        registry = Registry()
     out_dir = names.root
     written = _write_tables(data, names)
     model = ReportModel(data, first_screen.results(data), out_dir)
     if not data.short:
-        from .core_figures import draw_all
-
-        if registry is None:
-            from ..plugins import Registry
-
-            registry = Registry()
         model.figs = draw_all(data, names.file, progress)
         written += ioh.export_ioh(out_dir / ioh.FOLDER, data.loaded.records, data.rows, out_dir)
         model.suite, more = _suite_scores(data, registry, names)
         written += more
     model.sections, model.extra, model.section_errors = plugin_sections(
         registry, data, out_dir, names.claim)
-    written += _write_headline(data, model.extra, names)
+    # the tables that wait for the plugins' columns
+    _, _, csv_h, csv_rows = body.headline(data.summary, data.baseline_verdicts, model.extra,
+                                          data.baseline)
+    stat_keys = list(dict.fromkeys(k for s in data.summary for k in s))
+    written += (_table(names, "headline", csv_h, csv_rows)
+                + _table(names, "run_stats", stat_keys,
+                         [[s.get(k) for k in stat_keys] for s in data.summary]))
     written += [v for v in model.figs.values() if isinstance(v, Path)]
     for placed in model.sections:
         written += list(placed.section.files)
@@ -195,8 +191,6 @@ def _assemble(data: ReportData, names: _Names, registry: Any,
 
 def _add_interactive(model: ReportModel) -> None:
     """The interactive figures of each context; a failure costs them only, and is said."""
-    from .site_pages import interactive_figures
-
     try:
         model.interactive = interactive_figures(model.data)
     except Exception as exc:  # noqa: BLE001 - a figure's fault costs the figures only
@@ -208,9 +202,6 @@ def _add_interactive(model: ReportModel) -> None:
 
 def _render(model: ReportModel, names: _Names) -> tuple[Path, list[Path]]:
     """``report.md`` (:mod:`.outline`) and the HTML site, ``index.html`` first."""
-    from .site import check_links
-    from .site_pages import write_site
-
     md = names.claim(names.root / "report.md")
     md.write_text("\n".join(outline.markdown(model)), encoding="utf-8")
     site = write_site(model, names.claim)
@@ -231,10 +222,8 @@ class _Tables:
     def __init__(self, names: _Names) -> None:
         self.names, self.planned = names, []
 
-    def __call__(self, stem: str, headers: Sequence[str], rows: Sequence[Sequence[Any]]
-                 ) -> list[Path]:
+    def __call__(self, stem: str, headers: Sequence[str], rows: Sequence[Sequence[Any]]) -> None:
         self.planned.append((self.names.file("tables", stem, ".csv"), headers, rows))
-        return []
 
     def write(self) -> list[Path]:
         done = run_forked([lambda t=t: render.write_table(*t) for t in self.planned])
@@ -243,9 +232,7 @@ class _Tables:
 
 def _write_tables(data: ReportData, names: _Names) -> list[Path]:
     """``runs.csv`` and every table that does not wait for the plugins' columns."""
-    columns: list[str] = []
-    for r in data.rows:
-        columns += [k for k in r if k not in columns]
+    columns = list(dict.fromkeys(k for r in data.rows for k in r))
     written = [csv_table.write_csv(names.claim(names.root / "runs.csv"), columns,
                                 [[r.get(k) for k in columns] for r in data.rows])]
     tables = _Tables(names)
@@ -254,39 +241,23 @@ def _write_tables(data: ReportData, names: _Names) -> list[Path]:
         for stem, frame in (("kruskal", t.kw), ("pairwise", t.pairs),
                             ("pairwise_search", t.spairs)):
             if not frame.empty:
-                written += tables(stem, *render.frame_rows(frame))
+                tables(stem, *render.frame_rows(frame))
         if t.fr.mean_ranks is not None:
-            written += tables("friedman_wilcoxon", *render.frame_rows(t.fr.wilcoxon))
-            written += tables("nemenyi",
-                              *render.frame_rows(t.fr.nemenyi.reset_index(names="optimizer")))
+            tables("friedman_wilcoxon", *render.frame_rows(t.fr.wilcoxon))
+            tables("nemenyi", *render.frame_rows(t.fr.nemenyi.reset_index(names="optimizer")))
         for what, res in t.by_inst.items():
             if any(r.wilcoxon is not None for r in res.values()):
                 import pandas as pd
 
-                written += tables(f"friedman_instances_{what}", *render.frame_rows(
+                tables(f"friedman_instances_{what}", *render.frame_rows(
                     pd.concat([r.wilcoxon.assign(context=c) for c, r in res.items()
                                if r.wilcoxon is not None], ignore_index=True)))
     if data.hits:
-        written += tables("ert", anytime.ERT_HEADERS, anytime.ert_rows(data.hits))
+        tables("ert", anytime.ERT_HEADERS, anytime.ert_rows(data.hits))
     if data.search:
-        keys = ["context", "rank", "group", "algorithm", "n", "reached", "share",
-                "rel_gap_median", "floor_median", "to_opt_median", "auc"]
-        written += tables("search_quality", keys,
-                          [[s.get(k) for k in keys] for s in data.search])
+        keys = ["context", *(k for _, k in rankings.SEARCH_COLUMNS)]
+        tables("search_quality", keys, [[s.get(k) for k in keys] for s in data.search])
     return written + tables.write()
-
-
-def _write_headline(data: ReportData, extra: list[HeadlineColumn], names: _Names
-                    ) -> list[Path]:
-    """``tables/headline`` (with the plugins' columns) and ``tables/run_stats``."""
-    _, _, csv_h, csv_rows = body.headline(data.summary, data.baseline_verdicts, extra,
-                                          data.baseline)
-    stat_keys: list[str] = []
-    for s in data.summary:
-        stat_keys += [k for k in s if k not in stat_keys]
-    return (_table(names, "headline", csv_h, csv_rows)
-            + _table(names, "run_stats", stat_keys,
-                     [[s.get(k) for k in stat_keys] for s in data.summary]))
 
 
 def _suite_scores(data: ReportData, registry: Any, names: _Names
@@ -294,21 +265,15 @@ def _suite_scores(data: ReportData, registry: Any, names: _Names
     """The scores across the suite (none for fewer than two distinct problems with known
     optima: two population sizes of one problem are one problem), their tables and figure
     (:mod:`.suite_scores`)."""
-    from . import suite_scores as ss
-
     facts = ss.context_facts(data.loaded.records, data.rows, ss.family_lookup(registry))
-    if len(ss.problems_scored(data.rows, data.hits)) < 2:
+    scored = {h.context for h in data.hits}  # the contexts whose runs know their optima
+    if len({r["problem"] for r in data.rows if r["context"] in scored}) < 2:
         return None, []
     rows, notes = ss.score_rows(data.hits, facts)
     ladder = ss.ladder_rows(data.hits, facts)
     written = (_table(names, "suite_scores", ss.HEADERS, rows)
                + _table(names, "budget_ladder", ss.LADDER_HEADERS, ladder))
-    from .styles import of_report
-
-    fig = ss.figure(data.hits, facts, names.file("figures", "suite_ecdf", ".png"),
-                    of_report(data))
+    fig = ss.figure(data.hits, facts, names.file("figures", "suite_ecdf", ".png"), of_report(data))
     if isinstance(fig, Path):
         written.append(fig)
-    from .interactive import suite_ecdf_figure
-
     return SuiteScores(rows, notes, ladder, fig, suite_ecdf_figure(data.hits, facts)), written

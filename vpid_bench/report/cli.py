@@ -17,11 +17,9 @@ from .safe import clean
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
-        prog="vpid-bench-report",
-        description="Build a vpid-bench report (Markdown, HTML pages, CSV, LaTeX, PNG figures) "
-        "from the run records below one or more sweep or job folders, merged.",
-    )
+    p = argparse.ArgumentParser(prog="vpid-bench-report", description=(
+        "Build a vpid-bench report (Markdown, HTML pages, CSV, LaTeX, PNG figures) from the run "
+        "records below one or more sweep or job folders, merged."))
     p.add_argument("paths", nargs="+", type=Path, metavar="DIR",
                    help="sweep folders, job folders or record files (any number)")
     p.add_argument("-o", "--out", type=Path, default=Path("report"),
@@ -47,11 +45,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     if argv is None:  # the console command: SIGTERM and SIGHUP end it as Ctrl-C does
         interrupts.install()
     try:
-        return _main(argv)
+        code = _main(argv)
     except KeyboardInterrupt:
         print("interrupted: no report written (its folder keeps the previous one, if any); "
               "run the same command again", file=sys.stderr)
-        return _exit(interrupts.exit_status(), argv)
+        code = interrupts.exit_status()
+    if argv is None:  # called as the console script
+        sys.exit(code)
+    return code
 
 
 def _main(argv: Sequence[str] | None) -> int:
@@ -59,15 +60,15 @@ def _main(argv: Sequence[str] | None) -> int:
     missing = [str(p) for p in args.paths if not p.exists()]
     if missing:
         print(f"error: no such file or folder: {', '.join(missing)}", file=sys.stderr)
-        return _exit(2, argv)
+        return 2
     if not 0.0 < args.alpha < 1.0:
         print(f"error: --alpha={args.alpha} is not allowed: a number between 0 and 1",
               file=sys.stderr)
-        return _exit(2, argv)
+        return 2
     bad_out = check_output_dir(args.out, args.paths)
     if bad_out:
         print(f"error: -o {args.out} is not allowed: {bad_out}", file=sys.stderr)
-        return _exit(2, argv)
+        return 2
     from ..progress import Stages
     from .build import NoRecordsError, build_report
 
@@ -78,12 +79,12 @@ def _main(argv: Sequence[str] | None) -> int:
                               progress=None if args.short else Stages("report"))
     except NoRecordsError as exc:
         print(f"error: {clean(exc)}", file=sys.stderr)
-        return _exit(2, argv)
+        return 2
     except OSError as exc:  # the folder became unwritable, a full disk, a file-size limit
         print(f"error: the report could not be written into {clean(args.out)} "
               f"({clean(exc.strerror or type(exc).__name__)}); it keeps the previous report, "
               "if any", file=sys.stderr)
-        return _exit(1, argv)
+        return 1
     # every line below may quote records, archives or paths: cleaned (report.safe)
     for note in [*report.folder_notes, *report.archive_notes]:
         print(clean(note), file=sys.stderr)
@@ -93,7 +94,7 @@ def _main(argv: Sequence[str] | None) -> int:
         print(f"html: {clean(report.index_html)} (open it in a browser; it works offline)")
     for line in report.failures:
         print(f"warning: {clean(line)}", file=sys.stderr)
-    return _exit(1 if report.failures else 0, argv)
+    return 1 if report.failures else 0
 
 
 def check_output_dir(out: Path, inputs: Sequence[Path] = ()) -> str | None:
@@ -123,12 +124,6 @@ def check_output_dir(out: Path, inputs: Sequence[Path] = ()) -> str | None:
     except OSError as exc:
         return f"a folder you can create and write to ({exc.strerror or type(exc).__name__})"
     return None
-
-
-def _exit(code: int, argv: Sequence[str] | None) -> int:
-    if argv is None:  # called as the console script
-        sys.exit(code)
-    return code
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -11,9 +11,9 @@ from pathlib import Path
 from typing import Any
 
 from ..progress import Stages
-from . import anytime, diagnostics, estimates, estimator_floors, rankings, tables, ties
+from . import anytime, diagnostics, estimates, load, rankings, stats, tables, ties
 from .forked import run_forked
-from .identifiability import crb_norm_by_context, crb_norms_by_instance
+from .identifiability import crb_norm_by_context, crb_norms_by_instance, estimator_floors_by_context
 from .load import LoadedRecords, NoRecordsError, by_context, load_records, reason, run_rows
 from .optima import add_optimum_columns, load_optima, opt_column_names
 
@@ -83,21 +83,23 @@ class ReportData:
         units = {r.get("metric_unit", "") for r in self.rows if r["context"] == context}
         return units.pop() if len(units) == 1 else ""
 
+    def records_of(self, context: str) -> list[dict[str, Any]]:
+        """The records of the context's runs."""
+        ids = {r["run_id"] for r in self.rows if r["context"] == context}
+        return [rec for rec in self.loaded.records if rec["run_id"] in ids]
+
     def estimator(self, context: str) -> str | None:
         """The objective (``problem.objective``) the context's runs share, else ``None``."""
-        ids = {r["run_id"] for r in self.rows if r["context"] == context}
         found = set()
-        for rec in self.loaded.records:
-            if rec["run_id"] in ids:
-                config = (rec.get("problem") or {}).get("config")
-                found.add(config.get("objective") if isinstance(config, dict) else None)
+        for rec in self.records_of(context):
+            config = (rec.get("problem") or {}).get("config")
+            found.add(config.get("objective") if isinstance(config, dict) else None)
         value = found.pop() if len(found) == 1 else None
         return value if isinstance(value, str) and value.isidentifier() and len(value) <= 32 \
             else None
 
     def floors(self, context: str) -> dict[Any, float]:
-        """Per instance of ``context`` with a known optimum: its floor (the optimum's
-        headline metric)."""
+        """Per instance with a known optimum: its floor (the optimum's headline metric)."""
         rows = [r for r in self.rows if r["context"] == context]
         column, _ = opt_column_names(rows)
         out: dict[Any, float] = {}
@@ -108,8 +110,7 @@ class ReportData:
         return out
 
     def groups(self, which: str, context: str) -> dict[str, str] | None:
-        """Rank-group letters of a context's ranking (``"metric"`` or ``"search"``), or
-        ``None`` untested."""
+        """Rank-group letters of the ``"metric"`` or ``"search"`` ranking (``None``: untested)."""
         if self.tests is None:
             return None
         items = self.metric_rows(context) if which == "metric" else self.search_rows(context)
@@ -159,15 +160,14 @@ def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: st
     if tests is not None:
         _set_groups(summary, tests.pairs)
         _set_groups(search, tests.spairs)
-    verdicts = tables.baseline_verdicts(summary, None if tests is None else tests.pairs,
-                                        baseline)
+    verdicts = tables.baseline_verdicts(summary, None if tests is None else tests.pairs, baseline)
     for s, v in zip(summary, verdicts, strict=True):
         s[f"vs_{baseline}"] = v
     truthless = estimates.no_truth(loaded.records, rows)
     return ReportData(paths, short, alpha, baseline, loaded, rows, summary, search, hits,
                       optima_errors, crb_norm_by_context(loaded.records, rows),
                       rankings.box_centred(loaded.records, rows), verdicts, tests,
-                      estimator_floors.by_context(loaded.records, rows), notes, truthless,
+                      estimator_floors_by_context(loaded.records, rows), notes, truthless,
                       estimates.identified_by_context(loaded.records, rows, truthless),
                       estimates.comparisons_by_context(loaded.records, rows),
                       crb_norms_by_instance(loaded.records, rows),
@@ -220,10 +220,7 @@ def _add_archive(loaded: LoadedRecords, archive: bool | Path) -> tuple[list[Any]
 
 
 def _tests(rows: list[dict[str, Any]], search: list[dict[str, Any]], alpha: float) -> Tests:
-    from . import stats
-    from .load import runs_frame
-
-    df = runs_frame(rows)
+    df = load.runs_frame(rows)
     sdf = rankings.search_test_frame(df)
     sdf = sdf[sdf["context"].isin({s["context"] for s in search})]
     # two families of tests, each a few seconds over an archive: side by side (.forked)
@@ -238,13 +235,11 @@ def _tests(rows: list[dict[str, Any]], search: list[dict[str, Any]], alpha: floa
 
 def _set_groups(items: list[dict[str, Any]], pairs: Any) -> None:
     """Each row's rank group (compact letters from the Holm-corrected pairwise tests)."""
-    from .stats import rank_groups
-
     for context, g in by_context(items).items():
         n = "n_runs" if "n_runs" in g[0] else "n"
         order = [s["algorithm"] for s in sorted((s for s in g if s.get(n)),
                                                 key=lambda s: s["rank"])]
-        letters = rank_groups(pairs, context, order) if order else {}
+        letters = stats.rank_groups(pairs, context, order) if order else {}
         for s in g:
             s["group"] = letters.get(s["algorithm"], "—")
 

@@ -6,7 +6,6 @@ time)."""
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 from collections.abc import Callable
 from pathlib import Path
@@ -14,7 +13,11 @@ from typing import Any
 
 from ..fileio import write_refused
 from ..progress import Stages
+from . import anytime, figures, stats
 from .forked import run_forked
+from .identifiability import reference_levels
+from .load import trace_sets
+from .styles import of_report
 
 log = logging.getLogger(__name__)
 
@@ -24,54 +27,27 @@ CD_MIN_RUNS = 5
 CD_MIN_BLOCKS = 5
 
 
-@dataclasses.dataclass(frozen=True)
-class _Figure:
-    """A figure to draw: ``draw(data, *args)`` gives its path or why it was not drawn."""
-
-    title: str
-    draw: Callable[..., Path | str]
-    data: Any
-    args: tuple[Any, ...]
-
-
 def _draw(figs: dict[str, Any], title: str, data: Any,
           draw: Callable[..., Path | str], *args: Any) -> None:
-    """Plan ``figs[title]`` = ``draw(data, *args)``, or ``data`` itself when it is a reason."""
-    figs[title] = data if isinstance(data, str) else _Figure(title, draw, data, args)
+    """Plan ``figs[title]`` = ``draw(data, *args)``, its path or why it was not drawn, or
+    ``data`` itself when it is a reason."""
+    figs[title] = data if isinstance(data, str) else (lambda: draw(data, *args))
 
 
-def _one(figure: _Figure) -> Path | str:
+def _one(title: str, plan: Callable[[], Path | str]) -> Path | str:
     try:
-        return figure.draw(figure.data, *figure.args)
+        return plan()
     except Exception as exc:  # noqa: BLE001 - a figure's fault costs that figure only
         if write_refused(exc):  # a full disk is the report's failure, not the figure's
             raise
-        log.debug("figure %s failed", figure.title, exc_info=True)
+        log.debug("figure %s failed", title, exc_info=True)
         return f"failed: {type(exc).__name__}: {exc}"
-
-
-def _draw_planned(figs: dict[str, Any], progress: Stages | None = None
-                  ) -> dict[str, Path | str]:
-    """Every planned figure of ``figs`` drawn in place of its plan (:func:`.forked.run_forked`)."""
-    planned = [(title, f) for title, f in figs.items() if isinstance(f, _Figure)]
-    if progress is not None:
-        progress.stage("figures", len(planned))
-    drawn = run_forked([lambda f=f: _one(f) for _, f in planned],
-                       None if progress is None else progress.step)
-    for (title, _), result in zip(planned, drawn, strict=True):
-        figs[title] = result
-    return figs
 
 
 def draw_all(data: Any, file: Callable[[str, str, str], Path],
              progress: Stages | None = None) -> dict[str, Path | str]:
     """Every core figure of a full report, in order: title -> PNG path, or why it was not
     drawn; ``file(kind, name, suffix)`` claims a path in the report folder."""
-    from . import anytime, figures
-    from .identifiability import reference_levels
-    from .load import trace_sets
-    from .styles import of_report
-
     figs: dict[str, Any] = {}
     records, rows, df = data.loaded.records, data.rows, data.tests.df
     style_of = of_report(data)  # one style per optimizer in every figure
@@ -89,14 +65,19 @@ def draw_all(data: Any, file: Callable[[str, str, str], Path],
     for context in sorted({h.context for h in data.hits}):
         _draw(figs, f"Fixed-target ECDF, {context}", data.hits, anytime.ecdf_figure, context,
               file("figures", f"ecdf_{context}", ".png"), style_of)
-    return _draw_planned(figs, progress)
+    # every plan drawn in its place, side by side (:func:`.forked.run_forked`)
+    planned = [(title, f) for title, f in figs.items() if callable(f)]
+    if progress is not None:
+        progress.stage("figures", len(planned))
+    drawn = run_forked([lambda t=t, f=f: _one(t, f) for t, f in planned],
+                       None if progress is None else progress.step)
+    figs.update((t, d) for (t, _), d in zip(planned, drawn, strict=True))
+    return figs
 
 
 def _cd_figures(figs: dict[str, Path | str], data: Any,
                 file: Callable[[str, str, str], Path], style_of: Any = None) -> None:
     """The critical-difference diagrams (they need the tests)."""
-    from . import figures, stats
-
     t = data.tests
     df, pairs, fr, alpha = t.df, t.pairs, t.fr, data.alpha
     by_inst = t.by_inst.get("metric", {})

@@ -12,12 +12,16 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ..analysis.diagnostics import MISFIT
 from ..analysis.intervals import Z95
 from ..store.job_checks import read_diagnostics
 from ..store.job_files import DIAGNOSTICS
+from .figures import _plt
 from .render import fmt
 from .safe import escape
+from .sections import Contribution, Section
 
 TITLE = "Fit diagnostics: residual autocorrelation and cross-correlation"
 
@@ -30,25 +34,14 @@ def by_context(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str,
     tried: set[Path] = set()
     for row in rows:
         rec = by_id.get(row["run_id"])
-        if rec is None:
-            continue
-        path = Path(str(rec.get("_job_dir", "."))) / DIAGNOSTICS
-        if path in tried:
+        path = None if rec is None else Path(str(rec.get("_job_dir", "."))) / DIAGNOSTICS
+        if path is None or path in tried:
             continue
         tried.add(path)
-        data = read_diagnostics(path)
-        if data is None:
-            continue
-        data["job_dir"] = str(path.parent)
-        old = found.get(row["context"])
-        if old is None or data["f"] < old["f"]:
+        data, old = read_diagnostics(path), found.get(row["context"])
+        if data is not None and (old is None or data["f"] < old["f"]):
             found[row["context"]] = data
     return found
-
-
-def _worst(diag: Mapping[str, Any]) -> dict[str, Any]:
-    """The channel with the largest lag-1 autocorrelation."""
-    return max(diag["groups"], key=lambda g: abs(g["lag1"]))
 
 
 def plain_line(diag: Mapping[str, Any]) -> str:
@@ -143,10 +136,10 @@ def blocks(diag: Mapping[str, Any] | None, model_error: str = ""
     rows)``: the channel table, then the intervals and which is trusted."""
     if diag is None:
         return []
-    line = plain_line(diag)
-    g = _worst(diag)
-    head = line or (f"The residuals look like noise (lag-1 {fmt(g['lag1'], 3)}, every channel "
-                    "passes the whiteness test): the model explains the record.")
+    worst = max(diag["groups"], key=lambda g: abs(g["lag1"]))
+    head = plain_line(diag) or (f"The residuals look like noise (lag-1 {fmt(worst['lag1'], 3)}, "
+                                "every channel passes the whiteness test): the model explains "
+                                "the record.")
     misfit = [x["name"] for x in diag["groups"] if x["misfit"]]
     if misfit:
         head += (f" The residual exceeds {MISFIT:g} noise σ on {', '.join(map(escape, misfit))}"
@@ -167,14 +160,8 @@ def blocks(diag: Mapping[str, Any] | None, model_error: str = ""
 def draw(diag: Mapping[str, Any], title: str) -> Any:
     """Per channel: the residual's autocorrelation and its cross-correlation with each input,
     each with its 99 % band."""
-    import numpy as np
-
-    from .figures import _plt
-
-    plt = _plt()
-
     groups = diag["groups"]
-    fig, axes = plt.subplots(len(groups), 2, figsize=(9, 2.4 * len(groups) + 0.8),
+    fig, axes = _plt().subplots(len(groups), 2, figsize=(9, 2.4 * len(groups) + 0.8),
                              squeeze=False)
     for (ax, axc), g in zip(axes, groups, strict=True):
         rho = np.asarray(g["acf"])
@@ -205,8 +192,6 @@ def draw(diag: Mapping[str, Any], title: str) -> Any:
 
 def section(ctx: Any) -> Any:
     """The residual figure of the problem's best context (full report only)."""
-    from .sections import Contribution, Section
-
     if ctx.short:
         return None
     found = by_context(ctx.records, ctx.rows)

@@ -7,13 +7,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 from ..store.job_checks import finite, interval_ends, read_comparisons, read_profile
 from ..store.job_files import COMPARISONS, PROFILE
-from .load import first_file_by_context
+from .load import Rows, first_file_by_context
+from .render import fmt
 
 #: The words every no-truth context starts with (the first screen and the body).
 NO_TRUTH = ("No truth: the parameters that made this record are not known (a measured "
@@ -47,8 +48,7 @@ class Identified:
     def rows(self) -> tuple[list[str], list[list[Any]]]:
         """A table: parameter, unit, value, its Jacobian interval and half-width (%), and the
         profile interval where one was computed."""
-        headers = ["parameter", "unit", "value", "95 % interval (Jacobian)",
-                   "± %"]
+        headers = ["parameter", "unit", "value", "95 % interval (Jacobian)", "± %"]
         prof = self.profile
         if prof is not None:
             headers += ["likelihood's estimate", "95 % interval (profile)"]
@@ -67,15 +67,11 @@ class Identified:
 
 
 def _interval(lo: float | None, hi: float | None) -> str:
-    from .render import fmt
-
     return f"[{'open' if lo is None else fmt(lo)}, {'open' if hi is None else fmt(hi)}]"
 
 
-def no_truth(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
-             ) -> dict[str, bool]:
-    """Per context, whether its problem has no truth: every record of it has
-    ``parameters.true`` null."""
+def no_truth(records: Rows, rows: Rows) -> dict[str, bool]:
+    """Per context, whether its problem has no truth (every record's ``parameters.true`` null)."""
     by_id = {r["run_id"]: r for r in records}
     out: dict[str, bool] = {}
     for row in rows:
@@ -87,25 +83,21 @@ def no_truth(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, A
 
 def check_intervals(value: Any, d: int) -> dict[str, Any] | None:
     """A record's ``result.intervals``, or ``None`` when missing or malformed."""
-    if not isinstance(value, Mapping):
-        return None
-    if not (interval_ends(value.get("lower"), d) and interval_ends(value.get("upper"), d)):
+    if not (isinstance(value, Mapping) and interval_ends(value.get("lower"), d)
+            and interval_ends(value.get("upper"), d)):
         return None
     sigma = value.get("sigma")
-    if not (isinstance(sigma, list) and 0 < len(sigma) <= 1000 and all(finite(s) for s in sigma)):
-        return None
-    return dict(value)
+    ok = isinstance(sigma, list) and 0 < len(sigma) <= 1000 and all(finite(s) for s in sigma)
+    return dict(value) if ok else None
 
 
-def comparisons_by_context(records: Sequence[Mapping[str, Any]],
-                           rows: Sequence[Mapping[str, Any]]) -> dict[str, list[dict[str, Any]]]:
+def comparisons_by_context(records: Rows, rows: Rows) -> dict[str, list[dict[str, Any]]]:
     """Per context, the comparison rows of its first job that wrote readable ones."""
     return first_file_by_context(records, rows, COMPARISONS, read_comparisons)
 
 
-def identified_by_context(records: Sequence[Mapping[str, Any]],
-                          rows: Sequence[Mapping[str, Any]],
-                          contexts: Mapping[str, bool]) -> dict[str, Identified]:
+def identified_by_context(records: Rows, rows: Rows, contexts: Mapping[str, bool]
+                          ) -> dict[str, Identified]:
     """Per context without a truth: the best ok run with readable intervals, and the
     profile started at the lowest objective."""
     by_id = {r["run_id"]: r for r in records}
@@ -113,14 +105,11 @@ def identified_by_context(records: Sequence[Mapping[str, Any]],
     for context in (c for c, none in contexts.items() if none):
         mine = [r for r in rows if r["context"] == context and r["status"] == "ok"]
         mine.sort(key=lambda r: (_key(r.get("metric")), _key(r.get("f_best"))))
-        for row in mine:
-            rec = by_id[row["run_id"]]
-            found = _identified(row, rec)
-            if found is not None:
-                found.profile, found.profile_note = _best_profile(
-                    [by_id[r["run_id"]] for r in mine], len(found.names))
-                out[context] = found
-                break
+        found = next(filter(None, (_identified(r, by_id[r["run_id"]]) for r in mine)), None)
+        if found is not None:
+            found.profile, found.profile_note = _best_profile(
+                [by_id[r["run_id"]] for r in mine], len(found.names))
+            out[context] = found
     return out
 
 
@@ -159,20 +148,11 @@ def _text(v: Any, most: int) -> str:
     return " ".join(v.split())[:most] if isinstance(v, str) else ""
 
 
-def _best_profile(records: Sequence[Mapping[str, Any]], d: int
-                  ) -> tuple[dict[str, Any] | None, str]:
+def _best_profile(records: Rows, d: int) -> tuple[dict[str, Any] | None, str]:
     """The readable ``profile.json`` (status ok) with the lowest start among the records'
     jobs, or ``None`` and why not."""
-    seen: set[str] = set()
-    found: list[dict[str, Any]] = []
-    for rec in records:
-        folder = str(rec.get("_job_dir", "."))
-        if folder in seen:
-            continue
-        seen.add(folder)
-        data = read_profile(Path(folder) / PROFILE, d)
-        if data is not None:
-            found.append(data)
+    folders = dict.fromkeys(str(rec.get("_job_dir", ".")) for rec in records)
+    found = [p for p in (read_profile(Path(f) / PROFILE, d) for f in folders) if p is not None]
     ok = [p for p in found if p["status"] == "ok"]
     if ok:
         return min(ok, key=lambda p: p["f_start"]), ""

@@ -14,6 +14,9 @@ from typing import Any
 
 import numpy as np
 
+from .stats import compact_letters
+from .styles import legend, lookup
+
 #: Resolution of every PNG (dots per inch).
 DPI = 110
 #: zlib level of the PNG files: 1 (not 6) saves 5 % of the drawing time, files 5-7 % larger.
@@ -46,29 +49,12 @@ def save(fig: Any, path: Path) -> Path:
 def colours(n: int) -> list[Any]:
     """``n`` distinct colours: matplotlib's colour cycle when it has enough, else ``n`` evenly
     spaced hues (seaborn's ``husl``): a repeated colour would make two curves one."""
-    plt = _plt()
-    cycle = plt.rcParams["axes.prop_cycle"].by_key().get("color") or ["C0"]
+    cycle = _plt().rcParams["axes.prop_cycle"].by_key().get("color") or ["C0"]
     if n <= len(cycle):
         return list(cycle[:n])
     import seaborn as sns
 
     return list(sns.color_palette("husl", n))
-
-
-def _use_log(values: np.ndarray) -> bool:
-    v = values[np.isfinite(values)]
-    return bool(v.size and np.all(v > 0) and v.max() / v.min() > 50)
-
-
-def extremes(values: np.ndarray) -> np.ndarray:
-    """The few finite numbers of ``values`` that :func:`set_log_y` decides on (least,
-    largest, least non-zero magnitude)."""
-    v = np.asarray(values, float)
-    v = v[np.isfinite(v)]
-    if not v.size:
-        return v
-    nz = np.abs(v[v != 0])
-    return np.array([v.min(), v.max()] + ([nz.min()] if nz.size else []))
 
 
 def set_log_y(ax: Any, values: np.ndarray) -> str:
@@ -92,8 +78,7 @@ def set_log_y(ax: Any, values: np.ndarray) -> str:
 # --- convergence -----------------------------------------------------------------------------
 
 def step_values(ev: np.ndarray, best: np.ndarray, grid: np.ndarray) -> np.ndarray:
-    """A best-so-far trace read at ``grid`` evaluation counts as a step function (NaN before
-    the first batch)."""
+    """A best-so-far trace as a step function read at ``grid`` (NaN before the first batch)."""
     idx = np.searchsorted(ev, grid, side="right") - 1
     return np.where(idx >= 0, best[np.clip(idx, 0, None)], np.nan)
 
@@ -147,8 +132,6 @@ def convergence_panels(traces: TraceSets, f_true: Mapping[str, float] | None = N
     """The convergence figure's data, one panel per context with a finite value: each
     optimizer's quartiles over its runs of the best-so-far on the context's evaluation grid,
     thinned. ``traces[context][algorithm]``: each run's (evaluations, best) arrays."""
-    f_true = dict(f_true or {})
-    f_opt = dict(f_opt or {})
     panels = []
     for context in sorted(traces):
         by_alg = traces[context]
@@ -166,19 +149,20 @@ def convergence_panels(traces: TraceSets, f_true: Mapping[str, float] | None = N
             if not with_value.any():
                 continue
             n_runs.add(int(with_value.sum()))
-            found.append(extremes(m))
+            v = m[np.isfinite(m)]  # what set_log_y decides on: least, largest, least non-zero
+            nonzero = np.abs(v[v != 0])
+            found.append(np.array([v.min(), v.max()] + ([nonzero.min()] if nonzero.size else [])))
             cols = ~np.all(np.isnan(m), axis=0)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
                 q = nan_column_quantiles(m[:, cols], [0.25, 0.5, 0.75])
-            x, q25, q50, q75 = thin_steps(grid[cols], q[0], q[1], q[2])
-            curves.append({"algorithm": algorithm, "x": x, "q25": q25, "median": q50,
-                           "q75": q75})
+            x, q25, q50, q75 = thin_steps(grid[cols], *q)
+            curves.append({"algorithm": algorithm, "x": x, "q25": q25, "median": q50, "q75": q75})
         if not curves:
             continue
         panels.append({"context": context, "curves": curves, "runs": sorted(n_runs),
-                       "values": np.concatenate(found), "f_true": f_true.get(context),
-                       "f_opt": f_opt.get(context)})
+                       "values": np.concatenate(found), "f_true": (f_true or {}).get(context),
+                       "f_opt": (f_opt or {}).get(context)})
     return panels
 
 
@@ -188,13 +172,10 @@ def draw_convergence(panels: Sequence[Mapping[str, Any]], path: Path,
     context, log y axis; dashed: the objective at the truth, dotted: the record optimum."""
     if not panels:
         return "no finite objective values in the traces"
-    from .styles import legend, lookup
-
     look = lookup(style_of, [c["algorithm"] for p in panels for c in p["curves"]])
-    plt = _plt()
     ncol = min(len(panels), 2)
     nrow = -(-len(panels) // ncol)
-    fig, axes = plt.subplots(nrow, ncol, figsize=(6.5 * ncol, 4.2 * nrow), squeeze=False)
+    fig, axes = _plt().subplots(nrow, ncol, figsize=(6.5 * ncol, 4.2 * nrow), squeeze=False)
     for ax, p in zip(axes.flat, panels, strict=False):
         for c in p["curves"]:
             st = look[c["algorithm"]]
@@ -203,15 +184,12 @@ def draw_convergence(panels: Sequence[Mapping[str, Any]], path: Path,
             ax.fill_between(c["x"], c["q25"], c["q75"], color=st.colour, alpha=0.12,
                             step="post", linewidth=0)
         values = np.asarray(p["values"], float)
-        ft, fo = p.get("f_true"), p.get("f_opt")
-        if ft is not None and math.isfinite(ft):
-            ax.axhline(ft, color="black", ls="--", lw=1.0,
-                       label=f"f at the true parameters, median over instances ({ft:.4g})")
-            values = np.append(values, ft)
-        if fo is not None and math.isfinite(fo):
-            ax.axhline(fo, color="black", ls=":", lw=1.2,
-                       label=f"record optimum f*, median over instances ({fo:.4g})")
-            values = np.append(values, fo)
+        for level, ls, lw, what in ((p.get("f_true"), "--", 1.0, "f at the true parameters"),
+                                    (p.get("f_opt"), ":", 1.2, "record optimum f*")):
+            if level is not None and math.isfinite(level):
+                ax.axhline(level, color="black", ls=ls, lw=lw,
+                           label=f"{what}, median over instances ({level:.4g})")
+                values = np.append(values, level)
         scale = set_log_y(ax, values)
         ax.set_title(f"{p['context']}\n(runs per optimizer: {', '.join(map(str, p['runs']))})")
         ax.set_xlabel("objective evaluations used")
@@ -233,25 +211,25 @@ def runs_metric_data(df: Any, problem: str) -> dict[str, Any] | str:
     if d.empty:
         return f"no successful runs with a finite metric for {problem}"
     names = sorted(d["metric_name"].unique())
+    v = d["metric"].to_numpy(float)  # log axis: all positive, spanning more than 50 times
     values = {(str(a), str(c)): g["metric"].to_numpy(float)
               for (a, c), g in d.groupby(["algorithm", "context"], sort=True)}
     return {"problem": problem, "name": names[0] if len(names) == 1 else "metric",
             "order": sorted(map(str, d["algorithm"].unique())),
             "hue_order": sorted(map(str, d["context"].unique())), "values": values,
-            "log": _use_log(d["metric"].to_numpy(float))}
+            "log": bool(np.all(v > 0) and v.max() / v.min() > 50)}
 
 
 def draw_runs_metric(data: Mapping[str, Any], path: Path) -> Path | str:
     """Per-run metric per optimizer, grouped by context: a box (whiskers to 1.5 IQR) and every
     run as a dot (jittered by a fixed generator), one colour per context."""
-    plt = _plt()
     order, hue_order = data["order"], data["hue_order"]
     m = max(1, len(hue_order))
-    fig, ax = plt.subplots(figsize=(max(6.0, 0.9 * len(order) * m + 2), 4.6))
+    fig, ax = _plt().subplots(figsize=(max(6.0, 0.9 * len(order) * m + 2), 4.6))
     slot = 0.8 / m
     rng = np.random.default_rng(0)
-    for j, (colour, context) in enumerate(zip(colours(len(hue_order)), hue_order,
-                                              strict=True)):
+    palette = colours(len(hue_order))
+    for j, (colour, context) in enumerate(zip(palette, hue_order, strict=True)):
         pos, vals = [], []
         for i, algorithm in enumerate(order):
             v = data["values"].get((algorithm, context))
@@ -281,7 +259,7 @@ def draw_runs_metric(data: Mapping[str, Any], path: Path) -> Path | str:
     from matplotlib.patches import Patch
 
     ax.legend(handles=[Patch(facecolor="none", edgecolor=c, label=h, linewidth=1.2)
-                       for c, h in zip(colours(len(hue_order)), hue_order, strict=True)],
+                       for c, h in zip(palette, hue_order, strict=True)],
               title="context", fontsize=8, title_fontsize=8)
     return save(fig, path)
 
@@ -373,8 +351,6 @@ def cd_data(ranks: Any, pvalues: Any) -> dict[str, Any] | str:
 def cd_bars(names: list[str], p: np.ndarray, alpha: float) -> list[list[str]]:
     """The bars of a critical-difference diagram: each group (two or more) no pair of which
     differs significantly, the columns of the compact letter display, best first."""
-    from .stats import compact_letters
-
     different = {frozenset((names[i], names[j])) for i in range(len(names))
                  for j in range(i + 1, len(names)) if p[i, j] < alpha}
     letters = compact_letters(list(names), different)
@@ -388,10 +364,7 @@ def draw_cd(data: Mapping[str, Any], title: str, axis_label: str, path: Path,
     """Critical-difference diagram in Demšar's (2006) layout: mean ranks on a top axis, a bar
     per group of :func:`cd_bars`, each optimizer's elbow line to its label (better half
     left, the rest right), no two lines crossing."""
-    plt = _plt()
     names = [name for name, _ in data["ranks"]]
-    from .styles import lookup
-
     look = lookup(style_of, names)
     rank = {name: r for name, r in data["ranks"]}
     levels: list[float] = []  # the right end of the last bar placed on each level
@@ -407,7 +380,7 @@ def draw_cd(data: Mapping[str, Any], title: str, axis_label: str, path: Path,
     margin = 0.25 * (hi_r - lo_r) + 0.5
     left_x, right_x = lo_r - margin, hi_r + margin
     rows = -step * (len(levels) + 1 + np.arange(half))
-    fig, ax = plt.subplots(figsize=(8, 1.3 + 0.3 * (half + len(levels))))
+    fig, ax = _plt().subplots(figsize=(8, 1.3 + 0.3 * (half + len(levels))))
     for lo, hi, level in placed:
         ax.plot([lo - 0.03, hi + 0.03], [-step * (level + 1)] * 2, color="k", linewidth=3,
                 solid_capstyle="butt", zorder=3)

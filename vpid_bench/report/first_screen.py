@@ -14,9 +14,11 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from ..estimators import DESCRIPTION
-from . import anytime, assumed, verdicts
+from . import anytime, assumed, diagnostics, verdicts
+from .answer import sentences, table_note
 from .body import verdict_short
-from .render import PROSE_WIDTH, fmt, markdown, para, terminal
+from .estimates import NO_TRUTH, NO_TRUTH_NO_RECORD
+from .render import PROSE_WIDTH, fmt, joined, markdown, para, terminal
 from .safe import clean, escape, shown
 from .tables import pair_detail
 from .verdicts import Verdict
@@ -75,10 +77,7 @@ def _value(x: float, unit: str, name: Any = None) -> str:
 
 
 def _names(items: Sequence[str]) -> str:
-    items = [_name(i) for i in items]
-    if not items:
-        return ""
-    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
+    return joined([_name(i) for i in items])
 
 
 def _ref(name: str) -> str:
@@ -88,13 +87,10 @@ def _ref(name: str) -> str:
 
 def context_result(data: Any, context: str) -> ContextResult:
     """The first screen of ``context`` from a :class:`~.compute.ReportData`."""
-    mrows = [s for s in data.metric_rows(context) if s.get("n_runs")]
-    mrows.sort(key=lambda s: s["rank"])
-    srows = {s["algorithm"]: s for s in data.search_rows(context)}
-    metric = mrows[0]["metric_name"] if mrows else "metric"
-    unit = data.unit(context)
+    mrows, srows = _rows(data, context)
+    v = verdicts.decide(evidence(data, context))
     mgroups, sgroups = data.groups("metric", context), data.groups("search", context)
-    label = f"median {metric}" + (f" ({unit})" if unit else "")
+    label = f"median {v.metric}" + (f" ({v.unit})" if v.unit else "")
     headers = ["rank", "optimizer", "n", label, "IQR"]
     if mgroups is not None:
         headers.insert(1, "group")
@@ -120,21 +116,24 @@ def context_result(data: Any, context: str) -> ContextResult:
         if show_vs:
             row.append(verdict_short(s.get(vs) or ""))
         body.append(row)
-    verdict = verdicts.decide(evidence(data, context))
-    return ContextResult(context, metric, unit, headers, body, verdict.floor, verdict.bound,
-                         verdict_text(verdict), mgroups is not None, verdict, verdict.truth,
+    return ContextResult(context, v.metric, v.unit, headers, body, v.floor, v.bound,
+                         verdict_text(v), mgroups is not None, v, v.truth,
                          data.identified.get(context), data.comparisons.get(context, []),
-                         diagnostics=getattr(data, "diagnostics", {}).get(context),
-                         model_error=verdict.model_error,
-                         assumed=assumed.blocks(data, context),
-                         fits_a_record=assumed.fits_a_record(data, context))
+                         assumed.blocks(data, context),
+                         getattr(data, "diagnostics", {}).get(context), v.model_error,
+                         assumed.fits_a_record(data, context))
+
+
+def _rows(data: Any, context: str) -> tuple[list[dict[str, Any]], dict[str, dict[str, Any]]]:
+    """The context's metric rows with runs, best first, and its search rows by optimizer."""
+    mrows = sorted((s for s in data.metric_rows(context) if s.get("n_runs")),
+                   key=lambda s: s["rank"])
+    return mrows, {s["algorithm"]: s for s in data.search_rows(context)}
 
 
 def evidence(data: Any, context: str) -> verdicts.Evidence:
     """What the verdict of ``context`` rests on."""
-    mrows = sorted((s for s in data.metric_rows(context) if s.get("n_runs")),
-                   key=lambda s: s["rank"])
-    srows = {s["algorithm"]: s for s in data.search_rows(context)}
+    mrows, srows = _rows(data, context)
     mgroups = data.groups("metric", context) or {}
     sgroups = data.groups("search", context) or {}
     cost = {a: v for (c, a), v in anytime.costs_to_optimum(data.hits).items() if c == context}
@@ -169,10 +168,7 @@ def evidence(data: Any, context: str) -> verdicts.Evidence:
 
 def _model_error(data: Any, context: str) -> str:
     """What the richer model that made the records adds (``problem.info.model_error``)."""
-    ids = {r["run_id"] for r in data.rows if r["context"] == context}
-    for rec in data.loaded.records:
-        if rec["run_id"] not in ids:
-            continue
+    for rec in data.records_of(context):
         info = (rec.get("problem") or {}).get("info")
         me = info.get("model_error") if isinstance(info, Mapping) else None
         what = me.get("what") if isinstance(me, Mapping) else None
@@ -327,8 +323,7 @@ def _estimator(v: Verdict) -> str:
 
 
 def _limits(v: Verdict) -> str:
-    """What the records allow, and what limits the leader: search, the estimator or the
-    data."""
+    """What the records allow, and what limits the leader: search, the estimator or the data."""
     if not v.truth:
         return _limits_without_truth(v)
     parts = [_allowed(v)]
@@ -443,13 +438,10 @@ def _limits_without_truth(v: Verdict) -> str:
 
 def _no_truth_lines(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
     """The paragraphs and tables a context without a truth adds below its ranking."""
-    from .estimates import NO_TRUTH, NO_TRUTH_NO_RECORD
-
-    out: list[tuple[str, list[str], list[list[Any]]]] = []
     ranked = ("the objective" if r.metric == "f_best" else
               f"{escape(r.metric)} (held out) and, in the search columns, by the objective")
-    out.append((f"{NO_TRUTH if r.fits_a_record else NO_TRUTH_NO_RECORD}; ranked by {ranked}.",
-                [], []))
+    out: list[tuple[str, list[str], list[list[Any]]]] = [
+        (f"{NO_TRUTH if r.fits_a_record else NO_TRUTH_NO_RECORD}; ranked by {ranked}.", [], [])]
     ident = r.identified
     if ident is not None:
         sigma = ", ".join(fmt(s, 3) for s in ident.sigma)
@@ -470,9 +462,7 @@ def _no_truth_lines(r: ContextResult) -> list[tuple[str, list[str], list[list[An
         headers, rows = ident.rows()
         out.append((text, headers, rows))
     if r.comparisons:
-        names: list[str] = []
-        for c in r.comparisons:
-            names += [k for k in c["metrics"] if k not in names]
+        names = list(dict.fromkeys(k for c in r.comparisons for k in c["metrics"]))
         headers = ["comparison (not a run, not a truth)", "objective", *names, "note"]
         rows = [[escape(c["name"]), c["f"], *[c["metrics"].get(k) for k in names],
                  escape(c["note"])] for c in r.comparisons]
@@ -483,12 +473,9 @@ def _no_truth_lines(r: ContextResult) -> list[tuple[str, list[str], list[list[An
 
 def _objective(ident: Any) -> str:
     """The best run's objective with the unit and meaning the problem states."""
-    text = fmt(ident.f, 4)
-    if getattr(ident, "objective_unit", ""):
-        text += f" {escape(ident.objective_unit)}"
-    if getattr(ident, "objective_what", ""):
-        text += f", {escape(ident.objective_what)}"
-    return text
+    unit, what = ident.objective_unit, ident.objective_what
+    return (fmt(ident.f, 4) + (f" {escape(unit)}" if unit else "")
+            + (f", {escape(what)}" if what else ""))
 
 
 def markdown_lines(items: Sequence[ContextResult]) -> list[str]:
@@ -514,10 +501,8 @@ def extra_blocks(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]
     rows)`` (empty headers: text only): why row 1 is not the verdict's choice, what the
     answer assumes (:mod:`.assumed`), without a truth the identified values and comparison
     rows, and the fit diagnostics (:mod:`.diagnostics`)."""
-    from .diagnostics import blocks
-
     return (_row_one_note(r) + list(r.assumed) + ([] if r.truth else _no_truth_lines(r))
-            + blocks(r.diagnostics, r.model_error))
+            + diagnostics.blocks(r.diagnostics, r.model_error))
 
 
 def _row_one_note(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]]]]:
@@ -538,11 +523,6 @@ def _row_one_note(r: ContextResult) -> list[tuple[str, list[str], list[list[Any]
     return [(f"Row 1 of the ranking is not the verdict's choice: {why}.", [], [])]
 
 
-def terminal_width() -> int:
-    """The terminal's width in columns (80 when it cannot be told, at least 40)."""
-    return max(40, shutil.get_terminal_size((80, 24)).columns)
-
-
 #: Joins the words of a name while the terminal's verdict is wrapped (never in the output).
 _GLUE = "\u00a0"
 
@@ -560,25 +540,23 @@ def _wrap_glued(marked: str, width: int) -> str:
     return clean("\n".join(lines).replace(_GLUE, " "), keep_newlines=True)
 
 
+def _item(text: str, width: int) -> str:
+    """A list item wrapped at ``width``, later lines indented ("8 %" kept on one line)."""
+    return textwrap.fill(" ".join(text.split()).replace(" %", _GLUE + "%"), width=width,
+                         subsequent_indent="  ", break_long_words=False,
+                         break_on_hyphens=False).replace(_GLUE, " ")
+
+
 def answer_markdown(a: Any) -> list[str]:
     """The answer block of ``report.md`` (:mod:`.answer`): its sentences, the identified
     values where there is no truth, and the compact table per context."""
-    from .answer import sentences
-
     if a is None:
         return []
-    lines = ["## The answer", ""]
-    for label, text in sentences(a):
-        flat = f"- **{label}**: {' '.join(text.split())}".replace(" %", _GLUE + "%")
-        lines += [textwrap.fill(flat, width=PROSE_WIDTH, subsequent_indent="  ",
-                                break_long_words=False, break_on_hyphens=False
-                                ).replace(_GLUE, " ")]  # "8 %" never split over two lines
-    lines.append("")
+    lines = ["## The answer", "", *(_item(f"- **{label}**: {text}", PROSE_WIDTH)
+                                    for label, text in sentences(a)), ""]
     for _, text, headers, rows in a.identified:
         lines += [para(text), "", markdown(headers, rows), ""]
     if a.rows:
-        from .answer import table_note
-
         lines += [markdown(a.headers, a.rows), "",
                   para(table_note(a) + " Each verdict in full, with its reasons and the "
                        "ranking: [Results](#results) below."), ""]
@@ -587,16 +565,10 @@ def answer_markdown(a: Any) -> list[str]:
 
 def answer_terminal(a: Any, width: int) -> str:
     """The answer block for the terminal: the same, wrapped, without code marks."""
-    from .answer import sentences
-
     if a is None:
         return ""
-    out = ["The answer"]
-    for label, text in sentences(a):
-        flat = " ".join(f"{label}: {text}".replace("`", "").split()).replace(" %", _GLUE + "%")
-        out.append(clean(textwrap.fill(flat, width=width, subsequent_indent="  ",
-                                       break_long_words=False, break_on_hyphens=False
-                                       ).replace(_GLUE, " "), keep_newlines=True))
+    out = ["The answer", *(clean(_item(f"{label}: {text}".replace("`", ""), width),
+                                 keep_newlines=True) for label, text in sentences(a))]
     for _, text, headers, rows in a.identified:
         out += ["", _wrap(text, width), terminal(headers, rows)]
     if a.rows:
@@ -608,7 +580,7 @@ def terminal_text(items: Sequence[ContextResult], width: int | None = None,
                   answer: Any = None) -> str:
     """The same first screen for the terminal: the answer (:mod:`.answer`) first, then a
     table and a verdict per context, the prose wrapped to the terminal's width."""
-    width = width or terminal_width()
+    width = width or max(40, shutil.get_terminal_size((80, 24)).columns)  # 80 if unknown
     blocks = [answer_terminal(answer, width)] if answer is not None else []
     for r in items:
         extra = ""

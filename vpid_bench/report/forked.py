@@ -1,13 +1,9 @@
-"""Independent pieces of a report computed side by side: :func:`run_forked` runs calls in up
-to ``workers`` forked processes. The calls are inherited through ``fork`` (never pickled: a
-figure's data or a closure need not be picklable); only their results travel back. Where
-``fork`` or a second core is missing, or a process dies (a crash in a library), the calls run
-here, one after another: the same results, only slower.
-
-Why: an archive report's statistical tests and its figures are each a pile of independent
-pieces (two test families, 69 figures over archive/vpid1), half of the report's time; on two
-cores they take half as long.
-"""
+"""Independent pieces of a report computed side by side: an archive report's two families of
+tests and its figures (69 over archive/vpid1) are half of its time, and on two cores take
+half as long. :func:`run_forked` runs calls in forked processes, inherited through ``fork``
+(never pickled: a figure's data or a closure need not be picklable); only their results
+travel back. Where ``fork`` or a second core is missing, or a process dies, the calls run
+here, one after another: the same results, only slower."""
 
 from __future__ import annotations
 

@@ -16,12 +16,13 @@ from typing import Any
 from ..analysis.identifiability import ROUNDING
 from ..analysis.optimum import find_optimum, load_optima, record_settings
 from ..analysis.profile import STRUCTURAL_RATIO
+from ..estimators import DESCRIPTION, OBJECTIVES
 from ..problem import FILLED_PARAMS
 from ..store.job_checks import finite, read_estimator_floors, read_identifiability
 from ..store.job_files import ESTIMATORS, IDENTIFIABILITY
 from ..store.records import stable_hash
-from .estimator_floors import sentence as estimator_sentence
-from .load import first_file_by_context
+from .figures import _plt
+from .load import Rows, first_file_by_context
 from .optima import opt_column_names
 from .safe import escape
 from .sections import Contribution, ReportContext, Section
@@ -46,20 +47,14 @@ CONVENTION = (
     "arithmetic, computed to rounding) carry no information and are left out.")
 
 
-def optima_by_run(records: Sequence[Mapping[str, Any]]) -> dict[str, Mapping[str, Any]]:
+def optima_by_run(records: Rows) -> dict[str, Mapping[str, Any]]:
     """The optimum of the instance each run fitted (checked files of ``<job>/optima`` and
     ``<sweep>/optima``), by ``run_id``."""
     jobs = dict.fromkeys(Path(str(rec.get("_job_dir", "."))) for rec in records)
     optima = load_optima(dict.fromkeys(f for job in jobs
                                        for f in (job / "optima", job.parent / "optima")))
-    if not optima:
-        return {}
-    out = {}
-    for rec in records:
-        found = find_optimum(rec, optima)
-        if found is not None:
-            out[rec["run_id"]] = found
-    return out
+    found = {rec["run_id"]: find_optimum(rec, optima) for rec in records} if optima else {}
+    return {k: v for k, v in found.items() if v is not None}
 
 
 def _instance(rec: Mapping[str, Any]) -> Any:
@@ -67,8 +62,7 @@ def _instance(rec: Mapping[str, Any]) -> Any:
     return inst.get("id") if isinstance(inst, Mapping) else None
 
 
-def reference_levels(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
-                     ) -> tuple[dict[str, float], dict[str, float]]:
+def reference_levels(records: Rows, rows: Rows) -> tuple[dict[str, float], dict[str, float]]:
     """Per context, the median over its instances of the objective at the truth
     (``problem.info.f_at_true``) and of the record optimum ``f*``; a context is left out
     where an instance lacks a finite value."""
@@ -93,30 +87,32 @@ def reference_levels(records: Sequence[Mapping[str, Any]], rows: Sequence[Mappin
     return medians(f_true), medians(f_opt)
 
 
-def crb_norm_by_context(records: Sequence[Mapping[str, Any]],
-                        rows: Sequence[Mapping[str, Any]]) -> dict[str, float]:
+def _read_bounds(path: Path, rec: Mapping[str, Any]) -> dict[str, Any] | None:
+    """A job's ``identifiability.json`` for the record's parameters (``None``: unreadable)."""
+    names = list((rec.get("parameters") or {}).get("names") or [])
+    return read_identifiability(path, names)[0] if path.exists() else None
+
+
+def estimator_floors_by_context(records: Rows, rows: Rows) -> dict[str, dict[str, Any]]:
+    """Per context, the first readable ``estimators.json`` of its jobs (each estimator's floor)."""
+    return first_file_by_context(records, rows, ESTIMATORS,
+                                 lambda path, _: read_estimator_floors(path)[0])
+
+
+def crb_norm_by_context(records: Rows, rows: Rows) -> dict[str, float]:
     """Per context, the norm of the Cramér–Rao bounds (%) of the first readable
     ``identifiability.json`` of its jobs: what an efficient estimator could reach."""
-    def read(path: Path, rec: Mapping[str, Any]) -> Any:
-        names = list((rec.get("parameters") or {}).get("names") or [])
-        return read_identifiability(path, names)[0] if path.exists() else None
-
-    found = first_file_by_context(records, rows, FILE, read)
+    found = first_file_by_context(records, rows, FILE, _read_bounds)
     return {c: float(d["crb_norm_percent"]) for c, d in found.items()}
 
 
-def crb_norms_by_instance(records: Sequence[Mapping[str, Any]],
-                          rows: Sequence[Mapping[str, Any]]) -> dict[str, dict[Any, float]]:
+def crb_norms_by_instance(records: Rows, rows: Rows) -> dict[str, dict[Any, float]]:
     """Per context, each instance's own bound norm (%), keyed as the rows' ``instance``
     column (its id, or the run index where every run fits the same data): what the verdicts
     compare each instance's floor with (:func:`.verdicts.floor_over_bound`)."""
-    def read(path: Path, rec: Mapping[str, Any]) -> Any:
-        names = list((rec.get("parameters") or {}).get("names") or [])
-        data = read_identifiability(path, names)[0] if path.exists() else None
-        return (data or {}).get("instances") or None
-
     out: dict[str, dict[Any, float]] = {}
-    for context, entries in first_file_by_context(records, rows, FILE, read).items():
+    for context, entries in first_file_by_context(records, rows, FILE, lambda path, rec: (
+            _read_bounds(path, rec) or {}).get("instances") or None).items():
         norms: dict[Any, float] = {}
         for e in entries:
             keys = [e["instance"]] if isinstance(e["instance"], str) else e["runs"]
@@ -125,7 +121,7 @@ def crb_norms_by_instance(records: Sequence[Mapping[str, Any]],
     return out
 
 
-def _design_label(rows: Sequence[Mapping[str, Any]]) -> str:
+def _design_label(rows: Rows) -> str:
     """The labels of a design's contexts without the protocol: the problem and its varying
     settings (the rows' ``problem.<key>`` columns) but ``ps``, ``iterations`` and the
     budget."""
@@ -148,14 +144,10 @@ def _by_design(ctx: ReportContext) -> list[dict[str, Any]]:
                                "settings": record_settings(rec["problem"].get("config") or {})})
         except (TypeError, ValueError, AttributeError):
             continue
-        d = by_key.setdefault(key, {"contexts": [], "records": [], "rows": [], "jobs": []})
-        if row["context"] not in d["contexts"]:
-            d["contexts"].append(row["context"])
+        d = by_key.setdefault(key, {"contexts": {}, "records": [], "rows": [], "jobs": {}})
+        d["contexts"][row["context"]] = d["jobs"][ctx.job_dir(rec)] = None  # once each
         d["records"].append(rec)
         d["rows"].append(row)
-        job = ctx.job_dir(rec)
-        if job not in d["jobs"]:
-            d["jobs"].append(job)
     return list(by_key.values())
 
 
@@ -205,8 +197,7 @@ def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
     optima = optima_by_run(ctx.records)
     out = []
     for d in _by_design(ctx):
-        params = d["records"][0].get("parameters") or {}
-        names = list(params.get("names") or [])
+        names = list((d["records"][0].get("parameters") or {}).get("names") or [])
         crb = _first_bounds(d["jobs"], names, notes)
         if crb is None:
             continue
@@ -216,13 +207,12 @@ def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
                               [read_estimator_floors(job / ESTIMATORS)[0]] if data), None)
         out.append({
             "label": _design_label(d["rows"]), "contexts": sorted(d["contexts"]),
-            "names": names, "true": params.get("true"), "crb": crb, "metric": metric,
+            "names": names, "crb": crb, "metric": metric,
             "floor": statistics.median(floors.values()) if floors else None,
             "floor_errors": ([statistics.median(e[j] for e in errors.values())
                               for j in range(len(names))] if errors else None),
             "instances": len(floors) if floors else len(errors),
-            "estimators": per_estimator, "unit": str(d["rows"][0].get("metric_unit") or ""),
-        })
+            "estimators": per_estimator, "unit": str(d["rows"][0].get("metric_unit") or "")})
     out.sort(key=lambda x: x["label"])
     labels = [x["label"] for x in out]
     for x in out:
@@ -236,13 +226,9 @@ def draw_design(design: Mapping[str, Any]) -> Any:
     optima; a dashed line at :data:`UNDETERMINED_PERCENT`."""
     from matplotlib.ticker import FuncFormatter
 
-    from .figures import _plt
-
-    plt = _plt()
-
     names = design["names"]
     crb = design["crb"]["crb_percent"]
-    fig, ax = plt.subplots(figsize=(max(5.0, 0.7 * len(names) + 2.0), 3.8))
+    fig, ax = _plt().subplots(figsize=(max(5.0, 0.7 * len(names) + 2.0), 3.8))
     xs = range(len(names))
     ax.bar(xs, [max(v, 1e-6) for v in crb], color="#4c72b0",
            label="Cramér–Rao bound (relative sd, %)")
@@ -282,9 +268,13 @@ def _design_text(ctx: ReportContext, design: Mapping[str, Any]) -> str:
                if floor is not None else "; no instance optimum was found for a measured floor")
             + f". Condition number {ctx.fmt(cond, 3) if cond is not None else 'infinite'}; "
             f"singular values {', '.join(ctx.fmt(v, 3) for v in s)}. ")
-    if design.get("estimators"):
-        text += "Floors per estimator: " + estimator_sentence(
-            design["estimators"], design["unit"], ctx.fmt) + ". "
+    est = design.get("estimators")
+    if est:  # "...: ordinary least squares (objective=ols) 27.1 %; ..."
+        floors, unit = est["floors"], escape(design["unit"])
+        text += (f"Floors per estimator: median {escape(est['metric'])} of each estimator's "
+                 f"optimum on the first {est['instances']} instance(s): " + "; ".join(
+                     f"{DESCRIPTION[o]} (objective={o}) {ctx.fmt(floors[o]['median'], 3)} "
+                     f"{unit}".rstrip() for o in OBJECTIVES if floors.get(o) is not None) + ". ")
     if cond is None or cond >= 1.0 / STRUCTURAL_RATIO:
         text += ("The record is blind to a combination of the parameters (a structural "
                  "symmetry: the smallest singular value is at most "
@@ -327,30 +317,22 @@ def _instances_text(ctx: ReportContext, crb: Mapping[str, Any]) -> str:
 
 
 def section(ctx: ReportContext) -> Contribution | None:
-    """The identifiability section of one problem's runs (``None``: no job wrote an
-    ``identifiability.json``)."""
+    """The identifiability section of one problem's runs (``None``: no identifiability.json)."""
     designs, notes = _designs(ctx)
     if not designs:
         if not notes:
             return None
         return Contribution(sections=(Section(
             "Identifiability", ctx.para("Not built: " + "; ".join(notes) + ".")),))
-    files: list[Path] = []
-    rows = []
-    for d in designs:
-        for j, name in enumerate(d["names"]):
-            for context in d["contexts"]:
-                rows.append([context, d["label"], name, d["crb"]["crb_percent"][j],
-                             d["floor_errors"][j] if d["floor_errors"] is not None else None,
-                             d["instances"]])
-    files += ctx.write_table(
-        "identifiability",
-        ["context", "design", "parameter", "crb_percent", "floor_median_abs_error_percent",
-         "instances"], rows)
-    files += ctx.write_table(
-        "identifiability_designs",
-        ["design", "contexts", "crb_norm_percent", "floor_metric", "floor_median", "instances",
-         "condition_number", "singular_values", "sigma"],
+    files = ctx.write_table("identifiability", [
+        "context", "design", "parameter", "crb_percent", "floor_median_abs_error_percent",
+        "instances"],
+        [[context, d["label"], name, d["crb"]["crb_percent"][j],
+          d["floor_errors"][j] if d["floor_errors"] is not None else None, d["instances"]]
+         for d in designs for j, name in enumerate(d["names"]) for context in d["contexts"]])
+    files += ctx.write_table("identifiability_designs", [
+        "design", "contexts", "crb_norm_percent", "floor_metric", "floor_median", "instances",
+        "condition_number", "singular_values", "sigma"],
         [[d["label"], "; ".join(d["contexts"]), d["crb"]["crb_norm_percent"], d["metric"],
           d["floor"], d["instances"], d["crb"].get("condition_number"),
           " ".join(repr(float(v)) for v in d["crb"]["singular_values"]),

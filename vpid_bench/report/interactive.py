@@ -11,7 +11,11 @@ from typing import Any
 
 import numpy as np
 
-from .anytime import RunHits, auc, context_budget, ecdf
+from .anytime import RunHits, _groups, auc, context_budget, ecdf
+from .figures import convergence_panels, thin_steps
+from .identifiability import reference_levels
+from .load import trace_sets
+from .suite_scores import _budgets, _by, aggregated_ecdf
 
 #: At most this many points per curve (steps thinned as :func:`.figures.thin_steps` does).
 MAX_POINTS = 160
@@ -53,19 +57,13 @@ def _tuple(a: Any) -> tuple[float, ...]:
 
 def ecdf_figure(hits: Sequence[RunHits], context: str) -> Figure | None:
     """The fixed-target ECDF of ``context`` (``None``: no run knows its optimum)."""
-    from .figures import thin_steps
-
     sel = [h for h in hits if h.context == context]
     if not sel:
         return None
     budget = context_budget(hits, context)
     grid = np.unique(np.round(np.geomspace(1.0, max(budget, 2.0), ECDF_GRID)))
-    groups: dict[str, list[RunHits]] = {}
-    for h in sel:
-        groups.setdefault(h.algorithm, []).append(h)
     series = []
-    for name in sorted(groups):
-        g = groups[name]
+    for (_, name), g in sorted(_groups(sel).items()):
         x, y = thin_steps(grid, ecdf(g, grid), max_points=MAX_POINTS)
         series.append(Series(name, _tuple(x), _tuple(y),
                              label=f"{name} (AUC {auc(g, budget):.2f}, {len(g)} runs)"))
@@ -79,15 +77,10 @@ def ecdf_figure(hits: Sequence[RunHits], context: str) -> Figure | None:
 
 def convergence_figure(panel: Mapping[str, Any]) -> Figure:
     """One context's convergence (a panel of :func:`.figures.convergence_panels`)."""
-    from .figures import thin_steps
-
     context = str(panel["context"])
-    series = []
     values = [np.asarray(panel["values"], float)]
-    for c in panel["curves"]:
-        x, m, lo, hi = thin_steps(c["x"], c["median"], c["q25"], c["q75"],
-                                  max_points=MAX_POINTS)
-        series.append(Series(str(c["algorithm"]), _tuple(x), _tuple(m), _tuple(lo), _tuple(hi)))
+    series = [Series(str(c["algorithm"]), *map(_tuple, thin_steps(  # x, median and the IQR
+        c["x"], c["median"], c["q25"], c["q75"], max_points=MAX_POINTS))) for c in panel["curves"]]
     lines = []
     for label, key in (("f at the true parameters (median over instances)", "f_true"),
                        ("record optimum f* (median over instances)", "f_opt")):
@@ -112,10 +105,6 @@ def convergence_figure(panel: Mapping[str, Any]) -> Figure:
 def convergence_figures(records: Sequence[Mapping[str, Any]],
                         rows: Sequence[Mapping[str, Any]]) -> dict[str, Figure]:
     """Per context, its convergence figure (contexts without a finite trace left out)."""
-    from .figures import convergence_panels
-    from .identifiability import reference_levels
-    from .load import trace_sets
-
     traces = trace_sets(list(records), list(rows))
     if not traces:
         return {}
@@ -127,9 +116,6 @@ def suite_ecdf_figure(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, in
                       ) -> Figure | None:
     """The runtime ECDF aggregated over the suite (:func:`.suite_scores.aggregated_ecdf`),
     one series per optimizer that ran every problem; ``None`` below two problems."""
-    from .figures import thin_steps
-    from .suite_scores import _budgets, _by, aggregated_ecdf
-
     budgets, by_alg = _budgets(runs), _by(runs)
     contexts = sorted(c for c in budgets if c in facts)
     if len(contexts) < 2:
@@ -138,8 +124,7 @@ def suite_ecdf_figure(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, in
     top = max(budgets[c] / max(dims[c], 1) for c in contexts)
     grid = np.geomspace(min(1.0 / max(max(dims.values()), 1), 0.1), max(top, 1.0), ECDF_GRID)
     series = []
-    for name in sorted(by_alg):
-        per = by_alg[name]
+    for name, per in sorted(by_alg.items()):
         if all(c in per for c in contexts):
             x, y = thin_steps(grid, aggregated_ecdf({c: per[c] for c in contexts}, dims, grid),
                               max_points=MAX_POINTS)

@@ -21,6 +21,8 @@ from ..store.record_check import check_record
 from ..store.records import CorruptRecordError, decode_number, iter_record_files, read_record
 from .safe import clean
 
+#: Records, or rows of the run table: read-only mappings.
+Rows = Sequence[Mapping[str, Any]]
 #: Problem-config keys that never define a context of their own (ps, the problem's protocol
 #: as its record states it under ``problem.config``, is the context's first token).
 PROBLEM_KEYS_IGNORED = ("ps",)
@@ -79,8 +81,7 @@ def by_context(items: Iterable[Any]) -> dict[str, list[Any]]:
 def reason(path: Path, why: str) -> str:
     """``why`` without a leading ``path: `` (a :class:`CorruptRecordError` names its file,
     and the lines that quote it name the file already)."""
-    prefix = f"{path}: "
-    return why[len(prefix):] if why.startswith(prefix) else why
+    return why.removeprefix(f"{path}: ")
 
 
 def load_records(paths: Iterable[str | Path]) -> LoadedRecords:
@@ -113,25 +114,17 @@ def load_records(paths: Iterable[str | Path]) -> LoadedRecords:
             duplicates += 1
             continue
         seen.add(record["run_id"])
-        record = dict(record)
-        record["_file"] = str(path)
-        record["_job_dir"] = str(path.parent.parent)
-        records.append(record)
+        records.append({**record, "_file": str(path), "_job_dir": str(path.parent.parent)})
     statuses = {d: read_job_status(d) for d in sorted(job_dirs)}
     return LoadedRecords(records, skipped, duplicates, statuses)
 
 
 def flatten(obj: Any, prefix: str = "") -> dict[str, Any]:
     """Nested mappings as one level, keys joined with dots; lists become tuples."""
-    out: dict[str, Any] = {}
     if isinstance(obj, Mapping):
-        for k, v in obj.items():
-            out.update(flatten(v, f"{prefix}{k}."))
-        return out
-    if isinstance(obj, list):
-        obj = tuple(obj)
-    out[prefix[:-1]] = obj
-    return out
+        return {key: v for k, value in obj.items()
+                for key, v in flatten(value, f"{prefix}{k}.").items()}
+    return {prefix[:-1]: tuple(obj) if isinstance(obj, list) else obj}
 
 
 def _varying(rows: list[dict[str, Any]]) -> list[str]:
@@ -156,14 +149,11 @@ def grouping(records: list[dict[str, Any]]) -> tuple[dict[str, list[str]], dict[
     by_problem: dict[str, list[dict[str, Any]]] = {}
     by_opt: dict[str, list[dict[str, Any]]] = {}
     for r in records:
-        pflat = _settings(r)
-        for k in PROBLEM_KEYS_IGNORED:
-            pflat.pop(k, None)
-        by_problem.setdefault(r["problem"]["name"], []).append(pflat)
-        oflat = flatten(r["optimizer"].get("params") or {})
-        for k in OPTIMIZER_KEYS_IGNORED:
-            oflat.pop(k, None)
-        by_opt.setdefault(r["optimizer"]["name"], []).append(oflat)
+        by_problem.setdefault(r["problem"]["name"], []).append(
+            {k: v for k, v in _settings(r).items() if k not in PROBLEM_KEYS_IGNORED})
+        by_opt.setdefault(r["optimizer"]["name"], []).append(
+            {k: v for k, v in flatten(r["optimizer"].get("params") or {}).items()
+             if k not in OPTIMIZER_KEYS_IGNORED})
     return ({p: _varying(rows) for p, rows in by_problem.items()},
             {o: _varying(rows) for o, rows in by_opt.items()})
 
@@ -173,9 +163,8 @@ def grouping(records: list[dict[str, Any]]) -> tuple[dict[str, list[str]], dict[
 IMPLIED_KEYS = ("budget", "iterations")
 
 
-def _drop_implied(
-    records: list[dict[str, Any]], keys: dict[str, list[str]]
-) -> dict[str, list[str]]:
+def _drop_implied(records: list[dict[str, Any]], keys: dict[str, list[str]]
+                  ) -> dict[str, list[str]]:
     """``keys`` without the implied keys that ps and the other varying keys determine."""
     out = {}
     for pname, varying in keys.items():
@@ -222,12 +211,10 @@ def run_labels(records: list[dict[str, Any]]) -> list[RunLabel]:
         pvary = {k: pflat.get(k) for k in problem_keys[pname]}
         ovary = {k: oflat.get(k) for k in optimizer_keys[oname]}
         # labels every renderer shows (tables, figures, the terminal): one printable line
-        context = clean(f"{pname} ps={_fmt(ps)}" + "".join(
-            f" {k}={_fmt(v)}" for k, v in pvary.items()
-        ))
-        algorithm = clean(oname + (
-            "[" + ",".join(f"{k}={_fmt(v)}" for k, v in ovary.items()) + "]" if ovary else ""
-        ))
+        context = clean(f"{pname} ps={_fmt(ps)}"
+                        + "".join(f" {k}={_fmt(v)}" for k, v in pvary.items()))
+        params = ",".join(f"{k}={_fmt(v)}" for k, v in ovary.items())
+        algorithm = clean(oname + (f"[{params}]" if ovary else ""))
         out.append(RunLabel(context, algorithm, ps, pvary, ovary))
     return out
 
@@ -265,8 +252,7 @@ def choose_metrics(records: list[dict[str, Any]], labels: list[RunLabel]) -> dic
 
 
 def metric_unit(record: Mapping[str, Any], name: str) -> str:
-    """The unit of metric ``name`` the problem states (``problem.info.metric_units``): a short
-    plain string, else ``""``."""
+    """The unit of metric ``name`` the problem states (``problem.info.metric_units``), or ``""``."""
     info = (record.get("problem") or {}).get("info")
     units = info.get("metric_units") if isinstance(info, Mapping) else None
     unit = units.get(name) if isinstance(units, Mapping) else None
@@ -283,11 +269,7 @@ def run_rows(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
     Failed runs have NaN results; a ``null`` objective or metric is ``inf``."""
     labels = run_labels(records)
     chosen = choose_metrics(records, labels)
-    metric_names: list[str] = []
-    for r in records:
-        for k in _metrics(r):
-            if k not in metric_names:
-                metric_names.append(k)
+    metric_names = list(dict.fromkeys(k for r in records for k in _metrics(r)))
     rows = []
     for r, lab in zip(records, labels, strict=True):
         res = r.get("result") or {}
@@ -298,29 +280,22 @@ def run_rows(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
         f = _num(res.get("f_best")) if ok else math.nan
         name = chosen[lab.context]
         row: dict[str, Any] = {
-            "context": lab.context,
-            "problem": clean(r["problem"]["name"]),
-            "ps": lab.ps,
-            "algorithm": lab.algorithm,
-            "optimizer": clean(r["optimizer"]["name"]),
+            "context": lab.context, "problem": clean(r["problem"]["name"]), "ps": lab.ps,
+            "algorithm": lab.algorithm, "optimizer": clean(r["optimizer"]["name"]),
             **{clean(f"problem.{k}"): clean(_fmt(v)) for k, v in lab.problem_vary.items()
                if k != "budget"},
             **{clean(f"optimizer.{k}"): clean(_fmt(v)) for k, v in lab.optimizer_vary.items()},
-            "seed": (r.get("seeds") or {}).get("seed"),
-            "run_index": r.get("run_index"),
-            "status": r["status"],
-            "f_best": f,
+            "seed": (r.get("seeds") or {}).get("seed"), "run_index": r.get("run_index"),
+            "status": r["status"], "f_best": f,
             **{f"metric.{k}": mets.get(k, math.nan) for k in metric_names},
             "metric": (f if name == "f_best" else mets.get(name, math.inf)) if ok else math.nan,
-            "metric_name": name,
-            "metric_unit": metric_unit(r, name),
+            "metric_name": name, "metric_unit": metric_unit(r, name),
             "evaluations": res.get("evaluations", math.nan) if ok else math.nan,
             "budget": r.get("budget"),
             "wall_time_s": _num(timing.get("wall_time_s"), math.nan),
             "run_time_s": _num(timing.get("run_time_s"), math.nan),
             "stopped_by": res.get("stopped_by") if ok else None,
-            "error": (f"{error.get('type')}: {error.get('message')}" if error else None),
-        }
+            "error": (f"{error.get('type')}: {error.get('message')}" if error else None)}
         params = r.get("parameters") or {}
         names = params.get("names") or []
         n = len(names)
@@ -336,10 +311,8 @@ def run_rows(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
         row["run_id"] = r["run_id"]
         row["file"] = r.get("_file")
         rows.append(row)
-    order = sorted(range(len(rows)), key=lambda i: (
-        rows[i]["context"], rows[i]["algorithm"], _sort_key(rows[i]["seed"]),
-        _sort_key(rows[i]["run_index"])))
-    return [rows[i] for i in order]
+    return sorted(rows, key=lambda row: (row["context"], row["algorithm"],
+                                         _sort_key(row["seed"]), _sort_key(row["run_index"])))
 
 
 def _sort_key(value: Any) -> tuple[int, Any]:
@@ -373,9 +346,8 @@ def trace_sets(records: list[dict[str, Any]], rows: list[dict[str, Any]]
     return out
 
 
-def first_file_by_context(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]],
-                          name: str, read: Callable[[Path, Mapping[str, Any]], Any]
-                          ) -> dict[str, Any]:
+def first_file_by_context(records: Rows, rows: Rows, name: str,
+                          read: Callable[[Path, Mapping[str, Any]], Any]) -> dict[str, Any]:
     """Per context, the first file ``name`` of its jobs (each tried once) that
     ``read(path, record)`` accepts (returns other than ``None``)."""
     out: dict[str, Any] = {}

@@ -48,12 +48,6 @@ def load_optima(paths: Iterable[Path], records: Sequence[Mapping[str, Any]]) -> 
     return OptimaIndex(optima, skipped)
 
 
-def column_stem(metrics: Mapping[str, float], record_metrics: Sequence[str]) -> str:
-    """``<metric>`` of the column names."""
-    names = list(record_metrics) or list(metrics)
-    return names[0].lower() if names else "rel_error"
-
-
 def rel_gap(gap: float, f_opt: float) -> float:
     """``gap / |f_opt|``; the gap itself where ``f_opt`` is 0 (no relative scale)."""
     if not math.isfinite(gap):
@@ -61,8 +55,7 @@ def rel_gap(gap: float, f_opt: float) -> float:
     return gap / abs(f_opt) if f_opt != 0 else gap
 
 
-def distance_percent(x: Sequence[float], x_opt: Sequence[float], x_true: Sequence[float]
-                     ) -> float:
+def distance_percent(x: Sequence[float], x_opt: Sequence[float], x_true: Sequence[float]) -> float:
     """``100 ||(x - x_opt) / x_true||`` (%); NaN when a value is missing or a truth zero."""
     try:
         terms = [100.0 * (float(a) - float(b)) / float(t)
@@ -80,7 +73,6 @@ def add_optimum_columns(rows: list[dict[str, Any]], records: Sequence[Mapping[st
     return one line per run below its instance's optimum."""
     by_id = {r["run_id"]: r for r in records}
     notes: list[str] = []
-    stems: list[str] = []
     computed: list[dict[str, Any]] = []
     for row in rows:
         rec = by_id[row["run_id"]]
@@ -95,9 +87,7 @@ def add_optimum_columns(rows: list[dict[str, Any]], records: Sequence[Mapping[st
         if opt is not None:
             mnames = list(((rec.get("result") or {}).get("metrics") or {}).keys())
             mname = mnames[0] if mnames else next(iter(opt.metrics), None)
-            stem = column_stem(opt.metrics, [mname] if mname else [])
-            if stem not in stems:
-                stems.append(stem)
+            stem = (mname or next(iter(opt.metrics), "rel_error")).lower()  # of the columns
             extra["f_opt"] = opt.f_opt
             extra["opt_on_edge"] = on_edge(opt.x_opt, rec.get("parameters") or {})
             if row["status"] == "ok":
@@ -119,10 +109,8 @@ def add_optimum_columns(rows: list[dict[str, Any]], records: Sequence[Mapping[st
             extra[f"{stem}_to_opt"] = (distance_percent(x, opt.x_opt, true)
                                        if x and true else math.nan)
         computed.append(extra)
-    cols = ["instance", "f_opt", "gap", "rel_gap"]
-    for s in stems:
-        cols += [f"{s}_floor", f"{s}_to_opt"]
-    cols.append("opt_on_edge")
+    stems = dict.fromkeys(k for e in computed for k in e if k.endswith(("_floor", "_to_opt")))
+    cols = ["instance", "f_opt", "gap", "rel_gap", *stems, "opt_on_edge"]
     for row, extra in zip(rows, computed, strict=True):
         new = {}
         for k, v in row.items():

@@ -42,12 +42,11 @@ def _intro(model: Any, _: str | None) -> list[str]:
     n_ok = sum(r["status"] == "ok" for r in data.loaded.records)
     what = (", ".join(escape(p) for p in data.problems) if len(data.problems) <= 4 else
             f"{len(data.problems)} problems")  # named in the table of the answer
-    lines = ["# vpid-bench report" + (" (single job)" if data.short else ""), "",
-             para(f"{n} run(s) on {what} ({n_ok} ok, {n - n_ok} failed). The answer first; "
-                  f"then, per context, which optimizer, {judged(data)}, and why. How to read "
-                  "it, the tests and the sources follow. The same report as browsable pages: "
-                  "`index.html`."), ""]
-    return lines
+    return ["# vpid-bench report" + (" (single job)" if data.short else ""), "",
+            para(f"{n} run(s) on {what} ({n_ok} ok, {n - n_ok} failed). The answer first; "
+                 f"then, per context, which optimizer, {judged(data)}, and why. How to read "
+                 "it, the tests and the sources follow. The same report as browsable pages: "
+                 "`index.html`."), ""]
 
 
 def judged(data: Any) -> str:
@@ -60,22 +59,12 @@ def judged(data: Any) -> str:
 
 
 def _archive_notes(model: Any, _: str | None) -> list[str]:
-    data = model.data
-    lines: list[str] = []
-    if data.archive_notes:
-        lines += [para("Archived runs, made earlier by the code named beside them and "
-                       "ranked here with this report's own runs (`archive=false` leaves "
-                       "them out):"), ""]
-        lines += [f"- {escape(n)}" for n in data.archive_notes] + [""]
-    return lines
-
-
-def _suite(model: Any, _: str | None) -> list[str]:
-    s = model.suite
-    if s is None:
+    notes = model.data.archive_notes
+    if not notes:
         return []
-    return (body.suite_md(s.rows, s.notes, s.figure, model.out_dir)
-            + body.ladder_md(s.ladder, s.rows))
+    return [para("Archived runs, made earlier by the code named beside them and ranked here "
+                 "with this report's own runs (`archive=false` leaves them out):"), "",
+            *(f"- {escape(n)}" for n in notes), ""]
 
 
 def _single_job(model: Any, _: str | None) -> list[str]:
@@ -86,26 +75,6 @@ def _single_job(model: Any, _: str | None) -> list[str]:
                  "with figures:"), "", f"    {escape(full_report_command(data.paths[0]))}", ""]
 
 
-def _sections(model: Any, problem: str | None) -> list[str]:
-    """Every problem's report sections (the core's and the plugins'), then what failed."""
-    lines: list[str] = []
-    for placed in model.sections:
-        if problem is None or placed.problem == problem:
-            lines += body.section_md(placed.section, model.out_dir)
-    if model.section_errors and problem is None:
-        lines += [para("Not built: " + "; ".join(escape(e) for e in model.section_errors)
-                       + "."), ""]
-    return lines
-
-
-def _stats(model: Any, problem: str | None) -> list[str]:
-    summary = model.data.summary
-    if problem is not None:
-        contexts = set(model.contexts_of(problem))
-        summary = [s for s in summary if s["context"] in contexts]
-    return body.stats_md(summary) if summary else []
-
-
 def _tests(model: Any, _: str | None) -> list[str]:
     t = model.data.tests
     if t is None:
@@ -113,23 +82,9 @@ def _tests(model: Any, _: str | None) -> list[str]:
     return body.tests_md(t.kw, t.pairs, t.fr, model.data.alpha, t.by_inst)
 
 
-def _how_to_read(model: Any, _: str | None) -> list[str]:
-    data = model.data
-    return ["## How to read this report", "",
-            body.HOW_TO_READ.format(alpha=data.alpha, baseline=escape(data.baseline)), ""]
-
-
-def _sources(model: Any, _: str | None) -> list[str]:
-    data = model.data
-    return (["## Sources", ""] + body.sources_lines(data.paths, data.loaded, data.rows)
-            + [""])
-
-
-def _of(model: Any, problem: str | None, results: list[Any]) -> list[Any]:
-    if problem is None:
-        return results
-    contexts = set(model.contexts_of(problem))
-    return [r for r in results if r.context in contexts]
+def _results(model: Any, problem: str | None) -> list[str]:
+    contexts = model.data.contexts if problem is None else model.contexts_of(problem)
+    return first_screen.markdown_lines([r for r in model.results if r.context in contexts])
 
 
 #: The report's sections in the order of report.md: the verdict first, the method after.
@@ -138,20 +93,17 @@ PARTS: tuple[Part, ...] = (
     Part("answer", "index", "page",
          lambda model, _: first_screen.answer_markdown(getattr(model, "answer", None))),
     Part("archive_notes", "index", "page", _archive_notes),
-    Part("results", "index", "page", lambda model, problem: first_screen.markdown_lines(
-        _of(model, problem, model.results))),
-    Part("suite", "index", "page", _suite),
+    Part("results", "index", "page", _results),
+    Part("suite", "index", "page", body.suite_md),
     Part("single_job", "index", "page", _single_job),
-    Part("rankings", "problem", "page",
-         lambda model, _: body.headline_md(model.data, model.extra)),
-    Part("sections", "problem", "markdown", _sections),
-    Part("stats", "problem", "page", _stats),
+    Part("rankings", "problem", "page", body.headline_md),
+    Part("sections", "problem", "markdown", body.sections_md),
+    Part("stats", "problem", "page", body.stats_md),
     Part("tests", "protocol", "markdown", _tests),
-    Part("figures", "problem", "page", lambda model, _: body.figures_md(
-        model.figs, model.out_dir) if model.data.tests is not None else []),
-    Part("how_to_read", "protocol", "markdown", _how_to_read),
-    Part("sources", "protocol", "markdown", _sources),
-    Part("files", "protocol", "page", lambda model, _: body.files_md(model.data.short)),
+    Part("figures", "problem", "page", body.figures_md),
+    Part("how_to_read", "protocol", "markdown", body.how_to_read_md),
+    Part("sources", "protocol", "markdown", body.sources_md),
+    Part("files", "protocol", "page", body.files_md),
 )
 
 

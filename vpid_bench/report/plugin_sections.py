@@ -13,6 +13,7 @@ from typing import Any
 
 from ..fileio import write_refused
 from ..store.paths import UnsafePathError, inside
+from . import diagnostics, identifiability, signals
 from .model import PlacedSection
 from .sections import Contribution, HeadlineColumn, ReportContext, Section
 
@@ -23,12 +24,6 @@ def plugin_sections(registry: Any, data: Any, out_dir: Path, claim: Callable[[Pa
                     ) -> tuple[list[PlacedSection], list[HeadlineColumn], list[str]]:
     """Per problem: the core's sections, then the plugins'; with the headline columns they
     add and one line per failure."""
-    from . import diagnostics, identifiability, signals
-
-    if registry is None:
-        from ..plugins import Registry
-
-        registry = Registry()
     by_id = {r["run_id"]: r for r in data.loaded.records}
     sections: list[PlacedSection] = []
     columns: list[HeadlineColumn] = []
@@ -47,7 +42,7 @@ def plugin_sections(registry: Any, data: Any, out_dir: Path, claim: Callable[[Pa
                 if contrib is None:
                     continue
                 new, bad = _checked(contrib, plugin, out_dir)
-                sections += [PlacedSection(plugin, problem, sec) for _, sec in new]
+                sections += [PlacedSection(plugin, problem, sec) for sec in new]
                 errors += bad
                 columns += [c for c in contrib.headline if isinstance(c, HeadlineColumn)]
             except Exception as exc:  # a plugin's fault costs its section, not the report
@@ -59,8 +54,7 @@ def plugin_sections(registry: Any, data: Any, out_dir: Path, claim: Callable[[Pa
     return sections, columns, errors
 
 
-def _checked(contrib: Any, plugin: str, out_dir: Path
-             ) -> tuple[list[tuple[str, Section]], list[str]]:
+def _checked(contrib: Any, plugin: str, out_dir: Path) -> tuple[list[Section], list[str]]:
     """The sections of a contribution, each file checked to lie inside the report folder."""
     if not isinstance(contrib, Contribution):
         raise TypeError(f"returned {type(contrib).__name__}, not a Contribution")
@@ -75,5 +69,5 @@ def _checked(contrib: Any, plugin: str, out_dir: Path
             except UnsafePathError:
                 errors.append(f"report section of plugin {plugin!r}: {Path(f)} is outside the "
                               f"report folder {out_dir}")
-        out.append((plugin, dataclasses.replace(sec, files=tuple(kept))))
+        out.append(dataclasses.replace(sec, files=tuple(kept)))
     return out, errors

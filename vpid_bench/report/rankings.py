@@ -7,14 +7,14 @@ compare ``max(rel_gap, 1e-6)``: runs that both reached the optimum tie. Numpy on
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
-from .load import by_context
+from .load import Rows, by_context
 from .optima import REACHED, opt_column_names
-from .render import fmt, markdown, para
+from .render import fmt, joined, markdown, para
 from .safe import escape
 from .ties import WORDS_RTOL, same
 
@@ -22,9 +22,14 @@ from .ties import WORDS_RTOL, same
 CENTRED = 0.05
 #: Two medians within this relative distance are tied in words (:data:`.ties.WORDS_RTOL`).
 TIE_RTOL = WORDS_RTOL
+#: The search-quality columns of the HTML pages and the CSV: (header, key of a search row).
+SEARCH_COLUMNS = (("rank", "rank"), ("group", "group"), ("optimizer", "algorithm"),
+                  ("n", "n"), ("reached x*", "reached"), ("share reached", "share"),
+                  ("median rel_gap", "rel_gap_median"), ("floor", "floor_median"),
+                  ("median distance to x* (%)", "to_opt_median"), ("AUC", "auc"))
 
 
-def search_summary(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+def search_summary(rows: Rows) -> list[dict[str, Any]]:
     """Per context and algorithm, where every ok run knows its instance's optimum: n,
     reached, share, rel_gap_median, floor_median, to_opt_median and rank (largest share,
     then smallest median rel_gap first)."""
@@ -33,17 +38,15 @@ def search_summary(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
     for r in rows:
         if r["status"] == "ok":
             groups.setdefault((r["context"], r["algorithm"]), []).append(r)
-    complete = {c for c, _ in groups}
-    for (c, _), g in groups.items():
-        if any(not math.isfinite(float(r.get("rel_gap", math.nan))) for r in g):
-            complete.discard(c)
+    incomplete = {c for (c, _), g in groups.items()
+                  if any(not math.isfinite(float(r.get("rel_gap", math.nan))) for r in g)}
     out = []
     for (context, algorithm), g in sorted(groups.items()):
-        if context not in complete:
+        if context in incomplete:
             continue
         gaps = np.asarray([r["rel_gap"] for r in g], float)
 
-        def med(col: str | None, g: Sequence[Mapping[str, Any]] = g) -> float:
+        def med(col: str | None, g: Rows = g) -> float:
             v = np.asarray([r.get(col, math.nan) for r in g], float) if col else np.zeros(0)
             v = v[np.isfinite(v)]
             return float(np.median(v)) if v.size else math.nan
@@ -54,30 +57,23 @@ def search_summary(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
                     "rel_gap_median": float(np.median(gaps)), "floor_median": med(floor_col),
                     "to_opt_median": med(to_col),
                     "floor_name": floor_col[: -len("_floor")] if floor_col else ""})
-    grouped = by_context(out)
-    ranked = []
-    for context in sorted(grouped):
-        g = sorted(grouped[context],
-                   key=lambda s: (-s["share"], s["rel_gap_median"], s["algorithm"]))
+    out.sort(key=lambda s: (s["context"], -s["share"], s["rel_gap_median"], s["algorithm"]))
+    for g in by_context(out).values():
         for i, s in enumerate(g, start=1):
             s["rank"] = i
-        ranked += g
-    return ranked
+    return out
 
 
 def search_test_frame(df: Any) -> Any:
-    """The runs with ``rel_gap_test = max(rel_gap, REACHED)``, what the search tests
-    compare."""
+    """The runs with ``rel_gap_test = max(rel_gap, REACHED)``, what the search tests compare."""
     df = df.copy()
     df["rel_gap_test"] = np.maximum(df["rel_gap"].to_numpy(float), REACHED)
     df.loc[~np.isfinite(df["rel_gap"].to_numpy(float)), "rel_gap_test"] = np.nan
     return df
 
 
-def box_centred(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]]
-                ) -> dict[str, bool]:
-    """Per context: whether every record's box is centred on its true values (within
-    :data:`CENTRED`, relative)."""
+def box_centred(records: Rows, rows: Rows) -> dict[str, bool]:
+    """Per context: is every record's box centred on its true values (within :data:`CENTRED`)?"""
     context = {r["run_id"]: r["context"] for r in rows}
     out: dict[str, bool] = {}
     for rec in records:
@@ -97,15 +93,8 @@ def box_centred(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str
     return out
 
 
-def _names(items: Sequence[str]) -> str:
-    items = [escape(i) for i in items]
-    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
-
-
-def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[str, Any]],
-                 search: Sequence[Mapping[str, Any]], centred: bool,
-                 metric_groups: Mapping[str, str] | None = None,
-                 tie_rtol: float = TIE_RTOL) -> str:
+def disagreement(context: str, metric_name: str, metric_rows: Rows, search: Rows,
+                 centred: bool, metric_groups: Mapping[str, str] | None = None) -> str:
     """Why the two rankings of a context differ beyond ties, in words (``""``: they agree).
     An optimizer ahead by the metric is said to stop early only when it reaches the optimum
     in fewer runs than one it passes and its median gap is above the reach threshold."""
@@ -120,9 +109,9 @@ def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[s
         ma, mb = by_metric[a].get("median", math.nan), by_metric[b].get("median", math.nan)
         sa, sb = srank[a], srank[b]
         search_tie = (sa["reached"] == sb["reached"] and (
-            same(sa["rel_gap_median"], sb["rel_gap_median"], tie_rtol)
+            same(sa["rel_gap_median"], sb["rel_gap_median"], TIE_RTOL)
             or max(sa["rel_gap_median"], sb["rel_gap_median"]) <= REACHED))
-        return not same(ma, mb, tie_rtol) and not search_tie
+        return not same(ma, mb, TIE_RTOL) and not search_tie
 
     pairs = [(a, b) for a in m_order for b in m_order[m_order.index(a) + 1:]
              if s_order.index(b) < s_order.index(a) and really_passes(a, b)]
@@ -132,7 +121,7 @@ def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[s
     passed = [b for x, b in pairs if x == a]
     s = srank[a]
     text = (f"The rankings of {escape(context)} disagree beyond ties (medians within "
-            f"{tie_rtol:g} relative count as equal): {escape(a)} ranks "
+            f"{TIE_RTOL:g} relative count as equal): {escape(a)} ranks "
             f"{m_order.index(a) + 1} by {escape(metric_name)} but {s_order.index(a) + 1} by "
             f"search quality (it reaches the optimum in {s['reached']} of {s['n']} runs, "
             f"median rel_gap {fmt(s['rel_gap_median'], 3)}). ")
@@ -141,7 +130,7 @@ def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[s
                        if set(metric_groups.get(a, "")) & set(metric_groups.get(b, ""))]
         if unseparated:
             text += (f"By {escape(metric_name)} the tests do not separate it from "
-                     f"{_names(unseparated)}, which it passes there. ")
+                     f"{joined([escape(b) for b in unseparated])}, which it passes there. ")
     stops_short = s["rel_gap_median"] > REACHED and all(
         s["reached"] < srank[b]["reached"] or s["rel_gap_median"] > srank[b]["rel_gap_median"]
         for b in passed)
@@ -156,9 +145,8 @@ def disagreement(context: str, metric_name: str, metric_rows: Sequence[Mapping[s
     return text.rstrip()
 
 
-def search_lines(context: str, search: Sequence[Mapping[str, Any]],
-                 groups: Mapping[str, str] | None, metric_name: str, test: str | None
-                 ) -> list[str]:
+def search_lines(context: str, search: Rows, groups: Mapping[str, str] | None,
+                 metric_name: str, test: str | None) -> list[str]:
     """Markdown of one context's search-quality ranking (after its metric ranking)."""
     rows = [s for s in search if s["context"] == context]
     if not rows:

@@ -23,7 +23,7 @@ MAX_DECIMALS = 4
 PROSE_WIDTH = 100
 
 
-def _number(value: Any) -> float | None:
+def number(value: Any) -> float | None:
     """``value`` as a float when it is a number (not bool), else ``None``."""
     if isinstance(value, bool) or value is None or isinstance(value, str):
         return None
@@ -40,7 +40,7 @@ def fmt(value: Any, digits: int = 4) -> str:
         return ""
     if isinstance(value, bool):
         return "yes" if value else "no"
-    x = _number(value)
+    x = number(value)
     if x is None:
         return str(value)
     if math.isnan(x):
@@ -52,6 +52,11 @@ def fmt(value: Any, digits: int = 4) -> str:
     return f"{x:.{digits}g}"
 
 
+def joined(items: Sequence[str]) -> str:
+    """``a``, ``a and b``, ``a, b and c`` (``""`` for none)."""
+    return ", ".join(items[:-1]) + " and " + items[-1] if len(items) > 1 else "".join(items)
+
+
 def p_text(p: float, bound: bool, name: str = "p") -> str:
     """A p-value as text: ``p=0.012``, or ``p≤0.0002`` where it is a bound."""
     return f"{name}{'≤' if bound else '='}{float(p):.2g}"
@@ -59,12 +64,12 @@ def p_text(p: float, bound: bool, name: str = "p") -> str:
 
 def format_column(values: Sequence[Any], digits: int = 4) -> list[str]:
     """Every value of one column in the same number format (see the module docstring)."""
-    nums = [_number(v) for v in values]
+    nums = [number(v) for v in values]
     finite = [x for x in nums if x is not None and math.isfinite(x)]
     if not finite:
         return [fmt(v, digits) for v in values]
     if all(x.is_integer() and abs(x) < 1e9 for x in finite):
-        style, decimals = "int", 0
+        spec = "int"
     else:
         amax = max(abs(x) for x in finite)
         nonzero = [abs(x) for x in finite if x != 0.0]
@@ -74,21 +79,11 @@ def format_column(values: Sequence[Any], digits: int = 4) -> list[str]:
         decimals = min(MAX_DECIMALS, max(0, digits - 1 - lead_min))
         # Fixed point when the smallest value keeps `digits` figures and the largest needs
         # at most 8 characters of digits; otherwise scientific for the whole column.
-        if amin >= 1e-3 and amax < 1e6 and (lead_max + 1) + decimals <= 8:
-            style = "fixed"
-        else:
-            style, decimals = "sci", digits - 1
-    out = []
-    for v, x in zip(values, nums, strict=True):
-        if x is None or not math.isfinite(x):
-            out.append(fmt(v, digits))
-        elif style == "int":
-            out.append(str(int(x)))
-        elif style == "fixed":
-            out.append(f"{x:.{decimals}f}")
-        else:
-            out.append(f"{x:.{decimals}e}")
-    return out
+        fixed = amin >= 1e-3 and amax < 1e6 and (lead_max + 1) + decimals <= 8
+        spec = f".{decimals}f" if fixed else f".{digits - 1}e"
+    return [fmt(v, digits) if x is None or not math.isfinite(x)
+            else str(int(x)) if spec == "int" else format(x, spec)
+            for v, x in zip(values, nums, strict=True)]
 
 
 def cells(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4
@@ -99,7 +94,7 @@ def cells(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4
 
 
 def _numeric_columns(rows: Sequence[Sequence[Any]], n: int) -> list[bool]:
-    return [bool(rows) and all(_number(r[j]) is not None or r[j] is None for r in rows)
+    return [bool(rows) and all(number(r[j]) is not None or r[j] is None for r in rows)
             for j in range(n)]
 
 
@@ -137,16 +132,12 @@ def _shorten(s: str, n: int) -> str:
 def markdown(headers: Sequence[str], rows: Sequence[Sequence[Any]], *, keep: int | None = None,
              max_width: int = MAX_WIDTH, digits: int = 4) -> str:
     """A GitHub pipe table no wider than ``max_width`` as a reader sees it (its source may be
-    a few escapes wider).
-
-    The first ``keep`` columns (default all) are always shown; the others are dropped from
-    the right until the table fits. If it still does not fit, the longest text cells are
-    shortened (with ``…``). Text cells and headers are escaped; numbers are aligned right.
-    """
+    a few escapes wider): the first ``keep`` columns (default all) always shown, the others
+    dropped from the right until it fits, then the longest text cells shortened (with
+    ``…``). Text cells and headers are escaped; numbers are aligned right."""
     headers = [escape(h) for h in headers]
     if not rows:
         return "_(empty)_"
-    rows = [list(r) for r in rows]
     numeric = _numeric_columns(rows, len(headers))
     text = [[escape(c) for c in r] for r in cells(headers, rows, digits)]
     keep = len(headers) if keep is None else max(1, keep)
@@ -192,8 +183,7 @@ def latex(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4
                     tablefmt="latex_booktabs", disable_numparse=True)
 
 
-def write_table(path: Path, headers: Sequence[str], rows: Sequence[Sequence[Any]]
-                ) -> list[Path]:
+def write_table(path: Path, headers: Sequence[str], rows: Sequence[Sequence[Any]]) -> list[Path]:
     """``path`` (CSV, full precision) and its ``.tex`` (booktabs)."""
     csv_table.write_csv(path, headers, rows)
     tex = path.with_suffix(".tex")

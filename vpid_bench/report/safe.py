@@ -1,31 +1,20 @@
-"""Untrusted text made safe for a reader: the terminal (:func:`clean`), Markdown
-(:func:`escape`) and HTML (the site's templates auto-escape text that :func:`clean` made one
-printable line). File names and paths made from record content follow
-:mod:`vpid_bench.store.paths` (``slug``, ``inside``).
-
-Records, archives and result folders may come from anyone: a problem name, an optimizer
-parameter or a context label can hold ``../``, ``/``, ``|``, HTML, a thousand characters, a
+"""Untrusted text made safe for a reader, the one home of those rules: records, archives and
+result folders may come from anyone, and a name or label can hold ``../``, ``|``, HTML, a
 terminal escape sequence (``ESC ] 0 ;`` sets the window title) or a newline that forges a
-table row. Every piece of record text shown to a person is first made one line of printable
-characters (:func:`clean`), then escaped for its renderer. This module is the one home of
-those rules: every renderer (terminal, Markdown, HTML) uses it.
+table row. Record text shown to a person is first made one line of printable characters
+(:func:`clean`, the terminal), then escaped for its renderer (:func:`escape`, Markdown; the
+site's templates auto-escape HTML). File names made from record content follow
+:mod:`vpid_bench.store.paths`.
 
 Text is text (issue 44, N5): :func:`escape` (record text) and :func:`inert_markdown` (a
-plugin section's Markdown, tables and emphasis kept) make links, images, HTML and bare-URL
-autolinks inert for any CommonMark or GitHub renderer (``[``, ``]``, ``<`` and the
-triggers of ``scheme://``, ``www.`` and e-mail addresses escaped). The report's own links are
-the only ones: :func:`local_link` is the rule the HTML renderer and the link check apply.
-"""
+plugin section's Markdown, tables and emphasis kept) make links, images, HTML and autolinks
+(``scheme://``, ``www.``, e-mail addresses) inert for any CommonMark or GitHub renderer. The
+report's own links are the only ones: :func:`local_link` is the rule the HTML renderer and
+the link check apply."""
 
 from __future__ import annotations
 
 import re
-
-
-def _visible(char: str) -> str:
-    """A character that is not printable as its Python escape (``\\x1b``, ``\\n``,
-    ``\\u202e``): visible, and inert on any terminal."""
-    return repr(char)[1:-1]
 
 
 def clean(text: object, keep_newlines: bool = False) -> str:
@@ -37,7 +26,7 @@ def clean(text: object, keep_newlines: bool = False) -> str:
         return "\n".join(clean(line) for line in s.split("\n"))
     if s.isprintable():  # the usual case, in one pass
         return s
-    return "".join(c if c.isprintable() else _visible(c) for c in s)
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in s)  # its Python escape
 
 
 _MD_ESCAPES = {"|": "\\|", "&": "&amp;", "<": "&lt;", ">": "&gt;", "`": "'",

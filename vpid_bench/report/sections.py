@@ -1,13 +1,11 @@
 """The API through which a problem plugin adds its own sections to the report (docs/report.md,
-"Writing report sections for your problem", has an example): the plugin registers
-``section_function`` for a problem name from ``vpid_bench_register_report_sections``; it is
-called with a :class:`ReportContext` and returns a :class:`Contribution` (or ``None``).
-
-Files are written with the context's helpers (safe, unique names in ``tables/`` and
-``figures/``; a returned file outside the report folder is dropped), record text in Markdown
-goes through :meth:`ReportContext.escape`, and an exception costs that section only. In
-short mode (a single job's report) a section should skip figures and anything costly.
-"""
+"Writing report sections for your problem", has an example): a function registered for a
+problem name from ``vpid_bench_register_report_sections`` is called with a
+:class:`ReportContext` and returns a :class:`Contribution` (or ``None``). Files are written
+with the context's helpers (safe, unique names; a returned file outside the report folder is
+dropped), record text in Markdown goes through :meth:`ReportContext.escape`, and an exception
+costs that section only. In short mode (a single job's report) a section should skip
+figures and anything costly."""
 
 from __future__ import annotations
 
@@ -19,6 +17,7 @@ from typing import Any
 
 from ..store.paths import inside, slug
 from . import render
+from .figures import save
 from .safe import escape
 
 
@@ -91,8 +90,6 @@ class ReportContext:
     def save_figure(self, fig: Any, name: str) -> Path:
         """Save a matplotlib figure as ``figures/<name>.png``, close it, return the path (the
         one way a section adds a figure)."""
-        from .figures import save
-
         return save(fig, self.path("figures", name, ".png"))
 
     @staticmethod

@@ -9,7 +9,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ..store.artifacts import BEST_SIGNALS, BadArtifactError, read_best_signals
+from .figures import _plt
 from .sections import Contribution, ReportContext, Section
 
 TITLE = "Measured vs fitted signals of the best run"
@@ -18,15 +21,9 @@ TITLE = "Measured vs fitted signals of the best run"
 def draw_signals(t: Any, channels: Mapping[str, tuple[Any, Any]], units: Mapping[str, str],
                  title: str) -> Any:
     """Per channel a signal panel and a residual panel under it; one legend above all."""
-    import numpy as np
-
-    from .figures import _plt
-
-    plt = _plt()
-
     names = sorted(channels)
     ratios = [r for _ in names for r in (3, 1.2)]
-    fig, axes = plt.subplots(2 * len(names), 1, figsize=(7.5, 3.6 * len(names) + 0.8),
+    fig, axes = _plt().subplots(2 * len(names), 1, figsize=(7.5, 3.6 * len(names) + 0.8),
                              sharex=True, gridspec_kw={"height_ratios": ratios})
     t = np.asarray(t, dtype=float)
     for i, ch in enumerate(names):
@@ -58,21 +55,13 @@ def draw_signals(t: Any, channels: Mapping[str, tuple[Any, Any]], units: Mapping
     return fig
 
 
-def _best_run(ctx: ReportContext) -> tuple[Mapping[str, Any], Mapping[str, Any]] | None:
+def section(ctx: ReportContext) -> Contribution | None:
+    """The figure of the best run of ``ctx``'s problem (full report only; ``None``: no signals)."""
     ok = [(row, rec) for row, rec in zip(ctx.rows, ctx.records, strict=True)
           if row["status"] == "ok" and math.isfinite(row["metric"])]
-    return min(ok, key=lambda item: item[0]["metric"]) if ok else None
-
-
-def section(ctx: ReportContext) -> Contribution | None:
-    """The figure of the best run of ``ctx``'s problem (full report only; ``None``: no
-    signals)."""
-    if ctx.short:
+    if ctx.short or not ok:
         return None
-    best = _best_run(ctx)
-    if best is None:
-        return None
-    row, rec = best
+    row, rec = min(ok, key=lambda item: item[0]["metric"])
     path = Path(ctx.job_dir(rec)) / BEST_SIGNALS
     if not path.exists() and not path.is_symlink():
         return None

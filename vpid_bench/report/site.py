@@ -63,19 +63,13 @@ class Pages:
     def optimizer(self, name: str) -> str | None:
         return self._names.get(("optimizer", name))
 
-    def all(self) -> dict[tuple[str, str], str]:
-        return dict(self._names)
-
 
 def _sort_value(v: Any) -> str | None:
     """The raw value a numeric cell sorts by (``""`` for a missing number), or ``None``."""
-    if isinstance(v, bool) or v is None or isinstance(v, str):
+    x = render.number(v)
+    if x is None:
         return "" if v is None else None
-    try:
-        x = float(v)
-    except (TypeError, ValueError):
-        return None
-    return repr(x) if math.isfinite(x) or math.isinf(x) else ""
+    return "" if math.isnan(x) else repr(x)
 
 
 def table(headers: Sequence[str], rows: Sequence[Sequence[Any]],
@@ -158,11 +152,6 @@ def provenance(loaded: Any) -> dict[str, Any]:
 def figure_scope(title: str, names: Iterable[str]) -> bool:
     """Whether a figure's title (``"<what>, <problem or context>"``) names one of ``names``."""
     return any(title.endswith(f", {n}") for n in names)
-
-
-def written_tables(out_dir: Path) -> list[str]:
-    folder = out_dir / "tables"
-    return sorted(p.name for p in folder.glob("*.csv")) if folder.is_dir() else []
 
 
 def check_links(out_dir: Path, pages: Iterable[Path]) -> list[str]:

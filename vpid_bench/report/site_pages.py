@@ -13,23 +13,13 @@ from ..store.ioh import FOLDER as IOH_FOLDER
 from ..store.paths import slug
 from . import answer as answers
 from . import body, outline, styles, svg
-from .site import (
-    ASSET_DIR,
-    ASSETS,
-    Pages,
-    figure_scope,
-    provenance,
-    relative,
-    render_page,
-    table,
-    written_tables,
-)
+from .diagnostics import plain_line
+from .first_screen import extra_blocks
+from .interactive import convergence_figures, ecdf_figure
+from .rankings import SEARCH_COLUMNS
+from .site import ASSET_DIR, ASSETS, Pages, figure_scope, provenance, relative, render_page, table
+from .suite_scores import GROUP_SHOWN, ladder_table, score_table
 
-#: The search-quality columns of a problem page: (header, key of a search row).
-SEARCH_COLUMNS = (("rank", "rank"), ("group", "group"), ("optimizer", "algorithm"),
-                  ("n", "n"), ("reached x*", "reached"), ("share reached", "share"),
-                  ("median rel_gap", "rel_gap_median"), ("floor", "floor_median"),
-                  ("median distance to x* (%)", "to_opt_median"), ("AUC", "auc"))
 #: Core figures shown on the index (across problems) rather than on a problem's page.
 INDEX_FIGURES = ("Convergence", "Critical-difference diagram across blocks")
 
@@ -62,13 +52,10 @@ def build_pages(model: Any) -> dict[str, str]:
 
 
 def _links(pages: Pages) -> dict[str, Any]:
-    return {"optimizer": pages.optimizer, "algorithm": pages.optimizer,
-            "problem": pages.problem}
+    return {"optimizer": pages.optimizer, "algorithm": pages.optimizer, "problem": pages.problem}
 
 
 def _index(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, Any]:
-    from .diagnostics import plain_line
-
     data = model.data
     of = model.problem_of()
     verdicts = []
@@ -110,23 +97,19 @@ def decision(v: Any, pages: Pages) -> dict[str, Any] | None:
     """The headline of a :class:`.verdicts.Verdict`, names linked to their pages."""
     if v is None or v.kind == "empty":
         return None
-    names = [(n, pages.optimizer(n)) for n in v.tied]
     return {"kind": v.kind, "pick": (v.pick, pages.optimizer(v.pick)) if v.pick else None,
-            "tied": names, "limit": answers.LIMITS.get(v.limit, ""),
-            "not_beaten": list(v.not_beaten), "over_bound": v.over_bound}
+            "tied": [(n, pages.optimizer(n)) for n in v.tied],
+            "limit": answers.LIMITS.get(v.limit, ""), "not_beaten": list(v.not_beaten),
+            "over_bound": v.over_bound}
 
 
 def _suite(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, Any] | None:
-    from .suite_scores import GROUP_SHOWN, ladder_table, score_table
-
     s = model.suite
     if s is None or not s.rows:
         return None
     fig = s.figure if isinstance(s.figure, Path) else None
-    interactive = None
-    if s.interactive is not None:
-        interactive = {"figure": s.interactive, "id": "fig-suite",
-                       "layout": svg.layout(s.interactive, style_of)}
+    interactive = None if s.interactive is None else {
+        "figure": s.interactive, "id": "fig-suite", "layout": svg.layout(s.interactive, style_of)}
     groups = [row for kind in ("family", "dimension")
               for row in score_table(s.rows, kind)[1]]
     return {"table": table(*score_table(s.rows), _links(pages)), "notes": s.notes,
@@ -150,7 +133,7 @@ def _context_block(model: Any, pages: Pages, r: Any, style_of: Mapping[str, Any]
     search = table([h + (unit if k == "floor_median" else "") for h, k in SEARCH_COLUMNS],
                    [[s.get(k) for _, k in SEARCH_COLUMNS] for s in srows],
                    _links(pages)) if srows else None
-    stats_rows = [s for s in data.summary if s["context"] == r.context]
+    stats_rows = data.metric_rows(r.context)
     stats = table([h + (unit if h in ("median", "q1", "q3", "mean", "sd", "best", "worst")
                         else "") for h, _ in body.STATS_MD],
                   [[s.get(k) for _, k in body.STATS_MD] for s in stats_rows], _links(pages),
@@ -163,8 +146,6 @@ def _context_block(model: Any, pages: Pages, r: Any, style_of: Mapping[str, Any]
             counter[0] += 1
             figures.append((key, {"figure": fig, "layout": svg.layout(fig, style_of),
                                   "id": f"fig{counter[0]}"}))
-    from .first_screen import extra_blocks
-
     extra = [{"text": text, "table": table(h, rows, _links(pages)) if h else None}
              for text, h, rows in extra_blocks(r)]
     return {"context": r.context, "anchor": _anchor(r.context), "verdict": r.verdict,
@@ -176,8 +157,7 @@ def _context_block(model: Any, pages: Pages, r: Any, style_of: Mapping[str, Any]
             "stats": stats, "figures": figures}
 
 
-def _problem(model: Any, pages: Pages, problem: str, style_of: Mapping[str, Any]
-             ) -> dict[str, Any]:
+def _problem(model: Any, pages: Pages, problem: str, style_of: Mapping[str, Any]) -> dict[str, Any]:
     contexts = model.contexts_of(problem)
     counter = [0]
     blocks = [_context_block(model, pages, r, style_of, counter)
@@ -192,8 +172,7 @@ def _problem(model: Any, pages: Pages, problem: str, style_of: Mapping[str, Any]
 
 
 OPTIMIZER_HEADERS = ["problem", "context", "rank", "group", "n", "failed", "metric", "unit",
-                     "median", "q1", "q3", "search rank", "reached x*", "median rel_gap",
-                     "AUC"]
+                     "median", "q1", "q3", "search rank", "reached x*", "median rel_gap", "AUC"]
 
 
 def _optimizer(model: Any, pages: Pages, name: str) -> dict[str, Any]:
@@ -212,8 +191,6 @@ def _optimizer(model: Any, pages: Pages, name: str) -> dict[str, Any]:
                      q.get("rel_gap_median"), q.get("auc")])
     suite = None
     if model.suite is not None and model.suite.rows:
-        from .suite_scores import GROUP_SHOWN, score_table
-
         mine = [row for kind in ("all", "family", "dimension")
                 for row in ([["all problems", *r] for r in score_table(model.suite.rows)[1]]
                             if kind == "all" else score_table(model.suite.rows, kind)[1])
@@ -234,19 +211,15 @@ def _protocol(model: Any) -> dict[str, Any]:
     return {"parts": outline.shown_as_markdown(model, "protocol"),
             "archive_notes": data.archive_notes,
             "failures": [*model.section_errors, *data.optima_errors],
-            "tables": written_tables(model.out_dir),
+            "tables": sorted(p.name for p in (model.out_dir / "tables").glob("*.csv")),
             "ioh": (model.out_dir / IOH_FOLDER).is_dir()}
 
 
 def interactive_figures(data: Any) -> dict[str, dict[str, Any]]:
     """Per context, its ECDF and convergence figures (:mod:`.interactive`)."""
-    from .interactive import convergence_figures, ecdf_figure
-
     conv = convergence_figures(data.loaded.records, data.rows)
-    out: dict[str, dict[str, Any]] = {}
-    for c in data.contexts:
-        out[c] = {"ecdf": ecdf_figure(data.hits, c), "convergence": conv.get(c)}
-    return out
+    return {c: {"ecdf": ecdf_figure(data.hits, c), "convergence": conv.get(c)}
+            for c in data.contexts}
 
 
 def write_site(model: Any, claim: Callable[[Path], Path]) -> list[Path]:

@@ -1,13 +1,11 @@
-"""Significance tests on the per-run metric (lower is better), from scipy.stats.
-
-Within a context: Kruskal–Wallis, and every pair compared two-sided (Wilcoxon signed-rank
-where the runs pair by instance, else Mann–Whitney U), Holm-corrected over the context's
-pairs; the effect size is Vargha–Delaney's A12. Across blocks (contexts, or the instances of
-one): Friedman, Nemenyi's post-hoc test (the critical-difference diagram) and pairwise
-Wilcoxon with Holm. Too few groups, runs or blocks give a note, not an error. Holm and
-Nemenyi are a few lines of numpy (the numbers of statsmodels and scikit-posthocs, which the
-tests check): importing those libraries costs more than the statistics themselves.
-"""
+"""Significance tests on the per-run metric (lower is better), from scipy.stats. Within a
+context: Kruskal–Wallis, and every pair compared two-sided (Wilcoxon signed-rank where the
+runs pair by instance, else Mann–Whitney U), Holm-corrected over the context's pairs; the
+effect size is Vargha–Delaney's A12. Across blocks (contexts, or the instances of one):
+Friedman, Nemenyi's post-hoc test and pairwise Wilcoxon with Holm. Too few groups, runs or
+blocks give a note, not an error. Holm and Nemenyi are a few lines of numpy (the numbers of
+statsmodels and scikit-posthocs, which the tests check): importing those libraries costs
+more than the statistics themselves."""
 
 from __future__ import annotations
 
@@ -23,33 +21,30 @@ import numpy as np
 ALPHA = 0.05
 
 
+def _quiet(f: Any, *args: Any, **kwargs: Any) -> Any:
+    """``f(*args, **kwargs)`` with its warnings silenced (scipy's, on ties and tiny samples:
+    the tables say how each p was got)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return f(*args, **kwargs)
+
+
 def a12_magnitude(a12: float) -> str:
     """Vargha and Delaney's (2000) labels for |A12 - 0.5|: 0.06, 0.14, 0.21 thresholds."""
     d = abs(a12 - 0.5)
-    if d < 0.06:
-        return "negligible"
-    if d < 0.14:
-        return "small"
-    if d < 0.21:
-        return "medium"
-    return "large"
+    return next(label for limit, label in ((0.06, "negligible"), (0.14, "small"),
+                                           (0.21, "medium"), (math.inf, "large")) if d < limit)
 
 
 def holm(pvalues: list[float]) -> list[float]:
     """Holm–Bonferroni adjusted p-values: the i-th smallest of m finite p-values times
     ``m - i``, made non-decreasing in that order and capped at 1; NaN stays NaN."""
-    if not pvalues:
-        return []
     p = np.asarray(pvalues, dtype=float)
     adjusted = np.full(p.shape, np.nan)
     ok = np.flatnonzero(np.isfinite(p))
-    if ok.size:
-        q = p[ok]
-        order = np.argsort(q, kind="stable")
-        scaled = q[order] * np.arange(q.size, 0, -1)
-        adj = np.empty(q.size)
-        adj[order] = np.minimum(np.maximum.accumulate(scaled), 1.0)
-        adjusted[ok] = adj
+    order = ok[np.argsort(p[ok], kind="stable")]
+    adjusted[order] = np.minimum(np.maximum.accumulate(p[order] * np.arange(ok.size, 0, -1)),
+                                 1.0)
     return adjusted.tolist()
 
 
@@ -70,10 +65,14 @@ def nemenyi_friedman(values: np.ndarray) -> np.ndarray:
     return out
 
 
+def _ok(df: Any, value: str = "metric") -> Any:
+    """The successful runs (failed runs carry no value) with a ``value``."""
+    return df[(df["status"] == "ok") & df[value].notna()]
+
+
 def _samples(df: Any, value: str = "metric") -> dict[str, np.ndarray]:
-    """Per algorithm, ``value`` of the successful runs (failed runs carry no value)."""
-    ok = df[(df["status"] == "ok") & df[value].notna()]
-    return {a: g[value].to_numpy(float) for a, g in ok.groupby("algorithm", sort=True)}
+    """Per algorithm, ``value`` of the successful runs."""
+    return {a: g[value].to_numpy(float) for a, g in _ok(df, value).groupby("algorithm")}
 
 
 def kruskal_by_context(df: Any) -> Any:
@@ -92,9 +91,7 @@ def kruskal_by_context(df: Any) -> Any:
             row["note"] = "not run: needs at least 2 optimizers with at least 2 runs each"
         else:
             try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    res = stats.kruskal(*usable.values())
+                res = _quiet(stats.kruskal, *usable.values())
                 row["H"], row["p"] = float(res.statistic), float(res.pvalue)
                 if not np.isfinite(row["p"]):
                     row["note"] = "undefined: all values are identical"
@@ -111,16 +108,8 @@ def paired_by_instance(g: Any) -> bool:
     if "instance" not in g.columns:
         return False
     ok = g[g["status"] == "ok"]
-    if ok.empty or not all(isinstance(v, str) for v in ok["instance"]):
-        return False
-    return not ok.duplicated(["algorithm", "instance"]).any()
-
-
-def _by_instance(g: Any, value: str) -> dict[str, Any]:
-    """Per algorithm, ``value`` indexed by instance (successful runs with a value)."""
-    ok = g[(g["status"] == "ok") & g[value].notna()]
-    return {a: s.set_index("instance")[value].astype(float)
-            for a, s in ok.groupby("algorithm", sort=True)}
+    return (not ok.empty and all(isinstance(v, str) for v in ok["instance"])
+            and not ok.duplicated(["algorithm", "instance"]).any())
 
 
 #: Resamples of a permutation test (Monte Carlo when the exact enumeration is larger).
@@ -161,9 +150,7 @@ def _wilcoxon_cached(xb: bytes, yb: bytes) -> tuple[float, float, str]:
         return (*_wilcoxon_permutation(d), f"permutation ({N_RESAMPLES} resamples)")
     else:
         method, how = "asymptotic", "normal approximation"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res = stats.wilcoxon(x, y, method=method)
+    res = _quiet(stats.wilcoxon, x, y, method=method)
     return float(res.statistic), float(res.pvalue), how
 
 
@@ -180,9 +167,8 @@ def _wilcoxon_permutation(d: np.ndarray) -> tuple[float, float]:
     def r_plus(flipped: np.ndarray, axis: int = -1) -> np.ndarray:
         return np.sum((flipped > 0) * ranks, axis=axis)
 
-    method = _permutation()
     res = stats.permutation_test((d,), r_plus, permutation_type="samples", vectorized=True,
-                                 n_resamples=method.n_resamples, rng=method.rng,
+                                 n_resamples=N_RESAMPLES, rng=np.random.default_rng(0),
                                  alternative="two-sided")
     statistic = min(np.sum((d > 0) * ranks), np.sum((d < 0) * ranks))
     return float(statistic), float(res.pvalue)
@@ -201,9 +187,7 @@ def mann_whitney(x: np.ndarray, y: np.ndarray) -> tuple[float, float, str]:
         method, how = _permutation(), f"permutation ({N_RESAMPLES} resamples)"
     else:
         method, how = "asymptotic", "normal approximation"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res = stats.mannwhitneyu(x, y, alternative="two-sided", method=method)
+    res = _quiet(stats.mannwhitneyu, x, y, alternative="two-sided", method=method)
     p = float(res.pvalue)
     # every value tied: no variance, no evidence of a difference
     return float(res.statistic), (1.0 if math.isnan(p) else p), how
@@ -247,11 +231,9 @@ def _draw_counts(idx: np.ndarray, n: int) -> np.ndarray:
 
 
 def p_floor(method: str, two_sided: bool = True) -> float:
-    """The smallest p a permutation test gives (``1 / (N_RESAMPLES + 1)``, doubled when
-    two-sided), else 0."""
-    if not method.startswith("permutation"):
-        return 0.0
-    return (2.0 if two_sided else 1.0) / (N_RESAMPLES + 1)
+    """A permutation test's smallest p, ``1 / (N_RESAMPLES + 1)`` (doubled two-sided), else 0."""
+    return ((2.0 if two_sided else 1.0) / (N_RESAMPLES + 1)
+            if method.startswith("permutation") else 0.0)
 
 
 def at_floor(p: float, method: str, two_sided: bool = True) -> bool:
@@ -277,20 +259,18 @@ def pairwise_by_context(df: Any, alpha: float = ALPHA, value: str = "metric") ->
     for context, g in df.groupby("context", sort=True):
         samples = _samples(g, value)
         paired = paired_by_instance(g)
-        inst = _by_instance(g, value) if paired else {}
+        inst = {a: s.set_index("instance")[value].astype(float)  # per algorithm, by instance
+                for a, s in _ok(g, value).groupby("algorithm")} if paired else {}
         block = []
         for a, b in itertools.combinations(sorted(samples), 2):
-            x, y = samples[a], samples[b]
+            x, y = samples[a], samples[b]  # each of one run at least
+            effect = a12(x, y)
             row = {"context": context, "a": a, "b": b,
                    "test": TEST_PAIRED if paired else TEST_UNPAIRED, "p_method": "",
                    "n_a": len(x), "n_b": len(y), "n_pairs": np.nan,
-                   "median_a": float(np.median(x)) if len(x) else np.nan,
-                   "median_b": float(np.median(y)) if len(y) else np.nan,
-                   "U": np.nan, "W": np.nan, "p": np.nan, "A12": np.nan, "A12_lo": np.nan,
-                   "A12_hi": np.nan, "effect": "", "_lower": ""}
-            if len(x) and len(y):
-                row["A12"] = a12(x, y)
-                row["effect"] = a12_magnitude(row["A12"])
+                   "median_a": float(np.median(x)), "median_b": float(np.median(y)),
+                   "U": np.nan, "W": np.nan, "p": np.nan, "A12": effect, "A12_lo": np.nan,
+                   "A12_hi": np.nan, "effect": a12_magnitude(effect), "_lower": ""}
             if paired:
                 common = inst[a].index.intersection(inst[b].index)
                 row["n_pairs"] = len(common)
@@ -302,7 +282,7 @@ def pairwise_by_context(df: Any, alpha: float = ALPHA, value: str = "metric") ->
                     r = rankdata(np.abs(d[d != 0])) if (d != 0).any() else np.zeros(0)
                     plus, minus = r[d[d != 0] > 0].sum(), r[d[d != 0] < 0].sum()
                     row["_lower"] = a if plus < minus else b if minus < plus else ""
-            elif len(x) and len(y):
+            else:
                 row["A12_lo"], row["A12_hi"] = a12_interval(x, y, paired=False)
                 row["U"], row["p"], row["p_method"] = mann_whitney(x, y)
                 row["_lower"] = a if row["A12"] < 0.5 else b if row["A12"] > 0.5 else ""
@@ -311,8 +291,8 @@ def pairwise_by_context(df: Any, alpha: float = ALPHA, value: str = "metric") ->
             row["p_holm"] = p_adj
             row["p_at_floor"] = at_floor(float(row["p"]), row["p_method"])
             row["significant"] = bool(np.isfinite(p_adj) and p_adj < alpha)
-            row["better"] = row.pop("_lower") if row["significant"] else ""
-            row.pop("_lower", None)
+            lower = row.pop("_lower")
+            row["better"] = lower if row["significant"] else ""
         rows.extend(block)
     cols = ["context", "a", "b", "test", "p_method", "n_a", "n_b", "n_pairs", "median_a",
             "median_b", "U", "W", "p", "p_holm", "p_at_floor", "A12", "A12_lo", "A12_hi",
@@ -347,8 +327,7 @@ def compact_letters(order: list[str], different: set[frozenset[str]]) -> dict[st
 
 
 def rank_groups(pairs: Any, context: str, order: list[str]) -> dict[str, str]:
-    """Letters of :func:`compact_letters` for one context (an untested pair: not
-    separated)."""
+    """Letters of :func:`compact_letters` for one context (an untested pair is not separated)."""
     sub = pairs[(pairs["context"] == context) & pairs["significant"]]
     diff = {frozenset((r.a, r.b)) for r in sub.itertuples() if r.a in order and r.b in order}
     return compact_letters(order, diff)
@@ -371,7 +350,7 @@ def mean_ranks_in_context(df: Any, context: str) -> Any:
     """Mean rank (1 = lowest metric) of each algorithm's runs among all runs of ``context``."""
     from scipy import stats
 
-    g = df[(df["context"] == context) & (df["status"] == "ok") & df["metric"].notna()]
+    g = _ok(df[df["context"] == context])
     ranks = stats.rankdata(g["metric"].to_numpy(float))
     return g.assign(_rank=ranks).groupby("algorithm")["_rank"].mean().sort_values()
 
@@ -387,7 +366,6 @@ class FriedmanResult:
 
     blocks: list[str]
     algorithms: list[str]
-    medians: Any = None  # DataFrame blocks x algorithms
     statistic: float = float("nan")
     p: float = float("nan")
     p_method: str = ""
@@ -417,21 +395,17 @@ def friedman_test(table: np.ndarray, seed: int = 0) -> tuple[float, float, str]:
                                  vectorized=True, rng=np.random.default_rng(seed))
     exact = math.factorial(k) ** n <= N_RESAMPLES
     how = "exact (all permutations)" if exact else f"permutation ({N_RESAMPLES} resamples)"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        chi2 = float(stats.friedmanchisquare(*t.T).statistic)
-    return chi2, float(res.pvalue), how
+    return float(_quiet(stats.friedmanchisquare, *t.T).statistic), float(res.pvalue), how
 
 
-def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts"
-                      ) -> FriedmanResult:
+def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts") -> FriedmanResult:
     """Friedman, Nemenyi and pairwise Wilcoxon (Holm) on a blocks x algorithms DataFrame,
     with at least :data:`MIN_BLOCKS` blocks and 3 algorithms (else a note says why not)."""
     import pandas as pd
 
     table = table.dropna(axis=1, how="any")
     blocks, algos = [str(b) for b in table.index], list(table.columns)
-    res = FriedmanResult(blocks, algos, table, kind=kind)
+    res = FriedmanResult(blocks, algos, kind=kind)
     what = ("independent instances of the context" if kind == "instances" else
             "contexts such as problems or independent records")
     if len(blocks) < MIN_BLOCKS:
@@ -446,9 +420,7 @@ def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts"
     res.mean_ranks = table.rank(axis=1, method="average").mean().sort_values()
     res.statistic, res.p, res.p_method = friedman_test(values)
     res.p_at_floor = at_floor(res.p, res.p_method, two_sided=False)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res.nemenyi = pd.DataFrame(nemenyi_friedman(values), index=algos, columns=algos)
+    res.nemenyi = pd.DataFrame(_quiet(nemenyi_friedman, values), index=algos, columns=algos)
     rows = []
     for a, b in itertools.combinations(algos, 2):
         x, y = table[a].to_numpy(float), table[b].to_numpy(float)
@@ -464,20 +436,18 @@ def friedman_on_table(table: Any, alpha: float = ALPHA, kind: str = "contexts"
     return res
 
 
-def friedman_across_blocks(df: Any, alpha: float = ALPHA, value: str = "metric"
-                           ) -> FriedmanResult:
+def friedman_across_blocks(df: Any, alpha: float = ALPHA, value: str = "metric") -> FriedmanResult:
     """Friedman over contexts as blocks, on each algorithm's median ``value`` per context;
     not run where the contexts fit the same instances (not independent blocks)."""
-    ok = df[(df["status"] == "ok") & df[value].notna()]
+    ok = _ok(df, value)
     medians = ok.groupby(["context", "algorithm"])[value].median().unstack("algorithm")
     if "instance" in ok.columns and len(medians) >= 2:
         sets = [frozenset(map(str, g["instance"])) for _, g in ok.groupby("context")]
         if all(s == sets[0] for s in sets) and all(isinstance(v, str) for v in ok["instance"]):
-            res = FriedmanResult([str(b) for b in medians.index], list(medians.columns),
-                                 medians)
-            res.note = ("not run: the contexts fit the same instances, so they are not "
-                        "independent blocks (the instances of each context are)")
-            return res
+            return FriedmanResult([str(b) for b in medians.index], list(medians.columns),
+                                  note="not run: the contexts fit the same instances, "
+                                  "so they are not independent blocks (the instances of each "
+                                  "context are)")
     return friedman_on_table(medians, alpha, "contexts")
 
 
@@ -488,8 +458,6 @@ def friedman_by_instances(df: Any, alpha: float = ALPHA, value: str = "metric"
     for context, g in df.groupby("context", sort=True):
         if not paired_by_instance(g) or value not in g.columns:
             continue
-        ok = g[(g["status"] == "ok") & g[value].notna()]
-        table = ok.pivot(index="instance", columns="algorithm", values=value).dropna(
-            axis=0, how="any")
-        out[str(context)] = friedman_on_table(table.astype(float), alpha, "instances")
+        table = _ok(g, value).pivot(index="instance", columns="algorithm", values=value)
+        out[str(context)] = friedman_on_table(table.dropna().astype(float), alpha, "instances")
     return out

@@ -45,14 +45,11 @@ class Style:
         """Where along the line (fraction of :data:`MARK_SPACING`) its first marker sits."""
         return (self.index * 0.37) % 1.0
 
-    def mpl(self, markers: bool = True) -> dict[str, Any]:
+    def mpl(self) -> dict[str, Any]:
         """Keyword arguments of matplotlib's ``plot``/``step`` for this style."""
-        kw: dict[str, Any] = {"color": self.colour,
-                              "linestyle": (0, self.pattern) if self.pattern else "-"}
-        if markers:
-            kw.update(marker=self.marker, markersize=4.5, markevery=(
-                MARK_SPACING * (0.1 + 0.8 * self.offset), MARK_SPACING))
-        return kw
+        return {"color": self.colour, "linestyle": (0, self.pattern) if self.pattern else "-",
+                "marker": self.marker, "markersize": 4.5,
+                "markevery": (MARK_SPACING * (0.1 + 0.8 * self.offset), MARK_SPACING)}
 
 
 def style(index: int) -> Style:

@@ -15,6 +15,8 @@ from typing import Any
 import numpy as np
 
 from .anytime import RunHits, auc, context_budget, ecdf
+from .figures import _plt, save
+from .styles import lookup
 
 #: Bootstrap draws of the score interval, and the interval's level.
 N_BOOT = 2000
@@ -44,12 +46,6 @@ def context_facts(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[s
         dim = len(((rec.get("parameters") or {}).get("names")) or [])
         out[row["context"]] = (family_of(row["problem"]) or row["problem"], dim)
     return out
-
-
-def problems_scored(rows: Sequence[Mapping[str, Any]], runs: Sequence[RunHits]) -> set[str]:
-    """The distinct problems among the contexts whose runs know their optima."""
-    contexts = {h.context for h in runs}
-    return {r["problem"] for r in rows if r["context"] in contexts}
 
 
 def groups(facts: Mapping[str, tuple[str, int]]) -> list[Group]:
@@ -133,18 +129,13 @@ def figure(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]], path: 
           if g.kind in ("all", "family")][:6]
     if len(gs[0].contexts) < 2:
         return "needs runs with known optima on two or more problems"
-    from .figures import _plt, save
-
-    plt = _plt()
     dims = {c: facts[c][1] for c in budgets}
     top = max(budgets[c] / max(dims[c], 1) for c in budgets)
     grid = np.geomspace(min(1.0 / max(dims.values()), 0.1), max(top, 1.0), 300)
     cols = min(len(gs), 3)
     nrows = math.ceil(len(gs) / cols)
-    fig, axes = plt.subplots(nrows, cols, figsize=(5.2 * cols, 3.8 * nrows), squeeze=False)
+    fig, axes = _plt().subplots(nrows, cols, figsize=(5.2 * cols, 3.8 * nrows), squeeze=False)
     by_alg = _by(runs)
-    from .styles import lookup
-
     look = lookup(style_of, by_alg)
     for ax, g in zip(axes.ravel(), gs):
         for alg, per in sorted(by_alg.items()):
@@ -185,8 +176,7 @@ LADDER: tuple[int, ...] = (10, 100, 1000, 10000)
 LADDER_HEADERS = ["group", "algorithm", *[f"solved_at_{k}D" for k in LADDER]]
 
 
-def ladder_rows(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]]
-                ) -> list[list[Any]]:
+def ladder_rows(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]]) -> list[list[Any]]:
     """Per optimizer that ran every context, the aggregated ECDF at each rung of
     :data:`LADDER` (``nan`` beyond some context's budget)."""
     budgets = _budgets(runs)
@@ -209,12 +199,6 @@ SCORE_SHOWN = ["rank", "optimizer", "score (mean AUC, 0 to 1)", "95 % interval",
 GROUP_SHOWN = ["group", *SCORE_SHOWN]
 
 
-def _score_row(r: Sequence[Any]) -> list[Any]:
-    """A score row as shown: three decimals (as text), the share solved in whole percent."""
-    return [r[2], f"{float(r[5]):.3f}", f"[{r[6]:.3f}, {r[7]:.3f}]",
-            round(100 * float(r[8])), r[4]]
-
-
 def score_table(rows: Sequence[Sequence[Any]], kind: str = "all"
                 ) -> tuple[list[str], list[list[Any]]]:
     """The scores of one kind of group as a reader sees them, best first within each group."""
@@ -222,10 +206,11 @@ def score_table(rows: Sequence[Sequence[Any]], kind: str = "all"
     for name in dict.fromkeys(r[1] for r in rows if r[0] == kind):
         ranked = sorted((r for r in rows if r[0] == kind and r[1] == name),
                         key=lambda r: (-float(r[5]), r[2]))
-        for k, r in enumerate(ranked, 1):
+        for k, r in enumerate(ranked, 1):  # three decimals (as text), solved in whole percent
             group = f"{r[1]} ({r[3]} problem{'s' if r[3] != 1 else ''})"
-            out.append(([] if kind == "all" else [group])
-                       + [k, *_score_row(r)])
+            out.append(([] if kind == "all" else [group]) + [
+                k, r[2], f"{float(r[5]):.3f}", f"[{r[6]:.3f}, {r[7]:.3f}]",
+                round(100 * float(r[8])), r[4]])
     return (SCORE_SHOWN if kind == "all" else GROUP_SHOWN), out
 
 

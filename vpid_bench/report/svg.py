@@ -25,8 +25,6 @@ KEY_W, KEY_H = 34, 12
 
 def marker_path(marker: str, cx: float, cy: float, r: float = MARK_R) -> str:
     """An SVG path (filled) of one marker of :data:`.styles.MARKERS` centred at (cx, cy)."""
-    def pts(points: Sequence[tuple[float, float]]) -> str:
-        return "M" + "L".join(f"{cx + a * r:.1f} {cy + b * r:.1f}" for a, b in points) + "Z"
     if marker == "o":
         return (f"M{cx - r:.1f} {cy:.1f}a{r:.1f} {r:.1f} 0 1 0 {2 * r:.1f} 0"
                 f"a{r:.1f} {r:.1f} 0 1 0 {-2 * r:.1f} 0Z")
@@ -39,9 +37,9 @@ def marker_path(marker: str, cx: float, cy: float, r: float = MARK_R) -> str:
         "P": [(-t, -1), (t, -1), (t, -t), (1, -t), (1, t), (t, t), (t, 1), (-t, 1), (-t, t),
               (-1, t), (-1, -t), (-t, -t)],
         "X": [(-1, -0.75), (-0.75, -1), (0, -0.25), (0.75, -1), (1, -0.75), (0.25, 0),
-              (1, 0.75), (0.75, 1), (0, 0.25), (-0.75, 1), (-1, 0.75), (-0.25, 0)],
-    }
-    return pts(shapes.get(marker, shapes["s"]))
+              (1, 0.75), (0.75, 1), (0, 0.25), (-0.75, 1), (-1, 0.75), (-0.25, 0)]}
+    return "M" + "L".join(f"{cx + a * r:.1f} {cy + b * r:.1f}"
+                          for a, b in shapes.get(marker, shapes["s"])) + "Z"
 
 
 @dataclasses.dataclass(frozen=True)

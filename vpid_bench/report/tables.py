@@ -11,21 +11,11 @@ from typing import Any
 
 import numpy as np
 
-from .load import by_context
+from .load import Rows, by_context
 from .render import p_text
 
 #: The optimizer every report compares against by default (random search).
 BASELINE = "random"
-
-
-def metric_names(rows: Sequence[Mapping[str, Any]]) -> list[str]:
-    """The problem metrics present in the rows (keys ``metric.<name>``), first-seen order."""
-    out: list[str] = []
-    for r in rows:
-        for k in r:
-            if k.startswith("metric.") and k[7:] not in out:
-                out.append(k[7:])
-    return out
 
 
 def metric_stats(m: Sequence[float], f: Sequence[float]) -> dict[str, float]:
@@ -44,17 +34,16 @@ def metric_stats(m: Sequence[float], f: Sequence[float]) -> dict[str, float]:
             "best": float(np.min(m)), "worst": float(np.max(m)),
             "f_median": float(np.median(f)), "f_mean": float(np.mean(f)),
             "f_sd": float(np.std(f, ddof=1)) if len(f) > 1 else math.nan,
-            "f_best": float(np.min(f)), "f_worst": float(np.max(f)),
-        }
+            "f_best": float(np.min(f)), "f_worst": float(np.max(f))}
 
 
-def summarize(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+def summarize(rows: Rows) -> list[dict[str, Any]]:
     """One row per context and algorithm, sorted by context then rank (1 = lowest median
     metric, then mean; NaN without a successful run), with the :func:`metric_stats` keys."""
     groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
     for r in rows:
         groups.setdefault((r["context"], r["algorithm"]), []).append(r)
-    names = metric_names(rows)
+    names = list(dict.fromkeys(k[7:] for r in rows for k in r if k.startswith("metric.")))
     out = []
     for (context, algorithm), g in sorted(groups.items()):
         ok = [r for r in g if r["status"] == "ok"]
@@ -62,9 +51,7 @@ def summarize(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
         row: dict[str, Any] = {
             "context": context, "problem": first["problem"], "ps": first["ps"],
             "algorithm": algorithm, "optimizer": first["optimizer"],
-            "metric_name": first["metric_name"], "n_runs": len(ok),
-            "n_failed": len(g) - len(ok),
-        }
+            "metric_name": first["metric_name"], "n_runs": len(ok), "n_failed": len(g) - len(ok)}
         row.update(metric_stats([r["metric"] for r in ok], [r["f_best"] for r in ok]))
         for name in names:
             vals = [r.get(f"metric.{name}", math.nan) for r in ok]
@@ -80,58 +67,40 @@ def summarize(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
                        if np.isfinite(wall_ok).any() else math.nan,
                        wall_time_total_s=float(np.sum(wall[np.isfinite(wall)])))
         out.append(row)
-    grouped = by_context(out)
-    ranked = []
-    for context in sorted(grouped):
-        g = grouped[context]
-        with_runs = sorted((r for r in g if r["n_runs"]),
-                           key=lambda r: (r["median"], _nan_last(r["mean"]), r["algorithm"]))
-        for i, r in enumerate(with_runs, start=1):
-            r["rank"] = i
-        rest = [r for r in g if not r["n_runs"]]
-        for r in rest:
-            r["rank"] = math.nan
-        ranked += with_runs + rest
-    return ranked
+    # per context, those with runs by median, then mean (NaN last), then the rest
+    out.sort(key=lambda r: (r["context"], 0, r["median"], math.inf if math.isnan(r["mean"])
+                            else r["mean"], r["algorithm"]) if r["n_runs"] else (r["context"], 1))
+    for g in by_context(out).values():
+        for i, r in enumerate(g, start=1):
+            r["rank"] = i if r["n_runs"] else math.nan
+    return out
 
 
-def _nan_last(x: float) -> float:
-    return math.inf if math.isnan(x) else x
-
-
-def baseline_verdicts(summary: Sequence[Mapping[str, Any]], pairs: Any,
-                      baseline: str = BASELINE) -> list[str]:
+def baseline_verdicts(summary: Rows, pairs: Any, baseline: str = BASELINE) -> list[str]:
     """Per summary row, against its context's baseline: ``baseline``, ``beats it (...)``,
     ``does not clear it (...)``, ``WORSE than it (...)``, ``not tested`` or ``""`` (not
     run). ``pairs``: the pairwise tests, or ``None``."""
-    out = []
-    for r in summary:
+    def verdict(r: Mapping[str, Any]) -> str:
         bases = [b for b in summary if b["context"] == r["context"]
                  and b["optimizer"] == baseline]
-        if not bases:
-            out.append("")
-            continue
-        if r["optimizer"] == baseline:
-            out.append("baseline")
-            continue
+        if not bases or r["optimizer"] == baseline:
+            return "baseline" if bases else ""
         base = bases[0]["algorithm"]
         if pairs is None or pairs.empty:
-            out.append("not tested")
-            continue
+            return "not tested"
         sel = pairs[(pairs["context"] == r["context"])
                     & (((pairs["a"] == r["algorithm"]) & (pairs["b"] == base))
                        | ((pairs["a"] == base) & (pairs["b"] == r["algorithm"])))]
         if sel.empty or not np.isfinite(sel["p_holm"].iloc[0]):
-            out.append("not tested")
-            continue
+            return "not tested"
         detail = pair_detail(sel.iloc[0], r["algorithm"])
         if sel["better"].iloc[0] == r["algorithm"]:
-            out.append(f"beats it ({detail})")
-        elif sel["better"].iloc[0] == base:
-            out.append(f"WORSE than it ({detail})")
-        else:
-            out.append(f"does not clear it ({detail})")
-    return out
+            return f"beats it ({detail})"
+        if sel["better"].iloc[0] == base:
+            return f"WORSE than it ({detail})"
+        return f"does not clear it ({detail})"
+
+    return [verdict(r) for r in summary]
 
 
 def pair_detail(pair: Mapping[str, Any], first: str) -> str:

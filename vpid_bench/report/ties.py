@@ -1,5 +1,5 @@
 """Ties are ties: the ONE rule by which the report calls runs and optimizers equal, and how
-it breaks the tie.
+it breaks the tie:
 
 * Runs of one instance whose objectives lie within :data:`OBJECTIVE_RTOL` ended at the same
   optimum: :func:`snap_ties` gives them the lowest one's metrics before any test, ranking or
@@ -8,8 +8,7 @@ it breaks the tie.
   ordered by cost to the optimum (:func:`cheapest`: ERT, then seconds, within
   :data:`COST_TIE`); the verdict breaks its ties the same way.
 * At a rung of the budget ladder, shares within :data:`SHARE_TIE` of the highest solve as
-  many (:func:`share_leaders`), the higher suite score first.
-"""
+  many (:func:`share_leaders`), the higher suite score first."""
 
 from __future__ import annotations
 
@@ -37,8 +36,7 @@ T = TypeVar("T")
 
 
 def same(a: float, b: float, rtol: float = OBJECTIVE_RTOL) -> bool:
-    """Whether ``a`` and ``b`` are equal within ``rtol`` relative (non-finite: only equal
-    values)."""
+    """Whether ``a`` and ``b`` are equal within ``rtol`` relative (non-finite: only if equal)."""
     if not (math.isfinite(a) and math.isfinite(b)):
         return a == b
     return abs(a - b) <= rtol * max(abs(a), abs(b), 1e-300)
@@ -67,8 +65,7 @@ def snap_ties(rows: list[dict[str, Any]], records: Sequence[Mapping[str, Any]]) 
     return changed
 
 
-def cheapest(items: Sequence[T], cost: Callable[[T], tuple[float, float]]
-             ) -> tuple[T, str]:
+def cheapest(items: Sequence[T], cost: Callable[[T], tuple[float, float]]) -> tuple[T, str]:
     """The cheapest of ``items`` to reach the optimum (``cost(item) = (evaluations,
     seconds)``, within :data:`COST_TIE` a tie): ``(item, "evaluations" | "seconds")``, or
     ``(items[0], "")`` when cost does not decide."""
@@ -87,8 +84,7 @@ def cheapest(items: Sequence[T], cost: Callable[[T], tuple[float, float]]
 
 
 def by_cost(items: Sequence[T], cost: Callable[[T], tuple[float, float]]) -> list[T]:
-    """``items`` cheapest first by :func:`cheapest` (the order of ``items`` where cost does
-    not decide)."""
+    """``items`` cheapest first by :func:`cheapest` (in their order where cost does not decide)."""
     rest, out = list(items), []
     while rest:
         pick, _ = cheapest(rest, cost)
@@ -112,8 +108,7 @@ def rank_with_ties(summary: list[dict[str, Any]],
             head = ranked[0]
             tie = [s for s in ranked if same(float(s.get("median", math.nan)),
                                              float(head.get("median", math.nan)))]
-            for s in tie:
-                ranked.remove(s)
+            ranked = [s for s in ranked if s not in tie]
             ordered = by_cost(tie, lambda s, c=context: costs.get((c, s["algorithm"]),
                                                                    (math.inf, math.nan)))
             for i, s in enumerate(ordered):
@@ -125,8 +120,7 @@ def rank_with_ties(summary: list[dict[str, Any]],
     summary[:] = out
 
 
-def share_leaders(shares: Mapping[str, float], scores: Mapping[str, float]
-                  ) -> tuple[str, ...]:
+def share_leaders(shares: Mapping[str, float], scores: Mapping[str, float]) -> tuple[str, ...]:
     """The optimizers whose share lies within :data:`SHARE_TIE` of the highest, highest
     ``scores`` first (then by name); empty when no share is finite."""
     finite = {k: v for k, v in shares.items() if math.isfinite(v)}

@@ -11,8 +11,7 @@ docs/report.md ("Verdicts") with a test in tests/report/test_verdicts.py:
    estimator (or model error, where a richer model made the record) limits the accuracy;
    below :data:`BELOW_BOUND` the record's optimum is biased;
 5. under model error, a record's optimum farther from the truth than a reference ends means
-   the fitted model cannot identify the system (:func:`cannot_identify`).
-"""
+   the fitted model cannot identify the system (:func:`cannot_identify`)."""
 
 from __future__ import annotations
 
@@ -157,7 +156,6 @@ class Verdict:
     costs: tuple[Cost, ...] = ()
     next_pair: Mapping[str, Any] | None = None
     next_name: str | None = None
-    tested: bool = True
     single: bool = False
     over_bound: bool = False
     not_beaten: tuple[str, ...] = ()
@@ -220,38 +218,30 @@ def _lead(items: Sequence[Method], group: Any) -> list[Method]:
     return [m for m in items if letters[0] in group(m)]
 
 
-def _by_cost(items: Sequence[Method]) -> tuple[Method, str]:
-    """The cheapest of ``items`` to reach the optimum (:func:`.ties.cheapest`)."""
-    return cheapest(items, lambda m: (m.search.evaluations, m.search.seconds) if m.search
-                    else (math.nan, math.nan))
-
-
-def _choose(ev: Evidence, eligible: list[Method]) -> tuple[Method, str, list[Method],
-                                                             list[Method], list[Method]]:
-    """Rule 3: (pick, basis, its metric group, those tied with it by search too, the
-    metric's leaders when the pick is not among them)."""
+def _choose(eligible: list[Method]) -> tuple[Method, str, list[Method], list[Method]]:
+    """Rule 3: (pick, basis, the metric's best group, those tied with the pick by search
+    too)."""
     mlead = _lead(eligible, lambda m: m.group)
     if not all(m.search for m in eligible):
-        pick = mlead[0]
-        return pick, ALONE if len(mlead) == 1 else ORDER, mlead, [], []
+        return mlead[0], ALONE if len(mlead) == 1 else ORDER, mlead, []
     by_search = sorted(eligible, key=lambda m: (-m.search.reached / max(m.search.runs, 1),
                                                 m.search.rel_gap_median))
     slead = _lead(by_search, lambda m: m.search.group)
     names = {m.name for m in slead}
     both = [m for m in sorted(mlead, key=by_search.index) if m.name in names]
     pool = both or sorted(slead, key=by_search.index)
-    pick, decided = _by_cost(pool) if len(pool) > 1 else (pool[0], "")
+    pick, decided = (cheapest(pool, lambda m: (m.search.evaluations, m.search.seconds))
+                     if len(pool) > 1 else (pool[0], ""))
     if not both:
-        return pick, SEARCH_ONLY, mlead, pool, mlead
+        return pick, SEARCH_ONLY, mlead, pool
     basis = (ALONE if len(mlead) == 1 else SEARCH if len(both) == 1
              else COST if decided else ORDER)
     if basis == ORDER:  # tied on everything: the first by the metric's median
         pick = next(m for m in mlead if m in both)
-    return pick, basis, mlead, pool, []
+    return pick, basis, mlead, pool
 
 
-def _limit(pick: Method, floor: float, ratio: float, model_error: str = ""
-           ) -> tuple[str, float]:
+def _limit(pick: Method, floor: float, ratio: float, model_error: str = "") -> tuple[str, float]:
     """What limits the leader, and its median over the floor."""
     if not math.isfinite(floor) or floor < 0:
         return "", math.nan
@@ -281,8 +271,8 @@ def estimator_advice(chosen: str | None, ratio: float,
     others = [(o, float(v["median"])) for o, v in per.items() if o != chosen]
     best = min(others, key=lambda item: item[1], default=None)
     if best is None or not (best[1] < mine or not math.isfinite(mine)):
-        return EstimatorAdvice(chosen, ratio, None, math.nan, mine, int(floors["instances"]))
-    return EstimatorAdvice(chosen, ratio, best[0], best[1], mine, int(floors["instances"]))
+        best = (None, math.nan)
+    return EstimatorAdvice(chosen, ratio, *best, mine, int(floors["instances"]))
 
 
 def cannot_identify(ev: Evidence, floor: float) -> tuple[tuple[str, float], ...]:
@@ -294,27 +284,29 @@ def cannot_identify(ev: Evidence, floor: float) -> tuple[tuple[str, float], ...]
 
 
 def decide(ev: Evidence) -> Verdict:
-    """The verdict of one context (the rules of the module, one function each)."""
+    """The verdict of one context (the rules of the module)."""
     base = _base(ev)
     if not ev.methods:
         return Verdict(kind=EMPTY, **base)
     candidates = [m for m in ev.methods if m.name not in ev.references]
-    if not ev.tested or len(ev.methods) < 2 or not candidates:
-        return _describe(ev, candidates, base)
+    if not ev.tested or len(ev.methods) < 2 or not candidates:  # rule 1: a description
+        return _verdict(DESCRIBE, (candidates or list(ev.methods))[0], ev, base,
+                        single=len(ev.methods) < 2)
     eligible = [m for m in candidates
                 if all(beats(ev.pairs, m.name, r) for r in ev.references)]
     over = math.isfinite(base["bound"]) and base["bound"] > BOUND_LIMIT
-    if over or not eligible or base["cannot_identify"]:  # rule 5: no one is recommended
-        return _no_method(ev, candidates, over, base)
+    if over or not eligible or base["cannot_identify"]:  # rules 2 and 5: none recommended
+        not_beaten = tuple(r for r in ev.references
+                           if not any(beats(ev.pairs, m.name, r) for m in candidates))
+        return _verdict(NONE, candidates[0], ev, base, over_bound=over, not_beaten=not_beaten)
     return _use(ev, eligible, base)
 
 
 def _base(ev: Evidence) -> dict[str, Any]:
     """What every verdict of ``ev`` carries: its names and rule 4's levels."""
     base: dict[str, Any] = {
-        "context": ev.context, "metric": ev.metric, "unit": ev.unit, "tested": ev.tested,
-        "references": ev.references, "missing": ev.missing, "centred": ev.centred,
-        "estimator": ev.estimator, "truth": ev.truth}
+        "context": ev.context, "metric": ev.metric, "unit": ev.unit, "references": ev.references,
+        "missing": ev.missing, "centred": ev.centred, "estimator": ev.estimator, "truth": ev.truth}
     if not ev.methods:
         return base
     ratio = floor_over_bound(ev.floors, ev.bounds)
@@ -331,30 +323,16 @@ def _base(ev: Evidence) -> dict[str, Any]:
         "cannot_identify": cannot_identify(ev, _median(list(ev.floors.values())))}
 
 
-def _describe(ev: Evidence, candidates: list[Method], base: dict[str, Any]) -> Verdict:
-    """Rule 1: a description of the leader, not a recommendation."""
-    lead = (candidates or list(ev.methods))[0]
+def _verdict(kind: str, lead: Method, ev: Evidence, base: dict[str, Any], **kw: Any) -> Verdict:
+    """A verdict naming ``lead``, with what limits it (rule 4)."""
     limit, gain = _limit(lead, base["floor"], base["ratio"], ev.model_error)
-    return Verdict(kind=DESCRIBE, pick=lead.name, runs=lead.runs, median=lead.median,
-                   single=len(ev.methods) < 2, limit=limit, gain=gain,
-                   search=lead.search, **base)
-
-
-def _no_method(ev: Evidence, candidates: list[Method], over: bool,
-               base: dict[str, Any]) -> Verdict:
-    """Rule 2: no method identifies the model, or none is shown to beat the references."""
-    not_beaten = tuple(r for r in ev.references
-                       if not any(beats(ev.pairs, m.name, r) for m in candidates))
-    lead = candidates[0]
-    limit, gain = _limit(lead, base["floor"], base["ratio"], ev.model_error)
-    return Verdict(kind=NONE, pick=lead.name, runs=lead.runs, median=lead.median,
-                   over_bound=over, not_beaten=not_beaten, limit=limit, gain=gain,
-                   search=lead.search, **base)
+    return Verdict(kind=kind, pick=lead.name, runs=lead.runs, median=lead.median, limit=limit,
+                   gain=gain, search=lead.search, **kw, **base)
 
 
 def _use(ev: Evidence, eligible: list[Method], base: dict[str, Any]) -> Verdict:
     """Rule 3: whom to use among the eligible (:func:`_choose`)."""
-    pick, basis, mlead, pool, leaders = _choose(ev, eligible)
+    pick, basis, mlead, pool = _choose(eligible)
     # those the metric's tests do not separate from the pick: its rank group, or, where the
     # pick is not in the metric's best group, each eligible method without a significant pair
     tied_with = ([m for m in mlead if m.name != pick.name] if basis != SEARCH_ONLY else
@@ -367,10 +345,8 @@ def _use(ev: Evidence, eligible: list[Method], base: dict[str, Any]) -> Verdict:
     costs = tuple(Cost(m.name, m.search.evaluations, m.search.seconds)
                   for m in [pick] + [m for m in pool if m.name != pick.name] if m.search)
     nxt = next((m.name for m in ev.methods if m.name != pick.name), None)
-    limit, gain = _limit(pick, base["floor"], base["ratio"], ev.model_error)
-    return Verdict(kind=USE, pick=pick.name, runs=pick.runs, median=pick.median, basis=basis,
-                   tied=tuple(m.name for m in tied_with), spread=spread,
-                   leaders=tuple(m.name for m in leaders),
-                   costs=costs,
-                   next_pair=None if nxt is None else _pair(ev.pairs, pick.name, nxt),
-                   next_name=nxt, limit=limit, gain=gain, search=pick.search, **base)
+    return _verdict(USE, pick, ev, base, basis=basis, tied=tuple(m.name for m in tied_with),
+                    spread=spread, costs=costs,
+                    leaders=tuple(m.name for m in mlead) if basis == SEARCH_ONLY else (),
+                    next_pair=None if nxt is None else _pair(ev.pairs, pick.name, nxt),
+                    next_name=nxt)
