@@ -150,9 +150,6 @@ class VehicleProblem(ChannelFit, Problem):
 
     @property
     def weights(self) -> np.ndarray:
-        return self._weighting()
-
-    def _weighting(self) -> np.ndarray:
         """What a raw residual is multiplied by, ``(2, N)``: 1 for Eq. 3 (m/s^2)."""
         if "_weights" not in self.__dict__:
             nz, ref = self.config.noise, self.reference
@@ -179,9 +176,6 @@ class VehicleProblem(ChannelFit, Problem):
             raise ConfigError("threads", n, "an integer >= 1")
         self.model.set_threads(int(n))
 
-    def computed(self, X: np.ndarray) -> np.ndarray:
-        return self.responses(X)
-
     def responses(self, X: np.ndarray) -> np.ndarray:
         """z1'' and z2'' (m/s^2) ``(n, 2, N)``; NaN rows for non-physical candidates."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
@@ -192,6 +186,8 @@ class VehicleProblem(ChannelFit, Problem):
                 y = self.model(X[ok])
                 out[ok] = y if self.sampler is None else self.sampler.at_record(y)
         return out
+
+    computed = responses
 
     @property
     def _on_grid(self) -> bool:

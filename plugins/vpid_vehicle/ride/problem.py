@@ -285,9 +285,6 @@ class RideProblem(ChannelFit, Problem):
         """The instance's truth; ``None`` for a user's record (no truth)."""
         return None if self._x_true is None else self._x_true.copy()
 
-    def computed(self, X: np.ndarray) -> np.ndarray:
-        return self.responses(X)
-
     def responses(self, X: np.ndarray) -> np.ndarray:
         """The fitted model's channels ``(n, p, N)``; NaN rows for a row that is no vehicle."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
@@ -299,6 +296,8 @@ class RideProblem(ChannelFit, Problem):
                                         self.config.dt, "newmark").transpose(0, 2, 1)
                 out[ok] = y if self.sampler is None else self.sampler.at_record(y)
         return out
+
+    computed = responses
 
     def residual_sigma(self) -> np.ndarray | None:
         """The simulated noise's sigma per channel of :meth:`fisher_residuals`, or ``None``."""
