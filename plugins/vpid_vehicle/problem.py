@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from vpid_bench import Bounds, ChannelFit, Problem, estimators, relative_errors_percent
+from vpid_bench import Bounds, ChannelFit, ConfigError, Problem, estimators, relative_errors_percent
 
 from .config import (
     PARAM_NAMES,
@@ -170,8 +170,6 @@ class VehicleProblem(ChannelFit, Problem):
 
     def set_threads(self, n: int) -> None:
         """Let the kernel spread a large batch over ``n`` threads (bit-identical results)."""
-        from vpid_bench import ConfigError
-
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
             raise ConfigError("threads", n, "an integer >= 1")
         self.model.set_threads(int(n))

@@ -211,8 +211,24 @@ class RideProblem(ChannelFit, Problem):
         self.known = {k: v for k, v in published.items() if k not in self.model.names}
         #: How the model meets a user's record (None: the simulated record, on its grid).
         self.sampler: Sampler | None = None
-        if config.reference.file is not None:
-            self._from_file(config)
+        if config.reference.file is not None:  # no truth, no noise added, at rest at row one
+            record = read_ride_record(self.model, config)
+            self.sampler = sampler = Sampler(record.t, config.dt)
+            self.input_source = knowns.input_text(config, record.input_names,
+                                                  config.reference.columns)
+            if record.inputs is not None:
+                self.u = self.model.inputs_from_record(record, sampler)
+            else:  # the configured input (a hump, a bump, a step, a manoeuvre) over the steps
+                span = types.SimpleNamespace(**vars(config))
+                span.duration_s = sampler.steps.size * config.dt
+                self.u = self.model.inputs(span, self.known, config.dt, None)
+            self.record_info = sampler.describe(record)
+            log.info("%s", self.record_info)
+            self._x_true = None
+            self.t = record.t
+            self.clean = None
+            self.sigma = None
+            self.measured = record.outputs
         else:
             streams = instance_streams(config.seed, index, type(self).name)
             truth_rng, road_rng, noise_rng = (np.random.default_rng(s) for s in streams)
@@ -242,26 +258,6 @@ class RideProblem(ChannelFit, Problem):
         #: What a raw residual is multiplied by, ``(p, N)`` (Eq. 3: ``1 / ||measured_c||``).
         self.weights = estimators.weights(config.objective, self.measured,
                                           1.0 / self.scale[:, None], plug_in)
-
-    def _from_file(self, config: RideConfig) -> None:
-        """A user's record: no truth, no noise added, the model at rest at its first row."""
-        record = read_ride_record(self.model, config)
-        self.sampler = sampler = Sampler(record.t, config.dt)
-        self.input_source = knowns.input_text(config, record.input_names,
-                                              config.reference.columns)
-        if record.inputs is not None:
-            self.u = self.model.inputs_from_record(record, sampler)
-        else:  # the configured input (a hump, a bump, a step, a manoeuvre) over the steps
-            span = types.SimpleNamespace(**vars(config))
-            span.duration_s = sampler.steps.size * config.dt
-            self.u = self.model.inputs(span, self.known, config.dt, None)
-        self.record_info = sampler.describe(record)
-        log.info("%s", self.record_info)
-        self._x_true = None
-        self.t = record.t
-        self.clean = None
-        self.sigma = None
-        self.measured = record.outputs
 
     def _record(self, fine_u: np.ndarray, sub: int) -> np.ndarray:
         """The true vehicle's clean channels ``(p, N)`` sampled every ``dt``."""
