@@ -120,7 +120,15 @@ class AdaptiveDE(GenerationalOptimizer):
         XA = np.vstack([X, self.archive.rows]) if len(self.archive) else X
         r2 = partner_indices(rng, r1, len(XA))
         if self.engine == "numba":  # the same draws, then one compiled loop (vpid_de.fused)
-            U = self._fused_trials(X, pbest, r1, XA, r2, F, CR)
+            from .fused import BOUNDS_IDS, pbest_trials
+
+            u = rng.random((N, X.shape[1] + 1))
+            reinit = self.params.bounds == "reinit"
+            u_reinit = rng.random(X.shape) if reinit else np.empty((0, 0))
+            U = pbest_trials(X, pbest, r1, XA, r2, np.ascontiguousarray(F, dtype=float),
+                             np.ascontiguousarray(CR, dtype=float), u,
+                             BOUNDS_IDS[self.params.bounds], self.bounds.lower,
+                             self.bounds.upper, u_reinit)
         else:
             V = current_to_pbest1(X, pbest, r1, XA, r2, F[:, None])
             U = binomial_crossover(X, V, CR[:, None], rng)
@@ -129,20 +137,6 @@ class AdaptiveDE(GenerationalOptimizer):
         n = self.trial_count()
         self._CR, self._F = CR[:n], F[:n]
         return U[:n]
-
-    def _fused_trials(self, X: np.ndarray, pbest: np.ndarray, r1: np.ndarray, XA: np.ndarray,
-                      r2: np.ndarray, F: np.ndarray, CR: np.ndarray) -> np.ndarray:
-        """:func:`vpid_de.fused.pbest_trials`, its uniforms drawn as the numpy path draws them."""
-        from .fused import BOUNDS_IDS, pbest_trials
-
-        N, dim = X.shape
-        u = self.rng.random((N, dim + 1))
-        reinit = self.params.bounds == "reinit"
-        u_reinit = self.rng.random((N, dim)) if reinit else np.empty((0, 0))
-        return pbest_trials(X, pbest, r1, XA, r2, np.ascontiguousarray(F, dtype=float),
-                            np.ascontiguousarray(CR, dtype=float), u,
-                            BOUNDS_IDS[self.params.bounds], self.bounds.lower,
-                            self.bounds.upper, u_reinit)
 
     def advance(self, U: np.ndarray, fU: np.ndarray) -> None:
         n = len(U)

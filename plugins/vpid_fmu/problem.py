@@ -84,23 +84,6 @@ class FmuConfig(ProblemConfig):
         setup(self)  # the pre-flight reads the FMU and the record
 
 
-def _kind(config: FmuConfig, fmu: archive.FmuFile) -> str:
-    offered = sorted(fmu.binaries)
-    kind = config.interface
-    if kind == "auto":
-        kind = "cs" if "cs" in fmu.binaries else "me"
-    if kind not in fmu.binaries:
-        raise ConfigError("problem.interface", config.interface, "an interface this FMU has "
-                          f"a binary for: {', '.join(offered)}")
-    if kind == "me" and fmu.major == 3:
-        raise ConfigError("problem.interface", config.interface, "cs for an FMI 3.0 FMU "
-                          "(FMI 3.0 model exchange is not supported)")
-    if kind == "me" and int(fmu.description.numberOfEventIndicators or 0) > 0:
-        raise ConfigError("problem.interface", config.interface, "cs, or an FMU without event "
-                          "indicators (model exchange with events is not supported)")
-    return kind
-
-
 def _mode(config: FmuConfig, fmu: archive.FmuFile, kind: str) -> tuple[str, str]:
     """The input handling and its one info line."""
     if kind == "me":
@@ -128,7 +111,18 @@ def _mode(config: FmuConfig, fmu: archive.FmuFile, kind: str) -> tuple[str, str]
 @functools.lru_cache(maxsize=16)
 def _setup(config: FmuConfig, fmu_state: tuple, record_state: tuple) -> tuple:
     fmu = archive.inspect(config.fmu)
-    kind = _kind(config, fmu)
+    kind = config.interface  # the interface simulated
+    if kind == "auto":
+        kind = "cs" if "cs" in fmu.binaries else "me"
+    if kind not in fmu.binaries:
+        raise ConfigError("problem.interface", config.interface, "an interface this FMU has "
+                          f"a binary for: {', '.join(sorted(fmu.binaries))}")
+    if kind == "me" and fmu.major == 3:
+        raise ConfigError("problem.interface", config.interface, "cs for an FMI 3.0 FMU "
+                          "(FMI 3.0 model exchange is not supported)")
+    if kind == "me" and int(fmu.description.numberOfEventIndicators or 0) > 0:
+        raise ConfigError("problem.interface", config.interface, "cs, or an FMU without event "
+                          "indicators (model exchange with events is not supported)")
     p = plan.plan(fmu.description, config.parameters, config.bounds, config.known)
     rec = record.read(config.reference.file, [(v.name, v.unit) for v in p.inputs],
                       [(v.name, v.unit) for v in p.outputs], config.reference.columns,

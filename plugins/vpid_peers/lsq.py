@@ -52,8 +52,8 @@ def multistart(
     rng: np.random.Generator,
     first: np.ndarray | None = None,
 ) -> None:
-    """Descents from ``first`` (when given), then from uniform random points until the budget."""
-    check_scaling(params, bounds)
+    """Descents from ``first`` (when given), then from uniform random points until the budget
+    (``scaling`` checked by the optimizer when built)."""
     coords = Coordinates(bounds, params.scaling)
     solver = Solver(evaluate, coords, groups, SolverSettings(
         fd_step=params.fd_step, inner=params.inner, broyden=params.broyden, ftol=params.ftol))

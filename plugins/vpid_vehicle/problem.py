@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from vpid_bench import Bounds, ChannelFit, Problem, estimators, relative_errors_percent
+from vpid_bench import Bounds, ChannelFit, ConfigError, Problem, estimators, relative_errors_percent
 
 from .config import (
     PARAM_NAMES,
@@ -150,9 +150,6 @@ class VehicleProblem(ChannelFit, Problem):
 
     @property
     def weights(self) -> np.ndarray:
-        return self._weighting()
-
-    def _weighting(self) -> np.ndarray:
         """What a raw residual is multiplied by, ``(2, N)``: 1 for Eq. 3 (m/s^2)."""
         if "_weights" not in self.__dict__:
             nz, ref = self.config.noise, self.reference
@@ -173,14 +170,9 @@ class VehicleProblem(ChannelFit, Problem):
 
     def set_threads(self, n: int) -> None:
         """Let the kernel spread a large batch over ``n`` threads (bit-identical results)."""
-        from vpid_bench import ConfigError
-
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
             raise ConfigError("threads", n, "an integer >= 1")
         self.model.set_threads(int(n))
-
-    def computed(self, X: np.ndarray) -> np.ndarray:
-        return self.responses(X)
 
     def responses(self, X: np.ndarray) -> np.ndarray:
         """z1'' and z2'' (m/s^2) ``(n, 2, N)``; NaN rows for non-physical candidates."""
@@ -192,6 +184,8 @@ class VehicleProblem(ChannelFit, Problem):
                 y = self.model(X[ok])
                 out[ok] = y if self.sampler is None else self.sampler.at_record(y)
         return out
+
+    computed = responses
 
     @property
     def _on_grid(self) -> bool:

@@ -1,10 +1,8 @@
 """``problem=bayesrace``: a 1:43 race car's tyre, drive and yaw coefficients from records
 somebody else's simulator made (Bayesrace, published with Deep Dynamics; GPL-3.0, read by
-:mod:`.third_party`). The records are the simulator's explicit Euler step at 50 Hz, not the
-continuous system's response, and no noise is added: what the fit cannot explain is model
-error. The model is the simulator's equations in continuous time (SI units,
-:func:`.kernel.dynamic_single_track`) by RK4 at ``20 ms / substeps`` from the record's first
-state. The equations, what is identified and known, the objective and the metrics:
+:mod:`.third_party`; its explicit Euler step at 50 Hz, no noise added), fitted by its equations
+in continuous time (:func:`.kernel.dynamic_single_track`, SI units) by RK4 at ``20 ms /
+substeps``. The equations, what is identified and known, the objective and the metrics:
 docs/measured.md, "Bayesrace".
 """
 

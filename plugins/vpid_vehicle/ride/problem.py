@@ -211,8 +211,24 @@ class RideProblem(ChannelFit, Problem):
         self.known = {k: v for k, v in published.items() if k not in self.model.names}
         #: How the model meets a user's record (None: the simulated record, on its grid).
         self.sampler: Sampler | None = None
-        if config.reference.file is not None:
-            self._from_file(config)
+        if config.reference.file is not None:  # no truth, no noise added, at rest at row one
+            record = read_ride_record(self.model, config)
+            self.sampler = sampler = Sampler(record.t, config.dt)
+            self.input_source = knowns.input_text(config, record.input_names,
+                                                  config.reference.columns)
+            if record.inputs is not None:
+                self.u = self.model.inputs_from_record(record, sampler)
+            else:  # the configured input (a hump, a bump, a step, a manoeuvre) over the steps
+                span = types.SimpleNamespace(**vars(config))
+                span.duration_s = sampler.steps.size * config.dt
+                self.u = self.model.inputs(span, self.known, config.dt, None)
+            self.record_info = sampler.describe(record)
+            log.info("%s", self.record_info)
+            self._x_true = None
+            self.t = record.t
+            self.clean = None
+            self.sigma = None
+            self.measured = record.outputs
         else:
             streams = instance_streams(config.seed, index, type(self).name)
             truth_rng, road_rng, noise_rng = (np.random.default_rng(s) for s in streams)
@@ -243,26 +259,6 @@ class RideProblem(ChannelFit, Problem):
         self.weights = estimators.weights(config.objective, self.measured,
                                           1.0 / self.scale[:, None], plug_in)
 
-    def _from_file(self, config: RideConfig) -> None:
-        """A user's record: no truth, no noise added, the model at rest at its first row."""
-        record = read_ride_record(self.model, config)
-        self.sampler = sampler = Sampler(record.t, config.dt)
-        self.input_source = knowns.input_text(config, record.input_names,
-                                              config.reference.columns)
-        if record.inputs is not None:
-            self.u = self.model.inputs_from_record(record, sampler)
-        else:  # the configured input (a hump, a bump, a step, a manoeuvre) over the steps
-            span = types.SimpleNamespace(**vars(config))
-            span.duration_s = sampler.steps.size * config.dt
-            self.u = self.model.inputs(span, self.known, config.dt, None)
-        self.record_info = sampler.describe(record)
-        log.info("%s", self.record_info)
-        self._x_true = None
-        self.t = record.t
-        self.clean = None
-        self.sigma = None
-        self.measured = record.outputs
-
     def _record(self, fine_u: np.ndarray, sub: int) -> np.ndarray:
         """The true vehicle's clean channels ``(p, N)`` sampled every ``dt``."""
         dt = self.config.dt / sub
@@ -285,9 +281,6 @@ class RideProblem(ChannelFit, Problem):
         """The instance's truth; ``None`` for a user's record (no truth)."""
         return None if self._x_true is None else self._x_true.copy()
 
-    def computed(self, X: np.ndarray) -> np.ndarray:
-        return self.responses(X)
-
     def responses(self, X: np.ndarray) -> np.ndarray:
         """The fitted model's channels ``(n, p, N)``; NaN rows for a row that is no vehicle."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
@@ -299,6 +292,8 @@ class RideProblem(ChannelFit, Problem):
                                         self.config.dt, "newmark").transpose(0, 2, 1)
                 out[ok] = y if self.sampler is None else self.sampler.at_record(y)
         return out
+
+    computed = responses
 
     def residual_sigma(self) -> np.ndarray | None:
         """The simulated noise's sigma per channel of :meth:`fisher_residuals`, or ``None``."""

@@ -1,13 +1,8 @@
 """``problem=racecar``: a full-scale autonomous racecar's tyres and yaw inertia from its logs
-(measured, no truth; GPL-3.0, read by :mod:`.third_party`), judged by held-out prediction
-against a naive one. The single-track model with ``vx`` an input
-(:func:`.kernel.scheduled_single_track`, SI units), linear or Magic Formula tyres
-(:data:`TYRES`: names, units, box), predicts windows of ``horizon_s`` where ``vx >=
-min_speed``, each from its first logged ``(vy, r)``; the **naive predictor** holds that
-value. The objective compares the samples after each window's first; the held-out metrics
-are ``val_rel_naive`` (the model's rms over the naive one's, mean over ``vy``, ``r``: below 1
-beats it), ``val_rms_r``, ``val_rms_vy``. The equations, the logs and the box:
-docs/measured.md, "Racecar".
+(measured, no truth; GPL-3.0, read by :mod:`.third_party`): the single-track model with ``vx``
+an input (:func:`.kernel.scheduled_single_track`, SI units) predicts windows of the logs, judged
+on held-out windows against the naive predictor (each window's first state held). The
+equations, the windows, the box (:data:`TYRES`) and the metrics: docs/measured.md, "Racecar".
 """
 
 from __future__ import annotations
@@ -188,7 +183,7 @@ class RacecarProblem(ChannelFit, Problem):
         return {k: (v if np.isfinite(v) else float("inf")) for k, v in values.items()}
 
     def metrics(self, x: np.ndarray) -> dict[str, float]:
-        """The held-out metrics (the module docstring)."""
+        """The held-out metrics (docs/measured.md, "Racecar")."""
         return self._held_out_metrics(self._predict(x, self.held_out)[0])
 
     def comparisons(self) -> dict[str, dict[str, Any]]:
