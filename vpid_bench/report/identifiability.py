@@ -251,23 +251,18 @@ def draw_design(design: Mapping[str, Any]) -> Any:
 
 
 def _design_text(ctx: ReportContext, design: Mapping[str, Any]) -> str:
-    crb = design["crb"]
-    names = design["names"]
-    bounds = crb["crb_percent"]
+    crb, floor = design["crb"], design["floor"]
     cond = crb.get("condition_number")
-    s = crb["singular_values"]
-    undetermined = [f"{escape(n)} ({ctx.fmt(b, 3)} %)" for n, b in zip(names, bounds, strict=True)
-                    if b > UNDETERMINED_PERCENT]
-    floor = design["floor"]
-    metric = escape(design["metric"])
+    undetermined = [f"{escape(n)} ({ctx.fmt(b, 3)} %)" for n, b in zip(
+        design["names"], crb["crb_percent"], strict=True) if b > UNDETERMINED_PERCENT]
     text = (f"Record design **{escape(design['label'])}** (contexts: "
             f"{escape(', '.join(design['contexts']))}). "
             f"CRB norm {ctx.fmt(crb['crb_norm_percent'], 3)} %"
-            + (f"; measured floor: median {metric} of the record optima x* "
+            + (f"; measured floor: median {escape(design['metric'])} of the record optima x* "
                f"{ctx.fmt(floor, 3)} % over {design['instances']} instance(s)"
                if floor is not None else "; no instance optimum was found for a measured floor")
             + f". Condition number {ctx.fmt(cond, 3) if cond is not None else 'infinite'}; "
-            f"singular values {', '.join(ctx.fmt(v, 3) for v in s)}. ")
+            f"singular values {', '.join(ctx.fmt(v, 3) for v in crb['singular_values'])}. ")
     est = design.get("estimators")
     if est:  # "...: ordinary least squares (objective=ols) 27.1 %; ..."
         floors, unit = est["floors"], escape(design["unit"])

@@ -307,12 +307,7 @@ def compact_letters(order: list[str], different: set[frozenset[str]]) -> dict[st
     cols: list[frozenset[str]] = [frozenset(order)]
     for pair in sorted(different, key=lambda p: sorted(order.index(x) for x in p)):
         i, j = sorted(pair)
-        split: list[frozenset[str]] = []
-        for c in cols:
-            if i in c and j in c:
-                split += [c - {i}, c - {j}]
-            else:
-                split.append(c)
+        split = [s for c in cols for s in ([c - {i}, c - {j}] if i in c and j in c else [c])]
         uniq = list(dict.fromkeys(c for c in split if c))
         cols = [c for c in uniq if not any(c < d for d in uniq)]
     rank = {name: k for k, name in enumerate(order)}
