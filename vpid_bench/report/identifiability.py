@@ -352,8 +352,7 @@ def section(ctx: ReportContext) -> Contribution | None:
         parts += [_design_text(ctx, d), ""]
         body = [[n, b, (d["floor_errors"][j] if d["floor_errors"] is not None else None),
                  "not determined" if b > UNDETERMINED_PERCENT else ""]
-                for j, (n, b) in enumerate(zip(d["names"], d["crb"]["crb_percent"],
-                                               strict=True))]
+                for j, (n, b) in enumerate(zip(d["names"], d["crb"]["crb_percent"], strict=True))]
         parts += [ctx.markdown_table(["parameter", "CRB %", "floor median |error| %", ""],
                                      body, digits=3), ""]
         if not ctx.short:

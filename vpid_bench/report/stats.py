@@ -43,8 +43,7 @@ def holm(pvalues: list[float]) -> list[float]:
     adjusted = np.full(p.shape, np.nan)
     ok = np.flatnonzero(np.isfinite(p))
     order = ok[np.argsort(p[ok], kind="stable")]
-    adjusted[order] = np.minimum(np.maximum.accumulate(p[order] * np.arange(ok.size, 0, -1)),
-                                 1.0)
+    adjusted[order] = np.minimum(np.maximum.accumulate(p[order] * np.arange(ok.size, 0, -1)), 1.0)
     return adjusted.tolist()
 
 
