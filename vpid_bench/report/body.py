@@ -300,9 +300,8 @@ def files_md(model: Any, _: str | None) -> list[str]:
 
 
 def suite_md(model: Any, _: str | None) -> list[str]:
-    """"Across the suite": the score of every optimizer over all problems, the best per
-    family and per dimension, the aggregated ECDF figure and the budget ladder (see
-    :mod:`.suite_scores`)."""
+    """"Across the suite" (:mod:`.suite_scores`): every optimizer's score over all problems,
+    the best per family and dimension, the aggregated ECDF figure and the budget ladder."""
     if model.suite is None:
         return []
     rows, fig = model.suite.rows, model.suite.figure

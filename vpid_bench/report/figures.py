@@ -85,10 +85,9 @@ def step_values(ev: np.ndarray, best: np.ndarray, grid: np.ndarray) -> np.ndarra
 
 def thin_steps(x: np.ndarray, *ys: np.ndarray, max_points: int = MAX_CURVE_POINTS
                ) -> tuple[np.ndarray, ...]:
-    """Fewer points for ``steps-post`` curves: the points where no y changes are dropped
-    (nothing drawn changes); past ``max_points``, the x range is cut into equal bins, each
-    keeping its last point: exact at every kept point, off by at most one bin between.
-    Returns (x, *ys)."""
+    """Fewer points for ``steps-post`` curves, (x, *ys): points where no y changes dropped
+    (nothing drawn changes); past ``max_points``, the x range cut into equal bins, each
+    keeping its last point: exact at every kept point, off by at most one bin between."""
     x = np.asarray(x, float)
     ys = tuple(np.asarray(y, float) for y in ys)
     if x.size <= 2:

@@ -123,8 +123,7 @@ def crb_norms_by_instance(records: Rows, rows: Rows) -> dict[str, dict[Any, floa
 
 def _design_label(rows: Rows) -> str:
     """The labels of a design's contexts without the protocol: the problem and its varying
-    settings (the rows' ``problem.<key>`` columns) but ``ps``, ``iterations`` and the
-    budget."""
+    settings (``problem.<key>`` columns) but ``ps``, ``iterations`` and the budget."""
     labels = []
     for row in rows:
         label = str(row["problem"]) + "".join(

@@ -75,8 +75,7 @@ def _sort_value(v: Any) -> str | None:
 def table(headers: Sequence[str], rows: Sequence[Sequence[Any]],
           links: Mapping[str, Callable[[str], str | None]] | None = None,
           caption: str = "", digits: int = 4) -> Table:
-    """A sortable table, numbers formatted as in report.md; cells of the ``links`` columns
-    link to a page."""
+    """A sortable table, numbers as in report.md; cells of the ``links`` columns link to a page."""
     links = links or {}
 
     def cell(h: str, v: Any, t: str) -> Cell:
@@ -101,8 +100,7 @@ def _markdown_parser() -> Any:
 
 
 def markdown_html(text: str) -> Any:
-    """Markdown as HTML: raw HTML escaped, a link or image to anything but a file of the
-    report shown as text."""
+    """Markdown as HTML: raw HTML escaped, a link or image to anything but a report file as text."""
     from markupsafe import Markup
 
     return Markup(_markdown_parser().render(text or ""))  # noqa: S704 - escaped by the parser

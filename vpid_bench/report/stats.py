@@ -174,9 +174,8 @@ def _wilcoxon_permutation(d: np.ndarray) -> tuple[float, float]:
 
 
 def mann_whitney(x: np.ndarray, y: np.ndarray) -> tuple[float, float, str]:
-    """Two-sided Mann–Whitney U test: (U of ``x``, p, how p was got). Exact without ties up
-    to 30 runs a sample, a seeded permutation test with ties up to 40 in all, else the
-    normal approximation."""
+    """Two-sided Mann–Whitney U test: (U of ``x``, p, how p was got); exact without ties up to
+    30 runs a sample, seeded permutations with ties up to 40 in all, else the normal law."""
     from scipy import stats
 
     ties = np.unique(np.concatenate([x, y])).size < len(x) + len(y)
@@ -355,8 +354,7 @@ MIN_BLOCKS = 5
 
 @dataclasses.dataclass
 class FriedmanResult:
-    """Friedman test over blocks on one value per block and algorithm, with its post-hoc
-    tests."""
+    """Friedman's test over blocks (one value per block and algorithm) and its post-hoc tests."""
 
     blocks: list[str]
     algorithms: list[str]
