@@ -31,8 +31,7 @@ LIMITED_BY = {"search": "search (more would gain)", "below_floor": "search (runs
               "estimator": "the estimator", "model": "model error", "records": "the records",
               "truth": "search (to the truth)"}
 #: Without a truth: whether the leader reaches the record's optimum.
-LIMITS_NO_TRUTH = {True: "the record (optimum reached)",
-                   False: "search (more would move it)"}
+LIMITS_NO_TRUTH = {True: "the record (optimum reached)", False: "search (more would move it)"}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -274,8 +273,7 @@ def table(results: Sequence[Any], labels: Mapping[str, str] | None = None
     for r in results:
         row = [labels.get(r.context, r.context), _words(r.decision)]
         if truth:
-            row += ([_value(r.floor, r.unit), _value(r.bound, r.unit)] if r.truth else
-                    ["", ""])
+            row += ([_value(r.floor, r.unit), _value(r.bound, r.unit)] if r.truth else ["", ""])
         rows.append([*row, _limit(r.decision)])
     return headers, rows
 

@@ -117,8 +117,7 @@ def auc(runs: Sequence[RunHits], budget: float | None = None) -> float:
     if b <= 1:
         return float(np.mean(np.isfinite(h) & (h <= b)))
     h = np.where(np.isfinite(h) & (h <= b), np.maximum(h, 1.0), np.nan)
-    share = np.where(np.isfinite(h), np.log(b / np.where(np.isfinite(h), h, 1.0)) / np.log(b),
-                     0.0)
+    share = np.where(np.isfinite(h), np.log(b / np.where(np.isfinite(h), h, 1.0)) / np.log(b), 0.0)
     return float(share.mean())
 
 

@@ -108,8 +108,7 @@ def _best(records: Sequence[Mapping[str, Any]]) -> Mapping[str, Any] | None:
 
 
 def near_bounds(rec: Mapping[str, Any]) -> list[str]:
-    """Each parameter of a run's ``x_best`` within :data:`NEAR_BOUND` of its box's width from
-    a bound, in words."""
+    """In words, each parameter of ``x_best`` within :data:`NEAR_BOUND` box widths of a bound."""
     params, result = rec.get("parameters"), rec.get("result")
     if not isinstance(params, Mapping) or not isinstance(result, Mapping):
         return []

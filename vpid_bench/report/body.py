@@ -93,8 +93,7 @@ def headline(summary: list[dict[str, Any]], verdicts: list[str], extra: list[Hea
     """(headers, rows) of the headline for Markdown/terminal (compact, in priority order,
     context first) and for the CSV (every column)."""
     any_failed = any(s["n_failed"] for s in summary)
-    metric = {s["context"]: s["metric_name"] for s in summary}
-    show_f = any(m != "f_best" for m in metric.values())
+    show_f = any(s["metric_name"] != "f_best" for s in summary)
     has_verdict = any(verdicts)
     md_h = ["context", "rank", "group", "optimizer", "n"] + (["failed"] if any_failed else []) + [
         "metric", "median", "IQR"] + (["median f"] if show_f else []) + [c.name for c in extra] + (
@@ -114,8 +113,7 @@ def headline(summary: list[dict[str, Any]], verdicts: list[str], extra: list[Hea
                        + ([s.get("f_median")] if show_f else []) + ex
                        + ([verdict_short(v)] if has_verdict else []))
         csv_rows.append([s["context"], s["rank"], s.get("group", ""), s["algorithm"], s["n_runs"],
-                         s["n_failed"],
-                         s["metric_name"]] + [s.get(k) for k in (
+                         s["n_failed"], s["metric_name"]] + [s.get(k) for k in (
                              "median", "q1", "q3", "mean", "sd", "best", "worst", "f_median")]
                         + ex + ([v] if has_verdict else []))
     return md_h, md_rows, csv_h, csv_rows
@@ -156,8 +154,7 @@ def _friedman_md(fr: Any, label: str, alpha: float, files: str) -> list[str]:
     return [para(f"{label}: {len(fr.blocks)} blocks ({fr.kind}); optimizers present in every "
                  f"block: {escape(', '.join(fr.algorithms))}. Friedman χ² = "
                  f"{render.fmt(fr.statistic)}, {render.p_text(fr.p, fr.p_at_floor)} "
-                 f"({fr.p_method}). "
-                 f"{fr.note}"), "",
+                 f"({fr.p_method}). {fr.note}"), "",
             para("Mean rank per optimizer (1 = best): " + ", ".join(
                 f"{escape(a)} {r:.2f}" for a, r in fr.mean_ranks.items())), "",
             para(f"Pairwise Wilcoxon signed-rank over the blocks, Holm-corrected: {len(sig)} of "
@@ -303,9 +300,8 @@ def files_md(model: Any, _: str | None) -> list[str]:
 
 
 def suite_md(model: Any, _: str | None) -> list[str]:
-    """"Across the suite": the score of every optimizer over all problems, the best per
-    family and per dimension, the aggregated ECDF figure and the budget ladder (see
-    :mod:`.suite_scores`)."""
+    """"Across the suite" (:mod:`.suite_scores`): every optimizer's score over all problems,
+    the best per family and dimension, the aggregated ECDF figure and the budget ladder."""
     if model.suite is None:
         return []
     rows, fig = model.suite.rows, model.suite.figure

@@ -99,8 +99,7 @@ def _main(argv: Sequence[str] | None) -> int:
 
 def check_output_dir(out: Path, inputs: Sequence[Path] = ()) -> str | None:
     """Why ``out`` cannot hold the report (a file, a folder holding the records read or
-    anything a report does not write, one that cannot be created or written), or None.
-    Creates the folder."""
+    anything a report does not write, one not creatable or writable), or None; creates it."""
     from .build import foreign_entries
 
     if out.exists() and not out.is_dir():

@@ -1,6 +1,5 @@
-"""The report's first stage: everything it says, computed from the records, as data
-(:class:`ReportData`), which the later stages only read. Short mode imports neither pandas
-nor scipy.stats."""
+"""The report's first stage: everything it says, computed from the records as data
+(:class:`ReportData`) the later stages only read; short mode imports no pandas, scipy.stats."""
 
 from __future__ import annotations
 
@@ -199,8 +198,7 @@ def _load(paths: Sequence[Path]) -> tuple[LoadedRecords, list[Any]]:
 
 
 def _add_archive(loaded: LoadedRecords, archive: bool | Path) -> tuple[list[Any], list[str]]:
-    """Add the archived runs that stand beside ``loaded`` (in place); return their optima
-    and one-line notes."""
+    """Add the archived runs that stand beside ``loaded`` (in place): their optima, notes."""
     from ..store.archive_records import load_all
     from .archive import merge
 

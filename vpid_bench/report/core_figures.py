@@ -1,8 +1,7 @@
 """The report's own figures (PNG): convergence, per problem the per-run metric and the error
 heatmap, per context the ECDF and critical-difference diagram, and one across blocks. A
-figure that cannot be drawn leaves a reason instead of a path (one that raises costs only
-itself). Planned here, drawn side by side in forked processes (half an archive report's
-time)."""
+figure that cannot be drawn, or raises, leaves a reason instead of a path. Planned here,
+drawn side by side in forked processes (half an archive report's time)."""
 
 from __future__ import annotations
 

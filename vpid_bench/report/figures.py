@@ -85,10 +85,9 @@ def step_values(ev: np.ndarray, best: np.ndarray, grid: np.ndarray) -> np.ndarra
 
 def thin_steps(x: np.ndarray, *ys: np.ndarray, max_points: int = MAX_CURVE_POINTS
                ) -> tuple[np.ndarray, ...]:
-    """Fewer points for ``steps-post`` curves: the points where no y changes are dropped
-    (nothing drawn changes); past ``max_points``, the x range is cut into equal bins, each
-    keeping its last point: exact at every kept point, off by at most one bin between.
-    Returns (x, *ys)."""
+    """Fewer points for ``steps-post`` curves, (x, *ys): points where no y changes dropped
+    (nothing drawn changes); past ``max_points``, the x range cut into equal bins, each
+    keeping its last point: exact at every kept point, off by at most one bin between."""
     x = np.asarray(x, float)
     ys = tuple(np.asarray(y, float) for y in ys)
     if x.size <= 2:
@@ -179,8 +178,7 @@ def draw_convergence(panels: Sequence[Mapping[str, Any]], path: Path,
     for ax, p in zip(axes.flat, panels, strict=False):
         for c in p["curves"]:
             st = look[c["algorithm"]]
-            ax.plot(c["x"], c["median"], **st.mpl(), label=c["algorithm"],
-                    drawstyle="steps-post")
+            ax.plot(c["x"], c["median"], **st.mpl(), label=c["algorithm"], drawstyle="steps-post")
             ax.fill_between(c["x"], c["q25"], c["q75"], color=st.colour, alpha=0.12,
                             step="post", linewidth=0)
         values = np.asarray(p["values"], float)
@@ -245,8 +243,7 @@ def draw_runs_metric(data: Mapping[str, Any], path: Path) -> Path | str:
                    medianprops=props)
         xs = np.concatenate([np.full(len(v), p) + rng.uniform(-0.15, 0.15, len(v)) * slot
                              for p, v in zip(pos, vals, strict=True)])
-        ax.scatter(xs, np.concatenate(vals), s=9, color=colour, alpha=0.6, linewidths=0,
-                   zorder=3)
+        ax.scatter(xs, np.concatenate(vals), s=9, color=colour, alpha=0.6, linewidths=0, zorder=3)
     ax.set_xticks(range(len(order)), order)
     ax.set_xlim(-0.5, len(order) - 0.5)
     if data["log"]:
@@ -279,9 +276,8 @@ def error_label(v: float) -> str:
 
 def error_heatmap_data(df: Any, problem: str) -> dict[str, Any] | str:
     """Per (optimizer, context) row and parameter column, the median |relative error| (%)."""
-    eps_cols = [c for c in df.columns if c.startswith("eps.")]
     d = df[(df["problem"] == problem) & (df["status"] == "ok")]
-    eps_cols = [c for c in eps_cols if d[c].notna().any()]
+    eps_cols = [c for c in df.columns if c.startswith("eps.") and d[c].notna().any()]
     if d.empty or not eps_cols:
         return f"no relative errors for {problem} (the problem has no true parameter values)"
     rows, vals = [], []
@@ -344,8 +340,7 @@ def cd_data(ranks: Any, pvalues: Any) -> dict[str, Any] | str:
         return "fewer than 2 optimizers to compare"
     items = sorted(((str(k), float(v)) for k, v in dict(ranks).items()), key=lambda kv: kv[1])
     names = [k for k, _ in items]
-    p = pvalues.loc[names, names].to_numpy(float)
-    return {"ranks": items, "p": p}
+    return {"ranks": items, "p": pvalues.loc[names, names].to_numpy(float)}
 
 
 def cd_bars(names: list[str], p: np.ndarray, alpha: float) -> list[list[str]]:

@@ -181,11 +181,8 @@ def _model_error(data: Any, context: str) -> str:
 
 def _edge(data: Any, context: str) -> tuple[int, int]:
     """(instances whose optimum lies on a box edge, instances with a known optimum)."""
-    seen: dict[Any, float] = {}
-    for r in data.rows:
-        v = r.get("opt_on_edge", math.nan)
-        if r["context"] == context and isinstance(v, float) and math.isfinite(v):
-            seen[r.get("instance")] = v
+    seen = {r.get("instance"): v for r in data.rows if r["context"] == context
+            and isinstance(v := r.get("opt_on_edge", math.nan), float) and math.isfinite(v)}
     return int(sum(seen.values())), len(seen)
 
 

@@ -123,8 +123,7 @@ def crb_norms_by_instance(records: Rows, rows: Rows) -> dict[str, dict[Any, floa
 
 def _design_label(rows: Rows) -> str:
     """The labels of a design's contexts without the protocol: the problem and its varying
-    settings (the rows' ``problem.<key>`` columns) but ``ps``, ``iterations`` and the
-    budget."""
+    settings (``problem.<key>`` columns) but ``ps``, ``iterations`` and the budget."""
     labels = []
     for row in rows:
         label = str(row["problem"]) + "".join(
@@ -251,23 +250,18 @@ def draw_design(design: Mapping[str, Any]) -> Any:
 
 
 def _design_text(ctx: ReportContext, design: Mapping[str, Any]) -> str:
-    crb = design["crb"]
-    names = design["names"]
-    bounds = crb["crb_percent"]
+    crb, floor = design["crb"], design["floor"]
     cond = crb.get("condition_number")
-    s = crb["singular_values"]
-    undetermined = [f"{escape(n)} ({ctx.fmt(b, 3)} %)" for n, b in zip(names, bounds, strict=True)
-                    if b > UNDETERMINED_PERCENT]
-    floor = design["floor"]
-    metric = escape(design["metric"])
+    undetermined = [f"{escape(n)} ({ctx.fmt(b, 3)} %)" for n, b in zip(
+        design["names"], crb["crb_percent"], strict=True) if b > UNDETERMINED_PERCENT]
     text = (f"Record design **{escape(design['label'])}** (contexts: "
             f"{escape(', '.join(design['contexts']))}). "
             f"CRB norm {ctx.fmt(crb['crb_norm_percent'], 3)} %"
-            + (f"; measured floor: median {metric} of the record optima x* "
+            + (f"; measured floor: median {escape(design['metric'])} of the record optima x* "
                f"{ctx.fmt(floor, 3)} % over {design['instances']} instance(s)"
                if floor is not None else "; no instance optimum was found for a measured floor")
             + f". Condition number {ctx.fmt(cond, 3) if cond is not None else 'infinite'}; "
-            f"singular values {', '.join(ctx.fmt(v, 3) for v in s)}. ")
+            f"singular values {', '.join(ctx.fmt(v, 3) for v in crb['singular_values'])}. ")
     est = design.get("estimators")
     if est:  # "...: ordinary least squares (objective=ols) 27.1 %; ..."
         floors, unit = est["floors"], escape(design["unit"])
@@ -357,8 +351,7 @@ def section(ctx: ReportContext) -> Contribution | None:
         parts += [_design_text(ctx, d), ""]
         body = [[n, b, (d["floor_errors"][j] if d["floor_errors"] is not None else None),
                  "not determined" if b > UNDETERMINED_PERCENT else ""]
-                for j, (n, b) in enumerate(zip(d["names"], d["crb"]["crb_percent"],
-                                               strict=True))]
+                for j, (n, b) in enumerate(zip(d["names"], d["crb"]["crb_percent"], strict=True))]
         parts += [ctx.markdown_table(["parameter", "CRB %", "floor median |error| %", ""],
                                      body, digits=3), ""]
         if not ctx.short:

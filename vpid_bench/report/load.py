@@ -235,20 +235,12 @@ def _metrics(record: Mapping[str, Any]) -> dict[str, float]:
 def choose_metrics(records: list[dict[str, Any]], labels: list[RunLabel]) -> dict[str, str]:
     """Per context, the headline metric: the first of the problem's metrics (in the order of
     the context's first ok record) that every ok run of the context has; else ``f_best``."""
-    names: dict[str, list[str]] = {}
-    sets: dict[str, list[set[str]]] = {}
+    common: dict[str, list[str]] = {}
     for r, lab in zip(records, labels, strict=True):
-        if r["status"] != "ok" or not r.get("result"):
-            continue
-        keys = list(((r.get("result") or {}).get("metrics") or {}).keys())
-        names.setdefault(lab.context, keys)
-        sets.setdefault(lab.context, []).append(set(keys))
-    out = {}
-    for lab in labels:
-        first = names.get(lab.context, [])
-        common = [k for k in first if all(k in s for s in sets.get(lab.context, []))]
-        out[lab.context] = common[0] if common else "f_best"
-    return out
+        if r["status"] == "ok" and r.get("result"):
+            keys = (r["result"].get("metrics") or {}).keys()
+            common[lab.context] = [k for k in common.get(lab.context, keys) if k in keys]
+    return {lab.context: next(iter(common.get(lab.context, [])), "f_best") for lab in labels}
 
 
 def metric_unit(record: Mapping[str, Any], name: str) -> str:
@@ -256,9 +248,7 @@ def metric_unit(record: Mapping[str, Any], name: str) -> str:
     info = (record.get("problem") or {}).get("info")
     units = info.get("metric_units") if isinstance(info, Mapping) else None
     unit = units.get(name) if isinstance(units, Mapping) else None
-    if isinstance(unit, str) and len(unit) <= 16 and unit.isprintable():
-        return unit
-    return ""
+    return unit if isinstance(unit, str) and len(unit) <= 16 and unit.isprintable() else ""
 
 
 def run_rows(records: list[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -157,9 +157,8 @@ def markdown(headers: Sequence[str], rows: Sequence[Sequence[Any]], *, keep: int
 
 
 def terminal(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 4) -> str:
-    """A plain-text table for the terminal: columns separated by two spaces, every cell and
-    header one line of printable text (:func:`.safe.clean`), Markdown escapes undone
-    (:func:`.safe.shown`)."""
+    """A plain-text table for the terminal: columns two spaces apart, every cell and header one
+    printable line (:func:`.safe.clean`), Markdown escapes undone (:func:`.safe.shown`)."""
     headers = [clean(shown(h)) for h in headers]
     text = [[clean(shown(c)) for c in r] for r in cells(headers, rows, digits)]
     numeric = _numeric_columns(rows, len(headers))

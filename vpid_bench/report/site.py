@@ -75,20 +75,17 @@ def _sort_value(v: Any) -> str | None:
 def table(headers: Sequence[str], rows: Sequence[Sequence[Any]],
           links: Mapping[str, Callable[[str], str | None]] | None = None,
           caption: str = "", digits: int = 4) -> Table:
-    """A sortable table, numbers formatted as in report.md; cells of the ``links`` columns
-    link to a page."""
-    text = render.cells(headers, rows, digits) if rows else []
+    """A sortable table, numbers as in report.md; cells of the ``links`` columns link to a page."""
     links = links or {}
-    out = []
-    for raw, shown in zip(rows, text, strict=True):
-        cells = []
-        for h, v, t in zip(headers, raw, shown, strict=True):
-            key = _sort_value(v)
-            link = links.get(h)
-            cells.append(Cell(t, key, link(str(v)) if link and isinstance(v, str) else None,
-                              key is not None))
-        out.append(tuple(cells))
-    return Table(tuple(headers), tuple(out), caption)
+
+    def cell(h: str, v: Any, t: str) -> Cell:
+        key, link = _sort_value(v), links.get(h)
+        return Cell(t, key, link(str(v)) if link and isinstance(v, str) else None, key is not None)
+
+    text = render.cells(headers, rows, digits) if rows else []
+    return Table(tuple(headers), tuple(
+        tuple(cell(*c) for c in zip(headers, raw, shown, strict=True))
+        for raw, shown in zip(rows, text, strict=True)), caption)
 
 
 @functools.lru_cache(maxsize=1)
@@ -103,8 +100,7 @@ def _markdown_parser() -> Any:
 
 
 def markdown_html(text: str) -> Any:
-    """Markdown as HTML: raw HTML escaped, a link or image to anything but a file of the
-    report shown as text."""
+    """Markdown as HTML: raw HTML escaped, a link or image to anything but a report file as text."""
     from markupsafe import Markup
 
     return Markup(_markdown_parser().render(text or ""))  # noqa: S704 - escaped by the parser

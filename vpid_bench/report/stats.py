@@ -43,8 +43,7 @@ def holm(pvalues: list[float]) -> list[float]:
     adjusted = np.full(p.shape, np.nan)
     ok = np.flatnonzero(np.isfinite(p))
     order = ok[np.argsort(p[ok], kind="stable")]
-    adjusted[order] = np.minimum(np.maximum.accumulate(p[order] * np.arange(ok.size, 0, -1)),
-                                 1.0)
+    adjusted[order] = np.minimum(np.maximum.accumulate(p[order] * np.arange(ok.size, 0, -1)), 1.0)
     return adjusted.tolist()
 
 
@@ -175,9 +174,8 @@ def _wilcoxon_permutation(d: np.ndarray) -> tuple[float, float]:
 
 
 def mann_whitney(x: np.ndarray, y: np.ndarray) -> tuple[float, float, str]:
-    """Two-sided Mann–Whitney U test: (U of ``x``, p, how p was got). Exact without ties up
-    to 30 runs a sample, a seeded permutation test with ties up to 40 in all, else the
-    normal approximation."""
+    """Two-sided Mann–Whitney U test: (U of ``x``, p, how p was got); exact without ties up to
+    30 runs a sample, seeded permutations with ties up to 40 in all, else the normal law."""
     from scipy import stats
 
     ties = np.unique(np.concatenate([x, y])).size < len(x) + len(y)
@@ -307,12 +305,7 @@ def compact_letters(order: list[str], different: set[frozenset[str]]) -> dict[st
     cols: list[frozenset[str]] = [frozenset(order)]
     for pair in sorted(different, key=lambda p: sorted(order.index(x) for x in p)):
         i, j = sorted(pair)
-        split: list[frozenset[str]] = []
-        for c in cols:
-            if i in c and j in c:
-                split += [c - {i}, c - {j}]
-            else:
-                split.append(c)
+        split = [s for c in cols for s in ([c - {i}, c - {j}] if i in c and j in c else [c])]
         uniq = list(dict.fromkeys(c for c in split if c))
         cols = [c for c in uniq if not any(c < d for d in uniq)]
     rank = {name: k for k, name in enumerate(order)}
@@ -361,8 +354,7 @@ MIN_BLOCKS = 5
 
 @dataclasses.dataclass
 class FriedmanResult:
-    """Friedman test over blocks on one value per block and algorithm, with its post-hoc
-    tests."""
+    """Friedman's test over blocks (one value per block and algorithm) and its post-hoc tests."""
 
     blocks: list[str]
     algorithms: list[str]

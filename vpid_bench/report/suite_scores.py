@@ -181,16 +181,10 @@ def ladder_rows(runs: Sequence[RunHits], facts: Mapping[str, tuple[str, int]]) -
     :data:`LADDER` (``nan`` beyond some context's budget)."""
     budgets = _budgets(runs)
     dims = {c: max(facts[c][1], 1) for c in budgets}
-    out = []
-    for alg, per in sorted(_by(runs).items()):
-        if set(per) != set(budgets):
-            continue
-        grid = np.asarray(LADDER, float)
-        values = aggregated_ecdf(per, dims, grid)
-        beyond = [any(k * dims[c] > budgets[c] for c in budgets) for k in LADDER]
-        out.append(["all problems", alg, *[math.nan if b else float(v)
-                                           for v, b in zip(values, beyond, strict=True)]])
-    return out
+    beyond = [any(k * dims[c] > budgets[c] for c in budgets) for k in LADDER]
+    return [["all problems", alg, *[math.nan if b else float(v) for v, b in zip(
+                aggregated_ecdf(per, dims, np.asarray(LADDER, float)), beyond, strict=True)]]
+            for alg, per in sorted(_by(runs).items()) if set(per) == set(budgets)]
 
 
 #: The headers a reader sees of the scores (the CSV keeps :data:`HEADERS`).

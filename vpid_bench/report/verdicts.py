@@ -73,8 +73,7 @@ class Search:
 
 @dataclasses.dataclass(frozen=True)
 class Method:
-    """One optimizer of a context (``group`` ``""``: untested; ``search`` ``None``: the
-    optima are unknown)."""
+    """One optimizer of a context (``group`` ``""``: untested; ``search`` ``None``: no optima)."""
 
     name: str
     runs: int
@@ -219,8 +218,7 @@ def _lead(items: Sequence[Method], group: Any) -> list[Method]:
 
 
 def _choose(eligible: list[Method]) -> tuple[Method, str, list[Method], list[Method]]:
-    """Rule 3: (pick, basis, the metric's best group, those tied with the pick by search
-    too)."""
+    """Rule 3: (pick, basis, the metric's best group, those tied with the pick by search too)."""
     mlead = _lead(eligible, lambda m: m.group)
     if not all(m.search for m in eligible):
         return mlead[0], ALONE if len(mlead) == 1 else ORDER, mlead, []
@@ -260,8 +258,7 @@ def _limit(pick: Method, floor: float, ratio: float, model_error: str = "") -> t
 
 def estimator_advice(chosen: str | None, ratio: float,
                      floors: Mapping[str, Any] | None) -> EstimatorAdvice | None:
-    """Rule 4's advice (``None`` within :data:`ESTIMATOR_GAP`); ``floors``: a job's
-    ``estimators.json``."""
+    """Rule 4's advice (``None`` within :data:`ESTIMATOR_GAP`); ``floors``: ``estimators.json``."""
     if not (math.isfinite(ratio) and ratio > ESTIMATOR_GAP):
         return None
     if not floors:
