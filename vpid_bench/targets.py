@@ -18,7 +18,7 @@ import numpy as np
 from .errors import ConfigError
 from .problem import Problem, kept_instance
 from .spec import Job
-from .store.archive import archive_optima
+from .store.archive_records import load_all
 from .store.optimum import OptimaIndex, matching_optima
 
 
@@ -79,8 +79,8 @@ def certified_optima(job: Job, problem: Problem, root: Path | None = None) -> di
     """Per run index of ``job``, its instance's optimum in the archives below ``root``,
     matched as the report matches one and confirmed (:func:`_certify`), if any."""
     # an unusable archive certifies nothing; its runs are not needed
-    found_optima, _ = archive_optima(root, {job.problem_name})
-    optima = [o for o in found_optima if o.problem == job.problem_name]
+    archives, _ = load_all(root, {job.problem_name}, optima_only=True)
+    optima = [o for a in archives for o in a.optima if o.problem == job.problem_name]
     index = OptimaIndex(optima, [])
     names = [""] * problem.bounds.dim
     found = {}

@@ -560,16 +560,17 @@ def test_the_wheel_alone_certifies_and_the_report_says_what_to_install(tmp_path,
     (``$VPID_BENCH_ARCHIVE_RUNS_DIR`` naming an empty folder) ``target=`` still finds every
     optimum, and reading the runs fails in one line that names the command to install them;
     with it (this environment: ``make install``) the runs are read from there."""
-    from vpid_bench.store.archive import RECORDS, RUNS_DIR_ENV, archive_optima, located
+    from vpid_bench.store.archive import RECORDS, RUNS_DIR_ENV, located
 
     smoke = arch.default_root() / "smoke"
     assert not (smoke / RECORDS).exists()  # not in the code package
     assert located(smoke, RECORDS).is_file()  # in the installed data distribution
-    with_runs, bad = archive_optima(None, {"smoke_quarter"})
+    archives, bad = load_all(None, {"smoke_quarter"}, optima_only=True)
+    with_runs = [o for a in archives for o in a.optima]
     assert bad == [] and with_runs
     monkeypatch.setenv(RUNS_DIR_ENV, str(tmp_path))
-    alone, bad = archive_optima(None, {"smoke_quarter"})
-    assert bad == [] and alone == with_runs
+    archives, bad = load_all(None, {"smoke_quarter"}, optima_only=True)
+    assert bad == [] and [o for a in archives for o in a.optima] == with_runs
     with pytest.raises(arch.ArchiveError, match=r"records.jsonl.gz is missing .*make install"):
         read_archive(smoke)
 

@@ -17,7 +17,8 @@ from vpid_bench.api import Bounds, Problem, ProblemConfig
 from vpid_bench.report.build import NoRecordsError, build_report
 from vpid_bench.report.cli import main as report_main
 from vpid_bench.report.load import load_records, run_rows
-from vpid_bench.store.artifacts import best_vector, write_best_signals
+from vpid_bench.store.artifacts import best_of, write_best_signals
+from vpid_bench.store.records import read_record
 
 
 @dataclasses.dataclass(frozen=True)
@@ -60,7 +61,7 @@ def _vehicle_sweep(root: Path) -> Path:
                     for i in range(6)]
             job = write_job(root / f"optimizer={algo},problem.ps={ps}", recs)
             paths = sorted((job / "records").glob("run-*.json"))
-            x, source = best_vector(paths)
+            x, source = best_of([read_record(p) for p in paths])
             write_best_signals(job, FakeVehicle(FakeConfig()), x, source)
     return root
 

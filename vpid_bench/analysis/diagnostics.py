@@ -1,22 +1,12 @@
 """Fit diagnostics: does the fitted model explain the record? (as MATLAB's ``resid`` and
-``compare`` give them). Per residual group (a channel, entries in time order):
+``compare`` give them; what and why: docs/estimators.md and docs/report.md, fit diagnostics).
 
-* ``rms`` beside the measured signal's (``rms_over_signal``) and beside the noise's ``sigma``,
-  stated by the problem or estimated from the second differences (``σ̂² = mean((Δ²r)²) / 6``:
-  exact for white noise and blind to a smooth misfit, which so shows as ``rms_over_sigma``
-  above 1);
-* ``acf`` at lags ``0..lags`` with its 99 % band ``± 2.576 / sqrt(n)``, ``lag1`` and the
-  Ljung–Box test (``Q = n (n+2) Σ ρ_k² / (n-k)`` against χ²);
-* ``cross``: per input the problem exposes, ``corr(r_t, u_{t-k})`` at lags ``-lags..lags``
-  with Bartlett's 99 % band (``var ρ_ru(k) ≈ (1/n) Σ_j ρ_r(j) ρ_u(j)``: a smooth input with
-  white residuals is not flagged) and the share of lags ``outside`` it;
-* flags: ``correlated`` (Ljung–Box p below :data:`ALPHA`), ``input_correlated`` (more than
-  :data:`CROSS_SHARE` of an input's lags outside), ``misfit`` (``rms_over_sigma`` above
-  :data:`MISFIT`).
-
-A validation segment adds ``held_out`` (its error beside a naive predictor's). ``explained``
-is false when any group is ``correlated`` or ``input_correlated``; the words are the
-report's (:mod:`vpid_bench.report.diagnostics`).
+Per residual group: ``rms`` beside the signal's and the noise ``sigma`` (stated, or
+``σ̂² = mean((Δ²r)²) / 6``), ``acf`` with its 99 % band ``± 2.576 / sqrt(n)`` and Ljung–Box,
+``cross`` per input with Bartlett's band; flags ``correlated`` (Ljung–Box p below
+:data:`ALPHA`), ``input_correlated`` (over :data:`CROSS_SHARE` of lags outside) and ``misfit``
+(``rms_over_sigma`` above :data:`MISFIT`). ``explained`` is false when any group is
+``correlated`` or ``input_correlated``.
 """
 
 from __future__ import annotations

@@ -1,22 +1,10 @@
 """Identifiability: what a record design can determine, as Cramér–Rao bounds.
 
-For residuals ``r(θ) = y - g(θ)`` with independent Gaussian noise of standard deviation ``σ_c``
-per group (or ``σ_k`` per entry, e.g. multiplicative noise), the Fisher information at the
-truth is ``F = Jᵀ diag(1/σ²) J`` with ``J = ∂g/∂θ`` (central differences of
-:meth:`~vpid_bench.problem.Problem.fisher_residuals`, whose weights are fixed), and any
-unbiased estimator has covariance at least ``F⁻¹``. The bound is reported per parameter as a
-relative standard deviation in percent, ``100 sqrt((F⁻¹)_jj) / |θ_j|``, and as their norm;
-the singular values of ``J`` scaled by the truth and ``σ`` show how many parameter
-combinations the record pins down. The noise is the problem's
-(:meth:`Problem.residual_sigma`).
-
-**Rounding-level samples are left out**: an entry whose ``σ`` is at most :data:`ROUNDING`
-times its group's largest is the noise of an exact zero (a body acceleration at t = 0 of
-−1.4e-17 m/s²) and would add spurious information (docs/estimators.md).
-
-**Sensitivity to a σ floor**: under multiplicative noise the bound rests on the samples near
-zero crossings; :data:`FLOOR_FRACTIONS` gives it again with each ``σ_k`` floored at that
-fraction of its group's rms ``σ``: what a small additive noise would take away.
+The Fisher information at the truth is ``F = Jᵀ diag(1/σ²) J`` (``J`` central differences of
+:meth:`~vpid_bench.problem.Problem.fisher_residuals`, ``σ`` per group or entry from
+:meth:`Problem.residual_sigma`); per parameter ``100 sqrt((F⁻¹)_jj) / |θ_j|`` (%) and their
+norm. Entries at rounding level (:data:`ROUNDING`) are left out, and the bound is given again
+with ``σ`` floored at :data:`FLOOR_FRACTIONS` of its group's rms (docs/estimators.md, the bound).
 """
 
 from __future__ import annotations

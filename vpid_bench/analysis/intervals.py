@@ -1,25 +1,12 @@
 """Intervals of identified parameters on a record without a truth (a measured record).
 
-Where no truth is known, accuracy cannot be measured; what the record says about the answer
-can. For an identified vector ``x̂`` (physical units) of a problem with residuals ``r(θ)``
-(:meth:`Problem.fisher_residuals`) grouped by channel (:meth:`Problem.fisher_groups`):
-
-* each group's noise sigma from the residuals at ``x̂``: ``σ̂_g² = RSS_g / (m_g − d m_g / m)``
-  (``m_g`` entries of ``m``, ``d`` parameters: for one group the textbook ``RSS / (m − d)``);
-  model error counts as noise here, so an interval widens with it;
-* the covariance of ``x̂``, ``(Jᵀ W J)⁻¹``, ``J`` the central-difference Jacobian at ``x̂``
-  and ``W = diag(1 / σ̂_g²)`` (Gauss–Newton, Wald);
-* the 95 % interval ``x̂_j ± 1.96 sqrt(cov_jj)``, not clipped to the box; a parameter in a
-  vanishing singular direction of the whitened Jacobian gets an unbounded one.
-
-For a model linear in ``θ`` with one group this is the ordinary least-squares interval
-(tested against the closed form). It **assumes white residuals**; where model error leaves
-them correlated it is too narrow. Beside it, ``robust`` is the sandwich ``A⁻¹ B A⁻¹``
-(``A = Jᵀ W J``) with ``B`` the long-run covariance of the whitened scores summed per time
-position, Andrews and Monahan's (1992) *prewhitened* Newey–West (:func:`hac_covariance`,
-:func:`var1`, :func:`andrews_lags`); each parameter's robust variance is the larger of the
-prewhitened and the plain sandwich (why, and why not a block bootstrap: docs/estimators.md).
-With white residuals both equal the Jacobian interval.
+For ``x̂`` (physical units): each residual group's noise ``σ̂_g² = RSS_g / (m_g − d m_g / m)``
+(:meth:`Problem.fisher_groups`), the Gauss–Newton covariance ``(Jᵀ W J)⁻¹`` with ``J`` the
+central-difference Jacobian of :meth:`Problem.fisher_residuals` and ``W = diag(1 / σ̂_g²)``,
+and ``x̂_j ± 1.96 sqrt(cov_jj)`` (unbounded in a direction the record does not determine); it
+assumes white residuals. ``robust`` is the sandwich ``A⁻¹ B A⁻¹`` with ``B`` Andrews and
+Monahan's prewhitened Newey–West estimate, each variance the larger of it and the plain one
+(what and why: docs/estimators.md, fit diagnostics and intervals that survive model error).
 """
 
 from __future__ import annotations

@@ -1,20 +1,11 @@
-"""Each instance's attainable optimum: the lowest objective value its record allows.
+"""Each instance's attainable optimum: the lowest objective value its record allows
+(docs/report.md, each run against its instance's optimum).
 
-On a noisy record the objective's minimum is not at the true parameters: an optimizer's
-*search* is judged against that minimum ``f*`` (the gap ``f_best - f*``), the record's
-*identification* by where the minimum ``x*`` lies.
-
-:func:`polish` is a deterministic local minimisation of a sum of residual-group norms (one
-per measured channel) by iteratively reweighted least squares: each round weights group ``g``
-by ``1 / ||r_g||`` at the current point and solves the weighted problem with scipy's
-trust-region reflective method inside the box; its fixed point is a stationary point of the
-sum of norms. It never returns a point worse than where it started.
-
-:func:`update_instance_optimum` keeps one JSON file per instance in an ``optima`` folder
-shared by a sweep's jobs: polished once from the truth, and again from the best of any run
-below the known optimum or within 1 % of it (another basin may be lower; not from a run at
-the optimum's own point, :data:`SAME_POINT`), keeping the lowest: ``f*`` is never above the
-best of any run analysed with it.
+:func:`polish` minimises a sum of residual-group norms by iteratively reweighted least
+squares (group ``g`` weighted by ``1 / ||r_g||``, scipy's ``trf`` inside the box); it never
+returns a point worse than its start. :func:`update_instance_optimum` keeps one JSON file per
+instance in a sweep's ``optima`` folder, polished from the truth and from run bests below or
+near it (:data:`POLISH_NEAR`, :data:`SAME_POINT`), the lowest kept.
 """
 
 from __future__ import annotations

@@ -1,15 +1,9 @@
 """Profile-likelihood intervals: what one record determines, without the Cramér–Rao bound's
-linearisation.
+linearisation (classes and method: docs/estimators.md, profile-likelihood intervals).
 
-The likelihood is the simulated noise's (Gaussian, ``σ`` per entry from
-:meth:`Problem.residual_sigma`, each floored at ``SIGMA_FLOOR`` times its group's rms as the
-``ml`` weights are): ``NLL(θ) = ½ Σ_k (r_k(θ) / σ_k)²``. The profile ``PL_j(t)`` is the least
-NLL with ``θ_j = t`` (bounded least squares, warm started); the 95 % interval is where ``2
-(PL_j(t) − NLL(θ̂)) ≤ χ²(0.95, 1) = 3.84``. A parameter is **identifiable** when both ends are
-inside the box, **practically non-identifiable** when the profile stays under the threshold
-up to a box edge, **structurally non-identifiable** when it takes part in a combination the
-record is blind to (:func:`structural_symmetry`) and its profile is flat. For a model linear
-in ``θ`` the interval is the Cramér–Rao one (tested).
+``NLL(θ) = ½ Σ_k (r_k(θ) / σ_k)²`` (``σ`` from :meth:`Problem.residual_sigma`, floored at
+``SIGMA_FLOOR`` times its group's rms); the 95 % interval is where ``2 (PL_j(t) − NLL(θ̂)) ≤
+3.84``, ``PL_j(t)`` the least NLL with ``θ_j = t``.
 """
 
 from __future__ import annotations

@@ -1,18 +1,9 @@
 """Which model structure does a record support? Candidate structures fitted to one record and
 compared as system identification does (issue 43; MATLAB's ``compare``, ``aic``, ``resid``),
-through the core interface only (``fisher_residuals``, ``fisher_groups``, ``bounds``):
-
-* **Segments**: each channel's first ``fit_fraction`` of samples is fitted, the rest held out
-  (the model is simulated over the whole record: the rest is a prediction);
-* **Fit**: least squares on the fit segment from ``x0`` inside the box (``trf``);
-* **Held-out error**: ``sum_c ||measured_c - computed_c||`` over the held-out samples, each
-  over ``||measured_c||`` on the record;
-* **AIC, BIC**: ``-2 log L = sum_c n_c log(RSS_c / n_c)`` (each channel's variance profiled
-  out) plus ``2 k`` or ``k log n`` (``k`` parameters, ``n`` fit samples);
-* **Whiteness**: Ljung-Box of each channel's fit residuals at :data:`LAGS` lags, passed when
-  the smallest p-value times the channels (Bonferroni) is at least ``alpha``;
-* **Intervals**: ``x ± z sqrt(diag((Jw^T Jw)^-1))``, ``Jw`` whitened by each channel's fitted
-  sigma; a parameter left on a bound of the box gets none (NaN).
+through ``fisher_residuals``, ``fisher_groups`` and ``bounds`` only: each fitted on its
+channels' first :data:`FIT_FRACTION` and judged on the rest (:data:`METHOD` says how;
+docs/own-record.md). AIC, BIC: ``-2 log L = sum_c n_c log(RSS_c / n_c)`` plus ``2 k`` or
+``k log n``.
 """
 
 from __future__ import annotations
@@ -41,7 +32,6 @@ class StructureFit:
     lower: np.ndarray  # 95 % interval
     upper: np.ndarray
     k: int
-    n_fit: int
     heldout: float
     aic: float
     bic: float
@@ -107,7 +97,7 @@ def fit_structure(problem: Any, label: str, x0: np.ndarray | None = None,
     half = _half_widths(sol.jac / sigma[:, None] / width[None, :], sol.x, z)
     return StructureFit(
         label=label, names=tuple(b.names), units=tuple(b.units or ("",) * x.size), x=x,
-        lower=x - half, upper=x + half, k=int(x.size), n_fit=int(sum(n)),
+        lower=x - half, upper=x + half, k=int(x.size),
         heldout=float(sum(np.linalg.norm(r_all[i]) for i in val_idx)),
         aic=aic, bic=bic, white_p=min(1.0, p_min * len(fit_idx)),
         fit_error=float(sum(math.sqrt(r) for r in rss)))

@@ -1,9 +1,8 @@
 """An archive folder's format: its manifest, the files it lists (each checked against its
 SHA-256, each read through its size cap), its JSON-lines files and its optima (what each file
 of ``<root>/<suite>/`` holds: docs/protocol.md, the archive). Written by :mod:`.archive_pack`,
-its runs read by :mod:`.archive_records`. Everything in an archive is untrusted. ``target=``
-reads its optima through :func:`archive_optima`; the report reads the runs too, through the
-same checks.
+its runs (or its optima alone, for ``target=``) read by :mod:`.archive_records`. Everything
+in an archive is untrusted.
 """
 
 from __future__ import annotations
@@ -251,31 +250,6 @@ def find_archives(root: Path | None = None) -> list[Path]:
     if not root.is_dir():
         return []
     return sorted(p.parent for p in root.glob(f"*/{MANIFEST}") if not p.parent.is_symlink())
-
-
-def archive_optima(root: Path | None = None, problems: Iterable[str] | None = None
-                   ) -> tuple[list[Optimum], list[str]]:
-    """The optima of every usable archive below ``root`` whose manifest lists one of
-    ``problems`` (all when ``None``), and one line per such archive that cannot be used;
-    checked as the report checks them (files against their SHA-256, every optimum line),
-    the records not read line by line."""
-    optima: list[Optimum] = []
-    bad: list[str] = []
-    wanted = None if problems is None else set(problems)
-    for folder in find_archives(root):
-        try:
-            manifest = _manifest(folder)
-            if wanted is not None and not wanted & set(manifest.get("problems") or ()):
-                continue
-            _check_job_files(folder, manifest)
-            found = _read_optima(folder, manifest, _Bad(folder))
-            if runs_installed(folder):  # the wheel alone certifies from the optima
-                _checked_file(folder, manifest, RECORDS, MAX_GZ_BYTES)
-        except ArchiveError as exc:
-            bad.append(str(exc))
-            continue
-        optima += found
-    return optima, bad
 
 
 #: Largest summary.csv read for the time per evaluation (bytes).

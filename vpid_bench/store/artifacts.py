@@ -11,7 +11,6 @@ and ``# units: {JSON}``, then a CSV table: ``t`` (s), ``<channel>:measured``,
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import io
 import json
@@ -24,7 +23,6 @@ from typing import Any
 import numpy as np
 
 from ..fileio import loads_json, read_text_limited, write_text_atomic
-from .records import CorruptRecordError, read_record
 
 BEST_SIGNALS = "best_signals.csv"
 MAGIC = "# vpid-bench best signals 1"
@@ -45,15 +43,6 @@ class BestSignals:
     channels: dict[str, tuple[np.ndarray | None, np.ndarray | None]]
     units: dict[str, str]
     source: dict[str, Any]
-
-
-def best_vector(record_paths: Iterable[Path]) -> tuple[np.ndarray, dict[str, Any]] | None:
-    """:func:`best_of` the readable records at ``record_paths``."""
-    records = []
-    for path in record_paths:
-        with contextlib.suppress(CorruptRecordError, OSError):
-            records.append(read_record(Path(path)))
-    return best_of(records)
 
 
 def best_of(records: Iterable[Mapping[str, Any]]) -> tuple[np.ndarray, dict[str, Any]] | None:
