@@ -1,19 +1,12 @@
-"""``vpid-bench-compile``: compile the installed plugins' numba loops once, into numba's
-on-disk cache, so that no run pays the compile.
+"""``vpid-bench-compile``: the installed plugins' numba loops compiled once into numba's
+on-disk cache, so that no run pays the compile (5-45 s per model on a cold cache; ``make
+install`` runs it, docs/usage.md).
 
-Why. The built-in models, the DE and GA generations and the FMU loops are numba functions
-cached on disk (``cache=True``). A cold cache costs the first run of a problem 5-45 s of
-compiling (the full car's ride loop most) before its first evaluation: on a fresh install,
-the README's first command and the first of every test process paid it. ``make install``
-runs this command after installing, as a C extension is compiled when it is installed.
-
-What. Every registered problem is built with its default settings and evaluates a small
-population through every path a job takes (values, residuals and their Fisher form when
-offered, the signals at one point); every registered optimizer runs two generations on
-``problem=functions``. Only the plugin API is used, so a third party's plugins are compiled
-too. A problem that needs the user's own settings (``problem=fmu``: your FMU and record)
-is skipped with its reason. Problems are shared among ``--jobs`` processes (default: the
-machine's cores); a second run finds the cache and takes seconds.
+Every registered problem is built with its defaults and evaluates a small population through
+each path a job takes (values, residuals and their Fisher rows when offered, the signals);
+every registered optimizer runs two generations on ``problem=functions``. Only the plugin
+API is used, so a third party's plugins are compiled too; a problem that needs the user's
+own settings (``problem=fmu``) is skipped with its reason.
 """
 
 from __future__ import annotations
