@@ -264,8 +264,7 @@ def _value(x: float, unit: str) -> str:
 def table(results: Sequence[Any], labels: Mapping[str, str] | None = None
           ) -> tuple[list[str], list[list[Any]]]:
     """The compact table: per context (shown as ``labels[context]``), the verdict in a few
-    words, the floor and the bound (none without any truth) and what limits it. Record text
-    raw: each renderer makes it safe."""
+    words, the floor and bound (none without any truth), what limits it; record text raw."""
     truth = any(r.truth for r in results)
     labels = labels or {}
     headers = ["problem", "verdict"] + (["floor", "bound"] if truth else []) + ["limited by"]

@@ -336,10 +336,9 @@ def suite_md(model: Any, _: str | None) -> list[str]:
 
 
 def ladder_md(rows: Sequence[Sequence[Any]], scores: Sequence[Sequence[Any]] = ()) -> list[str]:
-    """The budget ladder (:func:`.suite_scores.ladder_rows`): the share of (run, target)
-    pairs solved at 10, 100, 1,000 and 10,000 evaluations per dimension, read off the same
-    runs, in the order of the scores (:func:`.suite_scores.ladder_table`); rungs no run
-    reached are left out."""
+    """The budget ladder (:func:`.suite_scores.ladder_rows`): the share of (run, target) pairs
+    solved at 10 to 10,000 evaluations per dimension, read off the same runs, in the order of
+    the scores (:func:`.suite_scores.ladder_table`); rungs no run reached are left out."""
     headers, shown = ladder_table(rows, scores)
     if not rows or len(headers) < 2:
         return []
