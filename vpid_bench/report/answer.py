@@ -8,6 +8,7 @@ the identified values. Texts are Markdown with record text escaped."""
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from collections import Counter
 from collections.abc import Mapping, Sequence
@@ -136,12 +137,7 @@ def pools(ladder: Sequence[Sequence[Any]], scores: Mapping[str, float],
 def _pool_text(pool: Pool) -> str:
     """``"`nevergrad` by 10·D and 100·D (8 %, 56 %), `cmaes` by 1,000·D (98 %; `de2` as
     many)"``: consecutive rungs with one leader said once."""
-    spans: list[list[Rung]] = []
-    for r in pool.rungs:
-        if spans and spans[-1][-1].leaders[0] == r.leaders[0]:
-            spans[-1].append(r)
-        else:
-            spans.append([r])
+    spans = [list(g) for _, g in itertools.groupby(pool.rungs, key=lambda r: r.leaders[0])]
     parts = []
     for span in spans:
         if len(spans) == 1 and len(span) > 1:

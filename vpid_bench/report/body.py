@@ -214,10 +214,8 @@ def tests_md(kw: Any, pairs: Any, fr: Any, alpha: float,
 
 def sections_md(model: Any, problem: str | None) -> list[str]:
     """Every problem's report sections (the core's and the plugins'), then what failed."""
-    lines: list[str] = []
-    for placed in model.sections:
-        if problem is None or placed.problem == problem:
-            lines += section_md(placed.section, model.out_dir)
+    lines = [line for placed in model.sections if problem in (None, placed.problem)
+             for line in section_md(placed.section, model.out_dir)]
     if model.section_errors and problem is None:
         lines += [para("Not built: " + "; ".join(escape(e) for e in model.section_errors)
                        + "."), ""]

@@ -179,16 +179,12 @@ def _optimizer(model: Any, pages: Pages, name: str) -> dict[str, Any]:
     data = model.data
     of = model.problem_of()
     search = {(s["context"], s["algorithm"]): s for s in data.search}
-    rows = []
-    for s in data.summary:
-        if s["algorithm"] != name:
-            continue
-        q = search.get((s["context"], name), {})
-        rows.append([of.get(s["context"], ""), s["context"], s.get("rank"), s.get("group", ""),
-                     s.get("n_runs"), s.get("n_failed"), s.get("metric_name"),
-                     data.unit(s["context"]), s.get("median"), s.get("q1"), s.get("q3"),
-                     q.get("rank"), f"{q['reached']}/{q['n']}" if q else "",
-                     q.get("rel_gap_median"), q.get("auc")])
+    rows = [[of.get(s["context"], ""), s["context"], s.get("rank"), s.get("group", ""),
+             s.get("n_runs"), s.get("n_failed"), s.get("metric_name"), data.unit(s["context"]),
+             s.get("median"), s.get("q1"), s.get("q3"), q.get("rank"),
+             f"{q['reached']}/{q['n']}" if q else "", q.get("rel_gap_median"), q.get("auc")]
+            for s in data.summary if s["algorithm"] == name
+            for q in [search.get((s["context"], name), {})]]
     suite = None
     if model.suite is not None and model.suite.rows:
         mine = [row for kind in ("all", "family", "dimension")
