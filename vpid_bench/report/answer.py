@@ -14,6 +14,7 @@ from collections import Counter
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from ..store.job_checks import finite
 from . import verdicts
 from .render import fmt, joined
 from .safe import escape
@@ -277,14 +278,9 @@ def _budget(data: Any) -> str:
     """The runs' budget per parameter (``"1,000·D"``) when all share one, else ``""``."""
     dims = {r["run_id"]: len((r.get("parameters") or {}).get("names") or [])
             for r in data.loaded.records}
-    per = set()
-    for row in data.rows:
-        b, d = row.get("budget"), dims.get(row["run_id"], 0)
-        if isinstance(b, (int, float)) and not isinstance(b, bool) and d:
-            per.add(round(b / d, 6))
-    if len(per) != 1:
-        return ""
-    v = per.pop()
+    per = {round(row["budget"] / d, 6) for row in data.rows
+           if finite(row.get("budget")) and (d := dims.get(row["run_id"], 0))}
+    v = per.pop() if len(per) == 1 else math.nan
     return f"{v:,.0f}·D" if float(v).is_integer() else ""
 
 

@@ -123,14 +123,10 @@ def crb_norms_by_instance(records: Rows, rows: Rows) -> dict[str, dict[Any, floa
 def _design_label(rows: Rows) -> str:
     """The labels of a design's contexts without the protocol: the problem and its varying
     settings (``problem.<key>`` columns) but ``ps``, ``iterations`` and the budget."""
-    labels = []
-    for row in rows:
-        label = str(row["problem"]) + "".join(
-            f" {k.removeprefix('problem.')}={v}" for k, v in row.items()
-            if k.startswith("problem.") and k.removeprefix("problem.") not in FILLED_PARAMS)
-        if label not in labels:
-            labels.append(label)
-    return " / ".join(labels)
+    return " / ".join(dict.fromkeys(str(row["problem"]) + "".join(
+        f" {k.removeprefix('problem.')}={v}" for k, v in row.items()
+        if k.startswith("problem.") and k.removeprefix("problem.") not in FILLED_PARAMS)
+        for row in rows))
 
 
 def _by_design(ctx: ReportContext) -> list[dict[str, Any]]:

@@ -58,16 +58,13 @@ def _links(pages: Pages) -> dict[str, Any]:
 def _index(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, Any]:
     data = model.data
     of = model.problem_of()
-    verdicts = []
-    for p in data.problems:
-        items = [{"verdict": r.verdict, "context": r.context, "anchor": _anchor(r.context),
-                  "n": len(r.rows), "decision": decision(getattr(r, "decision", None), pages),
-                  "assumed": [text for text, _, _ in getattr(r, "assumed", [])],
-                  "fit": plain_line(r.diagnostics) if r.diagnostics else "",
-                  "words": answers.table([r])[1][0][1]}
-                 for r in model.results if of.get(r.context) == p]
-        verdicts.append({"name": p, "href": pages.problem(p), "contexts": items,
-                         "id": "v-" + slug(p)})
+    verdicts = [{"name": p, "href": pages.problem(p), "id": "v-" + slug(p), "contexts": [
+        {"verdict": r.verdict, "context": r.context, "anchor": _anchor(r.context),
+         "n": len(r.rows), "decision": decision(getattr(r, "decision", None), pages),
+         "assumed": [text for text, _, _ in getattr(r, "assumed", [])],
+         "fit": plain_line(r.diagnostics) if r.diagnostics else "",
+         "words": answers.table([r])[1][0][1]} for r in model.results if of.get(r.context) == p]}
+        for p in data.problems]
     n_ok = sum(r["status"] == "ok" for r in data.loaded.records)
     short_note = ("A single job's report: statistics, no tests, no figures; "
                   "vpid-bench-report builds the full one." if data.short else "")
