@@ -8,11 +8,13 @@ the identified values. Texts are Markdown with record text escaped."""
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from ..store.job_checks import finite
 from . import verdicts
 from .render import fmt, joined
 from .safe import escape
@@ -136,12 +138,7 @@ def pools(ladder: Sequence[Sequence[Any]], scores: Mapping[str, float],
 def _pool_text(pool: Pool) -> str:
     """``"`nevergrad` by 10·D and 100·D (8 %, 56 %), `cmaes` by 1,000·D (98 %; `de2` as
     many)"``: consecutive rungs with one leader said once."""
-    spans: list[list[Rung]] = []
-    for r in pool.rungs:
-        if spans and spans[-1][-1].leaders[0] == r.leaders[0]:
-            spans[-1].append(r)
-        else:
-            spans.append([r])
+    spans = [list(g) for _, g in itertools.groupby(pool.rungs, key=lambda r: r.leaders[0])]
     parts = []
     for span in spans:
         if len(spans) == 1 and len(span) > 1:
@@ -264,8 +261,7 @@ def _value(x: float, unit: str) -> str:
 def table(results: Sequence[Any], labels: Mapping[str, str] | None = None
           ) -> tuple[list[str], list[list[Any]]]:
     """The compact table: per context (shown as ``labels[context]``), the verdict in a few
-    words, the floor and the bound (none without any truth) and what limits it. Record text
-    raw: each renderer makes it safe."""
+    words, the floor and bound (none without any truth), what limits it; record text raw."""
     truth = any(r.truth for r in results)
     labels = labels or {}
     headers = ["problem", "verdict"] + (["floor", "bound"] if truth else []) + ["limited by"]
@@ -282,14 +278,9 @@ def _budget(data: Any) -> str:
     """The runs' budget per parameter (``"1,000·D"``) when all share one, else ``""``."""
     dims = {r["run_id"]: len((r.get("parameters") or {}).get("names") or [])
             for r in data.loaded.records}
-    per = set()
-    for row in data.rows:
-        b, d = row.get("budget"), dims.get(row["run_id"], 0)
-        if isinstance(b, (int, float)) and not isinstance(b, bool) and d:
-            per.add(round(b / d, 6))
-    if len(per) != 1:
-        return ""
-    v = per.pop()
+    per = {round(row["budget"] / d, 6) for row in data.rows
+           if finite(row.get("budget")) and (d := dims.get(row["run_id"], 0))}
+    v = per.pop() if len(per) == 1 else math.nan
     return f"{v:,.0f}·D" if float(v).is_integer() else ""
 
 

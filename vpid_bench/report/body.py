@@ -214,10 +214,8 @@ def tests_md(kw: Any, pairs: Any, fr: Any, alpha: float,
 
 def sections_md(model: Any, problem: str | None) -> list[str]:
     """Every problem's report sections (the core's and the plugins'), then what failed."""
-    lines: list[str] = []
-    for placed in model.sections:
-        if problem is None or placed.problem == problem:
-            lines += section_md(placed.section, model.out_dir)
+    lines = [line for placed in model.sections if problem in (None, placed.problem)
+             for line in section_md(placed.section, model.out_dir)]
     if model.section_errors and problem is None:
         lines += [para("Not built: " + "; ".join(escape(e) for e in model.section_errors)
                        + "."), ""]
@@ -336,10 +334,9 @@ def suite_md(model: Any, _: str | None) -> list[str]:
 
 
 def ladder_md(rows: Sequence[Sequence[Any]], scores: Sequence[Sequence[Any]] = ()) -> list[str]:
-    """The budget ladder (:func:`.suite_scores.ladder_rows`): the share of (run, target)
-    pairs solved at 10, 100, 1,000 and 10,000 evaluations per dimension, read off the same
-    runs, in the order of the scores (:func:`.suite_scores.ladder_table`); rungs no run
-    reached are left out."""
+    """The budget ladder (:func:`.suite_scores.ladder_rows`): the share of (run, target) pairs
+    solved at 10 to 10,000 evaluations per dimension, read off the same runs, in the order of
+    the scores (:func:`.suite_scores.ladder_table`); rungs no run reached are left out."""
     headers, shown = ladder_table(rows, scores)
     if not rows or len(headers) < 2:
         return []

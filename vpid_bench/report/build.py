@@ -181,8 +181,7 @@ def _assemble(data: ReportData, names: _Names, registry: Any,
                 + _table(names, "run_stats", stat_keys,
                          [[s.get(k) for k in stat_keys] for s in data.summary]))
     written += [v for v in model.figs.values() if isinstance(v, Path)]
-    for placed in model.sections:
-        written += list(placed.section.files)
+    written += [f for placed in model.sections for f in placed.section.files]
     _add_interactive(model)
     model.answer = answer.derive(data, model.results, model.suite, answer.residual_users(
         registry, data.rows) if model.suite is not None else frozenset())

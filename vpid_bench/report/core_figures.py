@@ -28,8 +28,7 @@ CD_MIN_BLOCKS = 5
 
 def _draw(figs: dict[str, Any], title: str, data: Any,
           draw: Callable[..., Path | str], *args: Any) -> None:
-    """Plan ``figs[title]`` = ``draw(data, *args)``, its path or why it was not drawn, or
-    ``data`` itself when it is a reason."""
+    """Plan ``figs[title] = draw(data, *args)`` (a path or why not drawn), or ``data``: a reason."""
     figs[title] = data if isinstance(data, str) else (lambda: draw(data, *args))
 
 

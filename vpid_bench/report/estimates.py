@@ -149,8 +149,7 @@ def _text(v: Any, most: int) -> str:
 
 
 def _best_profile(records: Rows, d: int) -> tuple[dict[str, Any] | None, str]:
-    """The readable ``profile.json`` (status ok) with the lowest start among the records'
-    jobs, or ``None`` and why not."""
+    """The records' jobs' readable ``profile.json`` (ok) of lowest start, or ``None`` and why."""
     folders = dict.fromkeys(str(rec.get("_job_dir", ".")) for rec in records)
     found = [p for p in (read_profile(Path(f) / PROFILE, d) for f in folders) if p is not None]
     ok = [p for p in found if p["status"] == "ok"]

@@ -580,10 +580,8 @@ def terminal_text(items: Sequence[ContextResult], width: int | None = None,
     width = width or max(40, shutil.get_terminal_size((80, 24)).columns)  # 80 if unknown
     blocks = [answer_terminal(answer, width)] if answer is not None else []
     for r in items:
-        extra = ""
-        for text, headers, rows in extra_blocks(r):
-            extra += _wrap(text, width) + "\n" + (terminal(headers, rows) + "\n" if headers
-                                                  else "")
+        extra = "".join(_wrap(text, width) + "\n" + (terminal(h, rows) + "\n" if h else "")
+                        for text, h, rows in extra_blocks(r))
         verdict = (_wrap(r.verdict, width) if r.decision is None else
                    _wrap_glued(_marked_verdict(r.decision), width))
         blocks.append(f"{clean(r.context)}\n" + terminal(r.headers, r.rows) + "\n" + extra

@@ -48,8 +48,7 @@ CONVENTION = (
 
 
 def optima_by_run(records: Rows) -> dict[str, Mapping[str, Any]]:
-    """The optimum of the instance each run fitted (checked files of ``<job>/optima`` and
-    ``<sweep>/optima``), by ``run_id``."""
+    """By ``run_id``, the optimum of its instance (checked ``<job>/optima``, ``<sweep>/optima``)."""
     jobs = dict.fromkeys(Path(str(rec.get("_job_dir", "."))) for rec in records)
     optima = load_optima(dict.fromkeys(f for job in jobs
                                        for f in (job / "optima", job.parent / "optima")))
@@ -124,14 +123,10 @@ def crb_norms_by_instance(records: Rows, rows: Rows) -> dict[str, dict[Any, floa
 def _design_label(rows: Rows) -> str:
     """The labels of a design's contexts without the protocol: the problem and its varying
     settings (``problem.<key>`` columns) but ``ps``, ``iterations`` and the budget."""
-    labels = []
-    for row in rows:
-        label = str(row["problem"]) + "".join(
-            f" {k.removeprefix('problem.')}={v}" for k, v in row.items()
-            if k.startswith("problem.") and k.removeprefix("problem.") not in FILLED_PARAMS)
-        if label not in labels:
-            labels.append(label)
-    return " / ".join(labels)
+    return " / ".join(dict.fromkeys(str(row["problem"]) + "".join(
+        f" {k.removeprefix('problem.')}={v}" for k, v in row.items()
+        if k.startswith("problem.") and k.removeprefix("problem.") not in FILLED_PARAMS)
+        for row in rows))
 
 
 def _by_design(ctx: ReportContext) -> list[dict[str, Any]]:
@@ -190,8 +185,7 @@ def _floors(d: Mapping[str, Any], names: Sequence[str], metric: Any,
 
 
 def _designs(ctx: ReportContext) -> tuple[list[dict[str, Any]], list[str]]:
-    """The record designs of ``ctx``'s runs with their bounds and measured floors, and one
-    line per skipped file."""
+    """The record designs of ``ctx``'s runs, bounds and measured floors; a line per skipped file."""
     notes: list[str] = []
     optima = optima_by_run(ctx.records)
     out = []

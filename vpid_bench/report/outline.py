@@ -109,19 +109,11 @@ PARTS: tuple[Part, ...] = (
 
 def markdown(model: Any) -> list[str]:
     """``report.md``: every part's Markdown, in order."""
-    lines: list[str] = []
-    for part in PARTS:
-        lines += part.markdown(model, None)
-    return lines
+    return [line for part in PARTS for line in part.markdown(model, None)]
 
 
 def shown_as_markdown(model: Any, page: str, problem: str | None = None) -> list[tuple[str, str]]:
     """The parts a site page shows from their Markdown: (key, Markdown text), in order;
     ``problem``: that problem's share (the problem pages)."""
-    out = []
-    for part in PARTS:
-        if part.page == page and part.drawn == "markdown":
-            text = "\n".join(part.markdown(model, problem)).strip()
-            if text:
-                out.append((part.key, text))
-    return out
+    return [(part.key, text) for part in PARTS if part.page == page and part.drawn == "markdown"
+            and (text := "\n".join(part.markdown(model, problem)).strip())]

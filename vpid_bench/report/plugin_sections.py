@@ -22,8 +22,7 @@ log = logging.getLogger(__name__)
 
 def plugin_sections(registry: Any, data: Any, out_dir: Path, claim: Callable[[Path], Path]
                     ) -> tuple[list[PlacedSection], list[HeadlineColumn], list[str]]:
-    """Per problem: the core's sections, then the plugins'; with the headline columns they
-    add and one line per failure."""
+    """Per problem: the core's sections, then the plugins', their headline columns, failures."""
     by_id = {r["run_id"]: r for r in data.loaded.records}
     sections: list[PlacedSection] = []
     columns: list[HeadlineColumn] = []

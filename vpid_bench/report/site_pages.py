@@ -58,16 +58,13 @@ def _links(pages: Pages) -> dict[str, Any]:
 def _index(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, Any]:
     data = model.data
     of = model.problem_of()
-    verdicts = []
-    for p in data.problems:
-        items = [{"verdict": r.verdict, "context": r.context, "anchor": _anchor(r.context),
-                  "n": len(r.rows), "decision": decision(getattr(r, "decision", None), pages),
-                  "assumed": [text for text, _, _ in getattr(r, "assumed", [])],
-                  "fit": plain_line(r.diagnostics) if r.diagnostics else "",
-                  "words": answers.table([r])[1][0][1]}
-                 for r in model.results if of.get(r.context) == p]
-        verdicts.append({"name": p, "href": pages.problem(p), "contexts": items,
-                         "id": "v-" + slug(p)})
+    verdicts = [{"name": p, "href": pages.problem(p), "id": "v-" + slug(p), "contexts": [
+        {"verdict": r.verdict, "context": r.context, "anchor": _anchor(r.context),
+         "n": len(r.rows), "decision": decision(getattr(r, "decision", None), pages),
+         "assumed": [text for text, _, _ in getattr(r, "assumed", [])],
+         "fit": plain_line(r.diagnostics) if r.diagnostics else "",
+         "words": answers.table([r])[1][0][1]} for r in model.results if of.get(r.context) == p]}
+        for p in data.problems]
     n_ok = sum(r["status"] == "ok" for r in data.loaded.records)
     short_note = ("A single job's report: statistics, no tests, no figures; "
                   "vpid-bench-report builds the full one." if data.short else "")
@@ -179,16 +176,12 @@ def _optimizer(model: Any, pages: Pages, name: str) -> dict[str, Any]:
     data = model.data
     of = model.problem_of()
     search = {(s["context"], s["algorithm"]): s for s in data.search}
-    rows = []
-    for s in data.summary:
-        if s["algorithm"] != name:
-            continue
-        q = search.get((s["context"], name), {})
-        rows.append([of.get(s["context"], ""), s["context"], s.get("rank"), s.get("group", ""),
-                     s.get("n_runs"), s.get("n_failed"), s.get("metric_name"),
-                     data.unit(s["context"]), s.get("median"), s.get("q1"), s.get("q3"),
-                     q.get("rank"), f"{q['reached']}/{q['n']}" if q else "",
-                     q.get("rel_gap_median"), q.get("auc")])
+    rows = [[of.get(s["context"], ""), s["context"], s.get("rank"), s.get("group", ""),
+             s.get("n_runs"), s.get("n_failed"), s.get("metric_name"), data.unit(s["context"]),
+             s.get("median"), s.get("q1"), s.get("q3"), q.get("rank"),
+             f"{q['reached']}/{q['n']}" if q else "", q.get("rel_gap_median"), q.get("auc")]
+            for s in data.summary if s["algorithm"] == name
+            for q in [search.get((s["context"], name), {})]]
     suite = None
     if model.suite is not None and model.suite.rows:
         mine = [row for kind in ("all", "family", "dimension")

@@ -22,8 +22,7 @@ ALPHA = 0.05
 
 
 def _quiet(f: Any, *args: Any, **kwargs: Any) -> Any:
-    """``f(*args, **kwargs)`` with its warnings silenced (scipy's, on ties and tiny samples:
-    the tables say how each p was got)."""
+    """``f(*args, **kwargs)``, scipy's warnings (ties, tiny samples) silenced: tables say why."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return f(*args, **kwargs)

@@ -27,8 +27,7 @@ MARK_SPACING = 0.18
 
 @dataclasses.dataclass(frozen=True)
 class Style:
-    """How one optimizer is drawn; ``index``, its place among the report's optimizers, shifts
-    its markers along the line."""
+    """How one optimizer is drawn; ``index`` (its place in the report) shifts its markers."""
 
     colour: str
     dash: str
@@ -78,8 +77,7 @@ def lookup(style_of: Mapping[str, Style] | None, names: Iterable[str]) -> dict[s
 
 
 def legend(ax: Any, n: int, **kw: Any) -> Any:
-    """A legend of ``n`` lines, long enough to show dashes and markers: inside the axes for up
-    to six, beside them for more."""
+    """A legend of ``n`` lines showing dashes and markers: inside the axes up to six, or beside."""
     where: dict[str, Any] = ({"loc": "best"} if n <= 6 else
                              {"loc": "upper left", "bbox_to_anchor": (1.01, 1.0),
                               "borderaxespad": 0.0})

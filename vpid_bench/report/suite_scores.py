@@ -49,8 +49,7 @@ def context_facts(records: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[s
 
 
 def groups(facts: Mapping[str, tuple[str, int]]) -> list[Group]:
-    """All contexts, then one group per family and per dimension that holds two or more
-    contexts or differs from the whole."""
+    """All contexts, then a group per family and per dimension where these are not all one."""
     ctx = tuple(sorted(facts))
     out = [Group("all", "all problems", ctx)]
     for kind, key in (("family", 0), ("dimension", 1)):

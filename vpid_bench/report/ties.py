@@ -60,8 +60,7 @@ def snap_ties(rows: list[dict[str, Any]], records: Sequence[Mapping[str, Any]]) 
             if row is best or not same(float(row["f_best"]), float(best["f_best"])):
                 continue
             changed += any(row.get(k) != best[k] for k in names)
-            for k in names:
-                row[k] = best[k]
+            row.update({k: best[k] for k in names})
     return changed
 
 
