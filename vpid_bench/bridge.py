@@ -1,12 +1,10 @@
 """The bridge for optimizers that own their loop (``scipy.optimize.minimize`` and friends).
 
-Such a library calls ``f`` itself, in its own loop; the run loop asks and tells.
-:class:`LoopOptimizer` runs the library's loop in a worker thread and hands each batch
-across, strictly in turn (one thread works at a time: the run stays deterministic); when the
-run is over, even mid-loop, ``close`` unwinds the library's frames with an internal
-``BaseException`` and joins the thread (docs/peers.md, the bridge). The pattern is
-nevergrad's "recast" optimizers'; this is an independent implementation with two
-``queue.SimpleQueue``.
+:class:`LoopOptimizer` runs the library's loop in a worker thread and hands each batch across
+to the run loop's ask and tell, strictly in turn (the run stays deterministic); ``close``
+unwinds the library's frames with an internal ``BaseException`` and joins the thread
+(docs/peers.md, the bridge). The pattern is nevergrad's "recast" optimizers'; this is an
+independent implementation with two ``queue.SimpleQueue``.
 """
 
 from __future__ import annotations

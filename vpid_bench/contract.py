@@ -2,11 +2,10 @@
 
 A :class:`~vpid_bench.api.Problem` is a core plus capabilities it may offer
 (:data:`CAPABILITIES`; the table and why each is all or nothing: docs/architecture.md, the
-problem contract). A capability is offered when its *anchor* is overridden; overriding another
-of its members without the anchor is refused, and so is ``instance`` without ``instance_id``,
-and a method of :class:`~vpid_bench.api.Problem` replaced by a non-callable
-(``instance_id = "a"``): :func:`check_problem_class`, called by the job spec's parse (so the
-pre-flight), one line.
+problem contract). :func:`check_problem_class` (called by the job spec's parse, so the
+pre-flight) refuses in one line a member without its capability's anchor, ``instance``
+without ``instance_id``, and a method of :class:`~vpid_bench.api.Problem` replaced by a
+non-callable (``instance_id = "a"``).
 """
 
 from __future__ import annotations

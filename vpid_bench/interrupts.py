@@ -1,12 +1,9 @@
 """Telling the user's Ctrl-C from a ``KeyboardInterrupt`` that a plugin raises.
 
-The run loop lets ``KeyboardInterrupt`` stop the whole sweep (finished runs kept). A plugin
-raising it itself once stopped every resume too. So the command's handler notes the signal
-before raising; a ``KeyboardInterrupt`` without that note came from code and fails its run
-only. Without the handler (a program calling the library, a launcher's worker) every
-``KeyboardInterrupt`` counts as the user's.
-
-SIGTERM and SIGHUP end the command as SIGINT does, the same handler taking all three
+A plugin raising it itself once stopped every resume too. So the command's handler notes the
+signal before raising; a ``KeyboardInterrupt`` without that note came from code and fails its
+run only. Without the handler (a program calling the library, a launcher's worker) every
+``KeyboardInterrupt`` counts as the user's. SIGTERM and SIGHUP end the command as SIGINT does
 (:data:`SIGNALS`; issue 44, N2; docs/sweeps.md, crash isolation and the exit status).
 """
 

@@ -1,10 +1,9 @@
 """A job's runs: which go together, the warm-up before them, and each run's outcome.
 
-Every run goes through :func:`vpid_bench.runner.run_many`. When the problem's values do not
-depend on the batch (:attr:`~vpid_bench.api.Problem.rows_independent`) and the optimizer asks
-and tells in the loop's thread (no :class:`~vpid_bench.api.LoopOptimizer`, no residuals), the
-runs go in lockstep: one evaluation call per step for all; else one at a time. Either way a
-record is bit-identical (tested); a run's time is its own (constructor, ask, tell, its rows'
+Every run goes through :func:`vpid_bench.runner.run_many`: in lockstep when the problem's
+rows are independent and the optimizer asks and tells in the loop's thread (no
+:class:`~vpid_bench.api.LoopOptimizer`, no residuals), else one at a time; a record is
+bit-identical either way (tested), a run's time its own (constructor, ask, tell, its rows'
 share of each evaluation). One untimed warm-up run first compiles the kernels (numba). What
 the problem says of a run's best vector is computed where the run ran (in its worker).
 """

@@ -1,12 +1,7 @@
-"""Plugin discovery: entry points of group ``vpid_bench``, loaded into a pluggy manager.
-
-``get_plugin_manager()`` is a factory: nothing is imported or registered at import time of
-this module. Entry points are iterated one by one, so a plugin that fails to import is
-reported by name and skipped rather than aborting everything. Set ``VPID_BENCH_BLOCK_PLUGINS``
-to a comma-separated list of entry-point names to keep those plugins out.
-
-``Registry`` collects what the plugins register and refuses a name registered twice, naming
-both plugins.
+"""Plugin discovery: entry points of group ``vpid_bench``, loaded into a pluggy manager by the
+factory ``get_plugin_manager()`` (nothing imported at import time of this module), and the
+``Registry`` of what they register (the failures, names registered twice and
+``VPID_BENCH_BLOCK_PLUGINS``: docs/plugins.md).
 """
 
 from __future__ import annotations

@@ -3,15 +3,12 @@
 An optimizer only proposes candidates; this loop checks every proposal, evaluates at most
 ``budget`` candidates in all (a proposal larger than what is left is cut, the run ended
 without a ``tell``), keeps each run's books in one :class:`Ledger`, times each run and calls
-``optimizer.close()`` however the run ended (the contract, as a plugin author reads it:
-docs/plugins.md).
+``optimizer.close()`` however the run ended (the contract: docs/plugins.md).
 
-:func:`run_many` is the one loop, for one run or several *in lockstep*: each step it asks
-each unfinished run for its batch, evaluates the batches that need only values in one call
-(:meth:`Problem.evaluate_instances`) and hands every run its rows back. Each run keeps its own
-optimizer, ledger and time, so its result is bit-identical to running it alone when the
-problem's rows are independent (:attr:`Problem.rows_independent`). :func:`run` is the loop
-with one run, raising what ended it.
+:func:`run_many` runs one run or several *in lockstep* (the batches that need only values
+evaluated in one :meth:`Problem.evaluate_instances` call; bit-identical to running each
+alone when :attr:`Problem.rows_independent`). :func:`run` is the loop with one run, raising
+what ended it.
 """
 
 from __future__ import annotations

@@ -1,15 +1,10 @@
 """A worker process and every process its plugins start, held so that ending them never
-signals anything else (issue 44: N1, a reused process number once got SIGKILL; N3, N4; the
-whole story: docs/sweeps.md, crash isolation).
+signals anything else (issue 44: N1, a reused process number once got SIGKILL; N3, N4).
 
-Every signal goes through what this process holds: a pidfd (Linux >= 5.3) opened while the
-worker was its unreaped child, or on a process checked to be the tree's before it is
-signalled (psutil's handles, which check the start time, without pidfds). Each worker has a
-cgroup of its own where one can be made (:mod:`vpid_bench.cgroups`) and a mark in its
-environment (:data:`MARK`) that its descendants carry. :meth:`Tree.end` kills the cgroup,
-stops the worker (the child subreaper of its tree, so orphans keep coming to it), then round
-after round, until two rounds find nothing new, stops its descendants and every process
-carrying its mark, then kills them all; what still runs is returned.
+Every signal goes through a pidfd this process holds or a psutil handle checked to be the
+tree's; a worker has a cgroup where one can be made (:mod:`vpid_bench.cgroups`) and a mark in
+its environment (:data:`MARK`). How :meth:`Tree.end` finds and ends the tree, and what is
+guaranteed where: docs/sweeps.md, crash isolation.
 """
 
 from __future__ import annotations

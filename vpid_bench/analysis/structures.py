@@ -156,28 +156,6 @@ def verdict(fits: Sequence[StructureFit], alpha: float = 0.05) -> str:
     return "; ".join(text) + "."
 
 
-def table_rows(fits: Sequence[StructureFit]) -> list[list[Any]]:
-    """One row per structure, best first, in the columns of :data:`TABLE_HEADERS`."""
-    order = ranked(fits)
-    a0, b0 = min(f.aic for f in fits), min(f.bic for f in fits)
-    return [[f.label, f.k, f.heldout, f.fit_error, f.aic - a0, f.bic - b0, f.white_p]
-            for f in order]
-
-
-TABLE_HEADERS = ["structure", "k", "held-out error", "fit error", "ΔAIC", "ΔBIC", "whiteness p"]
-
-
-def value_rows(fits: Sequence[StructureFit]) -> list[list[Any]]:
-    """The identified values with their 95 % intervals, one row per structure and parameter."""
-    return [[f.label, name, unit, x, lo, hi]
-            for f in ranked(fits)
-            for name, unit, x, lo, hi in zip(f.names, f.units, f.x, f.lower, f.upper,
-                                             strict=True)]
-
-
-VALUE_HEADERS = ["structure", "parameter", "unit", "value", "95 % low", "95 % high"]
-
-
 #: How the comparison is made, in one paragraph (the report section's opening).
 METHOD = ("Each structure refitted (least squares) on each channel's first "
           f"{FIT_FRACTION:.3g} of samples from its best run, and judged on the rest: held-out "
@@ -200,6 +178,15 @@ class StructureSummary:
 
 
 def structure_summary(fits: Sequence[StructureFit], alpha: float = 0.05) -> StructureSummary:
-    """The :class:`StructureSummary` of fitted structures of one record."""
-    return StructureSummary(METHOD, verdict(fits, alpha), (TABLE_HEADERS, table_rows(fits)),
-                            (VALUE_HEADERS, value_rows(fits)))
+    """The :class:`StructureSummary` of fitted structures of one record: one table row per
+    structure and one value row per structure and parameter, best first."""
+    order = ranked(fits)
+    a0, b0 = min(f.aic for f in fits), min(f.bic for f in fits)
+    table = [[f.label, f.k, f.heldout, f.fit_error, f.aic - a0, f.bic - b0, f.white_p]
+             for f in order]
+    values = [[f.label, *row] for f in order
+              for row in zip(f.names, f.units, f.x, f.lower, f.upper, strict=True)]
+    return StructureSummary(
+        METHOD, verdict(fits, alpha),
+        (["structure", "k", "held-out error", "fit error", "ΔAIC", "ΔBIC", "whiteness p"], table),
+        (["structure", "parameter", "unit", "value", "95 % low", "95 % high"], values))

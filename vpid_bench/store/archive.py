@@ -113,17 +113,6 @@ def runs_installed(folder: Path) -> bool:
     return located(folder, RECORDS).is_file()
 
 
-def _read_bytes(path: Path, limit: int) -> bytes:
-    if path.is_symlink() or not path.is_file():
-        hint = (" (the archive's runs are a data distribution: make install, or pip install "
-                "./archive-runs)") if path.name in RUN_FILES else ""
-        raise ArchiveError(f"archive {path.parent}: {path.name} is missing or not a regular "
-                           f"file{hint}")
-    if path.stat().st_size > limit:
-        raise ArchiveError(f"archive {path.parent}: {path.name} is larger than {limit} bytes")
-    return path.read_bytes()
-
-
 def _manifest(folder: Path) -> dict[str, Any]:
     try:
         data = loads_json(read_text_limited(folder / MANIFEST, MAX_TEXT_BYTES))
@@ -144,7 +133,15 @@ def _checked_file(folder: Path, manifest: Mapping[str, Any], name: str, limit: i
     """The bytes of ``name``, which the manifest must list with the same SHA-256."""
     entry = manifest["files"].get(name)
     want = entry.get("sha256") if isinstance(entry, Mapping) else None
-    data = _read_bytes(located(folder, name), limit)
+    path = located(folder, name)
+    if path.is_symlink() or not path.is_file():
+        hint = (" (the archive's runs are a data distribution: make install, or pip install "
+                "./archive-runs)") if path.name in RUN_FILES else ""
+        raise ArchiveError(f"archive {path.parent}: {path.name} is missing or not a regular "
+                           f"file{hint}")
+    if path.stat().st_size > limit:
+        raise ArchiveError(f"archive {path.parent}: {path.name} is larger than {limit} bytes")
+    data = path.read_bytes()
     if not isinstance(want, str) or _sha256(data) != want:
         raise ArchiveError(f"archive {folder}: {name} does not match the SHA-256 in its "
                            f"{MANIFEST} (changed or damaged)")

@@ -1,18 +1,10 @@
 """The runs' best-so-far traces in IOHprofiler's data format, for IOHanalyzer and iohinspector
-(what each file holds: docs/report.md, the IOHprofiler export).
+(the layout and what each file holds: docs/report.md, the IOHprofiler export).
 
-Layout (one folder per context and optimizer, below the report's ``ioh/``; an archive's
-``ioh.zip`` holds the same, :func:`write_zip`)::
-
-    ioh/<context>/<optimizer>/IOHprofiler_f<id>_<problem>.json       meta-data
-    ioh/<context>/<optimizer>/data_f<id>_<problem>/IOHprofiler_f<id>_DIM<d>.dat
-
-The meta-data is the JSON the ``ioh`` package's Analyzer logger writes since 0.3.3. The
-records keep the best after each evaluated batch: an improvement is written at the end of
-the batch that found it, except the first batch's best, which the format needs at
-evaluation 1. The function id is the context's position among the report's contexts (1,
-2, ...); the instance number is the run's instance index. No record text is put where a
-reader evaluates it.
+``ioh/<context>/<optimizer>/IOHprofiler_f<id>_<problem>.json`` (the meta-data the ``ioh``
+package's Analyzer logger writes since 0.3.3) and ``data_f<id>_<problem>/
+IOHprofiler_f<id>_DIM<d>.dat``, below the report's ``ioh/`` or in an archive's ``ioh.zip``
+(:func:`write_zip`). No record text is put where a reader evaluates it.
 """
 
 from __future__ import annotations

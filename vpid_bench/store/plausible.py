@@ -1,16 +1,10 @@
 """Values no real run gives: the check an archived record passes before it is ranked.
 
-A record of a results folder is checked for its types (:func:`.record_check.check_record`); an
-archive's records stand beside a user's runs without being run again, so each must also hold
-values that a run of vpid-bench can give. A forged or damaged archive whose checksums match
-once ranked runs with a NaN metric, an infinite objective or a negative error as
-significantly better than the user's own. :func:`implausible` names the first such value of
-a record; the archive loader skips the line and names it. What an ok run gives (the list:
-docs/protocol.md, the archive): finite numbers below :data:`ABSURD` (the run loop maps NaN
-to ``inf`` and fails a run on ``-inf``), metrics that are errors (never negative),
-``x_best`` inside the box, evaluations within the budget, a trace that never rises and ends
-at ``f_best``, ``f_best`` not below its instance's optimum (the job polishes from every
-run's best), times ``null`` or finite and not negative.
+An archive's records stand beside a user's runs without being run again; a forged or damaged
+archive whose checksums match once ranked runs with a NaN metric, an infinite objective or a
+negative error as better than the user's own. :func:`implausible` names the first value an ok
+run cannot give (the list: docs/protocol.md, the archive; numbers below :data:`ABSURD`); the
+archive loader skips the line and names it.
 """
 
 from __future__ import annotations

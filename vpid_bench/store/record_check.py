@@ -1,14 +1,11 @@
 """The fields of a record: the one check every reader of records uses.
 
-A record on disk is untrusted: a field of the wrong type (a ``run_index`` of ``"three"``), a
-count below zero, a name of 200,000 characters (a report over it once ran past 300 s at 3 GB)
-or a run index that contradicts the record's file name (once counted twice on one instance)
-must neither crash the report nor be trusted by a resumed job. :func:`check_record` names the
-first bad field; the report skips such a record with that line, a resumed job sets it aside
-and runs that run again.
-
-The rules are a table (:data:`RULES`) checked in order: a rule may rely on every rule before
-it (``problem.name`` is read only once ``problem`` is known to be a mapping).
+A record on disk is untrusted (docs/report.md, untrusted records): a field of the wrong type,
+a count below zero, a name of 200,000 characters (a report over it once ran past 300 s at
+3 GB) or a run index that contradicts the file name (once counted twice on one instance).
+:func:`check_record` names the first bad field; the report skips such a record with that
+line, a resumed job sets it aside and runs that run again. The rules are a table
+(:data:`RULES`) checked in order: a rule may rely on every rule before it.
 """
 
 from __future__ import annotations
