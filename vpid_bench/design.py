@@ -91,13 +91,6 @@ def measure(problem: Any, floor: int, profile: bool) -> dict[str, Any]:
     return out
 
 
-def _row(label: str, m: dict[str, Any]) -> str:
-    floor = "" if m["floor"] is None else f"{m['floor']:.3g}"
-    return (f"| {label} | {m['crb_norm']:.3g} | {floor} | {m['condition']:.3g} | "
-            f"{m['d_opt']:.3g} | {m['a_opt']:.3g} | {', '.join(m['undetermined']) or 'none'} | "
-            f"{'yes' if m['structural'] else 'no'} |")
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="vpid-bench-design",
                                  description=__doc__.split("\n\n")[0],
@@ -139,7 +132,10 @@ def _print(args: argparse.Namespace, results: list[tuple[str, dict[str, Any]]]) 
           f"undetermined (> {UNDETERMINED_PERCENT:g} %) | structural symmetry |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     for label, m in results:
-        print(_row(label, m))
+        cell = "" if m["floor"] is None else f"{m['floor']:.3g}"
+        print(f"| {label} | {m['crb_norm']:.3g} | {cell} | {m['condition']:.3g} | "
+              f"{m['d_opt']:.3g} | {m['a_opt']:.3g} | {', '.join(m['undetermined']) or 'none'} | "
+              f"{'yes' if m['structural'] else 'no'} |")
     for label, m in results:
         if m["profile"] is None:
             continue
