@@ -120,11 +120,6 @@ def main(argv: list[str] | None = None) -> int:
     except VpidBenchError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    _print(args, results)
-    return 0
-
-
-def _print(args: argparse.Namespace, results: list[tuple[str, dict[str, Any]]]) -> None:
     results.sort(key=lambda item: item[1]["crb_norm"])
     floor = f"floor (median over {args.floor})" if args.floor else "floor"
     print(f"Designs of `{args.problem}`, best first by the Cramér–Rao norm (instance 0):\n")
@@ -147,6 +142,7 @@ def _print(args: argparse.Namespace, results: list[tuple[str, dict[str, Any]]]) 
             lo, up = p["lower"][j], p["upper"][j]
             print(f"| {n} | {p['estimate'][j]:.5g} | {'open' if lo is None else f'{lo:.5g}'} "
                   f"| {'open' if up is None else f'{up:.5g}'} | {p['classification'][j]} |")
+    return 0
 
 
 if __name__ == "__main__":  # pragma: no cover

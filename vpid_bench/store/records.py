@@ -114,7 +114,6 @@ def stable_hash(obj: Any, length: int = 16) -> str:
     return hashlib.sha256(canonical_json(obj).encode()).hexdigest()[:length]
 
 
-
 def run_id(key: Mapping[str, Any], run_index: int) -> str:
     """Deterministic id of run ``run_index`` of the job described by ``key``."""
     return stable_hash({**key, "run_index": run_index})
