@@ -91,13 +91,6 @@ def measure(problem: Any, floor: int, profile: bool) -> dict[str, Any]:
     return out
 
 
-def _row(label: str, m: dict[str, Any]) -> str:
-    floor = "" if m["floor"] is None else f"{m['floor']:.3g}"
-    return (f"| {label} | {m['crb_norm']:.3g} | {floor} | {m['condition']:.3g} | "
-            f"{m['d_opt']:.3g} | {m['a_opt']:.3g} | {', '.join(m['undetermined']) or 'none'} | "
-            f"{'yes' if m['structural'] else 'no'} |")
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="vpid-bench-design",
                                  description=__doc__.split("\n\n")[0],
@@ -127,11 +120,6 @@ def main(argv: list[str] | None = None) -> int:
     except VpidBenchError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    _print(args, results)
-    return 0
-
-
-def _print(args: argparse.Namespace, results: list[tuple[str, dict[str, Any]]]) -> None:
     results.sort(key=lambda item: item[1]["crb_norm"])
     floor = f"floor (median over {args.floor})" if args.floor else "floor"
     print(f"Designs of `{args.problem}`, best first by the Cramér–Rao norm (instance 0):\n")
@@ -139,7 +127,10 @@ def _print(args: argparse.Namespace, results: list[tuple[str, dict[str, Any]]]) 
           f"undetermined (> {UNDETERMINED_PERCENT:g} %) | structural symmetry |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     for label, m in results:
-        print(_row(label, m))
+        cell = "" if m["floor"] is None else f"{m['floor']:.3g}"
+        print(f"| {label} | {m['crb_norm']:.3g} | {cell} | {m['condition']:.3g} | "
+              f"{m['d_opt']:.3g} | {m['a_opt']:.3g} | {', '.join(m['undetermined']) or 'none'} | "
+              f"{'yes' if m['structural'] else 'no'} |")
     for label, m in results:
         if m["profile"] is None:
             continue
@@ -151,6 +142,7 @@ def _print(args: argparse.Namespace, results: list[tuple[str, dict[str, Any]]]) 
             lo, up = p["lower"][j], p["upper"][j]
             print(f"| {n} | {p['estimate'][j]:.5g} | {'open' if lo is None else f'{lo:.5g}'} "
                   f"| {'open' if up is None else f'{up:.5g}'} | {p['classification'][j]} |")
+    return 0
 
 
 if __name__ == "__main__":  # pragma: no cover

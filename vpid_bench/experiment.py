@@ -1,14 +1,10 @@
 """Run a job: a parsed job spec, the plugin registry and a folder in; run records out.
 
 :func:`run_from_config` is a plain function of a composed config (tests call it directly; the
-shell calls it once per job).
-
-Resume (docs/sweeps.md): a run whose complete ``ok`` record (same run id: plugins' versions
-and code, data files' content, settings) exists is skipped; every other run runs again.
-
-Crash isolation (docs/sweeps.md): an exception inside one run is written into its record
-(status ``failed``) and the job goes on. With worker processes every call into plugin code
-goes to them (:class:`_Here`: in this process).
+shell calls it once per job). Resume and crash isolation (docs/sweeps.md): a run whose
+complete ``ok`` record (same run id) exists is skipped; an exception inside one run is written
+into its record (status ``failed``) and the job goes on. With worker processes every call
+into plugin code goes to them (:class:`_Here`: in this process).
 """
 
 from __future__ import annotations

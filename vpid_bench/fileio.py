@@ -1,13 +1,10 @@
-"""Reading and writing files safely: atomically, and never through a planted symbolic link.
+"""Reading and writing files safely: atomically, and never through a planted symbolic link
+(docs/sweeps.md, files: atomic, no links followed, non-finite numbers kept).
 
-Every results file read back goes through :func:`read_text_limited` (a FIFO, device or
-folder under a record's name refused at once, and a file over a size limit), every JSON not
-just made through :func:`loads_json`. Every file written goes through
-:func:`write_text_atomic` (a crash leaves the old file or the new one; a link at the target
-is replaced, not followed); the folders kept inside an output folder through
-:func:`own_folder`. A folder that must be one thing whole (a report) is written by
-:class:`WholeFolder` (issue 44, N8: two reports at once, or one stopped by SIGTERM, once left
-pages of one and ``runs.csv`` of the other; N6).
+Results files are read back through :func:`read_text_limited` (a FIFO, device or folder
+refused, a size limit) and :func:`loads_json`; written through :func:`write_text_atomic`, the
+folders kept through :func:`own_folder`, a folder that must be one thing whole (a report)
+through :class:`WholeFolder` (issue 44, N8: two reports at once once mixed their pages; N6).
 """
 
 from __future__ import annotations

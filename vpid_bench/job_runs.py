@@ -82,6 +82,10 @@ def warm_up(job: Job, problem: Problem, lockstep: bool = False) -> float:
     return time.perf_counter() - t0
 
 
+#: The most of a plugin warning's text quoted in the log line of its group (characters).
+WARNING_CHARS = 160
+
+
 def run_outcomes(job: Job, problem: Problem, indices: Sequence[int], lockstep: bool,
                  announce: Callable[[str], None] | None = None) -> Iterator[RunOutcome]:
     """The outcome of each run in ``indices``, in order, with its metrics: in one lockstep
@@ -92,7 +96,15 @@ def run_outcomes(job: Job, problem: Problem, indices: Sequence[int], lockstep: b
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("default")  # each place once
             outcomes = _group(job, problem, group)
-        _say_warnings(job, group, caught)
+        if caught:  # one log line for the warnings plugin code raised (not dozens)
+            first = caught[0]
+            runs = f"run {group[0]}" if len(group) == 1 else f"runs {group[0]}-{group[-1]}"
+            text = " ".join(str(first.message).split())  # one line (cma's advice runs to six)
+            text = text if len(text) <= WARNING_CHARS else text[:WARNING_CHARS - 3] + "..."
+            log.warning("%s on %s, %s: %d warning(s) from plugin code (first: %s: %s, %s:%d); "
+                        "the runs are recorded", job.optimizer_name, job.problem_name, runs,
+                        len(caught), first.category.__name__, text, Path(first.filename).name,
+                        first.lineno)
         for outcome in outcomes:
             if outcome.result is not None and announce is not None:
                 announce("metrics")
@@ -128,24 +140,6 @@ def with_problem_results(job: Job, problem: Problem, outcome: RunOutcome) -> Run
     log.error("run %d of %s on %s failed: %s", outcome.index, job.optimizer_name,
               job.problem_name, error)
     return dataclasses.replace(outcome, outcome=error)
-
-
-#: The most of a plugin warning's text quoted in the log line of its group (characters).
-WARNING_CHARS = 160
-
-
-def _say_warnings(job: Job, group: Sequence[int], caught: Sequence[warnings.WarningMessage]
-                  ) -> None:
-    """One log line for the warnings plugin code raised in a group of runs (not dozens)."""
-    if not caught:
-        return
-    first = caught[0]
-    runs = f"run {group[0]}" if len(group) == 1 else f"runs {group[0]}-{group[-1]}"
-    text = " ".join(str(first.message).split())  # one line (cma's advice runs to six)
-    text = text if len(text) <= WARNING_CHARS else text[:WARNING_CHARS - 3] + "..."
-    log.warning("%s on %s, %s: %d warning(s) from plugin code (first: %s: %s, %s:%d); the "
-                "runs are recorded", job.optimizer_name, job.problem_name, runs, len(caught),
-                first.category.__name__, text, Path(first.filename).name, first.lineno)
 
 
 def _intervals(problem: Problem, x: np.ndarray) -> dict[str, Any] | None:

@@ -150,17 +150,12 @@ def serve(conn: Connection, out: Connection, err: Connection) -> None:
                 _run_task(job, payload, state, send)
         except BaseException as exc:  # noqa: BLE001 - the supervisor records it; keep serving
             error = portable(exc)
-        _end(send, error, value)
+        left = len(strays(os.getpid()))  # the task's last message: what it left running
+        try:
+            send(("end", error, value, left))
+        except Exception as exc:  # noqa: BLE001 - a value that does not pickle
+            send(("end", portable(exc), None, left))
     os._exit(0)  # a plugin's non-daemon thread must not keep the worker alive
-
-
-def _end(send: Callable[[Any], None], error: RemoteError | None, value: Any) -> None:
-    """The task's last message (with the processes it left running)."""
-    left = len(strays(os.getpid()))
-    try:
-        send(("end", error, value, left))
-    except Exception as exc:  # noqa: BLE001 - a value that does not pickle
-        send(("end", portable(exc), None, left))
 
 
 def _say(send: Callable[[Any], None], line: Callable[[Any], str]) -> Any:

@@ -224,11 +224,14 @@ class Tree(_Held):
                         new.append(h)
         return new
 
-    def _stop_all(self) -> dict[int, _Held]:
-        """Find and stop every process of the tree, until two rounds running find none new
-        (at most :data:`ROUNDS` rounds and :data:`WAIT_S` seconds)."""
-        held: dict[int, _Held] = {}
-        checked: set[int] = set()
+    def end(self) -> list[str]:
+        """Kill the worker and its tree; ``"<pid> (<name>)"`` of each process still running
+        afterwards. Nothing but what it holds is signalled."""
+        if self.cgroup is not None:
+            self.cgroup.kill(WAIT_S)
+        self.signal(signal.SIGSTOP)  # it starts no more; its orphans stay its own
+        held: dict[int, _Held] = {}  # every process of the tree found and stopped, until two
+        checked: set[int] = set()  # rounds running find none new (at most ROUNDS, WAIT_S)
         seen: set[int] = set()
         quiet = 0
         end = time.monotonic() + WAIT_S
@@ -241,15 +244,6 @@ class Tree(_Held):
             quiet = 0 if new or fresh else quiet + 1
             if quiet >= 2 or time.monotonic() > end:
                 break
-        return held
-
-    def end(self) -> list[str]:
-        """Kill the worker and its tree; ``"<pid> (<name>)"`` of each process still running
-        afterwards. Nothing but what it holds is signalled."""
-        if self.cgroup is not None:
-            self.cgroup.kill(WAIT_S)
-        self.signal(signal.SIGSTOP)  # it starts no more; its orphans stay its own
-        held = self._stop_all()
         self.signal(signal.SIGKILL)
         self._signal_group(signal.SIGKILL)
         for h in held.values():

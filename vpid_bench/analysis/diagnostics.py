@@ -89,17 +89,6 @@ def _num(v: float) -> float | None:
     return float(v) if math.isfinite(v) else None
 
 
-def _cross(r: np.ndarray, rho_r: np.ndarray, u: np.ndarray, lags: int) -> dict[str, Any]:
-    """The cross-correlation of ``r`` with one input and its Bartlett 99 % band."""
-    rho_u = acf(u, lags)
-    var = (1.0 + 2.0 * float(rho_r[1:] @ rho_u[1:])) / r.size
-    band = Z99 * math.sqrt(max(var, 1.0 / r.size))
-    c = ccf(r, u, lags)
-    at = int(np.argmax(np.abs(c)))
-    return {"ccf": c.tolist(), "band99": band, "max_abs": float(abs(c[at])),
-            "lag_at_max": at - lags, "outside": float(np.mean(np.abs(c) > band))}
-
-
 def group_diagnostics(r: np.ndarray, measured: np.ndarray | None = None,
                       sigma: float | None = None,
                       inputs: Mapping[str, np.ndarray] | None = None,
@@ -120,8 +109,14 @@ def group_diagnostics(r: np.ndarray, measured: np.ndarray | None = None,
     cross = {}
     for name, u in (inputs or {}).items():
         u = np.asarray(u, dtype=float).reshape(-1)
-        if u.size == n and np.all(np.isfinite(u)):
-            cross[str(name)] = _cross(r, rho, u, lags)
+        if u.size == n and np.all(np.isfinite(u)):  # with its Bartlett 99 % band
+            var = (1.0 + 2.0 * float(rho[1:] @ acf(u, lags)[1:])) / n
+            u_band = Z99 * math.sqrt(max(var, 1.0 / n))
+            c = ccf(r, u, lags)
+            at = int(np.argmax(np.abs(c)))
+            cross[str(name)] = {"ccf": c.tolist(), "band99": u_band, "max_abs": float(abs(c[at])),
+                                "lag_at_max": at - lags,
+                                "outside": float(np.mean(np.abs(c) > u_band))}
     over = rms / s if s > 0 else math.nan
     return {
         "n": n, "rms": _num(rms), "signal_rms": _num(signal),

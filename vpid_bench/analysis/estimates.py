@@ -1,13 +1,9 @@
 """What a job leaves about the answer itself where no truth is known, and the problem's fixed
-comparison rows.
-
-* ``profile.json`` (residuals, no truth): the 95 % profile-likelihood intervals started at the
-  instance's optimum, σ per group estimated from the residuals there, when the first fit says
-  they take at most :data:`PROFILE_LIMIT_S` (else the file says why not). Each run's own
-  Jacobian intervals are in its record.
-* ``comparisons.json``: each row :meth:`~vpid_bench.api.Problem.comparisons` gives (a
-  published estimate, a naive predictor...) with its objective and metrics computed here.
-  Never truths: the report prints them beside the ranking.
+comparison rows (docs/architecture.md, a problem without a truth): ``profile.json``, the 95 %
+profile-likelihood intervals at the instance's optimum, σ per group estimated from the
+residuals there, when the first fit says they take at most :data:`PROFILE_LIMIT_S` (else the
+file says why not); ``comparisons.json``, each row of
+:meth:`~vpid_bench.api.Problem.comparisons` with its objective and metrics (never truths).
 """
 
 from __future__ import annotations

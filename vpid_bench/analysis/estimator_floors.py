@@ -25,13 +25,6 @@ INSTANCES = 5
 FILE = ESTIMATORS
 
 
-def offers_objectives(problem: Problem) -> bool:
-    """Whether the problem's config has an ``objective`` field with a built-in value."""
-    config = getattr(problem, "config", None)
-    return (dataclasses.is_dataclass(config) and not isinstance(config, type)
-            and getattr(config, "objective", None) in OBJECTIVES)
-
-
 def truth_optima_metric(problem: Problem, n: int) -> tuple[str, list[float]] | None:
     """The problem's first metric at the optimum of each of instances 0 .. n-1 polished
     from the truth (its objective's floor there); ``None`` without a metric."""
@@ -50,7 +43,9 @@ def truth_optima_metric(problem: Problem, n: int) -> tuple[str, list[float]] | N
 def estimator_floors(problem: Problem, runs: int) -> dict[str, Any] | None:
     """``{"metric", "instances", "chosen", "floors": {objective: {"median", "values"}}}`` for
     a problem that offers the choice and knows its truth; ``None`` otherwise."""
-    if not offers_objectives(problem) or problem.x_true is None:
+    config = getattr(problem, "config", None)  # offers the choice: a built-in objective field
+    if not (dataclasses.is_dataclass(config) and not isinstance(config, type)
+            and getattr(config, "objective", None) in OBJECTIVES) or problem.x_true is None:
         return None
     n = max(1, min(INSTANCES, runs))
     metric: str | None = None

@@ -96,16 +96,6 @@ def _ends(x: np.ndarray, se: np.ndarray) -> dict[str, list[float | None]]:
             "se": _finite_or_none(se)}
 
 
-def time_positions(groups: np.ndarray) -> np.ndarray:
-    """Each entry's place within its group (its time position), ``(m,)`` ints."""
-    groups = np.asarray(groups, dtype=int).reshape(-1)
-    pos = np.empty(groups.size, dtype=int)
-    for g in np.unique(groups):
-        mine = groups == g
-        pos[mine] = np.arange(int(np.sum(mine)))
-    return pos
-
-
 def andrews_lags(rho: float, t: int) -> int:
     """Andrews' (1991) automatic Bartlett bandwidth for an AR(1) with lag-1 autocorrelation
     ``rho`` over ``t`` time points, ``1.1447 (α t)^{1/3}``, ``α = 4ρ²/((1−ρ)²(1+ρ)²)``
@@ -122,7 +112,11 @@ def hac_covariance(scores: np.ndarray, groups: np.ndarray, lags: int | None = No
     (``prewhiten``), or over the scores themselves (statsmodels' ``S_hac_simple``).
     ``lags=None``: :func:`andrews_lags` of the pooled lag-1 autocorrelation."""
     scores = np.asarray(scores, dtype=float)
-    pos = time_positions(groups)
+    groups = np.asarray(groups, dtype=int).reshape(-1)
+    pos = np.empty(groups.size, dtype=int)  # each entry's place (time position) in its group
+    for g in np.unique(groups):
+        mine = groups == g
+        pos[mine] = np.arange(int(np.sum(mine)))
     t = int(pos.max()) + 1 if pos.size else 0
     S = np.zeros((t, scores.shape[1]))
     np.add.at(S, pos, scores)

@@ -42,23 +42,18 @@ def structural_symmetry(problem: Problem, x: np.ndarray | None = None,
     structural symmetry when the ratio is at most :data:`STRUCTURAL_RATIO`, else ``None``.
     ``sigma``: the noise per group or entry (default the problem's ``residual_sigma``)."""
     x = np.asarray(problem.x_true if x is None else x, dtype=float)
-    J, _ = _whitened_jacobian(problem, x, sigma)
-    _, s, vt = np.linalg.svd(J * x[None], full_matrices=False)
-    ratio = float(s[-1] / s[0]) if s[0] > 0 else 0.0
-    return ratio, (vt[-1] if ratio <= STRUCTURAL_RATIO else None)
-
-
-def _whitened_jacobian(problem: Problem, x: np.ndarray, sigma: np.ndarray | None = None
-                       ) -> tuple[np.ndarray, np.ndarray]:
     given = problem.residual_sigma() if sigma is None else sigma
     if given is None:
         raise ValueError("the problem states no noise sigma (residual_sigma)")
     groups = np.asarray(problem.fisher_groups(), dtype=int)
-    sigma = entry_sigma(np.asarray(given, dtype=float), groups)
-    if sigma is None:
+    per = entry_sigma(np.asarray(given, dtype=float), groups)
+    if per is None:
         raise ValueError("the noise sigma has neither a per-group nor a per-entry shape")
-    kept = informative(sigma, groups)
-    return jacobian(problem, np.asarray(x, float))[kept] / sigma[kept][:, None], kept
+    kept = informative(per, groups)
+    J = jacobian(problem, x)[kept] / per[kept][:, None]
+    _, s, vt = np.linalg.svd(J * x[None], full_matrices=False)
+    ratio = float(s[-1] / s[0]) if s[0] > 0 else 0.0
+    return ratio, (vt[-1] if ratio <= STRUCTURAL_RATIO else None)
 
 
 class _Likelihood:

@@ -92,31 +92,24 @@ def fit_structure(problem: Any, label: str, x0: np.ndarray | None = None,
     n = [int(i.size) for i in fit_idx]
     aic, bic = information_criteria(rss, n, x.size)
     p_min = min(ljung_box_p(r_all[i]) for i in fit_idx)
-    # intervals: residuals whitened by each channel's fitted sigma
+    # z standard errors per parameter from the Jacobian whitened by each channel's fitted
+    # sigma; a parameter on its bound (within 1e-6 of it) is held there and gets NaN, the
+    # others' covariance is that of the free columns
     sigma = np.concatenate([np.full(nc, math.sqrt(r / nc)) for r, nc in zip(rss, n, strict=True)])
-    half = _half_widths(sol.jac / sigma[:, None] / width[None, :], sol.x, z)
+    half = np.full(x.size, np.nan)
+    free = (sol.x > 1e-6) & (sol.x < 1 - 1e-6)
+    if np.any(free):
+        Jf = (sol.jac / sigma[:, None] / width[None, :])[:, free]
+        try:
+            half[free] = z * np.sqrt(np.clip(np.diag(np.linalg.inv(Jf.T @ Jf)), 0.0, None))
+        except np.linalg.LinAlgError:
+            half[free] = np.inf
     return StructureFit(
         label=label, names=tuple(b.names), units=tuple(b.units or ("",) * x.size), x=x,
         lower=x - half, upper=x + half, k=int(x.size),
         heldout=float(sum(np.linalg.norm(r_all[i]) for i in val_idx)),
         aic=aic, bic=bic, white_p=min(1.0, p_min * len(fit_idx)),
         fit_error=float(sum(math.sqrt(r) for r in rss)))
-
-
-def _half_widths(Jw: np.ndarray, z01: np.ndarray, z: float) -> np.ndarray:
-    """``z`` standard errors per parameter from the whitened Jacobian ``Jw`` (per unit of
-    the physical parameter); a parameter on its bound (``z01`` within 1e-6 of 0 or 1) is
-    held there and gets NaN, the others' covariance is that of the free columns."""
-    half = np.full(z01.size, np.nan)
-    free = (z01 > 1e-6) & (z01 < 1 - 1e-6)
-    if np.any(free):
-        Jf = Jw[:, free]
-        try:
-            cov = np.linalg.inv(Jf.T @ Jf)
-            half[free] = z * np.sqrt(np.clip(np.diag(cov), 0.0, None))
-        except np.linalg.LinAlgError:
-            half[free] = np.inf
-    return half
 
 
 def ranked(fits: Sequence[StructureFit]) -> list[StructureFit]:

@@ -23,19 +23,6 @@ GROUPS = ("problem", "optimizer")
 SHIPPED = ConfigSource()
 
 
-def _yaml_error(exc: BaseException) -> ConfigError | None:
-    """A config file that is not YAML, as one line naming the place (or None)."""
-    cause: BaseException | None = exc
-    while cause is not None and not isinstance(cause, yaml.MarkedYAMLError):
-        cause = cause.__cause__ or cause.__context__
-    if cause is None:
-        return None
-    mark = cause.problem_mark or cause.context_mark
-    where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-    return ConfigError("config file", getattr(mark, "name", "?"),
-                       f"YAML ({cause.problem or cause.context}{where})")
-
-
 def hydra_error(exc: BaseException) -> ConfigError:
     """A Hydra or OmegaConf error as one line (the innermost cause that names a key)."""
     if isinstance(exc, MissingConfigException):
@@ -47,10 +34,15 @@ def hydra_error(exc: BaseException) -> ConfigError:
                                ".yaml) in the -cp or -cd folder")
         if group and options:
             return ConfigError(group, name, "one of " + ", ".join(options))
-    yaml_error = _yaml_error(exc)
-    if yaml_error is not None:
-        return yaml_error
-    cause: BaseException | None = exc
+    cause: BaseException | None = exc  # a config file that is not YAML: the place named
+    while cause is not None and not isinstance(cause, yaml.MarkedYAMLError):
+        cause = cause.__cause__ or cause.__context__
+    if cause is not None:
+        mark = cause.problem_mark or cause.context_mark
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        return ConfigError("config file", getattr(mark, "name", "?"),
+                           f"YAML ({cause.problem or cause.context}{where})")
+    cause = exc
     while cause is not None:
         key = getattr(cause, "full_key", None)
         if key:

@@ -379,9 +379,13 @@ def plan(cmd: CommandLine, registry: Registry) -> Plan:
 def check_sized_jobs(jobs: Sequence[Job]) -> Any:
     """The checks a job makes once its problem is built (``budget_per_dim``, ``target``:
     :func:`vpid_bench.targets.check_sized`), made for every job before any runs. In a
-    supervised worker (a crash costs only the check: the job says why); with
-    ``isolation=none`` here, the problems built returned for the jobs (else ``None``)."""
-    from ..workers import can_send
+    supervised worker (a crash costs only the check: the job says why; a failure but
+    ConfigError is the job's); with ``isolation=none`` here, the problems built returned for
+    the jobs (else ``None``)."""
+    from ..build import ProblemCache
+    from ..experiment import setup_limit_s
+    from ..targets import check_sized
+    from ..workers import Workers, can_send
 
     wanted = [j for j in jobs if j.spec.target is not None or j.spec.budget_per_dim is not None]
     if not wanted:
@@ -390,39 +394,21 @@ def check_sized_jobs(jobs: Sequence[Job]) -> Any:
     for j in wanted:  # 323 checks once took 37 s of the vpid1 build's pre-flight)
         firsts.setdefault(repr((j.problem_cls, j.problem_name, j.problem_settings(),
                                 j.spec.runs, j.spec.budget_per_dim, j.spec.target)), j)
-    once = list(firsts.values())
     if all(j.spec.isolation != "none" and can_send(j) is None for j in wanted):
-        _check_in_a_worker(once)
+        pool = Workers(1)
+        try:
+            for job in firsts.values():
+                try:
+                    pool.call(job, check_sized, what="the pre-flight's check of target= and "
+                              "budget_per_dim=", limit=setup_limit_s(job))
+                except Exception as exc:  # noqa: BLE001 - plugin code: its job says why
+                    if getattr(exc, "remote_type", None) == "ConfigError":
+                        raise VpidBenchError(str(exc)) from None
+        finally:
+            pool.close()
         return None
-    return _check_here(once)
-
-
-def _check_in_a_worker(jobs: Sequence[Job]) -> None:
-    """Each job's check in one supervised worker; a failure but ConfigError is the job's."""
-    from ..experiment import setup_limit_s
-    from ..targets import check_sized
-    from ..workers import Workers
-
-    pool = Workers(1)
-    try:
-        for job in jobs:
-            try:
-                pool.call(job, check_sized, what="the pre-flight's check of target= and "
-                          "budget_per_dim=", limit=setup_limit_s(job))
-            except Exception as exc:  # noqa: BLE001 - plugin code: its job says why
-                if getattr(exc, "remote_type", None) == "ConfigError":
-                    raise VpidBenchError(str(exc)) from None
-    finally:
-        pool.close()
-
-
-def _check_here(jobs: Sequence[Job]) -> Any:
-    """:func:`vpid_bench.targets.check_sized` of each job in this process; the problems."""
-    from ..build import ProblemCache
-    from ..targets import check_sized
-
     cache = ProblemCache()
-    for job in jobs:
+    for job in firsts.values():
         try:
             problem = cache.get(job)
         except VpidBenchError:

@@ -67,25 +67,20 @@ def find_previous(root: Path, overrides: Sequence[str], multirun: bool) -> Path 
     return None
 
 
-def earlier_jobs(folder: Path) -> set[Path]:
-    """The job folders an earlier command left in ``folder`` (itself, or those below it)."""
-    def is_job(p: Path) -> bool:
-        return not p.is_symlink() and ((p / "records").is_dir() or (p / JOB_STATUS_FILE).is_file())
-
-    folder = Path(folder)
-    if not folder.is_dir():
-        return set()
-    found = {p.resolve() for p in folder.iterdir() if p.is_dir() and is_job(p)}
-    return found | ({folder.resolve()} if is_job(folder) else set())
-
-
 def check_reuse(folder: Path, planned: Sequence[Path], overrides: Sequence[str],
                 multirun: bool, merge: bool, key: str) -> str | None:
     """Whether this command may write into ``folder`` (a second sweep was once merged into a
     finished one without a word). Jobs there it does not plan (``planned``) are another
     command's: :class:`ConfigError`, unless ``merge``, when the returned line says so.
     Without ``planned`` the earlier command's saved overrides must equal these."""
-    earlier = earlier_jobs(folder)
+    def is_job(p: Path) -> bool:  # a job folder an earlier command left (itself, or below)
+        return not p.is_symlink() and ((p / "records").is_dir() or (p / JOB_STATUS_FILE).is_file())
+
+    folder = Path(folder)
+    if not folder.is_dir():
+        return None
+    earlier = {p.resolve() for p in folder.iterdir() if p.is_dir() and is_job(p)}
+    earlier |= {folder.resolve()} if is_job(folder) else set()
     if not earlier:
         return None
     if planned:

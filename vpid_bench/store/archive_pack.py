@@ -44,10 +44,8 @@ def compact_trace(record: Mapping[str, Any]) -> dict[str, Any]:
     """``record`` with its best-so-far trace cut to the batches that improved it (the first
     batch with a finite best, every strict improvement, and the last batch), each kept
     entry's batch number in ``trace.batch`` (1 for the first) and ``timing.trace_s`` cut
-    alike. Lossless for every reading of the report: the trace is a step function, so the
-    first batch at or below any level is an improvement (hits, ECDFs, ERT in evaluations,
-    batches and seconds, the fixed-budget ladder), and the convergence figure and the IOH
-    export draw the same steps. A run of 9,000 single-candidate batches keeps a few hundred."""
+    alike: lossless for every reading of the report (docs/protocol.md, the archive), as the
+    trace is a step function. A run of 9,000 single-candidate batches keeps a few hundred."""
     out = dict(record)
     trace = record.get("trace")
     if not isinstance(trace, Mapping):

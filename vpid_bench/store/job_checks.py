@@ -76,11 +76,6 @@ def _bounds_ok(v: Any, d: int) -> bool:
     return isinstance(v, list) and len(v) == d and all(map(_positive, v))
 
 
-def _floor_entry_ok(e: Any, d: int) -> bool:
-    return (isinstance(e, dict) and _positive(e.get("fraction"))
-            and _positive(e.get("crb_norm_percent")) and _bounds_ok(e.get("crb_percent"), d))
-
-
 def _instance_entry_ok(e: Any, d: int) -> bool:
     norms = e.get("sigma_floor_norms") if isinstance(e, dict) else None
     return (isinstance(e, dict) and (e.get("instance") is None
@@ -103,7 +98,9 @@ def _optional_checks(data: Mapping[str, Any], d: int) -> list[tuple[str, bool, s
     if "sigma_floor_sensitivity" in data:
         v = data["sigma_floor_sensitivity"]
         checks.append(("sigma_floor_sensitivity", isinstance(v, list) and 1 <= len(v) <= 10
-                       and all(_floor_entry_ok(e, d) for e in v),
+                       and all(isinstance(e, dict) and _positive(e.get("fraction"))
+                               and _positive(e.get("crb_norm_percent"))
+                               and _bounds_ok(e.get("crb_percent"), d) for e in v),
                        f"a list of 1 to 10 {{fraction, crb_percent ({d} numbers), "
                        "crb_norm_percent}"))
     if "instances" in data:

@@ -98,22 +98,17 @@ def _close(a: float, b: float) -> bool:
     return abs(a - b) <= RTOL * max(abs(a), abs(b), 1.0)
 
 
-def _times(record: Mapping[str, Any]) -> str | None:
+def implausible(record: Mapping[str, Any], f_opt: float | None = None) -> str | None:
+    """The first value of a (type-checked) record that no real run gives, as ``"<field> =
+    <value>: expected ..."``, or ``None``. ``f_opt``: the optimum of the record's instance,
+    when known (``f_best`` may not lie below it)."""
     timing = record.get("timing") or {}
     for key in ("wall_time_s", "run_time_s"):
         v = timing.get(key)
         if v is not None and (not _num(v) or not 0 <= float(v) < ABSURD):
             return f"timing.{key} = {v!r}: expected null or a finite number of seconds >= 0"
-    return None
-
-
-def implausible(record: Mapping[str, Any], f_opt: float | None = None) -> str | None:
-    """The first value of a (type-checked) record that no real run gives, as ``"<field> =
-    <value>: expected ..."``, or ``None``. ``f_opt``: the optimum of the record's instance,
-    when known (``f_best`` may not lie below it)."""
-    why = _times(record)
-    if why or record.get("status") != "ok":
-        return why
+    if record.get("status") != "ok":
+        return None
     for name, v in _numbers(record):
         why = _bad_number(name, v)
         if why:

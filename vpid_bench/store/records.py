@@ -1,13 +1,10 @@
 """Run records on disk: the schema version, atomic JSON writes, reading and checking.
 
-A record says everything needed to repeat a run (config, seeds, versions) and to judge it
-(best vector in physical units, objective, metrics, errors, evaluations, trace, time). It is
-strict JSON; a non-finite float is written as the string ``"inf"``, ``"-inf"`` or ``"nan"``,
-and :func:`read_record` turns those back into floats in the numeric fields.
-
-Two runs of the same config and seed give records identical but for ``timing``; the run id
-in each file name (:func:`record_path`) hashes what determines the result, so a re-run of the
-job recognises its records.
+A record says everything needed to repeat a run (config, seeds, versions) and to judge it; it
+is strict JSON, a non-finite float written as ``"inf"``, ``"-inf"`` or ``"nan"`` and read back
+as a float in the numeric fields (:func:`read_record`). The run id in each file name
+(:func:`record_path`) hashes what determines the result, so a re-run of the job recognises its
+records (two runs of one config and seed differ only in ``timing``).
 """
 
 from __future__ import annotations
@@ -112,7 +109,6 @@ def canonical_json(obj: Any) -> str:
 def stable_hash(obj: Any, length: int = 16) -> str:
     """First ``length`` hex digits of the SHA-256 of ``canonical_json(obj)``."""
     return hashlib.sha256(canonical_json(obj).encode()).hexdigest()[:length]
-
 
 
 def run_id(key: Mapping[str, Any], run_index: int) -> str:
