@@ -70,12 +70,17 @@ class LoadedRecords:
         return out
 
 
+def grouped(items: Iterable[Any], key: Callable[[Any], Any]) -> dict[Any, list[Any]]:
+    """``items`` grouped by ``key(item)``, in order of appearance."""
+    out: dict[Any, list[Any]] = {}
+    for s in items:
+        out.setdefault(key(s), []).append(s)
+    return out
+
+
 def by_context(items: Iterable[Any]) -> dict[str, list[Any]]:
     """``items`` (mappings with a ``context``) grouped by it, in order of appearance."""
-    out: dict[str, list[Any]] = {}
-    for s in items:
-        out.setdefault(s["context"], []).append(s)
-    return out
+    return grouped(items, lambda s: s["context"])
 
 
 def reason(path: Path, why: str) -> str:
