@@ -292,9 +292,7 @@ def _identified(r: Any) -> tuple[str, str, list[str], list[list[Any]]] | None:
     headers, rows = ident.rows()
     text = (f"Identified on {escape(r.context)}: the best run ({escape(ident.run)}), with 95 % "
             "intervals from its residuals")
-    assumed = [t for t, h, _ in r.assumed if not h and t.startswith("Assumed")]
-    if assumed:
-        text += ". " + assumed[0]
+    text += next((". " + t for t, h, _ in r.assumed if not h and t.startswith("Assumed")), "")
     return r.context, text + ("" if text.endswith(".") else "."), headers, rows
 
 

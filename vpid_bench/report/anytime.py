@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from . import figures
+from .load import grouped
 from .optima import rel_gap
 from .styles import legend, lookup
 
@@ -122,10 +123,7 @@ def auc(runs: Sequence[RunHits], budget: float | None = None) -> float:
 
 
 def _groups(runs: Sequence[RunHits]) -> dict[tuple[str, str], list[RunHits]]:
-    out: dict[tuple[str, str], list[RunHits]] = {}
-    for r in runs:
-        out.setdefault((r.context, r.algorithm), []).append(r)
-    return out
+    return grouped(runs, lambda r: (r.context, r.algorithm))
 
 
 def context_budget(runs: Sequence[RunHits], context: str) -> float:

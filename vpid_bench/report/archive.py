@@ -14,6 +14,7 @@ from typing import Any
 from ..store.archive import _plain
 from ..store.archive_records import Archive, instance_id, run_setting
 from ..store.optimum import Optimum
+from .load import grouped
 from .ties import same
 
 #: Relative tolerance of the per-instance check (true parameters, objective at the truth).
@@ -103,10 +104,8 @@ def _check_problem(arch: Archive, problem: str, mine: Sequence[Mapping[str, Any]
 def merge(records: Sequence[Mapping[str, Any]], archives: Iterable[Archive]) -> Merged:
     """The archived runs that stand beside ``records`` (see the module docstring)."""
     out = Merged()
-    by_problem: dict[str, list[Mapping[str, Any]]] = {}
-    for r in records:
-        if "_archive" not in r:
-            by_problem.setdefault(r["problem"]["name"], []).append(r)
+    by_problem = grouped((r for r in records if "_archive" not in r),
+                         lambda r: r["problem"]["name"])
     other_settings: dict[str, list[str]] = {}
     matched: set[str] = set()
     for arch in archives:

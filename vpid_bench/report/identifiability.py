@@ -109,15 +109,11 @@ def crb_norms_by_instance(records: Rows, rows: Rows) -> dict[str, dict[Any, floa
     """Per context, each instance's own bound norm (%), keyed as the rows' ``instance``
     column (its id, or the run index where every run fits the same data): what the verdicts
     compare each instance's floor with (:func:`.verdicts.floor_over_bound`)."""
-    out: dict[str, dict[Any, float]] = {}
-    for context, entries in first_file_by_context(records, rows, FILE, lambda path, rec: (
-            _read_bounds(path, rec) or {}).get("instances") or None).items():
-        norms: dict[Any, float] = {}
-        for e in entries:
-            keys = [e["instance"]] if isinstance(e["instance"], str) else e["runs"]
-            norms.update({k: float(e["crb_norm_percent"]) for k in keys})
-        out[context] = norms
-    return out
+    found = first_file_by_context(records, rows, FILE, lambda path, rec: (
+        _read_bounds(path, rec) or {}).get("instances") or None)
+    return {context: {k: float(e["crb_norm_percent"]) for e in entries
+                      for k in ([e["instance"]] if isinstance(e["instance"], str) else e["runs"])}
+            for context, entries in found.items()}
 
 
 def _design_label(rows: Rows) -> str:

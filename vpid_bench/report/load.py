@@ -70,12 +70,17 @@ class LoadedRecords:
         return out
 
 
+def grouped(items: Iterable[Any], key: Callable[[Any], Any]) -> dict[Any, list[Any]]:
+    """``items`` grouped by ``key(item)``, in order of appearance."""
+    out: dict[Any, list[Any]] = {}
+    for s in items:
+        out.setdefault(key(s), []).append(s)
+    return out
+
+
 def by_context(items: Iterable[Any]) -> dict[str, list[Any]]:
     """``items`` (mappings with a ``context``) grouped by it, in order of appearance."""
-    out: dict[str, list[Any]] = {}
-    for s in items:
-        out.setdefault(s["context"], []).append(s)
-    return out
+    return grouped(items, lambda s: s["context"])
 
 
 def reason(path: Path, why: str) -> str:
@@ -146,16 +151,13 @@ def _settings(r: Mapping[str, Any]) -> dict[str, Any]:
 
 def grouping(records: list[dict[str, Any]]) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
     """Varying problem keys per problem name, and varying optimizer keys per optimizer name."""
-    by_problem: dict[str, list[dict[str, Any]]] = {}
-    by_opt: dict[str, list[dict[str, Any]]] = {}
-    for r in records:
-        by_problem.setdefault(r["problem"]["name"], []).append(
-            {k: v for k, v in _settings(r).items() if k not in PROBLEM_KEYS_IGNORED})
-        by_opt.setdefault(r["optimizer"]["name"], []).append(
-            {k: v for k, v in flatten(r["optimizer"].get("params") or {}).items()
-             if k not in OPTIMIZER_KEYS_IGNORED})
-    return ({p: _varying(rows) for p, rows in by_problem.items()},
-            {o: _varying(rows) for o, rows in by_opt.items()})
+    problems = grouped(records, lambda r: r["problem"]["name"])
+    optimizers = grouped(records, lambda r: r["optimizer"]["name"])
+    return ({p: _varying([{k: v for k, v in _settings(r).items() if k not in PROBLEM_KEYS_IGNORED}
+                          for r in rs]) for p, rs in problems.items()},
+            {o: _varying([{k: v for k, v in flatten(r["optimizer"].get("params") or {}).items()
+                           if k not in OPTIMIZER_KEYS_IGNORED} for r in rs])
+             for o, rs in optimizers.items()})
 
 
 #: Context keys left out of the label when the population size and the other varying keys

@@ -22,10 +22,9 @@ REACHED = 1e-6
 def optima_folders(paths: Iterable[Path], records: Sequence[Mapping[str, Any]]) -> list[Path]:
     """``optima/`` in every given folder, every record's job folder and the folder above."""
     found: list[Path] = []
+    jobs = [Path(str(r.get("_job_dir", ""))) for r in records]
     cands = [Path(p) / "optima" for p in paths]
-    for r in records:
-        job = Path(str(r.get("_job_dir", "")))
-        cands += [job / "optima", job.parent / "optima"]
+    cands += [f / "optima" for j in jobs for f in (j, j.parent)]  # each job's and the one above
     for c in cands:
         try:
             if c.is_dir() and not c.is_symlink() and c.resolve() not in found:
@@ -37,15 +36,10 @@ def optima_folders(paths: Iterable[Path], records: Sequence[Mapping[str, Any]]) 
 
 def load_optima(paths: Iterable[Path], records: Sequence[Mapping[str, Any]]) -> OptimaIndex:
     """Read and check every ``optima/*.json`` in :func:`optima_folders`."""
-    optima, skipped = [], []
-    for folder in optima_folders(paths, records):
-        for path in sorted(folder.glob("*.json")):
-            opt, why = read_optimum_file(path)
-            if opt is None:
-                skipped.append((path, str(why)))
-            else:
-                optima.append(opt)
-    return OptimaIndex(optima, skipped)
+    read = [(path, *read_optimum_file(path)) for folder in optima_folders(paths, records)
+            for path in sorted(folder.glob("*.json"))]
+    return OptimaIndex([opt for _, opt, _ in read if opt is not None],
+                       [(path, str(why)) for path, opt, why in read if opt is None])
 
 
 def rel_gap(gap: float, f_opt: float) -> float:

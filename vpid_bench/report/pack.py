@@ -13,6 +13,7 @@ from typing import Any
 from .. import __version__
 from ..store.archive_pack import write_archive
 from .compute import compute
+from .load import grouped
 from .optima import REACHED, load_optima
 
 
@@ -36,9 +37,7 @@ def _median(values: Sequence[float]) -> float:
 def summary_rows(rows: Sequence[Mapping[str, Any]]) -> list[list[Any]]:
     """Per problem and optimizer, the row of ``summary.csv``
     (:data:`~vpid_bench.store.archive_pack.SUMMARY_HEADERS`)."""
-    groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
-    for r in rows:
-        groups.setdefault((r["problem"], r["algorithm"]), []).append(r)
+    groups = grouped(rows, lambda r: (r["problem"], r["algorithm"]))
     out = []
     for (problem, algorithm), g in sorted(groups.items()):
         ok = [r for r in g if r["status"] == "ok"]

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .load import Rows, by_context
+from .load import Rows, by_context, grouped
 from .optima import REACHED, opt_column_names
 from .render import fmt, joined, markdown, para
 from .safe import escape
@@ -34,10 +34,8 @@ def search_summary(rows: Rows) -> list[dict[str, Any]]:
     reached, share, rel_gap_median, floor_median, to_opt_median and rank (largest share,
     then smallest median rel_gap first)."""
     floor_col, to_col = opt_column_names(rows)
-    groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
-    for r in rows:
-        if r["status"] == "ok":
-            groups.setdefault((r["context"], r["algorithm"]), []).append(r)
+    groups = grouped((r for r in rows if r["status"] == "ok"),
+                     lambda r: (r["context"], r["algorithm"]))
     incomplete = {c for (c, _), g in groups.items()
                   if any(not math.isfinite(float(r.get("rel_gap", math.nan))) for r in g)}
     out = []

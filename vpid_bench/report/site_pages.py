@@ -104,7 +104,6 @@ def _suite(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, A
     s = model.suite
     if s is None or not s.rows:
         return None
-    fig = s.figure if isinstance(s.figure, Path) else None
     interactive = None if s.interactive is None else {
         "figure": s.interactive, "id": "fig-suite", "layout": svg.layout(s.interactive, style_of)}
     groups = [row for kind in ("family", "dimension")
@@ -114,7 +113,7 @@ def _suite(model: Any, pages: Pages, style_of: Mapping[str, Any]) -> dict[str, A
             "ladder": table(*ladder_table(s.ladder, s.rows), _links(pages)) if s.ladder
             else None,
             "groups": table(GROUP_SHOWN, groups, _links(pages)) if groups else None,
-            "figure": relative(fig, model.out_dir) if fig else None}
+            "figure": relative(s.figure, model.out_dir) if isinstance(s.figure, Path) else None}
 
 
 def _anchor(context: str) -> str:

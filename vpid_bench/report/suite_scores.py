@@ -16,6 +16,7 @@ import numpy as np
 
 from .anytime import RunHits, auc, context_budget, ecdf
 from .figures import _plt, save
+from .load import grouped
 from .styles import lookup
 
 #: Bootstrap draws of the score interval, and the interval's level.
@@ -63,10 +64,8 @@ def groups(facts: Mapping[str, tuple[str, int]]) -> list[Group]:
 
 
 def _by(runs: Sequence[RunHits]) -> dict[str, dict[str, list[RunHits]]]:
-    out: dict[str, dict[str, list[RunHits]]] = {}
-    for r in runs:
-        out.setdefault(r.algorithm, {}).setdefault(r.context, []).append(r)
-    return out
+    return {alg: grouped(rs, lambda r: r.context)
+            for alg, rs in grouped(runs, lambda r: r.algorithm).items()}
 
 
 def _budgets(runs: Sequence[RunHits]) -> dict[str, float]:

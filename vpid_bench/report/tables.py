@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from .load import Rows, by_context
+from .load import Rows, by_context, grouped
 from .render import p_text
 
 #: The optimizer every report compares against by default (random search).
@@ -40,9 +40,7 @@ def metric_stats(m: Sequence[float], f: Sequence[float]) -> dict[str, float]:
 def summarize(rows: Rows) -> list[dict[str, Any]]:
     """One row per context and algorithm, sorted by context then rank (1 = lowest median
     metric, then mean; NaN without a successful run), with the :func:`metric_stats` keys."""
-    groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
-    for r in rows:
-        groups.setdefault((r["context"], r["algorithm"]), []).append(r)
+    groups = grouped(rows, lambda r: (r["context"], r["algorithm"]))
     names = list(dict.fromkeys(k[7:] for r in rows for k in r if k.startswith("metric.")))
     out = []
     for (context, algorithm), g in sorted(groups.items()):

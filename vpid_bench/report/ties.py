@@ -17,7 +17,8 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any, TypeVar
 
 from ..store.archive_records import instance_id
-from .load import by_context
+from ..store.job_checks import finite
+from .load import by_context, grouped
 
 #: Objective values within this relative difference are the same optimum (the archive's
 #: final target, :data:`vpid_bench.targets`).
@@ -46,12 +47,8 @@ def snap_ties(rows: list[dict[str, Any]], records: Sequence[Mapping[str, Any]]) 
     """In place: per context and instance, the ok runs within :data:`OBJECTIVE_RTOL` of the
     lowest take its metric values. Returns how many runs changed."""
     by_id = {r["run_id"]: r for r in records}
-    groups: dict[tuple[str, Any], list[dict[str, Any]]] = {}
-    for row in rows:
-        f = row.get("f_best")
-        if row["status"] == "ok" and isinstance(f, (int, float)) and math.isfinite(f):
-            key = (row["context"], instance_id(by_id.get(row["run_id"], {})))
-            groups.setdefault(key, []).append(row)
+    groups = grouped((row for row in rows if row["status"] == "ok" and finite(row.get("f_best"))),
+                     lambda row: (row["context"], instance_id(by_id.get(row["run_id"], {}))))
     changed = 0
     for g in groups.values():
         best = min(g, key=lambda r: float(r["f_best"]))
