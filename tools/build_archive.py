@@ -8,6 +8,12 @@ has recorded, so the same command again runs only what is missing. The stages, c
 ``--target``), runs and pack: docs/sweeps.md, building an archive. Anything after ``--``
 goes to both sweeps (e.g. a Hydra launcher). Commit the archive with the code that made it:
 the manifest names the commit and command.
+
+After a peer's code changed, ``--replace nevergrad`` makes only that optimizer's runs again
+(the archive's own command, stopped at the archive's optima) and packs them with every other
+run of the archive kept as it is:
+
+    .venv/bin/python tools/build_archive.py --suite vpid1 --replace nevergrad
 """
 
 from __future__ import annotations
@@ -23,11 +29,14 @@ import sys
 import time
 from pathlib import Path
 
+from vpid_bench.analysis.optimum import optimum_key
 from vpid_bench.job_analysis import SHARED_DIR
 from vpid_bench.plugins import Registry
 from vpid_bench.report.load import load_records
-from vpid_bench.report.pack import pack
-from vpid_bench.store.archive import ARCHIVE_DIR_ENV, RUN_FILES
+from vpid_bench.report.pack import pack, splice
+from vpid_bench.store.archive import ARCHIVE_DIR_ENV, MANIFEST, RUN_FILES, located
+from vpid_bench.store.archive_records import read_archive
+from vpid_bench.store.optimum import write_optimum_file
 
 ROOT = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
@@ -110,6 +119,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     ap.add_argument("--out", type=Path, default=None,
                     help="archive folder (default: archive/<suite> in the repository)")
     ap.add_argument("--no-pack", action="store_true", help="run the sweeps, do not pack")
+    ap.add_argument("--replace", default=None,
+                    help="optimizers (comma-separated) whose runs are made again by the "
+                         "archive's own command and replace theirs in it, every other run kept")
     ap.add_argument("extra", nargs="*", help="overrides for both sweeps (after --)")
     return ap.parse_args(argv)
 
@@ -123,6 +135,71 @@ class Built:
     runs_dir: Path
     seconds: dict[str, float]
     manifest: dict | None = None
+
+
+def ship(out: Path, suite: str, manifest: dict) -> None:
+    """Print each packed file's size; a shipped archive's runs move to their data
+    distribution, ``archive-runs/`` (docs/sweeps.md)."""
+    total = sum(f["bytes"] for f in manifest["files"].values())
+    for name, f in manifest["files"].items():
+        print(f"{out / name}: {f['bytes']:,} bytes, sha256 {f['sha256'][:16]}...")
+    print(f"archive {out}: {manifest['runs']} runs of {len(manifest['optimizers'])} "
+          f"optimizers on {len(manifest['problems'])} problems, {total:,} bytes")
+    if Path(out).resolve().parent == (ROOT / "archive").resolve():
+        home = ROOT / "archive-runs" / "vpid_archive_runs" / suite
+        home.mkdir(parents=True, exist_ok=True)
+        for name in RUN_FILES:
+            (Path(out) / name).replace(home / name)
+        print(f"its runs ({', '.join(RUN_FILES)}) moved to {home}")
+
+
+def rerun_argv(command: str, optimizers: str, runs_dir: Path, extra: list[str]) -> list[str]:
+    """The archive's sweep ``command`` (``vpid-bench -m ...``, from its manifest) with only
+    ``optimizers`` and its sweep folder ``runs_dir``; ``ValueError`` if it is not one."""
+    words = shlex.split(command)
+    if words[:2] != ["vpid-bench", "-m"] or not any(w.startswith("optimizer=") for w in words):
+        raise ValueError(f"the archive's command is not a vpid-bench sweep: {command[:200]!r}")
+    given = tuple(f"{w.split('=', 1)[0]}=" for w in extra if "=" in w)
+    keep = [w for w in words[2:] if not w.startswith(("optimizer=", "hydra.sweep.dir=", *given))]
+    return ["-m", *keep, f"optimizer={optimizers}", f"hydra.sweep.dir={runs_dir}", *extra]
+
+
+def replace(args: argparse.Namespace) -> Built:
+    """Make the runs of ``args.replace`` again and splice them into the archive (``--out``,
+    default ``archive/<suite>``): a copy of the archive as it was goes to ``<build>/before``,
+    whose optima the sweep stops at (``target=``) and starts its ``optima/`` from."""
+    out = (args.out or ROOT / "archive" / args.suite).resolve()
+    base = (args.sweep or ROOT / "outputs" / f"replace-{args.suite}").resolve()
+    before, runs_dir = base / "before" / args.suite, base / "runs"
+    if not before.is_dir():  # the first invocation; a resumed one keeps its copy
+        shutil.copytree(out, before, ignore=shutil.ignore_patterns(*RUN_FILES))
+        for name in RUN_FILES:
+            shutil.copyfile(located(out, name), before / name)
+    archive = read_archive(before, optima_only=True)
+    for opt in archive.optima:  # no truth polished again (as seed_optima does)
+        path = runs_dir / "optima" / (optimum_key(
+            opt.problem, opt.settings or {}, opt.data.get("data"), opt.instance) + ".json")
+        if not path.exists():
+            write_optimum_file(path, opt.data)
+    argv = rerun_argv(str(archive.manifest["command"]), args.replace, runs_dir, args.extra)
+    made_by, t0 = commit(), time.perf_counter()
+    ok = sweep(argv, {**os.environ, ARCHIVE_DIR_ENV: str(before.parent)})
+    seconds = {"runs": time.perf_counter() - t0}
+    if args.no_pack or not clean(runs_dir, ok):
+        return Built(ok and args.no_pack, runs_dir, seconds)
+    t1, spliced = time.perf_counter(), base / "spliced" / args.suite
+    shutil.rmtree(spliced, ignore_errors=True)
+    made_at = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    manifest = splice(before, runs_dir, set(args.replace.split(",")), spliced, replacing={
+        "optimizers": sorted(args.replace.split(",")), "command": "vpid-bench " + shlex.join(argv),
+        "commit": made_by, "made_at": made_at})
+    for name in [*manifest["files"], MANIFEST]:
+        (out / name).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(spliced / name, out / name)
+    seconds["pack"] = time.perf_counter() - t1
+    ship(out, args.suite, manifest)
+    print(f"the runs side by side: {BIN / 'python'} tools/compare_archives.py {before} {out}")
+    return Built(True, runs_dir, seconds, manifest)
 
 
 def build(args: argparse.Namespace) -> Built:
@@ -164,22 +241,13 @@ def build(args: argparse.Namespace) -> Built:
     manifest = pack(runs_dir, args.suite, out, command="vpid-bench " + shlex.join(argv),
                     commit=made_by, made_at=made_at, optima_only=args.optima_only)
     seconds["pack"] = time.perf_counter() - t2
-    total = sum(f["bytes"] for f in manifest["files"].values())
-    for name, f in manifest["files"].items():
-        print(f"{out / name}: {f['bytes']:,} bytes, sha256 {f['sha256'][:16]}...")
-    print(f"archive {out}: {manifest['runs']} runs of {len(manifest['optimizers'])} "
-          f"optimizers on {len(manifest['problems'])} problems, {total:,} bytes")
-    if Path(out).resolve().parent == (ROOT / "archive").resolve():
-        home = ROOT / "archive-runs" / "vpid_archive_runs" / args.suite
-        home.mkdir(parents=True, exist_ok=True)
-        for name in RUN_FILES:  # the runs ship apart from the wheel (docs/sweeps.md)
-            (Path(out) / name).replace(home / name)
-        print(f"its runs ({', '.join(RUN_FILES)}) moved to {home}")
+    ship(out, args.suite, manifest)
     return Built(True, runs_dir, seconds, manifest)
 
 
 def main(argv: list[str] | None = None) -> int:
-    built = build(parse_args(argv))
+    args = parse_args(argv)
+    built = replace(args) if args.replace else build(args)
     print("stages: " + ", ".join(f"{k} {v:.1f} s" for k, v in built.seconds.items()))
     return 0 if built.ok else 1
 

@@ -336,6 +336,7 @@ def test_a_trace_is_cut_to_its_improvements():
                             "batch": [2, 4, 5]}
     assert out["timing"]["trace_s"] == [0.2, 0.4, 0.5]
     assert "batch" not in record["trace"]  # the record itself is not changed
+    assert compact_trace(out) == out  # a cut trace packed again keeps its batch numbers
     odd = {"trace": {"evaluations": [1, 2], "best": [1.0]}}  # not aligned: left as it is
     assert compact_trace(odd) == odd
 

@@ -96,3 +96,50 @@ def test_a_failed_build_is_not_packed(tmp_path):
     done = build(tmp_path, "optimizer.no_such_key=1")
     assert done.returncode != 0
     assert not (tmp_path / "archive").exists()
+
+
+def test_replace_makes_one_optimizers_runs_again_and_keeps_every_other(first, tmp_path):
+    """``--replace random``: the archive's own command with only ``random`` (no certify
+    stage, stopped at the archive's optima, its truths not polished again), spliced in: the
+    other optimizer's lines byte for byte, ``random``'s the new sweep's, the same runs."""
+    import shutil
+
+    tmp, done = first
+    assert done.returncode == 0, done.stderr[-3000:]
+    shutil.copytree(tmp / "archive", tmp_path / "archive")
+    before = {json.loads(line)["run_id"]: line for line in
+              gzip.open(tmp_path / "archive" / "records.jsonl.gz", "rt", encoding="utf-8")}
+    old = json.loads((tmp_path / "archive" / "manifest.json").read_text())
+    again = subprocess.run(
+        [sys.executable, str(ROOT / "tools" / "build_archive.py"), "--suite", "smoke",
+         "--replace", "random", "--sweep", str(tmp_path / "r"), "--out",
+         str(tmp_path / "archive"), "--", "progress=false"],
+        cwd=ROOT, env=cli_env(), capture_output=True, text=True, timeout=limit(600),
+        check=False)
+    assert again.returncode == 0, again.stderr[-3000:]
+    assert "optimizer=lsq" not in again.stdout and "optimizer=random hydra" in again.stdout
+    after = {json.loads(line)["run_id"]: line for line in
+             gzip.open(tmp_path / "archive" / "records.jsonl.gz", "rt", encoding="utf-8")}
+    kept = {k: v for k, v in before.items() if '"name": "de1"' in v}
+    assert len(kept) == 2 and all(after.get(k) == v for k, v in kept.items())
+    made = {json.loads(p.read_text())["run_id"]: json.loads(p.read_text())
+            for p in (tmp_path / "r" / "runs").glob("*/records/run-*.json")}
+    new = {k: json.loads(v) for k, v in after.items() if k not in kept}
+    assert set(new) == set(made) and len(new) == 2
+    old_random = sorted((json.loads(v) for v in before.values() if v not in kept.values()),
+                        key=lambda r: r["run_index"])
+    for was, now in zip(old_random, sorted(new.values(), key=lambda r: r["run_index"]),
+                        strict=True):  # the same code: the same runs
+        assert now["result"]["f_best"] == was["result"]["f_best"]
+        assert now["result"]["evaluations"] == was["result"]["evaluations"]
+        assert now["target"] == was["target"]
+    manifest = json.loads((tmp_path / "archive" / "manifest.json").read_text())
+    assert manifest["command"] == old["command"] and manifest["runs"] == 4
+    [entry] = manifest["replaced"]
+    assert entry["optimizers"] == ["random"] and "optimizer=random" in entry["command"]
+    # the sweep's optima started from the archive's, under the keys its jobs look up (a
+    # wrong key: the jobs polish each truth again into files of their own)
+    names = sorted(p.name for p in (tmp_path / "r" / "runs" / "optima").glob("*.json"))
+    assert names == sorted(p.name for p in (tmp / "b" / "runs" / "optima").glob("*.json"))
+    assert (tmp_path / "archive" / "optima.jsonl").read_bytes() == (
+        tmp / "archive" / "optima.jsonl").read_bytes()

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -123,14 +123,18 @@ class ReportData:
 
 
 def compute(paths: Sequence[str | Path], short: bool, alpha: float, baseline: str,
-            archive: bool | Path = False, progress: Stages | None = None) -> ReportData:
+            archive: bool | Path = False, progress: Stages | None = None,
+            keep: Callable[[dict[str, Any]], bool] | None = None) -> ReportData:
     """Load the records below ``paths`` and compute everything the report shows (raises
     :class:`~.load.NoRecordsError` without a readable record); ``archive``: add the
-    archived built-ins' runs (``True``: the shipped archives; or a folder of archives)."""
+    archived built-ins' runs (``True``: the shipped archives; or a folder of archives);
+    ``keep``: only the records it keeps (an archive's runs with some optimizers' left out)."""
     paths = [Path(p) for p in paths]
     if progress is not None:
         progress.stage("reading the records")
     loaded, given_optima = _load(paths)
+    if keep is not None:
+        loaded.records[:] = [r for r in loaded.records if keep(r)]
     if not loaded.records:
         extra = ""
         if loaded.skipped:  # say why, from the first one: e.g. records of an older version

@@ -28,6 +28,32 @@ def pack(sweep_dir: Path, suite: str, out: Path, *, command: str, commit: str | 
                          made_at=made_at, version=__version__, optima_only=optima_only)
 
 
+def splice(archive: Path, sweep_dir: Path, replaced: set[str], out: Path, *,
+           replacing: Mapping[str, Any]) -> dict[str, Any]:
+    """Write into ``out`` the archive in ``archive`` with the runs of the optimizers
+    ``replaced`` taken from the sweep in ``sweep_dir`` instead; return its manifest.
+
+    Every other run, optimum and job file is the archive's (a run packed again is the same
+    line: :func:`~vpid_bench.store.archive_pack.compact_trace` keeps a cut trace); the
+    summary and IOHprofiler export are computed again from the runs together, the optima are
+    the lowest of the archive's and the sweep's. The manifest keeps the archive's command and
+    commit and adds ``replacing`` (the optimizers, command, commit and time of this sweep) to
+    its ``replaced`` list: after a peer's code changed, only its runs are made again
+    (docs/sweeps.md, rebuilding after a peer's code changed)."""
+    from ..store.archive_records import read_archive
+
+    old = read_archive(archive, optima_only=True)
+    data = compute([archive, sweep_dir], True, 0.05, "random", archive=False,
+                   keep=lambda r: ("_archive" in r) != (r["optimizer"]["name"] in replaced))
+    optima = old.optima + load_optima([sweep_dir], data.loaded.records).optima
+    manifest = old.manifest
+    return write_archive(out, str(manifest["suite"]), data.loaded.records, data.rows, optima,
+                         summary_rows(data.rows), command=str(manifest["command"]),
+                         commit=manifest.get("commit"), made_at=str(manifest["made_at"]),
+                         version=str(manifest["vpid_bench_version"]),
+                         replaced=[*manifest.get("replaced", []), dict(replacing)])
+
+
 def _median(values: Sequence[float]) -> float:
     """The median of the numbers that are not NaN (NaN when none)."""
     vals = [float(v) for v in values if isinstance(v, (int, float)) and not math.isnan(v)]

@@ -12,11 +12,10 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..errors import VpidBenchError
 from . import archive as arc
 from .csv_table import write_csv
 from .ioh import write_zip
-from .optimum import Optimum, read_optimum_data
+from .optimum import Optimum
 from .records import _jsonable
 
 #: Record keys left out of an archive (each run's copy of its plugins' dependency list).
@@ -45,7 +44,8 @@ def compact_trace(record: Mapping[str, Any]) -> dict[str, Any]:
     batch with a finite best, every strict improvement, and the last batch), each kept
     entry's batch number in ``trace.batch`` (1 for the first) and ``timing.trace_s`` cut
     alike: lossless for every reading of the report (docs/protocol.md, the archive), as the
-    trace is a step function. A run of 9,000 single-candidate batches keeps a few hundred."""
+    trace is a step function. A run of 9,000 single-candidate batches keeps a few hundred.
+    A trace cut already (an archived run's, packed again) comes back unchanged."""
     out = dict(record)
     trace = record.get("trace")
     if not isinstance(trace, Mapping):
@@ -53,6 +53,9 @@ def compact_trace(record: Mapping[str, Any]) -> dict[str, Any]:
     ev, best = trace.get("evaluations"), trace.get("best")
     if not (isinstance(ev, list) and isinstance(best, list) and ev and len(ev) == len(best)):
         return out
+    batch = trace.get("batch")  # an archived run's trace, cut already: its batch numbers
+    if not (isinstance(batch, list) and len(batch) == len(ev)):
+        batch = list(range(1, len(ev) + 1))
     keep, last = [], None
     for i, b in enumerate(best):
         if b is not None and (last is None or b < last):
@@ -61,7 +64,7 @@ def compact_trace(record: Mapping[str, Any]) -> dict[str, Any]:
     if not keep or keep[-1] != len(ev) - 1:
         keep.append(len(ev) - 1)
     out["trace"] = {**trace, "evaluations": [ev[i] for i in keep],
-                    "best": [best[i] for i in keep], "batch": [i + 1 for i in keep]}
+                    "best": [best[i] for i in keep], "batch": [batch[i] for i in keep]}
     timing = record.get("timing")
     secs = timing.get("trace_s") if isinstance(timing, Mapping) else None
     if isinstance(secs, list) and len(secs) == len(ev):
@@ -72,13 +75,16 @@ def compact_trace(record: Mapping[str, Any]) -> dict[str, Any]:
 def write_archive(out: Path, suite: str, records: Sequence[Mapping[str, Any]],
                   rows: Sequence[Mapping[str, Any]], optima: Sequence[Optimum],
                   summary: Sequence[Sequence[Any]], *, command: str, commit: str | None,
-                  made_at: str, version: str, optima_only: bool = False) -> dict[str, Any]:
+                  made_at: str, version: str, optima_only: bool = False,
+                  replaced: Sequence[Mapping[str, Any]] = ()) -> dict[str, Any]:
     """Write the archive of a sweep's ``records`` (as loaded, with their job folders) into
     ``out`` and return its manifest: the lowest of ``optima`` per instance, the
     ``summary`` rows (:data:`SUMMARY_HEADERS`) and the IOHprofiler export of the report's
     ``rows``. ``optima_only``: ship the instance optima alone (no runs to rank beside a
     report's, the optima that ``target=`` stops at). ``version``: vpid-bench's, for the
-    manifest (given by the caller: the store imports nothing above it)."""
+    manifest (given by the caller: the store imports nothing above it). ``replaced``: the
+    sweeps whose runs replaced some optimizers' since ``command`` (optimizers, command, commit,
+    made_at each), in the manifest when there are any."""
     out.mkdir(parents=True, exist_ok=True)
     found = sorted(records, key=lambda r: (
         r["problem"]["name"], r["optimizer"]["name"], r["run_index"]))
@@ -91,7 +97,7 @@ def write_archive(out: Path, suite: str, records: Sequence[Mapping[str, Any]],
     for o in sorted(optima, key=lambda o: (o.problem, str(o.instance), o.f_opt)):
         lowest.setdefault(arc.optimum_instance(o), o)
     (out / arc.OPTIMA).write_text("".join(
-        json.dumps(_optimum_data(o.path), sort_keys=True) + "\n"
+        json.dumps(o.data, sort_keys=True) + "\n"
         for o in lowest.values()), encoding="utf-8")
     job_files = [] if optima_only else _copy_job_files(found, out)
     write_csv(out / arc.SUMMARY, SUMMARY_HEADERS, [] if optima_only else summary)
@@ -107,6 +113,7 @@ def write_archive(out: Path, suite: str, records: Sequence[Mapping[str, Any]],
         "vpid_bench_version": version, "commit": commit,
         "optimizers": sorted({r["optimizer"]["name"] for r in runs}),
         "runs": len(runs), "problems": problems, "optima_only": optima_only,
+        **({"replaced": [dict(r) for r in replaced]} if replaced else {}),
         "files": {name: {"sha256": arc._sha256((out / name).read_bytes()),
                          "bytes": (out / name).stat().st_size}
                   for name in (arc.RECORDS, arc.OPTIMA, arc.SUMMARY, arc.IOH, *job_files)},
@@ -135,12 +142,3 @@ def _copy_job_files(records: Sequence[Mapping[str, Any]], out: Path) -> list[str
             shutil.copyfile(job / f, out / arc.JOBS / problem / f)
             names.append(f"{arc.JOBS}/{problem}/{f}")
     return names
-
-
-def _optimum_data(path: Path) -> dict[str, Any]:
-    """The optimum file ``path`` as its one reader takes it (it was read once already: a file
-    changed since is refused, not copied)."""
-    data, why = read_optimum_data(path)
-    if data is None:
-        raise VpidBenchError(f"optimum file {path}: {why}")
-    return data

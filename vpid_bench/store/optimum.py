@@ -35,6 +35,8 @@ class Optimum:
     f_true: float | None
     metrics: Mapping[str, float]
     starts: int
+    #: The checked data as read (what an archive writes as the instance's line).
+    data: Mapping[str, Any] = dataclasses.field(default_factory=dict, repr=False)
 
 
 def check_optimum(data: Any) -> str | None:
@@ -111,7 +113,7 @@ def optimum_from_data(data: Any, path: Path) -> tuple[Optimum | None, str | None
                    x_opt=tuple(float(v) for v in data["x_opt"]), f_opt=float(data["f_opt"]),
                    f_true=None if data.get("f_true") is None else float(data["f_true"]),
                    metrics={k: float(v) for k, v in (data.get("metrics") or {}).items()},
-                   starts=int(data["starts"])), None
+                   starts=int(data["starts"]), data=data), None
 
 
 @dataclasses.dataclass
