@@ -40,6 +40,12 @@ def archived(folder: Path) -> list[dict]:
         return [json.loads(line) for line in fh]
 
 
+def lines(folder: Path) -> dict[str, str]:
+    """The archive's record lines by run id, as written."""
+    with gzip.open(folder / "records.jsonl.gz", "rt", encoding="utf-8") as fh:
+        return {json.loads(line)["run_id"]: line for line in fh}
+
+
 @pytest.fixture(scope="module")
 def first(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("build")
@@ -107,8 +113,7 @@ def test_replace_makes_one_optimizers_runs_again_and_keeps_every_other(first, tm
     tmp, done = first
     assert done.returncode == 0, done.stderr[-3000:]
     shutil.copytree(tmp / "archive", tmp_path / "archive")
-    before = {json.loads(line)["run_id"]: line for line in
-              gzip.open(tmp_path / "archive" / "records.jsonl.gz", "rt", encoding="utf-8")}
+    before = lines(tmp_path / "archive")
     old = json.loads((tmp_path / "archive" / "manifest.json").read_text())
     again = subprocess.run(
         [sys.executable, str(ROOT / "tools" / "build_archive.py"), "--suite", "smoke",
@@ -118,8 +123,7 @@ def test_replace_makes_one_optimizers_runs_again_and_keeps_every_other(first, tm
         check=False)
     assert again.returncode == 0, again.stderr[-3000:]
     assert "optimizer=lsq" not in again.stdout and "optimizer=random hydra" in again.stdout
-    after = {json.loads(line)["run_id"]: line for line in
-             gzip.open(tmp_path / "archive" / "records.jsonl.gz", "rt", encoding="utf-8")}
+    after = lines(tmp_path / "archive")
     kept = {k: v for k, v in before.items() if '"name": "de1"' in v}
     assert len(kept) == 2 and all(after.get(k) == v for k, v in kept.items())
     made = {json.loads(p.read_text())["run_id"]: json.loads(p.read_text())
