@@ -64,13 +64,15 @@ def ccf(r: np.ndarray, u: np.ndarray, lags: int) -> np.ndarray:
 
 def ljung_box(r: np.ndarray, lags: int) -> tuple[float, float]:
     """The Ljung–Box statistic over lags ``1..lags`` and its p-value (χ² with ``lags``
-    degrees of freedom; statsmodels' ``acorr_ljungbox`` gives the same, tested)."""
-    from scipy.stats import chi2
+    degrees of freedom; statsmodels' ``acorr_ljungbox`` gives the same, tested). The χ²
+    survival function from ``scipy.special`` (``chdtrc``, what ``scipy.stats.chi2.sf``
+    computes): importing ``scipy.stats`` cost each job's analysis 0.65 s."""
+    from scipy.special import chdtrc
 
     n = r.size
     rho = acf(r, lags)[1:]
     q = float(n * (n + 2) * np.sum(rho**2 / (n - np.arange(1, lags + 1))))
-    return q, float(chi2.sf(q, lags))
+    return q, float(chdtrc(lags, q))
 
 
 def second_difference_sigma(r: np.ndarray) -> float:

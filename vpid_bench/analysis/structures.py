@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from .diagnostics import ljung_box
+
 #: Lags of the whiteness test (samples).
 LAGS = 20
 #: Of each channel's samples, the share fitted; the rest is held out.
@@ -40,11 +42,9 @@ class StructureFit:
 
 
 def ljung_box_p(residuals: np.ndarray, lags: int = LAGS) -> float:
-    """The Ljung-Box p-value of one residual series at ``lags`` (statsmodels)."""
-    from statsmodels.stats.diagnostic import acorr_ljungbox
-
-    out = acorr_ljungbox(np.asarray(residuals, dtype=float), lags=[lags])
-    return float(out["lb_pvalue"].iloc[0])
+    """The Ljung-Box p-value of one residual series at ``lags``
+    (:func:`.diagnostics.ljung_box`, statsmodels' value, tested)."""
+    return ljung_box(np.asarray(residuals, dtype=float), lags)[1]
 
 
 def segments(groups: np.ndarray, fit_fraction: float = FIT_FRACTION
