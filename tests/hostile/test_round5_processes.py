@@ -407,6 +407,7 @@ def test_N4_what_cannot_be_ended_is_named_in_one_warning_line(tmp_path, monkeypa
     sleeper = subprocess.Popen(["sleep", "60"], env={**os.environ,
                                                       worker_tree.MARK: worker.tree.token})
     real = worker_tree._Held.signal
+    monkeypatch.setattr(worker_tree, "WAIT_S", 1.0)  # how long it waits for the unkillable
     monkeypatch.setattr(worker_tree._Held, "signal", lambda self, sig: None if
                         self.pid == sleeper.pid else real(self, sig))
     try:

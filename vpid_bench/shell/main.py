@@ -26,6 +26,7 @@ from ..errors import VpidBenchError
 from ..fileio import loads_json, open_append, read_text_limited, write_text_atomic
 from ..machine import available_cores, environ
 from ..plugins import PluginLoadWarning, Registry
+from ..spec import JobSpec
 from ..store.archive import evaluation_seconds
 from ..store.job_status import write_job_status
 from . import preflight
@@ -340,7 +341,7 @@ def _main(argv: Sequence[str] | None) -> None:
         lock.release()
     _leave(1 if _failures(plan.output_dir, plan.multirun, plan.job_dirs,
                           report_expected=bool(plan.jobs) and plan.jobs[0].spec.report)
-           else 0, before, watch=console)
+           else 0, before, watch=console, grace_s=_grace(plan))
 
 
 def _prepare_folder(plan: Any, key: str, task: JobTask) -> Any:
@@ -377,7 +378,7 @@ def _report_only(plan: Any, task: JobTask, lock: Any, before: set[Any], watch: b
     finally:
         task.close()
         lock.release()
-    _leave(0 if ok else 1, before, watch)
+    _leave(0 if ok else 1, before, watch, _grace(plan))
 
 
 def _quick_help(cmd: Any, registry: Any) -> bool:
@@ -401,23 +402,24 @@ def _sweep_progress(plan: Any) -> Any:
     return SweepProgress(len(plan.jobs), sum(j.spec.runs for j in plan.jobs))
 
 
-#: Seconds the process may take to end before threads a plugin left running are abandoned.
-THREAD_GRACE_S = 10.0
+def _grace(plan: Any) -> float:
+    """The sweep's ``grace_s`` (its first job's: the key is top-level), else its default."""
+    return float(plan.jobs[0].spec.grace_s) if plan.jobs else JobSpec.grace_s
 
 
-def _leave(code: int, before: set[Any], watch: bool) -> None:
+def _leave(code: int, before: set[Any], watch: bool, grace_s: float) -> None:
     """End the command with ``code``. A non-daemon thread a plugin left running (not one of
     ``before``) would keep the process alive for ever: with ``watch`` (the console command),
-    a watchdog gives the shutdown :data:`THREAD_GRACE_S`, then names them and exits."""
+    a watchdog gives the shutdown ``grace_s`` (the sweep's key), then names them and exits."""
     mine = [t for t in threading.enumerate() if t is not threading.main_thread()
             and not t.daemon and t not in before]
     if watch and mine:
         def watchdog() -> None:
-            time.sleep(THREAD_GRACE_S)
+            time.sleep(grace_s)
             names = ", ".join(t.name for t in mine if t.is_alive()) or "?"
             print(f"warning: thread(s) {names} started by a plugin still run "
-                  f"{THREAD_GRACE_S:g} s after the end; exiting without them (every record "
-                  "is written)", file=sys.stderr)
+                  f"{grace_s:g} s after the end (grace_s); exiting without them (every "
+                  "record is written)", file=sys.stderr)
             sys.stdout.flush()
             sys.stderr.flush()
             os._exit(code)
