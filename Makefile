@@ -46,7 +46,7 @@ browser:
 
 test: install browser
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest -n auto --durations=15
+	$(BIN)/python -m pytest -n auto --dist worksteal --durations=15
 
 # What the default run leaves out (-m slow, pyproject's addopts): the long experiments, the
 # CLI re-proofs whose fast in-process twins the default run keeps, and the fuzz tests with ten

@@ -12,6 +12,20 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("MPLCONFIGDIR", tempfile.mkdtemp(prefix="vpid-mpl-"))
 
 
+def pytest_configure(config: pytest.Config) -> None:
+    """Under xdist, pin each test process to one core of its own (``gw0`` the first, ...),
+    with every process it starts: a CLI test's command then sees one core, as on a one-core
+    allocation, and starts one worker process per job, not one per core (each costs about
+    1.2 s of CPU to start), and two test processes never share a core. Not Linux, or one core:
+    nothing is pinned. A test that needs more cores widens its own (tests/extras.py)."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "").removeprefix("gw")
+    if not worker.isdigit() or not hasattr(os, "sched_setaffinity"):
+        return
+    cores = sorted(os.sched_getaffinity(0))
+    if len(cores) > 1:
+        os.sched_setaffinity(0, {cores[int(worker) % len(cores)]})
+
+
 @pytest.fixture(scope="session")
 def registry():
     """The plugin registry of the installed environment (built-ins and third parties)."""

@@ -7,8 +7,9 @@ plugin at all is installed (the ``hydra_plugins`` namespace itself is missing, a
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
-from collections.abc import Callable
+from collections.abc import Iterator
 
 import pytest
 
@@ -45,22 +46,24 @@ def limit(seconds: float) -> float:
     return seconds * min(8.0, max(1.0, load))
 
 
-def one_core() -> Callable[[], None] | None:
-    """A ``preexec_fn`` that pins a CLI subprocess to one core of this test process's, the
-    xdist worker's own (``gw0`` the first, ``gw1`` the second, ...): the command then sees one
-    core, as on a one-core allocation, and starts one worker process per job, not one per
-    core (each costs 1.2 s of CPU to start), and two test processes' commands do not share a
-    core. ``None`` where the platform cannot pin (not Linux)."""
-    import os
-
-    if not hasattr(os, "sched_setaffinity"):
-        return None
-    cores = sorted(os.sched_getaffinity(0))
-    worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0").removeprefix("gw")
-    core = cores[int(worker) % len(cores)] if worker.isdigit() else cores[0]
-    return lambda: os.sched_setaffinity(0, {core})
-
-
 #: The shipped archives' runs (archive-runs/, installed by ``make install``): tests that read
 #: them are skipped without it, with the reason.
 needs_archive_runs = needs("vpid_archive_runs", "make install: pip install -e ./archive-runs")
+
+
+@contextlib.contextmanager
+def every_core() -> Iterator[None]:
+    """This process on every core the machine lets it use, for the block (tests/conftest.py
+    pins each xdist test process to one): for a test of work spread over processes."""
+    import os
+
+    if not hasattr(os, "sched_setaffinity"):
+        yield
+        return
+    mine = os.sched_getaffinity(0)
+    with contextlib.suppress(OSError):  # cores it may not use (a cpuset): it stays as it was
+        os.sched_setaffinity(0, range(os.cpu_count() or 1))
+    try:
+        yield
+    finally:
+        os.sched_setaffinity(0, mine)

@@ -12,7 +12,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 
 import pytest
-from extras import limit, one_core
+from extras import limit
 
 CLI = [sys.executable, "-c", "from vpid_bench.shell.main import main; main()"]
 REPORT_CLI = [sys.executable, "-c", "from vpid_bench.report.cli import main; main()"]
@@ -34,7 +34,7 @@ def run_cli(args: Sequence[str], cwd: Path, env: Mapping[str, str] | None = None
     """``vpid-bench <args>`` (or ``vpid-bench-report``) in ``cwd``, text output."""
     return subprocess.run([*(REPORT_CLI if report else CLI), *args], cwd=cwd,
                           env=cli_env(env), capture_output=True, text=True, timeout=limit(timeout),
-                          check=False, preexec_fn=one_core())
+                          check=False)
 
 
 def main_in_process(argv: Sequence[str], capsys) -> tuple[int, str]:

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 from archive_slice import slice_archive
-from extras import needs_archive_runs
+from extras import every_core, needs_archive_runs
 
 from vpid_bench.progress import Stages, duration
 from vpid_bench.report.forked import run_forked
@@ -60,7 +60,8 @@ def test_run_forked_gives_the_results_in_order_with_unpicklable_calls():
     local = {"k": 3}  # a closure over local data: inherited by fork, never pickled
     calls = [lambda i=i: (i, os.getpid(), local["k"] * i) for i in range(6)]
     seen: list[int] = []
-    out = run_forked(calls, seen.append)
+    with every_core():  # a test process has one core of its own (tests/conftest.py)
+        out = run_forked(calls, seen.append)
     assert [(i, v) for i, _, v in out] == [(i, 3 * i) for i in range(6)]
     assert seen == list(range(1, 7))
     if (os.cpu_count() or 1) > 1 and len(os.sched_getaffinity(0)) > 1:

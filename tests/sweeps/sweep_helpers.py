@@ -8,7 +8,7 @@ import sys
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from extras import limit, one_core
+from extras import limit
 
 from vpid_bench.store import records as rec
 
@@ -29,7 +29,7 @@ def run_cli(
     """``vpid-bench <args>`` in ``cwd``; returns the completed process (text output)."""
     return subprocess.run(
         [*CLI, *args], cwd=cwd, env=cli_env(env), capture_output=True, text=True,
-        timeout=limit(timeout), check=False, preexec_fn=one_core(),
+        timeout=limit(timeout), check=False,
     )
 
 
