@@ -590,3 +590,21 @@ def test_the_wheel_ships_no_archived_runs():
     assert "records" not in shipped and "ioh" not in shipped
     runs = package_data(root / "archive-runs" / "pyproject.toml", "vpid_archive_runs")
     assert "records.jsonl.gz" in runs and "ioh.zip" in runs
+
+
+@pytest.mark.parametrize("replaced, said", [
+    ([{"optimizers": ["nevergrad"], "commit": "c8332e2abcdef0123"}],
+     "vpid-bench 0.1.0, commit abc; nevergrad's runs remade at commit c8332e2abcde"),
+    ([{"optimizers": ["a", "b"]}, {"optimizers": ["c"], "commit": "d"}],
+     "vpid-bench 0.1.0, commit abc; a, b's runs remade; c's runs remade at commit d"),
+    ("junk", "vpid-bench 0.1.0, commit abc"),
+    ([1, {"optimizers": "x"}, {"optimizers": [2, "\x1b[31m"]}], "vpid-bench 0.1.0, commit abc"),
+])
+def test_an_archive_names_the_sweeps_that_replaced_runs(replaced, said):
+    """``made_by`` (what a report says of archived runs) names each sweep that remade some
+    optimizers' runs (tools/build_archive.py --replace); an untrusted manifest's junk there
+    is left out, never shown or raised."""
+    from vpid_bench.store.archive_records import Archive
+
+    manifest = {"vpid_bench_version": "0.1.0", "commit": "abc", "replaced": replaced}
+    assert Archive(Path("."), "s", manifest, [], []).made_by == said

@@ -141,6 +141,9 @@ def test_replace_makes_one_optimizers_runs_again_and_keeps_every_other(first, tm
     assert manifest["command"] == old["command"] and manifest["runs"] == 4
     [entry] = manifest["replaced"]
     assert entry["optimizers"] == ["random"] and "optimizer=random" in entry["command"]
+    from vpid_bench.store.archive_records import read_archive
+
+    assert "; random's runs remade at commit" in read_archive(tmp_path / "archive").made_by
     # the sweep's optima started from the archive's, under the keys its jobs look up (a
     # wrong key: the jobs polish each truth again into files of their own)
     names = sorted(p.name for p in (tmp_path / "r" / "runs" / "optima").glob("*.json"))

@@ -16,6 +16,9 @@ from .plausible import implausible
 from .record_check import check_record
 from .records import CorruptRecordError, canonical_json, parse_record
 
+#: Replacing sweeps (and optimizers in one) named by :attr:`Archive.made_by`, at most.
+MAX_REPLACED = 20
+
 
 @dataclasses.dataclass
 class Archive:
@@ -40,11 +43,23 @@ class Archive:
 
     @property
     def made_by(self) -> str:
-        """``vpid-bench <version>, commit <sha>`` as the manifest states it (plain text)."""
+        """``vpid-bench <version>, commit <sha>`` as the manifest states it, and each later
+        sweep that replaced some optimizers' runs (``; nevergrad's runs remade at commit
+        <sha>``), plain text."""
         m = self.manifest
         version = arc._plain(m.get("vpid_bench_version"))
         commit = arc._plain(m.get("commit"))
-        return f"vpid-bench {version}" + (f", commit {commit[:12]}" if commit else "")
+        out = f"vpid-bench {version}" + (f", commit {commit[:12]}" if commit else "")
+        replaced = m.get("replaced")
+        for entry in replaced[:MAX_REPLACED] if isinstance(replaced, list) else ():
+            names = entry.get("optimizers") if isinstance(entry, Mapping) else None
+            names = [arc._plain(n) for n in names if arc._plain(n)] if isinstance(
+                names, list) else []
+            if names:
+                sha = arc._plain(entry.get("commit"))
+                out += (f"; {', '.join(names[:MAX_REPLACED])}'s runs remade"
+                        + (f" at commit {sha[:12]}" if sha else ""))
+        return out
 
 
 def _job_folder(folder: Path, manifest: Mapping[str, Any], problem: str) -> Path:
