@@ -104,3 +104,21 @@ def test_the_report_over_an_archive_says_each_stage_on_stderr(tmp_path, capsys):
     total = stages[2].removeprefix("report: figures (").rstrip(")")
     assert f"report: figures {total}/{total}" in stages
     assert out.startswith("The answer")
+
+
+def test_an_interrupted_run_forked_ends_its_processes_at_once():
+    """A Ctrl-C (or SIGTERM) while the calls run: raised at once, and every process the pool
+    forked is ended, not waited for (a call here would sleep 30 s) nor left behind."""
+    import multiprocessing
+    import time
+
+    def interrupt(n: int) -> None:
+        raise KeyboardInterrupt
+
+    before = set(multiprocessing.active_children())
+    calls = [lambda: 1, lambda: time.sleep(30) or 2, lambda: 3]
+    t0 = time.monotonic()
+    with every_core(), pytest.raises(KeyboardInterrupt):
+        run_forked(calls, interrupt)
+    assert time.monotonic() - t0 < 10
+    assert not set(multiprocessing.active_children()) - before

@@ -11,6 +11,7 @@ import contextlib
 import logging
 import multiprocessing
 import signal
+import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -58,18 +59,24 @@ def run_forked(calls: Sequence[Callable[[], T]], done: Callable[[int], Any] | No
     if workers > 1 and "fork" in multiprocessing.get_all_start_methods() and not _CALLS:
         _CALLS[:] = calls
         out: list[T] = []
+        before = set(multiprocessing.active_children())
+        pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"),
+                                   initializer=_take_signals)
         try:
-            with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"),
-                                     initializer=_take_signals) as pool:
-                with _signals_held():  # the pool forks its processes as the calls are given
-                    results = pool.map(_call, range(len(calls)))
-                for result in results:
-                    out.append(result)
-                    if done is not None:
-                        done(len(out))
+            with _signals_held():  # the pool forks its processes as the calls are given
+                results = pool.map(_call, range(len(calls)))
+            for result in results:
+                out.append(result)
+                if done is not None:
+                    done(len(out))
+            pool.shutdown()
             return out
         except BrokenProcessPool:
             log.debug("a forked process died; computing here", exc_info=True)
+            pool.shutdown(wait=False, cancel_futures=True)
+        except BaseException:  # a Ctrl-C or SIGTERM, a call's error: its processes end now
+            _end(pool, before)
+            raise
         finally:
             _CALLS.clear()
     out = []
@@ -78,3 +85,21 @@ def run_forked(calls: Sequence[Callable[[], T]], done: Callable[[int], Any] | No
         if done is not None:
             done(len(out))
     return out
+
+
+def _end(pool: ProcessPoolExecutor, before: set[multiprocessing.process.BaseProcess]) -> None:
+    """Stop ``pool`` without waiting and kill every process forked since ``before`` (SIGKILL:
+    they inherited the command's handlers, which only note a SIGTERM), including one the
+    pool's thread starts meanwhile. Left to the pool's own shutdown, an interrupted report
+    waited for every call under way, and the tests once found two of its forked processes
+    left behind, blocked for ever reading a pipe."""
+    pool.shutdown(wait=False, cancel_futures=True)
+    deadline = time.monotonic() + 5.0
+    while time.monotonic() < deadline:
+        forked = set(multiprocessing.active_children()) - before
+        if not forked:
+            return
+        for process in forked:
+            process.kill()
+        for process in forked:
+            process.join(0.5)
