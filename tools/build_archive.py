@@ -34,7 +34,7 @@ from vpid_bench.job_analysis import SHARED_DIR
 from vpid_bench.plugins import Registry
 from vpid_bench.report.load import load_records
 from vpid_bench.report.pack import pack, splice
-from vpid_bench.store.archive import ARCHIVE_DIR_ENV, MANIFEST, RUN_FILES, located
+from vpid_bench.store.archive import ARCHIVE_DIR_ENV, MANIFEST, RUN_FILES, ArchiveError, located
 from vpid_bench.store.archive_records import read_archive
 from vpid_bench.store.optimum import write_optimum_file
 
@@ -176,12 +176,12 @@ def replace(args: argparse.Namespace) -> Built:
         for name in RUN_FILES:
             shutil.copyfile(located(out, name), before / name)
     archive = read_archive(before, optima_only=True)
+    argv = rerun_argv(str(archive.manifest["command"]), args.replace, runs_dir, args.extra)
     for opt in archive.optima:  # no truth polished again (as seed_optima does)
         path = runs_dir / "optima" / (optimum_key(
             opt.problem, opt.settings or {}, opt.data.get("data"), opt.instance) + ".json")
         if not path.exists():
             write_optimum_file(path, opt.data)
-    argv = rerun_argv(str(archive.manifest["command"]), args.replace, runs_dir, args.extra)
     made_by, t0 = commit(), time.perf_counter()
     ok = sweep(argv, {**os.environ, ARCHIVE_DIR_ENV: str(before.parent)})
     seconds = {"runs": time.perf_counter() - t0}
@@ -247,7 +247,11 @@ def build(args: argparse.Namespace) -> Built:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
-    built = replace(args) if args.replace else build(args)
+    try:
+        built = replace(args) if args.replace else build(args)
+    except (ArchiveError, ValueError, OSError) as exc:  # --replace: no usable archive there
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     print("stages: " + ", ".join(f"{k} {v:.1f} s" for k, v in built.seconds.items()))
     return 0 if built.ok else 1
 

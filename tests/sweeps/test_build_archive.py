@@ -150,3 +150,35 @@ def test_replace_makes_one_optimizers_runs_again_and_keeps_every_other(first, tm
     assert names == sorted(p.name for p in (tmp / "b" / "runs" / "optima").glob("*.json"))
     assert (tmp_path / "archive" / "optima.jsonl").read_bytes() == (
         tmp / "archive" / "optima.jsonl").read_bytes()
+
+
+@pytest.mark.parametrize("archive", ["missing", "not-an-archive", "no-sweep-command"])
+def test_replace_without_a_usable_archive_is_one_line(tmp_path, archive):
+    """``--replace`` on a folder that is missing, holds no archive, or an archive whose
+    manifest names no ``vpid-bench -m`` sweep: one ``error:`` line, exit 2, nothing run."""
+    import shutil
+
+    out = tmp_path / "archive"
+    if archive != "missing":
+        out.mkdir()
+    if archive == "no-sweep-command":
+        from vpid_bench.store.archive import RUN_FILES, located
+
+        shutil.copytree(ROOT / "archive" / "smoke", out, dirs_exist_ok=True)
+        for name in RUN_FILES:  # the shipped runs' data distribution (make install)
+            if not located(ROOT / "archive" / "smoke", name).is_file():
+                pytest.skip("the archive's runs are not installed (make install)")
+            shutil.copyfile(located(ROOT / "archive" / "smoke", name), out / name)
+        manifest = json.loads((out / "manifest.json").read_text())
+        (out / "manifest.json").write_text(json.dumps({**manifest, "command": "rm -rf /"}))
+    done = subprocess.run(
+        [sys.executable, str(ROOT / "tools" / "build_archive.py"), "--suite", "smoke",
+         "--replace", "random", "--sweep", str(tmp_path / "r"), "--out", str(out)],
+        cwd=ROOT, env=cli_env(), capture_output=True, text=True, timeout=limit(120),
+        check=False)
+    assert done.returncode == 2, done.stderr[-2000:]
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), done.stderr[-2000:]
+    if archive == "no-sweep-command":
+        assert "is not a vpid-bench sweep: 'rm -rf /'" in lines[0]
+    assert "vpid-bench -m" not in done.stdout and not (tmp_path / "r" / "runs").exists()
