@@ -22,6 +22,7 @@ import argparse
 import dataclasses
 import datetime
 import os
+import re
 import shlex
 import shutil
 import subprocess
@@ -153,11 +154,19 @@ def ship(out: Path, suite: str, manifest: dict) -> None:
         print(f"its runs ({', '.join(RUN_FILES)}) moved to {home}")
 
 
+#: An override the archive's command may hold (an untrusted manifest): ``key=value`` with a
+#: dotted key, no Hydra key (a callback could name code to run), no ``+``/``~``, no ``_target_``.
+PLAIN_OVERRIDE = re.compile(r"[A-Za-z][A-Za-z0-9_.]*=[^\s]*")
+
+
 def rerun_argv(command: str, optimizers: str, runs_dir: Path, extra: list[str]) -> list[str]:
     """The archive's sweep ``command`` (``vpid-bench -m ...``, from its manifest) with only
     ``optimizers`` and its sweep folder ``runs_dir``; ``ValueError`` if it is not one."""
     words = shlex.split(command)
-    if words[:2] != ["vpid-bench", "-m"] or not any(w.startswith("optimizer=") for w in words):
+    plain = all(PLAIN_OVERRIDE.fullmatch(w) and "_target_" not in w and not w.startswith(
+        "hydra") for w in words[2:] if not w.startswith("hydra.sweep.dir="))  # replaced below
+    if words[:2] != ["vpid-bench", "-m"] or not plain or not any(
+            w.startswith("optimizer=") for w in words):
         raise ValueError(f"the archive's command is not a vpid-bench sweep: {command[:200]!r}")
     given = tuple(f"{w.split('=', 1)[0]}=" for w in extra if "=" in w)
     keep = [w for w in words[2:] if not w.startswith(("optimizer=", "hydra.sweep.dir=", *given))]

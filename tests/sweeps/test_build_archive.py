@@ -152,10 +152,14 @@ def test_replace_makes_one_optimizers_runs_again_and_keeps_every_other(first, tm
         tmp / "archive" / "optima.jsonl").read_bytes()
 
 
-@pytest.mark.parametrize("archive", ["missing", "not-an-archive", "no-sweep-command"])
-def test_replace_without_a_usable_archive_is_one_line(tmp_path, archive):
+@pytest.mark.parametrize("archive, command", [
+    ("missing", None), ("not-an-archive", None), ("no-sweep-command", "rm -rf /"),
+    ("no-sweep-command", "vpid-bench -m optimizer=de1 +hydra.callbacks.x._target_=os.system"),
+    ("no-sweep-command", "vpid-bench -m optimizer=de1 hydra/launcher=joblib")])
+def test_replace_without_a_usable_archive_is_one_line(tmp_path, archive, command):
     """``--replace`` on a folder that is missing, holds no archive, or an archive whose
-    manifest names no ``vpid-bench -m`` sweep: one ``error:`` line, exit 2, nothing run."""
+    (untrusted) manifest names no plain ``vpid-bench -m`` sweep (a Hydra key, a callback that
+    would run code): one ``error:`` line, exit 2, nothing run or written."""
     import shutil
 
     out = tmp_path / "archive"
@@ -170,7 +174,7 @@ def test_replace_without_a_usable_archive_is_one_line(tmp_path, archive):
                 pytest.skip("the archive's runs are not installed (make install)")
             shutil.copyfile(located(ROOT / "archive" / "smoke", name), out / name)
         manifest = json.loads((out / "manifest.json").read_text())
-        (out / "manifest.json").write_text(json.dumps({**manifest, "command": "rm -rf /"}))
+        (out / "manifest.json").write_text(json.dumps({**manifest, "command": command}))
     done = subprocess.run(
         [sys.executable, str(ROOT / "tools" / "build_archive.py"), "--suite", "smoke",
          "--replace", "random", "--sweep", str(tmp_path / "r"), "--out", str(out)],
@@ -180,5 +184,5 @@ def test_replace_without_a_usable_archive_is_one_line(tmp_path, archive):
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: "), done.stderr[-2000:]
     if archive == "no-sweep-command":
-        assert "is not a vpid-bench sweep: 'rm -rf /'" in lines[0]
+        assert f"is not a vpid-bench sweep: {command!r}" in lines[0]
     assert "vpid-bench -m" not in done.stdout and not (tmp_path / "r" / "runs").exists()
