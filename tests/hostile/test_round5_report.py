@@ -260,6 +260,7 @@ def test_n8_a_sigterm_a_fork_callback_swallowed_still_ends_the_report(two_sweeps
     figures are drawn in forked processes) raises there, and Python only prints "Exception
     ignored": the report once went on and exited 0. Here the signal is sent from that very
     callback: the build ends with ``KeyboardInterrupt`` and the old report is whole."""
+    import psutil
     from extras import every_core
 
     from vpid_bench import interrupts
@@ -272,6 +273,7 @@ def test_n8_a_sigterm_a_fork_callback_swallowed_still_ends_the_report(two_sweeps
     _report([a], out, short=True)
     before = _files(out)
     armed = {"on": False}
+    children = {c.pid for c in psutil.Process().children()}
 
     def kill_in_callback() -> None:
         if armed.pop("on", False):
@@ -293,6 +295,7 @@ def test_n8_a_sigterm_a_fork_callback_swallowed_still_ends_the_report(two_sweeps
         (interrupts._Watch.installed, interrupts._Watch.signalled,
          interrupts._Watch.signum) = watch
     assert _files(out) == before and _leftovers(out) == []
+    assert not {c.pid for c in psutil.Process().children()} - children  # none left behind
 
 
 def test_n8_two_reports_written_at_once_leave_one_whole(two_sweeps, tmp_path):

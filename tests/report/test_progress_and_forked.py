@@ -8,6 +8,7 @@ import io
 import os
 from pathlib import Path
 
+import psutil
 import pytest
 from archive_slice import slice_archive
 from extras import every_core, needs_archive_runs
@@ -77,6 +78,7 @@ def test_run_forked_raises_a_calls_error_here():
 
 
 def test_a_forked_process_that_dies_costs_only_speed():
+    """The calls run here again, and the pool's other process is ended, not left behind."""
     parent = os.getpid()
 
     def dies_elsewhere():
@@ -84,7 +86,10 @@ def test_a_forked_process_that_dies_costs_only_speed():
             os._exit(3)  # a crash in a library, in the forked process only
         return "here"
 
-    assert run_forked([lambda: 1, dies_elsewhere]) == [1, "here"]
+    before = {c.pid for c in psutil.Process().children()}
+    with every_core():  # a test process has one core of its own (tests/conftest.py)
+        assert run_forked([lambda: 1, dies_elsewhere]) == [1, "here"]
+    assert not {c.pid for c in psutil.Process().children()} - before
 
 
 @needs_archive_runs
@@ -109,16 +114,15 @@ def test_the_report_over_an_archive_says_each_stage_on_stderr(tmp_path, capsys):
 def test_an_interrupted_run_forked_ends_its_processes_at_once():
     """A Ctrl-C (or SIGTERM) while the calls run: raised at once, and every process the pool
     forked is ended, not waited for (a call here would sleep 30 s) nor left behind."""
-    import multiprocessing
     import time
 
     def interrupt(n: int) -> None:
         raise KeyboardInterrupt
 
-    before = set(multiprocessing.active_children())
+    before = {c.pid for c in psutil.Process().children()}
     calls = [lambda: 1, lambda: time.sleep(30) or 2, lambda: 3]
     t0 = time.monotonic()
     with every_core(), pytest.raises(KeyboardInterrupt):
         run_forked(calls, interrupt)
     assert time.monotonic() - t0 < 10
-    assert not set(multiprocessing.active_children()) - before
+    assert not {c.pid for c in psutil.Process().children()} - before

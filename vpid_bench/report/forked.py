@@ -17,6 +17,8 @@ from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any, TypeVar
 
+import psutil
+
 from ..interrupts import SIGNALS
 from ..machine import available_cores
 
@@ -59,7 +61,7 @@ def run_forked(calls: Sequence[Callable[[], T]], done: Callable[[int], Any] | No
     if workers > 1 and "fork" in multiprocessing.get_all_start_methods() and not _CALLS:
         _CALLS[:] = calls
         out: list[T] = []
-        before = set(multiprocessing.active_children())
+        before = _children()
         pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"),
                                    initializer=_take_signals)
         try:
@@ -71,9 +73,9 @@ def run_forked(calls: Sequence[Callable[[], T]], done: Callable[[int], Any] | No
                     done(len(out))
             pool.shutdown()
             return out
-        except BrokenProcessPool:
+        except BrokenProcessPool:  # the others may be stuck (a lock held at the fork): ended
             log.debug("a forked process died; computing here", exc_info=True)
-            pool.shutdown(wait=False, cancel_futures=True)
+            _end(pool, before)
         except BaseException:  # a Ctrl-C or SIGTERM, a call's error: its processes end now
             _end(pool, before)
             raise
@@ -87,19 +89,27 @@ def run_forked(calls: Sequence[Callable[[], T]], done: Callable[[int], Any] | No
     return out
 
 
-def _end(pool: ProcessPoolExecutor, before: set[multiprocessing.process.BaseProcess]) -> None:
-    """Stop ``pool`` without waiting and kill every process forked since ``before`` (SIGKILL:
-    they inherited the command's handlers, which only note a SIGTERM), including one the
-    pool's thread starts meanwhile. Left to the pool's own shutdown, an interrupted report
-    waited for every call under way, and the tests once found two of its forked processes
-    left behind, blocked for ever reading a pipe."""
+def _children() -> set[int]:
+    """The process ids of this process's children now."""
+    return {c.pid for c in psutil.Process().children()}
+
+
+def _end(pool: ProcessPoolExecutor, before: set[int]) -> None:
+    """Stop ``pool`` without waiting and kill (SIGKILL: they inherited the command's
+    handlers, which only note a SIGTERM) every child forked since ``before``, found by the
+    system, not multiprocessing: a signal handled on the main thread while the pool forks
+    (another thread took the signal) interrupts it between the fork and the process's
+    registration, and the tests found such processes left behind for ever, blocked on a
+    lock they inherited. Left to the pool's own shutdown, an interrupted report also waited
+    for every call under way."""
     pool.shutdown(wait=False, cancel_futures=True)
     deadline = time.monotonic() + 5.0
     while time.monotonic() < deadline:
-        forked = set(multiprocessing.active_children()) - before
+        forked = [c for c in psutil.Process().children() if c.pid not in before]
         if not forked:
-            return
-        for process in forked:
-            process.kill()
-        for process in forked:
-            process.join(0.5)
+            break
+        for child in forked:
+            with contextlib.suppress(psutil.Error):
+                child.kill()
+        psutil.wait_procs(forked, timeout=0.5)
+    multiprocessing.active_children()  # reaps the ones multiprocessing knows
